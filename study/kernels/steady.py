@@ -1,0 +1,496 @@
+"""Event-driven, closed-form steady-state stick-slip kernel (PHYSICS.md section 3).
+
+Time is measured by the drive phase ``theta = w t``. In a slip of sign ``s``
+started at rest at ``theta0``, the scaled speed ``U = s w v`` obeys::
+
+    dU/dtheta = -c + h cos(theta + phi)          c = ck g,  h e^{i phi} = B_s
+
+so ``U(D) = -c D + h [sin(psi0 + D) - sin(psi0)]`` with ``D = theta - theta0`` and
+``psi0 = theta0 + phi``. The extrema of ``U`` are at ``cos(psi) = c / h``: the slip
+end ``U = 0`` always lies on the single decreasing stretch that follows the first
+maximum, so it is bracketed on an interval where ``U`` is monotone and found by
+safeguarded Newton iteration. Stick releases are closed form (an arc of phase on
+which ``s tau - cs n > 0``).
+
+Everything here is private: :mod:`study.solver` validates, allocates and calls
+:func:`_steady_state`. Results are written to ``out`` arrays; nothing is allocated
+per point on the common (stick-slip) path.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+TWO_PI = 2.0 * math.pi
+
+# Status codes, mirrored by study.status.Status (tested to agree).
+STATIC = 0
+STICK_SLIP = 1
+CONTINUOUS_SLIDING = 2
+LIFT_OFF = 3
+NOT_CONVERGED = 4
+
+# Reasons for NOT_CONVERGED, mirrored by study.status.NonConvergence.
+REASON_NONE = 0
+REASON_NO_PERIODIC_ORBIT = 1
+REASON_EVENT_BUDGET = 2
+
+# A release that would start this close before the end of its arc (in phase, rad)
+# is a rounding artefact of a slip that ended exactly on the arc's edge: its slip
+# would last < 1e-12 rad and move < 1e-24 of the amplitude.
+EXIT_TOLERANCE = 1e-12
+# Consecutive slips without a stick after which the reversal phases are treated
+# as a circle map (continuous sliding).
+CIRCLE_MAP_AFTER = 8
+# Longest cycle of the circle map searched for, in map iterations.
+MAX_MAP_PERIOD = 16
+# A cycle candidate is refined by Newton iteration once it closes to this phase.
+CYCLE_DETECTION = 1e-6
+# Newton refinement of a cycle stops at this phase residual [rad].
+CYCLE_TOLERANCE = 1e-12
+
+# Round-trip status of a sequence of slips.
+_ROUND_OK = 0
+_ROUND_STUCK = 1
+_ROUND_BUDGET = 2
+
+
+@njit(cache=True, nogil=True)
+def _mod_two_pi(x):
+    r = x - TWO_PI * math.floor(x / TWO_PI)
+    if r >= TWO_PI:
+        r -= TWO_PI
+    return r
+
+
+@njit(cache=True, nogil=True)
+def _sin_minus_x(d, sin_d):
+    """``sin(d) - d`` without cancellation for small ``d``."""
+    if abs(d) >= 1.0:
+        return sin_d - d
+    x2 = d * d
+    series = 1.0 - x2 / 342.0
+    series = 1.0 - x2 / 272.0 * series
+    series = 1.0 - x2 / 210.0 * series
+    series = 1.0 - x2 / 156.0 * series
+    series = 1.0 - x2 / 110.0 * series
+    series = 1.0 - x2 / 72.0 * series
+    series = 1.0 - x2 / 42.0 * series
+    series = 1.0 - x2 / 20.0 * series
+    return -d * x2 / 6.0 * series
+
+
+@njit(cache=True, nogil=True)
+def _one_minus_cos_minus_half_square(d, one_minus_cos):
+    """``1 - cos(d) - d^2/2`` without cancellation for small ``d``."""
+    if abs(d) >= 1.0:
+        return one_minus_cos - 0.5 * d * d
+    x2 = d * d
+    series = 1.0 - x2 / 380.0
+    series = 1.0 - x2 / 306.0 * series
+    series = 1.0 - x2 / 240.0 * series
+    series = 1.0 - x2 / 182.0 * series
+    series = 1.0 - x2 / 132.0 * series
+    series = 1.0 - x2 / 90.0 * series
+    series = 1.0 - x2 / 56.0 * series
+    series = 1.0 - x2 / 30.0 * series
+    return -x2 * x2 / 24.0 * series
+
+
+@njit(cache=True, nogil=True)
+def _slip_speed(d, slope0, h, cos0, sin0):
+    """``U(d)`` and ``dU/dd`` of a slip started at rest (see module docstring)."""
+    sin_d = math.sin(d)
+    half = math.sin(0.5 * d)
+    one_minus_cos = 2.0 * half * half
+    speed = slope0 * d + h * (cos0 * _sin_minus_x(d, sin_d) - sin0 * one_minus_cos)
+    accel = slope0 - h * (cos0 * one_minus_cos + sin0 * sin_d)
+    return speed, accel
+
+
+@njit(cache=True, nogil=True)
+def _slip(psi0, c, h, gamma):
+    """Follow one slip that starts at rest at phase ``psi0`` (relative to ``phi``).
+
+    Returns
+    -------
+    duration, distance, slope_start, slope_end, moved
+        Phase length of the slip [rad], ``integral of U dD`` over it, ``dU/dD`` at
+        its start and end, and whether it moved at all (``False`` for a slip that
+        ends as soon as it starts, e.g. released exactly at the end of its arc).
+    """
+    if gamma < 0.0:
+        return 0.0, 0.0, 0.0, 0.0, False
+    cos0 = math.cos(psi0)
+    sin0 = math.sin(psi0)
+    slope0 = h * cos0 - c
+    # U increases while the phase is in (-gamma, gamma); the first maximum is at +gamma.
+    offset = _mod_two_pi(_mod_two_pi(psi0) + gamma)
+    if offset > TWO_PI - EXIT_TOLERANCE:
+        # Released where dU/dD = 0 (ck = cs, release at the arc's entry): rounding
+        # put the start just before the increasing stretch that physically follows.
+        offset = 0.0
+    if offset > 2.0 * gamma:
+        return 0.0, 0.0, slope0, slope0, False
+    lo = 2.0 * gamma - offset
+    speed_lo, _ = _slip_speed(lo, slope0, h, cos0, sin0)
+    if speed_lo <= 0.0:
+        return 0.0, 0.0, slope0, slope0, False
+    hi = lo + TWO_PI - 2.0 * gamma
+    speed_hi, _ = _slip_speed(hi, slope0, h, cos0, sin0)
+    # U is monotone decreasing on [lo, hi], U(lo) > 0 > U(hi): start from regula falsi.
+    d = lo + (hi - lo) * speed_lo / (speed_lo - speed_hi)
+    for _ in range(200):
+        speed, accel = _slip_speed(d, slope0, h, cos0, sin0)
+        if speed > 0.0:
+            lo = d
+        elif speed < 0.0:
+            hi = d
+        else:
+            break
+        step_ok = accel < 0.0
+        if step_ok:
+            d_new = d - speed / accel
+            step_ok = lo < d_new < hi
+        if not step_ok:
+            d_new = 0.5 * (lo + hi)
+        if abs(d_new - d) <= 1e-14 * d_new or hi - lo <= 4e-16 * hi:
+            d = d_new
+            break
+        d = d_new
+    sin_d = math.sin(d)
+    half = math.sin(0.5 * d)
+    one_minus_cos = 2.0 * half * half
+    distance = 0.5 * slope0 * d * d + h * (
+        cos0 * _one_minus_cos_minus_half_square(d, one_minus_cos)
+        + sin0 * _sin_minus_x(d, sin_d)
+    )
+    _, slope_end = _slip_speed(d, slope0, h, cos0, sin0)
+    return d, distance, slope0, slope_end, True
+
+
+@njit(cache=True, nogil=True)
+def _next_release(theta, excluded, k):
+    """Phase to wait from ``theta`` (at rest) until a slip starts, and its sign.
+
+    ``excluded`` (``+1``, ``-1`` or ``0``) forbids an immediate release of that sign,
+    used after a slip of that sign that could not move.
+    """
+    (_c, _hp, _pp, _gp, _hm, _pm, _gm, ok_p, entry_p, width_p, ok_m, entry_m, width_m) = k
+    best_wait = np.inf
+    best_sign = 0
+    if ok_p:
+        d = _mod_two_pi(theta - entry_p)
+        if d < width_p - EXIT_TOLERANCE and excluded != 1:
+            wait = 0.0
+        else:
+            wait = TWO_PI - d
+        best_wait = wait
+        best_sign = 1
+    if ok_m:
+        d = _mod_two_pi(theta - entry_m)
+        if d < width_m - EXIT_TOLERANCE and excluded != -1:
+            wait = 0.0
+        else:
+            wait = TWO_PI - d
+        if wait < best_wait:
+            best_wait = wait
+            best_sign = -1
+    return best_wait, best_sign
+
+
+@njit(cache=True, nogil=True)
+def _advance(theta, sign, k):
+    """One slip of ``sign`` from rest at ``theta``, then the decision at its end.
+
+    Returns
+    -------
+    theta_next, sign_next, wait, duration, distance, derivative
+        The next slip starts at ``theta_next`` with ``sign_next`` after a stick of
+        phase length ``wait`` (0: immediate reversal or continuation). ``distance``
+        is ``integral of U`` over the slip (positive), ``derivative`` is
+        ``d theta_end / d theta_start`` for the circle map.
+    """
+    c, h_p, phi_p, gamma_p, h_m, phi_m, gamma_m = k[0], k[1], k[2], k[3], k[4], k[5], k[6]
+    if sign > 0:
+        duration, distance, slope0, slope1, moved = _slip(theta + phi_p, c, h_p, gamma_p)
+    else:
+        duration, distance, slope0, slope1, moved = _slip(theta + phi_m, c, h_m, gamma_m)
+    if moved:
+        theta_end = theta + duration
+        wait, sign_next = _next_release(theta_end, 0, k)
+        derivative = slope0 / slope1
+    else:
+        theta_end = theta
+        wait, sign_next = _next_release(theta_end, sign, k)
+        derivative = 1.0
+    return theta_end + wait, sign_next, wait, duration, distance, derivative
+
+
+@njit(cache=True, nogil=True)
+def _rounds(theta, count, k, max_events):
+    """From a forward slip starting at rest at ``theta``, run until ``count`` more
+    forward slips have started by immediate reversal.
+
+    Returns
+    -------
+    flag, theta_end, sign_end, derivative, distance, forward, backward, slips
+        ``flag`` is ``_ROUND_OK``, ``_ROUND_STUCK`` (a stick interrupted the
+        sequence: ``theta_end, sign_end`` is its release) or ``_ROUND_BUDGET``.
+        ``distance`` is the signed integral of ``w v`` over phase; ``forward`` and
+        ``backward`` are the phase lengths of forward and backward slips.
+    """
+    sign = 1
+    derivative = 1.0
+    distance = 0.0
+    forward = 0.0
+    backward = 0.0
+    slips = 0
+    done = 0
+    for _ in range(max_events):
+        theta_next, sign_next, wait, duration, moved, factor = _advance(theta, sign, k)
+        if duration > 0.0:
+            slips += 1
+        if sign > 0:
+            distance += moved
+            forward += duration
+        else:
+            distance -= moved
+            backward += duration
+        derivative *= factor
+        theta = theta_next
+        sign = sign_next
+        if wait > 0.0:
+            return _ROUND_STUCK, theta, sign, 0.0, distance, forward, backward, slips
+        if sign > 0:
+            done += 1
+            if done == count:
+                return _ROUND_OK, theta, sign, derivative, distance, forward, backward, slips
+    return _ROUND_BUDGET, theta, sign, derivative, distance, forward, backward, slips
+
+
+@njit(cache=True, nogil=True)
+def _refine_cycle(theta, period, turns, k, max_events):
+    """Newton iteration for a cycle of the reversal circle map.
+
+    Solves ``R^period(p) = p + 2 pi turns`` from ``p = theta``. Returns
+    ``(converged, p)``; converged only for an attracting cycle (|multiplier| < 1).
+    """
+    p = _mod_two_pi(theta)
+    residual_ok = False
+    for _ in range(40):
+        flag, end, _s, deriv, _d, _f, _b, _n = _rounds(p, period, k, max_events)
+        if flag != _ROUND_OK:
+            return False, p
+        residual = end - p - TWO_PI * turns
+        if residual_ok:
+            return abs(residual) <= CYCLE_TOLERANCE and abs(deriv) < 1.0, p
+        if deriv == 1.0:
+            return False, p
+        step = residual / (deriv - 1.0)
+        p = _mod_two_pi(p - step)
+        if abs(step) <= CYCLE_TOLERANCE:
+            residual_ok = True
+    return False, p
+
+
+@njit(cache=True, nogil=True)
+def _circle_map(theta, k, max_rounds, max_events):
+    """Continuous sliding: find the attracting cycle of the reversal phases.
+
+    ``theta`` is the start of a forward slip by immediate reversal.
+
+    Returns
+    -------
+    flag, theta, sign, mean, slips, forward, backward, period
+        ``flag``: ``_ROUND_OK`` (cycle found; statistics per drive period follow),
+        ``_ROUND_STUCK`` (a stick appeared: resume stick-slip from ``theta, sign``),
+        or ``_ROUND_BUDGET`` (no cycle found).
+    """
+    # Unwrapped phase advance of each of the last iterations (a ring buffer).
+    advances = np.empty(MAX_MAP_PERIOD)
+    p = _mod_two_pi(theta)
+    for iteration in range(max_rounds):
+        flag, end, sign, _, _, _, _, _ = _rounds(p, 1, k, max_events)
+        if flag == _ROUND_STUCK:
+            return _ROUND_STUCK, end, sign, 0.0, 0.0, 0.0, 0.0, 0
+        if flag == _ROUND_BUDGET:
+            return _ROUND_BUDGET, end, sign, 0.0, 0.0, 0.0, 0.0, 0
+        advances[iteration % MAX_MAP_PERIOD] = end - p
+        p = _mod_two_pi(end)
+        total = 0.0
+        for period in range(1, min(iteration + 1, MAX_MAP_PERIOD) + 1):
+            total += advances[(iteration - period + 1) % MAX_MAP_PERIOD]
+            turns = round(total / TWO_PI)
+            if turns >= 1 and abs(total - TWO_PI * turns) < CYCLE_DETECTION:
+                converged, p_star = _refine_cycle(p, period, turns, k, max_events)
+                if converged:
+                    flag, end, sign, _, distance, forward, backward, slips = _rounds(
+                        p_star, period, k, max_events
+                    )
+                    if flag == _ROUND_OK:
+                        span = TWO_PI * turns
+                        return (
+                            _ROUND_OK,
+                            end,
+                            sign,
+                            distance / span,
+                            slips / turns,
+                            forward / span,
+                            backward / span,
+                            int(turns),
+                        )
+                break
+    return _ROUND_BUDGET, p, 1, 0.0, 0.0, 0.0, 0.0, 0
+
+
+@njit(cache=True, nogil=True)
+def _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g):
+    """Per-point constants: slip dynamics and release arcs for both signs."""
+    c = ck_g
+    h_p = abs(b_plus)
+    h_m = abs(b_minus)
+    phi_p = math.atan2(b_plus.imag, b_plus.real)
+    phi_m = math.atan2(b_minus.imag, b_minus.real)
+    gamma_p = math.atan2(math.sqrt((h_p - c) * (h_p + c)), c) if h_p > c else -1.0
+    gamma_m = math.atan2(math.sqrt((h_m - c) * (h_m + c)), c) if h_m > c else -1.0
+    r_p = abs(a_plus)
+    r_m = abs(a_minus)
+    ok_p = r_p > cs_g
+    ok_m = r_m > cs_g
+    entry_p = 0.0
+    width_p = 0.0
+    entry_m = 0.0
+    width_m = 0.0
+    if ok_p:
+        beta = math.atan2(math.sqrt((r_p - cs_g) * (r_p + cs_g)), cs_g)
+        entry_p = _mod_two_pi(-beta - math.atan2(a_plus.imag, a_plus.real))
+        width_p = 2.0 * beta
+    if ok_m:
+        beta = math.atan2(math.sqrt((r_m - cs_g) * (r_m + cs_g)), cs_g)
+        entry_m = _mod_two_pi(-beta - math.atan2(a_minus.imag, a_minus.real))
+        width_m = 2.0 * beta
+    return (c, h_p, phi_p, gamma_p, h_m, phi_m, gamma_m,
+            ok_p, entry_p, width_p, ok_m, entry_m, width_m)
+
+
+@njit(cache=True, nogil=True)
+def _solve_point(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_rounds):
+    """Periodic orbit reached from rest at phase 0, for one drive point.
+
+    Returns
+    -------
+    status, reason, mean, slips, forward, backward, period
+        ``mean`` is the orbit's mean of ``w v`` [m s^-2] (divide by ``w``),
+        ``slips`` the slip events per drive period, ``forward``/``backward`` the
+        fractions of the period spent slipping each way, ``period`` the orbit's
+        period in drive periods.
+    """
+    k = _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g)
+    if not k[7] and not k[10]:
+        return STATIC, REASON_NONE, 0.0, 0.0, 0.0, 0.0, 0
+    wait, sign = _next_release(0.0, 0, k)
+    theta = wait
+    # State at the two possible releases after a stick: (phase, distance, fwd, bwd, slips).
+    seen_p = False
+    seen_m = False
+    rec_p = (0.0, 0.0, 0.0, 0.0, 0)
+    rec_m = (0.0, 0.0, 0.0, 0.0, 0)
+    distance = 0.0
+    forward = 0.0
+    backward = 0.0
+    slips = 0
+    since_stick = 0
+    genuine = wait > 0.0
+    for _ in range(max_events):
+        if genuine:
+            since_stick = 0
+            now = (theta, distance, forward, backward, slips)
+            previous = rec_p if sign > 0 else rec_m
+            seen = seen_p if sign > 0 else seen_m
+            turns = round((theta - previous[0]) / TWO_PI)
+            if seen and turns >= 1:
+                span = TWO_PI * turns
+                return (
+                    STICK_SLIP,
+                    REASON_NONE,
+                    (distance - previous[1]) / span,
+                    (slips - previous[4]) / turns,
+                    (forward - previous[2]) / span,
+                    (backward - previous[3]) / span,
+                    int(turns),
+                )
+            if sign > 0:
+                seen_p = True
+                rec_p = now
+            else:
+                seen_m = True
+                rec_m = now
+        elif since_stick >= CIRCLE_MAP_AFTER and sign > 0:
+            flag, theta_c, sign_c, mean, per, fwd, bwd, period = _circle_map(
+                theta, k, max_rounds, max_events
+            )
+            if flag == _ROUND_OK:
+                return CONTINUOUS_SLIDING, REASON_NONE, mean, per, fwd, bwd, period
+            if flag == _ROUND_BUDGET:
+                return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, np.nan, 0.0, 0.0, 0.0, 0
+            # A stick ended the sliding transient: restart the bookkeeping there.
+            theta = theta_c
+            sign = sign_c
+            seen_p = False
+            seen_m = False
+            genuine = True
+            continue
+        theta_next, sign_next, wait, duration, moved, _ = _advance(theta, sign, k)
+        if duration > 0.0:
+            slips += 1
+        if sign > 0:
+            distance += moved
+            forward += duration
+        else:
+            distance -= moved
+            backward += duration
+        theta = theta_next
+        sign = sign_next
+        genuine = wait > 0.0
+        since_stick += 1
+    return NOT_CONVERGED, REASON_EVENT_BUDGET, np.nan, 0.0, 0.0, 0.0, 0
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _steady_state(
+    a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+    max_events, max_rounds,
+    velocity, status, reason, slips, forward, backward, period,
+):
+    """Fill the output arrays point by point, in parallel over points."""
+    for i in prange(a_plus.shape[0]):
+        if lifted[i]:
+            velocity[i] = np.nan
+            status[i] = LIFT_OFF
+            reason[i] = REASON_NONE
+            slips[i] = np.nan
+            forward[i] = np.nan
+            backward[i] = np.nan
+            period[i] = 0
+            continue
+        st, why, mean, per, fwd, bwd, n_period = _solve_point(
+            a_plus[i], a_minus[i], b_plus[i], b_minus[i], cs_g, ck_g,
+            max_events, max_rounds,
+        )
+        status[i] = st
+        reason[i] = why
+        if st == NOT_CONVERGED:
+            velocity[i] = np.nan
+            slips[i] = np.nan
+            forward[i] = np.nan
+            backward[i] = np.nan
+        else:
+            velocity[i] = mean / omega[i]
+            slips[i] = per
+            forward[i] = fwd
+            backward[i] = bwd
+        period[i] = n_period

@@ -1,0 +1,53 @@
+"""Status codes stored with every solved point (a CF flag variable on disk)."""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+__all__ = ["NonConvergence", "Status"]
+
+
+class Status(IntEnum):
+    """Outcome of the steady-state solver at one drive point.
+
+    Attributes
+    ----------
+    STATIC
+        Below both motion thresholds: the structure never slips, ``v = 0`` exactly.
+    STICK_SLIP
+        Periodic orbit with at least one stick phase in every period.
+    CONTINUOUS_SLIDING
+        Periodic orbit without any stick: slips reverse at ``v = 0`` (seen as ``M -> 1``).
+    LIFT_OFF
+        ``n(t) < 0`` during the cycle: the structure leaves the table, the model does
+        not apply and no velocity is given (NaN).
+    NOT_CONVERGED
+        No periodic orbit was found within the solver's budget; the reason is in
+        :class:`NonConvergence`. No velocity is given (NaN).
+    """
+
+    STATIC = 0
+    STICK_SLIP = 1
+    CONTINUOUS_SLIDING = 2
+    LIFT_OFF = 3
+    NOT_CONVERGED = 4
+
+
+class NonConvergence(IntEnum):
+    """Why a point has status ``NOT_CONVERGED`` (``NONE`` for every other status).
+
+    Attributes
+    ----------
+    NONE
+        The point converged (or did not need to).
+    NO_PERIODIC_ORBIT
+        The continuous-sliding circle map did not lock onto a stable periodic orbit
+        within the budget of map iterations (quasi-periodic, chaotic, or too slowly
+        attracting for the budget).
+    EVENT_BUDGET
+        The event loop exhausted its budget without closing an orbit.
+    """
+
+    NONE = 0
+    NO_PERIODIC_ORBIT = 1
+    EVENT_BUDGET = 2

@@ -1,0 +1,127 @@
+"""The single-plate structure: a validated value object (paper eqs. 2-4)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+__all__ = ["Structure"]
+
+
+def _require_finite(name: str, value: float) -> float:
+    if isinstance(value, bool):
+        raise ValueError(f"Structure parameter {name!r} must be a real number, got {value!r}")
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"Structure parameter {name!r} must be a real number, got {value!r}"
+        ) from None
+    if not math.isfinite(number):
+        raise ValueError(f"Structure parameter {name!r} must be finite, got {value!r}")
+    return number
+
+
+@dataclass(frozen=True)
+class Structure:
+    """A rigid base carrying one tilted resonant plate (PHYSICS.md section 1).
+
+    All forces in the model are per unit total mass, so the structure is fully
+    described by its mode and its friction with the table.
+
+    Parameters
+    ----------
+    f0 : float
+        Resonance frequency of the plate's first mode [Hz], ``f0 > 0``.
+    Q : float
+        Quality factor of the mode [1], ``Q > 0``.
+    alpha : float
+        Tilt of the plate from the horizontal [deg], ``-90 < alpha < 90``.
+        ``alpha -> -alpha`` mirrors the motion.
+    M : float
+        Mass ratio ``m1 / m`` of the resonant mass to the total mass [1],
+        ``0 < M <= 1``.
+    cs : float
+        Static friction coefficient with the table [1], ``cs > 0``.
+    ck : float, optional
+        Kinetic friction coefficient [1], ``0 < ck <= cs``; defaults to ``cs``
+        (the paper's single coefficient ``c_f``).
+    g : float, optional
+        Gravitational acceleration [m s^-2], ``g > 0``; default 9.8 as in the paper.
+
+    Raises
+    ------
+    ValueError
+        If a parameter is not a finite number or is outside its allowed range;
+        the message names the parameter, its value and the range.
+    """
+
+    f0: float
+    Q: float
+    alpha: float
+    M: float
+    cs: float
+    ck: float | None = None
+    g: float = 9.8
+
+    def __post_init__(self) -> None:
+        values = {}
+        for name in ("f0", "Q", "alpha", "M", "cs", "g"):
+            values[name] = _require_finite(name, getattr(self, name))
+        ck = values["cs"] if self.ck is None else _require_finite("ck", self.ck)
+        values["ck"] = ck
+
+        def refuse(name: str, allowed: str) -> None:
+            raise ValueError(
+                f"Structure parameter {name!r} = {values[name]!r} is out of range; "
+                f"allowed: {allowed}"
+            )
+
+        if values["f0"] <= 0:
+            refuse("f0", "f0 > 0 [Hz]")
+        if values["Q"] <= 0:
+            refuse("Q", "Q > 0")
+        if not -90.0 < values["alpha"] < 90.0:
+            refuse("alpha", "-90 < alpha < 90 [deg]")
+        if not 0.0 < values["M"] <= 1.0:
+            refuse("M", "0 < M <= 1")
+        if values["cs"] <= 0:
+            refuse("cs", "cs > 0")
+        if not 0.0 < ck <= values["cs"]:
+            refuse("ck", f"0 < ck <= cs (cs = {values['cs']!r})")
+        if values["g"] <= 0:
+            refuse("g", "g > 0 [m s^-2]")
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    @property
+    def omega0(self) -> float:
+        """Angular resonance frequency ``2 pi f0`` [rad s^-1]."""
+        return 2.0 * math.pi * self.f0
+
+    @property
+    def alpha_rad(self) -> float:
+        """Plate tilt [rad]."""
+        return math.radians(self.alpha)
+
+    def replace(self, **changes: float) -> Structure:
+        """Return a copy with some parameters changed, validated again.
+
+        ``ck`` is stored explicitly once built: pass it too when lowering ``cs``
+        below it.
+        """
+        params = self.as_dict()
+        params.update(changes)
+        return Structure(**params)
+
+    def as_dict(self) -> dict[str, float]:
+        """Parameters as a plain dict (``ck`` explicit)."""
+        return {
+            "f0": self.f0,
+            "Q": self.Q,
+            "alpha": self.alpha,
+            "M": self.M,
+            "cs": self.cs,
+            "ck": self.ck,
+            "g": self.g,
+        }

@@ -1,0 +1,481 @@
+"""Slow, high-accuracy reference integrator for the single-plate stick-slip model.
+
+This module is an *independent* check of the fast closed-form velocity solver in
+the ``study`` package. It deliberately imports nothing from ``study`` and uses no
+closed-form solution of the sliding motion: the hybrid (stick / slip) system is
+integrated numerically with :func:`scipy.integrate.solve_ivp` (``DOP853``) and
+terminal event location, restarting at every event with the updated discrete
+mode. The only closed form used is the steady harmonic response of the plate
+mode, to set its initial state.
+
+Model (per unit total mass, table frame, SI units; see ``PHYSICS.md`` sec. 1)
+---------------------------------------------------------------------------
+State ``y = (delta, ddelta_dt, x, v)``; drive acceleration ``a cos(w t)``.
+
+* mode: ``delta'' + (w0/Q) delta' + w0^2 delta = a cos(w t) cos(alpha)``
+  (one-way coupling: the mode does not feel the sliding);
+* normal force ``n = g - a cos(w t) + M delta'' cos(alpha)``;
+* tangential force ``tau = -M delta'' sin(alpha)``;
+* stick (``v = 0``, ``x`` constant) while ``|tau| <= cs n``;
+* slip of sign ``s``: ``dv/dt = tau - ck n s``, ``dx/dt = v``.
+
+Transitions
+-----------
+* stick -> slip ``+1`` when ``tau - cs n`` crosses zero upwards, slip ``-1``
+  when ``-tau - cs n`` crosses zero upwards (immediately if already positive
+  at the start of the stick phase);
+* in slip of sign ``s``, at ``v = 0`` (crossing in direction ``-s``): reverse if
+  ``-s tau - cs n > 0``; else continue with sign ``s`` if ``s tau - cs n > 0``
+  (tangential touch); else stick.
+
+Run this file directly for a small demonstration on paper parameters.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+__all__ = ["reference_velocity"]
+
+#: Statuses returned by :func:`reference_velocity`.
+STATUSES = ("static", "stick_slip", "continuous_sliding", "lift_off", "not_converged")
+
+_STICK = 0
+_MAX_K = 8  # longest orbit period (in drive periods) that is looked for
+_GUARD = 1e-8  # event-suppression window after a slip start, in drive periods
+_STICK_MIN = 1e-10  # stick phases shorter than this (in drive periods) do not count
+_N_SAMPLES = 4096  # samples of n(t) over one period for the lift-off test
+_MAX_SEGMENTS_PER_PERIOD = 10_000
+
+
+class _LiftOff(Exception):
+    """Raised internally when the normal force becomes negative."""
+
+
+class _System:
+    """Right-hand sides and event functions of the hybrid system.
+
+    Parameters
+    ----------
+    f0, Q, alpha_deg, M, cs, ck, g, f, a : float
+        Model parameters, see :func:`reference_velocity`.
+    """
+
+    def __init__(self, f0, Q, alpha_deg, M, cs, ck, g, f, a):
+        self.w0 = 2.0 * math.pi * f0
+        self.w = 2.0 * math.pi * f
+        self.c = self.w0 / Q
+        self.k = self.w0 * self.w0
+        alpha = math.radians(alpha_deg)
+        self.ca = math.cos(alpha)
+        self.sa = math.sin(alpha)
+        self.M = M
+        self.cs = cs
+        self.ck = ck
+        self.g = g
+        self.a = a
+        self.A = a * self.ca  # mode forcing amplitude
+
+    # -- forces -----------------------------------------------------------------
+    def forces(self, t, y):
+        """Return ``(tau, n)`` at local time ``t`` and state ``y``."""
+        cwt = math.cos(self.w * t)
+        acc = self.A * cwt - self.c * y[1] - self.k * y[0]
+        n = self.g - self.a * cwt + self.M * acc * self.ca
+        tau = -self.M * acc * self.sa
+        return tau, n
+
+    # -- right-hand sides ---------------------------------------------------------
+    def rhs_stick(self, t, y):
+        """Right-hand side in stick: ``x`` and ``v`` frozen."""
+        acc = self.A * math.cos(self.w * t) - self.c * y[1] - self.k * y[0]
+        return [y[1], acc, 0.0, 0.0]
+
+    def rhs_slip(self, s):
+        """Return the right-hand side of a slip of sign ``s``."""
+        A, w, c, k, M, ca, sa, g, a = (self.A, self.w, self.c, self.k, self.M,
+                                       self.ca, self.sa, self.g, self.a)
+        cks = self.ck * s
+
+        def rhs(t, y):
+            cwt = math.cos(w * t)
+            acc = A * cwt - c * y[1] - k * y[0]
+            n = g - a * cwt + M * acc * ca
+            tau = -M * acc * sa
+            return [y[1], acc, y[3], tau - cks * n]
+
+        return rhs
+
+    # -- events ---------------------------------------------------------------------
+    def ev_release(self, s):
+        """Event ``s tau - cs n = 0`` crossed upwards (release in direction ``s``)."""
+
+        def ev(t, y):
+            tau, n = self.forces(t, y)
+            return s * tau - self.cs * n
+
+        ev.terminal = True
+        ev.direction = 1
+        return ev
+
+    def ev_stop(self, s):
+        """Event ``v = 0`` crossed in direction ``-s`` (end of a slip of sign ``s``)."""
+
+        def ev(t, y):
+            return y[3]
+
+        ev.terminal = True
+        ev.direction = -s
+        return ev
+
+    def ev_lift(self):
+        """Event ``n = 0`` crossed downwards (lift-off)."""
+
+        def ev(t, y):
+            return self.forces(t, y)[1]
+
+        ev.terminal = True
+        ev.direction = -1
+        return ev
+
+
+def _initial_mode_state(sys_):
+    """Steady harmonic state of the mode at ``t = 0`` (the only closed form used)."""
+    w, w0 = sys_.w, sys_.w0
+    G = 1.0 / (w0 * w0 - w * w + 1j * sys_.c * w)  # c = w0 / Q
+    d0 = (sys_.A * G).real
+    dd0 = (1j * w * sys_.A * G).real
+    return d0, dd0
+
+
+def _min_normal_force(sys_, y_mode, T, rtol, atol, max_step):
+    """Minimum of ``n(t)`` over one period, sampled on a fine grid.
+
+    The mode ODE alone is integrated over one drive period from ``y_mode``;
+    the normal force is evaluated on ``_N_SAMPLES`` equally spaced instants.
+    """
+    t_eval = np.linspace(0.0, T, _N_SAMPLES + 1)
+    sol = solve_ivp(
+        lambda t, y: sys_.rhs_stick(t, [y[0], y[1]])[:2],
+        (0.0, T), list(y_mode), method="DOP853", t_eval=t_eval,
+        rtol=rtol, atol=atol, max_step=max_step,
+    )
+    if sol.status != 0:  # pragma: no cover - defensive
+        raise RuntimeError(f"mode integration failed: {sol.message}")
+    cwt = np.cos(sys_.w * sol.t)
+    acc = sys_.A * cwt - sys_.c * sol.y[1] - sys_.k * sol.y[0]
+    n = sys_.g - sys_.a * cwt + sys_.M * acc * sys_.ca
+    return float(n.min())
+
+
+class _Integrator:
+    """Piecewise integration of the hybrid system over one drive period.
+
+    Local time runs over ``[0, T]`` in every period (the drive is T-periodic), so
+    the drive phase is exact for every period and ``x`` is reset to 0 at each
+    period start; the displacement of the period is the final ``x``.
+    """
+
+    def __init__(self, sys_, T, rtol, atol, max_step):
+        self.sys = sys_
+        self.T = T
+        self.opts = dict(method="DOP853", rtol=rtol, atol=atol, max_step=max_step)
+        lift = sys_.ev_lift()
+        self.lift = lift
+        self.stick_events = [sys_.ev_release(+1), sys_.ev_release(-1), lift]
+        self.slip_rhs = {+1: sys_.rhs_slip(+1), -1: sys_.rhs_slip(-1)}
+        self.slip_events = {s: [sys_.ev_stop(s), lift] for s in (+1, -1)}
+        self.slip_noevent = [lift]
+        self.guard = _GUARD * T
+
+    def _solve(self, rhs, t0, t1, y0, events):
+        sol = solve_ivp(rhs, (t0, t1), y0, events=events, **self.opts)
+        if sol.status == -1:  # pragma: no cover - defensive
+            raise RuntimeError(f"integration failed: {sol.message}")
+        t_end = float(sol.t[-1])
+        y_end = [float(v) for v in sol.y[:, -1]]
+        fired = None
+        if sol.status == 1:
+            for i, te in enumerate(sol.t_events):
+                if len(te) and te[-1] == sol.t[-1]:
+                    fired = i
+                    break
+        return t_end, y_end, fired
+
+    def release_direction(self, t, y):
+        """Direction of an immediate release from stick (0 if none)."""
+        tau, n = self.sys.forces(t, y)
+        cs = self.sys.cs
+        if tau - cs * n > 0.0:
+            return +1
+        if -tau - cs * n > 0.0:
+            return -1
+        return _STICK
+
+    def after_stop(self, t, y, s):
+        """Discrete mode after a ``v = 0`` instant ending a slip of sign ``s``."""
+        tau, n = self.sys.forces(t, y)
+        cs = self.sys.cs
+        if -s * tau - cs * n > 0.0:
+            return -s  # reversal
+        if s * tau - cs * n > 0.0:
+            return s  # tangential touch: slip continues
+        return _STICK
+
+    def period(self, y, mode, fresh):
+        """Integrate one drive period.
+
+        Parameters
+        ----------
+        y : list of float
+            State ``(delta, ddelta_dt, x, v)`` at the period start; ``x`` must be 0.
+        mode : int
+            Discrete mode at the start: 0 (stick) or the slip sign +1 / -1.
+        fresh : bool
+            True if a slip starting at this instant has just begun from ``v = 0``.
+
+        Returns
+        -------
+        y, mode, fresh : the state at the period end.
+        stats : dict
+            ``stick_time`` (s), ``slipped`` (bool), ``events`` (int).
+        """
+        T = self.T
+        t = 0.0
+        stick_time = 0.0
+        slipped = mode != _STICK
+        n_events = 0
+        for _ in range(_MAX_SEGMENTS_PER_PERIOD):
+            if t >= T:
+                break
+            if mode == _STICK:
+                t1, y1, fired = self._solve(self.sys.rhs_stick, t, T, y, self.stick_events)
+                stick_time += t1 - t
+                t, y = t1, y1
+                if fired is None:
+                    continue
+                n_events += 1
+                if fired == 2:
+                    raise _LiftOff
+                mode = +1 if fired == 0 else -1
+                y[3] = 0.0
+                fresh = True
+                slipped = True
+                continue
+
+            s = mode
+            rhs = self.slip_rhs[s]
+            t1, y1, fired = self._solve(rhs, t, T, y, self.slip_events[s])
+            if fired == 0 and fresh and t1 - t < self.guard:
+                # The slip would end as soon as it starts: a root located at a
+                # release that sits exactly on the threshold. Integrate past that
+                # instant with the v = 0 event suppressed, then look again.
+                t_w = min(t + self.guard, T)
+                t1, y1, fired = self._solve(rhs, t, t_w, y, self.slip_noevent)
+                if fired is not None:
+                    raise _LiftOff
+                t, y = t1, y1
+                fresh = False
+                if s * y[3] <= 0.0:
+                    # The slip did not establish: it ends here.
+                    y[3] = 0.0
+                    n_events += 1
+                    mode = self.after_stop(t, y, s)
+                    fresh = mode != _STICK
+                continue
+            t, y = t1, y1
+            fresh = False
+            if fired is None:
+                continue
+            n_events += 1
+            if fired == 1:
+                raise _LiftOff
+            y[3] = 0.0
+            mode = self.after_stop(t, y, s)
+            fresh = mode != _STICK
+        else:  # pragma: no cover - defensive
+            raise RuntimeError("too many events in one drive period")
+        if mode == _STICK:
+            # Immediate release at the period boundary is handled by the events
+            # of the next period (a release function at 0 going up fires at once).
+            pass
+        stats = dict(stick_time=stick_time, slipped=slipped, events=n_events)
+        return y, mode, fresh, stats
+
+
+def reference_velocity(f0, Q, alpha_deg, M, cs, f, a, ck=None, g=9.8,
+                       rtol=1e-12, atol=1e-14, max_periods=400, period_tol=1e-13):
+    """Mean sliding velocity of the periodic steady orbit, by direct integration.
+
+    The hybrid stick/slip system of the single-plate model is integrated period
+    by period with ``solve_ivp(method="DOP853")`` and terminal event location,
+    from the canonical start: ``t = 0``, ``x = v = 0``, body in stick (released at
+    once if a release condition already holds), mode on its steady harmonic
+    response ``delta(0) = Re[a cos(alpha) G]``,
+    ``delta'(0) = Re[i w a cos(alpha) G]``,
+    ``G = 1 / (w0^2 - w^2 + i w0 w / Q)``.
+
+    Parameters
+    ----------
+    f0 : float
+        Resonance frequency of the plate mode [Hz].
+    Q : float
+        Quality factor of the mode.
+    alpha_deg : float
+        Tilt of the plate from the horizontal [deg].
+    M : float
+        Mass ratio ``m1 / m``.
+    cs : float
+        Static friction coefficient.
+    f : float
+        Drive frequency [Hz].
+    a : float
+        Drive (table) acceleration amplitude [m s^-2].
+    ck : float, optional
+        Kinetic friction coefficient, ``ck <= cs``; defaults to ``cs``.
+    g : float, optional
+        Gravity [m s^-2].
+    rtol, atol : float, optional
+        Tolerances of ``solve_ivp``. The state components are
+        ``(delta [m], ddelta/dt [m/s], x [m], v [m/s])``.
+    max_periods : int, optional
+        Maximum number of drive periods integrated.
+    period_tol : float, optional
+        Relative tolerance of the periodicity test on the displacement (an
+        absolute floor of 1e-15 m is also accepted); the velocity at the
+        period boundary must agree to the same relative tolerance (floor
+        ``1e-15 m / T``).
+
+    Returns
+    -------
+    velocity : float
+        Mean horizontal velocity [m/s] of the periodic orbit: displacement over
+        its ``k`` drive periods divided by ``k T``. ``0.0`` when static, ``nan``
+        at lift-off. When not converged, the mean velocity over the second half
+        of the integrated periods (a best estimate only).
+    status : str
+        ``"static"`` (never left stick), ``"stick_slip"`` (the periodic orbit has
+        a stick phase of positive duration), ``"continuous_sliding"`` (periodic
+        orbit without stick), ``"lift_off"`` (``n(t) < 0`` somewhere: model
+        invalid) or ``"not_converged"`` (no periodic orbit of period <= 8 drive
+        periods found within ``max_periods``).
+    n_periods : int
+        Number of drive periods of the hybrid system integrated (0 when lift-off
+        is detected by sampling ``n`` before the integration).
+
+    Notes
+    -----
+    Convergence is declared after period ``j`` for the smallest ``k`` in
+    ``1..8`` such that the discrete mode and the velocity at the boundaries
+    ``j`` and ``j - k`` agree and the displacement over periods
+    ``j-k+1..j`` equals that over ``j-2k+1..j-k``. The mode phase is the same at
+    every boundary, so this identifies a ``k``-periodic orbit.
+
+    Events are located by ``solve_ivp`` (Brent's method on the dense output);
+    at every event the integration restarts with the new discrete mode and
+    ``v`` set exactly to 0. ``max_step`` is ``T / 40`` so that no event is
+    stepped over. A slip that would end within ``1e-8 T`` of its start (a
+    release located exactly on a threshold) is integrated past that instant
+    with the ``v = 0`` event suppressed.
+    """
+    if ck is None:
+        ck = cs
+    if not (0.0 <= ck <= cs):
+        raise ValueError(f"need 0 <= ck <= cs, got ck={ck}, cs={cs}")
+    if f <= 0 or f0 <= 0 or Q <= 0:
+        raise ValueError("f, f0 and Q must be positive")
+    if max_periods < 2:
+        raise ValueError("max_periods must be >= 2")
+
+    T = 1.0 / f
+    max_step = T / 40.0
+    sys_ = _System(f0, Q, alpha_deg, M, cs, ck, g, f, a)
+    d0, dd0 = _initial_mode_state(sys_)
+
+    # Lift-off: the mode is on its steady response, so one period of n(t) is
+    # representative of all of them. The n = 0 event is also armed below.
+    if _min_normal_force(sys_, (d0, dd0), T, rtol, atol, max_step) < 0.0:
+        return math.nan, "lift_off", 0
+
+    integ = _Integrator(sys_, T, rtol, atol, max_step)
+    y = [d0, dd0, 0.0, 0.0]
+    mode = integ.release_direction(0.0, y)
+    fresh = mode != _STICK
+
+    dx, v_end, mode_end, stick_t, slipped = [], [], [], [], []
+    for j in range(1, max_periods + 1):
+        try:
+            y, mode, fresh, st = integ.period(y, mode, fresh)
+        except _LiftOff:
+            return math.nan, "lift_off", j
+        dx.append(y[2])
+        y[2] = 0.0
+        v_end.append(y[3])
+        mode_end.append(mode)
+        stick_t.append(st["stick_time"])
+        slipped.append(st["slipped"])
+
+        for k in range(1, _MAX_K + 1):
+            if j < 2 * k:
+                break
+            if mode_end[-1] != mode_end[-1 - k]:
+                continue
+            v1, v0 = v_end[-1], v_end[-1 - k]
+            if abs(v1 - v0) > max(period_tol * max(abs(v1), abs(v0)), 1e-15 / T):
+                continue
+            D1 = math.fsum(dx[-k:])
+            D0 = math.fsum(dx[-2 * k:-k])
+            if abs(D1 - D0) > max(period_tol * max(abs(D1), abs(D0)), 1e-15):
+                continue
+            if not any(slipped):
+                return 0.0, "static", j
+            if sum(stick_t[-k:]) > _STICK_MIN * T:
+                status = "stick_slip"
+            else:
+                status = "continuous_sliding"
+            return D1 / (k * T), status, j
+
+    half = max(1, max_periods // 2)
+    return math.fsum(dx[-half:]) / (half * T), "not_converged", max_periods
+
+
+def _demo():
+    """Print reference velocities on paper parameters at two tolerances."""
+    base = dict(f0=14.44, Q=17.5, alpha_deg=64.0, cs=0.25)
+    points = [
+        (0.08, 13.0, 5.0, "S: v = 0"),
+        (0.08, 13.0, 8.5, "P: v > 0"),
+        (0.08, 16.5, 8.5, "N: v < 0"),
+        (0.08, 14.5, 6.0, "v > 0"),
+        (0.08, 14.5, 9.0, "v < 0"),
+        (0.08, 14.6, 7.0, "PN"),
+        (1.0, 14.44, 5.0, "M -> 1"),
+        (0.9, 13.0, 6.0, "M -> 1"),
+    ]
+    print(f"{'M':>5} {'f':>6} {'a':>5} {'rtol':>6} {'v [m/s]':>24} {'status':>19}"
+          f" {'periods':>7} {'time[s]':>8}  rel.diff  expected")
+    t_all = time.perf_counter()
+    for M, f, a, note in points:
+        res = []
+        for rtol in (1e-12, 1e-13):
+            t0 = time.perf_counter()
+            v, status, n = reference_velocity(M=M, f=f, a=a, rtol=rtol,
+                                              atol=rtol * 1e-2, **base)
+            dt = time.perf_counter() - t0
+            res.append(v)
+            extra = ""
+            if len(res) == 2:
+                scale = max(abs(res[0]), abs(res[1]))
+                rd = abs(res[0] - res[1]) / scale if scale > 0 else 0.0
+                extra = f"{rd:9.2e}  {note}"
+            print(f"{M:5.2f} {f:6.2f} {a:5.2f} {rtol:6.0e} {v:24.16e} {status:>19}"
+                  f" {n:7d} {dt:8.2f}  {extra}", flush=True)
+    print(f"total wall time {time.perf_counter() - t_all:.1f} s")
+
+
+if __name__ == "__main__":
+    _demo()
