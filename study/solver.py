@@ -23,6 +23,9 @@ __all__ = ["SolverSettings", "SteadyState", "steady_state", "steady_velocity"]
 #: Version of the steady-state algorithm; changes whenever its results may change.
 SOLVER_VERSION = "1"
 
+#: Inputs with at least this many points are solved by the parallel kernel.
+PARALLEL_THRESHOLD = 2048
+
 
 @dataclass(frozen=True)
 class SolverSettings:
@@ -135,7 +138,9 @@ def steady_state(
     forward = np.empty(n)
     backward = np.empty(n)
     period = np.empty(n, dtype=np.int32)
-    _kernel._steady_state(
+    # Launching the thread pool costs milliseconds: small inputs run on this thread.
+    kernel = _kernel._steady_state if n >= PARALLEL_THRESHOLD else _kernel._steady_state_serial
+    kernel(
         np.ascontiguousarray(a_plus, dtype=np.complex128),
         np.ascontiguousarray(a_minus, dtype=np.complex128),
         np.ascontiguousarray(b_plus, dtype=np.complex128),

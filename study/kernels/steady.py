@@ -460,37 +460,63 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_r
     return NOT_CONVERGED, REASON_EVENT_BUDGET, np.nan, 0.0, 0.0, 0.0, 0
 
 
+@njit(cache=True, nogil=True)
+def _solve_into(
+    i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+    max_events, max_rounds,
+    velocity, status, reason, slips, forward, backward, period,
+):
+    """Solve point ``i`` and write its results into the output arrays."""
+    if lifted[i]:
+        velocity[i] = np.nan
+        status[i] = LIFT_OFF
+        reason[i] = REASON_NONE
+        slips[i] = np.nan
+        forward[i] = np.nan
+        backward[i] = np.nan
+        period[i] = 0
+        return
+    st, why, mean, per, fwd, bwd, n_period = _solve_point(
+        a_plus[i], a_minus[i], b_plus[i], b_minus[i], cs_g, ck_g, max_events, max_rounds
+    )
+    status[i] = st
+    reason[i] = why
+    if st == NOT_CONVERGED:
+        velocity[i] = np.nan
+        slips[i] = np.nan
+        forward[i] = np.nan
+        backward[i] = np.nan
+    else:
+        velocity[i] = mean / omega[i]
+        slips[i] = per
+        forward[i] = fwd
+        backward[i] = bwd
+    period[i] = n_period
+
+
 @njit(cache=True, nogil=True, parallel=True)
 def _steady_state(
     a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
     max_events, max_rounds,
     velocity, status, reason, slips, forward, backward, period,
 ):
-    """Fill the output arrays point by point, in parallel over points."""
+    """Fill the output arrays, in parallel over points (threads, GIL released)."""
     for i in prange(a_plus.shape[0]):
-        if lifted[i]:
-            velocity[i] = np.nan
-            status[i] = LIFT_OFF
-            reason[i] = REASON_NONE
-            slips[i] = np.nan
-            forward[i] = np.nan
-            backward[i] = np.nan
-            period[i] = 0
-            continue
-        st, why, mean, per, fwd, bwd, n_period = _solve_point(
-            a_plus[i], a_minus[i], b_plus[i], b_minus[i], cs_g, ck_g,
-            max_events, max_rounds,
+        _solve_into(
+            i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+            max_events, max_rounds, velocity, status, reason, slips, forward, backward, period,
         )
-        status[i] = st
-        reason[i] = why
-        if st == NOT_CONVERGED:
-            velocity[i] = np.nan
-            slips[i] = np.nan
-            forward[i] = np.nan
-            backward[i] = np.nan
-        else:
-            velocity[i] = mean / omega[i]
-            slips[i] = per
-            forward[i] = fwd
-            backward[i] = bwd
-        period[i] = n_period
+
+
+@njit(cache=True, nogil=True)
+def _steady_state_serial(
+    a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+    max_events, max_rounds,
+    velocity, status, reason, slips, forward, backward, period,
+):
+    """Same as :func:`_steady_state` on one thread: no thread-pool launch for small inputs."""
+    for i in range(a_plus.shape[0]):
+        _solve_into(
+            i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+            max_events, max_rounds, velocity, status, reason, slips, forward, backward, period,
+        )

@@ -1,0 +1,131 @@
+"""Benchmark: the paper's 1000 x 1000 (f, a) velocity map with the exact solver.
+
+Reports kernel time (parallel and one-thread, after compilation, minimum of
+repeats), the whole ``steady_state`` call, and the accuracy of a random sample of
+points against a 40-digit mpmath implementation of the same event-driven closed
+form (``benchmarks/exact_reference.py``, which shares no code with ``study``).
+Timings are reported, never asserted.
+
+Usage: ``python benchmarks/bench_velocity_map.py [--size 1000] [--sample 60]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+import study
+from study.kernels import steady as kernel
+from study.physics import lift_off_acceleration, release_amplitudes, slip_amplitudes
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+
+def _machine() -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as info:
+            for line in info:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return (
+        f"{cpu}, {os.cpu_count()} cores, numba {numba.__version__} "
+        f"({numba.config.NUMBA_NUM_THREADS} threads), numpy {np.__version__}, "
+        f"Python {platform.python_version()}"
+    )
+
+
+def _kernel_inputs(structure, f, a):
+    f_flat = np.ascontiguousarray(np.broadcast_to(f, np.broadcast_shapes(f.shape, a.shape))).ravel()
+    a_flat = np.ascontiguousarray(np.broadcast_to(a, np.broadcast_shapes(f.shape, a.shape))).ravel()
+    a_plus, a_minus = release_amplitudes(structure, f_flat, a_flat)
+    b_plus, b_minus = slip_amplitudes(structure, f_flat, a_flat)
+    lifted = a_flat > lift_off_acceleration(structure, f_flat)
+    n = f_flat.size
+    outputs = (
+        np.empty(n), np.empty(n, np.int8), np.empty(n, np.int8),
+        np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.int32),
+    )
+    inputs = (
+        a_plus, a_minus, b_plus, b_minus, lifted, 2 * np.pi * f_flat,
+        structure.cs * structure.g, structure.ck * structure.g, 10_000, 5_000,
+    )
+    return inputs, outputs
+
+
+def _best_of(repeats, func):
+    best = np.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        func()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=1000, help="points per axis")
+    parser.add_argument("--sample", type=int, default=60, help="points checked with mpmath")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+
+    structure = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
+    f = np.linspace(10.0, 20.0, args.size)[:, None]
+    a = np.linspace(0.0, 12.0, args.size)[None, :]
+    print(f"machine: {_machine()}")
+
+    start = time.perf_counter()
+    study.steady_state(structure, f[:2], a[:, :2])
+    study.steady_state(structure, np.full(4096, 13.0), 8.5)
+    print(f"first calls (compile or load the numba cache): {time.perf_counter() - start:.2f} s")
+
+    inputs, outputs = _kernel_inputs(structure, f, a)
+    parallel = _best_of(args.repeats, lambda: kernel._steady_state(*inputs, *outputs))
+    serial = _best_of(1, lambda: kernel._steady_state_serial(*inputs, *outputs))
+    whole = _best_of(args.repeats, lambda: study.steady_state(structure, f, a))
+    result = study.steady_state(structure, f, a)
+    n = result.velocity.size
+    counts = {s.name: int(np.sum(result.status == s)) for s in study.Status}
+    print(f"map {args.size} x {args.size} = {n} points; statuses {counts}")
+    print(f"kernel, parallel:   {parallel:.3f} s  ({parallel / n * 1e9:.0f} ns per point)")
+    print(f"kernel, one thread: {serial:.3f} s  (parallel speed-up {serial / parallel:.2f}x)")
+    print(f"steady_state call:  {whole:.3f} s  (kernel share {parallel / whole:.0%})")
+
+    try:
+        from exact_reference import exact_velocity
+    except ImportError as err:  # mpmath is in the test extra
+        print(f"accuracy check skipped: {err}")
+        return
+    rng = np.random.default_rng(2026)
+    moving = np.flatnonzero(result.status.ravel() == study.Status.STICK_SLIP)
+    chosen = rng.choice(moving, size=min(args.sample, moving.size), replace=False)
+    f_all = np.broadcast_to(f, result.velocity.shape).ravel()
+    a_all = np.broadcast_to(a, result.velocity.shape).ravel()
+    errors = []
+    start = time.perf_counter()
+    for i in chosen:
+        exact, status, _ = exact_velocity(14.44, 17.5, 64.0, 0.08, 0.25, f_all[i], a_all[i])
+        assert status == "stick_slip", (f_all[i], a_all[i], status)
+        ours = result.velocity.ravel()[i]
+        errors.append(abs(float((ours - exact) / exact)))
+    errors = np.array(errors)
+    eps = np.finfo(float).eps
+    print(
+        f"accuracy vs 40-digit reference on {errors.size} random moving points "
+        f"({time.perf_counter() - start:.1f} s): max relative error {errors.max():.2e} "
+        f"= {errors.max() / eps:.1f} eps, median {np.median(errors):.2e}"
+    )
+
+
+if __name__ == "__main__":
+    main()
