@@ -9,7 +9,7 @@ import pytest
 
 import study
 
-# tests/ holds the independent reference integrator used by several tiers.
+# tests/ holds the independent references (exact_reference, reference_integrator).
 sys.path.insert(0, str(Path(__file__).parent))
 
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08, "cs": 0.25, "g": 9.8}

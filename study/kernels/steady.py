@@ -47,8 +47,10 @@ EXIT_TOLERANCE = 1e-12
 CIRCLE_MAP_AFTER = 8
 # Longest cycle of the circle map searched for, in map iterations.
 MAX_MAP_PERIOD = 16
-# A cycle candidate is refined by Newton iteration once it closes to this phase.
-CYCLE_DETECTION = 1e-6
+# A cycle candidate is refined by Newton iteration once it closes to this phase
+# [rad]; a failed refinement is retried only once the gap has halved. Newton steps
+# make slowly attracting cycles (multiplier near 1) cheap to find.
+CYCLE_DETECTION = 1e-2
 # Newton refinement of a cycle stops at this phase residual [rad].
 CYCLE_TOLERANCE = 1e-12
 
@@ -312,6 +314,7 @@ def _circle_map(theta, k, max_rounds, max_events):
     """
     # Unwrapped phase advance of each of the last iterations (a ring buffer).
     advances = np.empty(MAX_MAP_PERIOD)
+    tried = np.full(MAX_MAP_PERIOD + 1, np.inf)
     p = _mod_two_pi(theta)
     for iteration in range(max_rounds):
         flag, end, sign, _, _, _, _, _ = _rounds(p, 1, k, max_events)
@@ -325,7 +328,9 @@ def _circle_map(theta, k, max_rounds, max_events):
         for period in range(1, min(iteration + 1, MAX_MAP_PERIOD) + 1):
             total += advances[(iteration - period + 1) % MAX_MAP_PERIOD]
             turns = round(total / TWO_PI)
-            if turns >= 1 and abs(total - TWO_PI * turns) < CYCLE_DETECTION:
+            gap = abs(total - TWO_PI * turns)
+            if turns >= 1 and gap < CYCLE_DETECTION and gap < 0.5 * tried[period]:
+                tried[period] = gap
                 converged, p_star = _refine_cycle(p, period, turns, k, max_events)
                 if converged:
                     flag, end, sign, _, distance, forward, backward, slips = _rounds(
@@ -500,12 +505,20 @@ def _steady_state(
     max_events, max_rounds,
     velocity, status, reason, slips, forward, backward, period,
 ):
-    """Fill the output arrays, in parallel over points (threads, GIL released)."""
-    for i in prange(a_plus.shape[0]):
-        _solve_into(
-            i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
-            max_events, max_rounds, velocity, status, reason, slips, forward, backward, period,
-        )
+    """Fill the output arrays, in parallel over points (threads, GIL released).
+
+    Points are dealt to threads interleaved: the cost of a point depends on its
+    regime, and neighbouring points share a regime, so contiguous blocks would
+    leave one thread with all the slipping points of a map.
+    """
+    n = a_plus.shape[0]
+    lanes = min(n, 256)
+    for lane in prange(lanes):
+        for i in range(lane, n, lanes):
+            _solve_into(
+                i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g, max_events,
+                max_rounds, velocity, status, reason, slips, forward, backward, period,
+            )
 
 
 @njit(cache=True, nogil=True)

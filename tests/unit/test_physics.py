@@ -137,5 +137,5 @@ def test_bad_acceleration_is_refused(paper_structure, bad_a):
 
 
 def test_structure_type_is_checked():
-    with pytest.raises(TypeError, match="study.Structure"):
+    with pytest.raises(TypeError, match=r"study\.Structure"):
         study.steady_velocity({"f0": 14.44}, 14.0, 5.0)

@@ -1,7 +1,7 @@
 """High-precision reference for the steady mean velocity of the stick-slip model.
 
 A slow but exact (to ``dps`` significant digits) event-driven solver of the
-single-plate model of ``/work/shared/PHYSICS.md`` (sections 1-3), written with
+single-plate model of ``PHYSICS.md (shared with the project)`` (sections 1-3), written with
 :mod:`mpmath` only. It is deliberately independent of the ``study`` package: nothing
 is imported from it, every formula is re-derived here, so that it can be used to check
 that the fast float64 solver is accurate to machine precision.
@@ -45,7 +45,7 @@ phase. The orbit is therefore closed as soon as a canonical release of the same 
 and phase (mod 2 pi) as an earlier one occurs; the mean velocity is the displacement
 between the two releases divided by the elapsed time.
 
-Run ``python benchmarks/exact_reference.py`` for a demo on the paper's parameters.
+Run ``python tests/exact_reference.py`` for a demo on the paper's parameters.
 """
 
 from __future__ import annotations
@@ -282,9 +282,7 @@ def exact_velocity(
         periodic orbit (which may span several drive periods); 0 unless stick-slip.
     """
     with mp.workdps(dps):
-        f0_, q_, al_, m_, cs_, f_, a_, g_ = (
-            _to_mpf(v) for v in (f0, Q, alpha_deg, M, cs, f, a, g)
-        )
+        f0_, q_, al_, m_, cs_, f_, a_, g_ = (_to_mpf(v) for v in (f0, Q, alpha_deg, M, cs, f, a, g))
         ck_ = cs_ if ck is None else _to_mpf(ck)
         if ck_ > cs_:
             raise ValueError("ck must not exceed cs")
