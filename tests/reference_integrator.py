@@ -48,6 +48,7 @@ _STICK = 0
 _MAX_K = 8  # longest orbit period (in drive periods) that is looked for
 _GUARD = 1e-8  # event-suppression window after a slip start, in drive periods
 _STICK_MIN = 1e-10  # stick phases shorter than this (in drive periods) do not count
+_STEPS_PER_PERIOD = 64  # max_step = T / _STEPS_PER_PERIOD
 _N_SAMPLES = 4096  # samples of n(t) over one period for the lift-off test
 _MAX_SEGMENTS_PER_PERIOD = 10_000
 
@@ -97,8 +98,17 @@ class _System:
 
     def rhs_slip(self, s):
         """Return the right-hand side of a slip of sign ``s``."""
-        A, w, c, k, M, ca, sa, g, a = (self.A, self.w, self.c, self.k, self.M,
-                                       self.ca, self.sa, self.g, self.a)
+        A, w, c, k, M, ca, sa, g, a = (
+            self.A,
+            self.w,
+            self.c,
+            self.k,
+            self.M,
+            self.ca,
+            self.sa,
+            self.g,
+            self.a,
+        )
         cks = self.ck * s
 
         def rhs(t, y):
@@ -161,8 +171,13 @@ def _min_normal_force(sys_, y_mode, T, rtol, atol, max_step):
     t_eval = np.linspace(0.0, T, _N_SAMPLES + 1)
     sol = solve_ivp(
         lambda t, y: sys_.rhs_stick(t, [y[0], y[1]])[:2],
-        (0.0, T), list(y_mode), method="DOP853", t_eval=t_eval,
-        rtol=rtol, atol=atol, max_step=max_step,
+        (0.0, T),
+        list(y_mode),
+        method="DOP853",
+        t_eval=t_eval,
+        rtol=rtol,
+        atol=atol,
+        max_step=max_step,
     )
     if sol.status != 0:  # pragma: no cover - defensive
         raise RuntimeError(f"mode integration failed: {sol.message}")
@@ -185,7 +200,6 @@ class _Integrator:
         self.T = T
         self.opts = dict(method="DOP853", rtol=rtol, atol=atol, max_step=max_step)
         lift = sys_.ev_lift()
-        self.lift = lift
         self.stick_events = [sys_.ev_release(+1), sys_.ev_release(-1), lift]
         self.slip_rhs = {+1: sys_.rhs_slip(+1), -1: sys_.rhs_slip(-1)}
         self.slip_events = {s: [sys_.ev_stop(s), lift] for s in (+1, -1)}
@@ -271,9 +285,11 @@ class _Integrator:
             rhs = self.slip_rhs[s]
             t1, y1, fired = self._solve(rhs, t, T, y, self.slip_events[s])
             if fired == 0 and fresh and t1 - t < self.guard:
-                # The slip would end as soon as it starts: a root located at a
-                # release that sits exactly on the threshold. Integrate past that
-                # instant with the v = 0 event suppressed, then look again.
+                # The slip would end as soon as it starts: v = 0 at the start makes
+                # the root finder return the start instant when v comes back to 0
+                # within the first step (or when the release was located a hair
+                # early). Integrate a tiny window with the v = 0 event masked (same
+                # ODE), then re-arm the event.
                 t_w = min(t + self.guard, T)
                 t1, y1, fired = self._solve(rhs, t, t_w, y, self.slip_noevent)
                 if fired is not None:
@@ -299,16 +315,25 @@ class _Integrator:
             fresh = mode != _STICK
         else:  # pragma: no cover - defensive
             raise RuntimeError("too many events in one drive period")
-        if mode == _STICK:
-            # Immediate release at the period boundary is handled by the events
-            # of the next period (a release function at 0 going up fires at once).
-            pass
         stats = dict(stick_time=stick_time, slipped=slipped, events=n_events)
         return y, mode, fresh, stats
 
 
-def reference_velocity(f0, Q, alpha_deg, M, cs, f, a, ck=None, g=9.8,
-                       rtol=1e-12, atol=1e-14, max_periods=400, period_tol=1e-13):
+def reference_velocity(
+    f0,
+    Q,
+    alpha_deg,
+    M,
+    cs,
+    f,
+    a,
+    ck=None,
+    g=9.8,
+    rtol=1e-12,
+    atol=1e-14,
+    max_periods=400,
+    period_tol=1e-13,
+):
     """Mean sliding velocity of the periodic steady orbit, by direct integration.
 
     The hybrid stick/slip system of the single-plate model is integrated period
@@ -340,7 +365,8 @@ def reference_velocity(f0, Q, alpha_deg, M, cs, f, a, ck=None, g=9.8,
     g : float, optional
         Gravity [m s^-2].
     rtol, atol : float, optional
-        Tolerances of ``solve_ivp``. The state components are
+        Tolerances of ``solve_ivp`` (``rtol`` must be >= ``100 * eps``, about
+        2.3e-14, or scipy warns). The state components are
         ``(delta [m], ddelta/dt [m/s], x [m], v [m/s])``.
     max_periods : int, optional
         Maximum number of drive periods integrated.
@@ -377,10 +403,17 @@ def reference_velocity(f0, Q, alpha_deg, M, cs, f, a, ck=None, g=9.8,
 
     Events are located by ``solve_ivp`` (Brent's method on the dense output);
     at every event the integration restarts with the new discrete mode and
-    ``v`` set exactly to 0. ``max_step`` is ``T / 40`` so that no event is
-    stepped over. A slip that would end within ``1e-8 T`` of its start (a
-    release located exactly on a threshold) is integrated past that instant
-    with the ``v = 0`` event suppressed.
+    ``v`` set exactly to 0. ``max_step`` is ``T / 64`` so that no event is
+    stepped over (an event function that crosses zero and comes back within
+    one step would be missed; such an excursion lasts less than 1/64 period).
+
+    A slip starts from ``v = 0`` exactly, so the ``v = 0`` event function is
+    zero at the start; if the slip also ends within the first step, or the
+    release was located a hair before the threshold, the root finder returns
+    the start instant. A slip ending within ``1e-8 T`` of its start is therefore
+    integrated past that window with the ``v = 0`` event suppressed (the ODE is
+    unchanged; only the event is masked), then the event is re-armed; if ``v``
+    has not taken the slip's sign by then, the slip ends there.
     """
     if ck is None:
         ck = cs
@@ -390,9 +423,21 @@ def reference_velocity(f0, Q, alpha_deg, M, cs, f, a, ck=None, g=9.8,
         raise ValueError("f, f0 and Q must be positive")
     if max_periods < 2:
         raise ValueError("max_periods must be >= 2")
+    return _reference_velocity(
+        f0, Q, alpha_deg, M, cs, f, a, ck, g, rtol, atol, max_periods, period_tol, _STEPS_PER_PERIOD
+    )
 
+
+def _reference_velocity(
+    f0, Q, alpha_deg, M, cs, f, a, ck, g, rtol, atol, max_periods, period_tol, steps_per_period
+):
+    """Body of :func:`reference_velocity` with ``max_step = T / steps_per_period``.
+
+    Exposed separately only so that the demo can show convergence in the step
+    size; arguments are as in :func:`reference_velocity` (``ck`` not None).
+    """
     T = 1.0 / f
-    max_step = T / 40.0
+    max_step = T / steps_per_period
     sys_ = _System(f0, Q, alpha_deg, M, cs, ck, g, f, a)
     d0, dd0 = _initial_mode_state(sys_)
 
@@ -428,7 +473,7 @@ def reference_velocity(f0, Q, alpha_deg, M, cs, f, a, ck=None, g=9.8,
             if abs(v1 - v0) > max(period_tol * max(abs(v1), abs(v0)), 1e-15 / T):
                 continue
             D1 = math.fsum(dx[-k:])
-            D0 = math.fsum(dx[-2 * k:-k])
+            D0 = math.fsum(dx[-2 * k : -k])
             if abs(D1 - D0) > max(period_tol * max(abs(D1), abs(D0)), 1e-15):
                 continue
             if not any(slipped):
@@ -444,8 +489,16 @@ def reference_velocity(f0, Q, alpha_deg, M, cs, f, a, ck=None, g=9.8,
 
 
 def _demo():
-    """Print reference velocities on paper parameters at two tolerances."""
-    base = dict(f0=14.44, Q=17.5, alpha_deg=64.0, cs=0.25)
+    """Print reference velocities on paper parameters.
+
+    Each point is computed three times: ``rtol = 1e-12`` and ``1e-13`` with the
+    default ``max_step = T / 64`` (``atol = rtol / 100``), then ``rtol = 1e-13``
+    with ``max_step = T / 256``. At these tolerances DOP853's own step is
+    about ``T / 30 .. T / 50``, so the ``T / 64`` cap usually binds and the
+    first two runs often agree bit for bit; the third run shows the
+    convergence in the step size.
+    """
+    base = dict(f0=14.44, Q=17.5, alpha_deg=64.0, cs=0.25, ck=0.25, g=9.8)
     points = [
         (0.08, 13.0, 5.0, "S: v = 0"),
         (0.08, 13.0, 8.5, "P: v > 0"),
@@ -455,26 +508,46 @@ def _demo():
         (0.08, 14.6, 7.0, "PN"),
         (1.0, 14.44, 5.0, "M -> 1"),
         (0.9, 13.0, 6.0, "M -> 1"),
+        (1.0, 14.44, 2.0, "M -> 1"),
+        (0.9, 13.0, 4.0, "M -> 1"),
+        (1.0, 15.0, 6.0, "M -> 1"),
     ]
-    print(f"{'M':>5} {'f':>6} {'a':>5} {'rtol':>6} {'v [m/s]':>24} {'status':>19}"
-          f" {'periods':>7} {'time[s]':>8}  rel.diff  expected")
+    runs = [(1e-12, _STEPS_PER_PERIOD), (1e-13, _STEPS_PER_PERIOD), (1e-13, 256)]
+    print(
+        f"{'M':>5} {'f':>6} {'a':>5} {'rtol':>6} {'T/h':>4} {'v [m/s]':>24}"
+        f" {'status':>19} {'periods':>7} {'time[s]':>7} {'rel.diff':>9}  expected"
+    )
     t_all = time.perf_counter()
     for M, f, a, note in points:
-        res = []
-        for rtol in (1e-12, 1e-13):
+        prev = None
+        for rtol, steps in runs:
             t0 = time.perf_counter()
-            v, status, n = reference_velocity(M=M, f=f, a=a, rtol=rtol,
-                                              atol=rtol * 1e-2, **base)
+            v, status, n = _reference_velocity(
+                M=M,
+                f=f,
+                a=a,
+                rtol=rtol,
+                atol=rtol * 1e-2,
+                max_periods=400,
+                period_tol=1e-13,
+                steps_per_period=steps,
+                **base,
+            )
             dt = time.perf_counter() - t0
-            res.append(v)
-            extra = ""
-            if len(res) == 2:
-                scale = max(abs(res[0]), abs(res[1]))
-                rd = abs(res[0] - res[1]) / scale if scale > 0 else 0.0
-                extra = f"{rd:9.2e}  {note}"
-            print(f"{M:5.2f} {f:6.2f} {a:5.2f} {rtol:6.0e} {v:24.16e} {status:>19}"
-                  f" {n:7d} {dt:8.2f}  {extra}", flush=True)
-    print(f"total wall time {time.perf_counter() - t_all:.1f} s")
+            rd = ""
+            if prev is not None and math.isfinite(v):
+                scale = max(abs(v), abs(prev))
+                rd = f"{(abs(v - prev) / scale if scale > 0 else 0.0):9.2e}"
+            prev = v
+            print(
+                f"{M:5.2f} {f:6.2f} {a:5.2f} {rtol:6.0e} {steps:4d} {v:24.16e}"
+                f" {status:>19} {n:7d} {dt:7.2f} {rd:>9}  {note}",
+                flush=True,
+            )
+    print(
+        f"total wall time {time.perf_counter() - t_all:.1f} s "
+        "(rel.diff: relative to the run on the line above)"
+    )
 
 
 if __name__ == "__main__":
