@@ -38,6 +38,7 @@ import time
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 __all__ = ["reference_velocity"]
 
@@ -45,6 +46,7 @@ __all__ = ["reference_velocity"]
 STATUSES = ("static", "stick_slip", "continuous_sliding", "lift_off", "not_converged")
 
 _STICK = 0
+_EPS = float(np.finfo(float).eps)
 _MAX_K = 8  # longest orbit period (in drive periods) that is looked for
 _GUARD = 1e-8  # event-suppression window after a slip start, in drive periods
 _STICK_MIN = 1e-10  # stick phases shorter than this (in drive periods) do not count
@@ -142,6 +144,40 @@ class _System:
         ev.direction = -s
         return ev
 
+    def force_rates(self, t, y):
+        """Return ``(dtau/dt, dn/dt)`` at local time ``t`` and state ``y``."""
+        wt = self.w * t
+        acc = self.A * math.cos(wt) - self.c * y[1] - self.k * y[0]
+        dacc = -self.A * self.w * math.sin(wt) - self.c * acc - self.k * y[1]
+        dn = self.a * self.w * math.sin(wt) + self.M * dacc * self.ca
+        dtau = -self.M * dacc * self.sa
+        return dtau, dn
+
+    def apex_release(self, s):
+        """Non-terminal event: maximum of ``s tau - cs n`` (its rate crosses down)."""
+
+        def ev(t, y):
+            dtau, dn = self.force_rates(t, y)
+            return s * dtau - self.cs * dn
+
+        ev.terminal = False
+        ev.direction = -1
+        return ev
+
+    def apex_stop(self, s):
+        """Non-terminal event: maximum of ``-s v`` in a slip of sign ``s``.
+
+        ``d(-s v)/dt = -s tau + ck n`` crosses zero downwards.
+        """
+
+        def ev(t, y):
+            tau, n = self.forces(t, y)
+            return -s * tau + self.ck * n
+
+        ev.terminal = False
+        ev.direction = -1
+        return ev
+
     def ev_lift(self):
         """Event ``n = 0`` crossed downwards (lift-off)."""
 
@@ -200,24 +236,86 @@ class _Integrator:
         self.T = T
         self.opts = dict(method="DOP853", rtol=rtol, atol=atol, max_step=max_step)
         lift = sys_.ev_lift()
+        # Terminal events, and for the crossing events the apex watchers
+        # (non-terminal events at the maxima of the oriented event function)
+        # as (apex event, index of the terminal event it watches).
         self.stick_events = [sys_.ev_release(+1), sys_.ev_release(-1), lift]
+        self.stick_apexes = [(sys_.apex_release(+1), 0), (sys_.apex_release(-1), 1)]
         self.slip_rhs = {+1: sys_.rhs_slip(+1), -1: sys_.rhs_slip(-1)}
         self.slip_events = {s: [sys_.ev_stop(s), lift] for s in (+1, -1)}
+        self.slip_apexes = {s: [(sys_.apex_stop(s), 0)] for s in (+1, -1)}
         self.slip_noevent = [lift]
         self.guard = _GUARD * T
 
-    def _solve(self, rhs, t0, t1, y0, events):
-        sol = solve_ivp(rhs, (t0, t1), y0, events=events, **self.opts)
+    def _solve(self, rhs, t0, t1, y0, events, apexes=()):
+        """Integrate until the first terminal event or ``t1``.
+
+        Parameters
+        ----------
+        rhs : callable
+            Right-hand side of the current discrete mode.
+        t0, t1 : float
+            Local time interval.
+        y0 : list of float
+            Initial state.
+        events : list of callable
+            Terminal events (each with ``direction`` set).
+        apexes : sequence of (callable, int)
+            Non-terminal events at the maxima of ``direction * event`` for the
+            terminal event of the given index. ``solve_ivp`` only sees sign
+            changes between step ends, so an event function that crosses zero
+            and comes back within one step is missed; at such a maximum the
+            oriented function is then positive, and the missed crossing is
+            located on the dense output between the step start and the maximum.
+
+        Returns
+        -------
+        t_end : float
+            End time (event time, or ``t1``).
+        y_end : list of float
+            State at ``t_end``.
+        fired : int or None
+            Index in ``events`` of the event that stopped the integration.
+        """
+        all_events = list(events) + [ev for ev, _ in apexes]
+        sol = solve_ivp(
+            rhs, (t0, t1), y0, events=all_events, dense_output=bool(apexes), **self.opts
+        )
         if sol.status == -1:  # pragma: no cover - defensive
             raise RuntimeError(f"integration failed: {sol.message}")
         t_end = float(sol.t[-1])
         y_end = [float(v) for v in sol.y[:, -1]]
         fired = None
         if sol.status == 1:
-            for i, te in enumerate(sol.t_events):
+            for i in range(len(events)):
+                te = sol.t_events[i]
                 if len(te) and te[-1] == sol.t[-1]:
                     fired = i
                     break
+        missed = None
+        for j, (_, idx) in enumerate(apexes):
+            ev = events[idx]
+            d = ev.direction
+
+            def oriented(t, ev=ev, d=d):
+                return d * ev(t, sol.sol(t))
+
+            for tm in sol.t_events[len(events) + j]:
+                if oriented(tm) <= 0.0:
+                    continue
+                # Missed crossing before tm: bracket it in the step ending past tm.
+                k = int(np.searchsorted(sol.t, tm, side="left")) - 1
+                ta = float(sol.t[max(k, 0)])
+                if ta < tm and oriented(ta) < 0.0:
+                    root = brentq(oriented, ta, tm, xtol=4 * _EPS, rtol=4 * _EPS)
+                else:
+                    root = ta
+                if missed is None or root < missed[0]:
+                    missed = (root, idx)
+                break
+        if missed is not None and missed[0] < t_end:
+            t_end, fired = missed
+            y_end = [float(v) for v in sol.sol(t_end)]
         return t_end, y_end, fired
 
     def release_direction(self, t, y):
@@ -267,7 +365,9 @@ class _Integrator:
             if t >= T:
                 break
             if mode == _STICK:
-                t1, y1, fired = self._solve(self.sys.rhs_stick, t, T, y, self.stick_events)
+                t1, y1, fired = self._solve(
+                    self.sys.rhs_stick, t, T, y, self.stick_events, self.stick_apexes
+                )
                 stick_time += t1 - t
                 t, y = t1, y1
                 if fired is None:
@@ -283,7 +383,7 @@ class _Integrator:
 
             s = mode
             rhs = self.slip_rhs[s]
-            t1, y1, fired = self._solve(rhs, t, T, y, self.slip_events[s])
+            t1, y1, fired = self._solve(rhs, t, T, y, self.slip_events[s], self.slip_apexes[s])
             if fired == 0 and fresh and t1 - t < self.guard:
                 # The slip would end as soon as it starts: v = 0 at the start makes
                 # the root finder return the start instant when v comes back to 0
@@ -403,9 +503,13 @@ def reference_velocity(
 
     Events are located by ``solve_ivp`` (Brent's method on the dense output);
     at every event the integration restarts with the new discrete mode and
-    ``v`` set exactly to 0. ``max_step`` is ``T / 64`` so that no event is
-    stepped over (an event function that crosses zero and comes back within
-    one step would be missed; such an excursion lasts less than 1/64 period).
+    ``v`` set exactly to 0. ``max_step`` is ``T / 64``. ``solve_ivp`` only
+    sees sign changes between step ends, so a short excursion of an event
+    function across zero inside one step (a brief release, a slip that
+    barely stops) would be missed; every crossing event is therefore watched
+    by a non-terminal event at the maxima of its oriented function (one per
+    period: these functions are sinusoids plus constants), and a positive
+    maximum triggers a root search on the dense output.
 
     A slip starts from ``v = 0`` exactly, so the ``v = 0`` event function is
     zero at the start; if the slip also ends within the first step, or the

@@ -30,10 +30,10 @@ STATUS_NAMES = {
 def _regime(structure, f, a, margin=0.02):
     """Regime of (f, a), or None within ``margin`` (relative) of a threshold.
 
-    Just above a threshold the slip window is shorter than the integrator's
-    ``max_step`` and its sign-change event detection can step over it (at
-    a = a*(1 + 3.6e-5) it reports a static body where the exact velocity is
-    -2.2e-11 m/s); those points are checked against the mpmath reference instead.
+    Within ``delta`` of a threshold the velocity's relative condition number is about
+    ``1/delta``, so the integrator's 1e-12 tolerance only buys ~1e-12/delta (at
+    a = a*(1 + 3.6e-5) it agrees to 8e-9 on v = -2.2e-11 m/s). Those points are
+    checked against the 40-digit mpmath reference instead (test_solver_cases.py).
     """
     a_plus, a_minus = study.thresholds(structure, f)
     if min(abs(a / a_plus - 1), abs(a / a_minus - 1)) < margin:
