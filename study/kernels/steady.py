@@ -44,14 +44,14 @@ REASON_EVENT_BUDGET = 2
 EXIT_TOLERANCE = 1e-12
 # Consecutive slips without a stick after which the reversal phases are treated
 # as a circle map (continuous sliding).
-CIRCLE_MAP_AFTER = 8
+CIRCLE_MAP_AFTER = 4
 # Longest cycle of the circle map searched for, in map iterations.
 MAX_MAP_PERIOD = 16
 # A cycle candidate is refined by Newton iteration once it closes to this phase
 # [rad]; a failed refinement is retried only once the gap has halved. Newton steps
 # make slowly attracting cycles (multiplier near 1) cheap to find.
 CYCLE_DETECTION = 1e-2
-# Newton refinement of a cycle stops at this phase residual [rad].
+# Newton refinement of a cycle stops once the cycle closes to this phase [rad].
 CYCLE_TOLERANCE = 1e-12
 
 # Round-trip status of a sequence of slips.
@@ -275,28 +275,34 @@ def _rounds(theta, count, k, max_events):
 
 
 @njit(cache=True, nogil=True)
-def _refine_cycle(theta, period, turns, k, max_events):
+def _refine_cycle(p, period, turns, k, max_events):
     """Newton iteration for a cycle of the reversal circle map.
 
-    Solves ``R^period(p) = p + 2 pi turns`` from ``p = theta``. Returns
-    ``(converged, p)``; converged only for an attracting cycle (|multiplier| < 1).
+    Solves ``R^period(p) = p + 2 pi turns`` from ``p``, with the analytic
+    derivative of the map. A cycle is accepted when it closes to within
+    ``CYCLE_TOLERANCE`` (a backward error: the exact cycle of a map perturbed by
+    that much; near multiplier 1 the phase itself is ill-conditioned, by
+    ``1 / |1 - multiplier|``) and it is attracting (|multiplier| < 1).
+
+    Returns
+    -------
+    converged, p, end, sign, distance, forward, backward, slips
+        The cycle's phase ``p`` and statistics of ``period`` map iterations along it.
     """
-    p = _mod_two_pi(theta)
-    residual_ok = False
     for _ in range(40):
-        flag, end, _s, deriv, _d, _f, _b, _n = _rounds(p, period, k, max_events)
-        if flag != _ROUND_OK:
-            return False, p
+        p = _mod_two_pi(p)
+        flag, end, sign, deriv, distance, forward, backward, slips = _rounds(
+            p, period, k, max_events
+        )
+        if flag != _ROUND_OK or deriv == 1.0:
+            break
         residual = end - p - TWO_PI * turns
-        if residual_ok:
-            return abs(residual) <= CYCLE_TOLERANCE and abs(deriv) < 1.0, p
-        if deriv == 1.0:
-            return False, p
-        step = residual / (deriv - 1.0)
-        p = _mod_two_pi(p - step)
-        if abs(step) <= CYCLE_TOLERANCE:
-            residual_ok = True
-    return False, p
+        if abs(residual) <= CYCLE_TOLERANCE:
+            if abs(deriv) < 1.0:
+                return True, p, end, sign, distance, forward, backward, slips
+            break
+        p -= residual / (deriv - 1.0)
+    return False, p, 0.0, 0, 0.0, 0.0, 0.0, 0
 
 
 @njit(cache=True, nogil=True)
@@ -312,42 +318,65 @@ def _circle_map(theta, k, max_rounds, max_events):
         ``_ROUND_STUCK`` (a stick appeared: resume stick-slip from ``theta, sign``),
         or ``_ROUND_BUDGET`` (no cycle found).
     """
-    # Unwrapped phase advance of each of the last iterations (a ring buffer).
+    # Ring buffers over the last iterations: start phase, unwrapped phase advance
+    # and derivative of the map.
+    starts = np.empty(MAX_MAP_PERIOD)
     advances = np.empty(MAX_MAP_PERIOD)
+    derivatives = np.empty(MAX_MAP_PERIOD)
     tried = np.full(MAX_MAP_PERIOD + 1, np.inf)
     p = _mod_two_pi(theta)
     for iteration in range(max_rounds):
-        flag, end, sign, _, _, _, _, _ = _rounds(p, 1, k, max_events)
+        flag, end, sign, deriv, _, _, _, _ = _rounds(p, 1, k, max_events)
         if flag == _ROUND_STUCK:
             return _ROUND_STUCK, end, sign, 0.0, 0.0, 0.0, 0.0, 0
         if flag == _ROUND_BUDGET:
             return _ROUND_BUDGET, end, sign, 0.0, 0.0, 0.0, 0.0, 0
-        advances[iteration % MAX_MAP_PERIOD] = end - p
+        slot = iteration % MAX_MAP_PERIOD
+        starts[slot] = p
+        advances[slot] = end - p
+        derivatives[slot] = deriv
         p = _mod_two_pi(end)
         total = 0.0
+        product = 1.0
         for period in range(1, min(iteration + 1, MAX_MAP_PERIOD) + 1):
-            total += advances[(iteration - period + 1) % MAX_MAP_PERIOD]
+            slot = (iteration - period + 1) % MAX_MAP_PERIOD
+            total += advances[slot]
+            product *= derivatives[slot]
             turns = round(total / TWO_PI)
             gap = abs(total - TWO_PI * turns)
             if turns >= 1 and gap < CYCLE_DETECTION and gap < 0.5 * tried[period]:
                 tried[period] = gap
-                converged, p_star = _refine_cycle(p, period, turns, k, max_events)
+                # First Newton step from the iterates already computed.
+                guess = starts[slot]
+                if product != 1.0:
+                    guess -= (total - TWO_PI * turns) / (product - 1.0)
+                converged, p_star, end, sign, distance, forward, backward, slips = (
+                    _refine_cycle(guess, period, turns, k, max_events)
+                )
                 if converged:
-                    flag, end, sign, _, distance, forward, backward, slips = _rounds(
-                        p_star, period, k, max_events
+                    # Report the cycle's own period, not a multiple that closed first.
+                    for shorter in range(1, period):
+                        if period % shorter or (turns * shorter) % period:
+                            continue
+                        turns_short = turns * shorter // period
+                        short = _rounds(p_star, shorter, k, max_events)
+                        if short[0] == _ROUND_OK and abs(
+                            short[1] - p_star - TWO_PI * turns_short
+                        ) <= 1e3 * CYCLE_TOLERANCE:
+                            _, end, sign, _, distance, forward, backward, slips = short
+                            turns = turns_short
+                            break
+                    span = TWO_PI * turns
+                    return (
+                        _ROUND_OK,
+                        end,
+                        sign,
+                        distance / span,
+                        slips / turns,
+                        forward / span,
+                        backward / span,
+                        int(turns),
                     )
-                    if flag == _ROUND_OK:
-                        span = TWO_PI * turns
-                        return (
-                            _ROUND_OK,
-                            end,
-                            sign,
-                            distance / span,
-                            slips / turns,
-                            forward / span,
-                            backward / span,
-                            int(turns),
-                        )
                 break
     return _ROUND_BUDGET, p, 1, 0.0, 0.0, 0.0, 0.0, 0
 
