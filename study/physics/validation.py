@@ -6,16 +6,22 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 
-def _as_real_array(name: str, values: ArrayLike, units: str) -> NDArray[np.float64]:
+def _checked(
+    name: str, values: ArrayLike, units: str, lower: float, inclusive: bool
+) -> NDArray[np.float64]:
+    """``values`` as float64, finite and above ``lower``; else a ValueError naming the
+    quantity, the first offending value, its index and the allowed range."""
     try:
         array = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be real numbers in {units}, got {values!r}") from None
-    bad = ~np.isfinite(array)
+        raise ValueError(f"{name} must be real numbers [{units}], got {values!r}") from None
+    with np.errstate(invalid="ignore"):
+        bad = ~np.isfinite(array) | ((array < lower) if inclusive else (array <= lower))
     if bad.any():
+        index = tuple(int(i) for i in np.argwhere(bad)[0])
+        allowed = f"finite and {'>=' if inclusive else '>'} {lower:g} {units}"
         raise ValueError(
-            f"{name} must be finite [{units}]; got {array[bad].ravel()[0]!r} "
-            f"at index {tuple(int(i) for i in np.argwhere(bad)[0])}"
+            f"{name} must be {allowed}; got {float(array[bad].ravel()[0])!r} at index {index}"
         )
     return array
 
@@ -26,16 +32,9 @@ def as_frequency(f: ArrayLike) -> NDArray[np.float64]:
     Raises
     ------
     ValueError
-        Naming the first offending value and its index.
+        Naming the first offending value, its index and the allowed range.
     """
-    array = _as_real_array("drive frequency f", f, "Hz")
-    bad = array <= 0
-    if bad.any():
-        raise ValueError(
-            f"drive frequency f must be > 0 Hz; got {array[bad].ravel()[0]!r} "
-            f"at index {tuple(int(i) for i in np.argwhere(bad)[0])}"
-        )
-    return array
+    return _checked("drive frequency f", f, "Hz", 0.0, inclusive=False)
 
 
 def as_acceleration(a: ArrayLike) -> NDArray[np.float64]:
@@ -44,13 +43,6 @@ def as_acceleration(a: ArrayLike) -> NDArray[np.float64]:
     Raises
     ------
     ValueError
-        Naming the first offending value and its index.
+        Naming the first offending value, its index and the allowed range.
     """
-    array = _as_real_array("drive acceleration a", a, "m s^-2")
-    bad = array < 0
-    if bad.any():
-        raise ValueError(
-            f"drive acceleration a must be >= 0 m s^-2; got {array[bad].ravel()[0]!r} "
-            f"at index {tuple(int(i) for i in np.argwhere(bad)[0])}"
-        )
-    return array
+    return _checked("drive acceleration a", a, "m s^-2", 0.0, inclusive=True)
