@@ -1,0 +1,1 @@
+"""Figure scripts: they draw computed results and compute nothing of their own."""
