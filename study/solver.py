@@ -97,6 +97,8 @@ def steady_state(
     f: ArrayLike,
     a: ArrayLike,
     settings: SolverSettings | None = None,
+    *,
+    parallel: bool | None = None,
 ) -> SteadyState:
     """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
 
@@ -114,6 +116,10 @@ def steady_state(
         Drive acceleration amplitude [m s^-2], >= 0.
     settings : SolverSettings, optional
         Solver budgets; defaults to ``SolverSettings()``.
+    parallel : bool, optional
+        Spread points over all cores (numba threads). By default only inputs of
+        at least ``PARALLEL_THRESHOLD`` points do; pass ``False`` when the caller
+        already runs one call per core (as the dask fan-out does).
 
     Returns
     -------
@@ -139,7 +145,9 @@ def steady_state(
     backward = np.empty(n)
     period = np.empty(n, dtype=np.int32)
     # Launching the thread pool costs milliseconds: small inputs run on this thread.
-    kernel = _kernel._steady_state if n >= PARALLEL_THRESHOLD else _kernel._steady_state_serial
+    if parallel is None:
+        parallel = n >= PARALLEL_THRESHOLD
+    kernel = _kernel._steady_state if parallel else _kernel._steady_state_serial
     kernel(
         np.ascontiguousarray(a_plus, dtype=np.complex128),
         np.ascontiguousarray(a_minus, dtype=np.complex128),

@@ -380,7 +380,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         )
     except ValueError as err:
         raise SpecError(f"{path}: [solver] {err}") from None
-    chunk_points = int(solver_table.get("chunk_points", 65_536))
+    chunk_points = int(solver_table.get("chunk_points", 20_000))
 
     canonical = {
         "name": study["name"],

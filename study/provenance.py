@@ -1,0 +1,114 @@
+"""Where a result came from: code, environment and the fingerprint that decides reruns."""
+
+from __future__ import annotations
+
+import hashlib
+import platform
+import socket
+import subprocess
+import sys
+from datetime import UTC, datetime
+from functools import cache
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+from study.solver import SOLVER_VERSION
+
+__all__ = [
+    "code_sha256",
+    "environment",
+    "fingerprint",
+    "git_state",
+    "package_version",
+    "utc_now",
+]
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+
+# Modules whose source decides the numbers in a result file. Anything else
+# (command line, figures, docs) can change without making results stale.
+_COMPUTING_SOURCES = (
+    "structure.py",
+    "solver.py",
+    "status.py",
+    "sweep.py",
+    "physics/forces.py",
+    "physics/validation.py",
+    "kernels/steady.py",
+)
+
+
+def utc_now() -> str:
+    """The current time, ISO 8601 in UTC with a ``Z``, to the second."""
+    return datetime.now(UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z")
+
+
+@cache
+def code_sha256() -> str:
+    """Hash of the source of every module that computes results, and the solver version."""
+    digest = hashlib.sha256(f"solver-version={SOLVER_VERSION}\n".encode())
+    for name in _COMPUTING_SOURCES:
+        digest.update(name.encode() + b"\0")
+        digest.update((PACKAGE_DIR / name).read_bytes())
+    return digest.hexdigest()
+
+
+def fingerprint(spec_sha256: str) -> str:
+    """What a result depends on: the canonical spec and the computing code."""
+    return hashlib.sha256(f"{spec_sha256}:{code_sha256()}".encode()).hexdigest()
+
+
+def package_version() -> str:
+    """Installed version of ``study``."""
+    try:
+        return metadata.version("study")
+    except metadata.PackageNotFoundError:  # running from a source tree
+        from study import __version__
+
+        return __version__
+
+
+@cache
+def git_state() -> dict[str, Any]:
+    """Commit and dirty flag of the checkout the package runs from, if it is one."""
+    def git(*args: str) -> str:
+        return subprocess.run(
+            ["git", "-C", str(PACKAGE_DIR), *args],
+            capture_output=True, text=True, check=True, timeout=10,
+        ).stdout.strip()
+
+    try:
+        commit = git("rev-parse", "HEAD")
+        dirty = bool(git("status", "--porcelain", "--untracked-files=no", "--", "."))
+    except (OSError, subprocess.SubprocessError):
+        return {"git_commit": "unknown", "git_dirty": "unknown"}
+    return {"git_commit": commit, "git_dirty": dirty}
+
+
+def _version(module: str) -> str:
+    try:
+        return metadata.version(module)
+    except metadata.PackageNotFoundError:
+        return "not installed"
+
+
+@cache
+def environment() -> dict[str, str]:
+    """Versions of the interpreter, the libraries and the netCDF/HDF5 C libraries."""
+    import netCDF4
+
+    return {
+        "python": platform.python_version(),
+        "numpy": _version("numpy"),
+        "numba": _version("numba"),
+        "xarray": _version("xarray"),
+        "dask": _version("dask"),
+        "distributed": _version("distributed"),
+        "netCDF4": _version("netCDF4"),
+        "netcdf_c": str(netCDF4.__netcdf4libversion__),
+        "hdf5": str(netCDF4.__hdf5libversion__),
+        "platform": platform.platform(),
+        "host": socket.gethostname(),
+        "executable": sys.executable,
+    }

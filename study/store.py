@@ -1,0 +1,514 @@
+"""Results on disk: the labelled dataset, atomic netCDF files, the chunk store, validation.
+
+Every result file is written to a temporary file in the destination folder,
+closed, reopened and validated against ``results_schema/study-result-v1.schema.json``
+and only then renamed over the final name: a reader never sees a half-written file.
+Completed chunks of a running study are kept, each written the same way, in a
+``<result>.partial/`` folder next to the result, with the fingerprint they were
+computed under; a resumed run reuses exactly the chunks whose fingerprint matches.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Iterable
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from study.spec import SPEC_SCHEMA_PATH, SpecError, StudySpec, parse_spec
+from study.status import NonConvergence, Status
+from study.sweep import Chunk, variables_for
+
+__all__ = [
+    "RESULT_SCHEMA",
+    "ChunkStore",
+    "ResultError",
+    "build_dataset",
+    "describe",
+    "open_result",
+    "validate_dataset",
+    "write_atomic",
+]
+
+RESULT_SCHEMA = "study-result-v1"
+RESULT_SCHEMA_PATH = SPEC_SCHEMA_PATH.parent / f"{RESULT_SCHEMA}.schema.json"
+
+#: units, long_name (and more) of every data variable a study can write.
+VARIABLE_ATTRS: dict[str, dict[str, Any]] = {
+    "a_star_plus": {
+        "units": "m s-2",
+        "long_name": "drive acceleration at which forward slips start (paper eq. 5)",
+    },
+    "a_star_minus": {
+        "units": "m s-2",
+        "long_name": "drive acceleration at which backward slips start (paper eq. 5)",
+    },
+    "lift_off_acceleration": {
+        "units": "m s-2",
+        "long_name": "drive acceleration above which the normal force becomes negative",
+    },
+    "velocity": {
+        "units": "m s-1",
+        "long_name": "mean velocity of the steady periodic orbit, positive forward",
+        "comment": "exactly 0 when static; NaN (missing) where status is lift_off or "
+        "not_converged",
+    },
+    "status": {
+        "units": "1",
+        "long_name": "outcome of the steady-state solver",
+        "flag_values": np.array([s.value for s in Status], dtype=np.int8),
+        "flag_meanings": " ".join(s.name.lower() for s in Status),
+    },
+    "slips_per_period": {
+        "units": "1",
+        "long_name": "slip events per drive period on the periodic orbit",
+    },
+    "forward_slip_fraction": {
+        "units": "1",
+        "long_name": "fraction of the drive period spent slipping forward",
+    },
+    "backward_slip_fraction": {
+        "units": "1",
+        "long_name": "fraction of the drive period spent slipping backward",
+    },
+    "orbit_period": {
+        "units": "1",
+        "long_name": "period of the steady orbit in drive periods (0: no orbit)",
+    },
+    "nonconvergence": {
+        "units": "1",
+        "long_name": "why the solver found no periodic orbit",
+        "flag_values": np.array([r.value for r in NonConvergence], dtype=np.int8),
+        "flag_meanings": " ".join(r.name.lower() for r in NonConvergence),
+    },
+}
+
+PAPER_REFERENCE = (
+    "T. Barois, A. Boucherie, L. Tadrist and H. Kellay, Controlled locomotion of a "
+    "minimal soft structure by stick-slip nonlinearity"
+)
+
+
+class ResultError(ValueError):
+    """A result file that is unreadable, foreign, outdated or inconsistent."""
+
+
+# ---------------------------------------------------------------------------
+# The dataset
+
+
+def _coordinate(name: str, values: Any, units: str, long_name: str, dims=None) -> xr.Variable:
+    dims = (name,) if dims is None else dims
+    return xr.Variable(dims, np.asarray(values, dtype=np.float64),
+                       {"units": units, "long_name": long_name})
+
+
+def build_dataset(
+    spec: StudySpec, arrays: dict[str, np.ndarray], attrs: dict[str, Any]
+) -> xr.Dataset:
+    """Assemble the full arrays of a study into its labelled dataset.
+
+    Parameters
+    ----------
+    spec : StudySpec
+        The study.
+    arrays : dict
+        Variable name -> full array over (structure axes..., f[, a]).
+    attrs : dict
+        Global attributes (provenance), added to the standard ones.
+    """
+    from study.spec import STRUCTURE_PARAMETERS
+
+    coords: dict[str, xr.Variable] = {}
+    for axis in spec.axes:
+        coords[axis.name] = _coordinate(axis.name, axis.values, axis.units, axis.long_name)
+    for name, value in spec.fixed.items():
+        units, long_name = (
+            STRUCTURE_PARAMETERS[name] if name in STRUCTURE_PARAMETERS
+            else ("kg", "added non-resonant mass")
+        )
+        coords[name] = _coordinate(name, value, units, long_name, dims=())
+    if spec.mass is not None:
+        coords["m0"] = _coordinate("m0", spec.mass.m0, "kg", "mass of the structure", ())
+        coords["m1"] = _coordinate("m1", spec.mass.m1, "kg", "resonant (modal) mass", ())
+        m_add_axis = spec.axis("m_add")
+        if m_add_axis is not None:
+            ratios = [spec.mass.mass_ratio(m) for m in m_add_axis.values]
+            coords["M"] = _coordinate("M", ratios, "1", STRUCTURE_PARAMETERS["M"][1], ("m_add",))
+        else:
+            ratio = spec.mass.mass_ratio(spec.fixed.get("m_add", 0.0))
+            coords["M"] = _coordinate("M", ratio, "1", STRUCTURE_PARAMETERS["M"][1], ())
+    if "ck" not in coords and spec.axis("ck") is None:
+        # ck defaults to cs: record it explicitly so the file describes the model fully.
+        cs_axis = spec.axis("cs")
+        if cs_axis is None:
+            coords["ck"] = _coordinate("ck", spec.fixed["cs"], "1",
+                                       STRUCTURE_PARAMETERS["ck"][1], ())
+    if "g" not in coords and spec.axis("g") is None:
+        coords["g"] = _coordinate("g", 9.8, "m s-2", STRUCTURE_PARAMETERS["g"][1], ())
+
+    structure_dims = tuple(axis.name for axis in spec.structure_axes)
+    data_vars = {}
+    for name, (with_a, dtype) in variables_for(spec).items():
+        dims = (*structure_dims, "f", "a") if with_a else (*structure_dims, "f")
+        var_attrs = dict(VARIABLE_ATTRS[name])
+        var_attrs["coverage_content_type"] = (
+            "qualityInformation" if "flag_values" in var_attrs else "modelResult"
+        )
+        data_vars[name] = xr.Variable(dims, arrays[name].astype(dtype, copy=False), var_attrs)
+    for coord in coords.values():
+        coord.attrs["coverage_content_type"] = "coordinate"
+    dataset = xr.Dataset(data_vars, coords=coords)
+    dataset.attrs.update(_standard_attrs(spec))
+    dataset.attrs.update(attrs)
+    return dataset
+
+
+def _creator() -> str:
+    """Who ran the study: $STUDY_CREATOR, else the login name."""
+    import getpass
+
+    try:
+        return os.environ.get("STUDY_CREATOR") or getpass.getuser()
+    except (KeyError, OSError):
+        return "unknown"
+
+
+def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
+    return {
+        "Conventions": "CF-1.11, ACDD-1.3",
+        "title": spec.title,
+        "summary": spec.description
+        or (
+            f"Parameter study '{spec.name}' of vibration-driven stick-slip locomotion: "
+            f"{', '.join(spec.observables)} of a soft structure with a resonant plate on a "
+            "vertically shaken table, computed by the exact steady-state solver of study."
+        ),
+        "keywords": "stick-slip, friction, locomotion, resonance, vibration, parameter study",
+        "id": f"{spec.name}-{spec.sha256[:16]}",
+        "naming_authority": "study",
+        "source": "study: exact event-driven steady-state stick-slip solver",
+        "processing_level": "model output",
+        "references": PAPER_REFERENCE,
+        "standard_name_vocabulary": "CF Standard Name Table v85",
+        "comment": "Forces per unit total mass in the table frame; SI units. No CF standard "
+        "names exist for these model quantities, so variables carry long_name only.",
+        "acknowledgement": "Model of " + PAPER_REFERENCE,
+        "creator_name": _creator(),
+        "study_result_schema": RESULT_SCHEMA,
+        "study_name": spec.name,
+        "study_spec": spec.text,
+        "study_spec_path": spec.path,
+        "study_spec_sha256": spec.sha256,
+    }
+
+
+# ---------------------------------------------------------------------------
+# Validation
+
+
+@cache
+def result_schema() -> dict[str, Any]:
+    """The JSON schema of result-file headers (``results_schema/study-result-v1...``)."""
+    return json.loads(RESULT_SCHEMA_PATH.read_text())
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def header(dataset: xr.Dataset) -> dict[str, Any]:
+    """The dataset's structure as plain JSON data: what the result schema validates."""
+    variables = {}
+    for name, var in dataset.variables.items():
+        variables[str(name)] = {
+            "dims": list(var.dims),
+            "dtype": str(var.dtype),
+            "attrs": {k: _jsonable(v) for k, v in var.attrs.items()},
+        }
+    return {
+        "attrs": {k: _jsonable(v) for k, v in dataset.attrs.items()},
+        "dims": {str(k): int(v) for k, v in dataset.sizes.items()},
+        "variables": variables,
+    }
+
+
+def validate_dataset(dataset: xr.Dataset, source: str = "dataset") -> None:
+    """Check a result dataset against the result schema and its own provenance.
+
+    Raises
+    ------
+    ResultError
+        Naming the file (``source``) and every problem found.
+    """
+    import jsonschema
+
+    attrs = dataset.attrs
+    if "study_result_schema" not in attrs:
+        raise ResultError(
+            f"{source}: not a study result file (no 'study_result_schema' attribute; "
+            f"global attributes: {', '.join(sorted(attrs)) or 'none'})"
+        )
+    if attrs["study_result_schema"] != RESULT_SCHEMA:
+        raise ResultError(
+            f"{source}: written with result schema {attrs['study_result_schema']!r}; this "
+            f"version of study reads {RESULT_SCHEMA!r}. Rerun its study to rewrite it."
+        )
+    validator = jsonschema.Draft202012Validator(result_schema())
+    problems = [
+        f"{'/'.join(map(str, e.absolute_path)) or 'file'}: {e.message}"
+        for e in sorted(validator.iter_errors(header(dataset)), key=lambda e: str(e.path))
+    ]
+    try:
+        spec = parse_spec(str(attrs["study_spec"]), f"{source} (embedded spec)")
+    except (SpecError, KeyError) as err:
+        problems.append(f"embedded study spec does not parse: {err}")
+    else:
+        if spec.sha256 != attrs.get("study_spec_sha256"):
+            problems.append("study_spec_sha256 does not match the embedded spec")
+        for axis in spec.axes:
+            if axis.name not in dataset.coords or not np.array_equal(
+                dataset[axis.name].values, axis.values
+            ):
+                problems.append(f"coordinate {axis.name!r} differs from the embedded spec")
+        for name in variables_for(spec):
+            if name not in dataset.data_vars:
+                problems.append(f"variable {name!r} asked for by the spec is missing")
+    try:
+        json.loads(attrs.get("provenance", ""))
+    except ValueError:
+        problems.append("global attribute 'provenance' is not a JSON document")
+    if "velocity" in dataset and "status" in dataset:
+        velocity = dataset["velocity"].values
+        status = dataset["status"].values
+        flagged = np.isin(status, [Status.LIFT_OFF, Status.NOT_CONVERGED])
+        if not np.array_equal(np.isnan(velocity), flagged):
+            problems.append("velocity is NaN exactly where status is not lift_off/not_converged")
+        if np.any(velocity[status == Status.STATIC] != 0.0):
+            problems.append("velocity is not 0 where status is static")
+    if problems:
+        raise ResultError(f"{source}: invalid study result:\n  " + "\n  ".join(problems))
+
+
+def open_result(path: str | Path) -> xr.Dataset:
+    """Open and validate a result file, loaded into memory (the file is closed).
+
+    Raises
+    ------
+    ResultError
+        For a missing, truncated, foreign, outdated or inconsistent file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ResultError(f"{path}: no such file")
+    try:
+        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=True) as dataset:
+            dataset = dataset.load()
+    except Exception as err:  # netCDF4 raises OSError, RuntimeError, ValueError...
+        raise ResultError(
+            f"{path}: not a readable netCDF file (truncated or corrupt?): {err}"
+        ) from None
+    validate_dataset(dataset, str(path))
+    return dataset
+
+
+# ---------------------------------------------------------------------------
+# Writing
+
+
+def _encoding(dataset: xr.Dataset) -> dict[str, dict[str, Any]]:
+    encoding = {}
+    for name, var in dataset.variables.items():
+        enc: dict[str, Any] = {}
+        # CF: coordinates have no fill value; NaN marks the points without a velocity.
+        if var.dtype.kind == "f" and name not in dataset.coords:
+            enc["_FillValue"] = np.nan
+        else:
+            enc["_FillValue"] = None
+        if var.ndim >= 2:
+            enc.update(zlib=True, complevel=1, shuffle=True)
+        encoding[name] = enc
+    return encoding
+
+
+def write_atomic(dataset: xr.Dataset, path: str | Path) -> Path:
+    """Write a result file so that ``path`` is never half-written.
+
+    Writes ``dataset`` to a temporary file in the same folder, closes it, reopens
+    and validates it, then renames it over ``path`` (atomic on POSIX).
+
+    Raises
+    ------
+    ResultError
+        If the written file does not validate; ``path`` is then left untouched.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(handle)
+    temporary = Path(temporary)
+    try:
+        dataset.to_netcdf(temporary, engine="netcdf4", format="NETCDF4",
+                          encoding=_encoding(dataset))
+        open_result(temporary)
+        os.replace(temporary, path)
+    finally:
+        temporary.unlink(missing_ok=True)
+    return path
+
+
+# ---------------------------------------------------------------------------
+# Chunks of a running study
+
+
+class ChunkStore:
+    """Completed chunks of one study run, kept for resuming.
+
+    Parameters
+    ----------
+    folder : pathlib.Path
+        ``<result>.partial``.
+    fingerprint : str
+        Spec and code fingerprint of the run: chunks stored under another
+        fingerprint are discarded, never reused.
+    """
+
+    MANIFEST = "manifest.json"
+
+    def __init__(self, folder: Path, fingerprint: str) -> None:
+        self.folder = Path(folder)
+        self.fingerprint = fingerprint
+        manifest = self._read_manifest()
+        if manifest is not None and manifest.get("fingerprint") != fingerprint:
+            shutil.rmtree(self.folder)
+            manifest = None
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.history: list[str] = [] if manifest is None else list(manifest.get("history", []))
+        self.reused = 0 if manifest is None else len(self.completed())
+
+    def _read_manifest(self) -> dict[str, Any] | None:
+        try:
+            return json.loads((self.folder / self.MANIFEST).read_text())
+        except (OSError, ValueError):
+            return None
+
+    def _write_json(self, name: str, payload: dict[str, Any]) -> None:
+        target = self.folder / name
+        temporary = target.with_suffix(".tmp")
+        temporary.write_text(json.dumps(payload, indent=1))
+        os.replace(temporary, target)
+
+    def start_run(self, history_line: str) -> None:
+        """Record this program run in the study's history."""
+        self.history.append(history_line)
+        self._write_json(self.MANIFEST, {"fingerprint": self.fingerprint,
+                                         "history": self.history})
+
+    def _chunk_path(self, number: int) -> Path:
+        return self.folder / f"chunk-{number:07d}.npz"
+
+    def completed(self) -> set[int]:
+        """Numbers of the chunks already stored."""
+        done = set()
+        for item in self.folder.glob("chunk-*.npz"):
+            try:
+                done.add(int(item.stem.split("-")[1]))
+            except (IndexError, ValueError):
+                continue
+        return done
+
+    def save(self, chunk: Chunk, arrays: dict[str, np.ndarray]) -> None:
+        """Store one chunk atomically (temporary file, then rename)."""
+        target = self._chunk_path(chunk.number)
+        temporary = target.with_name(target.name + ".tmp")
+        with open(temporary, "wb") as stream:
+            np.savez(stream, **arrays)
+        os.replace(temporary, target)
+
+    def load(self, chunk: Chunk) -> dict[str, np.ndarray]:
+        """Read one stored chunk."""
+        with np.load(self._chunk_path(chunk.number)) as data:
+            return {name: data[name] for name in data.files}
+
+    def remove(self) -> None:
+        """Delete the partial results (after the final file is in place)."""
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+def assemble(spec: StudySpec, chunks: Iterable[Chunk], store: ChunkStore) -> dict[str, np.ndarray]:
+    """Full arrays of every variable from the stored chunks."""
+    structure_shape = tuple(len(axis) for axis in spec.structure_axes)
+    n_f = len(spec.axis("f"))
+    n_a = len(spec.axis("a")) if spec.axis("a") is not None else 0
+    arrays = {}
+    for name, (with_a, dtype) in variables_for(spec).items():
+        shape = (*structure_shape, n_f, n_a) if with_a else (*structure_shape, n_f)
+        arrays[name] = np.empty(shape, dtype=dtype)
+    for chunk in chunks:
+        data = store.load(chunk)
+        for name, array in arrays.items():
+            array[(*chunk.structure_index, slice(chunk.f_start, chunk.f_stop))] = data[name]
+    return arrays
+
+
+# ---------------------------------------------------------------------------
+# Reading for people
+
+
+def describe(dataset: xr.Dataset, path: str = "") -> str:
+    """A readable summary of a result: what was swept, what is inside, where it came from."""
+    attrs = dataset.attrs
+    provenance = json.loads(attrs.get("provenance", "{}"))
+    run = provenance.get("run", {})
+    package = provenance.get("package", {})
+    lines = [f"{path or attrs.get('study_name')}: {attrs.get('title')}"]
+    lines.append(f"  study {attrs.get('study_name')!r}, spec sha256 "
+                 f"{attrs.get('study_spec_sha256', '')[:16]}, schema "
+                 f"{attrs.get('study_result_schema')}")
+    for name, size in dataset.sizes.items():
+        coord = dataset[name]
+        lines.append(
+            f"  axis {name:>6}: {size:6d} values, {float(coord.min()):.6g} .. "
+            f"{float(coord.max()):.6g} {coord.attrs.get('units', '')}"
+        )
+    for name, coord in dataset.coords.items():
+        if coord.ndim == 1 and name not in dataset.dims:
+            lines.append(
+                f"  {name} along {coord.dims[0]}: "
+                + ", ".join(f"{v:.6g}" for v in coord.values)
+                + f" {coord.attrs.get('units', '')}"
+            )
+    fixed = [f"{name}={float(dataset[name]):.6g}" for name in dataset.coords
+             if dataset[name].ndim == 0]
+    if fixed:
+        lines.append("  fixed: " + ", ".join(fixed))
+    for name, var in dataset.data_vars.items():
+        lines.append(f"  {name} {var.dims} [{var.attrs.get('units', '')}]: "
+                     f"{var.attrs.get('long_name', '')}")
+    if "status" in dataset:
+        values, counts = np.unique(dataset["status"].values, return_counts=True)
+        total = counts.sum()
+        parts = [f"{Status(int(v)).name.lower()} {c / total:.1%}" for v, c in zip(values, counts,
+                                                                               strict=True)]
+        lines.append("  status: " + ", ".join(parts))
+    lines.append(
+        f"  made by study {package.get('version')} (git {str(package.get('git_commit'))[:12]}"
+        f"{', dirty' if package.get('git_dirty') is True else ''}) on {run.get('host')}, "
+        f"{run.get('started_utc')} .. {run.get('finished_utc')} "
+        f"({run.get('wall_seconds', float('nan')):.2f} s, scheduler {run.get('scheduler')}, "
+        f"{run.get('workers')} workers)"
+    )
+    for line in str(attrs.get("history", "")).splitlines():
+        lines.append(f"  history: {line}")
+    return "\n".join(lines)
