@@ -1,0 +1,225 @@
+"""Running studies: values, provenance, resume, reruns, dask clusters, CF compliance."""
+
+from __future__ import annotations
+
+import json
+import platform
+import socket
+import subprocess
+import sys
+from datetime import datetime
+from pathlib import Path
+
+import netCDF4
+import numpy as np
+import pytest
+
+import study
+from study.provenance import code_sha256, fingerprint
+from study.runner import StudyInterrupted, partial_folder, run_study
+from study.spec import load_spec
+from study.store import open_result
+
+SPEC = """\
+# a small regime map
+[study]
+name = "{name}"
+observables = [{observables}]
+
+[structure]
+f0 = 14.44
+Q = {Q}
+alpha = 64.0
+cs = 0.25
+{extra}
+
+[sweep]
+{sweeps}
+f = {{ start = 12.0, stop = 17.0, num = 23 }}
+a = {{ start = 0.0, stop = 10.0, num = 17 }}
+
+[solver]
+chunk_points = 51
+"""
+
+
+def write_spec(folder: Path, name="small", Q=17.5, extra="M = 0.08", sweeps="",
+               observables='"thresholds", "lift_off", "velocity", "diagnostics"') -> Path:
+    path = folder / f"{name}.toml"
+    path.write_text(SPEC.format(name=name, Q=Q, extra=extra, sweeps=sweeps,
+                                observables=observables))
+    return path
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    """A small study run to completion once, uninterrupted."""
+    folder = tmp_path_factory.mktemp("finished")
+    spec_path = write_spec(folder)
+    report = run_study(spec_path, folder / "small.nc", progress=False, workers=2)
+    return spec_path, report, open_result(folder / "small.nc")
+
+
+def test_values_equal_direct_solver_calls(finished):
+    spec_path, report, ds = finished
+    assert report.chunks == report.computed > 1
+    s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
+    f, a = ds["f"].values, ds["a"].values
+    v, status = study.steady_velocity(s, f[:, None], a[None, :])
+    np.testing.assert_array_equal(ds["velocity"].values, v)
+    np.testing.assert_array_equal(ds["status"].values, status)
+    a_plus, a_minus = study.thresholds(s, f)
+    np.testing.assert_array_equal(ds["a_star_plus"].values, a_plus)
+    np.testing.assert_array_equal(ds["a_star_minus"].values, a_minus)
+    np.testing.assert_array_equal(ds["lift_off_acceleration"].values,
+                                  study.lift_off_acceleration(s, f))
+    assert ds["velocity"].dims == ("f", "a") and ds["a_star_plus"].dims == ("f",)
+
+
+def test_provenance_fields_present_and_true(finished):
+    spec_path, report, ds = finished
+    attrs = ds.attrs
+    spec = load_spec(spec_path)
+    assert attrs["study_spec"] == spec_path.read_text()
+    assert attrs["study_spec_sha256"] == spec.sha256
+    assert attrs["study_code_sha256"] == code_sha256()
+    assert attrs["study_fingerprint"] == fingerprint(spec.sha256)
+    assert attrs["study_version"] == study.__version__
+    provenance = json.loads(attrs["provenance"])
+    env = provenance["environment"]
+    assert env["python"] == platform.python_version()
+    assert env["numpy"] == np.__version__
+    assert env["netCDF4"] == netCDF4.__version__
+    assert env["netcdf_c"] == netCDF4.__netcdf4libversion__
+    assert env["hdf5"] == netCDF4.__hdf5libversion__
+    for library in ("numba", "xarray", "dask", "distributed"):
+        assert env[library] == __import__(library).__version__
+    assert env["host"] == socket.gethostname()
+    run = provenance["run"]
+    started = datetime.fromisoformat(run["started_utc"])
+    finished_at = datetime.fromisoformat(run["finished_utc"])
+    assert started <= finished_at
+    assert 0 < run["wall_seconds"] < 600
+    assert run["scheduler"] == "local" and run["workers"] == 2
+    assert run["solver_settings"]["max_events"] == spec.solver.max_events
+    assert run["chunks"] == report.chunks
+    package_dir = Path(study.__file__).parent
+    git = subprocess.run(["git", "-C", str(package_dir), "rev-parse", "HEAD"],
+                         capture_output=True, text=True)
+    if git.returncode == 0:
+        assert attrs["git_commit"] == git.stdout.strip()
+        assert attrs["git_dirty"] in ("true", "false")
+    assert len(attrs["history"].splitlines()) == 1
+    assert str(spec_path) in attrs["history"]
+
+
+def test_thresholds_only_study_runs_no_solver(tmp_path, monkeypatch):
+    def no_solver(*args, **kwargs):
+        raise AssertionError("the solver ran for a thresholds-only study")
+
+    monkeypatch.setattr("study.sweep.steady_state", no_solver)
+    spec_path = write_spec(tmp_path, observables='"thresholds"')
+    run_study(spec_path, tmp_path / "t.nc", progress=False)
+    ds = open_result(tmp_path / "t.nc")
+    assert set(ds.data_vars) == {"a_star_plus", "a_star_minus"}
+
+
+def test_interrupted_run_resumes_to_the_same_result(tmp_path, finished):
+    _, full_report, full = finished
+    spec_path = write_spec(tmp_path)
+    output = tmp_path / "small.nc"
+    with pytest.raises(StudyInterrupted):
+        run_study(spec_path, output, progress=False, stop_after=3)
+    assert not output.exists()
+    kept = sorted(partial_folder(output).glob("chunk-*.npz"))
+    assert len(kept) == 3
+    seen = []
+    report = run_study(spec_path, output, progress=False, on_chunk=seen.append)
+    assert report.reused == 3 and report.computed == full_report.chunks - 3
+    assert len(seen) == report.computed and not set(seen) & {
+        int(p.stem.split("-")[1]) for p in kept
+    }
+    resumed = open_result(output)
+    for name in full.data_vars:
+        np.testing.assert_array_equal(resumed[name].values, full[name].values)
+    assert len(resumed.attrs["history"].splitlines()) == 2  # one line per program run
+    assert not partial_folder(output).exists()
+
+
+def test_chunks_of_another_spec_are_never_reused(tmp_path):
+    output = tmp_path / "small.nc"
+    with pytest.raises(StudyInterrupted):
+        run_study(write_spec(tmp_path, Q=17.5), output, progress=False, stop_after=2)
+    report = run_study(write_spec(tmp_path, Q=18.0), output, progress=False)
+    assert report.reused == 0 and report.computed == report.chunks
+    assert float(open_result(output)["Q"]) == 18.0
+
+
+def test_unchanged_study_is_not_recomputed_changed_one_is(tmp_path):
+    spec_path = write_spec(tmp_path)
+    output = tmp_path / "small.nc"
+    run_study(spec_path, output, progress=False)
+    before = output.read_bytes()
+    seen = []
+    report = run_study(spec_path, output, progress=False, on_chunk=seen.append)
+    assert report.up_to_date and not seen and output.read_bytes() == before
+    # Comments and formatting are not changes.
+    spec_path.write_text("# reformatted\n" + spec_path.read_text().replace(" = ", "="))
+    assert run_study(spec_path, output, progress=False).up_to_date
+    # A number is.
+    spec_path.write_text(spec_path.read_text().replace("Q=17.5", "Q=17.25"))
+    report = run_study(spec_path, output, progress=False)
+    assert not report.up_to_date and report.computed == report.chunks
+
+
+def test_mass_ratio_study_in_the_papers_terms(tmp_path):
+    spec_path = write_spec(
+        tmp_path, name="masses",
+        extra="[structure.mass]\nm0 = 8.2e-3\nm1_fraction = 0.08",
+        sweeps="m_add = { values = [0.0, 1.7e-3, 3.8e-3, 7.7e-3, 16.6e-3] }",
+        observables='"thresholds"',
+    )
+    run_study(spec_path, tmp_path / "m.nc", progress=False)
+    ds = open_result(tmp_path / "m.nc")
+    m_add = np.array([0.0, 1.7e-3, 3.8e-3, 7.7e-3, 16.6e-3])
+    np.testing.assert_allclose(ds["m_add"].values, m_add, rtol=0)
+    np.testing.assert_allclose(ds["M"].values, 0.08 * 8.2e-3 / (8.2e-3 + m_add), rtol=1e-15)
+    assert ds["M"].dims == ("m_add",) and ds["a_star_plus"].dims == ("m_add", "f")
+    for i, M in enumerate(ds["M"].values):
+        s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=M, cs=0.25)
+        np.testing.assert_allclose(ds["a_star_plus"].values[i],
+                                   study.thresholds(s, ds["f"].values)[0], rtol=1e-15)
+
+
+def test_distributed_cluster_gives_the_local_result(tmp_path, finished):
+    """A real dask.distributed cluster on loopback: a scheduler and two worker processes."""
+    from distributed import LocalCluster
+
+    _, _, local = finished
+    spec_path = write_spec(tmp_path)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        report = run_study(spec_path, tmp_path / "d.nc", scheduler=cluster.scheduler_address,
+                           progress=False)
+    remote = open_result(tmp_path / "d.nc")
+    assert report.computed == report.chunks
+    provenance = json.loads(remote.attrs["provenance"])
+    assert provenance["run"]["scheduler"].startswith("tcp://127.0.0.1:")
+    assert provenance["run"]["workers"] == 2
+    for name in local.data_vars:
+        np.testing.assert_array_equal(remote[name].values, local[name].values)
+
+
+def test_written_file_passes_the_cf_compliance_checker(finished, tmp_path):
+    """IOOS compliance-checker, CF-1.11, offline (it falls back to its packaged tables)."""
+    _, report, _ = finished
+    checker = Path(sys.executable).with_name("compliance-checker")
+    out = tmp_path / "cf.json"
+    subprocess.run(
+        [str(checker), "--test", "cf:1.11", "--criteria", "strict", "--format", "json",
+         "--output", str(out), str(report.output)],
+        capture_output=True, text=True, timeout=300,
+    )
+    result = json.loads(out.read_text())["cf:1.11"]
+    failures = [p for p in result["all_priorities"] if p["value"][0] < p["value"][1]]
+    assert result["scored_points"] == result["possible_points"], failures
