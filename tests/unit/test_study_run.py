@@ -61,7 +61,7 @@ def finished(tmp_path_factory):
 
 
 def test_values_equal_direct_solver_calls(finished):
-    spec_path, report, ds = finished
+    _, report, ds = finished
     assert report.chunks == report.computed > 1
     s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
     f, a = ds["f"].values, ds["a"].values
