@@ -19,7 +19,7 @@ def _run(args: argparse.Namespace) -> int:
     from study.spec import load_spec
 
     spec = load_spec(args.spec)
-    command = "study " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv else None
+    command = "study " + " ".join(shlex.quote(a) for a in args.argv)
     try:
         report = run_study(
             spec,
@@ -138,7 +138,9 @@ def main(argv: list[str] | None = None) -> int:
     from study.store import ResultError
 
     parser = _parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
+    args.argv = argv  # recorded in the result's history
     if getattr(args, "workers", None) is not None and args.workers < 1:
         parser.error(f"--workers must be >= 1, got {args.workers}")
     try:

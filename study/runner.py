@@ -59,8 +59,11 @@ class RunReport:
 
 
 def default_output(spec: StudySpec) -> Path:
-    """``results/<name>.nc``."""
-    return Path("results") / f"{spec.name}.nc"
+    """``results/<spec file stem>.nc`` (what ``make`` and ``study list`` use), or
+    ``results/<study name>.nc`` for a spec that did not come from a file."""
+    source = Path(spec.path)
+    stem = source.stem if source.suffix == ".toml" else spec.name
+    return Path("results") / f"{stem}.nc"
 
 
 def partial_folder(output: Path) -> Path:

@@ -223,9 +223,15 @@ def load_spec(path: str | Path) -> StudySpec:
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        data = path.read_bytes()
     except OSError as err:
         raise SpecError(f"{path}: cannot read the study spec ({err.strerror})") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise SpecError(
+            f"{path}: a study spec must be UTF-8 text (TOML); byte {err.start} is not"
+        ) from None
     return parse_spec(text, str(path))
 
 
@@ -270,9 +276,13 @@ def _explain(error: Any, schema: dict[str, Any]) -> str:
         return f"{where}: {what}; allowed keys: {', '.join(allowed)}"
     if error.validator == "required":
         return f"{where}: {error.message}"
+    hint = error.schema.get("description", "")
     if error.validator in ("oneOf", "anyOf"):
-        hint = error.schema.get("description", "")
-        return f"{where}: {error.instance!r} does not match any allowed form; {hint}".rstrip("; ")
+        from jsonschema.exceptions import best_match
+
+        detail = best_match(error.context) if error.context else None
+        reason = f" ({detail.message})" if detail is not None else ""
+        return f"{where}: {error.instance!r} does not match any allowed form{reason}; {hint}"
     if error.validator == "enum":
         allowed = ", ".join(map(repr, error.validator_value))
         return f"{where}: {error.instance!r} is not allowed; allowed: {allowed}"
@@ -286,7 +296,7 @@ def _explain(error: Any, schema: dict[str, Any]) -> str:
         return f"{where} = {error.instance!r} is out of range; allowed: {limits}"
     if error.validator == "type":
         return f"{where}: {error.instance!r} has the wrong type; expected {error.validator_value}"
-    return f"{where}: {error.message}"
+    return f"{where}: {error.message}" + (f"; allowed: {hint}" if hint else "")
 
 
 def _axis_values(name: str, table: dict[str, Any], path: str) -> NDArray[np.float64]:
@@ -294,7 +304,11 @@ def _axis_values(name: str, table: dict[str, Any], path: str) -> NDArray[np.floa
     if "values" in table:
         values = np.asarray(table["values"], dtype=np.float64)
     else:
-        start, stop, num = float(table["start"]), float(table["stop"]), int(table["num"])
+        if not isinstance(table["num"], int):
+            raise SpecError(f"{where}: num = {table['num']!r} must be an integer")
+        start, stop, num = float(table["start"]), float(table["stop"]), table["num"]
+        if not (np.isfinite(start) and np.isfinite(stop)):
+            raise SpecError(f"{where}: start and stop must be finite numbers")
         if table.get("spacing", "linear") == "log":
             if start <= 0 or stop <= 0:
                 raise SpecError(f"{where}: log spacing needs start > 0 and stop > 0")
@@ -338,10 +352,17 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         else:
             m1 = float(mass_table["m1_fraction"]) * m0
         mass = MassModel(m0=m0, m1=m1)
+        if "m_add" in mass_table and "m_add" in sweep:
+            raise SpecError(
+                f"{path}: m_add both fixed in [structure.mass] and swept in [sweep]; "
+                "give it in one place"
+            )
         if "m_add" in mass_table:
             fixed["m_add"] = float(mass_table["m_add"])
     elif "m_add" in sweep:
-        raise SpecError(f"{path}: [sweep] m_add needs [structure.mass] (m0 and m1)")
+        raise SpecError(
+            f"{path}: [sweep] m_add needs [structure.mass] (m0 and one of m1, m1_fraction)"
+        )
 
     required = {"f0", "Q", "alpha", "cs"} | (set() if mass else {"M"})
     missing = sorted(required - set(fixed) - set(sweep))
@@ -382,12 +403,19 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         raise SpecError(f"{path}: [solver] {err}") from None
     chunk_points = int(solver_table.get("chunk_points", 20_000))
 
+    # Defaults written out: a spec that spells them out is the same study.
+    structure_canonical = dict(fixed)
+    if "g" not in fixed and "g" not in sweep:
+        structure_canonical["g"] = Structure.__dataclass_fields__["g"].default
+    if "ck" not in fixed and "ck" not in sweep and "cs" in fixed:
+        structure_canonical["ck"] = fixed["cs"]
     canonical = {
         "name": study["name"],
         "observables": list(observables),
-        "structure": {k: fixed[k] for k in sorted(fixed)},
+        "structure": {k: structure_canonical[k] for k in sorted(structure_canonical)},
         "mass": None if mass is None else {"m0": mass.m0, "m1": mass.m1},
-        "sweep": {axis.name: axis.values.tolist() for axis in axes},
+        # A list, not a mapping: the order of the axes is the layout of the result.
+        "sweep": [[axis.name, axis.values.tolist()] for axis in axes],
         "solver": {
             "max_events": solver.max_events,
             "max_map_iterations": solver.max_map_iterations,
@@ -422,5 +450,5 @@ def _check_structures(spec: StudySpec, path: str) -> None:
                 f"{axis.name} = {float(axis.values[i])!r}"
                 for axis, i in zip(spec.structure_axes, index, strict=True)
             )
-            where = f" (swept {at})" if at else ""
-            raise SpecError(f"{path}: [structure] invalid structure{where}: {err}") from None
+            where = f"[sweep] point {at}" if at else "[structure]"
+            raise SpecError(f"{path}: invalid structure at {where}: {err}") from None

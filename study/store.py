@@ -293,11 +293,16 @@ def validate_dataset(dataset: xr.Dataset, source: str = "dataset") -> None:
         velocity = dataset["velocity"].values
         status = dataset["status"].values
         flagged = np.isin(status, [Status.LIFT_OFF, Status.NOT_CONVERGED])
-        if not np.array_equal(np.isnan(velocity), flagged):
-            problems.append("velocity is NaN exactly where status is not lift_off/not_converged")
+        mismatched = int(np.count_nonzero(np.isnan(velocity) != flagged))
+        if mismatched:
+            problems.append(
+                "velocity must be NaN exactly where status is lift_off or not_converged; "
+                f"{mismatched} points disagree"
+            )
         if np.any(velocity[status == Status.STATIC] != 0.0):
             problems.append("velocity is not 0 where status is static")
     if problems:
+        problems = list(dict.fromkeys(problems))  # two schema branches may see one fault
         raise ResultError(f"{source}: invalid study result:\n  " + "\n  ".join(problems))
 
 
@@ -358,6 +363,10 @@ def write_atomic(dataset: xr.Dataset, path: str | Path) -> Path:
     handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(handle)
     temporary = Path(temporary)
+    # mkstemp makes the file private (0600); a result is for sharing: follow the umask.
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(temporary, 0o666 & ~umask)
     try:
         dataset.to_netcdf(temporary, engine="netcdf4", format="NETCDF4",
                           encoding=_encoding(dataset))
