@@ -15,7 +15,7 @@ __all__ = ["main"]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from study.runner import StudyInterrupted, run_study
+    from study.runner import StudyBusy, StudyInterrupted, run_study
     from study.spec import load_spec
 
     spec = load_spec(args.spec)
@@ -30,7 +30,7 @@ def _run(args: argparse.Namespace) -> int:
             force=args.force,
             command=command,
         )
-    except StudyInterrupted as err:
+    except (StudyInterrupted, StudyBusy) as err:
         print(f"study: {err}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

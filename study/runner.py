@@ -39,7 +39,7 @@ from study.store import (
 )
 from study.sweep import compute_chunk, plan_chunks
 
-__all__ = ["RunReport", "StudyInterrupted", "is_up_to_date", "run_study"]
+__all__ = ["RunReport", "StudyBusy", "StudyInterrupted", "is_up_to_date", "run_study"]
 
 
 class StudyInterrupted(RuntimeError):
@@ -181,6 +181,44 @@ def run_study(
         return RunReport(output, True, len(chunks), 0, len(chunks),
                          time.perf_counter() - started)
 
+    output.parent.mkdir(parents=True, exist_ok=True)
+    with _exclusive(output):
+        return _run_locked(spec, output, chunks, run_fingerprint, started, started_utc,
+                           scheduler, workers, progress, stop_after, command, on_chunk)
+
+
+class StudyBusy(RuntimeError):
+    """Another process is running the same study into the same file."""
+
+
+@contextmanager
+def _exclusive(output: Path):
+    """Hold an exclusive lock on ``output`` for the whole run (one writer per file)."""
+    import fcntl
+
+    lock_path = output.with_name(f".{output.name}.lock")
+    with open(lock_path, "a+") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.seek(0)
+            holder = lock.read().strip() or "another process"
+            raise StudyBusy(
+                f"{output}: another run is writing this result ({holder}); wait for it "
+                "to finish, or stop it: its finished chunks will be reused"
+            ) from None
+        lock.seek(0)
+        lock.truncate()
+        lock.write(f"pid {os.getpid()}")
+        lock.flush()
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
+def _run_locked(spec, output, chunks, run_fingerprint, started, started_utc, scheduler,
+                workers, progress, stop_after, command, on_chunk) -> RunReport:
     store = ChunkStore(partial_folder(output), run_fingerprint)
     command = command or "study.run_study(" + shlex.quote(spec.path) + ")"
     store.start_run(f"{started_utc}: {command} (study {package_version()})")

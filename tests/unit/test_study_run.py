@@ -223,3 +223,57 @@ def test_written_file_passes_the_cf_compliance_checker(finished, tmp_path):
     result = json.loads(out.read_text())["cf:1.11"]
     failures = [p for p in result["all_priorities"] if p["value"][0] < p["value"][1]]
     assert result["scored_points"] == result["possible_points"], failures
+
+
+def test_a_second_writer_of_the_same_result_is_refused(tmp_path):
+    import fcntl
+
+    from study.runner import StudyBusy
+
+    spec_path = write_spec(tmp_path)
+    output = tmp_path / "small.nc"
+    with open(tmp_path / ".small.nc.lock", "a+") as held:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        with pytest.raises(StudyBusy, match="another run is writing"):
+            run_study(spec_path, output, progress=False)
+    assert not output.exists() and not partial_folder(output).exists()
+    run_study(spec_path, output, progress=False)  # free again
+    assert output.exists()
+
+
+def test_ctrl_c_keeps_finished_chunks_and_the_next_run_resumes(tmp_path):
+    """A real SIGINT to `study run`, then a second `study run` that finishes the job."""
+    import signal
+    import time
+
+    spec_path = tmp_path / "slow.toml"
+    spec_path.write_text(
+        SPEC.format(name="slow", Q=17.5, extra="M = 1.0", sweeps="",
+                    observables='"velocity"')
+        .replace("num = 23", "num = 400").replace("num = 17", "num = 400")
+        .replace("chunk_points = 51", "chunk_points = 2000")
+    )
+    output = tmp_path / "slow.nc"
+    command = [str(Path(sys.executable).with_name("study")), "run", str(spec_path),
+               "-o", str(output), "--no-progress", "--workers", "1"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and process.poll() is None:
+        if len(list(partial_folder(output).glob("chunk-*.npz"))) >= 2:
+            break
+        time.sleep(0.05)
+    assert process.poll() is None, "the run ended before it could be interrupted"
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 130, stderr
+    assert "completed chunks are kept" in stderr
+    assert not output.exists()
+    kept = len(list(partial_folder(output).glob("chunk-*.npz")))
+    assert kept >= 2
+    report = run_study(spec_path, output, progress=False)
+    assert report.reused == kept and report.computed == report.chunks - kept
+    s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=1.0, cs=0.25)
+    ds = open_result(output)
+    v, _ = study.steady_velocity(s, ds["f"].values[:, None], ds["a"].values[None, :])
+    np.testing.assert_array_equal(ds["velocity"].values, v)
