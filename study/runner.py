@@ -187,6 +187,37 @@ def run_study(
                            scheduler, workers, progress, stop_after, command, on_chunk)
 
 
+def _frontier_arrays(spec: StudySpec, arrays: dict[str, Any]) -> dict[str, Any]:
+    """Frontier f*(a) of every structure, refined on the solver, padded to one shape."""
+    import numpy as np
+
+    from study.analysis import frontier_from_grid
+
+    f = spec.axis("f").values
+    a = spec.axis("a").values
+    found = {}
+    for index, structure in spec.structures():
+        found[index] = frontier_from_grid(
+            structure, f, a, arrays["velocity"][index], arrays["status"][index],
+            tolerance=spec.frontier_tolerance, settings=spec.solver,
+        )
+    branches = max(item.frequency.shape[1] for item in found.values())
+    shape = (*(len(axis) for axis in spec.structure_axes), len(a), branches)
+    out = {
+        "frontier_frequency": np.full(shape, np.nan),
+        "frontier_kind": np.zeros(shape, dtype=np.int8),
+        "frontier_direction": np.zeros(shape, dtype=np.int8),
+        "frontier_bracket": np.full(shape, np.nan),
+    }
+    for index, item in found.items():
+        n = item.frequency.shape[1]
+        out["frontier_frequency"][index][:, :n] = item.frequency
+        out["frontier_kind"][index][:, :n] = item.kind
+        out["frontier_direction"][index][:, :n] = item.direction
+        out["frontier_bracket"][index][:, :n] = item.width
+    return out
+
+
 class StudyBusy(RuntimeError):
     """Another process is running the same study into the same file."""
 
@@ -253,6 +284,8 @@ def _run_locked(spec, output, chunks, run_fingerprint, started, started_utc, sch
             finally:
                 client.cancel(list(futures))
         arrays = assemble(spec, chunks, store)
+    if "frontier" in spec.observables:
+        arrays.update(_frontier_arrays(spec, arrays))
     finished_utc = utc_now()
     wall = time.perf_counter() - started
     git = git_state()

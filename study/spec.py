@@ -44,6 +44,7 @@ from study.structure import Structure
 
 __all__ = [
     "OBSERVABLES",
+    "SOLVER_OBSERVABLES",
     "SPEC_SCHEMA_PATH",
     "Axis",
     "MassModel",
@@ -58,7 +59,9 @@ SPEC_SCHEMA_PATH = Path(__file__).resolve().parent.parent / "results_schema" / (
 )
 
 #: Observables a study can ask for, in the order they appear in a dataset.
-OBSERVABLES = ("thresholds", "lift_off", "velocity", "diagnostics")
+OBSERVABLES = ("resonance", "thresholds", "lift_off", "velocity", "diagnostics", "frontier")
+#: Observables that need the steady-state solver (and hence the drive acceleration a).
+SOLVER_OBSERVABLES = ("velocity", "diagnostics", "frontier")
 
 #: Structure parameters: units and long names (SI inside).
 STRUCTURE_PARAMETERS = {
@@ -140,6 +143,8 @@ class StudySpec:
         Solver budgets.
     chunk_points : int
         Target number of grid points per parallel task.
+    frontier_tolerance : float
+        Bracket width at which frontier roots are accepted [Hz].
     text : str
         The spec file's text, kept verbatim for provenance.
     path : str
@@ -155,6 +160,7 @@ class StudySpec:
     axes: tuple[Axis, ...]
     solver: SolverSettings
     chunk_points: int
+    frontier_tolerance: float
     text: str = field(repr=False)
     path: str
     canonical: dict[str, Any] = field(repr=False)
@@ -177,7 +183,7 @@ class StudySpec:
     @property
     def needs_solver(self) -> bool:
         """Whether any requested observable needs the velocity solver."""
-        return "velocity" in self.observables or "diagnostics" in self.observables
+        return any(o in self.observables for o in SOLVER_OBSERVABLES)
 
     def structure_at(self, index: tuple[int, ...]) -> Structure:
         """The structure at one point of the structure axes (``index`` in their order)."""
@@ -373,11 +379,11 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         )
     if "f" not in sweep:
         raise SpecError(f"{path}: [sweep] needs the drive frequency f")
-    needs_solver = "velocity" in observables or "diagnostics" in observables
+    needs_solver = any(o in observables for o in SOLVER_OBSERVABLES)
     if needs_solver and "a" not in sweep:
         raise SpecError(
             f"{path}: [sweep] needs the drive acceleration a for observables "
-            f"{', '.join(o for o in observables if o in ('velocity', 'diagnostics'))}"
+            f"{', '.join(o for o in observables if o in SOLVER_OBSERVABLES)}"
         )
 
     axes = []
@@ -395,13 +401,13 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         if axis.name == "m_add" and np.any(axis.values < 0):
             raise SpecError(f"{path}: [sweep] m_add: added masses must be >= 0 kg")
 
+    own = ("chunk_points", "frontier_tolerance")
     try:
-        solver = SolverSettings(
-            **{k: v for k, v in solver_table.items() if k != "chunk_points"}
-        )
+        solver = SolverSettings(**{k: v for k, v in solver_table.items() if k not in own})
     except ValueError as err:
         raise SpecError(f"{path}: [solver] {err}") from None
     chunk_points = int(solver_table.get("chunk_points", 20_000))
+    frontier_tolerance = float(solver_table.get("frontier_tolerance", 1e-9))
 
     # Defaults written out: a spec that spells them out is the same study.
     structure_canonical = dict(fixed)
@@ -419,6 +425,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         "solver": {
             "max_events": solver.max_events,
             "max_map_iterations": solver.max_map_iterations,
+            **({"frontier_tolerance": frontier_tolerance} if "frontier" in observables else {}),
         },
     }
     spec = StudySpec(
@@ -431,6 +438,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         axes=tuple(axes),
         solver=solver,
         chunk_points=chunk_points,
+        frontier_tolerance=frontier_tolerance,
         text=text,
         path=path,
         canonical=canonical,

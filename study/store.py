@@ -42,6 +42,14 @@ RESULT_SCHEMA_PATH = SPEC_SCHEMA_PATH.parent / f"{RESULT_SCHEMA}.schema.json"
 
 #: units, long_name (and more) of every data variable a study can write.
 VARIABLE_ATTRS: dict[str, dict[str, Any]] = {
+    "mode_gain": {
+        "units": "1",
+        "long_name": "amplification |w0^2 G| of the plate's first mode (1 at low frequency)",
+    },
+    "mode_phase": {
+        "units": "rad",
+        "long_name": "phase lag of the plate's deflection behind the drive",
+    },
     "a_star_plus": {
         "units": "m s-2",
         "long_name": "drive acceleration at which forward slips start (paper eq. 5)",
@@ -87,6 +95,29 @@ VARIABLE_ATTRS: dict[str, dict[str, Any]] = {
         "long_name": "why the solver found no periodic orbit",
         "flag_values": np.array([r.value for r in NonConvergence], dtype=np.int8),
         "flag_meanings": " ".join(r.name.lower() for r in NonConvergence),
+    },
+}
+
+#: Variables of the zero-velocity frontier, over (structure axes..., a, branch).
+FRONTIER_ATTRS: dict[str, dict[str, Any]] = {
+    "frontier_frequency": {
+        "units": "Hz",
+        "long_name": "drive frequency f*(a) where the mean velocity changes sign",
+        "comment": "NaN-padded where an acceleration has fewer branches",
+    },
+    "frontier_kind": {
+        "units": "1",
+        "long_name": "how the velocity changes sign at the frontier",
+        "flag_values": np.array([0, 1, 2], dtype=np.int8),
+        "flag_meanings": "none crossing jump",
+    },
+    "frontier_direction": {
+        "units": "1",
+        "long_name": "sign of the velocity just above the frontier frequency (0: none)",
+    },
+    "frontier_bracket": {
+        "units": "Hz",
+        "long_name": "width of the final bisection bracket of the frontier frequency",
     },
 }
 
@@ -163,6 +194,11 @@ def build_dataset(
             "qualityInformation" if "flag_values" in var_attrs else "modelResult"
         )
         data_vars[name] = xr.Variable(dims, arrays[name].astype(dtype, copy=False), var_attrs)
+    for name, attrs_ in FRONTIER_ATTRS.items():
+        if name in arrays:
+            var_attrs = dict(attrs_, coverage_content_type="modelResult")
+            data_vars[name] = xr.Variable((*structure_dims, "a", "branch"), arrays[name],
+                                          var_attrs)
     for coord in coords.values():
         coord.attrs["coverage_content_type"] = "coordinate"
     dataset = xr.Dataset(data_vars, coords=coords)
@@ -282,7 +318,10 @@ def validate_dataset(dataset: xr.Dataset, source: str = "dataset") -> None:
                 dataset[axis.name].values, axis.values
             ):
                 problems.append(f"coordinate {axis.name!r} differs from the embedded spec")
-        for name in variables_for(spec):
+        wanted = list(variables_for(spec))
+        if "frontier" in spec.observables:
+            wanted += list(FRONTIER_ATTRS)
+        for name in wanted:
             if name not in dataset.data_vars:
                 problems.append(f"variable {name!r} asked for by the spec is missing")
     try:
@@ -486,6 +525,9 @@ def describe(dataset: xr.Dataset, path: str = "") -> str:
                  f"{attrs.get('study_spec_sha256', '')[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
     for name, size in dataset.sizes.items():
+        if name not in dataset.coords:
+            lines.append(f"  dim {name:>7}: {size:6d}")
+            continue
         coord = dataset[name]
         lines.append(
             f"  axis {name:>6}: {size:6d} values, {float(coord.min()):.6g} .. "

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from study.physics import lift_off_acceleration, thresholds
+from study.physics import lift_off_acceleration, mode_response, thresholds
 from study.solver import steady_state
 from study.spec import StudySpec
 
@@ -64,8 +64,15 @@ def plan_chunks(spec: StudySpec) -> list[Chunk]:
 
 
 def variables_for(spec: StudySpec) -> dict[str, tuple[bool, np.dtype]]:
-    """Data variables a spec produces: name -> (depends on a, dtype)."""
+    """Data variables computed chunk by chunk: name -> (depends on a, dtype).
+
+    The frontier is not among them: it needs whole frequency rows and is found
+    after the chunks are assembled (see :func:`study.analysis.frontier_from_grid`).
+    """
     variables: dict[str, tuple[bool, np.dtype]] = {}
+    if "resonance" in spec.observables:
+        variables["mode_gain"] = (False, np.dtype(np.float64))
+        variables["mode_phase"] = (False, np.dtype(np.float64))
     if "thresholds" in spec.observables:
         variables["a_star_plus"] = (False, np.dtype(np.float64))
         variables["a_star_minus"] = (False, np.dtype(np.float64))
@@ -98,6 +105,10 @@ def compute_chunk(spec: StudySpec, chunk: Chunk) -> dict[str, np.ndarray]:
     structure = spec.structure_at(chunk.structure_index)
     f = spec.axis("f").values[chunk.f_start : chunk.f_stop]
     out: dict[str, np.ndarray] = {}
+    if "resonance" in spec.observables:
+        response = structure.omega0**2 * mode_response(structure, f)
+        out["mode_gain"] = np.abs(response)
+        out["mode_phase"] = -np.angle(response)
     if "thresholds" in spec.observables:
         out["a_star_plus"], out["a_star_minus"] = thresholds(structure, f)
     if "lift_off" in spec.observables:

@@ -183,8 +183,11 @@ def test_minimal_spec_has_one_structure_the_papers():
 
 
 def test_observables_are_kept_in_canonical_order():
-    spec = parse({"study": {"observables": ["diagnostics", "velocity", "thresholds", "lift_off"]}})
-    assert spec.observables == OBSERVABLES == ("thresholds", "lift_off", "velocity", "diagnostics")
+    spec = parse({"study": {"observables": ["frontier", "diagnostics", "velocity", "thresholds",
+                                            "resonance", "lift_off"]}})
+    assert spec.observables == OBSERVABLES == (
+        "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "frontier"
+    )
 
 
 def test_solver_settings_and_chunk_points_are_read():
@@ -476,7 +479,9 @@ def _mass(**keys: Any) -> dict[str, Any]:
     return {"structure": {"M": None, "mass": keys}}
 
 
-_OBS_ALLOWED = "'thresholds', 'lift_off', 'velocity', 'diagnostics'"
+_OBS_ALLOWED = (
+    "'resonance', 'thresholds', 'lift_off', 'velocity', 'diagnostics', 'frontier'"
+)
 _FORMS = "allowed forms: { start = x, stop = y, num = n }"
 
 REFUSALS = [
@@ -509,7 +514,7 @@ REFUSALS = [
     pytest.param(
         {"solver": {"max_event": 10}},
         ["[solver]", "unknown key 'max_event'",
-         "allowed keys: chunk_points, max_events, max_map_iterations"],
+         "allowed keys: chunk_points, frontier_tolerance, max_events, max_map_iterations"],
         id="unknown-key-solver",
     ),
     pytest.param(

@@ -1,0 +1,287 @@
+"""Analyses on top of the solver: the zero-velocity frontier f*(a) and threshold minima.
+
+Everything here works from the physics and the solver (never by contouring a
+picture): frontier points are roots of the steady velocity in ``f``, bracketed on a
+grid and refined by bisection on the exact solver to a set tolerance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+from numpy.typing import ArrayLike, NDArray
+
+from study.physics import as_acceleration, as_frequency, thresholds
+from study.solver import SolverSettings, steady_state
+from study.status import Status
+from study.structure import Structure
+
+__all__ = [
+    "FRONTIER_CROSSING",
+    "FRONTIER_JUMP",
+    "Frontier",
+    "collapse_variable",
+    "frontier",
+    "frontier_from_grid",
+    "minimum_threshold",
+    "resonance_threshold",
+]
+
+#: Frontier point where the velocity passes continuously through zero.
+FRONTIER_CROSSING = 1
+#: Frontier point where the velocity jumps across zero (a regime boundary).
+FRONTIER_JUMP = 2
+
+_MOVING = (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
+
+
+@dataclass(frozen=True)
+class Frontier:
+    """Zero-velocity frontier points for a set of accelerations.
+
+    Attributes
+    ----------
+    frequency : numpy.ndarray
+        ``(n_a, n_branch)`` frontier frequencies f* [Hz], ascending along a row,
+        NaN-padded where an acceleration has fewer branches.
+    kind : numpy.ndarray of int8
+        ``(n_a, n_branch)``: :data:`FRONTIER_CROSSING`, :data:`FRONTIER_JUMP`, 0 for padding.
+    width : numpy.ndarray
+        ``(n_a, n_branch)`` width of the final bracket [Hz] (<= the tolerance).
+    direction : numpy.ndarray of int8
+        ``(n_a, n_branch)``: +1 where v goes from negative to positive with rising f,
+        -1 the other way, 0 for padding.
+    """
+
+    frequency: NDArray[np.float64]
+    kind: NDArray[np.int8]
+    width: NDArray[np.float64]
+    direction: NDArray[np.int8]
+
+
+def frontier_from_grid(
+    structure: Structure,
+    f: ArrayLike,
+    a: ArrayLike,
+    velocity: ArrayLike,
+    status: ArrayLike,
+    *,
+    tolerance: float = 1e-9,
+    settings: SolverSettings | None = None,
+) -> Frontier:
+    """Refine every sign change of the velocity along ``f`` into a frontier point.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure the velocities belong to.
+    f : array_like
+        ``(n_f,)`` ascending drive frequencies [Hz] of the grid.
+    a : array_like
+        ``(n_a,)`` drive accelerations [m s^-2].
+    velocity, status : array_like
+        ``(n_f, n_a)`` steady velocity [m s^-1] and status on the grid.
+    tolerance : float
+        Bracket width at which bisection stops [Hz].
+    settings : SolverSettings, optional
+        Solver budgets for the refinement.
+
+    Returns
+    -------
+    Frontier
+        Every branch: each pair of neighbouring moving grid points with opposite
+        velocity signs holds one frontier point (a sign change finer than the grid
+        is not seen; use a finer grid to find it).
+    """
+    f = as_frequency(f)
+    a = as_acceleration(a)
+    velocity = np.asarray(velocity, dtype=np.float64)
+    status = np.asarray(status)
+    if velocity.shape != (f.size, a.size) or status.shape != velocity.shape:
+        raise ValueError(
+            f"velocity and status must have shape (n_f, n_a) = {(f.size, a.size)}, got "
+            f"{velocity.shape} and {status.shape}"
+        )
+    if not tolerance > 0:
+        raise ValueError(f"tolerance must be > 0 Hz, got {tolerance!r}")
+    moving = np.isin(status, _MOVING) & (velocity != 0)
+    sign = np.sign(velocity)
+    change = moving[:-1] & moving[1:] & (sign[:-1] * sign[1:] < 0)
+    i_f, i_a = np.nonzero(change)
+    lo = f[i_f].copy()
+    hi = f[i_f + 1].copy()
+    v_lo = velocity[i_f, i_a].copy()
+    v_hi = velocity[i_f + 1, i_a].copy()
+    scale = np.maximum(np.abs(v_lo), np.abs(v_hi))
+    a_points = a[i_a]
+    while lo.size and np.max(hi - lo) > tolerance:
+        mid = 0.5 * (lo + hi)
+        result = steady_state(structure, mid, a_points, settings)
+        v_mid = result.velocity
+        valid = np.isin(result.status, _MOVING) & (v_mid != 0)
+        take_lo = valid & (np.sign(v_mid) == np.sign(v_lo))
+        # A midpoint that does not move (static, lift-off) marks a jump: keep bisecting
+        # towards the side that changes sign with the lower end.
+        take_hi = ~take_lo
+        lo = np.where(take_lo, mid, lo)
+        v_lo = np.where(take_lo, v_mid, v_lo)
+        hi = np.where(take_hi, mid, hi)
+        v_hi = np.where(take_hi, np.where(valid, v_mid, v_hi), v_hi)
+    point = 0.5 * (lo + hi)
+    jump = np.abs(v_hi - v_lo) > 1e-6 * scale
+    direction = np.sign(v_hi).astype(np.int8)
+    counts = np.bincount(i_a, minlength=a.size)
+    n_branch = max(1, int(counts.max(initial=0)))
+    frequency = np.full((a.size, n_branch), np.nan)
+    kind = np.zeros((a.size, n_branch), dtype=np.int8)
+    width = np.full((a.size, n_branch), np.nan)
+    directions = np.zeros((a.size, n_branch), dtype=np.int8)
+    order = np.lexsort((point, i_a))
+    slot = np.zeros(a.size, dtype=int)
+    for k in order:
+        j = i_a[k]
+        frequency[j, slot[j]] = point[k]
+        kind[j, slot[j]] = FRONTIER_JUMP if jump[k] else FRONTIER_CROSSING
+        width[j, slot[j]] = hi[k] - lo[k]
+        directions[j, slot[j]] = direction[k]
+        slot[j] += 1
+    return Frontier(frequency, kind, width, directions)
+
+
+def frontier(
+    structure: Structure,
+    a: ArrayLike,
+    f_range: tuple[float, float],
+    *,
+    num: int = 2001,
+    tolerance: float = 1e-9,
+    settings: SolverSettings | None = None,
+) -> xr.Dataset:
+    """Zero-velocity frontier f*(a): every frequency where the velocity changes sign.
+
+    The velocity is solved on ``num`` frequencies spanning ``f_range``; each sign
+    change between neighbouring moving points is refined by bisection on the exact
+    solver until its bracket is narrower than ``tolerance``.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    a : array_like
+        Drive accelerations [m s^-2], 1-D.
+    f_range : (float, float)
+        Frequency interval searched [Hz].
+    num : int
+        Frequencies of the scanning grid.
+    tolerance : float
+        Location accuracy of every root [Hz]; default 1e-9.
+    settings : SolverSettings, optional
+        Solver budgets.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``frontier_frequency``, ``frontier_kind``, ``frontier_direction`` and
+        ``frontier_bracket`` over dims ``(a, branch)``, with units, long names and the
+        structure, range and tolerance as attributes.
+    """
+    f_min, f_max = (float(x) for x in f_range)
+    if not f_min < f_max:
+        raise ValueError(f"f_range must be (f_min, f_max) with f_min < f_max, got {f_range!r}")
+    if num < 2:
+        raise ValueError(f"num must be >= 2, got {num!r}")
+    a = np.atleast_1d(as_acceleration(a))
+    f = np.linspace(f_min, f_max, num)
+    result = steady_state(structure, f[:, None], a[None, :], settings)
+    found = frontier_from_grid(structure, f, a, result.velocity, result.status,
+                               tolerance=tolerance, settings=settings)
+    return frontier_dataset(found, a, structure, (f_min, f_max), num, tolerance)
+
+
+def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tolerance):
+    """Frontier points as a labelled dataset (dims ``a``, ``branch``)."""
+    from study.provenance import code_sha256, package_version, utc_now
+    from study.store import FRONTIER_ATTRS
+
+    dims = ("a", "branch")
+    values = {
+        "frontier_frequency": found.frequency,
+        "frontier_kind": found.kind,
+        "frontier_direction": found.direction,
+        "frontier_bracket": found.width,
+    }
+    dataset = xr.Dataset(
+        {name: (dims, values[name], dict(FRONTIER_ATTRS[name])) for name in values},
+        coords={"a": ("a", np.asarray(a, dtype=np.float64),
+                      {"units": "m s-2", "long_name": "drive acceleration amplitude"})},
+    )
+    dataset.attrs.update({
+        "title": "Zero-velocity frontier f*(a)",
+        "structure": repr(structure),
+        "f_range": np.asarray(f_range, dtype=np.float64),
+        "scan_points": int(num),
+        "tolerance_Hz": float(tolerance),
+        "study_version": package_version(),
+        "study_code_sha256": code_sha256(),
+        "date_created": utc_now(),
+    })
+    return dataset
+
+
+def resonance_threshold(structure: Structure) -> tuple[float, float]:
+    """Thresholds ``(a*_+, a*_-)`` at ``f = f0`` in closed form [m s^-2].
+
+    At resonance ``w^2 G = -i Q``, so
+    ``a*_pm = g / |1 - i Q M cos(alpha) (cos(alpha) +- sin(alpha)/cs)|``
+    ``= g / sqrt(1 + x_pm^2)`` with ``x_pm = Q M cos(alpha) (cos(alpha) +- sin(alpha)/cs)``:
+    the paper's ``Q m1 ~ m`` scaling, ``a* ~ g / (Q M ...)`` once ``x >> 1``.
+    """
+    x_plus, x_minus = collapse_variable(structure)
+    g = structure.g
+    return g / np.hypot(1.0, x_plus), g / np.hypot(1.0, x_minus)
+
+
+def collapse_variable(structure: Structure) -> tuple[float, float]:
+    """``x_pm = Q M cos(alpha) (cos(alpha) +- sin(alpha)/cs)`` [1].
+
+    See :func:`resonance_threshold`.
+    """
+    alpha = np.radians(structure.alpha)
+    base = structure.Q * structure.M * np.cos(alpha)
+    return (base * (np.cos(alpha) + np.sin(alpha) / structure.cs),
+            base * (np.cos(alpha) - np.sin(alpha) / structure.cs))
+
+
+def minimum_threshold(structure: Structure, f_range: tuple[float, float] | None = None,
+                      *, tolerance: float = 1e-10) -> tuple[float, float]:
+    """Lowest motion threshold ``min_f min(a*_+, a*_-)`` and where it is.
+
+    Golden-section search on the closed-form thresholds around their minimum on a
+    scanning grid (default range 0.5 f0 .. 2 f0).
+
+    Returns
+    -------
+    a_min, f_min : float
+        The minimum threshold [m s^-2] and its frequency [Hz].
+    """
+    lo, hi = f_range if f_range is not None else (0.5 * structure.f0, 2.0 * structure.f0)
+
+    def lower(f):
+        a_plus, a_minus = thresholds(structure, f)
+        return np.minimum(a_plus, a_minus)
+
+    grid = np.linspace(lo, hi, 4001)
+    i = int(np.argmin(lower(grid)))
+    left, right = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    ratio = (np.sqrt(5.0) - 1.0) / 2.0
+    while right - left > tolerance:
+        x1 = right - ratio * (right - left)
+        x2 = left + ratio * (right - left)
+        if lower(x1) < lower(x2):
+            right = x2
+        else:
+            left = x1
+    f_best = 0.5 * (left + right)
+    return float(lower(f_best)), float(f_best)
