@@ -1,5 +1,6 @@
 # study: make-driven parameter studies of stick-slip locomotion.
 #   make            run every workflow whose spec or package changed: results/<name>.nc
+#   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
 #   make test       set up .venv on a fresh machine, lint, run the test suite
 #   make bench      benchmarks (timings; never pass/fail)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
@@ -14,7 +15,7 @@ WORKFLOWS := $(wildcard workflows/*.toml)
 RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard results_schema/*.json)
 
-.PHONY: all results map test test-slow lint bench cf-check list clean
+.PHONY: all results figures docs test test-slow lint bench cf-check list clean
 
 all: results
 
@@ -31,8 +32,24 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-map: $(STAMP)
-	$(PY) -m study.figures.regime_map --output figures/regime_map.png
+# Figures, each redrawn from its result file alone: figures/NAME.png and .pdf.
+FIGURES := thresholds velocity-curves regime-map force-traces mass-ratio \
+           threshold-collapse mass-ratio-limit
+figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
+
+figures/thresholds.png: results/thresholds.nc
+figures/velocity-curves.png: results/velocity-curves.nc
+figures/regime-map.png: results/regime-map.nc
+figures/force-traces.png: results/regime-map.nc
+figures/mass-ratio.png: results/mass-ratio.nc
+figures/threshold-collapse.png: results/threshold-collapse.nc
+figures/mass-ratio-limit.png: results/mass-ratio-limit.nc
+figures/%.png: $(PACKAGE) | $(STAMP)
+	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*
+
+# The README's pictures are the figures of a full run.
+docs: figures
+	mkdir -p docs && cp $(addprefix figures/,$(addsuffix .png,$(FIGURES))) docs/
 
 list: $(STAMP)
 	$(STUDY) list

@@ -70,6 +70,17 @@ def _info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _figure(args: argparse.Namespace) -> int:
+    from study.figures import draw_figure
+    from study.store import open_result
+
+    dataset = open_result(args.file)
+    output = args.output or Path("figures") / args.name
+    for path in draw_figure(args.name, dataset, output):
+        print(f"wrote {path}")
+    return 0
+
+
 def _list(args: argparse.Namespace) -> int:
     from study.runner import is_up_to_date, partial_folder
     from study.spec import SpecError, load_spec
@@ -125,6 +136,19 @@ def _parser() -> argparse.ArgumentParser:
     info.add_argument("file", type=Path, metavar="FILE")
     info.set_defaults(handler=_info)
 
+    from study.figures import FIGURES
+
+    figure = commands.add_parser(
+        "figure", help="draw a figure from a result file (PNG and PDF)",
+        description="Figures: " + "; ".join(f"{k}: {v.shows}" for k, v in FIGURES.items()),
+    )
+    figure.add_argument("name", choices=sorted(FIGURES), metavar="NAME",
+                        help="one of: " + ", ".join(FIGURES))
+    figure.add_argument("file", type=Path, metavar="FILE", help="result file (netCDF)")
+    figure.add_argument("-o", "--output", type=Path,
+                        help="output stem (default: figures/NAME -> .png and .pdf)")
+    figure.set_defaults(handler=_figure)
+
     listing = commands.add_parser("list", help="the workflows and whether results are current")
     listing.add_argument("--workflows", default="workflows", help="spec folder")
     listing.add_argument("--results", default="results", help="result folder")
@@ -134,6 +158,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``study`` console script."""
+    from study.figures import FigureError
     from study.spec import SpecError
     from study.store import ResultError
 
@@ -145,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--workers must be >= 1, got {args.workers}")
     try:
         return args.handler(args)
-    except (SpecError, ResultError) as err:
+    except (SpecError, ResultError, FigureError) as err:
         print(f"study: {err}", file=sys.stderr)
         return 1
 
