@@ -148,7 +148,7 @@ def run_study(
     spec : StudySpec or path
         The study (a spec file is read and validated first).
     output : path, optional
-        Result file; default ``results/<name>.nc``.
+        Result file; default ``results/<spec file stem>.nc``.
     scheduler : str, optional
         Address of a dask.distributed scheduler; default: a local in-process cluster.
     workers : int, optional
