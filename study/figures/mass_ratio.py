@@ -1,0 +1,159 @@
+"""The paper's Fig. 3: motion thresholds of the structure with on-board loads.
+
+Left: ``a* = min(a*_+, a*_-)`` against the drive frequency for every load (the
+lift-off acceleration dashed in the same colour). Right: the lowest threshold over
+the frequency axis of the file against the mass ratio ``M = m1 / (m0 + m_add)``,
+with the closed form at resonance ``g / sqrt(1 + x^2)``
+(``x = max |x_pm|``, :func:`study.analysis.collapse_variable`) and the exact minimum
+over ``f`` of the closed-form thresholds (:func:`study.analysis.minimum_threshold`)
+over a fine range of ``M`` for the same structure.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+
+import study
+from study.analysis import minimum_threshold, resonance_threshold
+from study.figures import FigureError
+from study.figures.common import save, structure_from_dataset
+from study.figures.threshold_collapse import grid_minimum
+
+__all__ = ["draw"]
+
+#: The paper's statement for the 1.7 g load (Fig. 3 discussion).
+PAPER_M = 0.066
+
+_BOX = {"facecolor": "white", "edgecolor": "none", "alpha": 0.9, "pad": 1.5}
+
+
+def _loads(dataset: xr.Dataset) -> tuple[str | None, np.ndarray, np.ndarray | None]:
+    """The load axis: its name, the mass ratios along it and the added masses [kg]."""
+    ratio = dataset["M"]
+    if ratio.ndim > 1:
+        raise FigureError(f"figure 'mass-ratio' needs M along one axis, got dims {ratio.dims}")
+    dim = ratio.dims[0] if ratio.ndim == 1 else None
+    extra = [d for d in dataset["a_star_plus"].dims if d not in ("f", dim)]
+    if extra:
+        raise FigureError(
+            "figure 'mass-ratio' draws thresholds over (load, f) only; this file also "
+            f"sweeps {', '.join(extra)}"
+        )
+    m_add = None
+    if "m_add" in dataset.coords:
+        m_add = np.atleast_1d(dataset["m_add"].values).astype(float)
+    return dim, np.atleast_1d(ratio.values).astype(float), m_add
+
+
+def _label(ratio: float, m_add: float | None) -> str:
+    if m_add is None:
+        return f"M = {100 * ratio:.1f} %"
+    return f"m_add = {1e3 * m_add:.1f} g, M = {100 * ratio:.1f} %"
+
+
+def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+    """Draw Fig. 3 from a ``mass-ratio`` result file; returns the PNG and the PDF."""
+    dim, ratios, m_add = _loads(dataset)
+    f = dataset["f"].values
+    order = np.argsort(ratios)
+    colors = plt.cm.viridis(np.linspace(0.0, 0.85, ratios.size))
+    color_of = {int(i): colors[k] for k, i in enumerate(order)}
+
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12.5, 5.2), layout="constrained",
+                                 gridspec_kw={"width_ratios": [1.25, 1.0]})
+    a_top = float(dataset["a"].values.max()) if "a" in dataset.coords else None
+    minima, structures = [], []
+    beyond_drawn = False
+    for i in range(ratios.size):
+        at = {dim: i} if dim is not None else {}
+        structure = structure_from_dataset(dataset, **at)
+        structures.append(structure)
+        a_star = np.minimum(dataset["a_star_plus"].isel(at).values,
+                            dataset["a_star_minus"].isel(at).values)
+        if "lift_off_acceleration" in dataset:
+            a_lift = dataset["lift_off_acceleration"].isel(at).values
+        else:
+            a_lift = study.lift_off_acceleration(structure, f)
+        color = color_of[i]
+        label = _label(ratios[i], None if m_add is None else m_add[i])
+        # A threshold above lift-off is outside the model: drawn faint, never as valid.
+        valid = a_star < a_lift
+        ax.plot(f, np.where(valid, a_star, np.nan), color=color, lw=1.8, label=label)
+        if not valid.all():
+            ax.plot(f, np.where(valid, np.nan, a_star), color=color, lw=1.0, ls=":",
+                    alpha=0.6)
+            beyond_drawn = True
+        ax.plot(f, a_lift, color=color, lw=1.0, ls="--")
+        if not valid.any():
+            minima.append((np.nan, np.nan, True))
+            continue
+        j, resolved = grid_minimum(f, np.where(valid, a_star, np.inf), structure.f0,
+                                   structure.Q)
+        minima.append((a_star[j], f[j], not resolved))
+        ax.plot(f[j], a_star[j], "o", color=color, ms=5, mec="k", mew=0.6)
+    ax.plot([], [], color="0.3", lw=1.0, ls="--",
+            label="lift-off $a_{lift}$ (model invalid above)")
+    if beyond_drawn:
+        ax.plot([], [], color="0.3", lw=1.0, ls=":", label="$a^*$ above lift-off (invalid)")
+    ax.plot([], [], "o", color="0.6", mec="k", mew=0.6, label="minimum over f")
+    g = structures[0].g
+    ax.axhline(g, color="0.5", lw=0.8)
+    ax.text(f[0], g, "  g", va="bottom", ha="left", fontsize=8, color="0.35")
+    top = a_top if a_top is not None else 1.25 * g
+    ax.set(xlim=(f[0], f[-1]), ylim=(0.0, top), xlabel="drive frequency f [Hz]",
+           ylabel="motion threshold $a^* = \\min(a^*_+, a^*_-)$ [m s$^{-2}$]",
+           title="Threshold against frequency for each on-board load")
+    ax.legend(loc="lower left", fontsize=8, framealpha=0.9)
+
+    # Right: the minimum over f against M, with the closed forms over a fine M range.
+    base = structures[0]
+    fine = np.linspace(min(1e-3, 0.5 * ratios.min()), min(1.0, 1.25 * ratios.max()), 121)
+    at_resonance = np.array([min(resonance_threshold(replace(base, M=m))) for m in fine])
+    f_range = (float(f[0]), float(f[-1]))
+    exact_min = np.array([minimum_threshold(replace(base, M=m), f_range)[0] for m in fine])
+    bx.plot(100 * fine, at_resonance, color="k", lw=1.6,
+            label="closed form at $f_0$: $g/\\sqrt{1+x^2}$, $x = \\max|x_\\pm|$")
+    bx.plot(100 * fine, exact_min, color="0.45", lw=1.2, ls="--",
+            label=f"closed form, minimum over f in [{f[0]:g}, {f[-1]:g}] Hz")
+    for i in range(ratios.size):
+        a_min, _, at_edge = minima[i]
+        bx.plot(100 * ratios[i], a_min, "o", ms=8, color=color_of[i], mec="k", mew=0.8,
+                mfc="none" if at_edge else color_of[i])
+    bx.plot([], [], "o", color="0.6", mec="k", ms=8,
+            label=f"data: min over f in [{f[0]:g}, {f[-1]:g}] Hz")
+    if any(m[2] for m in minima):
+        bx.plot([], [], "o", mfc="none", mec="k", ms=8,
+                label="not resolved: f step > $f_0/(10Q)$ or at the range edge")
+    bx.axhline(g / 2, color="tab:red", lw=1.0, ls="-.", label="g/2")
+    bx.axvline(100 * PAPER_M, color="tab:red", lw=0.8, ls=":")
+    bx.annotate('paper: "about g/2 at resonance\nfor M = 6.6 %"',
+                xy=(100 * PAPER_M, g / 2), xytext=(0.7, 0.93), textcoords="axes fraction",
+                fontsize=8.5, color="tab:red", ha="center", bbox=_BOX,
+                arrowprops={"arrowstyle": "->", "color": "tab:red", "lw": 0.8})
+    paper = replace(base, M=PAPER_M)
+    paper_res = min(resonance_threshold(paper))
+    paper_min = minimum_threshold(paper, f_range)[0]
+    bx.text(0.7, 0.83,
+            f"model at M = 6.6 %: {paper_res:.2f} m s$^{{-2}}$ = {paper_res / g:.2f} g at "
+            f"$f_0$,\n{paper_min:.2f} m s$^{{-2}}$ = {paper_min / g:.2f} g at the minimum "
+            "over f",
+            transform=bx.transAxes, fontsize=8, ha="center", va="top", color="0.2", bbox=_BOX)
+    bx.set(xlim=(0.0, 100 * fine[-1]), ylim=(0.0, 1.05 * g),
+           xlabel="mass ratio M = m$_1$/m [%]",
+           ylabel="minimum threshold over f, $a^*_{min}$ [m s$^{-2}$]",
+           title="Minimum threshold against the mass ratio")
+    secondary = bx.secondary_yaxis("right", functions=(lambda y: y / g, lambda y: y * g))
+    secondary.set_ylabel("$a^*_{min}$ / g")
+    bx.legend(loc="lower left", fontsize=8, framealpha=0.9)
+
+    title = (
+        f"Fig. 3: motion threshold with on-board loads (f0 = {base.f0:g} Hz, Q = {base.Q:g}, "
+        f"alpha = {base.alpha:g} deg, cs = {base.cs:g})"
+    )
+    fig.suptitle(title, fontsize=11)
+    return save(fig, output, dataset, title)

@@ -1,0 +1,177 @@
+"""The limit ``M -> 1``: regime maps for a growing resonant share of the mass.
+
+One small regime map per mass ratio (up to six, 2 x 3): the steady mean velocity
+over ``(f, a)`` in mm/s on its own diverging scale, the thresholds ``a*_pm``, the
+lift-off region (grey, no velocity: outside the model), continuous sliding
+(status ``continuous_sliding``, hatched and outlined), points without a periodic
+orbit (black) and the zero-velocity frontier ``f*(a)`` as black dots. The paper: as
+``M -> 1`` the region PN (above both thresholds) widens and the frontier gains
+branches. Thresholds and lift-off come from the file, or else from their closed
+forms for the structure stored in it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.patheffects as patheffects
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.colors import ListedColormap, TwoSlopeNorm
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+import study
+from study.figures import FigureError
+from study.figures.common import save, structure_from_dataset
+from study.status import Status
+
+__all__ = ["draw", "panel_indices", "valid_velocity_mm_s"]
+
+MAX_PANELS = 6
+_STROKE = [patheffects.withStroke(linewidth=3.0, foreground="white")]
+_LIFT_OFF_GREY = "0.72"
+
+
+def valid_velocity_mm_s(velocity: np.ndarray, status: np.ndarray) -> np.ma.MaskedArray:
+    """Velocity [mm/s], masked wherever it is not a valid steady velocity.
+
+    Lift-off and not-converged points (and any NaN) are masked: they are drawn as
+    their own regions, never as a velocity.
+    """
+    velocity = np.asarray(velocity, dtype=np.float64)
+    status = np.asarray(status)
+    valid = np.isin(status, (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING))
+    valid &= np.isfinite(velocity)
+    return np.ma.masked_where(~valid, 1e3 * velocity)
+
+
+def panel_indices(n: int, limit: int = MAX_PANELS) -> list[int]:
+    """Indices of at most ``limit`` of ``n`` mass ratios, evenly spread, ends included."""
+    if n <= limit:
+        return list(range(n))
+    return sorted(set(np.rint(np.linspace(0, n - 1, limit)).astype(int).tolist()))
+
+
+def _norm(v: np.ma.MaskedArray) -> TwoSlopeNorm:
+    """A diverging norm centred on 0 with each side scaled to its own extreme."""
+    if v.count():
+        low, high = float(v.min()), float(v.max())
+    else:
+        low = high = 0.0
+    scale = max(abs(low), abs(high), 1e-9)
+    low = min(low, -1e-3 * scale)
+    high = max(high, 1e-3 * scale)
+    return TwoSlopeNorm(vcenter=0.0, vmin=low, vmax=high)
+
+
+def _closed(dataset: xr.Dataset, name: str, at: dict, structure, f) -> np.ndarray:
+    if name in dataset:
+        return dataset[name].isel(at).values
+    if name == "lift_off_acceleration":
+        return study.lift_off_acceleration(structure, f)
+    a_plus, a_minus = study.thresholds(structure, f)
+    return a_plus if name == "a_star_plus" else a_minus
+
+
+def _panel(fig, ax, dataset: xr.Dataset, at: dict) -> None:
+    f = dataset["f"].values
+    a = dataset["a"].values
+    structure = structure_from_dataset(dataset, **at)
+    status = dataset["status"].isel(at).transpose("f", "a").values
+    v = valid_velocity_mm_s(dataset["velocity"].isel(at).transpose("f", "a").values, status)
+    mesh = ax.pcolormesh(f, a, v.T, cmap="RdBu", norm=_norm(v), shading="nearest",
+                         rasterized=True)
+    fig.colorbar(mesh, ax=ax, label="mean velocity v [mm s$^{-1}$]", pad=0.01)
+    for flag, color in ((Status.LIFT_OFF, _LIFT_OFF_GREY), (Status.NOT_CONVERGED, "k")):
+        region = np.ma.masked_where(status != flag, np.ones(status.shape))
+        if region.count():
+            ax.pcolormesh(f, a, region.T, cmap=ListedColormap([color]), vmin=0, vmax=2,
+                          shading="nearest", rasterized=True)
+    sliding = (status == Status.CONTINUOUS_SLIDING).astype(float)
+    if sliding.any():
+        ax.contourf(f, a, sliding.T, levels=[0.5, 1.5], colors="none", hatches=["////"])
+        ax.contour(f, a, sliding.T, levels=[0.5], colors="k", linewidths=0.7)
+
+    a_plus = _closed(dataset, "a_star_plus", at, structure, f)
+    a_minus = _closed(dataset, "a_star_minus", at, structure, f)
+    a_lift = _closed(dataset, "lift_off_acceleration", at, structure, f)
+    for threshold, color in ((a_plus, "tab:blue"), (a_minus, "tab:red")):
+        # Above lift-off a threshold is outside the model: thin and dotted there.
+        below = threshold < a_lift
+        ax.plot(f, np.where(below, threshold, np.nan), color=color, lw=1.4,
+                path_effects=_STROKE)
+        ax.plot(f, np.where(below, np.nan, threshold), color=color, lw=0.8, ls=":")
+    ax.plot(f, a_lift, color="k", lw=0.9, ls="--")
+
+    branches = 0
+    if "frontier_frequency" in dataset:
+        frontier = dataset["frontier_frequency"].isel(at).transpose("a", "branch").values
+        found = np.isfinite(frontier)
+        branches = int(found.sum(axis=1).max(initial=0))
+        rows = np.nonzero(found)
+        ax.plot(frontier[rows], a[rows[0]], "o", color="k", ms=2.2, zorder=5)
+
+    valid = ~np.isin(status, (Status.LIFT_OFF, Status.NOT_CONVERGED))
+    above_both = a[None, :] > np.maximum(a_plus, a_minus)[:, None]
+    pn_share = np.count_nonzero(above_both & valid) / max(np.count_nonzero(valid), 1)
+    cs_share = np.count_nonzero(status == Status.CONTINUOUS_SLIDING) / status.size
+    not_converged = int(np.count_nonzero(status == Status.NOT_CONVERGED))
+    title = (f"M = {structure.M:g}: {branches} frontier branch"
+             f"{'' if branches == 1 else 'es'}, CS {100 * cs_share:.0f} %")
+    if not_converged:
+        title += f", {not_converged} not converged"
+    ax.set_title(title, fontsize=10)
+    ax.text(0.02, 0.97, f"PN: {100 * pn_share:.0f} % of the valid map", transform=ax.transAxes,
+            fontsize=8, va="top", bbox={"facecolor": "white", "edgecolor": "none",
+                                        "alpha": 0.85, "pad": 1.5})
+    ax.set(xlim=(f[0], f[-1]), ylim=(a[0], a[-1]))
+
+
+def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+    """Draw the regime maps of a ``mass-ratio-limit`` result; returns the PNG and the PDF."""
+    extra = [d for d in dataset["velocity"].dims if d not in ("M", "f", "a")]
+    if extra:
+        raise FigureError(
+            "figure 'mass-ratio-limit' draws one map per M; this file also sweeps "
+            f"{', '.join(extra)}"
+        )
+    swept = "M" in dataset["velocity"].dims
+    ats = [{"M": i} for i in panel_indices(dataset.sizes["M"])] if swept else [{}]
+    ncols = min(len(ats), 3)
+    nrows = -(-len(ats) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(5.2 * ncols, 4.0 * nrows + 0.9),
+                             layout="constrained", sharex=True, sharey=True, squeeze=False)
+    for k, ax in enumerate(axes.flat):
+        if k >= len(ats):
+            ax.set_visible(False)
+            continue
+        _panel(fig, ax, dataset, ats[k])
+        if k % ncols == 0:
+            ax.set_ylabel("drive acceleration a [m s$^{-2}$]")
+        if k // ncols == nrows - 1 or k + ncols >= len(ats):
+            ax.set_xlabel("drive frequency f [Hz]")
+            ax.xaxis.set_tick_params(labelbottom=True)
+
+    handles = [
+        Line2D([], [], color="tab:blue", lw=1.4, path_effects=_STROKE,
+               label="$a^*_+$ (forward slips start)"),
+        Line2D([], [], color="tab:red", lw=1.4, path_effects=_STROKE,
+               label="$a^*_-$ (backward slips start)"),
+        Line2D([], [], color="0.3", lw=0.8, ls=":", label="$a^*_\\pm$ above lift-off (invalid)"),
+        Line2D([], [], color="k", lw=0.9, ls="--", label="lift-off $a_{lift}$"),
+        Patch(facecolor=_LIFT_OFF_GREY, label="lift-off: outside the model, no velocity"),
+        Patch(facecolor="none", edgecolor="k", hatch="////", label="continuous sliding (CS)"),
+        Patch(facecolor="k", label="not converged"),
+        Line2D([], [], ls="none", marker="o", color="k", ms=3, label="frontier $f^*(a)$"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=9)
+    s = structure_from_dataset(dataset, **ats[0])
+    title = (
+        "The limit M -> 1: steady velocity over (f, a) as the resonant share of the mass "
+        f"grows (f0 = {s.f0:g} Hz, Q = {s.Q:g}, alpha = {s.alpha:g} deg, cs = {s.cs:g})"
+    )
+    fig.suptitle(title.replace(" (f0", "\n(f0", 1) + "; PN: above both thresholds",
+                 fontsize=11)
+    return save(fig, output, dataset, title)
