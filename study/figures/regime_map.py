@@ -1,86 +1,155 @@
-"""Draw the paper's Fig. 2 regime map: velocity over (f, a) with a*_pm and lift-off.
+"""The paper's Fig. 2: mean velocity over (f, a), thresholds, lift-off and frontier f*(a).
 
-Usage: ``python -m study.figures.regime_map --output figures/regime_map.png``
+Drawn from a ``regime-map`` result file alone (``study figure regime-map FILE``).
+The helpers :func:`single_structure` and :func:`parameter_text`, and the paper's
+four points :data:`PAPER_POINTS`, are shared with the other single-structure figures.
 """
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
+import matplotlib.patheffects as path_effects
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.colors import TwoSlopeNorm
+import xarray as xr
+from matplotlib.colors import ListedColormap, TwoSlopeNorm
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
-import study
+from study.figures import FigureError, common
+from study.status import Status
+
+__all__ = ["PAPER_POINTS", "draw", "parameter_text", "single_structure"]
+
+#: The paper's points in its regions S, P, N and PN: name -> (f [Hz], a [m s^-2]).
+PAPER_POINTS: dict[str, tuple[float, float]] = {
+    "S": (13.0, 5.0),
+    "P": (13.0, 8.5),
+    "N": (16.5, 8.5),
+    "PN": (14.6, 7.0),
+}
+
+#: Statuses with a valid velocity (0 when static).
+VALID = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
+
+#: A white outline that keeps thin lines readable over the colour map.
+OUTLINE = [path_effects.withStroke(linewidth=3.2, foreground="white")]
 
 
-def draw(structure: study.Structure, f, a, output: Path) -> Path:
-    """Solve the map and write it as an image.
+def single_structure(dataset: xr.Dataset, figure: str) -> None:
+    """Refuse a file that sweeps structure parameters (the figure draws one structure).
+
+    Raises
+    ------
+    FigureError
+        Naming the swept parameters.
+    """
+    swept = [str(d) for d in dataset.dims if d not in ("f", "a", "branch")]
+    if swept:
+        raise FigureError(
+            f"figure {figure!r} draws a single structure, but this file (study "
+            f"{dataset.attrs.get('study_name')!r}) sweeps {', '.join(swept)}; draw it from "
+            "a file with fixed structure parameters"
+        )
+
+
+def parameter_text(dataset: xr.Dataset) -> str:
+    """The structure's parameters, compactly, from the file's scalar coordinates."""
+    s = common.structure_from_dataset(dataset)
+    text = (
+        f"$f_0$ = {s.f0:g} Hz, Q = {s.Q:g}, $\\alpha$ = {s.alpha:g}°, M = {s.M:g}, "
+        f"$c_s$ = {s.cs:g}"
+    )
+    if s.ck != s.cs:
+        text += f", $c_k$ = {s.ck:g}"
+    if s.g != 9.8:
+        text += f", g = {s.g:g} m s$^{{-2}}$"
+    return text
+
+
+def _layer(ax, f, a, mask, color, alpha=1.0):
+    """Paint the cells where ``mask`` (over (a, f)) holds in one flat colour."""
+    if np.any(mask):
+        ax.pcolormesh(f, a, np.ma.masked_where(~mask, np.ones(mask.shape)),
+                      cmap=ListedColormap([color]), vmin=0, vmax=1, shading="nearest",
+                      alpha=alpha, rasterized=True)
+
+
+def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+    """Draw the regime map of a ``regime-map`` result into ``output.png/.pdf``.
 
     Parameters
     ----------
-    structure : study.Structure
-        The structure.
-    f : numpy.ndarray
-        Drive frequencies [Hz], 1-D.
-    a : numpy.ndarray
-        Drive accelerations [m s^-2], 1-D.
+    dataset : xarray.Dataset
+        A result holding velocity and status over (f, a), a*_pm, the lift-off
+        acceleration and the frontier f*(a).
     output : pathlib.Path
-        Image file to write (format from its suffix).
+        File stem.
 
     Returns
     -------
-    pathlib.Path
-        ``output``.
+    list of pathlib.Path
+        The PNG and the PDF.
     """
-    velocity, status = study.steady_velocity(structure, f[None, :], a[:, None])
-    a_plus, a_minus = study.thresholds(structure, f)
-    a_lift = study.lift_off_acceleration(structure, f)
-    fig, ax = plt.subplots(figsize=(7.0, 4.8), layout="constrained")
-    mm_per_s = 1e3 * np.where(status == study.Status.LIFT_OFF, np.nan, velocity)
-    limit = np.nanmax(np.abs(mm_per_s)) or 1.0
-    mesh = ax.pcolormesh(
-        f, a, mm_per_s, cmap="RdBu", norm=TwoSlopeNorm(0.0, -limit, limit), shading="auto"
-    )
-    fig.colorbar(mesh, ax=ax, label="mean velocity v [mm s$^{-1}$]")
-    ax.plot(f, a_plus, color="tab:blue", lw=1.5, label="$a^*_+$ (forward slips start)")
-    ax.plot(f, a_minus, color="tab:red", lw=1.5, label="$a^*_-$ (backward slips start)")
-    ax.plot(f, a_lift, color="k", ls="--", lw=1.2, label="lift-off (model invalid above)")
-    lifted = np.where(status == study.Status.LIFT_OFF, 1.0, np.nan)
-    ax.pcolormesh(f, a, lifted, cmap="Greys", vmin=0, vmax=4, shading="auto", alpha=0.6)
-    ax.set(
-        xlim=(f[0], f[-1]),
-        ylim=(a[0], a[-1]),
-        xlabel="drive frequency f [Hz]",
-        ylabel="drive acceleration a [m s$^{-2}$]",
-        title=(
-            f"Steady velocity: f0={structure.f0} Hz, Q={structure.Q}, "
-            f"alpha={structure.alpha} deg, M={structure.M}, cs={structure.cs}"
-        ),
-    )
-    ax.title.set_fontsize(10)
-    ax.legend(loc="lower left", fontsize=8)
-    output.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(output, dpi=150, metadata={"Description": repr(structure)})
-    plt.close(fig)
-    return output
+    single_structure(dataset, "regime-map")
+    f = dataset["f"].values
+    a = dataset["a"].values
+    velocity = 1e3 * dataset["velocity"].transpose("a", "f").values  # mm/s over (a, f)
+    status = dataset["status"].transpose("a", "f").values
+    valid = np.isin(status, VALID)
+    lifted = status == Status.LIFT_OFF
+    stuck = status == Status.NOT_CONVERGED
+    sliding = status == Status.CONTINUOUS_SLIDING
 
+    fig, ax = plt.subplots(figsize=(8.0, 6.0), layout="constrained")
+    shown = np.ma.masked_where(~valid | ~np.isfinite(velocity), velocity)
+    limit = float(np.max(np.abs(shown))) if shown.count() else 0.0
+    limit = limit if limit > 0 else 1.0
+    mesh = ax.pcolormesh(f, a, shown, cmap="RdBu", norm=TwoSlopeNorm(0.0, -limit, limit),
+                         shading="nearest", rasterized=True)
+    fig.colorbar(mesh, ax=ax, label="mean velocity v [mm s$^{-1}$]  (> 0: forward)",
+                 shrink=0.9)
+    _layer(ax, f, a, lifted, "0.62")
+    _layer(ax, f, a, stuck, "black")
+    if np.any(sliding):
+        ax.contourf(f, a, sliding.astype(float), levels=[0.5, 1.5], colors="none",
+                    hatches=["////"])
 
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--output", type=Path, default=Path("figures/regime_map.png"))
-    parser.add_argument("--num-f", type=int, default=501)
-    parser.add_argument("--num-a", type=int, default=301)
-    args = parser.parse_args(argv)
-    structure = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
-    f = np.linspace(10.0, 20.0, args.num_f)
-    a = np.linspace(0.0, 12.0, args.num_a)
-    print(f"wrote {draw(structure, f, a, args.output)}")
+    handles = []
+    lines = [
+        ("a_star_plus", dict(color="tab:blue", lw=1.8), "$a^*_+$: forward slips start"),
+        ("a_star_minus", dict(color="tab:red", lw=1.8), "$a^*_-$: backward slips start"),
+        ("lift_off_acceleration", dict(color="black", lw=1.4, ls="--"),
+         "lift-off acceleration: n < 0 above"),
+    ]
+    for name, style, label in lines:
+        (line,) = ax.plot(f, dataset[name].values, label=label, path_effects=OUTLINE, **style)
+        handles.append(line)
 
+    frontier = dataset["frontier_frequency"].transpose("a", "branch").values
+    for branch in range(frontier.shape[1]):
+        ax.plot(frontier[:, branch], a, color="black", lw=1.0, marker="o", ms=2.2,
+                path_effects=OUTLINE)
+    handles.append(Line2D([], [], color="black", lw=1.0, marker="o", ms=2.2,
+                          label="frontier f*(a): v changes sign"))
+    handles.append(Patch(facecolor="0.62", edgecolor="0.3", lw=0.5,
+                         label="lift-off: model invalid, no velocity"))
+    if np.any(sliding):
+        handles.append(Patch(facecolor="none", edgecolor="black", hatch="////",
+                             label="continuous sliding (no stick)"))
+    if np.any(stuck):
+        handles.append(Patch(facecolor="black", label="not converged: no velocity"))
 
-if __name__ == "__main__":
-    main()
+    ax.set(xlim=(f[0], f[-1]), ylim=(a[0], a[-1]), xlabel="drive frequency f [Hz]",
+           ylabel="drive acceleration a [m s$^{-2}$]")
+    for name, (f_point, a_point) in PAPER_POINTS.items():
+        if f[0] <= f_point <= f[-1] and a[0] <= a_point <= a[-1]:
+            ax.text(f_point, a_point, name, ha="center", va="center", fontsize=12,
+                    fontweight="bold", bbox=dict(boxstyle="round,pad=0.25", fc="white",
+                                                 ec="0.3", alpha=0.85))
+    title = "Mean steady velocity over drive frequency and acceleration"
+    ax.set_title(f"{title}\n{parameter_text(dataset)}", fontsize=11)
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,
+               frameon=False)
+    return common.save(fig, output, dataset, title)
