@@ -4,6 +4,7 @@ A soft structure with a resonant plate, on a vertically shaken table, walks forw
 or backward by stick-slip (Barois, Boucherie, Tadrist & Kellay). See PHYSICS.md.
 """
 
+from study.analysis import frontier, minimum_threshold
 from study.physics import (
     force_amplitudes,
     lift_off_acceleration,
@@ -26,7 +27,9 @@ __all__ = [
     "Structure",
     "__version__",
     "force_amplitudes",
+    "frontier",
     "lift_off_acceleration",
+    "minimum_threshold",
     "mode_response",
     "normal_force",
     "steady_state",
