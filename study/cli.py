@@ -118,7 +118,7 @@ def _parser() -> argparse.ArgumentParser:
     run = commands.add_parser("run", help="run a study spec and write its netCDF result")
     run.add_argument("spec", type=Path, help="study spec (TOML), e.g. workflows/regime-map.toml")
     run.add_argument("-o", "--output", type=Path,
-                     help="result file (default: results/<name>.nc)")
+                     help="result file (default: results/<spec file stem>.nc)")
     run.add_argument("--scheduler", metavar="ADDR",
                      help="dask.distributed scheduler address (default: local cluster)")
     run.add_argument("--workers", type=int, metavar="N",

@@ -129,12 +129,16 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
 
     frontier = dataset["frontier_frequency"].transpose("a", "branch").values
     for branch in range(frontier.shape[1]):
-        ax.plot(frontier[:, branch], a, color="black", lw=1.0, marker="o", ms=2.2,
-                path_effects=OUTLINE)
-    handles.append(Line2D([], [], color="black", lw=1.0, marker="o", ms=2.2,
+        found = int(np.count_nonzero(np.isfinite(frontier[:, branch])))
+        ax.plot(frontier[:, branch], a, color="black", lw=1.2, marker="o", ms=2.5,
+                markevery=max(1, found // 25), zorder=4)
+    handles.append(Line2D([], [], color="black", lw=1.2, marker="o", ms=2.5,
                           label="frontier f*(a): v changes sign"))
     handles.append(Patch(facecolor="0.62", edgecolor="0.3", lw=0.5,
                          label="lift-off: model invalid, no velocity"))
+    if any(f[0] <= fp <= f[-1] and a[0] <= ap <= a[-1] for fp, ap in PAPER_POINTS.values()):
+        handles.append(Line2D([], [], ls="none", marker="o", ms=5, mfc="white", mec="black",
+                              label="the paper's points in regions S, P, N, PN"))
     if np.any(sliding):
         handles.append(Patch(facecolor="none", edgecolor="black", hatch="////",
                              label="continuous sliding (no stick)"))
@@ -145,9 +149,11 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
            ylabel="drive acceleration a [m s$^{-2}$]")
     for name, (f_point, a_point) in PAPER_POINTS.items():
         if f[0] <= f_point <= f[-1] and a[0] <= a_point <= a[-1]:
-            ax.text(f_point, a_point, name, ha="center", va="center", fontsize=12,
-                    fontweight="bold", bbox=dict(boxstyle="round,pad=0.25", fc="white",
-                                                 ec="0.3", alpha=0.85))
+            ax.plot(f_point, a_point, marker="o", ms=5, mfc="white", mec="black", zorder=5)
+            ax.annotate(name, (f_point, a_point), xytext=(7, 5), textcoords="offset points",
+                        ha="left", va="bottom", fontsize=12, fontweight="bold", zorder=5,
+                        bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.3",
+                                  alpha=0.85))
     title = "Mean steady velocity over drive frequency and acceleration"
     ax.set_title(f"{title}\n{parameter_text(dataset)}", fontsize=11)
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,

@@ -1,4 +1,9 @@
-"""The paper's Fig. 1C inset: velocity against acceleration at fixed frequencies."""
+"""The paper's Fig. 1C inset: mean velocity against drive acceleration at fixed frequencies.
+
+Drawn from a ``velocity-curves`` result file alone (``study figure velocity-curves FILE``).
+Each curve stops at the first lift-off point of its frequency: beyond it the model
+does not apply. Points that did not converge leave gaps and are marked on the axis.
+"""
 
 from __future__ import annotations
 
@@ -7,47 +12,95 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-from matplotlib.colors import Normalize
+from matplotlib import colormaps
+from matplotlib.colors import ListedColormap
+from matplotlib.lines import Line2D
 
 from study.figures import common
 from study.figures.regime_map import VALID, parameter_text, single_structure
 from study.status import Status
 
-__all__ = ["draw"]
+__all__ = ["FREQUENCY_COLORS", "draw", "frequency_position"]
+
+#: Diverging colours for the drive frequency: blues below the resonance (forward
+#: motion), reds above (backward); light near f0, dark far from it, never so light
+#: that a line vanishes on white.
+FREQUENCY_COLORS = ListedColormap(
+    np.vstack([
+        colormaps["Blues"](np.linspace(1.0, 0.4, 128)),
+        colormaps["Reds"](np.linspace(0.4, 1.0, 128)),
+    ]),
+    name="below-above-f0",
+)
+
+
+def frequency_position(f: np.ndarray, f0: float) -> np.ndarray:
+    """Position in :data:`FREQUENCY_COLORS` of each frequency, centred on ``f0``.
+
+    ``0.5 + 0.5 sign(f - f0) sqrt(|f - f0| / max|f - f0|)``: monotone in ``f``, 0.5 at
+    the resonance; the square root spreads the colours of frequencies close to ``f0``,
+    where the curves differ most.
+    """
+    offset = np.asarray(f, dtype=float) - f0
+    span = max(float(np.max(np.abs(offset))), 1e-12)
+    return 0.5 + 0.5 * np.sign(offset) * np.sqrt(np.abs(offset) / span)
 
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
-    """One velocity curve per frequency of the file, into ``output.png/.pdf``."""
+    """Draw velocity against acceleration, one line per frequency, into ``output.png/.pdf``.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A result holding velocity and status over (f, a).
+    output : pathlib.Path
+        File stem.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The PNG and the PDF.
+    """
     single_structure(dataset, "velocity-curves")
+    structure = common.structure_from_dataset(dataset)
     f = dataset["f"].values
     a = dataset["a"].values
-    velocity = dataset["velocity"].values * 1e3
-    status = dataset["status"].values
-    # Every curve must stay visible: a sequential map, no pale middle.
-    norm = Normalize(vmin=f.min(), vmax=max(f.max(), f.min() + 1e-9))
-    cmap = plt.get_cmap("viridis")
+    velocity = 1e3 * dataset["velocity"].transpose("f", "a").values  # mm/s
+    status = dataset["status"].transpose("f", "a").values
+    positions = frequency_position(f, structure.f0)
 
-    fig, ax = plt.subplots(figsize=(7.5, 4.8), layout="constrained")
-    ax.axhline(0.0, color="0.4", lw=0.8)
-    flagged = False
+    fig, ax = plt.subplots(figsize=(8.0, 5.2), layout="constrained")
+    ax.axhline(0.0, color="black", lw=0.8)
+    handles = []
+    any_lift = any_stuck = False
     for i, frequency in enumerate(f):
-        valid = np.isin(status[i], VALID)
-        line = np.where(valid, velocity[i], np.nan)
-        ax.plot(a, line, color=cmap(norm(frequency)), lw=1.6, label=f"{frequency:g} Hz")
+        color = FREQUENCY_COLORS(positions[i])
         lifted = np.flatnonzero(status[i] == Status.LIFT_OFF)
-        if lifted.size:
-            end = lifted[0] - 1
-            if end >= 0 and np.isfinite(line[end]):
-                ax.plot(a[end], line[end], "x", color=cmap(norm(frequency)), ms=6)
-                flagged = True
-    if flagged:
-        ax.plot([], [], "kx", label="lift-off: curve ends")
-    if np.any(status == Status.NOT_CONVERGED):
-        ax.plot([], [], " ", label="not converged points left out")
+        end = int(lifted[0]) if lifted.size else a.size
+        valid = np.isin(status[i, :end], VALID)
+        shown = np.where(valid, velocity[i, :end], np.nan)
+        (line,) = ax.plot(a[:end], shown, color=color, lw=1.6, label=f"{frequency:g} Hz")
+        handles.append(line)
+        if lifted.size and end > 0 and valid[-1]:
+            any_lift = True
+            ax.plot(a[end - 1], shown[-1], ls="none", marker="o", ms=5.5, mfc="white",
+                    mec=color, mew=1.6, zorder=4)
+        stuck = np.flatnonzero(status[i] == Status.NOT_CONVERGED)
+        if stuck.size:
+            any_stuck = True
+            ax.plot(a[stuck], np.full(stuck.size, 0.03), ls="none", marker="x", ms=5,
+                    color=color, transform=ax.get_xaxis_transform(), clip_on=False)
+    if any_lift:
+        handles.append(Line2D([], [], ls="none", marker="o", ms=5.5, mfc="white", mec="0.3",
+                              mew=1.6, label="curve ends: lift-off\nabove (model invalid)"))
+    if any_stuck:
+        handles.append(Line2D([], [], ls="none", marker="x", ms=5, color="0.3",
+                              label="not converged at this a\n(no velocity; gap)"))
     ax.set(xlim=(a[0], a[-1]), xlabel="drive acceleration a [m s$^{-2}$]",
-           ylabel="mean velocity v [mm s$^{-1}$]")
-    title = "Velocity against drive acceleration at fixed frequencies (paper Fig. 1C)"
-    ax.set_title(f"{title}\n{parameter_text(dataset)}", fontsize=10)
-    ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8, title="f",
-              frameon=False)
+           ylabel="mean velocity v [mm s$^{-1}$]  (> 0: forward)")
+    title = "Mean steady velocity against drive acceleration at fixed frequencies"
+    ax.set_title(f"{title}\n{parameter_text(dataset)}", fontsize=11)
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              borderaxespad=0.0, fontsize=8.5, title="drive frequency f\n(blue < $f_0$ < red)",
+              title_fontsize=9, frameon=False)
     return common.save(fig, output, dataset, title)
