@@ -81,9 +81,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         t = phase / f_point
         n = normal_force(structure, f_point, a_point, t)
         tau = tangential_force(structure, f_point, a_point, t)
-        forward = tau > cs * n
-        backward = -tau > cs * n
-        lifted = n < 0.0
+        lifted = n < 0.0  # outside the model: neither slip criterion applies
+        forward = (tau > cs * n) & ~lifted
+        backward = (-tau > cs * n) & ~lifted
         strip = ax.get_xaxis_transform()
         ax.fill_between(phase, 0, 1, where=forward, color="tab:blue", alpha=0.18, lw=0,
                         transform=strip)

@@ -1,82 +1,165 @@
-"""Figure commands of Fig. 1B, 1C and 2 run on small result files and write images."""
+"""Figures drawn from result files: thresholds, velocity curves, regime map, force traces."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pytest
 from PIL import Image
 
 from study.cli import main
+from study.figures import FIGURES, draw_figure
+from study.figures.force_traces import region_of
+from study.figures.velocity_curves import frequency_position
 from study.runner import run_study
+from study.status import Status
 from study.store import open_result
 
-STRUCTURE = "[structure]\nf0 = 14.44\nQ = 17.5\nalpha = 64.0\nM = 0.08\ncs = 0.25\n"
+STRUCTURE = """\
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+M = 0.08
+cs = 0.25
+"""
+
 SPECS = {
-    "thresholds": ('["resonance", "thresholds", "lift_off"]',
-                   "f = { start = 10.0, stop = 20.0, num = 41 }\n"),
-    "velocity-curves": ('["thresholds", "lift_off", "velocity"]',
-                        "f = { values = [12.0, 14.5, 17.0] }\n"
-                        "a = { start = 0.0, stop = 12.0, num = 31 }\n"),
-    "regime-map": ('["thresholds", "lift_off", "velocity", "frontier"]',
-                   "f = { start = 10.0, stop = 20.0, num = 41 }\n"
-                   "a = { start = 0.0, stop = 12.0, num = 25 }\n"),
+    "thresholds": """\
+[study]
+name = "thresholds"
+observables = ["resonance", "thresholds", "lift_off"]
+{structure}
+[sweep]
+f = {{ start = 10.0, stop = 20.0, num = 41 }}
+""",
+    "velocity-curves": """\
+[study]
+name = "velocity-curves"
+observables = ["thresholds", "lift_off", "velocity"]
+{structure}
+[sweep]
+f = {{ values = [12.0, 14.0, 14.5, 16.0] }}
+a = {{ start = 0.0, stop = 12.0, num = 31 }}
+""",
+    "regime-map": """\
+[study]
+name = "regime-map"
+observables = ["resonance", "thresholds", "lift_off", "velocity", "frontier"]
+{structure}
+[sweep]
+f = {{ start = 10.0, stop = 20.0, num = 41 }}
+a = {{ start = 0.0, stop = 12.0, num = 31 }}
+""",
+}
+
+#: figure -> the result it is drawn from in these tests.
+SOURCES = {
+    "thresholds": "thresholds",
+    "velocity-curves": "velocity-curves",
+    "regime-map": "regime-map",
+    "force-traces": "regime-map",
 }
 
 
 @pytest.fixture(scope="module")
-def results(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("figures")
+def results(tmp_path_factory) -> dict[str, Path]:
+    """Small result files of the three workflows these figures are drawn from."""
+    folder = tmp_path_factory.mktemp("figure-results")
     files = {}
-    for name, (observables, sweep) in SPECS.items():
+    for name, text in SPECS.items():
         spec = folder / f"{name}.toml"
-        spec.write_text(f'[study]\nname = "{name}"\nobservables = {observables}\n'
-                        f"{STRUCTURE}[sweep]\n{sweep}")
-        files[name] = run_study(spec, folder / f"{name}.nc", progress=False).output
+        spec.write_text(text.format(structure=STRUCTURE))
+        files[name] = folder / f"{name}.nc"
+        run_study(spec, files[name], progress=False, workers=1)
     return files
 
 
-@pytest.mark.parametrize(
-    ("figure", "source"),
-    [("thresholds", "thresholds"), ("velocity-curves", "velocity-curves"),
-     ("regime-map", "regime-map"), ("force-traces", "regime-map")],
-)
-def test_figure_command_writes_png_and_pdf_with_provenance(results, tmp_path, figure, source):
+def test_the_small_specs_hold_what_their_figures_require(results):
+    for figure, source in SOURCES.items():
+        dataset = open_result(results[source])
+        missing = [v for v in FIGURES[figure].requires if v not in dataset.variables]
+        assert not missing, (figure, missing)
+
+
+@pytest.mark.parametrize("figure", sorted(SOURCES))
+def test_figure_command_writes_png_and_pdf_with_provenance(figure, results, tmp_path, capsys):
+    source = results[SOURCES[figure]]
     stem = tmp_path / figure
-    assert main(["figure", figure, str(results[source]), "-o", str(stem)]) == 0
+    assert main(["figure", figure, str(source), "-o", str(stem)]) == 0
     png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert pdf.read_bytes()[:5] == b"%PDF-"
-    sha = open_result(results[source]).attrs["study_spec_sha256"]
+    assert pdf.read_bytes()[:4] == b"%PDF"
+    assert str(png) in capsys.readouterr().out
+    sha = open_result(source).attrs["study_spec_sha256"]
     with Image.open(png) as image:
-        metadata = image.text
-        assert image.size[0] > 600
-        pixels = np.asarray(image.convert("L"))
-    assert sha in metadata["Description"] and sha in metadata["Source"]
-    assert metadata["Title"]
-    assert pixels.std() > 10  # something was drawn
+        text = dict(image.text)
+        width, height = image.size
+    assert sha in text["Source"]
+    assert sha in text["Description"]
+    assert text["Title"]
+    assert width >= 900 and height >= 600  # 150 dpi, a readable size
 
 
-def test_figure_from_a_file_without_its_variables_is_refused(results, tmp_path, capsys):
-    status = main(["figure", "regime-map", str(results["thresholds"]),
-                   "-o", str(tmp_path / "x")])
-    err = capsys.readouterr().err
-    assert status == 1
-    assert "velocity" in err and "workflows/regime-map.toml" in err
-    assert not (tmp_path / "x.png").exists()
+@pytest.mark.parametrize(
+    ("figure", "source", "missing"),
+    [
+        ("regime-map", "thresholds", "velocity"),
+        ("regime-map", "velocity-curves", "frontier_frequency"),
+        ("thresholds", "velocity-curves", "mode_gain"),
+        ("velocity-curves", "thresholds", "status"),
+        ("force-traces", "thresholds", "velocity"),
+    ],
+)
+def test_a_file_without_a_required_variable_is_refused(figure, source, missing, results,
+                                                       tmp_path, capsys):
+    stem = tmp_path / figure
+    assert main(["figure", figure, str(results[source]), "-o", str(stem)]) == 1
+    message = capsys.readouterr().err
+    assert missing in message
+    assert f"workflows/{FIGURES[figure].workflow}.toml" in message
+    assert not stem.with_suffix(".png").exists()
 
 
-def test_single_structure_figures_refuse_a_swept_structure(tmp_path, capsys):
+def test_a_file_sweeping_the_structure_is_refused(results, tmp_path, capsys):
     spec = tmp_path / "swept.toml"
-    spec.write_text('[study]\nname = "swept"\nobservables = ["resonance", "thresholds"]\n'
-                    "[structure]\nf0 = 14.44\nQ = 17.5\nalpha = 64.0\ncs = 0.25\n"
-                    "[sweep]\nM = { values = [0.05, 0.08] }\n"
-                    "f = { start = 10.0, stop = 20.0, num = 11 }\n")
-    output = run_study(spec, tmp_path / "swept.nc", progress=False).output
-    assert main(["figure", "thresholds", str(output), "-o", str(tmp_path / "t")]) == 1
+    spec.write_text(
+        SPECS["thresholds"].format(structure=STRUCTURE.replace("M = 0.08\n", ""))
+        .replace("[sweep]\n", "[sweep]\nM = { values = [0.05, 0.08] }\n")
+    )
+    run_study(spec, tmp_path / "swept.nc", progress=False, workers=1)
+    assert main(["figure", "thresholds", str(tmp_path / "swept.nc"),
+                 "-o", str(tmp_path / "fig")]) == 1
     assert "sweeps M" in capsys.readouterr().err
 
 
-def test_unknown_figure_is_a_usage_error(results):
-    with pytest.raises(SystemExit) as exit_info:
-        main(["figure", "fig-99", str(results["thresholds"])])
-    assert exit_info.value.code == 2
+@pytest.mark.parametrize("figure", ["regime-map", "velocity-curves"])
+def test_unconverged_and_sliding_points_are_drawn_apart(figure, results, tmp_path):
+    """Statuses absent from the small maps (not converged, continuous sliding) draw too."""
+    dataset = open_result(results[SOURCES[figure]])
+    status = dataset["status"].values
+    velocity = dataset["velocity"].values
+    moving = np.argwhere(status == Status.STICK_SLIP)
+    status[tuple(moving[0])] = Status.NOT_CONVERGED
+    velocity[tuple(moving[0])] = np.nan
+    status[tuple(moving[-1])] = Status.CONTINUOUS_SLIDING
+    written = draw_figure(figure, dataset, tmp_path / figure)
+    assert [p.suffix for p in written] == [".png", ".pdf"]
+    assert all(p.stat().st_size > 1000 for p in written)
+
+
+def test_region_names_follow_the_thresholds():
+    assert region_of(1.0, 2.0, 3.0) == "S"
+    assert region_of(2.5, 2.0, 3.0) == "P"
+    assert region_of(2.5, 3.0, 2.0) == "N"
+    assert region_of(3.5, 2.0, 3.0) == "PN"
+
+
+def test_frequency_colours_diverge_from_the_resonance():
+    f = np.array([10.0, 14.0, 14.44, 15.0, 20.0])
+    position = frequency_position(f, 14.44)
+    assert position[2] == pytest.approx(0.5)
+    assert np.all(np.diff(position) > 0)
+    assert position[0] < 0.5 < position[-1]
+    assert 0.0 <= position.min() and position.max() <= 1.0
