@@ -21,7 +21,7 @@ from study.structure import Structure
 __all__ = ["SolverSettings", "SteadyState", "steady_state", "steady_velocity"]
 
 #: Version of the steady-state algorithm; changes whenever its results may change.
-SOLVER_VERSION = "1"
+SOLVER_VERSION = "2"
 
 #: Inputs with at least this many points are solved by the parallel kernel.
 PARALLEL_THRESHOLD = 2048

@@ -289,6 +289,9 @@ def _refine_cycle(p, period, turns, k, max_events):
     converged, p, end, sign, distance, forward, backward, slips
         The cycle's phase ``p`` and statistics of ``period`` map iterations along it.
     """
+    found = False
+    polish = 0
+    best = (np.inf, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0)
     for _ in range(40):
         p = _mod_two_pi(p)
         flag, end, sign, deriv, distance, forward, backward, slips = _rounds(
@@ -297,11 +300,24 @@ def _refine_cycle(p, period, turns, k, max_events):
         if flag != _ROUND_OK or deriv == 1.0:
             break
         residual = end - p - TWO_PI * turns
-        if abs(residual) <= CYCLE_TOLERANCE:
-            if abs(deriv) < 1.0:
-                return True, p, end, sign, distance, forward, backward, slips
-            break
+        if found:
+            # Polish down to the rounding floor: near multiplier 1 the phase error is
+            # the residual / (1 - multiplier), so every halving of it counts.
+            if abs(residual) >= best[0]:
+                break
+            polish += 1
+        elif abs(residual) <= CYCLE_TOLERANCE:
+            if abs(deriv) >= 1.0:
+                break
+            found = True
+        if found:
+            best = (abs(residual), p, end, sign, distance, forward, backward, slips)
+            if polish >= 4:
+                break
         p -= residual / (deriv - 1.0)
+    if found:
+        _, p, end, sign, distance, forward, backward, slips = best
+        return True, p, end, sign, distance, forward, backward, slips
     return False, p, 0.0, 0, 0.0, 0.0, 0.0, 0
 
 
@@ -393,8 +409,11 @@ def _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g):
     gamma_m = math.atan2(math.sqrt((h_m - c) * (h_m + c)), c) if h_m > c else -1.0
     r_p = abs(a_plus)
     r_m = abs(a_minus)
-    ok_p = r_p > cs_g
-    ok_m = r_m > cs_g
+    # A release needs |A_s| > cs g. Within a few ulps the comparison is rounding, and
+    # at alpha = 0, a = a_lift it is exactly the lift-off touch (tau = 0, n = 0): no slip.
+    release_level = cs_g * (1.0 + 8.0 * 2.220446049250313e-16)
+    ok_p = r_p > release_level
+    ok_m = r_m > release_level
     entry_p = 0.0
     width_p = 0.0
     entry_m = 0.0
