@@ -1,4 +1,5 @@
-"""What every figure shares: style, saving as PNG and PDF, provenance in the metadata."""
+"""What the figures share: saving as PNG and PDF with provenance in the metadata, the
+structure a file was computed for, the paper's regime points, and a few checks."""
 
 from __future__ import annotations
 
@@ -8,9 +9,21 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+import numpy as np
 import xarray as xr
 
-__all__ = ["provenance_line", "save", "structure_from_dataset"]
+from study.status import Status
+
+__all__ = [
+    "PAPER_POINTS",
+    "VALID",
+    "grid_minimum",
+    "parameter_text",
+    "provenance_line",
+    "save",
+    "single_structure",
+    "structure_from_dataset",
+]
 
 
 def provenance_line(dataset: xr.Dataset) -> str:
@@ -89,3 +102,63 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
     if "ck" not in params and "cs" in params:
         params["ck"] = params["cs"]
     return study.Structure(**params)
+
+
+#: The paper's points in its regions S, P, N and PN: name -> (f [Hz], a [m s^-2]).
+PAPER_POINTS: dict[str, tuple[float, float]] = {
+    "S": (13.0, 5.0),
+    "P": (13.0, 8.5),
+    "N": (16.5, 8.5),
+    "PN": (14.6, 7.0),
+}
+
+#: Statuses with a valid velocity (0 when static).
+VALID = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
+
+
+def single_structure(dataset: xr.Dataset, figure: str) -> None:
+    """Refuse a file that sweeps structure parameters (the figure draws one structure).
+
+    Raises
+    ------
+    FigureError
+        Naming the swept parameters.
+    """
+    from study.figures import FigureError
+
+    swept = [str(d) for d in dataset.dims if d not in ("f", "a", "branch")]
+    if swept:
+        raise FigureError(
+            f"figure {figure!r} draws a single structure, but this file (study "
+            f"{dataset.attrs.get('study_name')!r}) sweeps {', '.join(swept)}; draw it from "
+            "a file with fixed structure parameters"
+        )
+
+
+def parameter_text(dataset: xr.Dataset) -> str:
+    """The structure's parameters, compactly, from the file's scalar coordinates."""
+    s = structure_from_dataset(dataset)
+    text = (
+        f"$f_0$ = {s.f0:g} Hz, Q = {s.Q:g}, $\\alpha$ = {s.alpha:g}°, M = {s.M:g}, "
+        f"$c_s$ = {s.cs:g}"
+    )
+    if s.ck != s.cs:
+        text += f", $c_k$ = {s.ck:g}"
+    if s.g != 9.8:
+        text += f", g = {s.g:g} m s$^{{-2}}$"
+    return text
+
+
+#: The f grid resolves a threshold minimum when its step is below f0 / (RESOLUTION Q):
+#: the nearest grid point is then within f0 / (20 Q) of the minimum, where the mode's
+#: gain has dropped by less than 0.5 %.
+RESOLUTION = 10.0
+
+
+def grid_minimum(f: np.ndarray, curve: np.ndarray, f0: float, Q: float) -> tuple[int, bool]:
+    """Index of the lowest value of ``curve`` over the grid ``f`` and whether it is a
+    resolved minimum: not at an end of the range, and the step below ``f0 / (10 Q)``.
+    An unresolved minimum is only an upper bound of the true one."""
+    j = int(np.argmin(curve))
+    step = float(np.max(np.diff(f))) if f.size > 1 else np.inf
+    return j, 0 < j < f.size - 1 and step <= f0 / (RESOLUTION * Q)

@@ -17,7 +17,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from study.figures import common
-from study.figures.regime_map import PAPER_POINTS, parameter_text, single_structure
+from study.figures.common import PAPER_POINTS, parameter_text, single_structure
 from study.physics.forces import normal_force, tangential_force, thresholds
 from study.status import Status
 

@@ -21,8 +21,7 @@ import xarray as xr
 import study
 from study.analysis import minimum_threshold, resonance_threshold
 from study.figures import FigureError
-from study.figures.common import save, structure_from_dataset
-from study.figures.threshold_collapse import grid_minimum
+from study.figures.common import grid_minimum, save, structure_from_dataset
 
 __all__ = ["draw"]
 

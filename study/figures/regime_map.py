@@ -1,8 +1,6 @@
 """The paper's Fig. 2: mean velocity over (f, a), thresholds, lift-off and frontier f*(a).
 
 Drawn from a ``regime-map`` result file alone (``study figure regime-map FILE``).
-The helpers :func:`single_structure` and :func:`parameter_text`, and the paper's
-four points :data:`PAPER_POINTS`, are shared with the other single-structure figures.
 """
 
 from __future__ import annotations
@@ -17,55 +15,14 @@ from matplotlib.colors import ListedColormap, TwoSlopeNorm
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from study.figures import FigureError, common
+from study.figures import common
+from study.figures.common import PAPER_POINTS, VALID, parameter_text, single_structure
 from study.status import Status
 
-__all__ = ["PAPER_POINTS", "draw", "parameter_text", "single_structure"]
-
-#: The paper's points in its regions S, P, N and PN: name -> (f [Hz], a [m s^-2]).
-PAPER_POINTS: dict[str, tuple[float, float]] = {
-    "S": (13.0, 5.0),
-    "P": (13.0, 8.5),
-    "N": (16.5, 8.5),
-    "PN": (14.6, 7.0),
-}
-
-#: Statuses with a valid velocity (0 when static).
-VALID = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
+__all__ = ["draw"]
 
 #: A white outline that keeps thin lines readable over the colour map.
 OUTLINE = [path_effects.withStroke(linewidth=3.2, foreground="white")]
-
-
-def single_structure(dataset: xr.Dataset, figure: str) -> None:
-    """Refuse a file that sweeps structure parameters (the figure draws one structure).
-
-    Raises
-    ------
-    FigureError
-        Naming the swept parameters.
-    """
-    swept = [str(d) for d in dataset.dims if d not in ("f", "a", "branch")]
-    if swept:
-        raise FigureError(
-            f"figure {figure!r} draws a single structure, but this file (study "
-            f"{dataset.attrs.get('study_name')!r}) sweeps {', '.join(swept)}; draw it from "
-            "a file with fixed structure parameters"
-        )
-
-
-def parameter_text(dataset: xr.Dataset) -> str:
-    """The structure's parameters, compactly, from the file's scalar coordinates."""
-    s = common.structure_from_dataset(dataset)
-    text = (
-        f"$f_0$ = {s.f0:g} Hz, Q = {s.Q:g}, $\\alpha$ = {s.alpha:g}°, M = {s.M:g}, "
-        f"$c_s$ = {s.cs:g}"
-    )
-    if s.ck != s.cs:
-        text += f", $c_k$ = {s.ck:g}"
-    if s.g != 9.8:
-        text += f", g = {s.g:g} m s$^{{-2}}$"
-    return text
 
 
 def _layer(ax, f, a, mask, color, alpha=1.0):

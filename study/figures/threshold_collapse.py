@@ -23,26 +23,11 @@ import xarray as xr
 
 from study.analysis import collapse_variable
 from study.figures import FigureError
-from study.figures.common import save, structure_from_dataset
+from study.figures.common import grid_minimum, save, structure_from_dataset
 
-__all__ = ["draw", "grid_minimum"]
+__all__ = ["draw"]
 
 _AXES = ("Q", "M")
-
-#: The f grid resolves a threshold minimum when its step is below f0 / (RESOLUTION Q):
-#: the nearest grid point is then within f0 / (20 Q) of the minimum, where the mode's
-#: gain has dropped by less than 0.5 %.
-RESOLUTION = 10.0
-
-
-def grid_minimum(f: np.ndarray, curve: np.ndarray, f0: float, Q: float) -> tuple[int, bool]:
-    """Index of the lowest value of ``curve`` over the grid ``f`` and whether it is a
-    resolved minimum: not at an end of the range, and the step below ``f0 / (10 Q)``.
-    An unresolved minimum is only an upper bound of the true one."""
-    j = int(np.argmin(curve))
-    step = float(np.max(np.diff(f))) if f.size > 1 else np.inf
-    return j, 0 < j < f.size - 1 and step <= f0 / (RESOLUTION * Q)
-
 
 def _minima(dataset: xr.Dataset):
     """Per structure: its index, x, the minimum over f and whether it is at a range edge."""

@@ -14,7 +14,7 @@ import xarray as xr
 from matplotlib.patches import Patch
 
 from study.figures import common
-from study.figures.regime_map import parameter_text, single_structure
+from study.figures.common import parameter_text, single_structure
 from study.physics.forces import lift_off_acceleration
 
 __all__ = ["draw"]

@@ -17,7 +17,7 @@ from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 
 from study.figures import common
-from study.figures.regime_map import VALID, parameter_text, single_structure
+from study.figures.common import VALID, parameter_text, single_structure
 from study.status import Status
 
 __all__ = ["FREQUENCY_COLORS", "draw", "frequency_position"]

@@ -12,8 +12,7 @@ import study
 from study.analysis import collapse_variable, minimum_threshold, resonance_threshold
 from study.cli import main
 from study.figures import mass_ratio_limit
-from study.figures.common import structure_from_dataset
-from study.figures.threshold_collapse import grid_minimum
+from study.figures.common import grid_minimum, structure_from_dataset
 from study.runner import run_study
 from study.status import Status
 from study.store import open_result
