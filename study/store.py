@@ -155,16 +155,15 @@ def build_dataset(
     attrs : dict
         Global attributes (provenance), added to the standard ones.
     """
-    from study.spec import STRUCTURE_PARAMETERS
+    from study.spec import STRUCTURE_PARAMETERS, SWEEPABLE
 
     coords: dict[str, xr.Variable] = {}
     for axis in spec.axes:
         coords[axis.name] = _coordinate(axis.name, axis.values, axis.units, axis.long_name)
-    for name, value in spec.fixed.items():
-        units, long_name = (
-            STRUCTURE_PARAMETERS[name] if name in STRUCTURE_PARAMETERS
-            else ("kg", "added non-resonant mass")
-        )
+    # The canonical form holds every fixed parameter with its defaults (g, ck = cs)
+    # written out, so the file describes the model fully.
+    for name, value in spec.canonical["structure"].items():
+        units, long_name = SWEEPABLE[name]
         coords[name] = _coordinate(name, value, units, long_name, dims=())
     if spec.mass is not None:
         coords["m0"] = _coordinate("m0", spec.mass.m0, "kg", "mass of the structure", ())
@@ -176,14 +175,6 @@ def build_dataset(
         else:
             ratio = spec.mass.mass_ratio(spec.fixed.get("m_add", 0.0))
             coords["M"] = _coordinate("M", ratio, "1", STRUCTURE_PARAMETERS["M"][1], ())
-    if "ck" not in coords and spec.axis("ck") is None:
-        # ck defaults to cs: record it explicitly so the file describes the model fully.
-        cs_axis = spec.axis("cs")
-        if cs_axis is None:
-            coords["ck"] = _coordinate("ck", spec.fixed["cs"], "1",
-                                       STRUCTURE_PARAMETERS["ck"][1], ())
-    if "g" not in coords and spec.axis("g") is None:
-        coords["g"] = _coordinate("g", 9.8, "m s-2", STRUCTURE_PARAMETERS["g"][1], ())
 
     structure_dims = tuple(axis.name for axis in spec.structure_axes)
     data_vars = {}
