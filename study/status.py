@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-__all__ = ["NonConvergence", "Status"]
+__all__ = ["INVALID_STATUSES", "NonConvergence", "Status"]
 
 
 class Status(IntEnum):
@@ -24,6 +24,10 @@ class Status(IntEnum):
     NOT_CONVERGED
         No periodic orbit was found within the solver's budget; the reason is in
         :class:`NonConvergence`. No velocity is given (NaN).
+    FRICTION_PARADOX
+        Two-way coupling only: a slip's equations have no unique solution (Painleve's
+        paradox, ``1 - M sin(alpha) (sin(alpha) + s ck cos(alpha)) <= 0``), as can happen
+        for ``M`` close to 1 at steep tilt. Outside the model; no velocity (NaN).
     """
 
     STATIC = 0
@@ -31,6 +35,7 @@ class Status(IntEnum):
     CONTINUOUS_SLIDING = 2
     LIFT_OFF = 3
     NOT_CONVERGED = 4
+    FRICTION_PARADOX = 5
 
 
 class NonConvergence(IntEnum):
@@ -51,3 +56,7 @@ class NonConvergence(IntEnum):
     NONE = 0
     NO_PERIODIC_ORBIT = 1
     EVENT_BUDGET = 2
+
+
+#: Statuses outside the model's validity or without a solution: no velocity (NaN).
+INVALID_STATUSES = (Status.LIFT_OFF, Status.NOT_CONVERGED, Status.FRICTION_PARADOX)

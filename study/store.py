@@ -23,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from study.spec import SPEC_SCHEMA_PATH, SpecError, StudySpec, parse_spec
-from study.status import NonConvergence, Status
+from study.status import INVALID_STATUSES, NonConvergence, Status
 from study.sweep import Chunk, variables_for
 
 __all__ = [
@@ -208,6 +208,20 @@ def _creator() -> str:
         return "unknown"
 
 
+def _method_text(spec: StudySpec) -> str:
+    """How the velocities were computed, for the file's own description."""
+    if spec.method == "exact":
+        return (
+            "the exact event-driven steady-state solver (closed form between events; "
+            "one-way coupling, the paper's model)"
+        )
+    return (
+        "Dormand-Prince 5(4) time integration with events located on the dense output, "
+        f"until the orbit repeats ({spec.coupling} coupling"
+        + ("; the sliding base also forces the mode)" if spec.coupling == "two-way" else ")")
+    )
+
+
 def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
     return {
         "Conventions": "CF-1.11, ACDD-1.3",
@@ -216,12 +230,14 @@ def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
         or (
             f"Parameter study '{spec.name}' of vibration-driven stick-slip locomotion: "
             f"{', '.join(spec.observables)} of a soft structure with a resonant plate on a "
-            "vertically shaken table, computed by the exact steady-state solver of study."
+            f"vertically shaken table, computed by {_method_text(spec)}."
         ),
         "keywords": "stick-slip, friction, locomotion, resonance, vibration, parameter study",
         "id": f"{spec.name}-{spec.sha256[:16]}",
         "naming_authority": "study",
-        "source": "study: exact event-driven steady-state stick-slip solver",
+        "source": f"study: {_method_text(spec)}",
+        "study_solver_method": spec.method,
+        "study_coupling": spec.coupling,
         "processing_level": "model output",
         "references": PAPER_REFERENCE,
         "standard_name_vocabulary": "CF Standard Name Table v85",
@@ -322,11 +338,12 @@ def validate_dataset(dataset: xr.Dataset, source: str = "dataset") -> None:
     if "velocity" in dataset and "status" in dataset:
         velocity = dataset["velocity"].values
         status = dataset["status"].values
-        flagged = np.isin(status, [Status.LIFT_OFF, Status.NOT_CONVERGED])
+        flagged = np.isin(status, INVALID_STATUSES)
         mismatched = int(np.count_nonzero(np.isnan(velocity) != flagged))
         if mismatched:
             problems.append(
-                "velocity must be NaN exactly where status is lift_off or not_converged; "
+                "velocity must be NaN exactly where status is lift_off, not_converged or "
+                "friction_paradox; "
                 f"{mismatched} points disagree"
             )
         if np.any(velocity[status == Status.STATIC] != 0.0):

@@ -24,7 +24,7 @@ from matplotlib.patches import Patch
 
 import study
 from study.figures import FigureError
-from study.figures.common import save, structure_from_dataset
+from study.figures.common import VALID, save, structure_from_dataset
 from study.status import Status
 
 __all__ = ["draw", "panel_indices", "valid_velocity_mm_s"]
@@ -42,7 +42,7 @@ def valid_velocity_mm_s(velocity: np.ndarray, status: np.ndarray) -> np.ma.Maske
     """
     velocity = np.asarray(velocity, dtype=np.float64)
     status = np.asarray(status)
-    valid = np.isin(status, (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING))
+    valid = np.isin(status, VALID)
     valid &= np.isfinite(velocity)
     return np.ma.masked_where(~valid, 1e3 * velocity)
 
@@ -113,7 +113,7 @@ def _panel(fig, ax, dataset: xr.Dataset, at: dict) -> None:
         rows = np.nonzero(found)
         ax.plot(frontier[rows], a[rows[0]], "o", color="k", ms=2.2, zorder=5)
 
-    valid = ~np.isin(status, (Status.LIFT_OFF, Status.NOT_CONVERGED))
+    valid = np.isin(status, VALID)
     above_both = a[None, :] > np.maximum(a_plus, a_minus)[:, None]
     pn_share = np.count_nonzero(above_both & valid) / max(np.count_nonzero(valid), 1)
     cs_share = np.count_nonzero(status == Status.CONTINUOUS_SLIDING) / status.size

@@ -190,10 +190,12 @@ def test_bad_solver_settings_are_refused(name, bad):
 
 
 def test_status_codes_mirror_kernel_constants():
-    assert [s.value for s in Status] == [
+    # The exact kernel never returns FRICTION_PARADOX (a two-way coupling outcome).
+    assert [s.value for s in Status][:5] == [
         kernel.STATIC, kernel.STICK_SLIP, kernel.CONTINUOUS_SLIDING, kernel.LIFT_OFF,
         kernel.NOT_CONVERGED,
     ]
+    assert Status.FRICTION_PARADOX.value == 5
     assert [r.value for r in NonConvergence] == [
         kernel.REASON_NONE, kernel.REASON_NO_PERIODIC_ORBIT, kernel.REASON_EVENT_BUDGET,
     ]
