@@ -7,6 +7,7 @@ grid and refined by bisection on the exact solver to a set tolerance.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,7 +15,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from study.physics import as_acceleration, as_frequency, thresholds
-from study.solver import SolverSettings, steady_state
+from study.solver import SolverSettings, SteadyState, steady_state
 from study.status import Status
 from study.structure import Structure
 
@@ -70,6 +71,8 @@ def frontier_from_grid(
     *,
     tolerance: float = 1e-9,
     settings: SolverSettings | None = None,
+    solve: Callable[[Structure, NDArray[np.float64], NDArray[np.float64]], SteadyState]
+    | None = None,
 ) -> Frontier:
     """Refine every sign change of the velocity along ``f`` into a frontier point.
 
@@ -87,6 +90,10 @@ def frontier_from_grid(
         Bracket width at which bisection stops [Hz].
     settings : SolverSettings, optional
         Solver budgets for the refinement.
+    solve : callable, optional
+        ``solve(structure, f, a) -> SteadyState`` used for the refinement instead of the
+        exact solver (e.g. the time integrator with two-way coupling): it must be the
+        solver that computed ``velocity``.
 
     Returns
     -------
@@ -118,7 +125,10 @@ def frontier_from_grid(
     a_points = a[i_a]
     while lo.size and np.max(hi - lo) > tolerance:
         mid = 0.5 * (lo + hi)
-        result = steady_state(structure, mid, a_points, settings)
+        if solve is None:
+            result = steady_state(structure, mid, a_points, settings)
+        else:
+            result = solve(structure, mid, a_points)
         v_mid = result.velocity
         valid = np.isin(result.status, _MOVING) & (v_mid != 0)
         take_lo = valid & (np.sign(v_mid) == np.sign(v_lo))

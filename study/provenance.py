@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from study.solver import SOLVER_VERSION
+from study.transient import INTEGRATOR_VERSION
 
 __all__ = [
     "code_sha256",
@@ -36,6 +37,8 @@ _COMPUTING_SOURCES = (
     "physics/forces.py",
     "physics/validation.py",
     "kernels/steady.py",
+    "transient.py",
+    "kernels/transient.py",
 )
 
 
@@ -47,7 +50,9 @@ def utc_now() -> str:
 @cache
 def code_sha256() -> str:
     """Hash of the source of every module that computes results, and the solver version."""
-    digest = hashlib.sha256(f"solver-version={SOLVER_VERSION}\n".encode())
+    digest = hashlib.sha256(
+        f"solver-version={SOLVER_VERSION}\nintegrator-version={INTEGRATOR_VERSION}\n".encode()
+    )
     for name in _COMPUTING_SOURCES:
         digest.update(name.encode() + b"\0")
         digest.update((PACKAGE_DIR / name).read_bytes())

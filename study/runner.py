@@ -37,7 +37,7 @@ from study.store import (
     open_result,
     write_atomic,
 )
-from study.sweep import compute_chunk, plan_chunks
+from study.sweep import compute_chunk, plan_chunks, solve
 
 __all__ = ["RunReport", "StudyBusy", "StudyInterrupted", "is_up_to_date", "run_study"]
 
@@ -200,6 +200,7 @@ def _frontier_arrays(spec: StudySpec, arrays: dict[str, Any]) -> dict[str, Any]:
         found[index] = frontier_from_grid(
             structure, f, a, arrays["velocity"][index], arrays["status"][index],
             tolerance=spec.frontier_tolerance, settings=spec.solver,
+            solve=lambda structure, f, a: solve(spec, structure, f, a),
         )
     branches = max(item.frequency.shape[1] for item in found.values())
     shape = (*(len(axis) for axis in spec.structure_axes), len(a), branches)
@@ -306,9 +307,7 @@ def _run_locked(spec, output, chunks, run_fingerprint, started, started_utc, sch
             "chunks_computed": computed,
             "chunks_reused": reused,
             "solver_settings": {
-                "method": "exact",
-                "max_events": spec.solver.max_events,
-                "max_map_iterations": spec.solver.max_map_iterations,
+                **spec.canonical["solver"],
                 "chunk_points": spec.chunk_points,
             },
             "host": environment()["host"],

@@ -41,8 +41,10 @@ from numpy.typing import NDArray
 
 from study.solver import SolverSettings
 from study.structure import Structure
+from study.transient import IntegratorSettings
 
 __all__ = [
+    "METHODS",
     "OBSERVABLES",
     "SOLVER_OBSERVABLES",
     "SPEC_SCHEMA_PATH",
@@ -62,6 +64,14 @@ SPEC_SCHEMA_PATH = Path(__file__).resolve().parent.parent / "results_schema" / (
 OBSERVABLES = ("resonance", "thresholds", "lift_off", "velocity", "diagnostics", "frontier")
 #: Observables that need the steady-state solver (and hence the drive acceleration a).
 SOLVER_OBSERVABLES = ("velocity", "diagnostics", "frontier")
+
+#: Velocity solvers a spec can choose with ``[solver] method``.
+METHODS = ("exact", "integrator")
+#: ``[solver]`` keys of the exact solver and of the time integrator.
+EXACT_KEYS = ("max_events", "max_map_iterations")
+INTEGRATOR_KEYS = (
+    "tolerance", "steps_per_period", "max_periods", "max_orbit_period", "period_tolerance",
+)
 
 #: Structure parameters: units and long names (SI inside).
 STRUCTURE_PARAMETERS = {
@@ -140,7 +150,14 @@ class StudySpec:
         Swept parameters in dataset dimension order: structure axes as declared,
         then ``f``, then ``a`` (the fastest-varying dimension).
     solver : SolverSettings
-        Solver budgets.
+        Budgets of the exact solver.
+    method : {"exact", "integrator"}
+        Velocity solver: the exact steady-state solver, or time integration until
+        the orbit repeats.
+    coupling : {"one-way", "two-way"}
+        Whether the sliding base also forces the mode (two-way, integrator only).
+    integrator : IntegratorSettings
+        Accuracy and budgets of the time integrator (used with ``method = "integrator"``).
     chunk_points : int
         Target number of grid points per parallel task.
     frontier_tolerance : float
@@ -164,6 +181,9 @@ class StudySpec:
     text: str = field(repr=False)
     path: str
     canonical: dict[str, Any] = field(repr=False)
+    method: str = "exact"
+    coupling: str = "one-way"
+    integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
 
     @property
     def sha256(self) -> str:
@@ -401,9 +421,29 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         if axis.name == "m_add" and np.any(axis.values < 0):
             raise SpecError(f"{path}: [sweep] m_add: added masses must be >= 0 kg")
 
-    own = ("chunk_points", "frontier_tolerance")
+    coupling = solver_table.get("coupling", "one-way")
+    # The exact solver covers the paper's (one-way) model; two-way coupling needs time
+    # integration. A spec that says nothing gets the cheapest model that covers it.
+    method = solver_table.get("method", "exact" if coupling == "one-way" else "integrator")
+    if method == "exact" and coupling != "one-way":
+        raise SpecError(
+            f'{path}: [solver] coupling = "{coupling}" needs method = "integrator"; the exact '
+            'solver models the paper\'s one-way coupling only (allowed with method = "exact": '
+            'coupling = "one-way")'
+        )
+    wrong = sorted(
+        k for k in solver_table if k in (INTEGRATOR_KEYS if method == "exact" else EXACT_KEYS)
+    )
+    if wrong:
+        raise SpecError(
+            f"{path}: [solver] {', '.join(wrong)} do not apply to method = \"{method}\"; "
+            f"its settings are: {', '.join(EXACT_KEYS if method == 'exact' else INTEGRATOR_KEYS)}"
+        )
     try:
-        solver = SolverSettings(**{k: v for k, v in solver_table.items() if k not in own})
+        solver = SolverSettings(**{k: v for k, v in solver_table.items() if k in EXACT_KEYS})
+        integrator = IntegratorSettings(
+            **{k: v for k, v in solver_table.items() if k in INTEGRATOR_KEYS}
+        )
     except ValueError as err:
         raise SpecError(f"{path}: [solver] {err}") from None
     chunk_points = int(solver_table.get("chunk_points", 20_000))
@@ -423,8 +463,22 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         # A list, not a mapping: the order of the axes is the layout of the result.
         "sweep": [[axis.name, axis.values.tolist()] for axis in axes],
         "solver": {
-            "max_events": solver.max_events,
-            "max_map_iterations": solver.max_map_iterations,
+            "method": method,
+            "coupling": coupling,
+            **(
+                {
+                    "max_events": solver.max_events,
+                    "max_map_iterations": solver.max_map_iterations,
+                }
+                if method == "exact"
+                else {
+                    "tolerance": integrator.tolerance,
+                    "steps_per_period": integrator.steps_per_period,
+                    "max_periods": integrator.max_periods,
+                    "max_orbit_period": integrator.max_orbit_period,
+                    "period_tolerance": integrator.resolved_period_tolerance,
+                }
+            ),
             **({"frontier_tolerance": frontier_tolerance} if "frontier" in observables else {}),
         },
     }
@@ -442,6 +496,9 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         text=text,
         path=path,
         canonical=canonical,
+        method=method,
+        coupling=coupling,
+        integrator=integrator,
     )
     _check_structures(spec, path)
     return spec

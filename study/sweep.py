@@ -15,10 +15,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from study.physics import lift_off_acceleration, mode_response, thresholds
-from study.solver import steady_state
+from study.solver import SteadyState, steady_state
 from study.spec import StudySpec
+from study.structure import Structure
+from study.transient import integrated_steady_state
 
-__all__ = ["Chunk", "compute_chunk", "plan_chunks", "variables_for"]
+__all__ = ["Chunk", "compute_chunk", "plan_chunks", "solve", "variables_for"]
 
 
 @dataclass(frozen=True)
@@ -90,6 +92,17 @@ def variables_for(spec: StudySpec) -> dict[str, tuple[bool, np.dtype]]:
     return variables
 
 
+def solve(
+    spec: StudySpec, structure: Structure, f: np.ndarray, a: np.ndarray, parallel: bool = False
+) -> SteadyState:
+    """Steady state at ``(f, a)`` (broadcast) by the spec's method and coupling."""
+    if spec.method == "integrator":
+        return integrated_steady_state(
+            structure, f, a, coupling=spec.coupling, settings=spec.integrator, parallel=parallel
+        )
+    return steady_state(structure, f, a, spec.solver, parallel=parallel)
+
+
 def compute_chunk(spec: StudySpec, chunk: Chunk) -> dict[str, np.ndarray]:
     """Compute the requested observables on one chunk.
 
@@ -115,7 +128,7 @@ def compute_chunk(spec: StudySpec, chunk: Chunk) -> dict[str, np.ndarray]:
         out["lift_off_acceleration"] = lift_off_acceleration(structure, f)
     if spec.needs_solver:
         a = spec.axis("a").values
-        result = steady_state(structure, f[:, None], a[None, :], spec.solver, parallel=False)
+        result = solve(spec, structure, f[:, None], a[None, :])
         out["velocity"] = result.velocity
         out["status"] = result.status
         if "diagnostics" in spec.observables:
