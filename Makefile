@@ -34,7 +34,7 @@ $(STAMP): pyproject.toml
 
 # Figures, each redrawn from its result file alone: figures/NAME.png and .pdf.
 FIGURES := thresholds velocity-curves regime-map force-traces mass-ratio \
-           threshold-collapse mass-ratio-limit
+           threshold-collapse mass-ratio-limit coupling
 figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 
 figures/thresholds.png: results/thresholds.nc
@@ -44,6 +44,7 @@ figures/force-traces.png: results/regime-map.nc
 figures/mass-ratio.png: results/mass-ratio.nc
 figures/threshold-collapse.png: results/threshold-collapse.nc
 figures/mass-ratio-limit.png: results/mass-ratio-limit.nc
+figures/coupling.png: results/coupling.nc
 figures/%.png: $(PACKAGE) | $(STAMP)
 	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*
 

@@ -61,9 +61,11 @@ SPEC_SCHEMA_PATH = Path(__file__).resolve().parent.parent / "results_schema" / (
 )
 
 #: Observables a study can ask for, in the order they appear in a dataset.
-OBSERVABLES = ("resonance", "thresholds", "lift_off", "velocity", "diagnostics", "frontier")
+OBSERVABLES = (
+    "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "paper_model", "frontier",
+)
 #: Observables that need the steady-state solver (and hence the drive acceleration a).
-SOLVER_OBSERVABLES = ("velocity", "diagnostics", "frontier")
+SOLVER_OBSERVABLES = ("velocity", "diagnostics", "paper_model", "frontier")
 
 #: Velocity solvers a spec can choose with ``[solver] method``.
 METHODS = ("exact", "integrator")
@@ -430,6 +432,12 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             f'{path}: [solver] coupling = "{coupling}" needs method = "integrator"; the exact '
             'solver models the paper\'s one-way coupling only (allowed with method = "exact": '
             'coupling = "one-way")'
+        )
+    if "paper_model" in observables and coupling == "one-way":
+        raise SpecError(
+            f'{path}: [study] observable "paper_model" (the one-way model beside a two-way '
+            'study) needs [solver] coupling = "two-way"; a one-way study\'s velocity already '
+            "is the paper's model"
         )
     wrong = sorted(
         k for k in solver_table if k in (INTEGRATOR_KEYS if method == "exact" else EXACT_KEYS)

@@ -65,12 +65,25 @@ VARIABLE_ATTRS: dict[str, dict[str, Any]] = {
     "velocity": {
         "units": "m s-1",
         "long_name": "mean velocity of the steady periodic orbit, positive forward",
-        "comment": "exactly 0 when static; NaN (missing) where status is lift_off or "
-        "not_converged",
+        "comment": "exactly 0 when static; NaN (missing) where status is lift_off, "
+        "not_converged or friction_paradox",
     },
     "status": {
         "units": "1",
         "long_name": "outcome of the steady-state solver",
+        "flag_values": np.array([s.value for s in Status], dtype=np.int8),
+        "flag_meanings": " ".join(s.name.lower() for s in Status),
+    },
+    "velocity_one_way": {
+        "units": "m s-1",
+        "long_name": "mean steady velocity of the paper's one-way model at the same point "
+        "(exact solver), for comparison with the two-way velocity",
+        "comment": "exactly 0 when static; NaN (missing) where status_one_way is lift_off "
+        "or not_converged",
+    },
+    "status_one_way": {
+        "units": "1",
+        "long_name": "outcome of the exact solver for the paper's one-way model",
         "flag_values": np.array([s.value for s in Status], dtype=np.int8),
         "flag_meanings": " ".join(s.name.lower() for s in Status),
     },
@@ -335,19 +348,21 @@ def validate_dataset(dataset: xr.Dataset, source: str = "dataset") -> None:
         json.loads(attrs.get("provenance", ""))
     except ValueError:
         problems.append("global attribute 'provenance' is not a JSON document")
-    if "velocity" in dataset and "status" in dataset:
-        velocity = dataset["velocity"].values
-        status = dataset["status"].values
+    for v_name, s_name in (("velocity", "status"), ("velocity_one_way", "status_one_way")):
+        if v_name not in dataset or s_name not in dataset:
+            continue
+        velocity = dataset[v_name].values
+        status = dataset[s_name].values
         flagged = np.isin(status, INVALID_STATUSES)
         mismatched = int(np.count_nonzero(np.isnan(velocity) != flagged))
         if mismatched:
             problems.append(
-                "velocity must be NaN exactly where status is lift_off, not_converged or "
+                f"{v_name} must be NaN exactly where {s_name} is lift_off, not_converged or "
                 "friction_paradox; "
                 f"{mismatched} points disagree"
             )
         if np.any(velocity[status == Status.STATIC] != 0.0):
-            problems.append("velocity is not 0 where status is static")
+            problems.append(f"{v_name} is not 0 where {s_name} is static")
     if problems:
         problems = list(dict.fromkeys(problems))  # two schema branches may see one fault
         raise ResultError(f"{source}: invalid study result:\n  " + "\n  ".join(problems))

@@ -89,6 +89,9 @@ def variables_for(spec: StudySpec) -> dict[str, tuple[bool, np.dtype]]:
         variables["backward_slip_fraction"] = (True, np.dtype(np.float64))
         variables["orbit_period"] = (True, np.dtype(np.int32))
         variables["nonconvergence"] = (True, np.dtype(np.int8))
+    if "paper_model" in spec.observables:
+        variables["velocity_one_way"] = (True, np.dtype(np.float64))
+        variables["status_one_way"] = (True, np.dtype(np.int8))
     return variables
 
 
@@ -137,4 +140,8 @@ def compute_chunk(spec: StudySpec, chunk: Chunk) -> dict[str, np.ndarray]:
             out["backward_slip_fraction"] = result.backward_fraction
             out["orbit_period"] = result.orbit_period
             out["nonconvergence"] = result.reason
+    if "paper_model" in spec.observables:
+        paper = steady_state(structure, f[:, None], a[None, :], spec.solver, parallel=False)
+        out["velocity_one_way"] = paper.velocity
+        out["status_one_way"] = paper.status
     return out

@@ -67,6 +67,11 @@ FIGURES: dict[str, Figure] = {
         ("velocity", "status", "frontier_frequency"),
         "The limit M -> 1: regime maps and frontier branches from M = 0.08 to 1",
     ),
+    "coupling": Figure(
+        "study.figures.coupling", "coupling",
+        ("velocity", "status", "velocity_one_way", "status_one_way", "M"),
+        "Two-way against one-way coupling over M: where the paper's model stops holding",
+    ),
 }
 
 
