@@ -19,6 +19,21 @@ State ``y = (delta, ddelta_dt, x, v)``; drive acceleration ``a cos(w t)``.
 * stick (``v = 0``, ``x`` constant) while ``|tau| <= cs n``;
 * slip of sign ``s``: ``dv/dt = tau - ck n s``, ``dx/dt = v``.
 
+Two-way coupling (``coupling="two-way"``)
+-----------------------------------------
+While the base slides, its horizontal acceleration ``x''`` also forces the mode:
+
+* mode: ``delta'' + (w0/Q) delta' + w0^2 delta = a cos(w t) cos(alpha) - x'' sin(alpha)``;
+* ``x'' = tau - s ck n`` with ``tau`` and ``n`` as above (functions of ``delta''``).
+
+In a slip the pair ``(delta'', x'')`` is the solution of a 2x2 linear system, solved
+numerically (Cramer's rule on the matrix built from the two equations as written) at
+every right-hand-side call; no eliminated closed form is used. Its determinant
+``1 - M sin(alpha) (sin(alpha) + s ck cos(alpha))`` must be positive for the slip
+direction entered, else the status is ``"friction_paradox"`` (Painleve). In stick
+``x'' = 0`` and everything is as in the one-way model; the transitions below are
+unchanged (at ``v = 0`` they use the stick forces).
+
 Transitions
 -----------
 * stick -> slip ``+1`` when ``tau - cs n`` crosses zero upwards, slip ``-1``
@@ -40,10 +55,20 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-__all__ = ["reference_velocity"]
+__all__ = ["ReferenceModelInvalid", "reference_slide_to_rest", "reference_velocity"]
 
 #: Statuses returned by :func:`reference_velocity`.
-STATUSES = ("static", "stick_slip", "continuous_sliding", "lift_off", "not_converged")
+STATUSES = (
+    "static",
+    "stick_slip",
+    "continuous_sliding",
+    "lift_off",
+    "not_converged",
+    "friction_paradox",
+)
+
+#: Accepted values of the ``coupling`` keyword.
+COUPLINGS = ("one-way", "two-way")
 
 _STICK = 0
 _EPS = float(np.finfo(float).eps)
@@ -53,10 +78,30 @@ _STICK_MIN = 1e-10  # stick phases shorter than this (in drive periods) do not c
 _STEPS_PER_PERIOD = 64  # max_step = T / _STEPS_PER_PERIOD
 _N_SAMPLES = 4096  # samples of n(t) over one period for the lift-off test
 _MAX_SEGMENTS_PER_PERIOD = 10_000
+_MAX_PERIODS = {"one-way": 400, "two-way": 2000}  # default max_periods
+_PERIOD_TOL = {"one-way": 1e-13, "two-way": 1e-9}  # default period_tol
 
 
 class _LiftOff(Exception):
     """Raised internally when the normal force becomes negative."""
+
+
+class _FrictionParadox(Exception):
+    """Raised internally when a two-way slip with a non-positive determinant starts."""
+
+
+class ReferenceModelInvalid(ValueError):
+    """The model is invalid along the computed motion.
+
+    Attributes
+    ----------
+    status : str
+        ``"lift_off"`` or ``"friction_paradox"``.
+    """
+
+    def __init__(self, status, message):
+        super().__init__(f"{status}: {message}")
+        self.status = status
 
 
 class _System:
@@ -66,9 +111,13 @@ class _System:
     ----------
     f0, Q, alpha_deg, M, cs, ck, g, f, a : float
         Model parameters, see :func:`reference_velocity`.
+    two_way : bool, optional
+        Two-way coupling: in slip, ``x''`` forces the mode. Only the methods
+        named ``*_slip2`` (and :meth:`slip_accels`, :meth:`apex_lift`) serve
+        it; the one-way methods are unchanged.
     """
 
-    def __init__(self, f0, Q, alpha_deg, M, cs, ck, g, f, a):
+    def __init__(self, f0, Q, alpha_deg, M, cs, ck, g, f, a, two_way=False):
         self.w0 = 2.0 * math.pi * f0
         self.w = 2.0 * math.pi * f
         self.c = self.w0 / Q
@@ -82,6 +131,70 @@ class _System:
         self.g = g
         self.a = a
         self.A = a * self.ca  # mode forcing amplitude
+        self.two_way = two_way
+        # Two-way slip of sign s: unknowns u = (delta'', x''),
+        #   delta'' + sin(alpha) x''                         = F
+        #   M (sin(alpha) + s ck cos(alpha)) delta'' + x''   = -s ck (g - a cos(w t))
+        # with F = a cos(alpha) cos(w t) - (w0/Q) delta' - w0^2 delta. The rows are
+        # the mode equation and x'' = tau - s ck n with tau, n written out.
+        self.mat = {}
+        self.det = {}
+        for s in (+1, -1):
+            m11, m12 = 1.0, self.sa
+            m21, m22 = M * (self.sa + s * ck * self.ca), 1.0
+            self.mat[s] = (m11, m12, m21, m22)
+            self.det[s] = m11 * m22 - m12 * m21
+
+    # -- two-way slip: the 2x2 linear system --------------------------------------
+    def _solve2(self, s, b1, b2):
+        """Solve the slip system of sign ``s`` for right-hand side ``(b1, b2)``.
+
+        Cramer's rule on the 2x2 matrix ``self.mat[s]``; returns ``(u1, u2)``.
+        """
+        m11, m12, m21, m22 = self.mat[s]
+        det = self.det[s]
+        return (b1 * m22 - m12 * b2) / det, (m11 * b2 - m21 * b1) / det
+
+    def slip_accels(self, t, y, s):
+        """Return ``(delta'', x'')`` in a two-way slip of sign ``s``."""
+        cwt = math.cos(self.w * t)
+        b1 = self.A * cwt - self.c * y[1] - self.k * y[0]
+        b2 = -s * self.ck * (self.g - self.a * cwt)
+        return self._solve2(s, b1, b2)
+
+    def forces_slip2(self, s):
+        """Return ``(t, y) -> (tau, n)`` in a two-way slip of sign ``s``."""
+
+        def forces(t, y):
+            acc, _ = self.slip_accels(t, y, s)
+            n = self.g - self.a * math.cos(self.w * t) + self.M * acc * self.ca
+            tau = -self.M * acc * self.sa
+            return tau, n
+
+        return forces
+
+    def rhs_slip2(self, s):
+        """Right-hand side of a two-way slip of sign ``s``."""
+
+        def rhs(t, y):
+            acc, xacc = self.slip_accels(t, y, s)
+            return [y[1], acc, y[3], xacc]
+
+        return rhs
+
+    def normal_rate_slip2(self, t, y, s):
+        """``dn/dt`` in a two-way slip of sign ``s``.
+
+        Differentiating the slip system in time gives the same matrix acting on
+        the rates of ``(delta'', x'')``; then
+        ``dn/dt = a w sin(w t) + M cos(alpha) d(delta'')/dt``.
+        """
+        swt = math.sin(self.w * t)
+        acc, _ = self.slip_accels(t, y, s)
+        db1 = -self.A * self.w * swt - self.c * acc - self.k * y[1]
+        db2 = -s * self.ck * self.a * self.w * swt
+        dacc, _ = self._solve2(s, db1, db2)
+        return self.a * self.w * swt + self.M * dacc * self.ca
 
     # -- forces -----------------------------------------------------------------
     def forces(self, t, y):
@@ -188,6 +301,47 @@ class _System:
         ev.direction = -1
         return ev
 
+    def apex_lift(self):
+        """Non-terminal event: minimum of ``n`` in stick (two-way only)."""
+
+        def ev(t, y):
+            return -self.force_rates(t, y)[1]
+
+        ev.terminal = False
+        ev.direction = -1
+        return ev
+
+    def apex_stop_slip2(self, s):
+        """Non-terminal event: maximum of ``-s v`` in a two-way slip of sign ``s``."""
+
+        def ev(t, y):
+            return -s * self.slip_accels(t, y, s)[1]
+
+        ev.terminal = False
+        ev.direction = -1
+        return ev
+
+    def ev_lift_slip2(self, s):
+        """Event ``n = 0`` crossed downwards in a two-way slip of sign ``s``."""
+        forces = self.forces_slip2(s)
+
+        def ev(t, y):
+            return forces(t, y)[1]
+
+        ev.terminal = True
+        ev.direction = -1
+        return ev
+
+    def apex_lift_slip2(self, s):
+        """Non-terminal event: minimum of ``n`` in a two-way slip of sign ``s``."""
+
+        def ev(t, y):
+            return -self.normal_rate_slip2(t, y, s)
+
+        ev.terminal = False
+        ev.direction = -1
+        return ev
+
 
 def _initial_mode_state(sys_):
     """Steady harmonic state of the mode at ``t = 0`` (the only closed form used)."""
@@ -241,13 +395,26 @@ class _Integrator:
         # as (apex event, index of the terminal event it watches).
         self.stick_events = [sys_.ev_release(+1), sys_.ev_release(-1), lift]
         self.stick_apexes = [(sys_.apex_release(+1), 0), (sys_.apex_release(-1), 1)]
-        self.slip_rhs = {+1: sys_.rhs_slip(+1), -1: sys_.rhs_slip(-1)}
-        self.slip_events = {s: [sys_.ev_stop(s), lift] for s in (+1, -1)}
-        self.slip_apexes = {s: [(sys_.apex_stop(s), 0)] for s in (+1, -1)}
-        self.slip_noevent = [lift]
+        self.two_way = sys_.two_way
+        if not self.two_way:
+            self.slip_rhs = {+1: sys_.rhs_slip(+1), -1: sys_.rhs_slip(-1)}
+            self.slip_events = {s: [sys_.ev_stop(s), lift] for s in (+1, -1)}
+            self.slip_apexes = {s: [(sys_.apex_stop(s), 0)] for s in (+1, -1)}
+            self.slip_noevent = {s: [lift] for s in (+1, -1)}
+        else:
+            # Two-way: n is not the same function of the state in stick and in slip,
+            # and the mode leaves its steady response, so lift-off cannot be excluded
+            # by sampling one period: every n = 0 event is watched by an apex too.
+            self.stick_apexes.append((sys_.apex_lift(), 2))
+            self.slip_rhs = {s: sys_.rhs_slip2(s) for s in (+1, -1)}
+            self.slip_events = {s: [sys_.ev_stop(s), sys_.ev_lift_slip2(s)] for s in (+1, -1)}
+            self.slip_apexes = {
+                s: [(sys_.apex_stop_slip2(s), 0), (sys_.apex_lift_slip2(s), 1)] for s in (+1, -1)
+            }
+            self.slip_noevent = {s: [self.slip_events[s][1]] for s in (+1, -1)}
         self.guard = _GUARD * T
 
-    def _solve(self, rhs, t0, t1, y0, events, apexes=()):
+    def _solve(self, rhs, t0, t1, y0, events, apexes=(), keep=None):
         """Integrate until the first terminal event or ``t1``.
 
         Parameters
@@ -267,6 +434,9 @@ class _Integrator:
             and comes back within one step is missed; at such a maximum the
             oriented function is then positive, and the missed crossing is
             located on the dense output between the step start and the maximum.
+        keep : list, optional
+            If given, dense output is switched on and ``(t0, t_end, sol.sol)`` is
+            appended to it (the piece of trajectory actually used).
 
         Returns
         -------
@@ -278,9 +448,8 @@ class _Integrator:
             Index in ``events`` of the event that stopped the integration.
         """
         all_events = list(events) + [ev for ev, _ in apexes]
-        sol = solve_ivp(
-            rhs, (t0, t1), y0, events=all_events, dense_output=bool(apexes), **self.opts
-        )
+        dense = bool(apexes) or keep is not None
+        sol = solve_ivp(rhs, (t0, t1), y0, events=all_events, dense_output=dense, **self.opts)
         if sol.status == -1:  # pragma: no cover - defensive
             raise RuntimeError(f"integration failed: {sol.message}")
         t_end = float(sol.t[-1])
@@ -316,6 +485,8 @@ class _Integrator:
         if missed is not None and missed[0] < t_end:
             t_end, fired = missed
             y_end = [float(v) for v in sol.sol(t_end)]
+        if keep is not None:
+            keep.append((t0, t_end, sol.sol))
         return t_end, y_end, fired
 
     def release_direction(self, t, y):
@@ -382,6 +553,8 @@ class _Integrator:
                 continue
 
             s = mode
+            if self.two_way and not self.sys.det[s] > 0.0:
+                raise _FrictionParadox
             rhs = self.slip_rhs[s]
             t1, y1, fired = self._solve(rhs, t, T, y, self.slip_events[s], self.slip_apexes[s])
             if fired == 0 and fresh and t1 - t < self.guard:
@@ -391,7 +564,7 @@ class _Integrator:
                 # early). Integrate a tiny window with the v = 0 event masked (same
                 # ODE), then re-arm the event.
                 t_w = min(t + self.guard, T)
-                t1, y1, fired = self._solve(rhs, t, t_w, y, self.slip_noevent)
+                t1, y1, fired = self._solve(rhs, t, t_w, y, self.slip_noevent[s])
                 if fired is not None:
                     raise _LiftOff
                 t, y = t1, y1
@@ -431,8 +604,9 @@ def reference_velocity(
     g=9.8,
     rtol=1e-12,
     atol=1e-14,
-    max_periods=400,
-    period_tol=1e-13,
+    max_periods=None,
+    period_tol=None,
+    coupling="one-way",
 ):
     """Mean sliding velocity of the periodic steady orbit, by direct integration.
 
@@ -469,12 +643,24 @@ def reference_velocity(
         2.3e-14, or scipy warns). The state components are
         ``(delta [m], ddelta/dt [m/s], x [m], v [m/s])``.
     max_periods : int, optional
-        Maximum number of drive periods integrated.
+        Maximum number of drive periods integrated; default 400 (one-way) or
+        2000 (two-way: the mode transient decays by a factor e in about
+        ``Q / pi`` periods).
     period_tol : float, optional
         Relative tolerance of the periodicity test on the displacement (an
         absolute floor of 1e-15 m is also accepted); the velocity at the
         period boundary must agree to the same relative tolerance (floor
-        ``1e-15 m / T``).
+        ``1e-15 m / T``). With two-way coupling ``delta`` and ``delta'`` at the
+        boundary must agree too, relative to their natural scales
+        ``max(|a cos(alpha) G|, |delta|)`` and ``max(w |a cos(alpha) G|, |delta'|)``
+        (floors ``1e-15 m`` and ``1e-15 m / T``). Default 1e-13 (one-way) or
+        1e-9 (two-way).
+    coupling : {"one-way", "two-way"}, optional
+        ``"one-way"`` (default): the mode does not feel the sliding. ``"two-way"``:
+        in slip the base acceleration ``x''`` forces the mode (module docstring);
+        the one-way lift-off pre-check by sampling is then skipped (the mode is no
+        longer on its steady response) and every ``n = 0`` event is watched by an
+        apex event instead.
 
     Returns
     -------
@@ -487,8 +673,11 @@ def reference_velocity(
         ``"static"`` (never left stick), ``"stick_slip"`` (the periodic orbit has
         a stick phase of positive duration), ``"continuous_sliding"`` (periodic
         orbit without stick), ``"lift_off"`` (``n(t) < 0`` somewhere: model
-        invalid) or ``"not_converged"`` (no periodic orbit of period <= 8 drive
-        periods found within ``max_periods``).
+        invalid), ``"not_converged"`` (no periodic orbit of period <= 8 drive
+        periods found within ``max_periods``) or, two-way only,
+        ``"friction_paradox"`` (a slip of a sign whose 2x2 determinant
+        ``1 - M sin(alpha) (sin(alpha) + s ck cos(alpha))`` is <= 0 would start;
+        velocity ``nan``).
     n_periods : int
         Number of drive periods of the hybrid system integrated (0 when lift-off
         is detected by sampling ``n`` before the integration).
@@ -499,7 +688,10 @@ def reference_velocity(
     ``1..8`` such that the discrete mode and the velocity at the boundaries
     ``j`` and ``j - k`` agree and the displacement over periods
     ``j-k+1..j`` equals that over ``j-2k+1..j-k``. The mode phase is the same at
-    every boundary, so this identifies a ``k``-periodic orbit.
+    every boundary, so this identifies a ``k``-periodic orbit. With two-way
+    coupling the mode state ``(delta, delta')`` at the boundaries ``j`` and
+    ``j - k`` must agree as well (one-way, it is the steady response at every
+    boundary).
 
     Events are located by ``solve_ivp`` (Brent's method on the dense output);
     at every event the integration restarts with the new discrete mode and
@@ -525,30 +717,207 @@ def reference_velocity(
         raise ValueError(f"need 0 <= ck <= cs, got ck={ck}, cs={cs}")
     if f <= 0 or f0 <= 0 or Q <= 0:
         raise ValueError("f, f0 and Q must be positive")
+    if coupling not in COUPLINGS:
+        raise ValueError(f"coupling must be one of {COUPLINGS}, got {coupling!r}")
+    if max_periods is None:
+        max_periods = _MAX_PERIODS[coupling]
+    if period_tol is None:
+        period_tol = _PERIOD_TOL[coupling]
     if max_periods < 2:
         raise ValueError("max_periods must be >= 2")
     return _reference_velocity(
-        f0, Q, alpha_deg, M, cs, f, a, ck, g, rtol, atol, max_periods, period_tol, _STEPS_PER_PERIOD
+        f0,
+        Q,
+        alpha_deg,
+        M,
+        cs,
+        f,
+        a,
+        ck,
+        g,
+        rtol,
+        atol,
+        max_periods,
+        period_tol,
+        _STEPS_PER_PERIOD,
+        coupling=coupling,
     )
 
 
+class _Trajectory:
+    """Dense output of :func:`reference_slide_to_rest` (piecewise ``OdeSolution``).
+
+    Call with a time (scalar or 1-D array, inside ``[0, t_end]``) to get the state
+    ``(delta, ddelta_dt, x, v)`` (shape ``(4,)`` or ``(4, len(t))``).
+
+    Attributes
+    ----------
+    t_end : float
+        End of the trajectory (the stop time).
+    breakpoints : numpy.ndarray
+        Sorted step ends of the integrator in ``[0, t_end]``, both ends included:
+        on each interval between two of them the state is a polynomial (DOP853
+        dense output, degree 7), so Gauss-Legendre quadrature of any polynomial
+        function of the state is exact there up to round-off.
+    """
+
+    def __init__(self, pieces):
+        self._pieces = pieces
+        self._starts = np.array([p[0] for p in pieces])
+        self.t_end = float(pieces[-1][1])
+        pts = [np.asarray([pieces[0][0]])]
+        for t0, t1, sol in pieces:
+            ts = np.asarray(sol.ts)
+            pts.append(ts[(ts > t0) & (ts < t1)])
+            pts.append(np.asarray([t1]))
+        self.breakpoints = np.unique(np.concatenate(pts))
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=float)
+        scalar = t.ndim == 0
+        tt = np.atleast_1d(t)
+        idx = np.clip(np.searchsorted(self._starts, tt, side="right") - 1, 0, None)
+        out = np.empty((4, tt.size))
+        for i in np.unique(idx):
+            sel = idx == i
+            out[:, sel] = self._pieces[i][2](tt[sel])
+        return out[:, 0] if scalar else out
+
+
+def reference_slide_to_rest(
+    f0,
+    Q,
+    alpha_deg,
+    M,
+    cs,
+    v0,
+    ck=None,
+    g=9.8,
+    coupling="one-way",
+    mode0=(0.0, 0.0),
+    rtol=1e-12,
+    atol=1e-14,
+    max_time=None,
+    return_trajectory=False,
+):
+    """Free slide without drive (``a = 0``) from velocity ``v0`` until ``v = 0``.
+
+    The slip of sign ``s = sign(v0)`` is integrated with ``solve_ivp`` (DOP853,
+    ``max_step = 1 / (64 f0)``) from ``t = 0``, ``x = 0``, ``v = v0`` and the
+    mode state ``mode0 = (delta, ddelta_dt)``, with the same right-hand sides
+    and event handling as :func:`reference_velocity` (including the watch for a
+    ``v = 0`` touch missed inside one step), up to the first instant where
+    ``v`` returns to 0. What would follow (stick, re-release) is not computed.
+
+    Parameters
+    ----------
+    f0, Q, alpha_deg, M, cs, ck, g : float
+        Structure, as in :func:`reference_velocity` (``ck`` defaults to ``cs``
+        and must be > 0).
+    v0 : float
+        Initial sliding velocity [m/s], nonzero.
+    coupling : {"one-way", "two-way"}, optional
+        As in :func:`reference_velocity`.
+    mode0 : (float, float), optional
+        Initial ``(delta [m], ddelta/dt [m/s])``; default at rest.
+    rtol, atol : float, optional
+        Tolerances of ``solve_ivp``.
+    max_time : float, optional
+        Integration horizon [s]; default ``10 |v0| / (ck g) + 10 / f0``.
+    return_trajectory : bool, optional
+        Also return the dense trajectory.
+
+    Returns
+    -------
+    t_stop : float
+        Time [s] at which ``v`` first returns to 0.
+    distance : float
+        ``x(t_stop)`` [m] (signed).
+    trajectory : _Trajectory
+        Only if ``return_trajectory``: callable ``t -> (delta, ddelta_dt, x, v)``
+        on ``[0, t_stop]`` with attribute ``breakpoints``.
+
+    Raises
+    ------
+    ReferenceModelInvalid
+        ``status == "friction_paradox"`` (two-way, non-positive determinant of
+        the slip system for ``sign(v0)``) or ``"lift_off"`` (``n`` reached 0).
+    RuntimeError
+        ``v`` did not return to 0 within ``max_time``.
+    """
+    if ck is None:
+        ck = cs
+    if not (0.0 < ck <= cs):
+        raise ValueError(f"need 0 < ck <= cs, got ck={ck}, cs={cs}")
+    if f0 <= 0 or Q <= 0:
+        raise ValueError("f0 and Q must be positive")
+    if coupling not in COUPLINGS:
+        raise ValueError(f"coupling must be one of {COUPLINGS}, got {coupling!r}")
+    if not (v0 != 0.0 and math.isfinite(v0)):
+        raise ValueError(f"v0 must be finite and nonzero, got {v0}")
+    s = 1 if v0 > 0.0 else -1
+    two_way = coupling == "two-way"
+    # No drive: a = 0, so the drive frequency only enters through cos(w t) * 0.
+    sys_ = _System(f0, Q, alpha_deg, M, cs, ck, g, f0, 0.0, two_way=two_way)
+    if two_way and not sys_.det[s] > 0.0:
+        raise ReferenceModelInvalid(
+            "friction_paradox", f"determinant {sys_.det[s]:.3g} <= 0 for slip sign {s:+d}"
+        )
+    T0 = 1.0 / f0
+    if max_time is None:
+        max_time = 10.0 * abs(v0) / (ck * g) + 10.0 * T0
+    integ = _Integrator(sys_, T0, rtol, atol, T0 / _STEPS_PER_PERIOD)
+    y = [float(mode0[0]), float(mode0[1]), 0.0, float(v0)]
+    pieces = []
+    t1, y1, fired = integ._solve(
+        integ.slip_rhs[s], 0.0, max_time, y, integ.slip_events[s], integ.slip_apexes[s], pieces
+    )
+    if fired == 1:
+        raise ReferenceModelInvalid("lift_off", f"n = 0 at t = {t1:.6g} s")
+    if fired is None:
+        raise RuntimeError(f"v did not return to 0 within max_time = {max_time:.6g} s")
+    if return_trajectory:
+        return t1, y1[2], _Trajectory(pieces)
+    return t1, y1[2]
+
+
 def _reference_velocity(
-    f0, Q, alpha_deg, M, cs, f, a, ck, g, rtol, atol, max_periods, period_tol, steps_per_period
+    f0,
+    Q,
+    alpha_deg,
+    M,
+    cs,
+    f,
+    a,
+    ck,
+    g,
+    rtol,
+    atol,
+    max_periods,
+    period_tol,
+    steps_per_period,
+    coupling="one-way",
 ):
     """Body of :func:`reference_velocity` with ``max_step = T / steps_per_period``.
 
     Exposed separately only so that the demo can show convergence in the step
-    size; arguments are as in :func:`reference_velocity` (``ck`` not None).
+    size; arguments are as in :func:`reference_velocity` (``ck``, ``max_periods``
+    and ``period_tol`` not None).
     """
+    two_way = coupling == "two-way"
     T = 1.0 / f
     max_step = T / steps_per_period
-    sys_ = _System(f0, Q, alpha_deg, M, cs, ck, g, f, a)
+    sys_ = _System(f0, Q, alpha_deg, M, cs, ck, g, f, a, two_way=two_way)
     d0, dd0 = _initial_mode_state(sys_)
 
     # Lift-off: the mode is on its steady response, so one period of n(t) is
-    # representative of all of them. The n = 0 event is also armed below.
-    if _min_normal_force(sys_, (d0, dd0), T, rtol, atol, max_step) < 0.0:
+    # representative of all of them (one-way only). The n = 0 event is also
+    # armed below.
+    if not two_way and _min_normal_force(sys_, (d0, dd0), T, rtol, atol, max_step) < 0.0:
         return math.nan, "lift_off", 0
+    # Natural scales of the mode state (steady one-way response amplitude).
+    amp_d = abs(sys_.A / complex(sys_.k - sys_.w * sys_.w, sys_.c * sys_.w))  # |a cos(alpha) G|
+    amp_dd = sys_.w * amp_d
 
     integ = _Integrator(sys_, T, rtol, atol, max_step)
     y = [d0, dd0, 0.0, 0.0]
@@ -556,14 +925,19 @@ def _reference_velocity(
     fresh = mode != _STICK
 
     dx, v_end, mode_end, stick_t, slipped = [], [], [], [], []
+    d_end, dd_end = [], []
     for j in range(1, max_periods + 1):
         try:
             y, mode, fresh, st = integ.period(y, mode, fresh)
         except _LiftOff:
             return math.nan, "lift_off", j
+        except _FrictionParadox:
+            return math.nan, "friction_paradox", j
         dx.append(y[2])
         y[2] = 0.0
         v_end.append(y[3])
+        d_end.append(y[0])
+        dd_end.append(y[1])
         mode_end.append(mode)
         stick_t.append(st["stick_time"])
         slipped.append(st["slipped"])
@@ -580,6 +954,13 @@ def _reference_velocity(
             D0 = math.fsum(dx[-2 * k : -k])
             if abs(D1 - D0) > max(period_tol * max(abs(D1), abs(D0)), 1e-15):
                 continue
+            if two_way:
+                p1, p0 = d_end[-1], d_end[-1 - k]
+                if abs(p1 - p0) > max(period_tol * max(amp_d, abs(p1), abs(p0)), 1e-15):
+                    continue
+                q1, q0 = dd_end[-1], dd_end[-1 - k]
+                if abs(q1 - q0) > max(period_tol * max(amp_dd, abs(q1), abs(q0)), 1e-15 / T):
+                    continue
             if not any(slipped):
                 return 0.0, "static", j
             if sum(stick_t[-k:]) > _STICK_MIN * T:
