@@ -427,6 +427,9 @@ def _integrate(
 ):
     """Integrate from ``t_box[0]`` to ``t_stop`` (within the segments), in place.
 
+    With ``fixed_step > 0`` steps end on the grid ``t_box[0] + k fixed_step`` (and at
+    events); otherwise the step is adapted to ``rtol``/``atol``.
+
     ``y``, ``mode_box[0]``, ``t_box[0]`` carry the state in and out; ``t_box[1]`` is the
     step size to try first (updated). Output samples at ``out_t`` (sorted) are written
     from index ``out_box[0]`` on; events are recorded in ``ev_*`` while ``ev_box[0]``
@@ -448,6 +451,7 @@ def _integrate(
     prev_rates = np.empty(3)
     mode = mode_box[0]
     t = t_box[0]
+    t_origin = t
     h = t_box[1]
     seg = 0
     while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
@@ -491,7 +495,13 @@ def _integrate(
         # Steps end on segment ends, the stop time and never exceed the cap.
         limit = min(t_stop, seg_end[seg])
         if fixed_step > 0.0:
-            h = fixed_step
+            # Fixed steps stay on a grid anchored at the call's start time: after an
+            # event the step ends on the next grid point, so every drive period is cut
+            # the same way and a periodic orbit repeats exactly.
+            grid = math.floor((t - t_origin) / fixed_step * (1.0 + 1e-12)) + 1.0
+            h = t_origin + grid * fixed_step - t
+            if h < 1e-9 * fixed_step:
+                h += fixed_step
         h = min(h, max_step)
         last = False
         if t + 1.01 * h >= limit:
