@@ -2,7 +2,7 @@
 #   make            run every workflow whose spec or package changed: results/<name>.nc
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
 #   make test       set up .venv on a fresh machine, lint, run the test suite
-#   make bench      benchmarks (timings; never pass/fail)
+#   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 
 PYTHON ?= python3
@@ -67,6 +67,7 @@ test-slow: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_velocity_map.py
 	$(PY) benchmarks/bench_study_overhead.py
+	$(PY) benchmarks/bench_work_precision.py
 
 cf-check: $(RESULTS)
 	$(VENV)/bin/compliance-checker --test cf:1.11 --criteria strict $(RESULTS)
