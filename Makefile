@@ -68,6 +68,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_velocity_map.py
 	$(PY) benchmarks/bench_study_overhead.py
 	$(PY) benchmarks/bench_work_precision.py
+	mkdir -p docs && cp figures/work-precision.png docs/
 
 cf-check: $(RESULTS)
 	$(VENV)/bin/compliance-checker --test cf:1.11 --criteria strict $(RESULTS)

@@ -183,10 +183,13 @@ def test_minimal_spec_has_one_structure_the_papers():
 
 
 def test_observables_are_kept_in_canonical_order():
-    spec = parse({"study": {"observables": ["frontier", "diagnostics", "velocity", "thresholds",
-                                            "resonance", "lift_off"]}})
+    spec = parse({"study": {"observables": ["frontier", "paper_model", "diagnostics",
+                                            "velocity", "thresholds", "resonance",
+                                            "lift_off"]},
+                  "solver": {"coupling": "two-way"}})
     assert spec.observables == OBSERVABLES == (
-        "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "frontier"
+        "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "paper_model",
+        "frontier",
     )
 
 
@@ -199,7 +202,8 @@ def test_solver_settings_and_chunk_points_are_read():
 def test_example_workflow_is_valid():
     path = REPO / "workflows" / "regime-map.toml"
     spec = load_spec(path)
-    assert spec.observables == OBSERVABLES
+    # Every observable of a one-way study (paper_model belongs to two-way studies).
+    assert spec.observables == tuple(o for o in OBSERVABLES if o != "paper_model")
     assert spec.title == "Regime map of the paper's structure (Fig. 2)"
     assert axis_names(spec) == ["f", "a"]
     assert [len(axis) for axis in spec.axes] == [401, 241]
@@ -480,7 +484,8 @@ def _mass(**keys: Any) -> dict[str, Any]:
 
 
 _OBS_ALLOWED = (
-    "'resonance', 'thresholds', 'lift_off', 'velocity', 'diagnostics', 'frontier'"
+    "'resonance', 'thresholds', 'lift_off', 'velocity', 'diagnostics', 'paper_model', "
+    "'frontier'"
 )
 _FORMS = "allowed forms: { start = x, stop = y, num = n }"
 
