@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
-from study.solver import PARALLEL_THRESHOLD, SteadyState
+from study.solver import PARALLEL_THRESHOLD, SteadyState, _check_structure
 from study.status import NonConvergence, Status
 from study.structure import Structure
 
@@ -40,7 +40,9 @@ __all__ = [
     "Schedule",
     "Trajectory",
     "integrated_steady_state",
+    "model_parameters",
     "simulate",
+    "steady_mode_state",
 ]
 
 #: Version of the integrator's algorithm; changes whenever its results may change.
@@ -265,12 +267,6 @@ class Trajectory:
     events_dropped: int = field(default=0)
 
 
-def _check_structure(structure: object) -> Structure:
-    if not isinstance(structure, Structure):
-        raise TypeError(f"structure must be a study.Structure, got {type(structure).__name__}")
-    return structure
-
-
 def _check_coupling(coupling: str) -> bool:
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling must be one of {COUPLINGS}, got {coupling!r}")
@@ -472,7 +468,7 @@ def integrated_steady_state(
     a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
     n = f_flat.size
     omega = 2.0 * np.pi * f_flat
-    period = 1.0 / np.maximum(f_flat, 1e-300)
+    period = 1.0 / f_flat  # f > 0, checked by as_frequency
     y0 = np.ascontiguousarray(steady_mode_state(structure, f_flat, a_flat).reshape(n, 4))
     scale = np.ascontiguousarray(_scales(structure, omega).reshape(n, 4))
     if settings.steps_per_period:
