@@ -1,0 +1,678 @@
+"""Event-driven Dormand-Prince 5(4) integrator of the planar disk with resonant plates.
+
+State ``y = (x, y, theta, vx, vy, spin, path, delta_1, delta_1', ..., delta_P,
+delta_P')`` (world frame; ``path`` is the distance slid) and a contact mode, ``STICK``
+or ``SLIP``. Per unit total mass, table frame, drive ``A(t) = a cos(phi(t))``::
+
+    F_i  = A cos(alpha_i) - (w_i/Q_i) delta_i' - w_i^2 delta_i      (delta_i'' = F_i)
+    n    = g - A + sum_i M_i cos(alpha_i) F_i
+    f_b  = sum_i -M_i sin(alpha_i) F_i e_i,   T = sum_i -M_i sin(alpha_i) F_i l_i
+    W    = (R(theta) f_b, T / c),              u = (vx, vy, c spin)
+    stick: u = 0 while |W| <= cs n
+    slip:  (vx, vy)' = R(theta) f_b - ck n uhat_xy,  spin' = (T - ck n c uhat_3) / rho^2
+
+``e_i`` is plate i's direction and ``l_i`` its lever (``r_i x e_i``) in the body frame,
+``c`` the length of the ellipsoidal limit surface (maximum friction torque ``mu n c``)
+and ``rho`` the gyration radius. In the scaled twist ``u`` the limit surface is a
+sphere and the sliding law reads ``u' = K (W - ck n uhat)`` with ``K = diag(1, 1,
+c^2/rho^2)``.
+
+A slip starts from rest along the direction ``uhat`` whose acceleration is parallel to
+itself, ``K (W - ck n uhat) = lambda uhat`` with ``lambda >= 0``, i.e. ``uhat_j =
+W_j / (lambda / K_j + ck n)`` with ``|uhat| = 1`` (a monotone scalar equation in
+``lambda``). A slip ends where the twist vanishes; on the dense output this is the
+zero of ``u . d`` with ``d`` the twist direction at the start of the step (near its
+end a slip's twist shrinks to zero along a converging direction, so the projection
+changes sign there).
+
+Events are located as in :mod:`study.kernels.transient`: sampled on the dense output,
+watched at their minima, refined by the Illinois method. Everything here is private:
+:mod:`study.planar` validates, allocates and calls.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from study.kernels import transient as dp
+from study.kernels.transient import _dense, _drive, _error_norm
+
+# Contact modes. A slip that starts from rest is in its ONSET phase until its twist
+# exceeds the slaving threshold: there its direction is the slaved one, which removes
+# the stiffness (relaxation rate ck n / |u|) of the direction near u = 0.
+STICK = 0
+SLIP = 1
+ONSET = 2
+
+# Run outcomes.
+RUN_DONE = 0
+RUN_LIFT_OFF = 1
+RUN_BUDGET = 2
+
+# Event kinds recorded in trajectories.
+EVENT_RELEASE = 1
+EVENT_SLIP_END = 3
+EVENT_LIFT_OFF = 4
+
+# State layout.
+X = 0
+Y = 1
+HEADING = 2
+VX = 3
+VY = 4
+SPIN = 5
+PATH = 6
+MODES = 7
+
+# Columns of the plate parameter table.
+PL_DAMPING = 0  # w0/Q [s^-1]
+PL_STIFFNESS = 1  # w0^2 [s^-2]
+PL_COS = 2  # cos(alpha)
+PL_SIN = 3  # sin(alpha)
+PL_MASS = 4  # M
+PL_EX = 5  # body-frame direction, forward component
+PL_EY = 6  # body-frame direction, left component
+PL_LEVER = 7  # r x e [m]
+N_PLATE_PARAMETERS = 8
+
+# Entries of the disk parameter vector.
+DK_CS = 0
+DK_CK = 1
+DK_G = 2
+DK_LENGTH = 3  # limit-surface length c [m]
+DK_GYRATION2 = 4  # rho^2 [m^2]
+DK_SLAVED = 5  # twist below which its direction is the slaved one [m s^-1]
+N_DISK_PARAMETERS = 6
+
+# Safeguarded Newton iterations of the slaved-direction equation (converges in a few).
+SLAVED_ITERATIONS = 100
+
+
+@njit(cache=True, nogil=True)
+def _loads(plates, disk, drive, drive_rate_neg, y, out):
+    """Normal force, body-frame plate force and torque per unit mass, and their rates.
+
+    ``out = (n, fx, fy, T, n', fx', fy', T')``; ``drive_rate_neg = -dA/dt``.
+    """
+    n = disk[DK_G] - drive
+    n_rate = drive_rate_neg
+    fx = 0.0
+    fy = 0.0
+    torque = 0.0
+    fx_rate = 0.0
+    fy_rate = 0.0
+    torque_rate = 0.0
+    for i in range(plates.shape[0]):
+        d = y[MODES + 2 * i]
+        d_rate = y[MODES + 2 * i + 1]
+        forcing = drive * plates[i, PL_COS] - plates[i, PL_DAMPING] * d_rate \
+            - plates[i, PL_STIFFNESS] * d
+        forcing_rate = -drive_rate_neg * plates[i, PL_COS] - plates[i, PL_DAMPING] * forcing \
+            - plates[i, PL_STIFFNESS] * d_rate
+        n += plates[i, PL_MASS] * plates[i, PL_COS] * forcing
+        n_rate += plates[i, PL_MASS] * plates[i, PL_COS] * forcing_rate
+        push = -plates[i, PL_MASS] * plates[i, PL_SIN]
+        fx += push * forcing * plates[i, PL_EX]
+        fy += push * forcing * plates[i, PL_EY]
+        torque += push * forcing * plates[i, PL_LEVER]
+        fx_rate += push * forcing_rate * plates[i, PL_EX]
+        fy_rate += push * forcing_rate * plates[i, PL_EY]
+        torque_rate += push * forcing_rate * plates[i, PL_LEVER]
+    out[0] = n
+    out[1] = fx
+    out[2] = fy
+    out[3] = torque
+    out[4] = n_rate
+    out[5] = fx_rate
+    out[6] = fy_rate
+    out[7] = torque_rate
+
+
+@njit(cache=True, nogil=True)
+def _world_wrench(disk, heading, loads, wrench):
+    """Scaled wrench ``W = (R(theta) f_b, T/c)`` and its rate (the heading is frozen
+    while stuck, and its rate's contribution is not needed elsewhere)."""
+    c = math.cos(heading)
+    s = math.sin(heading)
+    length = disk[DK_LENGTH]
+    wrench[0] = c * loads[1] - s * loads[2]
+    wrench[1] = s * loads[1] + c * loads[2]
+    wrench[2] = loads[3] / length
+    wrench[3] = c * loads[5] - s * loads[6]
+    wrench[4] = s * loads[5] + c * loads[6]
+    wrench[5] = loads[7] / length
+
+
+@njit(cache=True, nogil=True)
+def _slaved_direction(disk, n, wrench, out):
+    """Unit twist direction ``uhat`` whose acceleration is parallel to itself.
+
+    Solves ``K (W - ck n uhat) = lambda uhat``, i.e. ``uhat_j = W_j / (lambda / K_j +
+    ck n)`` with ``sum_j uhat_j^2 = 1``; the sum falls monotonically in ``lambda`` on
+    ``(-ck n min K, inf)``, so the root is unique: ``lambda >= 0`` for a slip that
+    starts (``|W| >= ck n``), ``lambda < 0`` for one that comes to rest. A slip's
+    twist relaxes to this direction at the rate ``ck n / |u|``: it is the direction
+    of a slip starting from rest and the one a vanishing twist follows.
+    Returns ``lambda``.
+    """
+    kappa = disk[DK_LENGTH] ** 2 / disk[DK_GYRATION2]
+    friction = disk[DK_CK] * max(n, 0.0)
+    w0 = wrench[0]
+    w1 = wrench[1]
+    w2 = wrench[2]
+    size = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    if size == 0.0:
+        out[0] = 1.0
+        out[1] = 0.0
+        out[2] = 0.0
+        return -friction
+    lo = -friction * min(1.0, kappa)
+    hi = size * max(1.0, kappa)
+    lam = min(max(size - friction, lo + 0.5 * (size - lo) * 1e-3), hi)
+    for _ in range(SLAVED_ITERATIONS):
+        m_xy = lam + friction
+        m_z = lam / kappa + friction
+        if m_xy <= 0.0 or m_z <= 0.0:
+            lam = 0.5 * (lo + hi)
+            continue
+        phi = (w0 * w0 + w1 * w1) / (m_xy * m_xy) + w2 * w2 / (m_z * m_z) - 1.0
+        if phi > 0.0:
+            lo = lam
+        else:
+            hi = lam
+        slope = -2.0 * (w0 * w0 + w1 * w1) / m_xy**3 - 2.0 * w2 * w2 / (kappa * m_z**3)
+        step = phi / slope
+        candidate = lam - step
+        if not (lo < candidate < hi):
+            candidate = 0.5 * (lo + hi)
+        if abs(candidate - lam) <= 1e-15 * (abs(lam) + size) or hi - lo <= 1e-15 * size:
+            lam = candidate
+            break
+        lam = candidate
+    m_xy = lam + friction
+    m_z = lam / kappa + friction
+    out[0] = w0 / m_xy
+    out[1] = w1 / m_xy
+    out[2] = w2 / m_z
+    norm = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2)
+    for j in range(3):
+        out[j] /= norm
+    return lam
+
+
+@njit(cache=True, nogil=True)
+def _friction_direction(disk, mode, reference, y, n, wrench, out):
+    """Unit twist direction that the friction wrench opposes.
+
+    ``u / |u|`` while the twist exceeds the slaving threshold ``disk[DK_SLAVED]``.
+    Below it, at a slip's onset, the slaved direction; at a slip's end, the direction
+    ``reference`` at the step's start, frozen for the step. Both keep the right-hand
+    side smooth where ``u / |u|`` would turn at the rate ``ck n / |u|`` (stiff) or flip
+    (at ``u = 0``), so the twist crosses zero inside a step, where the slip-end event
+    finds it.
+    """
+    u0 = y[VX]
+    u1 = y[VY]
+    u2 = disk[DK_LENGTH] * y[SPIN]
+    size = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+    if size > disk[DK_SLAVED] or (size > 0.0 and disk[DK_SLAVED] == 0.0):
+        out[0] = u0 / size
+        out[1] = u1 / size
+        out[2] = u2 / size
+    elif mode == ONSET or (size == 0.0 and mode != SLIP):
+        _slaved_direction(disk, n, wrench, out)
+    else:
+        out[0] = reference[0]
+        out[1] = reference[1]
+        out[2] = reference[2]
+
+
+@njit(cache=True, nogil=True)
+def _rhs(plates, disk, mode, reference, drive, y, out, work):
+    """Time derivative of the state; ``work`` is scratch of length >= 17."""
+    loads = work[0:8]
+    wrench = work[8:14]
+    direction = work[14:17]
+    _loads(plates, disk, drive, 0.0, y, loads)
+    for i in range(plates.shape[0]):
+        j = MODES + 2 * i
+        out[j] = y[j + 1]
+        out[j + 1] = drive * plates[i, PL_COS] - plates[i, PL_DAMPING] * y[j + 1] \
+            - plates[i, PL_STIFFNESS] * y[j]
+    out[X] = y[VX]
+    out[Y] = y[VY]
+    out[HEADING] = y[SPIN]
+    if mode == STICK:
+        out[VX] = 0.0
+        out[VY] = 0.0
+        out[SPIN] = 0.0
+        out[PATH] = 0.0
+        return
+    _world_wrench(disk, y[HEADING], loads, wrench)
+    _friction_direction(disk, mode, reference, y, loads[0], wrench, direction)
+    friction = disk[DK_CK] * loads[0]
+    out[VX] = wrench[0] - friction * direction[0]
+    out[VY] = wrench[1] - friction * direction[1]
+    out[SPIN] = (loads[3] - friction * disk[DK_LENGTH] * direction[2]) / disk[DK_GYRATION2]
+    out[PATH] = math.sqrt(y[VX] * y[VX] + y[VY] * y[VY])
+
+
+@njit(cache=True, nogil=True)
+def _event_values(plates, disk, mode, reference, drive, drive_rate_neg, y, values,
+                  rates, work):
+    """Event functions of the current mode, positive while nothing happens.
+
+    stick: ``cs n - |W|`` (release); slip: ``u . d`` (slip end, ``d`` the reference
+    direction); always: ``n`` (lift-off).
+    """
+    loads = work[0:8]
+    wrench = work[8:14]
+    direction = work[14:17]
+    _loads(plates, disk, drive, drive_rate_neg, y, loads)
+    _world_wrench(disk, y[HEADING], loads, wrench)
+    if mode == STICK:
+        size = math.sqrt(wrench[0] ** 2 + wrench[1] ** 2 + wrench[2] ** 2)
+        size_rate = 0.0
+        if size > 0.0:
+            size_rate = (wrench[0] * wrench[3] + wrench[1] * wrench[4]
+                         + wrench[2] * wrench[5]) / size
+        values[0] = disk[DK_CS] * loads[0] - size
+        rates[0] = disk[DK_CS] * loads[4] - size_rate
+    else:
+        _friction_direction(disk, mode, reference, y, loads[0], wrench, direction)
+        length = disk[DK_LENGTH]
+        friction = disk[DK_CK] * loads[0]
+        ax = wrench[0] - friction * direction[0]
+        ay = wrench[1] - friction * direction[1]
+        aspin = (loads[3] - friction * length * direction[2]) / disk[DK_GYRATION2]
+        values[0] = y[VX] * reference[0] + y[VY] * reference[1] \
+            + length * y[SPIN] * reference[2]
+        rates[0] = ax * reference[0] + ay * reference[1] + length * aspin * reference[2]
+    values[1] = loads[0]
+    rates[1] = loads[4]
+
+
+@njit(cache=True, nogil=True)
+def _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, dense, tmp, work):
+    """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL)."""
+    seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
+    n = y.shape[0]
+    for i in range(n):
+        tmp[i] = y[i] + h * dp.A21 * k[0, i]
+    drive, _ = _drive(t + dp.C2 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+    _rhs(plates, disk, mode, reference, drive, tmp, k[1], work)
+    for i in range(n):
+        tmp[i] = y[i] + h * (dp.A31 * k[0, i] + dp.A32 * k[1, i])
+    drive, _ = _drive(t + dp.C3 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+    _rhs(plates, disk, mode, reference, drive, tmp, k[2], work)
+    for i in range(n):
+        tmp[i] = y[i] + h * (dp.A41 * k[0, i] + dp.A42 * k[1, i] + dp.A43 * k[2, i])
+    drive, _ = _drive(t + dp.C4 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+    _rhs(plates, disk, mode, reference, drive, tmp, k[3], work)
+    for i in range(n):
+        tmp[i] = y[i] + h * (
+            dp.A51 * k[0, i] + dp.A52 * k[1, i] + dp.A53 * k[2, i] + dp.A54 * k[3, i]
+        )
+    drive, _ = _drive(t + dp.C5 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+    _rhs(plates, disk, mode, reference, drive, tmp, k[4], work)
+    for i in range(n):
+        tmp[i] = y[i] + h * (
+            dp.A61 * k[0, i] + dp.A62 * k[1, i] + dp.A63 * k[2, i] + dp.A64 * k[3, i]
+            + dp.A65 * k[4, i]
+        )
+    drive, _ = _drive(t + h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+    _rhs(plates, disk, mode, reference, drive, tmp, k[5], work)
+    for i in range(n):
+        y_new[i] = y[i] + h * (
+            dp.B1 * k[0, i] + dp.B3 * k[2, i] + dp.B4 * k[3, i] + dp.B5 * k[4, i] + dp.B6 * k[5, i]
+        )
+    _rhs(plates, disk, mode, reference, drive, y_new, k[6], work)
+    for i in range(n):
+        err[i] = h * (
+            dp.E1 * k[0, i] + dp.E3 * k[2, i] + dp.E4 * k[3, i] + dp.E5 * k[4, i] + dp.E6 * k[5, i]
+            + dp.E7 * k[6, i]
+        )
+        dense[0, i] = y[i]
+        rise = y_new[i] - y[i]
+        dense[1, i] = rise
+        slope_gap = h * k[0, i] - rise
+        dense[2, i] = slope_gap
+        dense[3, i] = rise - h * k[6, i] - slope_gap
+        dense[4, i] = h * (
+            dp.D1 * k[0, i] + dp.D3 * k[2, i] + dp.D4 * k[3, i] + dp.D5 * k[4, i] + dp.D6 * k[5, i]
+            + dp.D7 * k[6, i]
+        )
+    if mode == STICK:
+        # The pose is exactly frozen while stuck.
+        for i in range(MODES):
+            y_new[i] = y[i]
+            err[i] = 0.0
+            for row in range(1, 5):
+                dense[row, i] = 0.0
+        y_new[VX] = 0.0
+        y_new[VY] = 0.0
+        y_new[SPIN] = 0.0
+
+
+@njit(cache=True, nogil=True)
+def _values_at(theta, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
+               values, rates, work):
+    seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
+    _dense(theta, h, dense, ystate)
+    drive, rate = _drive(t + theta * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+    _event_values(plates, disk, mode, reference, drive, rate, ystate, values, rates,
+                  work)
+
+
+@njit(cache=True, nogil=True)
+def _refine(which, lo, hi, plates, disk, mode, reference, t, h, dense, drive_args,
+            ystate, values, rates, work, xtol):
+    """Illinois iteration on event ``which`` over ``[lo, hi]`` (clear at ``lo``,
+    triggered at ``hi``); returns the triggered end of a bracket narrower than ``xtol``.
+    """
+    _values_at(lo, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
+               values, rates, work)
+    f_lo = values[which]
+    _values_at(hi, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
+               values, rates, work)
+    f_hi = values[which]
+    side = 0
+    for _ in range(dp.MAX_ROOT_ITERATIONS):
+        if hi - lo <= xtol:
+            break
+        if f_lo - f_hi > 0.0 and math.isfinite(f_lo - f_hi):
+            mid = lo + (hi - lo) * f_lo / (f_lo - f_hi)
+        else:
+            mid = 0.5 * (lo + hi)
+        width = hi - lo
+        mid = min(max(mid, lo + 0.01 * width), hi - 0.01 * width)
+        _values_at(mid, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
+                   values, rates, work)
+        f_mid = values[which]
+        triggered = f_mid <= 0.0 if which == 0 and mode != STICK else f_mid < 0.0
+        if triggered:
+            hi = mid
+            f_hi = f_mid
+            if side == -1:
+                f_lo *= 0.5
+            side = -1
+        else:
+            lo = mid
+            f_lo = f_mid
+            if side == 1:
+                f_hi *= 0.5
+            side = 1
+    return hi
+
+
+@njit(cache=True, nogil=True)
+def _minimum(which, lo, hi, plates, disk, mode, reference, t, h, dense, drive_args,
+             ystate, values, rates, work, xtol):
+    """Bisection for the minimum of event ``which`` (its rate negative at ``lo``,
+    positive at ``hi``)."""
+    for _ in range(dp.MAX_ROOT_ITERATIONS):
+        if hi - lo <= xtol:
+            break
+        mid = 0.5 * (lo + hi)
+        _values_at(mid, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
+                   values, rates, work)
+        if rates[which] < 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=True, nogil=True)
+def _first_event(plates, disk, mode, reference, t, h, dense, drive_args, samples, xtol,
+                 fresh, ystate, values, rates, prev_values, prev_rates, work):
+    """Earliest event in the step: ``(which, theta)`` or ``(-1, 1.0)``.
+
+    ``which`` is 0 (release, or slip end) or 1 (lift-off). At a fresh slip's start the
+    slip-end function is zero and rising: its first sample interval counts as clear.
+    """
+    best_which = -1
+    best_theta = 2.0
+    _values_at(0.0, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
+               prev_values, prev_rates, work)
+    theta_prev = 0.0
+    for j in range(1, samples + 1):
+        theta = j / samples
+        _values_at(theta, plates, disk, mode, reference, t, h, dense, drive_args,
+                   ystate, values, rates, work)
+        for which in range(2):
+            before = prev_values[which]
+            after = values[which]
+            slip_end = which == 0 and mode != STICK
+            now_triggered = after <= 0.0 if slip_end else after < 0.0
+            was_clear = before > 0.0 if slip_end else before >= 0.0
+            if slip_end and j == 1 and fresh:
+                was_clear = True
+            root_hi = -1.0
+            if was_clear and now_triggered:
+                root_hi = theta
+            elif was_clear and prev_rates[which] < 0.0 and rates[which] > 0.0:
+                theta_min = _minimum(which, theta_prev, theta, plates, disk, mode,
+                                     reference, t, h, dense, drive_args, ystate, values, rates,
+                                     work, xtol)
+                _values_at(theta_min, plates, disk, mode, reference, t, h, dense,
+                           drive_args, ystate, values, rates, work)
+                dip = values[which]
+                if (dip <= 0.0) if slip_end else (dip < 0.0):
+                    root_hi = theta_min
+                _values_at(theta, plates, disk, mode, reference, t, h, dense,
+                           drive_args, ystate, values, rates, work)
+            if root_hi >= 0.0:
+                root = _refine(which, theta_prev, root_hi, plates, disk, mode,
+                               reference, t, h, dense, drive_args, ystate, values, rates, work,
+                               xtol)
+                if root < best_theta:
+                    best_theta = root
+                    best_which = which
+                _values_at(theta, plates, disk, mode, reference, t, h, dense,
+                           drive_args, ystate, values, rates, work)
+        if best_which >= 0:
+            return best_which, best_theta
+        for which in range(2):
+            prev_values[which] = values[which]
+            prev_rates[which] = rates[which]
+        theta_prev = theta
+    return -1, 1.0
+
+
+@njit(cache=True, nogil=True)
+def _mode_after_rest(plates, disk, drive, y, work):
+    """``SLIP`` if the wrench at rest exceeds the static limit surface, else ``STICK``."""
+    loads = work[0:8]
+    wrench = work[8:14]
+    _loads(plates, disk, drive, 0.0, y, loads)
+    _world_wrench(disk, y[HEADING], loads, wrench)
+    size = math.sqrt(wrench[0] ** 2 + wrench[1] ** 2 + wrench[2] ** 2)
+    if size > disk[DK_CS] * loads[0]:
+        return ONSET
+    return STICK
+
+
+@njit(cache=True, nogil=True)
+def _record(ev_t, ev_kind, ev_y, ev_box, t, kind, y):
+    j = ev_box[0]
+    if j < ev_t.shape[0]:
+        ev_t[j] = t
+        ev_kind[j] = kind
+        for i in range(y.shape[0]):
+            ev_y[j, i] = y[i]
+    ev_box[0] = j + 1
+
+
+@njit(cache=True, nogil=True)
+def _integrate(
+    plates, disk, seg_t0, seg_omega, seg_a, seg_phase0, seg_end,
+    y, mode_box, t_box, t_stop,
+    rtol, atol, scale, max_step, xtol_time, samples, max_steps,
+    out_t, out_y, out_mode, out_box,
+    ev_t, ev_kind, ev_y, ev_box,
+    stats,
+):
+    """Integrate from ``t_box[0]`` to ``t_stop`` in place; returns a ``RUN_*`` code.
+
+    ``y``, ``mode_box[0]`` and ``t_box = (t, next step size)`` carry the state in and
+    out, so a run can be continued by another call. Output samples at ``out_t`` are written from
+    ``out_box[0]`` on, events while ``ev_box[0]`` is below their capacity. ``stats``
+    accumulates ``[steps, rejected, slips, stuck time, slipping time]``.
+    """
+    n = y.shape[0]
+    k = np.empty((7, n))
+    y_new = np.empty(n)
+    err = np.empty(n)
+    dense = np.empty((5, n))
+    tmp = np.empty(n)
+    ystate = np.empty(n)
+    work = np.empty(17)
+    values = np.empty(2)
+    rates = np.empty(2)
+    prev_values = np.empty(2)
+    prev_rates = np.empty(2)
+    reference = np.zeros(3)
+    mode = mode_box[0]
+    t = t_box[0]
+    h = t_box[1]
+    seg = 0
+    while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
+        seg += 1
+    need_rhs = True
+    length = disk[DK_LENGTH]
+    fresh = mode != STICK and y[VX] == 0.0 and y[VY] == 0.0 and y[SPIN] == 0.0
+    steps = 0
+    while t < t_stop:
+        if steps >= max_steps:
+            mode_box[0] = mode
+            t_box[0] = t
+            return RUN_BUDGET
+        while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
+            seg += 1
+            need_rhs = True
+        drive_args = (seg, seg_t0, seg_omega, seg_a, seg_phase0)
+        if need_rhs:
+            drive, rate = _drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+            if mode == STICK:
+                y[VX] = 0.0
+                y[VY] = 0.0
+                y[SPIN] = 0.0
+                if _mode_after_rest(plates, disk, drive, y, work) == ONSET:
+                    mode = ONSET
+                    fresh = True
+                    stats[2] += 1.0
+                    _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
+            _event_values(plates, disk, mode, reference, drive, rate, y, values, rates, work)
+            if values[1] < 0.0:
+                _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
+                mode_box[0] = mode
+                t_box[0] = t
+                return RUN_LIFT_OFF
+            _rhs(plates, disk, mode, reference, drive, y, k[0], work)
+            need_rhs = False
+        limit = min(t_stop, seg_end[seg])
+        h = min(h, max_step)
+        last = False
+        if t + 1.01 * h >= limit:
+            h = limit - t
+            last = True
+        if h <= 0.0:
+            t = limit
+            continue
+        if mode != STICK:
+            # The slip end is watched along the friction direction at the step start.
+            drive, _ = _drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+            loads = work[0:8]
+            wrench = work[8:14]
+            _loads(plates, disk, drive, 0.0, y, loads)
+            _world_wrench(disk, y[HEADING], loads, wrench)
+            size = math.sqrt(y[VX] ** 2 + y[VY] ** 2 + (length * y[SPIN]) ** 2)
+            if size > 0.0 and (mode == SLIP or size > disk[DK_SLAVED]):
+                reference[0] = y[VX] / size
+                reference[1] = y[VY] / size
+                reference[2] = length * y[SPIN] / size
+            else:
+                _slaved_direction(disk, loads[0], wrench, reference)
+            if mode == SLIP and size <= disk[DK_SLAVED]:
+                # The frozen direction of this step differs from the last step's.
+                _rhs(plates, disk, mode, reference, drive, y, k[0], work)
+        _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, dense, tmp, work)
+        steps += 1
+        stats[0] += 1.0
+        norm = _error_norm(err, y, y_new, scale, rtol, atol)
+        if not norm <= 1.0:
+            stats[1] += 1.0
+            factor = dp.MIN_FACTOR if not math.isfinite(norm) else max(
+                dp.MIN_FACTOR, dp.SAFETY * norm ** -0.2
+            )
+            h *= factor
+            if h < 1e-14 * max(abs(t), max_step):
+                mode_box[0] = mode
+                t_box[0] = t
+                return RUN_BUDGET
+            continue
+        factor = dp.MAX_FACTOR if norm == 0.0 else min(dp.MAX_FACTOR, dp.SAFETY * norm ** -0.2)
+        which, theta = _first_event(
+            plates, disk, mode, reference, t, h, dense, drive_args, samples,
+            xtol_time / h, fresh, ystate, values, rates, prev_values, prev_rates, work,
+        )
+        t_end = t + theta * h if which >= 0 else t + h
+        if last and which < 0:
+            t_end = limit
+        while out_box[0] < out_t.shape[0] and out_t[out_box[0]] <= t_end:
+            j = out_box[0]
+            _dense((out_t[j] - t) / h, h, dense, ystate)
+            for i in range(n):
+                out_y[j, i] = ystate[i]
+            out_mode[j] = mode
+            out_box[0] += 1
+        if mode == STICK:
+            stats[3] += t_end - t
+        else:
+            stats[4] += t_end - t
+        if which < 0:
+            for i in range(n):
+                y[i] = y_new[i]
+                k[0, i] = k[6, i]
+            t = t_end
+            h *= factor
+            fresh = False
+            if mode == ONSET:
+                twist = math.sqrt(y[VX] ** 2 + y[VY] ** 2 + (length * y[SPIN]) ** 2)
+                if twist > disk[DK_SLAVED]:
+                    mode = SLIP
+            continue
+        _dense(theta, h, dense, ystate)
+        for i in range(n):
+            y[i] = ystate[i]
+        t = t_end
+        need_rhs = True
+        drive, rate = _drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+        if which == 1:
+            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
+            mode_box[0] = mode
+            t_box[0] = t
+            return RUN_LIFT_OFF
+        if mode == STICK:
+            mode = ONSET
+            fresh = True
+            stats[2] += 1.0
+            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
+        else:
+            y[VX] = 0.0
+            y[VY] = 0.0
+            y[SPIN] = 0.0
+            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_SLIP_END, y)
+            mode = _mode_after_rest(plates, disk, drive, y, work)
+            fresh = mode == ONSET
+            if fresh:
+                stats[2] += 1.0
+                _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
+    mode_box[0] = mode
+    t_box[0] = t
+    t_box[1] = h
+    return RUN_DONE

@@ -1,0 +1,643 @@
+"""Planar steering model: a rigid disk with resonant plates on a vertically shaken table.
+
+The paper's Fig. 4 structure is a disk with two soft plates: a head plate that moves
+it forward or backward and a tail plate, across the head-tail axis, that turns it.
+Each plate is the single-plate model of paper eqs. 2-4 (a first mode driven by the
+table, one-way coupled), mounted at a point of the disk along a direction in its
+body frame. The disk's contact is planar Coulomb friction with an ellipsoidal limit
+surface (the friction force and torque at sliding lie on the ellipsoid
+``|f|^2 / (mu n)^2 + tau^2 / (mu n c)^2 = 1``; the twist is normal to it), with
+stick and slip for force and torque together. See :mod:`study.kernels.planar` for
+the equations and README "Steering" for the choices.
+
+Per unit total mass, SI units: lengths in m, angles in rad inside (degrees in the
+plate definition, as in :class:`study.structure.Structure`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from study.kernels import planar as _kernel
+from study.structure import _require_finite
+from study.transient import IntegratorSettings, Schedule
+
+__all__ = [
+    "OUTCOMES",
+    "PLANAR_VERSION",
+    "Disk",
+    "PlanarTrajectory",
+    "Plate",
+    "disk_parameters",
+    "simulate_planar",
+    "steady_plate_states",
+]
+
+#: Bumped whenever the planar model or its numerics change the numbers it returns.
+PLANAR_VERSION = "1"
+
+#: How a run ended, by kernel return code.
+OUTCOMES = {
+    _kernel.RUN_DONE: "completed",
+    _kernel.RUN_LIFT_OFF: "lift_off",
+    _kernel.RUN_BUDGET: "step_budget",
+}
+
+#: Event kinds recorded in trajectories.
+EVENT_KINDS = {
+    _kernel.EVENT_RELEASE: "release",
+    _kernel.EVENT_SLIP_END: "slip_end",
+    _kernel.EVENT_LIFT_OFF: "lift_off",
+}
+
+#: Default slaving threshold of a slip's onset, in units of ``ck g / w`` [1].
+SLAVING = 1e-4
+
+#: Names of the state components (``delta_i``, ``delta_i'`` follow, plate by plate).
+POSE_STATE = ("x", "y", "heading", "vx", "vy", "spin", "path")
+
+
+@dataclass(frozen=True)
+class Plate:
+    """One resonant plate on the disk.
+
+    Parameters
+    ----------
+    f0 : float
+        Resonance frequency of the plate's first mode [Hz], > 0.
+    Q : float
+        Quality factor [1], > 0.
+    alpha : float
+        Tilt of the mode's direction from the horizontal [degree], in [0, 90].
+    M : float
+        Mass ratio of the plate's modal mass to the whole structure's mass [1], in (0, 1].
+    direction : float
+        Direction of the mode's horizontal component in the body frame, counterclockwise
+        from the heading [degree].
+    attachment : tuple of float
+        Point where the plate acts, body frame ``(forward, left)`` from the disk's
+        centre [m].
+    name : str
+        Label.
+    """
+
+    f0: float
+    Q: float
+    alpha: float
+    M: float
+    direction: float = 0.0
+    attachment: tuple[float, float] = (0.0, 0.0)
+    name: str = "plate"
+
+    def __post_init__(self) -> None:
+        checks = (
+            ("f0", "Hz", lambda v: v > 0.0, "> 0"),
+            ("Q", "1", lambda v: v > 0.0, "> 0"),
+            ("alpha", "degree", lambda v: 0.0 <= v <= 90.0, "in [0, 90]"),
+            ("M", "1", lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+            ("direction", "degree", lambda v: True, "finite"),
+        )
+        for name, units, ok, allowed in checks:
+            value = _require_finite(f"Plate.{name}", getattr(self, name))
+            if not ok(value):
+                raise ValueError(
+                    f"Plate {self.name!r}: {name} = {value!r} [{units}] is out of range; "
+                    f"allowed: {allowed}"
+                )
+            object.__setattr__(self, name, value)
+        point = tuple(self.attachment)
+        if len(point) != 2:
+            raise ValueError(
+                f"Plate {self.name!r}: attachment must be (forward, left) [m], got "
+                f"{self.attachment!r}"
+            )
+        object.__setattr__(self, "attachment", tuple(
+            _require_finite(f"Plate.attachment[{i}]", v) for i, v in enumerate(point)
+        ))
+
+    @property
+    def unit_direction(self) -> tuple[float, float]:
+        """Body-frame unit vector of the mode's horizontal component (forward, left)."""
+        angle = math.radians(self.direction)
+        return math.cos(angle), math.sin(angle)
+
+    @property
+    def lever(self) -> float:
+        """Moment arm ``r x e`` of the plate's horizontal force about the centre [m]."""
+        ex, ey = self.unit_direction
+        return self.attachment[0] * ey - self.attachment[1] * ex
+
+
+@dataclass(frozen=True)
+class Disk:
+    """The rigid disk, its contact with the table and its plates.
+
+    Parameters
+    ----------
+    radius : float
+        Disk radius [m], > 0.
+    plates : tuple of Plate
+        The plates (at least one); their mass ratios sum to at most 1.
+    cs : float
+        Static friction coefficient [1], > 0.
+    ck : float, optional
+        Kinetic friction coefficient [1], in (0, cs]; default ``cs``.
+    g : float
+        Gravitational acceleration [m s^-2].
+    gyration_radius : float, optional
+        Radius of gyration about the vertical axis [m]; default ``radius / sqrt(2)``
+        (a uniform disk).
+    friction_length : float, optional
+        Length ``c`` of the ellipsoidal limit surface, the maximum friction torque
+        over the maximum friction force [m]; default ``2 radius / 3`` (uniform
+        pressure on the full disk).
+    """
+
+    radius: float
+    plates: tuple[Plate, ...]
+    cs: float
+    ck: float | None = None
+    g: float = 9.8
+    gyration_radius: float | None = None
+    friction_length: float | None = None
+    _names: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        radius = _require_finite("Disk.radius", self.radius)
+        if radius <= 0.0:
+            raise ValueError(f"Disk: radius = {radius!r} [m] must be > 0")
+        plates = tuple(self.plates)
+        if not plates or not all(isinstance(p, Plate) for p in plates):
+            raise ValueError("Disk: plates must be a non-empty sequence of study.planar.Plate")
+        total = sum(p.M for p in plates)
+        if total > 1.0 + 1e-12:
+            raise ValueError(
+                f"Disk: the plates' mass ratios sum to {total:g} > 1 (each M is a share of "
+                "the whole structure's mass)"
+            )
+        cs = _require_finite("Disk.cs", self.cs)
+        if cs <= 0.0:
+            raise ValueError(f"Disk: cs = {cs!r} must be > 0")
+        ck = cs if self.ck is None else _require_finite("Disk.ck", self.ck)
+        if not 0.0 < ck <= cs:
+            raise ValueError(f"Disk: ck = {ck!r} must be in (0, cs = {cs!r}]")
+        g = _require_finite("Disk.g", self.g)
+        if g <= 0.0:
+            raise ValueError(f"Disk: g = {g!r} [m s^-2] must be > 0")
+        gyration = radius / math.sqrt(2.0) if self.gyration_radius is None else (
+            _require_finite("Disk.gyration_radius", self.gyration_radius))
+        length = 2.0 * radius / 3.0 if self.friction_length is None else (
+            _require_finite("Disk.friction_length", self.friction_length))
+        for name, value in (("gyration_radius", gyration), ("friction_length", length)):
+            if value <= 0.0:
+                raise ValueError(f"Disk: {name} = {value!r} [m] must be > 0")
+        for name, value in (("radius", radius), ("plates", plates), ("cs", cs), ("ck", ck),
+                            ("g", g), ("gyration_radius", gyration),
+                            ("friction_length", length)):
+            object.__setattr__(self, name, value)
+
+    @property
+    def diameter(self) -> float:
+        """Disk diameter [m]."""
+        return 2.0 * self.radius
+
+
+def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The kernel's plate table ``(P, 8)`` and disk vector ``(5,)``."""
+    if not isinstance(disk, Disk):
+        raise TypeError(f"disk must be a study.planar.Disk, got {type(disk).__name__}")
+    plates = np.empty((len(disk.plates), _kernel.N_PLATE_PARAMETERS))
+    for i, plate in enumerate(disk.plates):
+        w0 = 2.0 * math.pi * plate.f0
+        alpha = math.radians(plate.alpha)
+        ex, ey = plate.unit_direction
+        plates[i, _kernel.PL_DAMPING] = w0 / plate.Q
+        plates[i, _kernel.PL_STIFFNESS] = w0 * w0
+        plates[i, _kernel.PL_COS] = math.cos(alpha)
+        plates[i, _kernel.PL_SIN] = math.sin(alpha)
+        plates[i, _kernel.PL_MASS] = plate.M
+        plates[i, _kernel.PL_EX] = ex
+        plates[i, _kernel.PL_EY] = ey
+        plates[i, _kernel.PL_LEVER] = plate.lever
+    vector = np.empty(_kernel.N_DISK_PARAMETERS)
+    vector[_kernel.DK_CS] = disk.cs
+    vector[_kernel.DK_CK] = disk.ck
+    vector[_kernel.DK_G] = disk.g
+    vector[_kernel.DK_LENGTH] = disk.friction_length
+    vector[_kernel.DK_GYRATION2] = disk.gyration_radius**2
+    vector[_kernel.DK_SLAVED] = 0.0
+    return plates, vector
+
+
+def _scales(disk: Disk, omega: float) -> NDArray[np.float64]:
+    """Absolute-tolerance scale of each state component at drive pulsation ``omega``."""
+    g = disk.g
+    size = g / omega**2
+    scale = [size, size, size / disk.radius, g / omega, g / omega, g / omega / disk.radius,
+             size]
+    for plate in disk.plates:
+        fastest = max(omega, 2.0 * math.pi * plate.f0)
+        scale += [g / fastest**2, g / fastest]
+    return np.array(scale)
+
+
+def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
+                        ) -> NDArray[np.float64]:
+    """Plate states ``(delta_1, delta_1', ...)`` on their steady response to
+    ``a cos(2 pi f t + phase)`` at ``t = 0`` [m, m s^-1]: a run started there has no
+    mode transient."""
+    omega = 2.0 * math.pi * float(f)
+    out = np.empty(2 * len(disk.plates))
+    for i, plate in enumerate(disk.plates):
+        w0 = 2.0 * math.pi * plate.f0
+        amplitude = float(a) * math.cos(math.radians(plate.alpha)) / complex(
+            w0 * w0 - omega * omega, w0 * omega / plate.Q
+        )
+        rotating = amplitude * complex(math.cos(phase), math.sin(phase))
+        out[2 * i] = rotating.real
+        out[2 * i + 1] = (1j * omega * rotating).real
+    return out
+
+
+@dataclass(frozen=True)
+class PlanarTrajectory:
+    """A planar run: samples, events and how it ended.
+
+    Attributes
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    x, y : numpy.ndarray
+        Position of the disk's centre [m].
+    heading : numpy.ndarray
+        Heading, counterclockwise from the x axis, unwrapped [rad].
+    vx, vy : numpy.ndarray
+        Velocity [m s^-1].
+    spin : numpy.ndarray
+        Angular velocity [rad s^-1].
+    path : numpy.ndarray
+        Distance slid since the start [m].
+    plate_states : numpy.ndarray
+        ``(time, plate, 2)``: each plate's ``delta`` [m] and ``delta'`` [m s^-1].
+    slipping : numpy.ndarray
+        True where the disk slides at the sample.
+    event_time, event_kind : numpy.ndarray
+        Recorded events (kinds in :data:`EVENT_KINDS`).
+    outcome : str
+        One of :data:`OUTCOMES`' values; ``"lift_off"`` means the normal force fell
+        below zero at ``end_time`` (the model stops holding there).
+    end_time : float
+        Time the run reached [s].
+    steps, rejected_steps, slips : int
+        Work done.
+    heading_kicks : numpy.ndarray
+        Heading noise added at the end of each drive period [rad] (zeros without noise).
+    """
+
+    time: NDArray[np.float64]
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    heading: NDArray[np.float64]
+    vx: NDArray[np.float64]
+    vy: NDArray[np.float64]
+    spin: NDArray[np.float64]
+    path: NDArray[np.float64]
+    plate_states: NDArray[np.float64] = field(repr=False)
+    slipping: NDArray[np.bool_] = field(repr=False)
+    event_time: NDArray[np.float64] = field(repr=False)
+    event_kind: NDArray[np.int8] = field(repr=False)
+    outcome: str
+    end_time: float
+    steps: int
+    rejected_steps: int
+    slips: int
+    final_state: NDArray[np.float64] = field(repr=False)
+    heading_kicks: NDArray[np.float64] = field(repr=False)
+
+
+def _kick_times(schedule: Schedule) -> NDArray[np.float64]:
+    """End of every whole drive period of every segment (and each segment's end)."""
+    times = []
+    for start, end, f in zip(schedule.starts, schedule.ends, schedule.frequency, strict=True):
+        count = math.floor((end - start) * f * (1.0 + 1e-12))
+        times.append(start + np.arange(1, count + 1) / f)
+        times.append([end])
+    merged = np.unique(np.concatenate(times))
+    return merged[merged <= schedule.ends[-1]]
+
+
+def simulate_planar(
+    disk: Disk,
+    schedule: Schedule,
+    *,
+    initial_state: ArrayLike | None = None,
+    output_times: ArrayLike | None = None,
+    settings: IntegratorSettings | None = None,
+    heading_noise: float = 0.0,
+    rng: np.random.Generator | int | None = None,
+    max_events: int = 0,
+    slaving: float = SLAVING,
+) -> PlanarTrajectory:
+    """Integrate the planar model through a drive schedule.
+
+    Parameters
+    ----------
+    disk : Disk
+        The disk and its plates.
+    schedule : study.transient.Schedule
+        The drive; the run ends at the end of its last segment (or at lift-off).
+    initial_state : array_like, optional
+        ``(x [m], y [m], heading [rad], vx [m s^-1], vy [m s^-1], spin [rad s^-1],
+        path [m], delta_1 [m], delta_1' [m s^-1], ...)`` at ``t = 0``; default all
+        zero (at rest, plates at rest). With a non-zero twist the run starts sliding.
+    output_times : array_like, optional
+        Sorted sample times within the schedule [s]; default 16 per shortest drive
+        period.
+    settings : IntegratorSettings, optional
+        ``tolerance``, ``event_tolerance``, ``samples_per_step``, ``max_step`` and
+        ``max_steps`` apply (periods are the schedule's shortest); fixed steps are not
+        offered here.
+    heading_noise : float
+        Phenomenological heading diffusion [rad m^-1/2]: at the end of every drive
+        period the heading gets a Gaussian kick of variance ``heading_noise^2 * s``,
+        ``s`` the distance slid in that period. ``0.1 / sqrt(diameter)`` gives the
+        paper's measured drift of 0.1 rad per diameter travelled.
+    rng : numpy.random.Generator or int, optional
+        Source (or seed) of the heading kicks.
+    max_events : int
+        Events to record (0: none).
+    slaving : float
+        A slip that starts from rest moves along its slaved direction until its twist
+        exceeds ``slaving * ck * g / (2 pi f_max)`` [1]: this removes the stiffness of
+        the direction's relaxation (rate ``ck n / |u|``) at the cost of an error of
+        order ``slaving^1.5`` relative (see README, Steering). Exact for motion along
+        one axis.
+
+    Returns
+    -------
+    PlanarTrajectory
+    """
+    plates, disk_vector = disk_parameters(disk)
+    if not isinstance(schedule, Schedule):
+        raise TypeError(f"schedule must be a study.transient.Schedule, got {type(schedule)}")
+    settings = IntegratorSettings() if settings is None else settings
+    if settings.steps_per_period is not None:
+        raise ValueError("simulate_planar: fixed steps (steps_per_period) are not offered; "
+                         "set tolerance instead")
+    noise = _require_finite("heading_noise", heading_noise)
+    if noise < 0.0:
+        raise ValueError(f"heading_noise = {noise!r} [rad m^-1/2] must be >= 0")
+    size = len(_kernel_state_names(disk))
+    y = np.zeros(size) if initial_state is None else np.array(initial_state, dtype=float)
+    if y.shape != (size,) or not np.all(np.isfinite(y)):
+        raise ValueError(
+            f"initial_state must be {size} finite numbers ({', '.join(_kernel_state_names(disk))})"
+            f", got {initial_state!r}"
+        )
+    end = float(schedule.ends[-1])
+    shortest = float(1.0 / np.max(schedule.frequency))
+    if output_times is None:
+        out_t = np.linspace(0.0, end, max(2, math.ceil(end / shortest * 16) + 1))
+    else:
+        out_t = np.array(output_times, dtype=float).ravel()
+        if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
+            raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
+        if np.any(np.diff(out_t) < 0):
+            raise ValueError("output_times must be sorted")
+    omega = 2.0 * np.pi * schedule.frequency
+    scale = _scales(disk, float(np.max(omega)))
+    slaving = _require_finite("slaving", slaving)
+    if not 0.0 <= slaving < 1.0:
+        raise ValueError(f"slaving = {slaving!r} must be in [0, 1)")
+    disk_vector[_kernel.DK_SLAVED] = slaving * disk.ck * disk.g / float(np.max(omega))
+    moving = bool(np.any(y[[_kernel.VX, _kernel.VY, _kernel.SPIN]] != 0.0))
+    mode_box = np.array([_kernel.SLIP if moving else _kernel.STICK], dtype=np.int64)
+    t_box = np.array([0.0, settings.max_step * shortest])
+    out_y = np.empty((out_t.size, size))
+    out_mode = np.empty(out_t.size, dtype=np.int64)
+    out_box = np.zeros(1, dtype=np.int64)
+    capacity = max(int(max_events), 0)
+    ev_t = np.empty(capacity)
+    ev_kind = np.empty(capacity, dtype=np.int64)
+    ev_y = np.empty((capacity, size))
+    ev_box = np.zeros(1, dtype=np.int64)
+    stats = np.zeros(5)
+    stops = _kick_times(schedule) if noise > 0.0 else np.array([end])
+    kicks = np.zeros(stops.size)
+    generator = np.random.default_rng(rng) if noise > 0.0 else None
+    code = _kernel.RUN_DONE
+    for j, stop in enumerate(stops):
+        path_before = y[_kernel.PATH]
+        code = _kernel._integrate(
+            plates, disk_vector, schedule.starts, omega, schedule.acceleration,
+            schedule.start_phases, schedule.ends, y, mode_box, t_box, float(stop),
+            settings.tolerance, settings.tolerance, scale, settings.max_step * shortest,
+            settings.event_tolerance * shortest, settings.samples_per_step,
+            settings.max_steps, out_t, out_y, out_mode, out_box, ev_t, ev_kind, ev_y,
+            ev_box, stats,
+        )
+        if code != _kernel.RUN_DONE:
+            break
+        if generator is not None:
+            slid = y[_kernel.PATH] - path_before
+            kicks[j] = noise * math.sqrt(slid) * generator.standard_normal()
+            y[_kernel.HEADING] += kicks[j]
+    m = int(out_box[0])
+    e = min(int(ev_box[0]), capacity)
+    states = out_y[:m]
+    return PlanarTrajectory(
+        time=out_t[:m].copy(),
+        x=states[:, _kernel.X].copy(),
+        y=states[:, _kernel.Y].copy(),
+        heading=states[:, _kernel.HEADING].copy(),
+        vx=states[:, _kernel.VX].copy(),
+        vy=states[:, _kernel.VY].copy(),
+        spin=states[:, _kernel.SPIN].copy(),
+        path=states[:, _kernel.PATH].copy(),
+        plate_states=states[:, _kernel.MODES:].reshape(m, len(disk.plates), 2).copy(),
+        slipping=out_mode[:m] != _kernel.STICK,
+        event_time=ev_t[:e].copy(),
+        event_kind=ev_kind[:e].astype(np.int8),
+        outcome=OUTCOMES[int(code)],
+        end_time=float(t_box[0]),
+        steps=int(stats[0]),
+        rejected_steps=int(stats[1]),
+        slips=int(stats[2]),
+        final_state=y.copy(),
+        heading_kicks=kicks,
+    )
+
+
+def _kernel_state_names(disk: Disk) -> tuple[str, ...]:
+    names: list[str] = list(POSE_STATE)
+    for plate in disk.plates:
+        names += [f"delta_{plate.name}", f"delta_rate_{plate.name}"]
+    return tuple(names)
+
+
+def state_names(disk: Disk) -> tuple[str, ...]:
+    """Names of the components of a planar state vector."""
+    return _kernel_state_names(disk)
+
+
+def describe_disk(disk: Disk) -> dict[str, Any]:
+    """The disk's parameters as plain numbers (for provenance)."""
+    return {
+        "radius": disk.radius, "cs": disk.cs, "ck": disk.ck, "g": disk.g,
+        "gyration_radius": disk.gyration_radius, "friction_length": disk.friction_length,
+        "plates": [
+            {"name": p.name, "f0": p.f0, "Q": p.Q, "alpha": p.alpha, "M": p.M,
+             "direction": p.direction, "attachment": list(p.attachment)}
+            for p in disk.plates
+        ],
+    }
+
+
+@dataclass(frozen=True)
+class PeriodicMotion:
+    """Steady motion of the disk under a constant drive, per drive period.
+
+    The motion is periodic in the body frame (friction is isotropic and the plates
+    turn with the disk), so the pose advances by the same body-frame displacement
+    every period once the orbit is reached.
+
+    Attributes
+    ----------
+    forward_speed, lateral_speed : float
+        Mean velocity along the heading and to its left, in the body frame at the
+        period's start [m s^-1].
+    turn_rate : float
+        Mean angular velocity, counterclockwise positive [rad s^-1].
+    status : int
+        A :class:`study.status.Status` code.
+    reason : int
+        A :class:`study.status.Reason` code (why not converged).
+    periods : int
+        Drive periods integrated.
+    slips_per_period : float
+        Slips starting in the last period.
+    stuck_fraction : float
+        Fraction of the last period spent stuck [1].
+    """
+
+    forward_speed: float
+    lateral_speed: float
+    turn_rate: float
+    status: int
+    reason: int
+    periods: int
+    slips_per_period: float
+    stuck_fraction: float
+
+
+def periodic_motion(
+    disk: Disk,
+    f: float,
+    a: float,
+    *,
+    settings: IntegratorSettings | None = None,
+    max_periods: int = 400,
+    repeat_tolerance: float = 1e-8,
+    slaving: float = SLAVING,
+) -> PeriodicMotion:
+    """Steady forward, lateral and turning speed under the drive ``a cos(2 pi f t)``.
+
+    The plates start on their steady response (no mode transient to wait for) and the
+    disk at rest; whole periods are integrated until the body-frame displacement per
+    period and the body-frame twist at the period's end repeat within
+    ``repeat_tolerance`` (in units of ``g / w^2`` and ``g / w``).
+
+    Parameters
+    ----------
+    disk : Disk
+    f : float
+        Drive frequency [Hz].
+    a : float
+        Drive acceleration amplitude [m s^-2].
+    settings : IntegratorSettings, optional
+        Integrator accuracy (default tolerance 1e-10).
+    max_periods : int
+        Budget; beyond it the status is ``NOT_CONVERGED``.
+    repeat_tolerance : float
+        Periodicity test [1].
+    slaving : float
+        See :func:`simulate_planar`.
+
+    Returns
+    -------
+    PeriodicMotion
+    """
+    from study.status import NonConvergence as Reason
+    from study.status import Status
+
+    plates, disk_vector = disk_parameters(disk)
+    settings = IntegratorSettings() if settings is None else settings
+    f = _require_finite("f", f)
+    a = _require_finite("a", a)
+    if f <= 0.0 or a < 0.0:
+        raise ValueError(f"periodic_motion: need f > 0 [Hz] and a >= 0 [m s^-2], got {f}, {a}")
+    omega = 2.0 * math.pi * f
+    period = 1.0 / f
+    disk_vector[_kernel.DK_SLAVED] = slaving * disk.ck * disk.g / omega
+    scale = _scales(disk, omega)
+    size = scale.size
+    y = np.zeros(size)
+    y[_kernel.MODES:] = steady_plate_states(disk, f, a)
+    seg = (np.zeros(1), np.full(1, omega), np.full(1, float(a)), np.zeros(1), np.full(1, np.inf))
+    mode_box = np.zeros(1, dtype=np.int64)
+    t_box = np.array([0.0, settings.max_step * period])
+    empty_t = np.empty(0)
+    empty_y = np.empty((0, size))
+    empty_i = np.empty(0, dtype=np.int64)
+    box = np.zeros(1, dtype=np.int64)
+    previous = None
+    length_unit = disk.g / omega**2
+    speed_unit = disk.g / omega
+    for count in range(1, max_periods + 1):
+        start = y.copy()
+        stats = np.zeros(5)
+        # Time restarts each period (phase 2 pi k is phase 0): no loss of precision.
+        t_box[0] = 0.0
+        code = _kernel._integrate(
+            plates, disk_vector, *seg, y, mode_box, t_box, period,
+            settings.tolerance, settings.tolerance, scale, settings.max_step * period,
+            settings.event_tolerance * period, settings.samples_per_step, settings.max_steps,
+            empty_t, empty_y, empty_i, box, empty_t, empty_i, empty_y, box, stats,
+        )
+        if code == _kernel.RUN_LIFT_OFF:
+            return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.LIFT_OFF),
+                                  int(Reason.NONE), count, math.nan, math.nan)
+        if code != _kernel.RUN_DONE:
+            return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
+                                  int(Reason.EVENT_BUDGET), count, math.nan, math.nan)
+        heading = start[_kernel.HEADING]
+        c, s = math.cos(heading), math.sin(heading)
+        dx = y[_kernel.X] - start[_kernel.X]
+        dy = y[_kernel.Y] - start[_kernel.Y]
+        body = np.array([
+            c * dx + s * dy, -s * dx + c * dy, y[_kernel.HEADING] - heading,
+            c * y[_kernel.VX] + s * y[_kernel.VY], -s * y[_kernel.VX] + c * y[_kernel.VY],
+            y[_kernel.SPIN],
+        ])
+        units = np.array([length_unit, length_unit, length_unit / disk.radius,
+                          speed_unit, speed_unit, speed_unit / disk.radius])
+        if previous is not None and np.all(np.abs(body - previous) <= repeat_tolerance * units):
+            stuck = stats[3] / period
+            if stats[2] == 0 and np.all(body[:3] == 0.0):
+                status = Status.STATIC
+            elif stuck > 0.0:
+                status = Status.STICK_SLIP
+            else:
+                status = Status.CONTINUOUS_SLIDING
+            return PeriodicMotion(
+                float(body[0] * f), float(body[1] * f), float(body[2] * f), int(status),
+                int(Reason.NONE), count, float(stats[2]), float(stuck),
+            )
+        previous = body
+    return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
+                          int(Reason.NO_PERIODIC_ORBIT), max_periods, math.nan, math.nan)
