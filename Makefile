@@ -1,5 +1,6 @@
 # study: make-driven parameter studies of stick-slip locomotion.
 #   make            run every workflow whose spec or package changed: results/<name>.nc
+#                   (parameter studies and the steering scenes alike)
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
 #   make test       set up .venv on a fresh machine, lint, run the test suite
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc
@@ -34,7 +35,8 @@ $(STAMP): pyproject.toml
 
 # Figures, each redrawn from its result file alone: figures/NAME.png and .pdf.
 FIGURES := thresholds velocity-curves regime-map force-traces mass-ratio \
-           threshold-collapse mass-ratio-limit coupling
+           threshold-collapse mass-ratio-limit coupling \
+           steering steering-calibration steering-plan
 figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 
 figures/thresholds.png: results/thresholds.nc
@@ -45,6 +47,9 @@ figures/mass-ratio.png: results/mass-ratio.nc
 figures/threshold-collapse.png: results/threshold-collapse.nc
 figures/mass-ratio-limit.png: results/mass-ratio-limit.nc
 figures/coupling.png: results/coupling.nc
+figures/steering.png: results/steering.nc
+figures/steering-calibration.png: results/steering-calibration.nc
+figures/steering-plan.png: results/steering-plan.nc
 figures/%.png: $(PACKAGE) | $(STAMP)
 	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*
 

@@ -14,10 +14,26 @@ from pathlib import Path
 __all__ = ["main"]
 
 
+def _run_scene(args: argparse.Namespace) -> int:
+    from study.scene import load_scene, run_scene
+
+    spec = load_scene(args.spec)
+    output = args.output or Path("results") / f"{Path(args.spec).stem}.nc"
+    path, up_to_date, wall = run_scene(spec, output, force=args.force)
+    if up_to_date:
+        print(f"{path}: up to date (scene and code unchanged)")
+    else:
+        print(f"{path}: {spec.kind} scene computed in {wall:.2f} s")
+    return 0
+
+
 def _run(args: argparse.Namespace) -> int:
     from study.runner import StudyBusy, StudyInterrupted, run_study
+    from study.scene import is_scene_file
     from study.spec import load_spec
 
+    if is_scene_file(args.spec):
+        return _run_scene(args)
     spec = load_spec(args.spec)
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
     try:
@@ -83,6 +99,7 @@ def _figure(args: argparse.Namespace) -> int:
 
 def _list(args: argparse.Namespace) -> int:
     from study.runner import is_up_to_date, partial_folder
+    from study.scene import is_scene_file, load_scene, scene_up_to_date
     from study.spec import SpecError, load_spec
 
     specs = sorted(Path(args.workflows).glob("*.toml"))
@@ -91,6 +108,16 @@ def _list(args: argparse.Namespace) -> int:
         return 0
     for path in specs:
         output = Path(args.results) / f"{path.stem}.nc"
+        if is_scene_file(path):
+            try:
+                scene = load_scene(path)
+            except SpecError as err:
+                print(f"{path}: INVALID SPEC: {str(err).splitlines()[0]}")
+                continue
+            state = ("up to date" if scene_up_to_date(scene, output)
+                     else "out of date" if output.exists() else "not run")
+            print(f"{path}  ->  {output}: {state}")
+            continue
         try:
             spec = load_spec(path)
         except SpecError as err:

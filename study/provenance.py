@@ -22,6 +22,8 @@ __all__ = [
     "fingerprint",
     "git_state",
     "package_version",
+    "scene_code_sha256",
+    "scene_fingerprint",
     "utc_now",
 ]
 
@@ -57,6 +59,35 @@ def code_sha256() -> str:
         digest.update(name.encode() + b"\0")
         digest.update((PACKAGE_DIR / name).read_bytes())
     return digest.hexdigest()
+
+
+# Modules whose source decides the numbers of a steering scene (study.scene).
+_SCENE_SOURCES = (
+    "status.py",
+    "transient.py",
+    "planar.py",
+    "kernels/transient.py",
+    "kernels/planar.py",
+    "planner.py",
+    "scene.py",
+)
+
+
+@cache
+def scene_code_sha256() -> str:
+    """Hash of the source of every module that computes steering scenes."""
+    from study.planar import PLANAR_VERSION
+
+    digest = hashlib.sha256(f"planar-version={PLANAR_VERSION}\n".encode())
+    for name in _SCENE_SOURCES:
+        digest.update(name.encode() + b"\0")
+        digest.update((PACKAGE_DIR / name).read_bytes())
+    return digest.hexdigest()
+
+
+def scene_fingerprint(spec_sha256: str) -> str:
+    """What a scene result depends on: the canonical scene spec and its code."""
+    return hashlib.sha256(f"{spec_sha256}:{scene_code_sha256()}".encode()).hexdigest()
 
 
 def fingerprint(spec_sha256: str) -> str:

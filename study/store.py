@@ -39,6 +39,9 @@ __all__ = [
 
 RESULT_SCHEMA = "study-result-v1"
 RESULT_SCHEMA_PATH = SPEC_SCHEMA_PATH.parent / f"{RESULT_SCHEMA}.schema.json"
+#: Result files of steering scenes (study.scene): trajectories, calibrations, plans.
+SCENE_SCHEMA = "study-scene-v1"
+SCENE_SCHEMA_PATH = SPEC_SCHEMA_PATH.parent / f"{SCENE_SCHEMA}.schema.json"
 
 #: units, long_name (and more) of every data variable a study can write.
 VARIABLE_ATTRS: dict[str, dict[str, Any]] = {
@@ -316,6 +319,9 @@ def validate_dataset(dataset: xr.Dataset, source: str = "dataset") -> None:
             f"{source}: not a study result file (no 'study_result_schema' attribute; "
             f"global attributes: {', '.join(sorted(attrs)) or 'none'})"
         )
+    if attrs["study_result_schema"] == SCENE_SCHEMA:
+        _validate_scene(dataset, source)
+        return
     if attrs["study_result_schema"] != RESULT_SCHEMA:
         raise ResultError(
             f"{source}: written with result schema {attrs['study_result_schema']!r}; this "
@@ -366,6 +372,36 @@ def validate_dataset(dataset: xr.Dataset, source: str = "dataset") -> None:
     if problems:
         problems = list(dict.fromkeys(problems))  # two schema branches may see one fault
         raise ResultError(f"{source}: invalid study result:\n  " + "\n  ".join(problems))
+
+
+def _validate_scene(dataset: xr.Dataset, source: str) -> None:
+    """Check a steering-scene result against its schema and its embedded spec."""
+    import jsonschema
+
+    from study.scene import SceneError, parse_scene
+
+    schema = json.loads(SCENE_SCHEMA_PATH.read_text())
+    validator = jsonschema.Draft202012Validator(schema)
+    problems = [
+        f"{'/'.join(map(str, e.absolute_path)) or 'file'}: {e.message}"
+        for e in sorted(validator.iter_errors(header(dataset)), key=lambda e: str(e.path))
+    ]
+    attrs = dataset.attrs
+    if not problems:
+        try:
+            spec = parse_scene(str(attrs["study_spec"]), f"{source} (embedded spec)")
+        except SceneError as err:
+            problems.append(f"embedded spec: {err}")
+        else:
+            if spec.sha256 != attrs["study_spec_sha256"]:
+                problems.append("study_spec_sha256 does not match the embedded spec")
+            if spec.kind != attrs["study_scene_kind"]:
+                problems.append("study_scene_kind does not match the embedded spec")
+    for name, var in dataset.data_vars.items():
+        if var.dtype.kind == "f" and "units" not in var.attrs:
+            problems.append(f"{name} has no units")
+    if problems:
+        raise ResultError(f"{source}: invalid steering scene result:\n  " + "\n  ".join(problems))
 
 
 def open_result(path: str | Path) -> xr.Dataset:
@@ -552,6 +588,9 @@ def describe(dataset: xr.Dataset, path: str = "") -> str:
             lines.append(f"  dim {name:>7}: {size:6d}")
             continue
         coord = dataset[name]
+        if coord.dtype.kind in "USO":
+            lines.append(f"  axis {name:>6}: {', '.join(map(str, coord.values))}")
+            continue
         lines.append(
             f"  axis {name:>6}: {size:6d} values, {float(coord.min()):.6g} .. "
             f"{float(coord.max()):.6g} {coord.attrs.get('units', '')}"

@@ -1,0 +1,334 @@
+"""Waypoint planner for the steering disk: frequency schedules from the calibration.
+
+The calibration gives, for each command (a drive frequency at the operating
+acceleration), the disk's steady body-frame motion: forward and lateral speed and
+turn rate. Under a constant command the disk moves along a circular arc, so where a
+segment ends is known in closed form (:func:`arc_displacement`). A leg to a waypoint
+is one turn (left or right command) and one straight command (forward or backward),
+the pair chosen to take the least time; the turn's duration and the straight
+command's duration are solved so that the predicted arc ends on the waypoint.
+
+Past the paper: the paper steers by hand. Between command switches the plate modes
+go through transients the calibration does not know, and the measured heading drift
+is random; :func:`run_plan` shows how much both cost by simulating the schedule.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from study.planar import Disk, PeriodicMotion, periodic_motion, simulate_planar
+from study.status import Status
+from study.transient import IntegratorSettings, Schedule
+
+__all__ = [
+    "COMMANDS",
+    "Command",
+    "Leg",
+    "PlanRun",
+    "arc_displacement",
+    "calibrate_commands",
+    "plan_leg",
+    "plan_route",
+    "run_plan",
+]
+
+#: Command names: the two straight commands and the two turns.
+COMMANDS = ("forward", "backward", "left", "right")
+
+
+@dataclass(frozen=True)
+class Command:
+    """One drive command and the steady motion it produces.
+
+    Attributes
+    ----------
+    name : str
+    frequency : float
+        Drive frequency [Hz].
+    acceleration : float
+        Drive acceleration amplitude [m s^-2].
+    forward_speed, lateral_speed : float
+        Steady body-frame velocity [m s^-1].
+    turn_rate : float
+        Steady angular velocity, counterclockwise positive [rad s^-1].
+    """
+
+    name: str
+    frequency: float
+    acceleration: float
+    forward_speed: float
+    lateral_speed: float
+    turn_rate: float
+
+
+@dataclass(frozen=True)
+class Leg:
+    """A planned leg: a turn then a straight command, and the predicted pose after it."""
+
+    turn: str
+    turn_duration: float
+    straight: str
+    straight_duration: float
+    predicted_pose: tuple[float, float, float]
+
+
+class PlanError(ValueError):
+    """The commands cannot reach a waypoint (e.g. a command does not move the disk)."""
+
+
+def calibrate_commands(disk: Disk, frequencies: dict[str, float], acceleration: float,
+                       settings: IntegratorSettings | None = None) -> dict[str, Command]:
+    """Steady motion of each command from the model (:func:`study.planar.periodic_motion`).
+
+    Raises
+    ------
+    PlanError
+        If a command's point is outside the model (lift-off, no periodic orbit) or
+        does not do its job (a straight command that does not translate, a turn that
+        does not turn, two turns the same way).
+    """
+    commands = {}
+    for name in COMMANDS:
+        if name not in frequencies:
+            raise PlanError(f"no frequency for command {name!r}; commands: {COMMANDS}")
+        motion: PeriodicMotion = periodic_motion(disk, frequencies[name], acceleration,
+                                                 settings=settings)
+        if motion.status not in (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING):
+            raise PlanError(
+                f"command {name!r} ({frequencies[name]} Hz, {acceleration} m s^-2) does not "
+                f"move the disk: status {Status(motion.status).name}"
+            )
+        commands[name] = Command(name, float(frequencies[name]), float(acceleration),
+                                 motion.forward_speed, motion.lateral_speed, motion.turn_rate)
+    if commands["forward"].forward_speed <= 0.0 or commands["backward"].forward_speed >= 0.0:
+        raise PlanError(
+            "the forward command must move the disk forward and the backward command "
+            f"backward; calibrated speeds {commands['forward'].forward_speed:.3g} and "
+            f"{commands['backward'].forward_speed:.3g} m s^-1"
+        )
+    if commands["left"].turn_rate <= 0.0 or commands["right"].turn_rate >= 0.0:
+        raise PlanError(
+            "the left command must turn the disk counterclockwise and the right command "
+            f"clockwise; calibrated turn rates {commands['left'].turn_rate:.3g} and "
+            f"{commands['right'].turn_rate:.3g} rad s^-1"
+        )
+    return commands
+
+
+def arc_displacement(command: Command, duration: float) -> tuple[float, float, float]:
+    """Body-frame displacement ``(forward [m], left [m], turn [rad])`` after holding a
+    command for ``duration`` [s] (a circular arc at constant body-frame velocity)."""
+    turn = command.turn_rate * duration
+    u, v = command.forward_speed, command.lateral_speed
+    if abs(turn) < 1e-9:
+        # Series of the arc for a tiny turn (avoids 0/0).
+        return (duration * (u - v * turn / 2.0), duration * (v + u * turn / 2.0), turn)
+    s, c = math.sin(turn), 1.0 - math.cos(turn)
+    w = command.turn_rate
+    return ((u * s - v * c) / w, (u * c + v * s) / w, turn)
+
+
+def _advance(pose: tuple[float, float, float], command: Command, duration: float
+             ) -> tuple[float, float, float]:
+    forward, left, turn = arc_displacement(command, duration)
+    x, y, heading = pose
+    c, s = math.cos(heading), math.sin(heading)
+    return (x + c * forward - s * left, y + s * forward + c * left, heading + turn)
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def _straight_time(command: Command, distance: float) -> float:
+    """Time for the command's arc to reach ``distance`` from its start [s]."""
+    speed = math.hypot(command.forward_speed, command.lateral_speed)
+    guess = distance / speed
+    if abs(command.turn_rate) < 1e-12:
+        return guess
+    # The chord 2 (speed / w) |sin(w t / 2)| grows with t up to half a circle.
+    ratio = distance * abs(command.turn_rate) / (2.0 * speed)
+    if ratio >= 1.0:
+        raise PlanError(
+            f"the {command.name!r} command veers on a circle of diameter "
+            f"{2 * speed / abs(command.turn_rate):.3g} m and cannot reach {distance:.3g} m"
+        )
+    return 2.0 * math.asin(ratio) / abs(command.turn_rate)
+
+
+def _single_leg(pose: tuple[float, float, float], target: tuple[float, float],
+                commands: dict[str, Command], iterations: int) -> Leg | None:
+    """The fastest turn-then-straight pair from ``pose`` to ``target`` (None if no
+    straight command's arc reaches it)."""
+    best: Leg | None = None
+    best_time = math.inf
+    for straight in ("forward", "backward"):
+        command = commands[straight]
+        turn_name, turn_duration = "left", 0.0
+        start = pose
+        try:
+            for _ in range(iterations):
+                dx, dy = target[0] - start[0], target[1] - start[1]
+                duration = _straight_time(command, math.hypot(dx, dy))
+                forward, left, _ = arc_displacement(command, duration)
+                # Heading at which the arc from `start` ends on the target.
+                heading_needed = math.atan2(dy, dx) - math.atan2(left, forward)
+                change = _wrap(heading_needed - pose[2])
+                turn_name = "left" if change >= 0.0 else "right"
+                turn_duration = change / commands[turn_name].turn_rate
+                start = _advance(pose, commands[turn_name], turn_duration)
+        except PlanError:
+            continue
+        total = turn_duration + duration
+        if total < best_time:
+            best_time = total
+            best = Leg(turn_name, turn_duration, straight, duration,
+                       _advance(start, command, duration))
+    return best
+
+
+def plan_leg(pose: tuple[float, float, float], target: tuple[float, float],
+             commands: dict[str, Command], iterations: int = 8) -> list[Leg]:
+    """Turn-then-straight pairs from ``pose`` to ``target`` under the calibration.
+
+    A straight command veers (the plates are not perfectly aligned in their effect):
+    its path is an arc of a circle, so a target farther than a third of that circle's
+    diameter is approached through intermediate points on the line to it, each
+    reached by its own fastest pair.
+    """
+    forward = commands["forward"]
+    diameter = 2.0 * math.hypot(forward.forward_speed, forward.lateral_speed) / max(
+        abs(forward.turn_rate), 1e-300)
+    reach = diameter / 3.0
+    legs: list[Leg] = []
+    for _ in range(10_000):
+        dx, dy = target[0] - pose[0], target[1] - pose[1]
+        distance = math.hypot(dx, dy)
+        step = min(1.0, reach / distance) if distance > 0.0 else 1.0
+        point = (pose[0] + step * dx, pose[1] + step * dy)
+        leg = _single_leg(pose, point, commands, iterations)
+        if leg is None:
+            raise PlanError(f"no command reaches {point} from {pose[:2]}")
+        legs.append(leg)
+        pose = leg.predicted_pose
+        if step == 1.0:
+            return legs
+    raise PlanError(f"target {target} not reached in 10000 legs")
+
+
+def plan_route(start: tuple[float, float, float], waypoints: NDArray[np.float64],
+               commands: dict[str, Command]) -> list[list[Leg]]:
+    """Legs to every waypoint in turn, each planned from the previous prediction."""
+    route = []
+    pose = start
+    for target in np.asarray(waypoints, dtype=float):
+        legs = plan_leg(pose, (float(target[0]), float(target[1])), commands)
+        route.append(legs)
+        pose = legs[-1].predicted_pose
+    return route
+
+
+def _schedule(legs: list[Leg], commands: dict[str, Command], minimum: float,
+              phase: float = 0.0) -> tuple[Schedule | None, list[str]]:
+    frequency, acceleration, duration, labels = [], [], [], []
+    for leg in legs:
+        for name, span in ((leg.turn, leg.turn_duration), (leg.straight, leg.straight_duration)):
+            if span <= minimum:
+                continue
+            frequency.append(commands[name].frequency)
+            acceleration.append(commands[name].acceleration)
+            duration.append(span)
+            labels.append(name)
+    if not labels:
+        return None, labels
+    return Schedule(np.array(frequency), np.array(acceleration), np.array(duration),
+                    phase), labels
+
+
+@dataclass(frozen=True)
+class PlanRun:
+    """A simulated plan: the path, where each leg ended and the schedule flown."""
+
+    time: NDArray[np.float64]
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    heading: NDArray[np.float64]
+    leg_end: NDArray[np.float64]  # (waypoint, 2) position at each leg's end [m]
+    miss_distance: NDArray[np.float64]  # (waypoint,) [m]
+    schedule: Schedule
+    labels: list[str]
+    outcome: str
+
+
+def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[np.float64],
+             commands: dict[str, Command], *, feedback: bool = False,
+             heading_noise: float = 0.0, seed: int | None = None,
+             settings: IntegratorSettings | None = None, sample_interval: float = 0.05,
+             ) -> PlanRun:
+    """Simulate a route: open loop (the whole plan flown blind) or with feedback.
+
+    With ``feedback`` each leg is re-planned from the simulated pose at the end of the
+    previous one (an operator who watches the disk between legs); without, the legs
+    planned from the start are flown as they are.
+
+    Parameters
+    ----------
+    heading_noise : float
+        Heading diffusion [rad m^-1/2] (see :func:`study.planar.simulate_planar`).
+    sample_interval : float
+        Spacing of the returned path samples [s].
+    """
+    waypoints = np.asarray(waypoints, dtype=float)
+    rng = np.random.default_rng(seed)
+    minimum = 1e-6
+    pose = tuple(float(v) for v in start)
+    state = np.zeros(7 + 2 * len(disk.plates))
+    state[:3] = pose
+    time_offset = 0.0
+    phase = 0.0
+    times, xs, ys, headings = [np.zeros(1)], [np.array([pose[0]])], [np.array([pose[1]])], \
+        [np.array([pose[2]])]
+    leg_end = np.empty((len(waypoints), 2))
+    planned = plan_route(pose, waypoints, commands)
+    frequencies, accelerations, durations, labels = [], [], [], []
+    outcome = "completed"
+    for i, target in enumerate(waypoints):
+        legs = plan_leg(pose, (target[0], target[1]), commands) if feedback else planned[i]
+        schedule, leg_labels = _schedule(legs, commands, minimum, phase)
+        if schedule is None:  # already there
+            leg_end[i] = pose[:2]
+            continue
+        end = float(schedule.ends[-1])
+        phase = float(schedule.start_phases[-1]
+                      + 2.0 * math.pi * schedule.frequency[-1] * schedule.duration[-1])
+        grid = np.arange(0.0, end, sample_interval)
+        out_t = np.append(grid, end)
+        # The table's phase and the plate modes carry over from leg to leg.
+        run = simulate_planar(disk, schedule, initial_state=state, output_times=out_t,
+                              settings=settings, heading_noise=heading_noise, rng=rng)
+        times.append(time_offset + run.time[1:])
+        xs.append(run.x[1:])
+        ys.append(run.y[1:])
+        headings.append(run.heading[1:])
+        state = run.final_state.copy()
+        state[6] = 0.0  # path length is per leg
+        pose = (float(state[0]), float(state[1]), float(state[2]))
+        leg_end[i] = pose[:2]
+        time_offset += run.end_time
+        frequencies += list(schedule.frequency)
+        accelerations += list(schedule.acceleration)
+        durations += list(schedule.duration)
+        labels += leg_labels
+        if run.outcome != "completed":
+            outcome = run.outcome
+            leg_end[i + 1:] = np.nan
+            break
+    miss = np.hypot(leg_end[:, 0] - waypoints[:, 0], leg_end[:, 1] - waypoints[:, 1])
+    flown = Schedule(np.array(frequencies), np.array(accelerations), np.array(durations))
+    return PlanRun(np.concatenate(times), np.concatenate(xs), np.concatenate(ys),
+                   np.concatenate(headings), leg_end, miss, flown, labels, outcome)
