@@ -27,13 +27,16 @@ from study.transient import IntegratorSettings, Schedule
 
 __all__ = [
     "COMMANDS",
+    "STRATEGIES",
     "Command",
     "Leg",
+    "PlanError",
     "PlanRun",
     "arc_displacement",
     "calibrate_commands",
     "plan_leg",
     "plan_route",
+    "refined_legs",
     "run_plan",
 ]
 
@@ -252,7 +255,8 @@ def _schedule(legs: list[Leg], commands: dict[str, Command], minimum: float,
 
 @dataclass(frozen=True)
 class PlanRun:
-    """A simulated plan: the path, where each leg ended and the schedule flown."""
+    """A simulated plan: the path, where each leg ended (NaN for legs never flown: the
+    run stopped, see ``outcome``), the distance missed and the schedule flown."""
 
     time: NDArray[np.float64]
     x: NDArray[np.float64]
@@ -260,54 +264,121 @@ class PlanRun:
     heading: NDArray[np.float64]
     leg_end: NDArray[np.float64]  # (waypoint, 2) position at each leg's end [m]
     miss_distance: NDArray[np.float64]  # (waypoint,) [m]
-    schedule: Schedule
+    schedule: Schedule | None
     labels: list[str]
     outcome: str
 
 
+STRATEGIES = ("calibration", "open_loop", "closed_loop")
+
+#: Below this a planned segment is dropped [s].
+_SHORTEST = 1e-6
+
+
+def _end_phase(schedule: Schedule) -> float:
+    return float(schedule.start_phases[-1]
+                 + 2.0 * math.pi * schedule.frequency[-1] * schedule.duration[-1])
+
+
+def refined_legs(disk: Disk, state: NDArray[np.float64], phase: float,
+                 target: tuple[float, float], commands: dict[str, Command],
+                 settings: IntegratorSettings | None = None, iterations: int = 5,
+                 tolerance: float = 1e-4) -> list[Leg]:
+    """Legs to ``target`` corrected by simulating the model itself.
+
+    The calibration knows only steady motion; after a command switch the plate modes
+    ring (beating at ``|f - f0|``, decaying over ``2 Q / w0``) and the disk moves
+    differently. Each iteration flies the legs in the noise-free model from ``state``
+    and moves the aim point by the miss, until the miss is below ``tolerance`` [m].
+    """
+    pose = (float(state[0]), float(state[1]), float(state[2]))
+    aim = np.array(target, dtype=float)
+    legs = plan_leg(pose, (aim[0], aim[1]), commands)
+    for _ in range(iterations):
+        schedule, _ = _schedule(legs, commands, _SHORTEST, phase)
+        if schedule is None:
+            break
+        run = simulate_planar(disk, schedule, initial_state=state,
+                              output_times=[float(schedule.ends[-1])], settings=settings)
+        if run.outcome != "completed":
+            break
+        miss = run.final_state[:2] - np.asarray(target)
+        if math.hypot(miss[0], miss[1]) <= tolerance:
+            break
+        aim = aim - miss
+        legs = plan_leg(pose, (aim[0], aim[1]), commands)
+    return legs
+
+
 def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[np.float64],
-             commands: dict[str, Command], *, feedback: bool = False,
+             commands: dict[str, Command], *, strategy: str = "closed_loop",
              heading_noise: float = 0.0, seed: int | None = None,
              settings: IntegratorSettings | None = None, sample_interval: float = 0.05,
-             ) -> PlanRun:
-    """Simulate a route: open loop (the whole plan flown blind) or with feedback.
+             iterations: int = 5) -> PlanRun:
+    """Simulate a route flown by one of three strategies.
 
-    With ``feedback`` each leg is re-planned from the simulated pose at the end of the
-    previous one (an operator who watches the disk between legs); without, the legs
-    planned from the start are flown as they are.
+    ``"calibration"``: the legs planned from the calibration alone, flown blind.
+    ``"open_loop"``: the legs corrected by simulating the noise-free model
+    (:func:`refined_legs`), flown blind. ``"closed_loop"``: each leg planned and
+    corrected from the pose actually reached at the previous waypoint (an operator
+    who looks at the disk between legs).
 
     Parameters
     ----------
     heading_noise : float
-        Heading diffusion [rad m^-1/2] (see :func:`study.planar.simulate_planar`).
+        Heading diffusion of the flown run [rad m^-1/2] (see
+        :func:`study.planar.simulate_planar`); the planner's own simulations are
+        noise-free.
     sample_interval : float
         Spacing of the returned path samples [s].
+    iterations : int
+        Correction iterations of :func:`refined_legs`.
     """
+    if strategy not in STRATEGIES:
+        raise ValueError(f"strategy {strategy!r} unknown; allowed: {', '.join(STRATEGIES)}")
     waypoints = np.asarray(waypoints, dtype=float)
     rng = np.random.default_rng(seed)
-    minimum = 1e-6
     pose = tuple(float(v) for v in start)
     state = np.zeros(7 + 2 * len(disk.plates))
     state[:3] = pose
+    planned: list[list[Leg]] = []
+    if strategy == "calibration":
+        planned = plan_route(pose, waypoints, commands)
+    elif strategy == "open_loop":
+        # The whole route corrected in the noise-free model, before flying any of it.
+        ghost, phase = state.copy(), 0.0
+        for target in waypoints:
+            legs = refined_legs(disk, ghost, phase, (target[0], target[1]), commands,
+                                settings, iterations)
+            planned.append(legs)
+            schedule, _ = _schedule(legs, commands, _SHORTEST, phase)
+            if schedule is not None:
+                run = simulate_planar(disk, schedule, initial_state=ghost,
+                                      output_times=[float(schedule.ends[-1])],
+                                      settings=settings)
+                ghost = run.final_state.copy()
+                ghost[6] = 0.0
+                phase = _end_phase(schedule)
     time_offset = 0.0
     phase = 0.0
     times, xs, ys, headings = [np.zeros(1)], [np.array([pose[0]])], [np.array([pose[1]])], \
         [np.array([pose[2]])]
-    leg_end = np.empty((len(waypoints), 2))
-    planned = plan_route(pose, waypoints, commands)
+    leg_end = np.full((len(waypoints), 2), np.nan)
     frequencies, accelerations, durations, labels = [], [], [], []
     outcome = "completed"
     for i, target in enumerate(waypoints):
-        legs = plan_leg(pose, (target[0], target[1]), commands) if feedback else planned[i]
-        schedule, leg_labels = _schedule(legs, commands, minimum, phase)
+        if strategy == "closed_loop":
+            legs = refined_legs(disk, state, phase, (target[0], target[1]), commands, settings,
+                                iterations)
+        else:
+            legs = planned[i]
+        schedule, leg_labels = _schedule(legs, commands, _SHORTEST, phase)
         if schedule is None:  # already there
             leg_end[i] = pose[:2]
             continue
         end = float(schedule.ends[-1])
-        phase = float(schedule.start_phases[-1]
-                      + 2.0 * math.pi * schedule.frequency[-1] * schedule.duration[-1])
-        grid = np.arange(0.0, end, sample_interval)
-        out_t = np.append(grid, end)
+        phase = _end_phase(schedule)
+        out_t = np.append(np.arange(0.0, end, sample_interval), end)
         # The table's phase and the plate modes carry over from leg to leg.
         run = simulate_planar(disk, schedule, initial_state=state, output_times=out_t,
                               settings=settings, heading_noise=heading_noise, rng=rng)
@@ -318,7 +389,6 @@ def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[n
         state = run.final_state.copy()
         state[6] = 0.0  # path length is per leg
         pose = (float(state[0]), float(state[1]), float(state[2]))
-        leg_end[i] = pose[:2]
         time_offset += run.end_time
         frequencies += list(schedule.frequency)
         accelerations += list(schedule.acceleration)
@@ -326,9 +396,10 @@ def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[n
         labels += leg_labels
         if run.outcome != "completed":
             outcome = run.outcome
-            leg_end[i + 1:] = np.nan
             break
+        leg_end[i] = pose[:2]
     miss = np.hypot(leg_end[:, 0] - waypoints[:, 0], leg_end[:, 1] - waypoints[:, 1])
-    flown = Schedule(np.array(frequencies), np.array(accelerations), np.array(durations))
+    flown = Schedule(np.array(frequencies), np.array(accelerations),
+                     np.array(durations)) if labels else None
     return PlanRun(np.concatenate(times), np.concatenate(xs), np.concatenate(ys),
                    np.concatenate(headings), leg_end, miss, flown, labels, outcome)

@@ -48,7 +48,14 @@ import numpy as np
 import xarray as xr
 
 from study.planar import Disk, Plate, describe_disk, periodic_motion, simulate_planar
-from study.planner import COMMANDS, PlanError, calibrate_commands, plan_route, run_plan
+from study.planner import (
+    COMMANDS,
+    STRATEGIES,
+    PlanError,
+    calibrate_commands,
+    plan_route,
+    run_plan,
+)
 from study.spec import SpecError
 from study.status import Status
 from study.transient import IntegratorSettings, Schedule
@@ -494,13 +501,13 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
         raise SceneError(f"{spec.path}: [plan]: {err}") from None
     waypoints = options["waypoints"]
     noise = _heading_noise(options["heading_drift"], disk)
-    strategies = ("open_loop", "closed_loop")
+    strategies = STRATEGIES
     count = options["realisations"] + 1
     runs = {}
     for s, strategy in enumerate(strategies):
         for r in range(count):
             runs[s, r] = run_plan(
-                disk, options["start"], waypoints, commands, feedback=strategy == "closed_loop",
+                disk, options["start"], waypoints, commands, strategy=strategy,
                 heading_noise=noise if r > 0 else 0.0, seed=options["seed"] * 1000 + r,
                 settings=spec.settings, sample_interval=options["sample_interval"],
             )
@@ -516,14 +523,16 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
             paths[key][s, r] = np.interp(t, run.time, getattr(run, key))
         miss[s, r] = run.miss_distance
         outcome[s, r] = SEGMENT_STATUS.index(run.outcome)
-    plan_run = runs[0, 0]
+    plan_run = runs[STRATEGIES.index("open_loop"), 0]
     planned = np.array([legs[-1].predicted_pose[:2] for legs in route])
     dims = ("strategy", "realisation", "time")
     variables = {
         "time": _variable("time", t, "s", "time since the drive started"),
         "strategy": _variable("strategy", np.array(strategies, dtype=str), None,
-                              "open_loop: the plan flown blind; closed_loop: each leg "
-                              "re-planned from the simulated pose"),
+                              "calibration: legs from the calibration alone, flown blind; "
+                              "open_loop: legs corrected in the noise-free model, flown "
+                              "blind; closed_loop: each leg planned and corrected from the "
+                              "pose reached"),
         "realisation": _variable("realisation", np.arange(count), None,
                                  "0: without heading noise; others: with"),
         "waypoint": _variable("waypoint", np.arange(len(waypoints)), None, "waypoint number"),
@@ -544,7 +553,7 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
             "realisation", np.where(np.arange(count) > 0, options["heading_drift"], 0.0),
             "rad", "heading spread per disk diameter slid"),
         "segment_label": _variable("segment", np.array(plan_run.labels, dtype=str), None,
-                                   "command of the segment (noise-free open-loop plan)"),
+                                   "command of the segment (the open-loop plan)"),
         "frequency": _variable("segment", plan_run.schedule.frequency, "Hz", "drive frequency"),
         "acceleration": _variable("segment", plan_run.schedule.acceleration, "m s-2",
                                   "drive acceleration amplitude"),
