@@ -169,23 +169,45 @@ def _slaved_direction(disk, n, wrench, out):
         out[1] = 0.0
         out[2] = 0.0
         return -friction
-    lo = -friction * min(1.0, kappa)
+    # Components below rounding relative to |W| count as zero: near the poles they would
+    # only add rounding noise (and overflow).
+    if abs(w0) < 1e-14 * size:
+        w0 = 0.0
+    if abs(w1) < 1e-14 * size:
+        w1 = 0.0
+    if abs(w2) < 1e-14 * size:
+        w2 = 0.0
+    # Poles at lambda = -ck n (x, y) and -ck n kappa (spin); a zero component of W has
+    # none, and its component of uhat stays zero.
+    if w0 == 0.0 and w1 == 0.0:
+        lo = -friction * kappa
+    elif w2 == 0.0:
+        lo = -friction
+    else:
+        lo = -friction * min(1.0, kappa)
     hi = size * max(1.0, kappa)
     lam = min(max(size - friction, lo + 0.5 * (size - lo) * 1e-3), hi)
+    xy2 = w0 * w0 + w1 * w1
+    z2 = w2 * w2
     for _ in range(SLAVED_ITERATIONS):
         m_xy = lam + friction
         m_z = lam / kappa + friction
-        if m_xy <= 0.0 or m_z <= 0.0:
+        if (xy2 > 0.0 and m_xy <= 0.0) or (z2 > 0.0 and m_z <= 0.0):
             lam = 0.5 * (lo + hi)
             continue
-        phi = (w0 * w0 + w1 * w1) / (m_xy * m_xy) + w2 * w2 / (m_z * m_z) - 1.0
+        phi = -1.0
+        slope = 0.0
+        if xy2 > 0.0:
+            phi += xy2 / (m_xy * m_xy)
+            slope -= 2.0 * xy2 / m_xy**3
+        if z2 > 0.0:
+            phi += z2 / (m_z * m_z)
+            slope -= 2.0 * z2 / (kappa * m_z**3)
         if phi > 0.0:
             lo = lam
         else:
             hi = lam
-        slope = -2.0 * (w0 * w0 + w1 * w1) / m_xy**3 - 2.0 * w2 * w2 / (kappa * m_z**3)
-        step = phi / slope
-        candidate = lam - step
+        candidate = lam - phi / slope
         if not (lo < candidate < hi):
             candidate = 0.5 * (lo + hi)
         if abs(candidate - lam) <= 1e-15 * (abs(lam) + size) or hi - lo <= 1e-15 * size:
@@ -194,9 +216,9 @@ def _slaved_direction(disk, n, wrench, out):
         lam = candidate
     m_xy = lam + friction
     m_z = lam / kappa + friction
-    out[0] = w0 / m_xy
-    out[1] = w1 / m_xy
-    out[2] = w2 / m_z
+    out[0] = w0 / m_xy if w0 != 0.0 else 0.0
+    out[1] = w1 / m_xy if w1 != 0.0 else 0.0
+    out[2] = w2 / m_z if w2 != 0.0 else 0.0
     norm = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2)
     for j in range(3):
         out[j] /= norm
