@@ -72,6 +72,21 @@ FIGURES: dict[str, Figure] = {
         ("velocity", "status", "velocity_one_way", "status_one_way", "M"),
         "Two-way against one-way coupling over M: where the paper's model stops holding",
     ),
+    "steering": Figure(
+        "study.figures.steering", "steering",
+        ("x", "y", "heading", "segment_index", "segment_label", "frequency"),
+        "Fig. 4A: the disk steered by a frequency sequence, path coloured by segment",
+    ),
+    "steering-calibration": Figure(
+        "study.figures.steering_calibration", "steering-calibration",
+        ("forward_speed", "turn_rate", "status"),
+        "Steering commands: the disk's forward speed and turn rate against frequency",
+    ),
+    "steering-plan": Figure(
+        "study.figures.steering_plan", "steering-plan",
+        ("waypoint_x", "waypoint_y", "x", "y", "miss_distance"),
+        "Steering through waypoints: open-loop plan against closed-loop correction",
+    ),
 }
 
 

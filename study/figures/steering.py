@@ -1,0 +1,289 @@
+"""The paper's Fig. 4A: the disk steered by a sequence of drive frequencies.
+
+Drawn from a ``steering`` result file alone (``study figure steering FILE``), a
+trajectory scene: the disk's pose over time and, per segment of the frequency
+sequence, its label, drive and outcome. Left: the path in the plane, each segment's
+part coloured by its label, the disk's outline and heading arrows at the start, at
+every segment boundary and at the end. Right: the heading against time over the
+segments. Segments that did not complete (lift-off, not reached, step budget) are
+marked in red.
+
+The label colours and the flag decoding are shared with the other steering figures.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Patch
+
+from study.figures import FigureError
+from study.figures.common import save
+
+__all__ = [
+    "LABEL_COLORS",
+    "SEGMENT_STATUS",
+    "check_scene_kind",
+    "draw",
+    "flag_codes",
+    "flag_names",
+    "label_colors",
+    "labels_of",
+]
+
+#: Fixed colours of the paper's four commands; any other label takes the next of
+#: :data:`OTHER_COLORS` in order of first appearance.
+LABEL_COLORS: dict[str, str] = {
+    "forward": "tab:blue",
+    "backward": "tab:red",
+    "left": "tab:green",
+    "right": "tab:orange",
+}
+OTHER_COLORS = ("tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:gray")
+
+#: A segment's outcome (``segment_status``) when the file holds no flag attributes.
+SEGMENT_STATUS = ("completed", "lift_off", "not_reached", "step_budget")
+
+#: Red markers of the segments that did not complete, by status name.
+STATUS_MARKERS = {"lift_off": "x", "not_reached": "o", "step_budget": "+"}
+
+
+def labels_of(values: Iterable) -> list[str]:
+    """Segment labels as ``str`` (a file may hold them as bytes or objects)."""
+    return [v.decode() if isinstance(v, bytes) else str(v) for v in values]
+
+
+def label_colors(labels: Sequence[str]) -> dict[str, str]:
+    """Colour of each distinct label: fixed for forward/backward/left/right, the others
+    from :data:`OTHER_COLORS` in order of first appearance (cycled)."""
+    colors: dict[str, str] = {}
+    others = 0
+    for label in labels:
+        if label in colors:
+            continue
+        key = label.strip().lower()
+        if key in LABEL_COLORS:
+            colors[label] = LABEL_COLORS[key]
+        else:
+            colors[label] = OTHER_COLORS[others % len(OTHER_COLORS)]
+            others += 1
+    return colors
+
+
+def flag_names(variable: xr.DataArray, default: Sequence[str]) -> dict[int, str]:
+    """Value -> name of a CF flag variable, from its ``flag_values``/``flag_meanings``
+    attributes, else ``default`` (the name of value ``i`` at position ``i``)."""
+    values = variable.attrs.get("flag_values")
+    meanings = variable.attrs.get("flag_meanings")
+    if values is not None and meanings:
+        values = np.atleast_1d(values)
+        names = str(meanings).split()
+        if len(names) == len(values):
+            return {int(v): name for v, name in zip(values, names, strict=True)}
+    return dict(enumerate(default))
+
+
+def flag_codes(variable: xr.DataArray, missing: int = -1) -> np.ndarray:
+    """A flag variable's codes as ints (``missing`` where a reader masked it to NaN)."""
+    values = np.asarray(variable.values)
+    if np.issubdtype(values.dtype, np.floating):
+        values = np.where(np.isfinite(values), values, missing)
+    return values.astype(int)
+
+
+def check_scene_kind(dataset: xr.Dataset, figure: str, kind: str) -> None:
+    """Refuse a scene file of another kind (files without the attribute pass).
+
+    Raises
+    ------
+    FigureError
+        Naming the file's kind and the one the figure is drawn from.
+    """
+    found = dataset.attrs.get("study_scene_kind")
+    if found is not None and str(found) != kind:
+        raise FigureError(
+            f"figure {figure!r} is drawn from a {kind!r} scene, but this file (study "
+            f"{dataset.attrs.get('study_name')!r}) holds a {str(found)!r} scene"
+        )
+
+
+def frequency_text(values: Iterable[float]) -> str:
+    """Distinct frequencies, compactly: ``"14.2 Hz"`` or ``"7.2, 8.2 Hz"``."""
+    distinct = sorted({round(float(v), 3) for v in values if np.isfinite(v)})
+    return ", ".join(f"{v:g}" for v in distinct) + " Hz" if distinct else "? Hz"
+
+
+def value_range_text(values: np.ndarray) -> str:
+    """``"8.5"`` for one distinct value, ``"7-9"`` for several."""
+    finite = np.unique(np.round(values[np.isfinite(values)], 4))
+    if finite.size == 0:
+        return "?"
+    if finite.size == 1:
+        return f"{finite[0]:g}"
+    return f"{finite.min():g}-{finite.max():g}"
+
+
+def heading_arrow(ax: plt.Axes, x: float, y: float, heading: float, length: float,
+                  **style) -> None:
+    """An arrow of ``length`` from ``(x, y)`` along ``heading`` (rad, from +x)."""
+    end = (x + length * np.cos(heading), y + length * np.sin(heading))
+    ax.annotate("", xy=end, xytext=(x, y),
+                arrowprops={"arrowstyle": "-|>", "lw": 0.7, "color": "0.2",
+                            "shrinkA": 0, "shrinkB": 0, "mutation_scale": 8, **style})
+
+
+def _segments(dataset: xr.Dataset) -> list[np.ndarray]:
+    """Sample indices of each segment (in the order of the ``segment`` dimension)."""
+    index = dataset["segment_index"].values
+    return [np.flatnonzero(index == value) for value in dataset["segment"].values]
+
+
+def _plot(dataset: xr.Dataset) -> plt.Figure:
+    """The steering figure (not saved): path lines carry gid ``segment-K``."""
+    check_scene_kind(dataset, "steering", "trajectory")
+    for name in ("x", "y", "heading", "segment_index"):
+        if dataset[name].dims != ("time",):
+            raise FigureError(
+                f"figure 'steering' draws one trajectory over time; {name!r} has "
+                f"dimensions {dataset[name].dims}"
+            )
+    x = 1e3 * dataset["x"].values
+    y = 1e3 * dataset["y"].values
+    heading = dataset["heading"].values
+    time = dataset["time"].values
+    if x.size == 0:
+        raise FigureError("figure 'steering' needs a trajectory with samples; this one is empty")
+    labels = labels_of(dataset["segment_label"].values)
+    frequency = dataset["frequency"].values
+    colors = label_colors(labels)
+    samples = _segments(dataset)
+    n_segments = len(labels)
+    if "segment_status" in dataset:
+        status = flag_codes(dataset["segment_status"], missing=0)
+        names = flag_names(dataset["segment_status"], SEGMENT_STATUS)
+    else:
+        status = np.zeros(n_segments, dtype=int)
+        names = dict(enumerate(SEGMENT_STATUS))
+    radius = 1e3 * float(dataset.attrs.get("disk_radius", np.nan))
+
+    fig, (left, right) = plt.subplots(
+        1, 2, figsize=(12.0, 5.6), layout="constrained", width_ratios=(1.15, 1.0))
+
+    # Left: the path, coloured by segment label.
+    for k, (label, picked) in enumerate(zip(labels, samples, strict=True)):
+        if picked.size == 0:
+            continue
+        first, last = int(picked[0]), int(picked[-1])
+        span = slice(max(first - 1, 0), last + 1)  # joined to the previous segment's end
+        (line,) = left.plot(x[span], y[span], color=colors[label], lw=1.8,
+                            solid_capstyle="round", zorder=4)
+        line.set_gid(f"segment-{k}")
+    if x.size == 1 or not any(p.size for p in samples):
+        left.plot(x, y, ".", color="0.3")
+    extent = max(float(np.nanmax(x) - np.nanmin(x)), float(np.nanmax(y) - np.nanmin(y)), 1e-3)
+    arrow = radius if np.isfinite(radius) and radius > 0 else 0.05 * extent  # to the rim
+    if np.isfinite(radius) and radius > 0:
+        left.add_patch(Circle((x[0], y[0]), radius, fill=False, color="0.35", lw=1.0))
+        left.add_patch(Circle((x[-1], y[-1]), radius, fill=False, color="0.35", lw=1.0,
+                              ls="--"))
+    poses = sorted({0, x.size - 1} | {int(p[0]) for p in samples if p.size})
+    for i in poses:
+        if np.isfinite(x[i]) and np.isfinite(y[i]) and np.isfinite(heading[i]):
+            heading_arrow(left, x[i], y[i], heading[i], arrow)
+    left.plot(x[0], y[0], "o", color="black", ms=4)
+    left.annotate("start", (x[0], y[0]), xytext=(4, -10), textcoords="offset points",
+                  fontsize=8)
+
+    handles: list = [
+        Line2D([], [], color=colors[label], lw=2.0,
+               label=f"{label} {frequency_text(frequency[[lab == label for lab in labels]])}")
+        for label in colors
+    ]
+    handles.append(Line2D([], [], color="black", lw=0.8, marker=r"$\rightarrow$", ms=9,
+                          ls="none", label="heading (start, boundaries, end; to the rim)"))
+    if np.isfinite(radius):
+        handles.append(Patch(fill=False, edgecolor="0.35",
+                             label=f"disk, R = {radius:g} mm (start; end dashed)"))
+
+    # Segments that did not complete: red marks at their end (where the run stopped
+    # for those never reached).
+    failed: dict[str, list[int]] = {}
+    for k in np.flatnonzero(status != 0):
+        failed.setdefault(names.get(int(status[k]), f"status {status[k]}"), []).append(int(k))
+    for name, segments in failed.items():
+        marker = STATUS_MARKERS.get(name, "x")
+        ends = [int(samples[k][-1]) if samples[k].size else x.size - 1 for k in segments]
+        face = "none" if marker == "o" else "tab:red"
+        left.plot(x[ends], y[ends], marker, ls="none", color="tab:red", mfc=face, ms=9,
+                  mew=1.8, gid=f"status-{name}")
+        handles.append(Line2D([], [], marker=marker, ls="none", color="tab:red", mfc=face,
+                              ms=8, mew=1.8,
+                              label=f"{name}: segment{'s' if len(segments) > 1 else ''} "
+                                    f"{', '.join(str(k) for k in segments)}"))
+    left.set_aspect("equal", adjustable="datalim")
+    left.set_xlabel("x [mm]")
+    left.set_ylabel("y [mm]")
+    left.grid(color="0.92", lw=0.6)
+    left.set_title("path of the disk's centre", fontsize=10)
+    left.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13),
+                ncol=2, frameon=False)
+
+    # Right: heading over time, segments shaded by label.
+    starts = dataset["start_time"].values if "start_time" in dataset else None
+    ends_t = dataset["end_time"].values if "end_time" in dataset else None
+    for k, label in enumerate(labels):
+        if starts is not None and ends_t is not None:
+            t0, t1 = float(starts[k]), float(ends_t[k])
+        elif samples[k].size:
+            t0, t1 = float(time[samples[k][0]]), float(time[samples[k][-1]])
+        else:
+            continue
+        if np.isfinite(t0) and np.isfinite(t1) and t1 > t0:
+            right.axvspan(t0, t1, color=colors[label], alpha=0.18, lw=0)
+    degrees = np.degrees(heading)
+    right.plot(time, degrees, color="black", lw=1.2)
+    for name, segments in failed.items():
+        marker = STATUS_MARKERS.get(name, "x")
+        ends = [int(samples[k][-1]) if samples[k].size else x.size - 1 for k in segments]
+        right.plot(time[ends], degrees[ends], marker, ls="none", color="tab:red",
+                   mfc="none" if marker == "o" else "tab:red", ms=9, mew=1.8, clip_on=False)
+    right.set_xlabel("time t [s]")
+    right.set_ylabel("heading [deg] (counterclockwise from +x, unwrapped)")
+    right.grid(color="0.92", lw=0.6)
+    right.set_xlim(float(time[0]), float(time[-1]) if time[-1] > time[0] else None)
+    right.set_title("heading; segments shaded by label", fontsize=10)
+
+    parts = [f"{n_segments} segment{'s' if n_segments != 1 else ''}"]
+    if "acceleration" in dataset:
+        parts.append(f"a = {value_range_text(dataset['acceleration'].values)} m s$^{{-2}}$")
+    if "path_length" in dataset:
+        parts.append(f"path length {1e3 * float(dataset['path_length'].values[-1]):.1f} mm")
+    parts.append(f"{float(time[-1] - time[0]):g} s")
+    fig.suptitle("Steering the disk by the drive frequency (paper Fig. 4A): "
+                 + ", ".join(parts), fontsize=10)
+    return fig
+
+
+def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+    """Draw the steered trajectory of a ``steering`` result into ``output.png/.pdf``.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A trajectory scene: the pose over ``time`` and the segments' labels, drive
+        and outcome over ``segment``.
+    output : pathlib.Path
+        File stem.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The PNG and the PDF.
+    """
+    return save(_plot(dataset), output, dataset,
+                "Steering the disk: trajectory coloured by segment, heading against time")

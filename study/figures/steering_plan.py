@@ -1,0 +1,230 @@
+"""Steering through waypoints: an open-loop plan against closed-loop correction.
+
+Drawn from a ``steering-plan`` result file alone (``study figure steering-plan FILE``),
+a plan scene: waypoints, the noise-free open-loop plan (its segments and where it
+predicts each leg to end), and the disk's path for each strategy and realisation of
+the heading noise (realisation 0 is noise-free). Left: the waypoints, the start pose
+and every path (open loop dashed, closed loop solid, noise-free thick). Right: the
+distance by which each run misses each waypoint, with the disk's diameter for scale.
+"""
+
+from __future__ import annotations
+
+import textwrap
+import warnings
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle
+
+from study.figures import FigureError
+from study.figures.common import save
+from study.figures.steering import check_scene_kind, heading_arrow, labels_of
+
+__all__ = ["STRATEGY_STYLES", "draw"]
+
+#: Colour and line style of each strategy; others take the fallback colours, dotted.
+STRATEGY_STYLES: dict[str, tuple[str, str]] = {
+    "open_loop": ("tab:orange", "--"),
+    "closed_loop": ("tab:blue", "-"),
+}
+OTHER_COLORS = ("tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan")
+
+
+def _styles(strategies: list[str]) -> dict[str, tuple[str, str]]:
+    styles, others = {}, 0
+    for name in strategies:
+        if name in STRATEGY_STYLES:
+            styles[name] = STRATEGY_STYLES[name]
+        else:
+            styles[name] = (OTHER_COLORS[others % len(OTHER_COLORS)], ":")
+            others += 1
+    return styles
+
+
+def _noise_free(dataset: xr.Dataset) -> int:
+    """Index of the noise-free realisation (coordinate value 0, else the first)."""
+    values = dataset["realisation"].values
+    zero = np.flatnonzero(values == 0)
+    return int(zero[0]) if zero.size else 0
+
+
+def _plan_text(dataset: xr.Dataset) -> str:
+    """The noise-free open-loop plan, by label: count, frequency and total duration."""
+    if "segment_label" not in dataset:
+        return ""
+    labels = labels_of(dataset["segment_label"].values)
+    frequency = dataset["frequency"].values if "frequency" in dataset else None
+    duration = dataset["duration"].values if "duration" in dataset else None
+    parts = []
+    for label in dict.fromkeys(labels):
+        picked = np.array([lab == label for lab in labels])
+        text = f"{label} x{int(picked.sum())}"
+        if frequency is not None:
+            text += " at " + ", ".join(f"{v:g}" for v in
+                                       sorted({round(float(v), 3) for v in frequency[picked]}))
+            text += " Hz"
+        if duration is not None:
+            text += f" ({float(np.nansum(duration[picked])):.3g} s)"
+        parts.append(text)
+    total = f", {float(np.nansum(duration)):.3g} s in all" if duration is not None else ""
+    return f"open-loop plan: {len(labels)} segments{total}: " + "; ".join(parts)
+
+
+def _plot(dataset: xr.Dataset) -> plt.Figure:
+    """The plan figure (not saved): paths carry gid ``path-STRATEGY-I`` for realisation
+    index ``I``, the miss-distance points ``miss-STRATEGY``."""
+    check_scene_kind(dataset, "steering-plan", "plan")
+    for name in ("x", "y"):
+        if set(dataset[name].dims) != {"strategy", "realisation", "time"}:
+            raise FigureError(
+                f"figure 'steering-plan' draws paths over (strategy, realisation, time); "
+                f"{name!r} has dimensions {dataset[name].dims}"
+            )
+    order = ("strategy", "realisation", "time")
+    x = 1e3 * dataset["x"].transpose(*order).values
+    y = 1e3 * dataset["y"].transpose(*order).values
+    miss = 1e3 * dataset["miss_distance"].transpose("strategy", "realisation", "waypoint").values
+    wx = 1e3 * dataset["waypoint_x"].values
+    wy = 1e3 * dataset["waypoint_y"].values
+    strategies = labels_of(dataset["strategy"].values)
+    styles = _styles(strategies)
+    clean = _noise_free(dataset)
+    n_real = x.shape[1]
+    radius = 1e3 * float(dataset.attrs.get("disk_radius", np.nan))
+    start = [1e3 * float(dataset.attrs[k]) if k in dataset.attrs else np.nan
+             for k in ("start_x", "start_y")]
+    if not np.all(np.isfinite(start)):
+        start = [x[0, clean, 0], y[0, clean, 0]]
+    start_heading = float(dataset.attrs.get("start_heading", np.nan))
+    if not np.isfinite(start_heading) and "heading" in dataset:
+        start_heading = float(dataset["heading"].transpose(*order).values[0, clean, 0])
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12.5, 5.8), layout="constrained",
+                                      width_ratios=(1.2, 1.0))
+
+    # Left: waypoints, start pose, all paths.
+    for s, strategy in enumerate(strategies):
+        color, style = styles[strategy]
+        for r in range(n_real):
+            thick = r == clean
+            (line,) = left.plot(x[s, r], y[s, r], ls=style, color=color,
+                                lw=2.0 if thick else 0.7, alpha=1.0 if thick else 0.45,
+                                zorder=(3.5 if style != "-" else 3) if thick else 2)
+            line.set_gid(f"path-{strategy}-{r}")
+    diameter = 2 * radius if np.isfinite(radius) and radius > 0 else np.nan
+    if np.isfinite(diameter):
+        for px, py in zip(wx, wy, strict=True):
+            left.add_patch(Circle((px, py), radius, fill=False, color="0.55", lw=0.7,
+                                  ls=":"))
+        left.add_patch(Circle(start, radius, fill=False, color="0.2", lw=1.0))
+    left.plot(wx, wy, "*", color="black", ms=11, zorder=5)
+    for i, (px, py) in enumerate(zip(wx, wy, strict=True)):
+        left.annotate(str(i + 1), (px, py), xytext=(6, 5), textcoords="offset points",
+                      fontsize=10, fontweight="bold")
+    if "planned_x" in dataset and "planned_y" in dataset:
+        left.plot(1e3 * dataset["planned_x"].values, 1e3 * dataset["planned_y"].values, "s",
+                  mfc="none", color="0.3", ms=6, zorder=4)
+    left.plot(*start, "o", color="black", ms=4, zorder=5)
+    if np.isfinite(start_heading):
+        extent = max(float(np.nanmax(x) - np.nanmin(x)), float(np.nanmax(y) - np.nanmin(y)),
+                     1e-3)
+        length = radius if np.isfinite(radius) and radius > 0 else 0.05 * extent
+        heading_arrow(left, start[0], start[1], start_heading, length, lw=1.2, color="black")
+    left.annotate("start", start, xytext=(4, -12), textcoords="offset points", fontsize=8)
+    left.set_aspect("equal", adjustable="datalim")
+    left.set_xlabel("x [mm]")
+    left.set_ylabel("y [mm]")
+    left.grid(color="0.92", lw=0.6)
+    left.set_title("waypoints and paths", fontsize=10)
+
+    handles = [Line2D([], [], color=styles[s][0], ls=styles[s][1], lw=1.5,
+                      label=s.replace("_", " ")) for s in strategies]
+    handles += [
+        Line2D([], [], color="0.3", lw=2.0, label="noise-free (thick)"),
+        Line2D([], [], color="0.3", lw=0.7, alpha=0.6, label="heading noise (thin)"),
+        Line2D([], [], marker="*", color="black", ls="none", ms=10, label="waypoint"),
+    ]
+    if "planned_x" in dataset:
+        handles.append(Line2D([], [], marker="s", mfc="none", color="0.3", ls="none", ms=6,
+                              label="plan's predicted leg end"))
+    if np.isfinite(diameter):
+        handles.append(Line2D([], [], color="0.55", ls=":", lw=0.8,
+                              label="disk outline centred on a waypoint"))
+        handles.append(Line2D([], [], color="0.2", lw=1.0, label="disk at the start"))
+    left.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13),
+                ncol=3, frameon=False)
+
+    # Right: miss distance per waypoint.
+    n_way = wx.size
+    positions = np.arange(1, n_way + 1)
+    width = 0.6 / max(len(strategies), 1)
+    noisy = [r for r in range(n_real) if r != clean]
+    jitter = np.linspace(-0.35, 0.35, len(noisy)) * width if noisy else np.zeros(0)
+    for s, strategy in enumerate(strategies):
+        color, _ = styles[strategy]
+        centre = positions + (s - (len(strategies) - 1) / 2) * width
+        if noisy:
+            px = (centre[None, :] + jitter[:, None]).ravel()
+            right.plot(px, miss[s, noisy].ravel(), "o", color=color, ms=3.5, alpha=0.55,
+                       mew=0, gid=f"miss-{strategy}", clip_on=False)
+            with warnings.catch_warnings():  # a waypoint no noisy run has a distance to
+                warnings.simplefilter("ignore", RuntimeWarning)
+                median = np.nanmedian(miss[s, noisy], axis=0)
+            right.hlines(median, centre - 0.45 * width, centre + 0.45 * width, color=color,
+                         lw=1.5)
+        right.plot(centre, miss[s, clean], "D", color=color, mec="black", ms=7, mew=1.0,
+                   zorder=4, gid=f"miss-{strategy}-noise-free", clip_on=False)
+    if np.isfinite(diameter):
+        right.axhline(diameter, color="0.3", ls="--", lw=1.0)
+        right.annotate(f"disk diameter {diameter:g} mm", (0.01, diameter),
+                       xycoords=("axes fraction", "data"), xytext=(0, 3),
+                       textcoords="offset points", fontsize=8, color="0.3")
+    right.set_xticks(positions)
+    right.set_xlim(0.5, n_way + 0.5)
+    right.set_ylim(bottom=0.0)
+    right.set_xlabel("waypoint")
+    right.set_ylabel("miss distance [mm]")
+    right.grid(axis="y", color="0.92", lw=0.6)
+    right.set_title("distance from each waypoint", fontsize=10)
+    miss_handles = [Line2D([], [], marker="o", color=styles[s][0], ls="none", ms=4, alpha=0.7,
+                           label=f"{s.replace('_', ' ')}, noisy") for s in strategies]
+    miss_handles += [Line2D([], [], marker="D", color="0.6", mec="black", ls="none", ms=6,
+                            label="noise-free")]
+    if noisy:
+        miss_handles.append(Line2D([], [], color="0.3", lw=1.5, label="median of the noisy"))
+    right.legend(handles=miss_handles, fontsize=8, loc="upper center",
+                 bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
+
+    noise = f"{len(noisy)} realisation{'s' if len(noisy) != 1 else ''} with heading noise"
+    if "realisation_heading_drift" in dataset and noisy:
+        drift = dataset["realisation_heading_drift"].values[noisy]
+        noise += f" (drift rms {float(np.sqrt(np.nanmean(drift ** 2))):.3g} rad)"
+    title = (f"Steering through {n_way} waypoint{'s' if n_way != 1 else ''}: "
+             f"{' vs '.join(s.replace('_', ' ') for s in strategies)}, noise-free and {noise}")
+    plan = _plan_text(dataset)
+    fig.suptitle(title + ("\n" + textwrap.fill(plan, 170) if plan else ""), fontsize=9)
+    return fig
+
+
+def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+    """Draw the waypoint plan of a ``steering-plan`` result into ``output.png/.pdf``.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A plan scene: waypoints, the open-loop plan, and the paths and miss distances
+        of each strategy and realisation.
+    output : pathlib.Path
+        File stem.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The PNG and the PDF.
+    """
+    return save(_plot(dataset), output, dataset,
+                "Steering through waypoints: open-loop plan against closed-loop correction")
