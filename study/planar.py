@@ -520,9 +520,11 @@ class PeriodicMotion:
     periods : int
         Drive periods integrated.
     slips_per_period : float
-        Slips starting in the last period.
+        Slips per drive period over the orbit.
     stuck_fraction : float
-        Fraction of the last period spent stuck [1].
+        Fraction of the orbit's time spent stuck [1].
+    orbit_period : int
+        Drive periods after which the motion repeats (0 if it does not).
     """
 
     forward_speed: float
@@ -533,6 +535,7 @@ class PeriodicMotion:
     periods: int
     slips_per_period: float
     stuck_fraction: float
+    orbit_period: int
 
 
 def periodic_motion(
@@ -542,7 +545,8 @@ def periodic_motion(
     *,
     settings: IntegratorSettings | None = None,
     max_periods: int = 400,
-    repeat_tolerance: float = 1e-8,
+    max_orbit_period: int = 8,
+    repeat_tolerance: float | None = None,
     slaving: float = SLAVING,
 ) -> PeriodicMotion:
     """Steady forward, lateral and turning speed under the drive ``a cos(2 pi f t)``.
@@ -550,7 +554,8 @@ def periodic_motion(
     The plates start on their steady response (no mode transient to wait for) and the
     disk at rest; whole periods are integrated until the body-frame displacement per
     period and the body-frame twist at the period's end repeat within
-    ``repeat_tolerance`` (in units of ``g / w^2`` and ``g / w``).
+    ``repeat_tolerance`` (in units of ``g / w^2`` and ``g / w``), possibly only after
+    several periods (an orbit of period up to ``max_orbit_period``).
 
     Parameters
     ----------
@@ -563,8 +568,11 @@ def periodic_motion(
         Integrator accuracy (default tolerance 1e-10).
     max_periods : int
         Budget; beyond it the status is ``NOT_CONVERGED``.
-    repeat_tolerance : float
-        Periodicity test [1].
+    max_orbit_period : int
+        Longest orbit looked for [drive periods]; speeds are then means over the orbit.
+    repeat_tolerance : float, optional
+        Periodicity test [1]; default ``max(100 * tolerance, 1e-12)`` (integration
+        noise must not hide the repetition).
     slaving : float
         See :func:`simulate_planar`.
 
@@ -595,7 +603,9 @@ def periodic_motion(
     empty_y = np.empty((0, size))
     empty_i = np.empty(0, dtype=np.int64)
     box = np.zeros(1, dtype=np.int64)
-    previous = None
+    history: list[tuple[Any, ...]] = []
+    if repeat_tolerance is None:
+        repeat_tolerance = max(100.0 * settings.tolerance, 1e-12)
     length_unit = disk.g / omega**2
     speed_unit = disk.g / omega
     for count in range(1, max_periods + 1):
@@ -611,10 +621,10 @@ def periodic_motion(
         )
         if code == _kernel.RUN_LIFT_OFF:
             return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.LIFT_OFF),
-                                  int(Reason.NONE), count, math.nan, math.nan)
+                                  int(Reason.NONE), count, math.nan, math.nan, 0)
         if code != _kernel.RUN_DONE:
             return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
-                                  int(Reason.EVENT_BUDGET), count, math.nan, math.nan)
+                                  int(Reason.EVENT_BUDGET), count, math.nan, math.nan, 0)
         heading = start[_kernel.HEADING]
         c, s = math.cos(heading), math.sin(heading)
         dx = y[_kernel.X] - start[_kernel.X]
@@ -626,18 +636,40 @@ def periodic_motion(
         ])
         units = np.array([length_unit, length_unit, length_unit / disk.radius,
                           speed_unit, speed_unit, speed_unit / disk.radius])
-        if previous is not None and np.all(np.abs(body - previous) <= repeat_tolerance * units):
-            stuck = stats[3] / period
-            if stats[2] == 0 and np.all(body[:3] == 0.0):
+        history.append((body, start[:3].copy(), y[:3].copy(), stats.copy()))
+        del history[:-2 * max_orbit_period]
+        orbit = _orbit_period(history, units * repeat_tolerance, max_orbit_period)
+        if orbit:
+            window = history[-orbit:]
+            stuck = sum(h[3][3] for h in window) / (orbit * period)
+            slips = sum(h[3][2] for h in window) / orbit
+            first, last = window[0][1], window[-1][2]
+            c, s = math.cos(first[2]), math.sin(first[2])
+            dx, dy = last[0] - first[0], last[1] - first[1]
+            rate = f / orbit
+            if slips == 0 and dx == 0.0 and dy == 0.0 and last[2] == first[2]:
                 status = Status.STATIC
             elif stuck > 0.0:
                 status = Status.STICK_SLIP
             else:
                 status = Status.CONTINUOUS_SLIDING
             return PeriodicMotion(
-                float(body[0] * f), float(body[1] * f), float(body[2] * f), int(status),
-                int(Reason.NONE), count, float(stats[2]), float(stuck),
+                float((c * dx + s * dy) * rate), float((-s * dx + c * dy) * rate),
+                float((last[2] - first[2]) * rate), int(status), int(Reason.NONE), count,
+                float(slips), float(stuck), orbit,
             )
-        previous = body
     return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
-                          int(Reason.NO_PERIODIC_ORBIT), max_periods, math.nan, math.nan)
+                          int(Reason.NO_PERIODIC_ORBIT), max_periods, math.nan, math.nan, 0)
+
+
+def _orbit_period(history: list[tuple[Any, ...]], tolerance: NDArray[np.float64],
+                  longest: int) -> int:
+    """Smallest ``q <= longest`` for which the last ``q`` periods repeat the ``q`` before
+    (body-frame displacement and end twist within ``tolerance``), else 0."""
+    for q in range(1, longest + 1):
+        if len(history) < 2 * q:
+            return 0
+        if all(np.all(np.abs(history[-1 - j][0] - history[-1 - j - q][0]) <= tolerance)
+               for j in range(q)):
+            return q
+    return 0

@@ -465,11 +465,13 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
                "stuck_fraction")}
     status = np.zeros(shape, dtype=np.int8)
     periods = np.zeros(shape, dtype=np.int32)
+    orbit = np.zeros(shape, dtype=np.int32)
     for (i, j), motion in zip(points, motions, strict=True):
         for key in fields:
             fields[key][i, j] = getattr(motion, key)
         status[i, j] = motion.status
         periods[i, j] = motion.periods
+        orbit[i, j] = motion.orbit_period
     dims = ("f", "a")
     variables = {
         "f": _variable("f", f, "Hz", "drive frequency"),
@@ -486,6 +488,8 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
                                     "fraction of the period stuck"),
         "status": _flag(dims, status, MOTION_STATUS, "outcome at the point"),
         "periods": _variable(dims, periods, "1", "drive periods integrated"),
+        "orbit_period": _variable(dims, orbit, "1",
+                                  "drive periods after which the motion repeats (0: none)"),
     }
     return variables, {}
 
