@@ -183,8 +183,13 @@ def _single_leg(pose: tuple[float, float, float], target: tuple[float, float],
                 heading_needed = math.atan2(dy, dx) - math.atan2(left, forward)
                 change = _wrap(heading_needed - pose[2])
                 turn_name = "left" if change >= 0.0 else "right"
+                previous = turn_duration
                 turn_duration = change / commands[turn_name].turn_rate
                 start = _advance(pose, commands[turn_name], turn_duration)
+                if abs(turn_duration - previous) <= 1e-13 * (1.0 + abs(turn_duration)):
+                    dx, dy = target[0] - start[0], target[1] - start[1]
+                    duration = _straight_time(command, math.hypot(dx, dy))
+                    break
         except PlanError:
             continue
         total = turn_duration + duration
@@ -196,7 +201,7 @@ def _single_leg(pose: tuple[float, float, float], target: tuple[float, float],
 
 
 def plan_leg(pose: tuple[float, float, float], target: tuple[float, float],
-             commands: dict[str, Command], iterations: int = 8) -> list[Leg]:
+             commands: dict[str, Command], iterations: int = 100) -> list[Leg]:
     """Turn-then-straight pairs from ``pose`` to ``target`` under the calibration.
 
     A straight command veers (the plates are not perfectly aligned in their effect):

@@ -1,0 +1,246 @@
+"""Steering scenes: spec validation, the three kinds end to end, result files."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+from numpy.testing import assert_allclose
+
+from study.cli import main
+from study.planar import periodic_motion, simulate_planar
+from study.planner import arc_displacement, calibrate_commands, plan_leg
+from study.scene import SceneError, load_scene, parse_scene, run_scene
+from study.store import ResultError, open_result
+from study.transient import IntegratorSettings, Schedule
+
+WORKFLOWS = Path(__file__).resolve().parents[2] / "workflows"
+
+DISK = """
+[disk]
+radius = 0.02
+cs = 0.25
+
+[[plate]]
+name = "head"
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+M = 0.08
+direction = 0.0
+attachment = [0.02, 0.0]
+
+[[plate]]
+name = "tail"
+f0 = 7.7
+Q = 10.0
+alpha = 64.0
+M = 0.08
+direction = -90.0
+attachment = [-0.02, 0.0]
+"""
+
+TRAJECTORY = """
+[scene]
+name = "tiny"
+kind = "trajectory"
+""" + DISK + """
+[trajectory]
+sample_interval = 0.1
+start = [0.0, 0.0, 90.0]
+
+[[segment]]
+label = "forward"
+f = 14.2
+a = 7.0
+duration = 1.0
+[[segment]]
+label = "left"
+f = 7.2
+a = 7.0
+duration = 1.0
+"""
+
+
+def test_the_workflows_share_one_disk():
+    """The three steering workflows describe the same disk (no silent drift)."""
+    specs = [load_scene(WORKFLOWS / f"{name}.toml")
+             for name in ("steering", "steering-calibration", "steering-plan")]
+    assert specs[0].disk == specs[1].disk == specs[2].disk
+    assert [s.kind for s in specs] == ["trajectory", "calibration", "plan"]
+
+
+@pytest.mark.parametrize(
+    ("edit", "words"),
+    [
+        (lambda t: t.replace('kind = "trajectory"', 'kind = "trajectroy"'),
+         ["kind", "trajectroy", "trajectory, calibration, plan"]),
+        (lambda t: t.replace("Q = 17.5", "Q = -17.5"), ["plate", "Q", "> 0"]),
+        (lambda t: t.replace("radius = 0.02", "raduis = 0.02"),
+         ["raduis", "[disk]", "radius"]),
+        (lambda t: t.replace("duration = 1.0\n[[segment]]", "duration = -1.0\n[[segment]]"),
+         ["segment #1", "duration"]),
+        (lambda t: t.replace("label = \"left\"", "label = \"left\"\nfreq = 7.0"),
+         ["freq", "segment #2", "allowed"]),
+        (lambda t: t + "\n[calibration]\nf = { values = [8.0] }\na = { values = [7.0] }\n",
+         ["[calibration]", "trajectory"]),
+        (lambda t: t + "\n[bogus]\nx = 1\n", ["bogus", "allowed"]),
+        (lambda t: t.replace("[[segment]]", "[[segmnt]]", 1), ["segmnt"]),
+    ],
+)
+def test_bad_specs_are_refused_with_file_key_and_allowed_values(edit, words):
+    with pytest.raises(SceneError) as error:
+        parse_scene(edit(TRAJECTORY), "workflows/tiny.toml")
+    message = str(error.value)
+    assert "workflows/tiny.toml" in message
+    for word in words:
+        assert word in message
+
+
+def test_comments_and_key_order_do_not_change_the_hash():
+    spec = parse_scene(TRAJECTORY)
+    edited = parse_scene("# a comment\n" + TRAJECTORY.replace(
+        'name = "head"\nf0 = 14.44', 'f0 = 14.44\nname = "head"'))
+    assert spec.sha256 == edited.sha256
+    assert parse_scene(TRAJECTORY.replace("a = 7.0\nduration = 1.0\n[[segment]]",
+                                          "a = 7.5\nduration = 1.0\n[[segment]]")
+                       ).sha256 != spec.sha256
+
+
+def test_trajectory_scene_end_to_end(tmp_path):
+    spec_path = tmp_path / "tiny.toml"
+    spec_path.write_text(TRAJECTORY)
+    output = tmp_path / "tiny.nc"
+    assert main(["run", str(spec_path), "-o", str(output)]) == 0
+    data = open_result(output)
+    assert data.attrs["study_scene_kind"] == "trajectory"
+    for name in ("x", "y", "heading", "time"):
+        assert data[name].attrs["units"] in ("m", "rad", "s")
+    assert list(data.segment_label.values) == ["forward", "left"]
+    assert np.all(data.segment_status.values == 0)
+    # Segment boundaries are samples, and the summary matches the path there.
+    assert 1.0 in data.time.values
+    end = data.sel(time=1.0)
+    heading0 = math.pi / 2
+    along = math.cos(heading0) * float(end.x) + math.sin(heading0) * float(end.y)
+    assert_allclose(float(data.forward_displacement[0]), along, rtol=1e-12, atol=1e-15)
+    assert float(data.forward_displacement[0]) > 0.0
+    assert float(data.heading_change[1]) > 0.0  # left turn
+    # The same run computed directly.
+    spec = load_scene(spec_path)
+    state = np.zeros(11)
+    state[2] = heading0
+    direct = simulate_planar(spec.disk, Schedule(np.array([14.2, 7.2]), np.array([7.0, 7.0]),
+                                                 np.array([1.0, 1.0])),
+                             initial_state=state, output_times=[2.0], settings=spec.settings,
+                             slaving=spec.slaving)
+    assert_allclose(float(data.x[-1]), direct.x[-1], rtol=0, atol=1e-12)
+    # A second run is up to date; editing a comment keeps it so.
+    assert run_scene(spec_path, output)[1]
+    spec_path.write_text("# note\n" + TRAJECTORY)
+    assert run_scene(spec_path, output)[1]
+    assert main(["validate", str(output)]) == 0
+    assert main(["info", str(output)]) == 0
+
+
+def test_lift_off_is_a_segment_status_not_a_number(tmp_path):
+    text = TRAJECTORY.replace("f = 7.2\na = 7.0", "f = 14.44\na = 9.8")
+    spec = parse_scene(text, "lift.toml")
+    output = run_scene(spec, tmp_path / "lift.nc")[0]
+    data = open_result(output)
+    meanings = data.segment_status.attrs["flag_meanings"].split()
+    assert meanings[int(data.segment_status[1])] == "lift_off"
+    assert data.attrs["study_outcome"] == "lift_off"
+    assert float(data.time[-1]) < 2.0
+    assert not np.any(np.isnan(data.x.values))
+
+
+def test_truncated_and_tampered_scene_files_are_refused(tmp_path):
+    spec_path = tmp_path / "tiny.toml"
+    spec_path.write_text(TRAJECTORY)
+    output = run_scene(spec_path, tmp_path / "tiny.nc")[0]
+    truncated = tmp_path / "truncated.nc"
+    truncated.write_bytes(output.read_bytes()[:2000])
+    with pytest.raises(ResultError, match="truncated"):
+        open_result(truncated)
+    data = open_result(output)
+    data.attrs["study_spec_sha256"] = "0" * 64
+    tampered = tmp_path / "tampered.nc"
+    data.to_netcdf(tampered)
+    with pytest.raises(ResultError, match="study_spec_sha256"):
+        open_result(tampered)
+    data = open_result(output)
+    del data["x"].attrs["units"]
+    data.to_netcdf(tampered)
+    with pytest.raises(ResultError, match="units"):
+        open_result(tampered)
+
+
+def test_calibration_scene_matches_periodic_motion(tmp_path):
+    text = "[scene]\nname = \"cal\"\nkind = \"calibration\"\n" + DISK + (
+        "\n[calibration]\nf = { values = [7.2, 14.2, 14.44] }\na = { values = [2.0, 7.0, 9.8] }\n")
+    spec = parse_scene(text, "cal.toml")
+    data = open_result(run_scene(spec, tmp_path / "cal.nc")[0])
+    direct = periodic_motion(spec.disk, 14.2, 7.0, settings=spec.settings)
+    assert_allclose(float(data.forward_speed.sel(f=14.2, a=7.0)), direct.forward_speed,
+                    rtol=1e-12)
+    meanings = data.status.attrs["flag_meanings"].split()
+    statuses = {meanings[v] for v in data.status.values.ravel()}
+    assert {"static", "stick_slip", "lift_off"} <= statuses
+    invalid = np.isin(data.status.values, [3, 4])
+    assert np.all(np.isnan(data.turn_rate.values[invalid]))
+    assert np.all(np.isfinite(data.turn_rate.values[~invalid]))
+    assert np.all(data.turn_rate.values[data.status.values == 0] == 0.0)
+
+
+def test_arc_displacement_is_the_integral_of_the_body_velocity():
+    command = calibrate_commands.__globals__["Command"]("x", 14.2, 7.0, 0.01, 0.002, 0.3)
+    duration = 4.0
+    t = np.linspace(0.0, duration, 200_001)
+    heading = command.turn_rate * t
+    vx = command.forward_speed * np.cos(heading) - command.lateral_speed * np.sin(heading)
+    vy = command.forward_speed * np.sin(heading) + command.lateral_speed * np.cos(heading)
+    trapezoid = [np.trapezoid(vx, t), np.trapezoid(vy, t), heading[-1]]
+    assert_allclose(arc_displacement(command, duration), trapezoid, rtol=1e-9, atol=1e-14)
+
+
+def test_a_planned_leg_ends_on_its_target_in_the_calibrated_model():
+    spec = load_scene(WORKFLOWS / "steering-plan.toml")
+    commands = calibrate_commands(spec.disk, spec.options["frequencies"],
+                                  spec.options["acceleration"],
+                                  settings=IntegratorSettings(tolerance=1e-9))
+    for target in [(0.05, 0.03), (-0.04, 0.0), (0.0, -0.2)]:
+        legs = plan_leg((0.0, 0.0, 0.3), target, commands)
+        assert_allclose(legs[-1].predicted_pose[:2], target, rtol=0, atol=1e-9)
+
+
+def test_plan_scene_reaches_its_waypoints_without_noise(tmp_path):
+    text = "[scene]\nname = \"plan\"\nkind = \"plan\"\n" + DISK + """
+[plan]
+acceleration = 7.0
+forward = 14.2
+backward = 15.2
+left = 7.2
+right = 8.2
+start = [0.0, 0.0, 90.0]
+waypoints = [[0.0, 0.03], [0.02, 0.04]]
+realisations = 1
+seed = 3
+"""
+    spec = parse_scene(text, "plan.toml")
+    data = open_result(run_scene(spec, tmp_path / "plan.nc")[0])
+    miss = data.miss_distance
+    assert list(data.strategy.values) == ["calibration", "open_loop", "closed_loop"]
+    assert np.all(np.isfinite(miss.values))
+    # Corrected in the model, the noise-free runs end within a millimetre of each
+    # waypoint; the calibration alone does not know the command-switch transients.
+    assert float(miss.sel(strategy="open_loop", realisation=0).max()) < 1e-3
+    assert float(miss.sel(strategy="closed_loop", realisation=0).max()) < 1e-3
+    assert float(miss.sel(strategy="calibration", realisation=0).max()) > 1e-3
+    # After its schedule a run stays put: the last samples repeat.
+    assert isinstance(data, xr.Dataset)
+    assert float(data.x.isel(time=-1, strategy=0, realisation=0)) == float(
+        data.x.isel(time=-2, strategy=0, realisation=0))
