@@ -269,7 +269,8 @@ def parse_scene(text: str, path: str = "<string>") -> SceneSpec:
                             low_open=True)
     slaving = 1e-4
     if "slaving" in integrator:
-        slaving = _number(integrator, "slaving", "integrator", path, low=0.0, high=0.1)
+        slaving = _number(integrator, "slaving", "integrator", path, low=0.0, high=0.1,
+                          low_open=True)
     options = _kind_options(kind, raw, path)
     return SceneSpec(
         name=str(scene["name"]), kind=kind, title=str(scene.get("title", scene["name"])),
@@ -410,14 +411,14 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
         summary["turn"][j] = run.heading[i1] - run.heading[i0]
         summary["path"][j] = run.path[i1] - run.path[i0]
     variables = {
-        "x": _variable("time", run.x, "m", "x position of the disk's centre"),
-        "y": _variable("time", run.y, "m", "y position of the disk's centre"),
-        "heading": _variable("time", run.heading, "rad",
+        "x": _variable("t", run.x, "m", "x position of the disk's centre"),
+        "y": _variable("t", run.y, "m", "y position of the disk's centre"),
+        "heading": _variable("t", run.heading, "rad",
                              "heading, counterclockwise from the x axis (unwrapped)"),
-        "path_length": _variable("time", run.path, "m", "distance slid since the start"),
-        "slipping": _flag("time", run.slipping.astype(np.int8), ("stuck", "slipping"),
+        "path_length": _variable("t", run.path, "m", "distance slid since the start"),
+        "slipping": _flag("t", run.slipping.astype(np.int8), ("stuck", "slipping"),
                           "contact state at the sample"),
-        "segment_index": _variable("time", index.astype(np.int32), None,
+        "segment_index": _variable("t", index.astype(np.int32), None,
                                    "segment of the schedule the sample belongs to"),
         "segment_label": _variable("segment", np.array([r["label"] for r in rows], dtype=str),
                                    None, "command of the segment"),
@@ -439,7 +440,7 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
                                          "distance slid in the segment"),
         "segment_status": _flag("segment", status, SEGMENT_STATUS, "how the segment ended"),
     }
-    coords = {"time": _variable("time", t, "s", "time since the drive started"),
+    coords = {"t": _variable("t", t, "s", "time since the drive started"),
               "segment": _variable("segment", np.arange(len(rows)), None, "segment number")}
     attrs = {"study_outcome": run.outcome, "study_end_time": run.end_time,
              "study_steps": run.steps, "study_slips": run.slips}
@@ -529,10 +530,12 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
         outcome[s, r] = SEGMENT_STATUS.index(run.outcome)
     plan_run = runs[STRATEGIES.index("open_loop"), 0]
     planned = np.array([legs[-1].predicted_pose[:2] for legs in route])
-    dims = ("strategy", "realisation", "time")
+    dims = ("strategy", "realisation", "t")
     variables = {
-        "time": _variable("time", t, "s", "time since the drive started"),
-        "strategy": _variable("strategy", np.array(strategies, dtype=str), None,
+        "t": _variable("t", t, "s", "time since the drive started"),
+        # Strings name the strategies in an auxiliary coordinate: a string-valued
+        # coordinate variable is not CF (coordinate variables must be monotonic).
+        "strategy_name": _variable("strategy", np.array(strategies, dtype=str), None,
                               "calibration: legs from the calibration alone, flown blind; "
                               "open_loop: legs corrected in the noise-free model, flown "
                               "blind; closed_loop: each leg planned and corrected from the "
@@ -662,8 +665,8 @@ def scene_dataset(spec: SceneSpec) -> xr.Dataset:
         "plate_attachment_left": _variable("plate", [p.attachment[1] for p in disk.plates],
                                            "m", "plate attachment, left of the centre"),
     }
-    coords = {k: v for k, v in variables.items() if k in ("time", "segment", "f", "a",
-                                                          "strategy", "realisation",
+    coords = {k: v for k, v in variables.items() if k in ("t", "segment", "f", "a",
+                                                          "strategy_name", "realisation",
                                                           "waypoint")}
     data = {k: v for k, v in {**variables, **plate_vars}.items() if k not in coords}
     return xr.Dataset(data, coords=coords, attrs=attrs)

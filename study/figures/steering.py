@@ -147,7 +147,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     """The steering figure (not saved): path lines carry gid ``segment-K``."""
     check_scene_kind(dataset, "steering", "trajectory")
     for name in ("x", "y", "heading", "segment_index"):
-        if dataset[name].dims != ("time",):
+        if dataset[name].dims != ("t",):
             raise FigureError(
                 f"figure 'steering' draws one trajectory over time; {name!r} has "
                 f"dimensions {dataset[name].dims}"
@@ -155,7 +155,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     x = 1e3 * dataset["x"].values
     y = 1e3 * dataset["y"].values
     heading = dataset["heading"].values
-    time = dataset["time"].values
+    time = dataset["t"].values
     if x.size == 0:
         raise FigureError("figure 'steering' needs a trajectory with samples; this one is empty")
     labels = labels_of(dataset["segment_label"].values)

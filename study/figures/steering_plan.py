@@ -79,18 +79,20 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     index ``I``, the miss-distance points ``miss-STRATEGY``."""
     check_scene_kind(dataset, "steering-plan", "plan")
     for name in ("x", "y"):
-        if set(dataset[name].dims) != {"strategy", "realisation", "time"}:
+        if set(dataset[name].dims) != {"strategy", "realisation", "t"}:
             raise FigureError(
                 f"figure 'steering-plan' draws paths over (strategy, realisation, time); "
                 f"{name!r} has dimensions {dataset[name].dims}"
             )
-    order = ("strategy", "realisation", "time")
+    order = ("strategy", "realisation", "t")
     x = 1e3 * dataset["x"].transpose(*order).values
     y = 1e3 * dataset["y"].transpose(*order).values
     miss = 1e3 * dataset["miss_distance"].transpose("strategy", "realisation", "waypoint").values
     wx = 1e3 * dataset["waypoint_x"].values
     wy = 1e3 * dataset["waypoint_y"].values
-    strategies = labels_of(dataset["strategy"].values)
+    names = dataset["strategy_name"] if "strategy_name" in dataset.variables else (
+        dataset["strategy"])
+    strategies = labels_of(names.values)
     styles = _styles(strategies)
     clean = _noise_free(dataset)
     n_real = x.shape[1]

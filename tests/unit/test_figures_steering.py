@@ -89,14 +89,14 @@ def trajectory_dataset(lift_off_in: int | None = None, dt: float = 0.01) -> xr.D
     dx, dy = per_segment(x), per_segment(y)
     return xr.Dataset(
         {
-            "x": _var("time", x, "m", "x of the disk's centre"),
-            "y": _var("time", y, "m", "y of the disk's centre"),
-            "heading": _var("time", heading, "rad", "heading, counterclockwise from +x"),
-            "path_length": _var("time", path, "m", "path length"),
-            "slipping": _var("time", (speed != 0).astype(np.int8), None, "slipping",
+            "x": _var("t", x, "m", "x of the disk's centre"),
+            "y": _var("t", y, "m", "y of the disk's centre"),
+            "heading": _var("t", heading, "rad", "heading, counterclockwise from +x"),
+            "path_length": _var("t", path, "m", "path length"),
+            "slipping": _var("t", (speed != 0).astype(np.int8), None, "slipping",
                              flag_values=np.array([0, 1], dtype=np.int8),
                              flag_meanings="stuck slipping"),
-            "segment_index": _var("time", index.astype(np.int32), None, "segment"),
+            "segment_index": _var("t", index.astype(np.int32), None, "segment"),
             "segment_label": _var("segment", np.array(labels), None, "command"),
             "frequency": _var("segment", frequency, "Hz", "drive frequency"),
             "acceleration": _var("segment", np.full(n, 8.0), "m s-2", "drive acceleration"),
@@ -109,7 +109,7 @@ def trajectory_dataset(lift_off_in: int | None = None, dt: float = 0.01) -> xr.D
             "segment_path_length": _var("segment", per_segment(path), "m", "path length"),
             "segment_status": _var("segment", status, None, "outcome", **SEGMENT_STATUS),
         },
-        coords={"time": _var("time", time, "s", "time"),
+        coords={"t": _var("t", time, "s", "t"),
                 "segment": _var("segment", np.arange(n), None, "segment")},
         attrs={**ATTRS, "study_scene_kind": "trajectory", "disk_radius": DISK_RADIUS},
     )
@@ -173,7 +173,7 @@ def plan_dataset(realisations: int = 5, samples: int = 300) -> xr.Dataset:
     miss = np.hypot(x[..., None] - WAYPOINTS[:, 0], y[..., None] - WAYPOINTS[:, 1]).min(axis=2)
     labels = ["forward", "left", "forward", "left", "forward"]
     frequency = [14.2, 8.2, 14.2, 8.2, 14.2]
-    dims = ("strategy", "realisation", "time")
+    dims = ("strategy", "realisation", "t")
     return xr.Dataset(
         {
             "waypoint_x": _var("waypoint", WAYPOINTS[:, 0], "m", "waypoint x"),
@@ -192,7 +192,7 @@ def plan_dataset(realisations: int = 5, samples: int = 300) -> xr.Dataset:
         },
         coords={"strategy": ("strategy", list(STRATEGIES)),
                 "realisation": ("realisation", np.arange(realisations)),
-                "time": _var("time", time, "s", "time")},
+                "t": _var("t", time, "s", "t")},
         attrs={**ATTRS, "study_scene_kind": "plan", "disk_radius": DISK_RADIUS,
                "start_x": 0.0, "start_y": 0.0, "start_heading": 0.0},
     )

@@ -117,13 +117,13 @@ def test_trajectory_scene_end_to_end(tmp_path):
     assert main(["run", str(spec_path), "-o", str(output)]) == 0
     data = open_result(output)
     assert data.attrs["study_scene_kind"] == "trajectory"
-    for name in ("x", "y", "heading", "time"):
+    for name in ("x", "y", "heading", "t"):
         assert data[name].attrs["units"] in ("m", "rad", "s")
     assert list(data.segment_label.values) == ["forward", "left"]
     assert np.all(data.segment_status.values == 0)
     # Segment boundaries are samples, and the summary matches the path there.
-    assert 1.0 in data.time.values
-    end = data.sel(time=1.0)
+    assert 1.0 in data.t.values
+    end = data.sel(t=1.0)
     heading0 = math.pi / 2
     along = math.cos(heading0) * float(end.x) + math.sin(heading0) * float(end.y)
     assert_allclose(float(data.forward_displacement[0]), along, rtol=1e-12, atol=1e-15)
@@ -154,7 +154,7 @@ def test_lift_off_is_a_segment_status_not_a_number(tmp_path):
     meanings = data.segment_status.attrs["flag_meanings"].split()
     assert meanings[int(data.segment_status[1])] == "lift_off"
     assert data.attrs["study_outcome"] == "lift_off"
-    assert float(data.time[-1]) < 2.0
+    assert float(data.t[-1]) < 2.0
     assert not np.any(np.isnan(data.x.values))
 
 
@@ -233,14 +233,15 @@ seed = 3
     spec = parse_scene(text, "plan.toml")
     data = open_result(run_scene(spec, tmp_path / "plan.nc")[0])
     miss = data.miss_distance
-    assert list(data.strategy.values) == ["calibration", "open_loop", "closed_loop"]
+    assert list(data.strategy_name.values) == ["calibration", "open_loop", "closed_loop"]
+    miss = miss.swap_dims(strategy="strategy_name")
     assert np.all(np.isfinite(miss.values))
     # Corrected in the model, the noise-free runs end within a millimetre of each
     # waypoint; the calibration alone does not know the command-switch transients.
-    assert float(miss.sel(strategy="open_loop", realisation=0).max()) < 1e-3
-    assert float(miss.sel(strategy="closed_loop", realisation=0).max()) < 1e-3
-    assert float(miss.sel(strategy="calibration", realisation=0).max()) > 1e-3
+    assert float(miss.sel(strategy_name="open_loop", realisation=0).max()) < 1e-3
+    assert float(miss.sel(strategy_name="closed_loop", realisation=0).max()) < 1e-3
+    assert float(miss.sel(strategy_name="calibration", realisation=0).max()) > 1e-3
     # After its schedule a run stays put: the last samples repeat.
     assert isinstance(data, xr.Dataset)
-    assert float(data.x.isel(time=-1, strategy=0, realisation=0)) == float(
-        data.x.isel(time=-2, strategy=0, realisation=0))
+    assert float(data.x.isel(t=-1, strategy=0, realisation=0)) == float(
+        data.x.isel(t=-2, strategy=0, realisation=0))
