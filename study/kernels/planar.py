@@ -38,7 +38,14 @@ import numpy as np
 from numba import njit
 
 from study.kernels import transient as dp
-from study.kernels.transient import _dense, _drive, _error_norm
+from study.kernels.transient import (
+    _dense,
+    _drive,
+    _error_and_dense,
+    _error_norm,
+    _solution,
+    _stage_state,
+)
 
 # Contact modes. A slip that starts from rest is in its ONSET phase until its twist
 # exceeds the slaving threshold: there its direction is the slaved one, which removes
@@ -321,52 +328,14 @@ def _event_values(plates, disk, mode, reference, drive, drive_rate_neg, y, value
 def _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, dense, tmp, work):
     """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL)."""
     seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
-    n = y.shape[0]
-    for i in range(n):
-        tmp[i] = y[i] + h * dp.A21 * k[0, i]
-    drive, _ = _drive(t + dp.C2 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(plates, disk, mode, reference, drive, tmp, k[1], work)
-    for i in range(n):
-        tmp[i] = y[i] + h * (dp.A31 * k[0, i] + dp.A32 * k[1, i])
-    drive, _ = _drive(t + dp.C3 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(plates, disk, mode, reference, drive, tmp, k[2], work)
-    for i in range(n):
-        tmp[i] = y[i] + h * (dp.A41 * k[0, i] + dp.A42 * k[1, i] + dp.A43 * k[2, i])
-    drive, _ = _drive(t + dp.C4 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(plates, disk, mode, reference, drive, tmp, k[3], work)
-    for i in range(n):
-        tmp[i] = y[i] + h * (
-            dp.A51 * k[0, i] + dp.A52 * k[1, i] + dp.A53 * k[2, i] + dp.A54 * k[3, i]
-        )
-    drive, _ = _drive(t + dp.C5 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(plates, disk, mode, reference, drive, tmp, k[4], work)
-    for i in range(n):
-        tmp[i] = y[i] + h * (
-            dp.A61 * k[0, i] + dp.A62 * k[1, i] + dp.A63 * k[2, i] + dp.A64 * k[3, i]
-            + dp.A65 * k[4, i]
-        )
-    drive, _ = _drive(t + h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(plates, disk, mode, reference, drive, tmp, k[5], work)
-    for i in range(n):
-        y_new[i] = y[i] + h * (
-            dp.B1 * k[0, i] + dp.B3 * k[2, i] + dp.B4 * k[3, i] + dp.B5 * k[4, i] + dp.B6 * k[5, i]
-        )
+    for stage in range(1, 6):
+        _stage_state(stage, y, h, k, tmp)
+        drive, _ = _drive(t + dp.STAGE_NODES[stage] * h, seg, seg_t0, seg_omega, seg_a,
+                          seg_phase0)
+        _rhs(plates, disk, mode, reference, drive, tmp, k[stage], work)
+    _solution(y, h, k, y_new)
     _rhs(plates, disk, mode, reference, drive, y_new, k[6], work)
-    for i in range(n):
-        err[i] = h * (
-            dp.E1 * k[0, i] + dp.E3 * k[2, i] + dp.E4 * k[3, i] + dp.E5 * k[4, i] + dp.E6 * k[5, i]
-            + dp.E7 * k[6, i]
-        )
-        dense[0, i] = y[i]
-        rise = y_new[i] - y[i]
-        dense[1, i] = rise
-        slope_gap = h * k[0, i] - rise
-        dense[2, i] = slope_gap
-        dense[3, i] = rise - h * k[6, i] - slope_gap
-        dense[4, i] = h * (
-            dp.D1 * k[0, i] + dp.D3 * k[2, i] + dp.D4 * k[3, i] + dp.D5 * k[4, i] + dp.D6 * k[5, i]
-            + dp.D7 * k[6, i]
-        )
+    _error_and_dense(y, h, k, y_new, err, dense)
     if mode == STICK:
         # The pose is exactly frozen while stuck.
         for i in range(MODES):

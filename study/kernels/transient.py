@@ -93,6 +93,17 @@ D5 = 701980252875.0 / 199316789632.0
 D6 = -1453857185.0 / 822651844.0
 D7 = 69997945.0 / 29380423.0
 
+# The stages' coefficients as tables, for the loops shared by every kernel's step.
+STAGE_NODES = np.array([0.0, C2, C3, C4, C5, 1.0])
+STAGE_WEIGHTS = np.array([
+    [0.0, 0.0, 0.0, 0.0, 0.0],
+    [A21, 0.0, 0.0, 0.0, 0.0],
+    [A31, A32, 0.0, 0.0, 0.0],
+    [A41, A42, A43, 0.0, 0.0],
+    [A51, A52, A53, A54, 0.0],
+    [A61, A62, A63, A64, A65],
+])
+
 # Step-size controller (standard for a 5th-order pair with local extrapolation).
 SAFETY = 0.9
 MIN_FACTOR = 0.2
@@ -196,42 +207,30 @@ def _dense(theta, h, dense, out):
 
 
 @njit(cache=True, nogil=True)
-def _step(p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp):
-    """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL).
+def _stage_state(stage, y, h, k, out):
+    """``out = y + h sum_l a_{stage, l} k[l]``: the state at which stage ``stage`` (1-5)
+    of a Dormand-Prince step evaluates the right-hand side."""
+    for i in range(y.shape[0]):
+        total = STAGE_WEIGHTS[stage, 0] * k[0, i]
+        for j in range(1, stage):
+            total += STAGE_WEIGHTS[stage, j] * k[j, i]
+        out[i] = y[i] + h * total
 
-    Fills ``k[1..6]``, the 5th-order solution ``y_new``, the error estimate ``err``
-    and the dense-output coefficients.
-    """
-    seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
-    n = y.shape[0]
-    for i in range(n):
-        tmp[i] = y[i] + h * A21 * k[0, i]
-    drive, _ = _drive(t + C2 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(p, mode, drive, tmp, k[1])
-    for i in range(n):
-        tmp[i] = y[i] + h * (A31 * k[0, i] + A32 * k[1, i])
-    drive, _ = _drive(t + C3 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(p, mode, drive, tmp, k[2])
-    for i in range(n):
-        tmp[i] = y[i] + h * (A41 * k[0, i] + A42 * k[1, i] + A43 * k[2, i])
-    drive, _ = _drive(t + C4 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(p, mode, drive, tmp, k[3])
-    for i in range(n):
-        tmp[i] = y[i] + h * (A51 * k[0, i] + A52 * k[1, i] + A53 * k[2, i] + A54 * k[3, i])
-    drive, _ = _drive(t + C5 * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(p, mode, drive, tmp, k[4])
-    for i in range(n):
-        tmp[i] = y[i] + h * (
-            A61 * k[0, i] + A62 * k[1, i] + A63 * k[2, i] + A64 * k[3, i] + A65 * k[4, i]
-        )
-    drive, _ = _drive(t + h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-    _rhs(p, mode, drive, tmp, k[5])
-    for i in range(n):
+
+@njit(cache=True, nogil=True)
+def _solution(y, h, k, y_new):
+    """The step's 5th-order solution from the stages ``k[0..5]``."""
+    for i in range(y.shape[0]):
         y_new[i] = y[i] + h * (
             B1 * k[0, i] + B3 * k[2, i] + B4 * k[3, i] + B5 * k[4, i] + B6 * k[5, i]
         )
-    _rhs(p, mode, drive, y_new, k[6])
-    for i in range(n):
+
+
+@njit(cache=True, nogil=True)
+def _error_and_dense(y, h, k, y_new, err, dense):
+    """Embedded error estimate and Shampine's dense-output coefficients (needs the FSAL
+    stage ``k[6] = f(t + h, y_new)``)."""
+    for i in range(y.shape[0]):
         err[i] = h * (
             E1 * k[0, i] + E3 * k[2, i] + E4 * k[3, i] + E5 * k[4, i] + E6 * k[5, i]
             + E7 * k[6, i]
@@ -246,6 +245,24 @@ def _step(p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp):
             D1 * k[0, i] + D3 * k[2, i] + D4 * k[3, i] + D5 * k[4, i] + D6 * k[5, i]
             + D7 * k[6, i]
         )
+
+
+@njit(cache=True, nogil=True)
+def _step(p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp):
+    """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL).
+
+    Fills ``k[1..6]``, the 5th-order solution ``y_new``, the error estimate ``err``
+    and the dense-output coefficients.
+    """
+    seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
+    for stage in range(1, 6):
+        _stage_state(stage, y, h, k, tmp)
+        drive, _ = _drive(t + STAGE_NODES[stage] * h, seg, seg_t0, seg_omega, seg_a,
+                          seg_phase0)
+        _rhs(p, mode, drive, tmp, k[stage])
+    _solution(y, h, k, y_new)
+    _rhs(p, mode, drive, y_new, k[6])
+    _error_and_dense(y, h, k, y_new, err, dense)
     if mode == STICK:
         # x and v are exactly constant while stuck.
         y_new[2] = y[2]
