@@ -275,7 +275,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     Parameters
     ----------
     dataset : xarray.Dataset
-        A trajectory scene: the pose over ``time`` and the segments' labels, drive
+        A trajectory scene: the pose over time ``t`` and the segments' labels, drive
         and outcome over ``segment``.
     output : pathlib.Path
         File stem.

@@ -81,7 +81,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     for name in ("x", "y"):
         if set(dataset[name].dims) != {"strategy", "realisation", "t"}:
             raise FigureError(
-                f"figure 'steering-plan' draws paths over (strategy, realisation, time); "
+                f"figure 'steering-plan' draws paths over (strategy, realisation, t); "
                 f"{name!r} has dimensions {dataset[name].dims}"
             )
     order = ("strategy", "realisation", "t")
