@@ -73,6 +73,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_velocity_map.py
 	$(PY) benchmarks/bench_study_overhead.py
 	$(PY) benchmarks/bench_work_precision.py
+	$(PY) benchmarks/bench_planar.py
 	mkdir -p docs && cp figures/work-precision.png docs/
 
 cf-check: $(RESULTS)
