@@ -15,11 +15,16 @@ __all__ = ["main"]
 
 
 def _run_scene(args: argparse.Namespace) -> int:
+    from study.runner import StudyBusy
     from study.scene import load_scene, run_scene
 
     spec = load_scene(args.spec)
     output = args.output or Path("results") / f"{Path(args.spec).stem}.nc"
-    path, up_to_date, wall = run_scene(spec, output, force=args.force)
+    try:
+        path, up_to_date, wall = run_scene(spec, output, force=args.force)
+    except StudyBusy as err:
+        print(f"study: {err}", file=sys.stderr)
+        return 1
     if up_to_date:
         print(f"{path}: up to date (scene and code unchanged)")
     else:

@@ -702,6 +702,11 @@ def run_scene(spec: SceneSpec | str | Path, output: str | Path, *, force: bool =
     if not force and scene_up_to_date(spec, output):
         output.touch()
         return output, True, time.perf_counter() - started
-    dataset = scene_dataset(spec)
-    write_atomic(dataset, output)
+    from study.runner import _exclusive
+
+    output.parent.mkdir(parents=True, exist_ok=True)
+    # One writer per result file (the write itself is atomic: temporary, check, rename).
+    with _exclusive(output):
+        dataset = scene_dataset(spec)
+        write_atomic(dataset, output)
     return output, False, time.perf_counter() - started

@@ -245,3 +245,13 @@ seed = 3
     assert isinstance(data, xr.Dataset)
     assert float(data.x.isel(t=-1, strategy=0, realisation=0)) == float(
         data.x.isel(t=-2, strategy=0, realisation=0))
+
+
+def test_a_second_writer_is_refused_while_one_runs(tmp_path):
+    from study.runner import StudyBusy, _exclusive
+
+    spec = parse_scene(TRAJECTORY, "tiny.toml")
+    output = tmp_path / "tiny.nc"
+    with _exclusive(output), pytest.raises(StudyBusy, match="another run"):
+        run_scene(spec, output)
+    assert not output.exists()
