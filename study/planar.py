@@ -28,13 +28,19 @@ from study.structure import _require_finite
 from study.transient import IntegratorSettings, Schedule
 
 __all__ = [
+    "EVENT_KINDS",
     "OUTCOMES",
     "PLANAR_VERSION",
+    "SLAVING",
     "Disk",
+    "PeriodicMotion",
     "PlanarTrajectory",
     "Plate",
+    "describe_disk",
     "disk_parameters",
+    "periodic_motion",
     "simulate_planar",
+    "state_names",
     "steady_plate_states",
 ]
 
@@ -295,6 +301,8 @@ class PlanarTrajectory:
         Time the run reached [s].
     steps, rejected_steps, slips : int
         Work done.
+    final_state : numpy.ndarray
+        State vector at ``end_time`` (see :func:`state_names`), to continue a run from.
     heading_kicks : numpy.ndarray
         Heading noise added at the end of each drive period [rad] (zeros without noise).
     """
