@@ -184,24 +184,26 @@ def _slaved_direction(disk, n, wrench, out):
         w1 = 0.0
     if abs(w2) < 1e-14 * size:
         w2 = 0.0
-    # Poles at lambda = -ck n (x, y) and -ck n kappa (spin); a zero component of W has
-    # none, and its component of uhat stays zero.
-    if w0 == 0.0 and w1 == 0.0:
-        lo = -friction * kappa
-    elif w2 == 0.0:
-        lo = -friction
-    else:
-        lo = -friction * min(1.0, kappa)
-    hi = size * max(1.0, kappa)
-    lam = min(max(size - friction, lo + 0.5 * (size - lo) * 1e-3), hi)
+    # In lambda the poles are -ck n (x, y) and -ck n kappa (spin); a zero component of
+    # W has none. The root lies right of the rightmost pole, often very close to it:
+    # solve for the distance ``gap`` from that pole, so the denominator that vanishes
+    # there keeps its full relative precision (no cancellation in lambda + ck n).
     xy2 = w0 * w0 + w1 * w1
     z2 = w2 * w2
+    if xy2 == 0.0:
+        pole = -friction * kappa
+    elif z2 == 0.0:
+        pole = -friction
+    else:
+        pole = max(-friction, -friction * kappa)
+    offset_xy = pole + friction  # m_xy = gap + offset_xy, both >= 0
+    offset_z = pole + friction * kappa  # kappa m_z = gap + offset_z
+    lo = 0.0
+    hi = size * max(1.0, kappa)
+    gap = min(max(size - friction - pole, 1e-3 * hi), hi)
     for _ in range(SLAVED_ITERATIONS):
-        m_xy = lam + friction
-        m_z = lam / kappa + friction
-        if (xy2 > 0.0 and m_xy <= 0.0) or (z2 > 0.0 and m_z <= 0.0):
-            lam = 0.5 * (lo + hi)
-            continue
+        m_xy = gap + offset_xy
+        m_z = (gap + offset_z) / kappa
         phi = -1.0
         slope = 0.0
         if xy2 > 0.0:
@@ -211,25 +213,25 @@ def _slaved_direction(disk, n, wrench, out):
             phi += z2 / (m_z * m_z)
             slope -= 2.0 * z2 / (kappa * m_z**3)
         if phi > 0.0:
-            lo = lam
+            lo = gap
         else:
-            hi = lam
-        candidate = lam - phi / slope
+            hi = gap
+        candidate = gap - phi / slope
         if not (lo < candidate < hi):
             candidate = 0.5 * (lo + hi)
-        if abs(candidate - lam) <= 1e-15 * (abs(lam) + size) or hi - lo <= 1e-15 * size:
-            lam = candidate
+        if abs(candidate - gap) <= 1e-15 * gap or hi - lo <= 1e-16 * hi:
+            gap = candidate
             break
-        lam = candidate
-    m_xy = lam + friction
-    m_z = lam / kappa + friction
+        gap = candidate
+    m_xy = gap + offset_xy
+    m_z = (gap + offset_z) / kappa
     out[0] = w0 / m_xy if w0 != 0.0 else 0.0
     out[1] = w1 / m_xy if w1 != 0.0 else 0.0
     out[2] = w2 / m_z if w2 != 0.0 else 0.0
     norm = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2)
     for j in range(3):
         out[j] /= norm
-    return lam
+    return gap + pole
 
 
 @njit(cache=True, nogil=True)

@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
@@ -128,6 +128,9 @@ def test_slaving_converges():
     ck=st.floats(0.05, 1.0),
     kappa=st.floats(0.2, 5.0),
 )
+# Roots next to a pole, once found by hypothesis: solved for the distance to the pole.
+@example(w=[0.0, 1.5485261058550724e-10, 0.25], n=1.0, ck=1.0, kappa=2.0)
+@example(w=[0.0, 1.0, 1.1695444993889148e-230], n=3.0, ck=1.0, kappa=0.5)
 def test_slaved_direction_is_a_fixed_point_of_the_twist_direction(w, n, ck, kappa):
     """K (W - ck n u) is parallel to u, |u| = 1, and u points into W's orthant."""
     disk = np.array([ck, ck, 9.8, 1.0, 1.0 / kappa, 0.0])
