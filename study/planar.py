@@ -36,6 +36,7 @@ __all__ = [
     "PeriodicMotion",
     "PlanarTrajectory",
     "Plate",
+    "contact_margins",
     "describe_disk",
     "disk_parameters",
     "periodic_motion",
@@ -688,3 +689,50 @@ def _orbit_period(history: list[tuple[Any, ...]], tolerance: NDArray[np.float64]
                for j in range(q)):
             return q
     return 0
+
+
+def contact_margins(disk: Disk, f: float, a: float, samples: int = 512
+                    ) -> tuple[float, float]:
+    """How close the steady drive comes to lifting the disk, whole or at its rim.
+
+    The plates push on the disk vertically at their attachment points. With full
+    contact and a pressure linear across the disk, the pressure stays positive at
+    the rim while the tilting moment ``|sum_i M_i cos(alpha_i) delta_i'' r_i|`` stays
+    below ``n R / 4`` (the kern of a disk). The model assumes full contact with
+    uniform pressure (its limit surface); where the rim margin is negative, part of
+    the disk would leave the table and the model is outside its validity there.
+    Tilting moments of the horizontal forces (which act above the table, at heights
+    the model does not know) are not counted.
+
+    Parameters
+    ----------
+    disk : Disk
+    f : float
+        Drive frequency [Hz].
+    a : float
+        Drive acceleration amplitude [m s^-2].
+    samples : int
+        Phases over the period at which the margins are evaluated.
+
+    Returns
+    -------
+    (rim, normal) : tuple of float
+        ``min_t (n R / 4 - |moment|) / (g R / 4)`` and ``min_t n / g`` over a period
+        of the steady plate response [1]; negative means the rim (or the whole disk)
+        leaves the table.
+    """
+    omega = 2.0 * math.pi * float(f)
+    phase = np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False)
+    normal = disk.g - float(a) * np.cos(phase)
+    moment = np.zeros((2, samples))
+    for plate in disk.plates:
+        w0 = 2.0 * math.pi * plate.f0
+        tilt = math.radians(plate.alpha)
+        amplitude = float(a) * math.cos(tilt) / complex(w0 * w0 - omega * omega,
+                                                        w0 * omega / plate.Q)
+        acceleration = (-(omega**2) * amplitude * np.exp(1j * phase)).real
+        vertical = plate.M * math.cos(tilt) * acceleration
+        normal = normal + vertical
+        moment += np.outer(plate.attachment, vertical)
+    rim = normal * disk.radius / 4.0 - np.hypot(moment[0], moment[1])
+    return float(np.min(rim) / (disk.g * disk.radius / 4.0)), float(np.min(normal) / disk.g)

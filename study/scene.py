@@ -47,7 +47,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from study.planar import Disk, Plate, describe_disk, periodic_motion, simulate_planar
+from study.planar import (
+    Disk,
+    Plate,
+    contact_margins,
+    describe_disk,
+    periodic_motion,
+    simulate_planar,
+)
 from study.planner import (
     COMMANDS,
     STRATEGIES,
@@ -363,6 +370,11 @@ def _flag(dims, values, meanings: tuple[str, ...], long_name: str) -> xr.Variabl
     })
 
 
+RIM_NOTE = (
+    "min over a period of the steady drive of (n R/4 - |tilting moment of the plates' "
+    "vertical forces|) / (g R/4); negative: the rim leaves the table and the full-contact, "
+    "uniform-pressure friction model does not hold there (the numbers are still computed)"
+)
 SEGMENT_STATUS = ("completed", "lift_off", "not_reached", "step_budget")
 MOTION_STATUS = tuple(s.name.lower() for s in Status)[:5]
 
@@ -439,6 +451,9 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
         "segment_path_length": _variable("segment", summary["path"], "m",
                                          "distance slid in the segment"),
         "segment_status": _flag("segment", status, SEGMENT_STATUS, "how the segment ended"),
+        "edge_contact_margin": _variable(
+            "segment", [contact_margins(spec.disk, r["f"], r["a"])[0] for r in rows], "1",
+            "rim contact margin of the segment's drive", comment=RIM_NOTE),
     }
     coords = {"t": _variable("t", t, "s", "time since the drive started"),
               "segment": _variable("segment", np.arange(len(rows)), None, "segment number")}
@@ -467,6 +482,7 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
     status = np.zeros(shape, dtype=np.int8)
     periods = np.zeros(shape, dtype=np.int32)
     orbit = np.zeros(shape, dtype=np.int32)
+    rim = np.array([[contact_margins(spec.disk, fi, aj)[0] for aj in a] for fi in f])
     for (i, j), motion in zip(points, motions, strict=True):
         for key in fields:
             fields[key][i, j] = getattr(motion, key)
@@ -491,6 +507,8 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
         "periods": _variable(dims, periods, "1", "drive periods integrated"),
         "orbit_period": _variable(dims, orbit, "1",
                                   "drive periods after which the motion repeats (0: none)"),
+        "edge_contact_margin": _variable(dims, rim, "1", "rim contact margin",
+                                         comment=RIM_NOTE),
     }
     return variables, {}
 

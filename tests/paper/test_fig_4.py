@@ -111,3 +111,12 @@ def test_heading_noise_reproduces_the_measured_drift(disk):
     # variance per diameter is drift^2 (chi-square with ~600 dof: 6 % spread).
     per_diameter = np.sum(kicks**2) / (run.path[-1] / disk.diameter)
     assert_allclose(per_diameter, drift**2, rtol=0.25)
+
+
+def test_the_commands_keep_the_disk_in_full_contact(disk):
+    """The model assumes full contact; at the operating point it holds, rim included."""
+    from study.planar import contact_margins
+
+    for f in (FORWARD, BACKWARD, LEFT, RIGHT):
+        rim, normal = contact_margins(disk, f, A_OPERATING)
+        assert rim > 0.0 and normal > 0.0

@@ -210,3 +210,36 @@ def test_bad_run_arguments_are_refused():
         simulate_planar(disk, schedule, output_times=[0.5, 2.0])
     with pytest.raises(ValueError, match=r"slaving .* allowed: \(0, 0.1\]"):
         simulate_planar(disk, schedule, slaving=0.0)
+
+
+def test_contact_margins_match_the_simulated_plates():
+    """Rim and normal margins against n and the tilting moment computed from the plate
+    states of a simulated run (the plates do not feel the disk: any run will do)."""
+    from study.planar import contact_margins
+
+    disk = _two_plate_disk()  # head plate at the rim
+    f, a = 14.2, 7.0
+    state = np.zeros(11)
+    state[7:] = steady_plate_states(disk, f, a)
+    times = np.linspace(0.0, 1.0 / f, 4097)
+    run = simulate_planar(disk, Schedule.constant(f, a, 1.0 / f), initial_state=state,
+                          output_times=times, settings=IntegratorSettings(tolerance=1e-12))
+    drive = a * np.cos(2 * math.pi * f * run.time)
+    normal = disk.g - drive
+    moment = np.zeros((2, times.size))
+    for i, plate in enumerate(disk.plates):
+        w0 = 2 * math.pi * plate.f0
+        tilt = math.radians(plate.alpha)
+        delta, rate = run.plate_states[:, i, 0], run.plate_states[:, i, 1]
+        vertical = plate.M * math.cos(tilt) * (
+            drive * math.cos(tilt) - w0 / plate.Q * rate - w0**2 * delta)
+        normal = normal + vertical
+        moment += np.outer(plate.attachment, vertical)
+    rim = np.min(normal * R / 4 - np.hypot(*moment)) / (disk.g * R / 4)
+    expected = contact_margins(disk, f, a, samples=4096)
+    assert_allclose(expected, [rim, np.min(normal) / disk.g], rtol=1e-6, atol=1e-9)
+    assert expected[0] < 0.0 < expected[1]  # the rim lifts, the disk does not
+    # Clamped at the centre, the head plate no longer tilts the disk.
+    head, tail = disk.plates
+    centred = replace(disk, plates=(replace(head, attachment=(0.0, 0.0)), tail))
+    assert contact_margins(centred, f, a)[0] > 0.0
