@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from study.planar import simulate_planar, steady_plate_states
+from study.planar import rest_state, simulate_planar
 from study.scene import load_scene
 from study.transient import IntegratorSettings, Schedule
 
@@ -37,9 +37,7 @@ PERIODS = 3
 
 
 def _start(disk, f):
-    state = np.zeros(7 + 2 * len(disk.plates))
-    state[7:] = steady_plate_states(disk, f, ACCELERATION)
-    return state
+    return rest_state(disk, drive=(f, ACCELERATION))
 
 
 def _package(disk, f, tolerance, slaving):

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import planar as _kernel
+from study.physics import mode_response
 from study.structure import _require_finite
 from study.transient import IntegratorSettings, Schedule
 
@@ -40,6 +41,7 @@ __all__ = [
     "describe_disk",
     "disk_parameters",
     "periodic_motion",
+    "rest_state",
     "simulate_planar",
     "state_names",
     "steady_plate_states",
@@ -134,6 +136,11 @@ class Plate:
         return math.cos(angle), math.sin(angle)
 
     @property
+    def omega0(self) -> float:
+        """Angular resonance frequency of the plate's mode [rad s^-1]."""
+        return 2.0 * math.pi * self.f0
+
+    @property
     def lever(self) -> float:
         """Moment arm ``r x e`` of the plate's horizontal force about the centre [m]."""
         ex, ey = self.unit_direction
@@ -220,7 +227,7 @@ def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64
         raise TypeError(f"disk must be a study.planar.Disk, got {type(disk).__name__}")
     plates = np.empty((len(disk.plates), _kernel.N_PLATE_PARAMETERS))
     for i, plate in enumerate(disk.plates):
-        w0 = 2.0 * math.pi * plate.f0
+        w0 = plate.omega0
         alpha = math.radians(plate.alpha)
         ex, ey = plate.unit_direction
         plates[i, _kernel.PL_DAMPING] = w0 / plate.Q
@@ -248,9 +255,17 @@ def _scales(disk: Disk, omega: float) -> NDArray[np.float64]:
     scale = [size, size, size / disk.radius, g / omega, g / omega, g / omega / disk.radius,
              size]
     for plate in disk.plates:
-        fastest = max(omega, 2.0 * math.pi * plate.f0)
+        fastest = max(omega, plate.omega0)
         scale += [g / fastest**2, g / fastest]
     return np.array(scale)
+
+
+def _mode_amplitude(plate: Plate, f: float, a: float) -> complex:
+    """Complex amplitude of the plate's steady response ``delta`` to ``a cos(2 pi f t)``
+    [m]: the single-plate model's (:func:`study.physics.mode_response`)."""
+    # mode_response needs only the mode's omega0 and Q, which a Plate has too.
+    response = mode_response(plate, float(f))  # type: ignore[arg-type]
+    return complex(float(a) * math.cos(math.radians(plate.alpha)) * response)
 
 
 def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
@@ -261,14 +276,23 @@ def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
     omega = 2.0 * math.pi * float(f)
     out = np.empty(2 * len(disk.plates))
     for i, plate in enumerate(disk.plates):
-        w0 = 2.0 * math.pi * plate.f0
-        amplitude = float(a) * math.cos(math.radians(plate.alpha)) / complex(
-            w0 * w0 - omega * omega, w0 * omega / plate.Q
-        )
-        rotating = amplitude * complex(math.cos(phase), math.sin(phase))
+        rotating = _mode_amplitude(plate, f, a) * complex(math.cos(phase),
+                                                                math.sin(phase))
         out[2 * i] = rotating.real
         out[2 * i + 1] = (1j * omega * rotating).real
     return out
+
+
+def rest_state(disk: Disk, pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
+               drive: tuple[float, float] | None = None) -> NDArray[np.float64]:
+    """A state vector (see :func:`state_names`) with the disk at rest at ``pose``
+    ``(x [m], y [m], heading [rad])``: the plates at rest, or, with ``drive = (f [Hz],
+    a [m s^-2])``, on their steady response to it at drive phase 0."""
+    state = np.zeros(len(POSE_STATE) + 2 * len(disk.plates))
+    state[:3] = pose
+    if drive is not None:
+        state[_kernel.MODES:] = steady_plate_states(disk, *drive)
+    return state
 
 
 @dataclass(frozen=True)
@@ -410,12 +434,13 @@ def simulate_planar(
     noise = _require_finite("heading_noise", heading_noise)
     if noise < 0.0:
         raise ValueError(f"heading_noise = {noise!r} [rad m^-1/2] must be >= 0")
-    size = len(_kernel_state_names(disk))
+    names = state_names(disk)
+    size = len(names)
     y = np.zeros(size) if initial_state is None else np.array(initial_state, dtype=float)
     if y.shape != (size,) or not np.all(np.isfinite(y)):
         raise ValueError(
-            f"initial_state must be {size} finite numbers ({', '.join(_kernel_state_names(disk))})"
-            f", got {initial_state!r}"
+            f"initial_state must be {size} finite numbers ({', '.join(names)}), got "
+            f"{initial_state!r}"
         )
     end = float(schedule.ends[-1])
     shortest = float(1.0 / np.max(schedule.frequency))
@@ -489,16 +514,12 @@ def simulate_planar(
     )
 
 
-def _kernel_state_names(disk: Disk) -> tuple[str, ...]:
+def state_names(disk: Disk) -> tuple[str, ...]:
+    """Names of the components of a planar state vector."""
     names: list[str] = list(POSE_STATE)
     for plate in disk.plates:
         names += [f"delta_{plate.name}", f"delta_rate_{plate.name}"]
     return tuple(names)
-
-
-def state_names(disk: Disk) -> tuple[str, ...]:
-    """Names of the components of a planar state vector."""
-    return _kernel_state_names(disk)
 
 
 def describe_disk(disk: Disk) -> dict[str, Any]:
@@ -610,8 +631,7 @@ def periodic_motion(
     disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / omega
     scale = _scales(disk, omega)
     size = scale.size
-    y = np.zeros(size)
-    y[_kernel.MODES:] = steady_plate_states(disk, f, a)
+    y = rest_state(disk, drive=(f, a))
     seg = (np.zeros(1), np.full(1, omega), np.full(1, float(a)), np.zeros(1), np.full(1, np.inf))
     mode_box = np.zeros(1, dtype=np.int64)
     t_box = np.array([0.0, settings.max_step * period])
@@ -624,6 +644,10 @@ def periodic_motion(
         repeat_tolerance = max(100.0 * settings.tolerance, 1e-12)
     length_unit = disk.g / omega**2
     speed_unit = disk.g / omega
+    tolerance = repeat_tolerance * np.array([
+        length_unit, length_unit, length_unit / disk.radius,
+        speed_unit, speed_unit, speed_unit / disk.radius,
+    ])
     for count in range(1, max_periods + 1):
         start = y.copy()
         stats = np.zeros(5)
@@ -650,11 +674,9 @@ def periodic_motion(
             c * y[_kernel.VX] + s * y[_kernel.VY], -s * y[_kernel.VX] + c * y[_kernel.VY],
             y[_kernel.SPIN],
         ])
-        units = np.array([length_unit, length_unit, length_unit / disk.radius,
-                          speed_unit, speed_unit, speed_unit / disk.radius])
         history.append((body, start[:3].copy(), y[:3].copy(), stats.copy()))
         del history[:-2 * max_orbit_period]
-        orbit = _orbit_period(history, units * repeat_tolerance, max_orbit_period)
+        orbit = _orbit_period(history, tolerance, max_orbit_period)
         if orbit:
             window = history[-orbit:]
             stuck = sum(h[3][3] for h in window) / (orbit * period)
@@ -726,12 +748,9 @@ def contact_margins(disk: Disk, f: float, a: float, samples: int = 512
     normal = disk.g - float(a) * np.cos(phase)
     moment = np.zeros((2, samples))
     for plate in disk.plates:
-        w0 = 2.0 * math.pi * plate.f0
-        tilt = math.radians(plate.alpha)
-        amplitude = float(a) * math.cos(tilt) / complex(w0 * w0 - omega * omega,
-                                                        w0 * omega / plate.Q)
+        amplitude = _mode_amplitude(plate, f, a)
         acceleration = (-(omega**2) * amplitude * np.exp(1j * phase)).real
-        vertical = plate.M * math.cos(tilt) * acceleration
+        vertical = plate.M * math.cos(math.radians(plate.alpha)) * acceleration
         normal = normal + vertical
         moment += np.outer(plate.attachment, vertical)
     rim = normal * disk.radius / 4.0 - np.hypot(moment[0], moment[1])

@@ -21,7 +21,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from study.planar import Disk, PeriodicMotion, periodic_motion, simulate_planar
+from study.planar import (
+    POSE_STATE,
+    SLAVING,
+    Disk,
+    PeriodicMotion,
+    PlanarTrajectory,
+    periodic_motion,
+    rest_state,
+    simulate_planar,
+)
 from study.status import Status
 from study.transient import IntegratorSettings, Schedule
 
@@ -37,6 +46,7 @@ __all__ = [
     "plan_leg",
     "plan_route",
     "refined_legs",
+    "refined_route",
     "run_plan",
 ]
 
@@ -85,7 +95,8 @@ class PlanError(ValueError):
 
 
 def calibrate_commands(disk: Disk, frequencies: dict[str, float], acceleration: float,
-                       settings: IntegratorSettings | None = None) -> dict[str, Command]:
+                       settings: IntegratorSettings | None = None,
+                       slaving: float = SLAVING) -> dict[str, Command]:
     """Steady motion of each command from the model (:func:`study.planar.periodic_motion`).
 
     Raises
@@ -100,7 +111,7 @@ def calibrate_commands(disk: Disk, frequencies: dict[str, float], acceleration: 
         if name not in frequencies:
             raise PlanError(f"no frequency for command {name!r}; commands: {COMMANDS}")
         motion: PeriodicMotion = periodic_motion(disk, frequencies[name], acceleration,
-                                                 settings=settings)
+                                                 settings=settings, slaving=slaving)
         if motion.status not in (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING):
             raise PlanError(
                 f"command {name!r} ({frequencies[name]} Hz, {acceleration} m s^-2) does not "
@@ -175,21 +186,20 @@ def _single_leg(pose: tuple[float, float, float], target: tuple[float, float],
         turn_name, turn_duration = "left", 0.0
         start = pose
         try:
+            # Fixed point: the turn moves the disk, which moves the heading needed.
             for _ in range(iterations):
                 dx, dy = target[0] - start[0], target[1] - start[1]
-                duration = _straight_time(command, math.hypot(dx, dy))
-                forward, left, _ = arc_displacement(command, duration)
+                forward, left, _ = arc_displacement(
+                    command, _straight_time(command, math.hypot(dx, dy)))
                 # Heading at which the arc from `start` ends on the target.
-                heading_needed = math.atan2(dy, dx) - math.atan2(left, forward)
-                change = _wrap(heading_needed - pose[2])
+                change = _wrap(math.atan2(dy, dx) - math.atan2(left, forward) - pose[2])
                 turn_name = "left" if change >= 0.0 else "right"
-                previous = turn_duration
-                turn_duration = change / commands[turn_name].turn_rate
+                previous, turn_duration = turn_duration, change / commands[turn_name].turn_rate
                 start = _advance(pose, commands[turn_name], turn_duration)
                 if abs(turn_duration - previous) <= 1e-13 * (1.0 + abs(turn_duration)):
-                    dx, dy = target[0] - start[0], target[1] - start[1]
-                    duration = _straight_time(command, math.hypot(dx, dy))
                     break
+            duration = _straight_time(command, math.hypot(target[0] - start[0],
+                                                          target[1] - start[1]))
         except PlanError:
             continue
         total = turn_duration + duration
@@ -241,12 +251,14 @@ def plan_route(start: tuple[float, float, float], waypoints: NDArray[np.float64]
     return route
 
 
-def _schedule(legs: list[Leg], commands: dict[str, Command], minimum: float,
-              phase: float = 0.0) -> tuple[Schedule | None, list[str]]:
+def _schedule(legs: list[Leg], commands: dict[str, Command], phase: float = 0.0
+              ) -> tuple[Schedule | None, list[str]]:
+    """The legs as a drive schedule starting at drive ``phase`` (None if all are
+    shorter than :data:`_SHORTEST`), and the command of each segment."""
     frequency, acceleration, duration, labels = [], [], [], []
     for leg in legs:
         for name, span in ((leg.turn, leg.turn_duration), (leg.straight, leg.straight_duration)):
-            if span <= minimum:
+            if span <= _SHORTEST:
                 continue
             frequency.append(commands[name].frequency)
             acceleration.append(commands[name].acceleration)
@@ -280,15 +292,44 @@ STRATEGIES = ("calibration", "open_loop", "closed_loop")
 _SHORTEST = 1e-6
 
 
-def _end_phase(schedule: Schedule) -> float:
-    return float(schedule.start_phases[-1]
-                 + 2.0 * math.pi * schedule.frequency[-1] * schedule.duration[-1])
+@dataclass(frozen=True)
+class _Flight:
+    """Legs flown from a state: the run (None if there was nothing to fly), the state
+    and drive phase it ends at, and its schedule and commands."""
+
+    run: PlanarTrajectory | None
+    state: NDArray[np.float64]
+    phase: float
+    schedule: Schedule | None
+    labels: list[str]
+
+
+def _fly(disk: Disk, state: NDArray[np.float64], phase: float, legs: list[Leg],
+         commands: dict[str, Command], settings: IntegratorSettings | None, slaving: float,
+         *, sample_interval: float | None = None, heading_noise: float = 0.0,
+         rng: np.random.Generator | None = None) -> _Flight:
+    """Simulate ``legs`` from ``state`` at drive ``phase``; the table's phase and the
+    plate modes carry over from leg to leg."""
+    schedule, labels = _schedule(legs, commands, phase)
+    if schedule is None:
+        return _Flight(None, state, phase, None, labels)
+    end = float(schedule.ends[-1])
+    out_t = [end] if sample_interval is None else np.append(
+        np.arange(0.0, end, sample_interval), end)
+    run = simulate_planar(disk, schedule, initial_state=state, output_times=out_t,
+                          settings=settings, heading_noise=heading_noise, rng=rng,
+                          slaving=slaving)
+    after = run.final_state.copy()
+    after[len(POSE_STATE) - 1] = 0.0  # the path length counts per flight
+    phase = float(schedule.start_phases[-1]
+                  + 2.0 * math.pi * schedule.frequency[-1] * schedule.duration[-1])
+    return _Flight(run, after, phase, schedule, labels)
 
 
 def refined_legs(disk: Disk, state: NDArray[np.float64], phase: float,
                  target: tuple[float, float], commands: dict[str, Command],
                  settings: IntegratorSettings | None = None, iterations: int = 5,
-                 tolerance: float = 1e-4) -> list[Leg]:
+                 tolerance: float = 1e-4, slaving: float = SLAVING) -> list[Leg]:
     """Legs to ``target`` corrected by simulating the model itself.
 
     The calibration knows only steady motion; after a command switch the plate modes
@@ -300,14 +341,10 @@ def refined_legs(disk: Disk, state: NDArray[np.float64], phase: float,
     aim = np.array(target, dtype=float)
     legs = plan_leg(pose, (aim[0], aim[1]), commands)
     for _ in range(iterations):
-        schedule, _ = _schedule(legs, commands, _SHORTEST, phase)
-        if schedule is None:
+        flight = _fly(disk, state, phase, legs, commands, settings, slaving)
+        if flight.run is None or flight.run.outcome != "completed":
             break
-        run = simulate_planar(disk, schedule, initial_state=state,
-                              output_times=[float(schedule.ends[-1])], settings=settings)
-        if run.outcome != "completed":
-            break
-        miss = run.final_state[:2] - np.asarray(target)
+        miss = flight.state[:2] - np.asarray(target)
         if math.hypot(miss[0], miss[1]) <= tolerance:
             break
         aim = aim - miss
@@ -315,18 +352,36 @@ def refined_legs(disk: Disk, state: NDArray[np.float64], phase: float,
     return legs
 
 
+def refined_route(disk: Disk, start: tuple[float, float, float],
+                  waypoints: NDArray[np.float64], commands: dict[str, Command],
+                  settings: IntegratorSettings | None = None, iterations: int = 5,
+                  slaving: float = SLAVING) -> list[list[Leg]]:
+    """Legs to every waypoint in turn, each corrected (:func:`refined_legs`) from the
+    state the noise-free model reaches at the previous one."""
+    state, phase = rest_state(disk, start), 0.0
+    route = []
+    for target in np.asarray(waypoints, dtype=float):
+        legs = refined_legs(disk, state, phase, (target[0], target[1]), commands, settings,
+                            iterations, slaving=slaving)
+        route.append(legs)
+        flight = _fly(disk, state, phase, legs, commands, settings, slaving)
+        state, phase = flight.state, flight.phase
+    return route
+
+
 def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[np.float64],
              commands: dict[str, Command], *, strategy: str = "closed_loop",
              heading_noise: float = 0.0, seed: int | None = None,
              settings: IntegratorSettings | None = None, sample_interval: float = 0.05,
-             iterations: int = 5) -> PlanRun:
+             iterations: int = 5, slaving: float = SLAVING,
+             route: list[list[Leg]] | None = None) -> PlanRun:
     """Simulate a route flown by one of three strategies.
 
-    ``"calibration"``: the legs planned from the calibration alone, flown blind.
-    ``"open_loop"``: the legs corrected by simulating the noise-free model
-    (:func:`refined_legs`), flown blind. ``"closed_loop"``: each leg planned and
-    corrected from the pose actually reached at the previous waypoint (an operator
-    who looks at the disk between legs).
+    ``"calibration"``: the legs planned from the calibration alone
+    (:func:`plan_route`), flown blind. ``"open_loop"``: the legs corrected in the
+    noise-free model (:func:`refined_route`), flown blind. ``"closed_loop"``: each leg
+    planned and corrected from the pose actually reached at the previous waypoint (an
+    operator who looks at the disk between legs).
 
     Parameters
     ----------
@@ -338,34 +393,21 @@ def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[n
         Spacing of the returned path samples [s].
     iterations : int
         Correction iterations of :func:`refined_legs`.
+    route : list of list of Leg, optional
+        The blind strategies' legs, if already planned (they do not depend on the
+        noise, so several noisy runs can share them).
     """
     if strategy not in STRATEGIES:
         raise ValueError(f"strategy {strategy!r} unknown; allowed: {', '.join(STRATEGIES)}")
     waypoints = np.asarray(waypoints, dtype=float)
     rng = np.random.default_rng(seed)
     pose = tuple(float(v) for v in start)
-    state = np.zeros(7 + 2 * len(disk.plates))
-    state[:3] = pose
-    planned: list[list[Leg]] = []
-    if strategy == "calibration":
-        planned = plan_route(pose, waypoints, commands)
-    elif strategy == "open_loop":
-        # The whole route corrected in the noise-free model, before flying any of it.
-        ghost, phase = state.copy(), 0.0
-        for target in waypoints:
-            legs = refined_legs(disk, ghost, phase, (target[0], target[1]), commands,
-                                settings, iterations)
-            planned.append(legs)
-            schedule, _ = _schedule(legs, commands, _SHORTEST, phase)
-            if schedule is not None:
-                run = simulate_planar(disk, schedule, initial_state=ghost,
-                                      output_times=[float(schedule.ends[-1])],
-                                      settings=settings)
-                ghost = run.final_state.copy()
-                ghost[6] = 0.0
-                phase = _end_phase(schedule)
+    if route is None and strategy == "calibration":
+        route = plan_route(pose, waypoints, commands)
+    elif route is None and strategy == "open_loop":
+        route = refined_route(disk, pose, waypoints, commands, settings, iterations, slaving)
+    state, phase = rest_state(disk, pose), 0.0
     time_offset = 0.0
-    phase = 0.0
     times, xs, ys, headings = [np.zeros(1)], [np.array([pose[0]])], [np.array([pose[1]])], \
         [np.array([pose[2]])]
     leg_end = np.full((len(waypoints), 2), np.nan)
@@ -374,35 +416,28 @@ def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[n
     for i, target in enumerate(waypoints):
         if strategy == "closed_loop":
             legs = refined_legs(disk, state, phase, (target[0], target[1]), commands, settings,
-                                iterations)
+                                iterations, slaving=slaving)
         else:
-            legs = planned[i]
-        schedule, leg_labels = _schedule(legs, commands, _SHORTEST, phase)
-        if schedule is None:  # already there
-            leg_end[i] = pose[:2]
+            legs = route[i]
+        flight = _fly(disk, state, phase, legs, commands, settings, slaving,
+                      sample_interval=sample_interval, heading_noise=heading_noise, rng=rng)
+        state, phase, run = flight.state, flight.phase, flight.run
+        if run is None:  # already there
+            leg_end[i] = state[:2]
             continue
-        end = float(schedule.ends[-1])
-        phase = _end_phase(schedule)
-        out_t = np.append(np.arange(0.0, end, sample_interval), end)
-        # The table's phase and the plate modes carry over from leg to leg.
-        run = simulate_planar(disk, schedule, initial_state=state, output_times=out_t,
-                              settings=settings, heading_noise=heading_noise, rng=rng)
         times.append(time_offset + run.time[1:])
         xs.append(run.x[1:])
         ys.append(run.y[1:])
         headings.append(run.heading[1:])
-        state = run.final_state.copy()
-        state[6] = 0.0  # path length is per leg
-        pose = (float(state[0]), float(state[1]), float(state[2]))
         time_offset += run.end_time
-        frequencies += list(schedule.frequency)
-        accelerations += list(schedule.acceleration)
-        durations += list(schedule.duration)
-        labels += leg_labels
+        frequencies += list(flight.schedule.frequency)
+        accelerations += list(flight.schedule.acceleration)
+        durations += list(flight.schedule.duration)
+        labels += flight.labels
         if run.outcome != "completed":
             outcome = run.outcome
             break
-        leg_end[i] = pose[:2]
+        leg_end[i] = state[:2]
     miss = np.hypot(leg_end[:, 0] - waypoints[:, 0], leg_end[:, 1] - waypoints[:, 1])
     flown = Schedule(np.array(frequencies), np.array(accelerations),
                      np.array(durations)) if labels else None

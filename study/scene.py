@@ -53,6 +53,7 @@ from study.planar import (
     contact_margins,
     describe_disk,
     periodic_motion,
+    rest_state,
     simulate_planar,
 )
 from study.planner import (
@@ -61,6 +62,7 @@ from study.planner import (
     PlanError,
     calibrate_commands,
     plan_route,
+    refined_route,
     run_plan,
 )
 from study.spec import SpecError
@@ -392,10 +394,9 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
     end = float(schedule.ends[-1])
     grid = np.arange(0.0, end, options["sample_interval"])
     out_t = np.unique(np.concatenate([grid, schedule.starts, [end]]))
-    state = np.zeros(7 + 2 * len(spec.disk.plates))
-    state[:3] = options["start"]
     run = simulate_planar(
-        spec.disk, schedule, initial_state=state, output_times=out_t, settings=spec.settings,
+        spec.disk, schedule, initial_state=rest_state(spec.disk, options["start"]),
+        output_times=out_t, settings=spec.settings,
         heading_noise=_heading_noise(options["heading_drift"], spec.disk),
         rng=options["seed"], slaving=spec.slaving,
     )
@@ -518,11 +519,17 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     disk = spec.disk
     try:
         commands = calibrate_commands(disk, options["frequencies"], options["acceleration"],
-                                      settings=spec.settings)
-        route = plan_route(options["start"], options["waypoints"], commands)
+                                      settings=spec.settings, slaving=spec.slaving)
+        waypoints = options["waypoints"]
+        # The blind strategies' legs do not depend on the noise: plan them once.
+        routes = {
+            "calibration": plan_route(options["start"], waypoints, commands),
+            "open_loop": refined_route(disk, options["start"], waypoints, commands,
+                                       spec.settings, slaving=spec.slaving),
+            "closed_loop": None,
+        }
     except PlanError as err:
         raise SceneError(f"{spec.path}: [plan]: {err}") from None
-    waypoints = options["waypoints"]
     noise = _heading_noise(options["heading_drift"], disk)
     strategies = STRATEGIES
     count = options["realisations"] + 1
@@ -533,6 +540,7 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
                 disk, options["start"], waypoints, commands, strategy=strategy,
                 heading_noise=noise if r > 0 else 0.0, seed=options["seed"] * 1000 + r,
                 settings=spec.settings, sample_interval=options["sample_interval"],
+                slaving=spec.slaving, route=routes[strategy],
             )
     end = max(float(run.time[-1]) for run in runs.values())
     t = np.arange(0.0, end + options["sample_interval"], options["sample_interval"])
@@ -547,7 +555,7 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
         miss[s, r] = run.miss_distance
         outcome[s, r] = SEGMENT_STATUS.index(run.outcome)
     plan_run = runs[STRATEGIES.index("open_loop"), 0]
-    planned = np.array([legs[-1].predicted_pose[:2] for legs in route])
+    planned = np.array([legs[-1].predicted_pose[:2] for legs in routes["calibration"]])
     dims = ("strategy", "realisation", "t")
     variables = {
         "t": _variable("t", t, "s", "time since the drive started"),

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from study.planar import periodic_motion, simulate_planar, steady_plate_states
+from study.planar import periodic_motion, rest_state, simulate_planar
 from study.scene import load_scene
 from study.status import Status
 from study.transient import IntegratorSettings, Schedule
@@ -34,9 +34,7 @@ def motions(disk):
 
 
 def _run(disk, f, a, periods, heading=0.0):
-    state = np.zeros(7 + 2 * len(disk.plates))
-    state[2] = heading
-    state[7:] = steady_plate_states(disk, f, a)
+    state = rest_state(disk, (0.0, 0.0, heading), drive=(f, a))
     schedule = Schedule.constant(f, a, periods / f)
     return simulate_planar(disk, schedule, initial_state=state, output_times=[0.0, periods / f],
                            settings=IntegratorSettings(tolerance=1e-9))
@@ -99,8 +97,7 @@ def test_heading_noise_reproduces_the_measured_drift(disk):
     """0.1 rad of heading spread per diameter slid (paper, Fig. 4 text)."""
     drift = 0.1
     noise = drift / math.sqrt(disk.diameter)
-    state = np.zeros(7 + 2 * len(disk.plates))
-    state[7:] = steady_plate_states(disk, FORWARD, A_OPERATING)
+    state = rest_state(disk, drive=(FORWARD, A_OPERATING))
     periods = 600
     run = simulate_planar(disk, Schedule.constant(FORWARD, A_OPERATING, periods / FORWARD),
                           initial_state=state, heading_noise=noise, rng=11,

@@ -17,8 +17,8 @@ from study.planar import (
     Disk,
     Plate,
     periodic_motion,
+    rest_state,
     simulate_planar,
-    steady_plate_states,
 )
 from study.solver import steady_state
 from study.status import Status
@@ -100,8 +100,7 @@ def test_the_path_rotates_with_the_initial_heading():
     schedule = Schedule(np.array([14.2, 8.2]), np.array([7.0, 7.0]), np.array([1.0, 1.0]))
     base = simulate_planar(disk, schedule, output_times=[1.0, 2.0])
     turn = 1.1
-    state = np.zeros(11)
-    state[2] = turn
+    state = rest_state(disk, (0.0, 0.0, turn))
     rotated = simulate_planar(disk, schedule, initial_state=state, output_times=[1.0, 2.0])
     c, s = math.cos(turn), math.sin(turn)
     assert_allclose(rotated.x, c * base.x - s * base.y, rtol=0, atol=1e-9)
@@ -168,8 +167,7 @@ def test_steady_plate_states_start_without_a_transient():
     """Started on their steady response, the plates' state repeats after one period."""
     disk = _two_plate_disk()
     f, a = 8.2, 1.0  # below threshold: the disk stays stuck, only the plates move
-    state = np.zeros(11)
-    state[7:] = steady_plate_states(disk, f, a)
+    state = rest_state(disk, drive=(f, a))
     run = simulate_planar(disk, Schedule.constant(f, a, 1 / f), initial_state=state,
                           output_times=[1 / f], settings=IntegratorSettings(tolerance=1e-12))
     assert_allclose(run.final_state[7:], state[7:], rtol=1e-9, atol=1e-15)
@@ -219,8 +217,7 @@ def test_contact_margins_match_the_simulated_plates():
 
     disk = _two_plate_disk()  # head plate at the rim
     f, a = 14.2, 7.0
-    state = np.zeros(11)
-    state[7:] = steady_plate_states(disk, f, a)
+    state = rest_state(disk, drive=(f, a))
     times = np.linspace(0.0, 1.0 / f, 4097)
     run = simulate_planar(disk, Schedule.constant(f, a, 1.0 / f), initial_state=state,
                           output_times=times, settings=IntegratorSettings(tolerance=1e-12))

@@ -11,7 +11,7 @@ import xarray as xr
 from numpy.testing import assert_allclose
 
 from study.cli import main
-from study.planar import periodic_motion, simulate_planar
+from study.planar import periodic_motion, rest_state, simulate_planar
 from study.planner import arc_displacement, calibrate_commands, plan_leg
 from study.scene import SceneError, load_scene, parse_scene, run_scene
 from study.store import ResultError, open_result
@@ -131,8 +131,7 @@ def test_trajectory_scene_end_to_end(tmp_path):
     assert float(data.heading_change[1]) > 0.0  # left turn
     # The same run computed directly.
     spec = load_scene(spec_path)
-    state = np.zeros(11)
-    state[2] = heading0
+    state = rest_state(spec.disk, (0.0, 0.0, heading0))
     direct = simulate_planar(spec.disk, Schedule(np.array([14.2, 7.2]), np.array([7.0, 7.0]),
                                                  np.array([1.0, 1.0])),
                              initial_state=state, output_times=[2.0], settings=spec.settings,
