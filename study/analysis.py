@@ -18,6 +18,7 @@ from study.physics import as_acceleration, as_frequency, thresholds
 from study.solver import SolverSettings, SteadyState, steady_state
 from study.status import Status
 from study.structure import Structure
+from study.variables import VARIABLES
 
 __all__ = [
     "FRONTIER_CROSSING",
@@ -213,7 +214,6 @@ def frontier(
 def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tolerance):
     """Frontier points as a labelled dataset (dims ``a``, ``branch``)."""
     from study.provenance import code_sha256, package_version, utc_now
-    from study.store import FRONTIER_ATTRS
 
     dims = ("a", "branch")
     values = {
@@ -223,7 +223,7 @@ def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tol
         "frontier_bracket": found.width,
     }
     dataset = xr.Dataset(
-        {name: (dims, values[name], dict(FRONTIER_ATTRS[name])) for name in values},
+        {name: (dims, values[name], VARIABLES[name].attrs()) for name in values},
         coords={"a": ("a", np.asarray(a, dtype=np.float64),
                       {"units": "m s-2", "long_name": "drive acceleration amplitude"})},
     )

@@ -1,0 +1,232 @@
+"""The observables a study can ask for, each declared once.
+
+An :class:`Observable` names its variables (declared in :mod:`study.variables`),
+the grid it lives on, what it requires, whether its values are worth keeping for
+reuse, and how it is computed. The spec schema, the sweep, the result file and its
+validation all take it from here: adding an observable is one entry in
+:data:`OBSERVABLES` (and its variables in :mod:`study.variables`).
+
+Closed-form observables (``grid = "row"``) cost microseconds per frequency, less
+than reading them back, so they are recomputed and never cached; solver
+observables (``grid = "point"``) are cached point by point.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from study.analysis import frontier_from_grid
+from study.physics import lift_off_acceleration, mode_response, thresholds
+from study.solver import SolverSettings, SteadyState, steady_state
+from study.structure import Structure
+from study.transient import IntegratorSettings, integrated_steady_state
+from study.variables import VARIABLES, Variable
+
+__all__ = [
+    "METHODS",
+    "OBSERVABLES",
+    "Method",
+    "Observable",
+    "PointWork",
+    "resolve",
+    "variables_of",
+]
+
+#: Velocity solvers a spec can choose with ``[solver] method``.
+METHODS = ("exact", "integrator")
+
+
+@dataclass(frozen=True)
+class Method:
+    """How steady velocities are computed: solver, coupling and their settings.
+
+    Attributes
+    ----------
+    name : {"exact", "integrator"}
+        The exact event-driven solver, or time integration until the orbit repeats.
+    coupling : {"one-way", "two-way"}
+        Whether the sliding base also forces the mode.
+    solver : SolverSettings
+        Budgets of the exact solver.
+    integrator : IntegratorSettings
+        Accuracy and budgets of the time integrator.
+    """
+
+    name: str = "exact"
+    coupling: str = "one-way"
+    solver: SolverSettings = field(default_factory=SolverSettings)
+    integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
+
+    def canonical(self) -> dict[str, Any]:
+        """The settings that decide the numbers, as plain JSON data."""
+        if self.name == "exact":
+            settings = {"max_events": self.solver.max_events,
+                        "max_map_iterations": self.solver.max_map_iterations}
+        else:
+            settings = {
+                "tolerance": self.integrator.tolerance,
+                "steps_per_period": self.integrator.steps_per_period,
+                "max_periods": self.integrator.max_periods,
+                "max_orbit_period": self.integrator.max_orbit_period,
+                "period_tolerance": self.integrator.resolved_period_tolerance,
+            }
+        return {"method": self.name, "coupling": self.coupling, **settings}
+
+    def solve(self, structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+              parallel: bool = False) -> SteadyState:
+        """Steady state at ``(f, a)`` (broadcast) [Hz, m s^-2] by this method."""
+        if self.name == "integrator":
+            return integrated_steady_state(structure, f, a, coupling=self.coupling,
+                                           settings=self.integrator, parallel=parallel)
+        return steady_state(structure, f, a, self.solver, parallel=parallel)
+
+
+@dataclass
+class PointWork:
+    """Drive points of one task and the solves its observables share.
+
+    Attributes
+    ----------
+    structure : Structure
+    f, a : numpy.ndarray
+        Drive frequencies [Hz] and accelerations [m s^-2], broadcast together
+        (``f[:, None]`` and ``a[None, :]`` for a block of the grid).
+    method : Method
+    """
+
+    structure: Structure
+    f: NDArray[np.float64]
+    a: NDArray[np.float64]
+    method: Method
+
+    @cached_property
+    def solution(self) -> SteadyState:
+        """Steady state by the study's method (computed once per task)."""
+        return self.method.solve(self.structure, self.f, self.a)
+
+    @cached_property
+    def one_way(self) -> SteadyState:
+        """Steady state of the paper's one-way model by the exact solver."""
+        return steady_state(self.structure, self.f, self.a, self.method.solver, parallel=False)
+
+
+@dataclass(frozen=True)
+class Observable:
+    """What a spec can ask for under ``[study] observables``.
+
+    Attributes
+    ----------
+    name : str
+    summary : str
+        One line for docs and error messages.
+    grid : {"row", "point", "frontier"}
+        ``row``: closed form per frequency; ``point``: per drive point, by the
+        solver; ``frontier``: found from whole velocity rows after the grid.
+    variables : tuple of str
+        Names of its variables in :data:`study.variables.VARIABLES`.
+    requires : tuple of str
+        Observables it implies (their variables are written too).
+    cached : bool
+        Whether computed values are kept for reuse by later runs.
+    compute : callable
+        ``row``: ``compute(structure, f) -> {name: (n_f,)}``; ``point``:
+        ``compute(work: PointWork) -> {name: array}``; ``frontier``:
+        ``compute(structure, f, a, velocity, status, method, tolerance) -> {name: (n_a, n_branch)}``.
+    """
+
+    name: str
+    summary: str
+    grid: str
+    variables: tuple[str, ...]
+    compute: Callable[..., dict[str, NDArray[Any]]] = field(repr=False)
+    requires: tuple[str, ...] = ()
+    cached: bool = False
+
+    @property
+    def needs_acceleration(self) -> bool:
+        """Whether the sweep needs the drive acceleration axis ``a``."""
+        return self.grid != "row"
+
+
+def _resonance(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    response = structure.omega0**2 * mode_response(structure, f)
+    return {"mode_gain": np.abs(response), "mode_phase": -np.angle(response)}
+
+
+def _thresholds(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    plus, minus = thresholds(structure, f)
+    return {"a_star_plus": plus, "a_star_minus": minus}
+
+
+def _lift_off(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    return {"lift_off_acceleration": lift_off_acceleration(structure, f)}
+
+
+def _velocity(work: PointWork) -> dict[str, NDArray[Any]]:
+    return {"velocity": work.solution.velocity, "status": work.solution.status}
+
+
+def _diagnostics(work: PointWork) -> dict[str, NDArray[Any]]:
+    s = work.solution
+    return {"slips_per_period": s.slips_per_period, "forward_slip_fraction": s.forward_fraction,
+            "backward_slip_fraction": s.backward_fraction, "orbit_period": s.orbit_period,
+            "nonconvergence": s.reason}
+
+
+def _paper_model(work: PointWork) -> dict[str, NDArray[Any]]:
+    return {"velocity_one_way": work.one_way.velocity, "status_one_way": work.one_way.status}
+
+
+def _frontier(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+              velocity: NDArray[np.float64], status: NDArray[np.int8], method: Method,
+              tolerance: float) -> dict[str, NDArray[Any]]:
+    found = frontier_from_grid(structure, f, a, velocity, status, tolerance=tolerance,
+                               settings=method.solver, solve=method.solve)
+    return {"frontier_frequency": found.frequency, "frontier_kind": found.kind,
+            "frontier_direction": found.direction, "frontier_bracket": found.width}
+
+
+_DECLARED = (
+    Observable("resonance", "gain and phase of the plate's first mode", "row",
+               ("mode_gain", "mode_phase"), _resonance),
+    Observable("thresholds", "drive accelerations at which forward/backward slips start",
+               "row", ("a_star_plus", "a_star_minus"), _thresholds),
+    Observable("lift_off", "drive acceleration at which the normal force vanishes", "row",
+               ("lift_off_acceleration",), _lift_off),
+    Observable("velocity", "steady mean velocity and the solver's status", "point",
+               ("velocity", "status"), _velocity, cached=True),
+    Observable("diagnostics", "slips per period, slip fractions, orbit period, why not "
+               "converged", "point",
+               ("slips_per_period", "forward_slip_fraction", "backward_slip_fraction",
+                "orbit_period", "nonconvergence"), _diagnostics, requires=("velocity",),
+               cached=True),
+    Observable("paper_model", "the paper's one-way velocity beside a two-way study", "point",
+               ("velocity_one_way", "status_one_way"), _paper_model, requires=("velocity",),
+               cached=True),
+    Observable("frontier", "zero-velocity frontier f*(a), refined by bisection", "frontier",
+               ("frontier_frequency", "frontier_kind", "frontier_direction",
+                "frontier_bracket"), _frontier, requires=("velocity",)),
+)
+
+#: name -> Observable, in the order they appear in a dataset.
+OBSERVABLES: dict[str, Observable] = {o.name: o for o in _DECLARED}
+
+
+def resolve(requested: tuple[str, ...] | list[str]) -> tuple[Observable, ...]:
+    """The requested observables and those they require, in :data:`OBSERVABLES` order."""
+    wanted = set(requested)
+    for name in list(wanted):
+        wanted.update(OBSERVABLES[name].requires)
+    return tuple(o for name, o in OBSERVABLES.items() if name in wanted)
+
+
+def variables_of(requested: tuple[str, ...] | list[str]) -> tuple[Variable, ...]:
+    """Every variable a study with these observables writes, in file order."""
+    names = {v for o in resolve(requested) for v in o.variables}
+    return tuple(v for name, v in VARIABLES.items() if name in names)

@@ -1,0 +1,145 @@
+"""Every data variable a study result can hold, declared once.
+
+A :class:`Variable` carries what the file needs (dims, dtype, units, long_name, CF
+flags) and what validation checks; :mod:`study.observables` groups them into the
+observables a spec asks for and says how each is computed. Nothing here computes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from study.status import NonConvergence, Status
+
+__all__ = ["FRONTIER_KINDS", "GRIDS", "VARIABLES", "Variable"]
+
+#: Where a variable lives: over (structure..., f), (structure..., f, a), or the
+#: frontier's (structure..., a, branch).
+GRIDS = {"row": ("f",), "point": ("f", "a"), "frontier": ("a", "branch")}
+
+#: How the velocity changes sign at a frontier point.
+FRONTIER_KINDS = ("none", "crossing", "jump")
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One data variable of a result file.
+
+    Attributes
+    ----------
+    name : str
+        netCDF variable name.
+    grid : {"row", "point", "frontier"}
+        Trailing dimensions after the structure axes (see :data:`GRIDS`).
+    dtype : str
+        numpy dtype name on disk.
+    units, long_name : str
+        CF attributes.
+    flags : tuple of str
+        CF ``flag_meanings`` of a flag variable; its ``flag_values`` are
+        ``flag_values`` (default ``0 .. len(flags) - 1``).
+    flag_values : tuple of int
+        Codes of the flags, in the order of ``flags``.
+    comment : str
+        CF ``comment`` (optional).
+    invalid_where : str
+        For a float variable paired with a status flag: the name of that flag
+        variable; the value is NaN exactly where the status is invalid and 0 where
+        it is static.
+    """
+
+    name: str
+    grid: str
+    dtype: str
+    units: str
+    long_name: str
+    flags: tuple[str, ...] = ()
+    flag_values: tuple[int, ...] = ()
+    comment: str = ""
+    invalid_where: str = ""
+
+    def __post_init__(self) -> None:
+        if self.grid not in GRIDS:
+            raise ValueError(f"{self.name}: grid {self.grid!r}; allowed: {', '.join(GRIDS)}")
+        if self.flags and not self.flag_values:
+            object.__setattr__(self, "flag_values", tuple(range(len(self.flags))))
+
+    @property
+    def is_flag(self) -> bool:
+        """Whether the variable is a CF flag variable."""
+        return bool(self.flags)
+
+    def dims(self, structure_dims: tuple[str, ...]) -> tuple[str, ...]:
+        """Dimensions of the variable in a study with these structure axes."""
+        return (*structure_dims, *GRIDS[self.grid])
+
+    def attrs(self) -> dict[str, Any]:
+        """CF/ACDD attributes as written to the file."""
+        attrs: dict[str, Any] = {"units": self.units, "long_name": self.long_name}
+        if self.flags:
+            attrs["flag_values"] = np.array(self.flag_values, dtype=self.dtype)
+            attrs["flag_meanings"] = " ".join(self.flags)
+            attrs["coverage_content_type"] = "qualityInformation"
+        else:
+            attrs["coverage_content_type"] = "modelResult"
+        if self.comment:
+            attrs["comment"] = self.comment
+        return attrs
+
+
+_STATUS_FLAGS = tuple(s.name.lower() for s in Status)
+_STATUS_VALUES = tuple(int(s) for s in Status)
+
+_DECLARED = (
+    Variable("mode_gain", "row", "float64", "1",
+             "amplification |w0^2 G| of the plate's first mode (1 at low frequency)"),
+    Variable("mode_phase", "row", "float64", "rad",
+             "phase lag of the plate's deflection behind the drive"),
+    Variable("a_star_plus", "row", "float64", "m s-2",
+             "drive acceleration at which forward slips start (paper eq. 5)"),
+    Variable("a_star_minus", "row", "float64", "m s-2",
+             "drive acceleration at which backward slips start (paper eq. 5)"),
+    Variable("lift_off_acceleration", "row", "float64", "m s-2",
+             "drive acceleration above which the normal force becomes negative"),
+    Variable("velocity", "point", "float64", "m s-1",
+             "mean velocity of the steady periodic orbit, positive forward",
+             comment="exactly 0 when static; NaN (missing) where status is lift_off, "
+             "not_converged or friction_paradox", invalid_where="status"),
+    Variable("status", "point", "int8", "1", "outcome of the steady-state solver",
+             flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("slips_per_period", "point", "float64", "1",
+             "slip events per drive period on the periodic orbit"),
+    Variable("forward_slip_fraction", "point", "float64", "1",
+             "fraction of the drive period spent slipping forward"),
+    Variable("backward_slip_fraction", "point", "float64", "1",
+             "fraction of the drive period spent slipping backward"),
+    Variable("orbit_period", "point", "int32", "1",
+             "period of the steady orbit in drive periods (0: no orbit)"),
+    Variable("nonconvergence", "point", "int8", "1",
+             "why the solver found no periodic orbit",
+             flags=tuple(r.name.lower() for r in NonConvergence),
+             flag_values=tuple(int(r) for r in NonConvergence)),
+    Variable("velocity_one_way", "point", "float64", "m s-1",
+             "mean steady velocity of the paper's one-way model at the same point "
+             "(exact solver), for comparison with the two-way velocity",
+             comment="exactly 0 when static; NaN (missing) where status_one_way is "
+             "lift_off or not_converged", invalid_where="status_one_way"),
+    Variable("status_one_way", "point", "int8", "1",
+             "outcome of the exact solver for the paper's one-way model",
+             flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("frontier_frequency", "frontier", "float64", "Hz",
+             "drive frequency f*(a) where the mean velocity changes sign",
+             comment="NaN-padded where an acceleration has fewer branches"),
+    Variable("frontier_kind", "frontier", "int8", "1",
+             "how the velocity changes sign at the frontier", flags=FRONTIER_KINDS),
+    Variable("frontier_direction", "frontier", "int8", "1",
+             "sign of the velocity just above the frontier frequency (0: none)"),
+    Variable("frontier_bracket", "frontier", "float64", "Hz",
+             "width of the final bisection bracket of the frontier frequency"),
+)
+
+#: name -> Variable, in the order variables appear in a file.
+VARIABLES: dict[str, Variable] = {v.name: v for v in _DECLARED}
