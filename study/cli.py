@@ -7,6 +7,7 @@ Exit status: 0 on success, 1 when a file or spec is invalid or a run fails,
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import sys
 from pathlib import Path
@@ -33,7 +34,7 @@ def _run_scene(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from study.runner import StudyBusy, StudyInterrupted, run_study
+    from study.runner import StudyInterrupted, run_study
     from study.scene import is_scene_file
     from study.spec import load_spec
 
@@ -47,24 +48,79 @@ def _run(args: argparse.Namespace) -> int:
             args.output,
             scheduler=args.scheduler,
             workers=args.workers,
-            progress=False if args.no_progress else None,
+            progress=args.progress,
             force=args.force,
             command=command,
+            cache=args.cache,
         )
-    except (StudyInterrupted, StudyBusy) as err:
+    except StudyInterrupted as err:
         print(f"study: {err}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print("\nstudy: interrupted; completed chunks are kept, run again to resume",
+        print("\nstudy: interrupted; computed values are kept, run again to resume",
               file=sys.stderr)
         return 130
-    if report.up_to_date:
+    if report.metadata_updated:
+        print(f"{report.output}: metadata updated (numbers unchanged, nothing recomputed)")
+    elif report.up_to_date:
         print(f"{report.output}: up to date (spec and code unchanged)")
     else:
         print(
-            f"{report.output}: {report.chunks} chunks ({report.computed} computed, "
-            f"{report.reused} reused) in {report.wall_seconds:.2f} s"
+            f"{report.output}: {report.points} points ({report.points_computed} computed, "
+            f"{report.points_reused} reused) in {report.chunks} chunks "
+            f"({report.computed} computed, {report.reused} reused) in "
+            f"{report.wall_seconds:.2f} s"
         )
+    return 0
+
+
+def _cache(args: argparse.Namespace) -> int:
+    import time
+
+    from study.cache import ResultCache
+    from study.provenance import code_sha256
+
+    cache = ResultCache(args.cache)
+    entries = list(cache.entries())
+    current = code_sha256()
+    now = time.time()
+    if args.action == "list":
+        if not entries:
+            print(f"{cache.root}: no kept values")
+            return 0
+        total = 0
+        for entry in entries:
+            content = entry.content
+            code = str(content.get("code_sha256", "?"))
+            structure = ", ".join(f"{k}={v:.6g}" for k, v in
+                                  sorted(content.get("structure", {}).items()))
+            method = content.get("method", {})
+            print(
+                f"{entry.key[:12]}  {content.get('observable', '?'):<12} "
+                f"{method.get('method', '?')}/{method.get('coupling', '?')}  "
+                f"{entry.points:>10d} pts {entry.blocks:>5d} blocks {entry.size / 1e6:9.2f} MB "
+                f"{(now - entry.modified) / 86400:7.1f} d  code {code[:12]}"
+                f"{'' if code == current else ' (stale code)'}  {structure}"
+            )
+            total += entry.size
+        print(f"{len(entries)} entries, {total / 1e6:.2f} MB in {cache.root}")
+        return 0
+    doomed = [
+        e for e in entries
+        if args.all
+        or (args.stale and e.content.get("code_sha256") != current)
+        or (args.older_than is not None and now - e.modified > args.older_than * 86400)
+    ]
+    if not (args.all or args.stale or args.older_than is not None):
+        print("study: cache prune needs --stale, --older-than DAYS or --all", file=sys.stderr)
+        return 2
+    freed = sum(e.size for e in doomed)
+    for entry in doomed:
+        if not args.dry_run:
+            cache.remove(entry.key)
+    verb = "would remove" if args.dry_run else "removed"
+    print(f"{verb} {len(doomed)} of {len(entries)} entries ({freed / 1e6:.2f} MB) "
+          f"from {cache.root}")
     return 0
 
 
@@ -103,7 +159,7 @@ def _figure(args: argparse.Namespace) -> int:
 
 
 def _list(args: argparse.Namespace) -> int:
-    from study.runner import is_up_to_date, partial_folder
+    from study.runner import is_up_to_date
     from study.scene import is_scene_file, load_scene, scene_up_to_date
     from study.spec import SpecError, load_spec
 
@@ -130,8 +186,6 @@ def _list(args: argparse.Namespace) -> int:
             continue
         if is_up_to_date(spec, output):
             state = "up to date"
-        elif partial_folder(output).exists():
-            state = "interrupted (resumable)"
         elif output.exists():
             state = "out of date"
         else:
@@ -157,8 +211,26 @@ def _parser() -> argparse.ArgumentParser:
                      help="threads of the local cluster (default: one per core)")
     run.add_argument("--force", action="store_true",
                      help="recompute even when the result is up to date")
-    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                     help="progress with rate and time left (default: a bar on a terminal, "
+                     "a line every 10%% or 30 s otherwise)")
+    run.add_argument("--cache", type=Path, metavar="DIR",
+                     help="kept values to reuse and extend (default: $STUDY_CACHE, else "
+                     "RESULT_FOLDER/.study-cache)")
     run.set_defaults(handler=_run)
+
+    cache = commands.add_parser("cache", help="show or prune the kept computed values")
+    cache.add_argument("action", choices=("list", "prune"))
+    cache.add_argument("--cache", type=Path, metavar="DIR",
+                       default=Path(os.environ.get("STUDY_CACHE") or "results/.study-cache"),
+                       help="cache folder (default: $STUDY_CACHE, else results/.study-cache)")
+    cache.add_argument("--stale", action="store_true",
+                       help="prune: entries computed by other code than this")
+    cache.add_argument("--older-than", type=float, metavar="DAYS",
+                       help="prune: entries not written for DAYS days")
+    cache.add_argument("--all", action="store_true", help="prune: everything")
+    cache.add_argument("--dry-run", action="store_true", help="prune: only say what would go")
+    cache.set_defaults(handler=_cache)
 
     validate = commands.add_parser("validate", help="check result files against the schema")
     validate.add_argument("files", type=Path, nargs="+", metavar="FILE")
@@ -190,9 +262,10 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``study`` console script."""
+    from study.cluster import ClusterError
     from study.figures import FigureError
     from study.spec import SpecError
-    from study.store import ResultError
+    from study.store import ResultError, StoreBusy, StoreError
 
     parser = _parser()
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -202,7 +275,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--workers must be >= 1, got {args.workers}")
     try:
         return args.handler(args)
-    except (SpecError, ResultError, FigureError) as err:
+    except (SpecError, ResultError, FigureError, StoreError, StoreBusy, ClusterError) as err:
         print(f"study: {err}", file=sys.stderr)
         return 1
 

@@ -137,7 +137,8 @@ class Observable:
     compute : callable
         ``row``: ``compute(structure, f) -> {name: (n_f,)}``; ``point``:
         ``compute(work: PointWork) -> {name: array}``; ``frontier``:
-        ``compute(structure, f, a, velocity, status, method, tolerance) -> {name: (n_a, n_branch)}``.
+        ``compute(structure, f, a, velocity, status, method, tolerance)``, each array
+        ``(n_a, n_branch)``.
     """
 
     name: str

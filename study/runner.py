@@ -1,9 +1,13 @@
-"""Run a study: the only module that crosses spec -> sweep -> store.
+"""Run a study: the only module that crosses spec -> sweep -> cache -> store.
 
-Chunks are fanned out over dask.distributed: by default an in-process local
-cluster with one thread per core (the numba kernel releases the GIL), or any
-cluster given by its scheduler address, unchanged. Each finished chunk is stored
-as it arrives, so an interrupted run loses nothing and the next run resumes.
+A run plans the grid in chunks, looks every chunk up in the cache of kept values,
+sends what is missing to the executor (local threads, or a dask scheduler), and
+writes each chunk into the result file as it arrives, together with its computed
+values into the cache. Memory holds a bounded number of chunks, never the study.
+An interrupted run loses nothing: the next run finds the values in the cache. A
+result whose spec and code are unchanged is not recomputed (deciding so reads the
+file's attributes only); a spec changed only in its metadata (title, description,
+comments) gets new metadata without recomputation.
 """
 
 from __future__ import annotations
@@ -11,14 +15,17 @@ from __future__ import annotations
 import json
 import os
 import shlex
-import sys
 import time
-from collections.abc import Callable
-from contextlib import contextmanager
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from study.cache import ResultCache, entry_key
+from study.observables import Method, Observable, resolve
+from study.progress import Progress
 from study.provenance import (
     code_sha256,
     environment,
@@ -27,28 +34,65 @@ from study.provenance import (
     package_version,
     utc_now,
 )
-from study.spec import StudySpec, load_spec
+from study.spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec, load_spec
 from study.store import (
     RESULT_SCHEMA,
-    ChunkStore,
-    ResultError,
-    assemble,
-    build_dataset,
-    open_result,
-    write_atomic,
+    GridWriter,
+    StoreBusy,
+    clean_temporaries,
+    commit,
+    exclusive,
+    file_attributes,
+    new_temporary,
+    rewrite_attributes,
 )
-from study.sweep import compute_chunk, plan_chunks, solve
+from study.structure import Structure
+from study.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
+from study.variables import VARIABLES
 
-__all__ = ["RunReport", "StudyBusy", "StudyInterrupted", "is_up_to_date", "run_study"]
+__all__ = [
+    "PAPER_REFERENCE",
+    "RunReport",
+    "StudyBusy",
+    "StudyInterrupted",
+    "default_cache",
+    "default_output",
+    "is_up_to_date",
+    "run_study",
+]
+
+PAPER_REFERENCE = (
+    "T. Barois, A. Boucherie, L. Tadrist and H. Kellay, Controlled locomotion of a "
+    "minimal soft structure by stick-slip nonlinearity"
+)
+
+#: Another process is writing the same result (re-exported for callers of the runner).
+StudyBusy = StoreBusy
 
 
 class StudyInterrupted(RuntimeError):
-    """Raised when a run stops early on request (``stop_after``); chunks are kept."""
+    """Raised when a run stops early on request (``stop_after``); values are kept."""
 
 
 @dataclass(frozen=True)
 class RunReport:
-    """What a call to :func:`run_study` did."""
+    """What a call to :func:`run_study` did.
+
+    Attributes
+    ----------
+    output : pathlib.Path
+    up_to_date : bool
+        Nothing was computed: the file was current (or only its metadata changed).
+    chunks, computed, reused : int
+        Chunks of the study, chunks that needed the solver, chunks found whole in the
+        cache.
+    wall_seconds : float
+        Wall time of the call, writing and validating included [s].
+    points, points_computed, points_reused : int
+        Grid points of the study, computed in this run, and taken from the cache.
+    metadata_updated : bool
+        Only the file's metadata was rewritten (title, description, spec text).
+    """
 
     output: Path
     up_to_date: bool
@@ -56,6 +100,10 @@ class RunReport:
     computed: int
     reused: int
     wall_seconds: float
+    points: int = 0
+    points_computed: int = 0
+    points_reused: int = 0
+    metadata_updated: bool = False
 
 
 def default_output(spec: StudySpec) -> Path:
@@ -66,67 +114,43 @@ def default_output(spec: StudySpec) -> Path:
     return Path("results") / f"{stem}.nc"
 
 
-def partial_folder(output: Path) -> Path:
-    """Where the completed chunks of an unfinished run of ``output`` are kept."""
-    return output.with_name(output.name + ".partial")
+def default_cache(output: Path) -> Path:
+    """Where kept values live: ``$STUDY_CACHE``, else ``.study-cache`` beside the result
+    (so every study writing into one folder shares them)."""
+    return Path(os.environ.get("STUDY_CACHE") or output.parent / ".study-cache")
+
+
+def _metadata_attrs(spec: StudySpec) -> dict[str, Any]:
+    """Attributes that follow the spec's text but not its numbers."""
+    return {
+        "title": spec.title,
+        "summary": spec.description or (
+            f"Parameter study '{spec.name}' of vibration-driven stick-slip locomotion: "
+            f"{', '.join(spec.observables)} of a soft structure with a resonant plate on a "
+            f"vertically shaken table, computed by {_method_text(spec)}."
+        ),
+        "id": f"{spec.name}-{spec.sha256[:16]}",
+        "study_name": spec.name,
+        "study_spec": spec.text,
+        "study_spec_path": spec.path,
+    }
+
+
+def _state(spec: StudySpec, output: Path) -> str:
+    """"current", "metadata" (same numbers, other spec text) or "stale"."""
+    attrs = file_attributes(output)
+    if attrs is None or attrs.get("study_result_schema") != RESULT_SCHEMA:
+        return "stale"
+    if attrs.get("study_fingerprint") != fingerprint(spec.sha256):
+        return "stale"
+    wanted = _metadata_attrs(spec)
+    return "current" if all(attrs.get(k) == v for k, v in wanted.items()) else "metadata"
 
 
 def is_up_to_date(spec: StudySpec, output: Path) -> bool:
-    """Whether ``output`` is a valid result of this spec computed by this code."""
-    try:
-        dataset = open_result(output)
-    except ResultError:
-        return False
-    return dataset.attrs.get("study_fingerprint") == fingerprint(spec.sha256)
-
-
-@contextmanager
-def _client(scheduler: str | None, workers: int | None):
-    from distributed import Client, LocalCluster
-
-    if scheduler is None:
-        threads = workers or os.cpu_count() or 1
-        # Threads, not processes: the kernel releases the GIL, and nothing is pickled.
-        cluster = LocalCluster(n_workers=1, threads_per_worker=threads, processes=False,
-                               dashboard_address=None)
-        client = Client(cluster)
-        try:
-            yield client, "local", threads
-        finally:
-            client.close()
-            cluster.close()
-    else:
-        client = Client(scheduler, timeout="30s")
-        try:
-            threads = sum(client.nthreads().values())
-            yield client, scheduler, threads
-        finally:
-            client.close()
-
-
-class _Progress:
-    """A one-line text progress bar on stderr (only when it is a terminal or forced)."""
-
-    def __init__(self, total: int, label: str, enabled: bool) -> None:
-        self.total = max(total, 1)
-        self.label = label
-        self.enabled = enabled
-        self.done = 0
-        self.start = time.perf_counter()
-
-    def advance(self) -> None:
-        self.done += 1
-        if not self.enabled:
-            return
-        fraction = self.done / self.total
-        bar = "#" * int(30 * fraction)
-        elapsed = time.perf_counter() - self.start
-        sys.stderr.write(
-            f"\r{self.label} [{bar:<30}] {self.done}/{self.total} chunks {elapsed:6.1f} s"
-        )
-        if self.done == self.total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
+    """Whether ``output`` holds this spec's numbers computed by this code (reads only
+    the file's attributes; ``study validate`` checks the data)."""
+    return _state(spec, Path(output)) != "stale"
 
 
 def run_study(
@@ -140,6 +164,7 @@ def run_study(
     stop_after: int | None = None,
     command: str | None = None,
     on_chunk: Callable[[int], None] | None = None,
+    cache: str | Path | None = None,
 ) -> RunReport:
     """Run a study and write its result file.
 
@@ -150,20 +175,23 @@ def run_study(
     output : path, optional
         Result file; default ``results/<spec file stem>.nc``.
     scheduler : str, optional
-        Address of a dask.distributed scheduler; default: a local in-process cluster.
+        Address of a dask.distributed scheduler; default: threads in this process.
     workers : int, optional
-        Threads of the local cluster (default: one per core).
+        Threads of the local run (default: one per core).
     progress : bool, optional
-        Show a progress bar (default: when stderr is a terminal).
+        Force progress output on or off; default: a bar on a terminal, log lines
+        otherwise.
     force : bool
-        Recompute even if the result is up to date (stored chunks are still reused).
+        Rewrite the result even if it is up to date (kept values are still reused).
     stop_after : int, optional
-        Stop with :class:`StudyInterrupted` after this many chunks were computed
-        and stored in this run: the interrupted run a later run resumes.
+        Stop with :class:`StudyInterrupted` after this many chunks were computed in
+        this run (an interrupted run, for tests); their values are kept.
     command : str, optional
         The command line recorded in the file's history.
     on_chunk : callable, optional
-        Called with the chunk number each time a chunk is stored.
+        Called with the chunk number each time a computed chunk is written.
+    cache : path, optional
+        Folder of kept values (default :func:`default_cache`).
 
     Returns
     -------
@@ -174,158 +202,352 @@ def run_study(
     if not isinstance(spec, StudySpec):
         spec = load_spec(spec)
     output = Path(output) if output is not None else default_output(spec)
-    run_fingerprint = fingerprint(spec.sha256)
-    chunks = plan_chunks(spec)
-    if not force and is_up_to_date(spec, output):
+    n_chunks = len(_plan(spec))
+    if not force and _state(spec, output) == "current":
         output.touch()  # tell make the target is current
-        return RunReport(output, True, len(chunks), 0, len(chunks),
-                         time.perf_counter() - started)
-
-    output.parent.mkdir(parents=True, exist_ok=True)
-    with _exclusive(output):
-        return _run_locked(spec, output, chunks, run_fingerprint, started, started_utc,
-                           scheduler, workers, progress, stop_after, command, on_chunk)
-
-
-def _frontier_arrays(spec: StudySpec, arrays: dict[str, Any]) -> dict[str, Any]:
-    """Frontier f*(a) of every structure, refined on the solver, padded to one shape."""
-    import numpy as np
-
-    from study.analysis import frontier_from_grid
-
-    f = spec.axis("f").values
-    a = spec.axis("a").values
-    found = {}
-    for index, structure in spec.structures():
-        found[index] = frontier_from_grid(
-            structure, f, a, arrays["velocity"][index], arrays["status"][index],
-            tolerance=spec.frontier_tolerance, settings=spec.solver,
-            solve=lambda structure, f, a: solve(spec, structure, f, a),
-        )
-    branches = max(item.frequency.shape[1] for item in found.values())
-    shape = (*(len(axis) for axis in spec.structure_axes), len(a), branches)
-    out = {
-        "frontier_frequency": np.full(shape, np.nan),
-        "frontier_kind": np.zeros(shape, dtype=np.int8),
-        "frontier_direction": np.zeros(shape, dtype=np.int8),
-        "frontier_bracket": np.full(shape, np.nan),
-    }
-    for index, item in found.items():
-        n = item.frequency.shape[1]
-        out["frontier_frequency"][index][:, :n] = item.frequency
-        out["frontier_kind"][index][:, :n] = item.kind
-        out["frontier_direction"][index][:, :n] = item.direction
-        out["frontier_bracket"][index][:, :n] = item.width
-    return out
-
-
-class StudyBusy(RuntimeError):
-    """Another process is running the same study into the same file."""
-
-
-@contextmanager
-def _exclusive(output: Path):
-    """Hold an exclusive lock on ``output`` for the whole run (one writer per file)."""
-    import fcntl
-
-    lock_path = output.with_name(f".{output.name}.lock")
-    with open(lock_path, "a+") as lock:
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            lock.seek(0)
-            holder = lock.read().strip() or "another process"
-            raise StudyBusy(
-                f"{output}: another run is writing this result ({holder}); wait for it "
-                "to finish, or stop it: its finished chunks will be reused"
-            ) from None
-        lock.seek(0)
-        lock.truncate()
-        lock.write(f"pid {os.getpid()}")
-        lock.flush()
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
-
-
-def _run_locked(spec, output, chunks, run_fingerprint, started, started_utc, scheduler,
-                workers, progress, stop_after, command, on_chunk) -> RunReport:
-    store = ChunkStore(partial_folder(output), run_fingerprint)
+        return RunReport(output, True, n_chunks, 0, n_chunks, time.perf_counter() - started)
     command = command or "study.run_study(" + shlex.quote(spec.path) + ")"
-    store.start_run(f"{started_utc}: {command} (study {package_version()})")
-    done = store.completed()
-    pending = [chunk for chunk in chunks if chunk.number not in done]
-    reused = len(chunks) - len(pending)
-    show = sys.stderr.isatty() if progress is None else progress
-    bar = _Progress(len(pending), spec.name, show and bool(pending))
-    computed = 0
-    with _client(scheduler, workers) as (client, scheduler_name, threads):
-        if pending:
-            from distributed import as_completed
+    with exclusive(output):
+        clean_temporaries(output)
+        if not force and _state(spec, output) == "metadata":
+            attrs = file_attributes(output) or {}
+            history = f"{attrs.get('history', '')}\n{started_utc}: {command} (metadata only)"
+            rewrite_attributes(output, {**_metadata_attrs(spec), "history": history.strip(),
+                                        "date_modified": started_utc})
+            return RunReport(output, True, n_chunks, 0, n_chunks,
+                             time.perf_counter() - started, metadata_updated=True)
+        return _Run(spec, output, started, started_utc, command,
+                    ResultCache(Path(cache) if cache is not None else default_cache(output)),
+                    on_chunk).execute(scheduler, workers, progress, stop_after)
 
-            futures = {
-                client.submit(compute_chunk, spec, chunk, key=f"{spec.name}-chunk-"
-                              f"{chunk.number}-{run_fingerprint[:12]}", pure=False): chunk
-                for chunk in pending
+
+def _plan(spec: StudySpec) -> list[Chunk]:
+    a_axis = spec.axis("a")
+    n_a = len(a_axis) if (a_axis is not None and spec.needs_solver) else 1
+    return plan_chunks(tuple(len(axis) for axis in spec.structure_axes), len(spec.axis("f")),
+                       n_a, spec.chunk_points)
+
+
+def _structure_content(structure: Structure) -> dict[str, float]:
+    return {name: float(getattr(structure, name)) for name in Structure.__dataclass_fields__}
+
+
+def _method(spec: StudySpec) -> Method:
+    return Method(spec.method, spec.coupling, spec.solver, spec.integrator)
+
+
+def _method_text(spec: StudySpec) -> str:
+    """How the velocities were computed, for the file's own description."""
+    if spec.method == "exact":
+        return (
+            "the exact event-driven steady-state solver (closed form between events; "
+            "one-way coupling, the paper's model)"
+        )
+    return (
+        "Dormand-Prince 5(4) time integration with events located on the dense output, "
+        f"until the orbit repeats ({spec.coupling} coupling"
+        + ("; the sliding base also forces the mode)" if spec.coupling == "two-way" else ")")
+    )
+
+
+def _creator() -> str:
+    """Who ran the study: $STUDY_CREATOR, else the login name."""
+    import getpass
+
+    try:
+        return os.environ.get("STUDY_CREATOR") or getpass.getuser()
+    except (KeyError, OSError):
+        return "unknown"
+
+
+def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
+    return {
+        "Conventions": "CF-1.11, ACDD-1.3",
+        **_metadata_attrs(spec),
+        "keywords": "stick-slip, friction, locomotion, resonance, vibration, parameter study",
+        "naming_authority": "study",
+        "source": f"study: {_method_text(spec)}",
+        "study_solver_method": spec.method,
+        "study_coupling": spec.coupling,
+        "processing_level": "model output",
+        "references": PAPER_REFERENCE,
+        "standard_name_vocabulary": "CF Standard Name Table v85",
+        "comment": "Forces per unit total mass in the table frame; SI units. No CF standard "
+        "names exist for these model quantities, so variables carry long_name only.",
+        "acknowledgement": "Model of " + PAPER_REFERENCE,
+        "creator_name": _creator(),
+        "study_result_schema": RESULT_SCHEMA,
+        "study_spec_sha256": spec.sha256,
+    }
+
+
+def _coordinate_attrs(units: str, long_name: str) -> dict[str, Any]:
+    return {"units": units, "long_name": long_name, "coverage_content_type": "coordinate"}
+
+
+class _Run:
+    """One computing run of a study into a temporary file, committed at the end."""
+
+    def __init__(self, spec: StudySpec, output: Path, started: float, started_utc: str,
+                 command: str, cache: ResultCache, on_chunk: Callable[[int], None] | None):
+        self.spec = spec
+        self.output = output
+        self.started = started
+        self.started_utc = started_utc
+        self.command = command
+        self.cache = cache
+        self.on_chunk = on_chunk
+        self.method = _method(spec)
+        observables = resolve(spec.observables)
+        self.rows = tuple(o for o in observables if o.grid == "row")
+        self.points = tuple(o for o in observables if o.grid == "point")
+        self.frontier = next((o for o in observables if o.grid == "frontier"), None)
+        self.f = spec.axis("f").values
+        a_axis = spec.axis("a")
+        self.a = a_axis.values if (a_axis is not None and spec.needs_solver) else np.empty(0)
+        self.chunks = _plan(spec)
+        self.code = code_sha256()
+        self.points_computed = 0
+        self.points_reused = 0
+        self.chunks_computed = 0
+        self.chunks_reused = 0
+        self._keys: dict[tuple[tuple[int, ...], str], tuple[str, dict[str, Any]]] = {}
+
+    # -- cache keys --------------------------------------------------------------
+
+    def key(self, structure_index: tuple[int, ...], observable: Observable
+            ) -> tuple[str, dict[str, Any]]:
+        """Cache key and content of an observable's values for one structure."""
+        item = (structure_index, observable.name)
+        if item not in self._keys:
+            content = {
+                "observable": observable.name,
+                "variables": {v: VARIABLES[v].dtype for v in observable.variables},
+                "structure": _structure_content(self.spec.structure_at(structure_index)),
+                "method": self.method.canonical(),
+                "code_sha256": self.code,
             }
+            self._keys[item] = (entry_key(content), content)
+        return self._keys[item]
+
+    # -- the file ------------------------------------------------------------------
+
+    def _open(self, path: Path) -> GridWriter:
+        spec = self.spec
+        writer = GridWriter(path, _standard_attrs(spec))
+        for axis in spec.axes:
+            if axis.name == "a" and not spec.needs_solver:
+                continue
+            writer.coordinate(axis.name, (axis.name,), axis.values,
+                              _coordinate_attrs(axis.units, axis.long_name))
+        scalars = []
+        for name, value in spec.canonical["structure"].items():
+            units, long_name = SWEEPABLE[name]
+            writer.coordinate(name, (), np.float64(value), _coordinate_attrs(units, long_name))
+            scalars.append(name)
+        if spec.mass is not None:
+            writer.coordinate("m0", (), np.float64(spec.mass.m0),
+                              _coordinate_attrs("kg", "mass of the structure"))
+            writer.coordinate("m1", (), np.float64(spec.mass.m1),
+                              _coordinate_attrs("kg", "resonant (modal) mass"))
+            scalars += ["m0", "m1"]
+            m_add_axis = spec.axis("m_add")
+            units, long_name = STRUCTURE_PARAMETERS["M"]
+            if m_add_axis is not None:
+                ratios = np.array([spec.mass.mass_ratio(m) for m in m_add_axis.values])
+                writer.coordinate("M", ("m_add",), ratios, _coordinate_attrs(units, long_name))
+            else:
+                writer.coordinate("M", (), np.float64(spec.mass.mass_ratio(
+                    spec.fixed.get("m_add", 0.0))), _coordinate_attrs(units, long_name))
+            scalars.append("M")
+        self.auxiliary = " ".join(scalars)
+        structure_dims = tuple(axis.name for axis in spec.structure_axes)
+        block = max(chunk.size for chunk in self.chunks)
+        ones = (1,) * len(structure_dims)
+        for observable in (*self.rows, *self.points):
+            for name in observable.variables:
+                variable = VARIABLES[name]
+                dims = variable.dims(structure_dims)
+                chunks = (*ones, block) if variable.grid == "row" else (
+                    *ones, block, max(self.a.size, 1))
+                attrs = {**variable.attrs(), "coordinates": self.auxiliary}
+                writer.variable(name, dims, variable.dtype, attrs, chunks)
+        return writer
+
+    # -- the work --------------------------------------------------------------------
+
+    def _tasks(self, pending: dict[int, Any]) -> Iterator[Task]:
+        """Look each chunk up in the cache; yield what needs computing. Chunks found
+        whole are written at once (``pending`` keeps the found values until the
+        task's result arrives)."""
+        for chunk in self.chunks:
+            structure = self.spec.structure_at(chunk.structure_index)
+            f = self.f[chunk.f_start:chunk.f_stop]
+            found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]] = {}
+            missing = np.zeros((f.size, self.a.size), dtype=bool)
+            for observable in self.points:
+                key, _ = self.key(chunk.structure_index, observable)
+                dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in observable.variables}
+                values, present = self.cache.lookup(key, f, self.a, dtypes)
+                found[observable.name] = (values, present)
+                missing |= ~present
+            rectangles = missing_rectangles(missing) if self.points else ()
+            needed = tuple(o.name for o in self.points if not found[o.name][1].all())
+            task = Task(chunk, structure, f, self.a, tuple(o.name for o in self.rows), needed,
+                        rectangles, self.method)
+            pending[chunk.number] = found
+            if not rectangles and not self.rows:
+                self._finish(task, ({}, []), pending.pop(chunk.number))
+                continue
+            yield task
+
+    def _finish(self, task: Task, result: tuple[dict[str, np.ndarray], list[dict[str, Any]]],
+                found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]]) -> None:
+        """Write one chunk into the file and its computed values into the cache."""
+        chunk = task.chunk
+        rows, blocks = result
+        where_rows = (*chunk.structure_index, slice(chunk.f_start, chunk.f_stop))
+        for name, values in rows.items():
+            self.writer.write(name, where_rows, values)
+        where_points = (*where_rows, slice(None))
+        for observable in self.points:
+            values, _ = found[observable.name]
+            for rectangle, computed in zip(task.rectangles, blocks, strict=True):
+                for name in observable.variables:
+                    if name in computed:
+                        values[name][np.ix_(rectangle.rows, rectangle.columns)] = computed[name]
+            for name in observable.variables:
+                self.writer.write(name, where_points, values[name])
+        for rectangle, computed in zip(task.rectangles, blocks, strict=True):
+            for observable in self.points:
+                if observable.name not in task.points:
+                    continue
+                key, content = self.key(chunk.structure_index, observable)
+                self.cache.store(key, content, task.f[rectangle.rows],
+                                 task.a[rectangle.columns],
+                                 {v: computed[v] for v in observable.variables})
+        size = chunk.size * max(self.a.size, 1)
+        computed_points = task.point_count if self.points else size
+        self.points_computed += computed_points
+        self.points_reused += size - computed_points
+        if computed_points:
+            self.chunks_computed += 1
+        else:
+            self.chunks_reused += 1
+        self.progress.update(size)
+
+    def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
+                stop_after: int | None) -> RunReport:
+        from study.cluster import executor
+
+        self.cache.clean_temporaries()
+        temporary = new_temporary(self.output)
+        try:
+            self.writer = self._open(temporary)
+            total = len(self.f) * max(self.a.size, 1) * int(np.prod(
+                [len(axis) for axis in self.spec.structure_axes], dtype=np.int64))
+            self.progress = Progress(total, self.spec.name, progress)
+            pending: dict[int, Any] = {}
+            computed_chunks = 0
             try:
-                for future in as_completed(futures):
-                    chunk = futures[future]
-                    store.save(chunk, future.result())
-                    computed += 1
-                    bar.advance()
-                    if on_chunk is not None:
-                        on_chunk(chunk.number)
-                    if stop_after is not None and computed >= stop_after:
-                        raise StudyInterrupted(
-                            f"stopped after {computed} chunks on request; "
-                            f"{len(pending) - computed} left, kept in {store.folder}"
-                        )
+                with executor(scheduler, workers, self.code) as pool:
+                    self.scheduler_name, self.threads = pool.name, pool.threads
+                    for task, result in pool.run_unordered(compute_task, self._tasks(pending),
+                                                           label=self.spec.name):
+                        self._finish(task, result, pending.pop(task.chunk.number))
+                        if task.rectangles:
+                            computed_chunks += 1
+                            if self.on_chunk is not None:
+                                self.on_chunk(task.chunk.number)
+                        if stop_after is not None and computed_chunks >= stop_after:
+                            raise StudyInterrupted(
+                                f"stopped after {computed_chunks} computed chunks on request; "
+                                f"their values are kept in {self.cache.root}")
             finally:
-                client.cancel(list(futures))
-        arrays = assemble(spec, chunks, store)
-    if "frontier" in spec.observables:
-        arrays.update(_frontier_arrays(spec, arrays))
-    finished_utc = utc_now()
-    wall = time.perf_counter() - started
-    git = git_state()
-    provenance: dict[str, Any] = {
-        "result_schema": RESULT_SCHEMA,
-        "study": {"name": spec.name, "spec_path": spec.path, "spec_sha256": spec.sha256,
-                  "canonical_spec": spec.canonical},
-        "code": {"code_sha256": code_sha256(), "fingerprint": run_fingerprint},
-        "package": {"name": "study", "version": package_version(), **git},
-        "environment": environment(),
-        "run": {
-            "started_utc": started_utc,
-            "finished_utc": finished_utc,
-            "wall_seconds": wall,
-            "scheduler": scheduler_name,
-            "workers": threads,
-            "chunks": len(chunks),
-            "chunks_computed": computed,
-            "chunks_reused": reused,
-            "solver_settings": {
-                **spec.canonical["solver"],
-                "chunk_points": spec.chunk_points,
+                self.progress.close()
+            if self.frontier is not None:
+                self._write_frontier()
+            self.writer.set_attributes(self._provenance_attrs())
+            self.writer.close()
+        except BaseException:
+            if hasattr(self, "writer"):
+                self.writer.close()
+            temporary.unlink(missing_ok=True)
+            raise
+        commit(temporary, self.output)
+        return RunReport(
+            self.output, False, len(self.chunks), self.chunks_computed, self.chunks_reused,
+            time.perf_counter() - self.started, self.points_computed + self.points_reused,
+            self.points_computed, self.points_reused,
+        )
+
+    def _write_frontier(self) -> None:
+        """Frontier f*(a) of every structure from its whole velocity rows."""
+        spec = self.spec
+        found = {}
+        for index, structure in spec.structures():
+            where = (*index, slice(None), slice(None))
+            velocity = self.writer.read("velocity", where)
+            status = self.writer.read("status", where)
+            found[index] = self.frontier.compute(structure, self.f, self.a, velocity, status,
+                                                 self.method, spec.frontier_tolerance)
+        branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
+        self.writer.dimension("branch", branches)
+        structure_dims = tuple(axis.name for axis in spec.structure_axes)
+        ones = (1,) * len(structure_dims)
+        for name in self.frontier.variables:
+            variable = VARIABLES[name]
+            self.writer.variable(name, variable.dims(structure_dims), variable.dtype,
+                                 {**variable.attrs(), "coordinates": self.auxiliary},
+                                 (*ones, self.a.size, branches))
+        for index, item in found.items():
+            for name in self.frontier.variables:
+                values = item[name]
+                dtype = np.dtype(VARIABLES[name].dtype)
+                padded = np.full((self.a.size, branches),
+                                 np.nan if dtype.kind == "f" else 0, dtype=dtype)
+                padded[:, :values.shape[1]] = values
+                self.writer.write(name, (*index, slice(None), slice(None)), padded)
+
+    def _provenance_attrs(self) -> dict[str, Any]:
+        spec = self.spec
+        finished_utc = utc_now()
+        git = git_state()
+        run_fingerprint = fingerprint(spec.sha256)
+        provenance: dict[str, Any] = {
+            "result_schema": RESULT_SCHEMA,
+            "study": {"name": spec.name, "spec_path": spec.path, "spec_sha256": spec.sha256,
+                      "canonical_spec": spec.canonical},
+            "code": {"code_sha256": self.code, "fingerprint": run_fingerprint},
+            "package": {"name": "study", "version": package_version(), **git},
+            "environment": environment(),
+            "run": {
+                "started_utc": self.started_utc,
+                "finished_utc": finished_utc,
+                "wall_seconds": time.perf_counter() - self.started,
+                "scheduler": self.scheduler_name,
+                "workers": self.threads,
+                "chunks": len(self.chunks),
+                "chunks_computed": self.chunks_computed,
+                "chunks_reused": self.chunks_reused,
+                "points": self.points_computed + self.points_reused,
+                "points_computed": self.points_computed,
+                "points_reused": self.points_reused,
+                "cache": str(self.cache.root),
+                "solver_settings": {**spec.canonical["solver"],
+                                    "chunk_points": spec.chunk_points},
+                "host": environment()["host"],
             },
-            "host": environment()["host"],
-        },
-    }
-    attrs = {
-        "history": "\n".join(store.history),
-        "date_created": finished_utc,
-        "date_modified": finished_utc,
-        "product_version": package_version(),
-        "study_version": package_version(),
-        "study_code_sha256": code_sha256(),
-        "study_fingerprint": run_fingerprint,
-        "git_commit": str(git["git_commit"]),
-        "git_dirty": str(git["git_dirty"]).lower(),
-        "provenance": json.dumps(provenance, sort_keys=True),
-    }
-    dataset = build_dataset(spec, arrays, attrs)
-    write_atomic(dataset, output)
-    store.remove()
-    return RunReport(output, False, len(chunks), computed, reused, wall)
+        }
+        return {
+            "history": f"{self.started_utc}: {self.command} (study {package_version()})",
+            "date_created": finished_utc,
+            "date_modified": finished_utc,
+            "product_version": package_version(),
+            "study_version": package_version(),
+            "study_code_sha256": self.code,
+            "study_fingerprint": run_fingerprint,
+            "git_commit": str(git["git_commit"]),
+            "git_dirty": str(git["git_dirty"]).lower(),
+            "provenance": json.dumps(provenance, sort_keys=True),
+        }

@@ -728,7 +728,7 @@ def run_scene(spec: SceneSpec | str | Path, output: str | Path, *, force: bool =
     if not force and scene_up_to_date(spec, output):
         output.touch()
         return output, True, time.perf_counter() - started
-    from study.runner import _exclusive
+    from study.store import exclusive as _exclusive
 
     output.parent.mkdir(parents=True, exist_ok=True)
     # One writer per result file (the write itself is atomic: temporary, check, rename).

@@ -1,9 +1,12 @@
-"""Split a study into independent chunks and compute one chunk.
+"""Cut a study into independent chunks and compute what a chunk is missing.
 
 A chunk is one structure (one point of the structure axes) and a contiguous block
-of drive frequencies, with every drive acceleration. :func:`compute_chunk` is a
-pure function of ``(spec, chunk)``: it runs on any dask worker, and its result
-is what the store keeps for resuming.
+of drive frequencies, with every drive acceleration. A :class:`Task` is the work
+one chunk still needs after the kept values were looked up: its closed-form rows
+and the rectangles of drive points whose solver observables are missing. A task
+carries only its own slice of the grid (never the whole spec), so sending it to a
+worker costs the size of the chunk, not of the study; :func:`compute_task` is a
+pure function of it and runs on any worker.
 """
 
 from __future__ import annotations
@@ -11,16 +14,15 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from study.physics import lift_off_acceleration, mode_response, thresholds
-from study.solver import SteadyState, steady_state
-from study.spec import StudySpec
+from study.observables import OBSERVABLES, Method, PointWork
 from study.structure import Structure
-from study.transient import integrated_steady_state
 
-__all__ = ["Chunk", "compute_chunk", "plan_chunks", "solve", "variables_for"]
+__all__ = ["Chunk", "Rectangle", "Task", "compute_task", "missing_rectangles", "plan_chunks"]
 
 
 @dataclass(frozen=True)
@@ -30,7 +32,7 @@ class Chunk:
     Attributes
     ----------
     number : int
-        Position in the plan (also the chunk's file name in the store).
+        Position in the plan.
     structure_index : tuple of int
         Index along the structure axes.
     f_start, f_stop : int
@@ -42,106 +44,120 @@ class Chunk:
     f_start: int
     f_stop: int
 
+    @property
+    def size(self) -> int:
+        """Number of frequencies in the chunk."""
+        return self.f_stop - self.f_start
 
-def plan_chunks(spec: StudySpec) -> list[Chunk]:
-    """Cut the study grid into chunks of about ``spec.chunk_points`` points.
 
-    The plan depends only on the spec, so an interrupted run and its resumption
-    agree on what every chunk number means.
+def plan_chunks(structure_shape: tuple[int, ...], n_f: int, n_a: int,
+                chunk_points: int) -> list[Chunk]:
+    """Cut a grid into chunks of about ``chunk_points`` points.
+
+    Parameters
+    ----------
+    structure_shape : tuple of int
+        Lengths of the structure axes.
+    n_f, n_a : int
+        Lengths of the frequency and acceleration axes (``n_a = 1`` without ``a``).
+    chunk_points : int
+        Target points per chunk.
     """
-    n_f = len(spec.axis("f"))
-    a_axis = spec.axis("a")
-    per_f = len(a_axis) if (a_axis is not None and spec.needs_solver) else 1
-    f_per_chunk = max(1, min(n_f, spec.chunk_points // per_f))
+    f_per_chunk = max(1, min(n_f, chunk_points // max(n_a, 1)))
     n_blocks = math.ceil(n_f / f_per_chunk)
     chunks = []
-    ranges = [range(len(axis)) for axis in spec.structure_axes]
-    for structure_index in itertools.product(*ranges):
+    for structure_index in itertools.product(*(range(n) for n in structure_shape)):
         for block in range(n_blocks):
             start = block * f_per_chunk
-            chunks.append(
-                Chunk(len(chunks), structure_index, start, min(n_f, start + f_per_chunk))
-            )
+            chunks.append(Chunk(len(chunks), structure_index, start,
+                                min(n_f, start + f_per_chunk)))
     return chunks
 
 
-def variables_for(spec: StudySpec) -> dict[str, tuple[bool, np.dtype]]:
-    """Data variables computed chunk by chunk: name -> (depends on a, dtype).
+@dataclass(frozen=True)
+class Rectangle:
+    """Drive points ``f[rows] x a[columns]`` of a chunk to compute (indices)."""
 
-    The frontier is not among them: it needs whole frequency rows and is found
-    after the chunks are assembled (see :func:`study.analysis.frontier_from_grid`).
+    rows: NDArray[np.intp]
+    columns: NDArray[np.intp]
+
+    @property
+    def points(self) -> int:
+        """Number of drive points."""
+        return self.rows.size * self.columns.size
+
+
+def missing_rectangles(missing: NDArray[np.bool_]) -> tuple[Rectangle, ...]:
+    """Cover the ``True`` points of a ``(n_f, n_a)`` mask by rectangles, exactly.
+
+    Rows with the same missing columns form one rectangle: a fresh chunk is one
+    rectangle, an axis refined or extended is one or two.
     """
-    variables: dict[str, tuple[bool, np.dtype]] = {}
-    if "resonance" in spec.observables:
-        variables["mode_gain"] = (False, np.dtype(np.float64))
-        variables["mode_phase"] = (False, np.dtype(np.float64))
-    if "thresholds" in spec.observables:
-        variables["a_star_plus"] = (False, np.dtype(np.float64))
-        variables["a_star_minus"] = (False, np.dtype(np.float64))
-    if "lift_off" in spec.observables:
-        variables["lift_off_acceleration"] = (False, np.dtype(np.float64))
-    if spec.needs_solver:
-        variables["velocity"] = (True, np.dtype(np.float64))
-        variables["status"] = (True, np.dtype(np.int8))
-    if "diagnostics" in spec.observables:
-        variables["slips_per_period"] = (True, np.dtype(np.float64))
-        variables["forward_slip_fraction"] = (True, np.dtype(np.float64))
-        variables["backward_slip_fraction"] = (True, np.dtype(np.float64))
-        variables["orbit_period"] = (True, np.dtype(np.int32))
-        variables["nonconvergence"] = (True, np.dtype(np.int8))
-    if "paper_model" in spec.observables:
-        variables["velocity_one_way"] = (True, np.dtype(np.float64))
-        variables["status_one_way"] = (True, np.dtype(np.int8))
-    return variables
+    groups: dict[bytes, list[int]] = {}
+    for row in np.flatnonzero(missing.any(axis=1)):
+        groups.setdefault(missing[row].tobytes(), []).append(int(row))
+    return tuple(
+        Rectangle(np.asarray(rows, dtype=np.intp), np.flatnonzero(missing[rows[0]]))
+        for rows in groups.values()
+    )
 
 
-def solve(
-    spec: StudySpec, structure: Structure, f: np.ndarray, a: np.ndarray, parallel: bool = False
-) -> SteadyState:
-    """Steady state at ``(f, a)`` (broadcast) by the spec's method and coupling."""
-    if spec.method == "integrator":
-        return integrated_steady_state(
-            structure, f, a, coupling=spec.coupling, settings=spec.integrator, parallel=parallel
-        )
-    return steady_state(structure, f, a, spec.solver, parallel=parallel)
+@dataclass(frozen=True)
+class Task:
+    """What one chunk still needs computing.
+
+    Attributes
+    ----------
+    chunk : Chunk
+    structure : Structure
+    f : numpy.ndarray
+        The chunk's drive frequencies [Hz].
+    a : numpy.ndarray
+        Drive accelerations [m s^-2] (empty without an ``a`` axis).
+    rows : tuple of str
+        Closed-form (row) observables to compute on ``f``.
+    points : tuple of str
+        Solver observables to compute on each rectangle.
+    rectangles : tuple of Rectangle
+        Where the solver observables are missing.
+    method : Method
+    """
+
+    chunk: Chunk
+    structure: Structure
+    f: NDArray[np.float64]
+    a: NDArray[np.float64]
+    rows: tuple[str, ...]
+    points: tuple[str, ...]
+    rectangles: tuple[Rectangle, ...]
+    method: Method
+
+    @property
+    def point_count(self) -> int:
+        """Drive points the solver computes in this task."""
+        return sum(r.points for r in self.rectangles)
 
 
-def compute_chunk(spec: StudySpec, chunk: Chunk) -> dict[str, np.ndarray]:
-    """Compute the requested observables on one chunk.
-
-    Only what was asked for is computed: a thresholds-only study runs no solver.
-    The solver runs on one thread here; parallelism comes from running chunks
-    side by side.
+def compute_task(task: Task) -> tuple[dict[str, NDArray[Any]], list[dict[str, NDArray[Any]]]]:
+    """Compute a task on one thread (parallelism comes from tasks side by side).
 
     Returns
     -------
-    dict
-        Variable name -> array of shape ``(n_f,)`` or ``(n_f, n_a)`` for the chunk.
+    rows : dict
+        Variable name -> ``(n_f,)`` array for the closed-form observables.
+    rectangles : list of dict
+        For each rectangle of the task, variable name -> ``(rows, columns)`` array
+        of the solver observables.
     """
-    structure = spec.structure_at(chunk.structure_index)
-    f = spec.axis("f").values[chunk.f_start : chunk.f_stop]
-    out: dict[str, np.ndarray] = {}
-    if "resonance" in spec.observables:
-        response = structure.omega0**2 * mode_response(structure, f)
-        out["mode_gain"] = np.abs(response)
-        out["mode_phase"] = -np.angle(response)
-    if "thresholds" in spec.observables:
-        out["a_star_plus"], out["a_star_minus"] = thresholds(structure, f)
-    if "lift_off" in spec.observables:
-        out["lift_off_acceleration"] = lift_off_acceleration(structure, f)
-    if spec.needs_solver:
-        a = spec.axis("a").values
-        result = solve(spec, structure, f[:, None], a[None, :])
-        out["velocity"] = result.velocity
-        out["status"] = result.status
-        if "diagnostics" in spec.observables:
-            out["slips_per_period"] = result.slips_per_period
-            out["forward_slip_fraction"] = result.forward_fraction
-            out["backward_slip_fraction"] = result.backward_fraction
-            out["orbit_period"] = result.orbit_period
-            out["nonconvergence"] = result.reason
-    if "paper_model" in spec.observables:
-        paper = steady_state(structure, f[:, None], a[None, :], spec.solver, parallel=False)
-        out["velocity_one_way"] = paper.velocity
-        out["status_one_way"] = paper.status
-    return out
+    rows: dict[str, NDArray[Any]] = {}
+    for name in task.rows:
+        rows.update(OBSERVABLES[name].compute(task.structure, task.f))
+    blocks = []
+    for rectangle in task.rectangles:
+        work = PointWork(task.structure, task.f[rectangle.rows][:, None],
+                         task.a[rectangle.columns][None, :], task.method)
+        values: dict[str, NDArray[Any]] = {}
+        for name in task.points:
+            values.update(OBSERVABLES[name].compute(work))
+        blocks.append(values)
+    return rows, blocks
