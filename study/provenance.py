@@ -13,8 +13,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from study.solver import SOLVER_VERSION
-from study.transient import INTEGRATOR_VERSION
+from study.fingerprint import result_code_sha256
 
 __all__ = [
     "code_sha256",
@@ -29,60 +28,24 @@ __all__ = [
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 
-# Modules whose source decides the numbers in a result file. Anything else
-# (command line, figures, docs) can change without making results stale.
-_COMPUTING_SOURCES = (
-    "structure.py",
-    "solver.py",
-    "status.py",
-    "sweep.py",
-    "physics/forces.py",
-    "physics/validation.py",
-    "kernels/steady.py",
-    "transient.py",
-    "kernels/transient.py",
-)
-
 
 def utc_now() -> str:
     """The current time, ISO 8601 in UTC with a ``Z``, to the second."""
     return datetime.now(UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z")
 
 
-@cache
 def code_sha256() -> str:
-    """Hash of the source of every module that computes results, and the solver version."""
-    digest = hashlib.sha256(
-        f"solver-version={SOLVER_VERSION}\nintegrator-version={INTEGRATOR_VERSION}\n".encode()
-    )
-    for name in _COMPUTING_SOURCES:
-        digest.update(name.encode() + b"\0")
-        digest.update((PACKAGE_DIR / name).read_bytes())
-    return digest.hexdigest()
+    """Hash of the code behind parameter-study results (see :mod:`study.fingerprint`).
+
+    It covers every module that ``study.sweep`` and ``study.analysis`` import, found
+    from the import graph, so the solver and integrator versions are in it too.
+    """
+    return result_code_sha256("study")
 
 
-# Modules whose source decides the numbers of a steering scene (study.scene).
-_SCENE_SOURCES = (
-    "status.py",
-    "transient.py",
-    "planar.py",
-    "kernels/transient.py",
-    "kernels/planar.py",
-    "planner.py",
-    "scene.py",
-)
-
-
-@cache
 def scene_code_sha256() -> str:
-    """Hash of the source of every module that computes steering scenes."""
-    from study.planar import PLANAR_VERSION
-
-    digest = hashlib.sha256(f"planar-version={PLANAR_VERSION}\n".encode())
-    for name in _SCENE_SOURCES:
-        digest.update(name.encode() + b"\0")
-        digest.update((PACKAGE_DIR / name).read_bytes())
-    return digest.hexdigest()
+    """Hash of the code behind steering scenes (see :mod:`study.fingerprint`)."""
+    return result_code_sha256("scene")
 
 
 def scene_fingerprint(spec_sha256: str) -> str:

@@ -1,0 +1,212 @@
+"""Code fingerprints from the import graph (study.fingerprint): closures, staleness, CLI."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from study.fingerprint import (
+    RESULT_KIND_ENTRIES,
+    code_fingerprint,
+    import_closure,
+    main,
+    result_code_sha256,
+)
+from study.provenance import code_sha256, scene_code_sha256
+
+PACKAGE = Path(__file__).resolve().parents[2] / "study"
+SCHEMAS = PACKAGE.parent / "results_schema"
+
+NOT_COMPUTING = ("study.cli", "study.figures")
+
+
+def _copy_package(destination: Path) -> Path:
+    """A scratch copy of the package (and the schemas next to it); its package folder."""
+    shutil.copytree(PACKAGE, destination / "study",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    if SCHEMAS.is_dir():
+        shutil.copytree(SCHEMAS, destination / "results_schema")
+    return destination / "study"
+
+
+@pytest.fixture(scope="module")
+def copy(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A scratch copy of ``study``; tests that edit it restore what they edit."""
+    return _copy_package(tmp_path_factory.mktemp("copy"))
+
+
+def _source(root: Path, module: str) -> Path:
+    base = root.joinpath(*module.split(".")[1:])
+    return base / "__init__.py" if base.is_dir() else base.with_suffix(".py")
+
+
+def test_study_closure_holds_every_computing_module():
+    modules = code_fingerprint(RESULT_KIND_ENTRIES["study"]).modules
+    for name in ("study.sweep", "study.analysis", "study.solver", "study.kernels.steady",
+                 "study.physics.forces", "study.structure", "study.transient",
+                 "study.kernels.transient", "study.status", "study", "study.kernels",
+                 "study.physics"):
+        assert name in modules, name
+    assert not [m for m in modules if m.startswith(NOT_COMPUTING)], modules
+
+
+def test_scene_closure_holds_the_planar_model():
+    modules = code_fingerprint(RESULT_KIND_ENTRIES["scene"]).modules
+    for name in ("study.scene", "study.planar", "study.kernels.planar", "study.planner",
+                 "study.physics.forces", "study.transient", "study.status"):
+        assert name in modules, name
+    assert not [m for m in modules if m.startswith(NOT_COMPUTING)], modules
+
+
+def test_walker_follows_every_import_form(tmp_path: Path):
+    root = tmp_path / "study"
+    files = {
+        "__init__.py": "",
+        "entry.py": (
+            "import os\n"
+            "import study.plain\n"
+            "from study.pkg import sub\n"            # sub is a submodule
+            "from study.named import VALUE\n"        # VALUE is a name
+            "from . import sibling\n"
+            "from .rel import thing\n"
+            "def late():\n"
+            "    from study import lazy\n"          # function-level
+            "    import importlib\n"
+            "    importlib.import_module('study.dynamic')\n"
+        ),
+        "plain.py": "", "named.py": "VALUE = 1\n", "sibling.py": "", "rel.py": "thing = 2\n",
+        "lazy.py": "", "dynamic.py": "", "unused.py": "",
+        "pkg/__init__.py": "from .inner import x\n",
+        "pkg/inner.py": "from .. import deep\nx = 1\n",
+        "pkg/sub.py": "",
+        "deep.py": "",
+    }
+    for name, text in files.items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(text)
+    assert import_closure(("study.entry",), root) == tuple(sorted(
+        ["study", "study.entry", "study.plain", "study.pkg", "study.pkg.sub",
+         "study.pkg.inner", "study.named", "study.sibling", "study.rel", "study.lazy",
+         "study.dynamic", "study.deep"]
+    ))
+
+
+def test_every_closure_module_edit_changes_its_kind_hash(copy: Path):
+    for kind, entries in RESULT_KIND_ENTRIES.items():
+        before = result_code_sha256(kind, copy)
+        modules = code_fingerprint(entries, copy).modules
+        assert modules == code_fingerprint(entries).modules
+        for module in modules:
+            path = _source(copy, module)
+            original = path.read_bytes()
+            path.write_bytes(original + b"\n# edited\n")
+            try:
+                assert result_code_sha256(kind, copy) != before, (kind, module)
+            finally:
+                path.write_bytes(original)
+        assert result_code_sha256(kind, copy) == before
+
+
+def test_cli_figures_and_schemas(copy: Path):
+    before = {kind: result_code_sha256(kind, copy) for kind in RESULT_KIND_ENTRIES}
+    edited = [copy / "cli.py", *sorted((copy / "figures").glob("*.py"))]
+    originals = {path: path.read_bytes() for path in edited}
+    try:
+        for path in edited:
+            path.write_bytes(originals[path] + b"\n# edited\n")
+        for kind, sha in before.items():
+            assert result_code_sha256(kind, copy) == sha, kind
+    finally:
+        for path, original in originals.items():
+            path.write_bytes(original)
+    # The schemas the spec layer reads do count.
+    schema = sorted((copy.parent / "results_schema").glob("*.json"))[0]
+    original = schema.read_bytes()
+    schema.write_bytes(original + b"\n")
+    try:
+        for kind, sha in before.items():
+            assert result_code_sha256(kind, copy) != sha, kind
+    finally:
+        schema.write_bytes(original)
+
+
+def test_deterministic_and_order_free():
+    entries = RESULT_KIND_ENTRIES["study"]
+    first = code_fingerprint(entries, PACKAGE)
+    assert code_fingerprint(entries, PACKAGE) == first
+    assert first.sha256 == code_sha256() == result_code_sha256("study")
+    assert result_code_sha256("scene") == scene_code_sha256()
+    # Other entry tuples reaching the same modules hash the same modules.
+    for other in (entries[::-1], (*entries, "study.solver", "study.sweep")):
+        again = code_fingerprint(other, PACKAGE)
+        assert again.modules == first.modules
+        assert again.sha256 == first.sha256
+    assert set(first.libraries) == {"numpy", "numba", "llvmlite", "python", "machine"}
+
+
+def test_unknown_kind_names_the_allowed_ones():
+    with pytest.raises(ValueError, match="unknown result kind 'nope'; allowed: scene, study"):
+        result_code_sha256("nope")
+    with pytest.raises(ValueError, match=r"no source for module 'study\.missing'"):
+        code_fingerprint(("study.missing",), PACKAGE)
+
+
+def test_module_listing_for_humans(capsys: pytest.CaptureFixture[str]):
+    assert main(["scene"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"scene: {result_code_sha256('scene')}\n")
+    assert "    study.kernels.planar\n" in out
+    assert "study.cli" not in out
+
+
+TINY = """\
+[study]
+name = "tiny"
+title = "Thresholds only, for the fingerprint test"
+observables = ["thresholds"]
+
+[structure]
+f0 = 14.44   # Hz
+Q = 17.5
+alpha = 64.0 # deg
+M = 0.08
+cs = 0.25
+
+[sweep]
+f = { start = 10.0, stop = 20.0, num = 5 }  # Hz
+"""
+
+
+def test_study_list_follows_computing_edits_only(tmp_path: Path):
+    root = _copy_package(tmp_path / "copy")
+    workflows, results = tmp_path / "workflows", tmp_path / "results"
+    workflows.mkdir()
+    results.mkdir()
+    (workflows / "tiny.toml").write_text(TINY)
+    env = {**os.environ, "PYTHONPATH": str(root.parent)}
+
+    def study(*argv: str) -> str:
+        done = subprocess.run([sys.executable, "-m", "study.cli", *argv], cwd=tmp_path,
+                              env=env, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr
+        return done.stdout
+
+    def state() -> str:
+        return study("list", "--workflows", str(workflows), "--results", str(results))
+
+    study("run", str(workflows / "tiny.toml"), "-o", str(results / "tiny.nc"),
+          "--workers", "1", "--no-progress")
+    assert ": up to date" in state()
+    forces = root / "physics" / "forces.py"
+    original = forces.read_bytes()
+    forces.write_bytes(original + b"\n# edited\n")
+    assert ": out of date" in state()
+    forces.write_bytes(original)
+    (root / "figures" / "common.py").write_bytes(
+        (root / "figures" / "common.py").read_bytes() + b"\n# edited\n")
+    assert ": up to date" in state()
