@@ -42,7 +42,7 @@ PACKAGE = "study"
 
 # The modules whose import closure decides the numbers of each result kind.
 RESULT_KIND_ENTRIES: dict[str, tuple[str, ...]] = {
-    "study": ("study.sweep", "study.analysis"),
+    "study": ("study.sweep", "study.analysis", "study.spec"),
     "scene": ("study.scene",),
 }
 

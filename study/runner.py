@@ -336,8 +336,6 @@ class _Run:
         spec = self.spec
         writer = GridWriter(path, _standard_attrs(spec))
         for axis in spec.axes:
-            if axis.name == "a" and not spec.needs_solver:
-                continue
             writer.coordinate(axis.name, (axis.name,), axis.values,
                               _coordinate_attrs(axis.units, axis.long_name))
         scalars = []

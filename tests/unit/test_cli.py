@@ -12,7 +12,7 @@ import pytest
 
 from study.cli import main
 from study.provenance import package_version
-from study.runner import StudyInterrupted, partial_folder, run_study
+from study.runner import StudyInterrupted, run_study
 from study.store import open_result
 
 # 7 x 5 points, 2 frequencies (10 points) per chunk: 4 chunks.
@@ -94,7 +94,7 @@ def test_run_then_up_to_date_then_force(capsys, spec: Path, output: Path) -> Non
     assert counts(out) == (CHUNKS, CHUNKS, 0)
     assert err == ""  # --no-progress: no bar
     open_result(output)
-    assert not partial_folder(output).exists()
+    assert not list(output.parent.glob(".tiny.nc.*.tmp"))
     first = output.read_bytes()
 
     status, out, err = run(capsys, "run", spec, "-o", output, "--no-progress")
@@ -103,13 +103,15 @@ def test_run_then_up_to_date_then_force(capsys, spec: Path, output: Path) -> Non
     assert "up to date" in out
     assert output.read_bytes() == first
 
+    # --force rewrites the file; the values are kept, so nothing is recomputed.
     status, out, err = run(capsys, "run", spec, "-o", output, "--no-progress", "--force")
     assert status == 0, err
     assert "up to date" not in out
-    assert counts(out) == (CHUNKS, CHUNKS, 0)
+    assert counts(out) == (CHUNKS, 0, CHUNKS)
     run_info = json.loads(open_result(output).attrs["provenance"])["run"]
-    assert run_info["chunks_computed"] == CHUNKS
-    assert run_info["chunks_reused"] == 0
+    assert run_info["chunks_computed"] == 0
+    assert run_info["chunks_reused"] == CHUNKS
+    assert run_info["points_reused"] == run_info["points"] == 35
 
 
 def test_run_with_workers(capsys, spec: Path, output: Path) -> None:
@@ -123,11 +125,10 @@ def test_run_with_workers(capsys, spec: Path, output: Path) -> None:
 def test_run_resumes_an_interrupted_study(capsys, spec: Path, output: Path) -> None:
     with pytest.raises(StudyInterrupted):
         run_study(spec, output, progress=False, stop_after=1)
-    assert partial_folder(output).is_dir()
+    assert list((output.parent / ".study-cache").glob("??/*/block-*.npz"))
     status, out, err = run(capsys, "run", spec, "-o", output, "--no-progress")
     assert status == 0, err
     assert counts(out) == (CHUNKS, CHUNKS - 1, 1)
-    assert not partial_folder(output).exists()
 
 
 def test_history_records_the_command_given_to_main(capsys, spec: Path, output: Path) -> None:
@@ -240,7 +241,7 @@ def test_list_interrupted(capsys, workspace, spec: Path, output: Path) -> None:
     with pytest.raises(StudyInterrupted):
         run_study(spec, output, progress=False, stop_after=1)
     line = listing(capsys, *workspace)["tiny.toml"]
-    assert line.endswith(": interrupted (resumable)")
+    assert line.endswith(": not run")
 
 
 def test_list_without_workflows(capsys, tmp_path: Path) -> None:
@@ -266,7 +267,6 @@ def test_unknown_key_in_the_spec(capsys, workspace, output: Path) -> None:
     for key in ("name", "observables", "title", "description"):
         assert key in err.split("allowed keys", 1)[1]
     assert not output.exists()
-    assert not partial_folder(output).exists()
     assert list(output.parent.iterdir()) == []
 
 

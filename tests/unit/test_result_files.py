@@ -15,7 +15,7 @@ import xarray as xr
 
 import study
 import study.store
-from study.runner import partial_folder, run_study
+from study.runner import run_study
 from study.store import (
     RESULT_SCHEMA_PATH,
     ResultError,
@@ -55,7 +55,7 @@ def result_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
     assert not report.up_to_date
     assert report.output == output
     assert output.is_file()
-    assert not partial_folder(output).exists()
+    assert not list(folder.glob(".tiny-map.nc.*.tmp"))
     return output
 
 

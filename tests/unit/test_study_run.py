@@ -16,7 +16,7 @@ import pytest
 
 import study
 from study.provenance import code_sha256, fingerprint
-from study.runner import StudyInterrupted, partial_folder, run_study
+from study.runner import StudyInterrupted, run_study
 from study.spec import load_spec
 from study.store import open_result
 
@@ -41,6 +41,11 @@ a = {{ start = 0.0, stop = 10.0, num = 17 }}
 [solver]
 chunk_points = 51
 """
+
+
+def kept_blocks(folder: Path) -> list[Path]:
+    """Blocks of kept values in the default cache of results written to ``folder``."""
+    return sorted((folder / ".study-cache").glob("??/*/block-*.npz"))
 
 
 def write_spec(folder: Path, name="small", Q=17.5, extra="M = 0.08", sweeps="",
@@ -117,7 +122,8 @@ def test_thresholds_only_study_runs_no_solver(tmp_path, monkeypatch):
     def no_solver(*args, **kwargs):
         raise AssertionError("the solver ran for a thresholds-only study")
 
-    monkeypatch.setattr("study.sweep.steady_state", no_solver)
+    monkeypatch.setattr("study.observables.steady_state", no_solver)
+    monkeypatch.setattr("study.observables.integrated_steady_state", no_solver)
     spec_path = write_spec(tmp_path, observables='"thresholds"')
     run_study(spec_path, tmp_path / "t.nc", progress=False)
     ds = open_result(tmp_path / "t.nc")
@@ -128,22 +134,23 @@ def test_interrupted_run_resumes_to_the_same_result(tmp_path, finished):
     _, full_report, full = finished
     spec_path = write_spec(tmp_path)
     output = tmp_path / "small.nc"
+    first = []
     with pytest.raises(StudyInterrupted):
-        run_study(spec_path, output, progress=False, stop_after=3)
-    assert not output.exists()
-    kept = sorted(partial_folder(output).glob("chunk-*.npz"))
-    assert len(kept) == 3
+        run_study(spec_path, output, progress=False, stop_after=3, on_chunk=first.append)
+    assert not output.exists() and not list(tmp_path.glob(".small.nc.*.tmp"))
+    assert len(first) == 3
+    assert len(kept_blocks(tmp_path)) == 3 * 2  # velocity and diagnostics per chunk
     seen = []
     report = run_study(spec_path, output, progress=False, on_chunk=seen.append)
     assert report.reused == 3 and report.computed == full_report.chunks - 3
-    assert len(seen) == report.computed and not set(seen) & {
-        int(p.stem.split("-")[1]) for p in kept
-    }
+    assert len(seen) == report.computed and not set(seen) & set(first)
+    assert report.points_computed + report.points_reused == report.points == 23 * 17
     resumed = open_result(output)
     for name in full.data_vars:
         np.testing.assert_array_equal(resumed[name].values, full[name].values)
-    assert len(resumed.attrs["history"].splitlines()) == 2  # one line per program run
-    assert not partial_folder(output).exists()
+    run = json.loads(resumed.attrs["provenance"])["run"]
+    assert (run["points_computed"], run["points_reused"]) == (
+        report.points_computed, report.points_reused)
 
 
 def test_chunks_of_another_spec_are_never_reused(tmp_path):
@@ -163,9 +170,12 @@ def test_unchanged_study_is_not_recomputed_changed_one_is(tmp_path):
     seen = []
     report = run_study(spec_path, output, progress=False, on_chunk=seen.append)
     assert report.up_to_date and not seen and output.read_bytes() == before
-    # Comments and formatting are not changes.
+    # Comments and formatting change no number: the stored spec follows the file,
+    # nothing is recomputed.
     spec_path.write_text("# reformatted\n" + spec_path.read_text().replace(" = ", "="))
-    assert run_study(spec_path, output, progress=False).up_to_date
+    report = run_study(spec_path, output, progress=False, on_chunk=seen.append)
+    assert report.up_to_date and report.metadata_updated and not seen
+    assert open_result(output).attrs["study_spec"] == spec_path.read_text()
     # A number is.
     spec_path.write_text(spec_path.read_text().replace("Q=17.5", "Q=17.25"))
     report = run_study(spec_path, output, progress=False)
@@ -236,7 +246,7 @@ def test_a_second_writer_of_the_same_result_is_refused(tmp_path):
         fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
         with pytest.raises(StudyBusy, match="another run is writing"):
             run_study(spec_path, output, progress=False)
-    assert not output.exists() and not partial_folder(output).exists()
+    assert not output.exists() and not kept_blocks(tmp_path)
     run_study(spec_path, output, progress=False)  # free again
     assert output.exists()
 
@@ -260,16 +270,16 @@ def test_ctrl_c_keeps_finished_chunks_and_the_next_run_resumes(tmp_path):
                                text=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and process.poll() is None:
-        if len(list(partial_folder(output).glob("chunk-*.npz"))) >= 2:
+        if len(kept_blocks(tmp_path)) >= 2:
             break
         time.sleep(0.05)
     assert process.poll() is None, "the run ended before it could be interrupted"
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=120)
     assert process.returncode == 130, stderr
-    assert "completed chunks are kept" in stderr
+    assert "computed values are kept" in stderr
     assert not output.exists()
-    kept = len(list(partial_folder(output).glob("chunk-*.npz")))
+    kept = len(kept_blocks(tmp_path))
     assert kept >= 2
     report = run_study(spec_path, output, progress=False)
     assert report.reused == kept and report.computed == report.chunks - kept
