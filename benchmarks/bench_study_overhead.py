@@ -1,24 +1,48 @@
-"""Benchmark: cost of `study run` beyond the kernel, on a 1000 x 1000 velocity study.
+"""Benchmark: `study run` against the bare solver call, from 1e6 to 1e8 points.
 
-Runs the paper's map as a study (dask fan-out, chunk store, netCDF write with
-validation) and compares its wall time with the bare kernel on the same grid,
-both after compilation, in one process. Timings are reported, never asserted.
+Velocity studies of the paper's structure (f0 14.44 Hz, Q 17.5, alpha 64 deg,
+M 0.08, cs 0.25) on square (f, a) grids, f 10-20 Hz and a 0-12 m s^-2. For each
+size, every measurement runs in a fresh Python process (so its peak RSS is its
+own) that first imports what it needs and loads the compiled kernels, then times:
 
-Usage: ``python benchmarks/bench_study_overhead.py [--size 1000]``
+a. ``bare``: ``study.steady_velocity(structure, f[:, None], a[None, :])`` on the same
+   points (above ``--block-points`` points, in blocks of whole f rows, each block's
+   result copied into one preallocated velocity/status pair of the whole grid, so the
+   solver's temporaries stay bounded and the values are kept, as a study keeps them);
+b. ``run``: ``run_study(..., force=True)`` with an empty cache folder: everything is
+   computed, written into the netCDF file and kept in the cache, and the file is
+   sealed (validated) before the atomic rename;
+c. ``rerun``: the unchanged study again (reads the file's metadata only);
+d. ``reuse``: the study again after deleting the result but keeping the cache
+   (every value is read back from the cache, nothing is computed).
+
+Each timing is the minimum over ``--repeats`` processes (other work on the machine
+only ever adds time); the peak RSS is the largest seen (``ru_maxrss`` of the child).
+Timings are reported, never asserted. The table goes to ``results/bench-study.md``.
+
+Usage: ``python benchmarks/bench_study_overhead.py [--sizes 1e6 1e7 1e8] [--repeats 3]``
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import math
 import os
+import platform
+import resource
+import shutil
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-import study
-from study.runner import run_study
+F_RANGE = (10.0, 20.0)  # Hz
+A_RANGE = (0.0, 12.0)  # m s-2
+STRUCTURE = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08, "cs": 0.25}
 
 SPEC = """\
 [study]
@@ -26,57 +50,226 @@ name = "bench-map"
 observables = ["velocity"]
 
 [structure]
-f0 = 14.44
-Q = 17.5
-alpha = 64.0
-M = 0.08
-cs = 0.25
+f0 = {f0}
+Q = {Q}
+alpha = {alpha}
+M = {M}
+cs = {cs}
 
 [sweep]
-f = {{ start = 10.0, stop = 20.0, num = {n} }}
-a = {{ start = 0.0, stop = 12.0, num = {n} }}
+f = {{ start = {f_lo}, stop = {f_hi}, num = {n} }}
+a = {{ start = {a_lo}, stop = {a_hi}, num = {n} }}
 """
+
+KINDS = ("bare", "run", "rerun", "reuse")
+
+
+# ---------------------------------------------------------------------------
+# Child process: one measurement
+
+
+def _warm() -> None:
+    """Import what a run uses and load both compiled kernels (serial and parallel), so
+    that timings measure the work, not the first use of numba or netCDF."""
+    import netCDF4  # noqa: F401
+    import xarray  # noqa: F401
+
+    import study
+    import study.runner
+    from study.solver import PARALLEL_THRESHOLD, steady_state
+
+    structure = study.Structure(**STRUCTURE)
+    f = np.linspace(*F_RANGE, 64)[:, None]
+    a = np.linspace(*A_RANGE, 64)[None, :]
+    assert f.size * a.size >= PARALLEL_THRESHOLD
+    steady_state(structure, f, a, parallel=True)
+    steady_state(structure, f[:4], a, parallel=False)
+
+
+def _bare(n: int, block_points: int) -> dict[str, float]:
+    import study
+
+    structure = study.Structure(**STRUCTURE)
+    f = np.linspace(*F_RANGE, n)
+    a = np.linspace(*A_RANGE, n)
+    start = time.perf_counter()
+    if n * n <= block_points:
+        velocity, status = study.steady_velocity(structure, f[:, None], a[None, :])
+    else:
+        velocity = np.empty((n, n))
+        status = np.empty((n, n), dtype=np.int8)
+        rows = max(1, block_points // n)
+        for lo in range(0, n, rows):
+            hi = min(n, lo + rows)
+            velocity[lo:hi], status[lo:hi] = study.steady_velocity(
+                structure, f[lo:hi, None], a[None, :])
+    seconds = time.perf_counter() - start
+    return {"seconds": seconds, "moving": float(np.mean(status == 2))}
+
+
+def _run(spec: Path, output: Path, cache: Path, force: bool) -> dict[str, float]:
+    from study.runner import run_study
+
+    start = time.perf_counter()
+    report = run_study(spec, output, progress=False, force=force, cache=cache)
+    seconds = time.perf_counter() - start
+    return {"seconds": seconds, "up_to_date": report.up_to_date, "chunks": report.chunks,
+            "points_computed": report.points_computed, "points_reused": report.points_reused}
+
+
+def child(kind: str, n: int, folder: Path, block_points: int) -> None:
+    """Run one measurement and print it as one JSON line."""
+    _warm()
+    spec, output, cache = folder / "bench-map.toml", folder / "bench-map.nc", folder / "cache"
+    if kind == "bare":
+        result = _bare(n, block_points)
+    else:
+        result = _run(spec, output, cache, force=kind == "run")
+    # Linux reports ru_maxrss in KiB.
+    result["max_rss"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    print("RESULT " + json.dumps(result))
+
+
+# ---------------------------------------------------------------------------
+# Parent process: the table
+
+
+def _measure(kind: str, n: int, folder: Path, block_points: int) -> dict[str, float]:
+    command = [sys.executable, __file__, "--child", kind, "--side", str(n),
+               "--folder", str(folder), "--block-points", str(block_points)]
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"{kind} at {n} x {n} failed:\n{done.stdout}\n{done.stderr}")
+    line = next(x for x in done.stdout.splitlines() if x.startswith("RESULT "))
+    return json.loads(line.removeprefix("RESULT "))
+
+
+def _folder_size(path: Path) -> int:
+    return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+
+
+def _best(kind: str, n: int, folder: Path, repeats: int, block_points: int,
+          before: callable) -> dict[str, float]:
+    """Minimum time and largest peak RSS over ``repeats`` fresh processes."""
+    best: dict[str, float] | None = None
+    for _ in range(repeats):
+        before()
+        result = _measure(kind, n, folder, block_points)
+        if best is None:
+            best = dict(result)
+        best["seconds"] = min(best["seconds"], result["seconds"])
+        best["max_rss"] = max(best["max_rss"], result["max_rss"])
+        print(f"  {kind:>5} {n} x {n}: {result['seconds']:.3f} s, "
+              f"peak RSS {result['max_rss'] / 2**20:.0f} MiB", flush=True)
+    assert best is not None
+    return best
+
+
+def machine() -> str:
+    """Cores, CPU model and the versions that set the speed."""
+    import netCDF4
+    import numba
+
+    model = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
+    return (f"{os.cpu_count()} cores, {model}, {memory:.0f} GiB; Python "
+            f"{platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}, "
+            f"netCDF4 {netCDF4.__version__} (HDF5 {netCDF4.__hdf5libversion__})")
+
+
+def measure_size(points: float, repeats: int, block_points: int, root: Path) -> dict:
+    n = round(math.sqrt(points))
+    folder = Path(tempfile.mkdtemp(prefix=f"bench-{n}-", dir=root))
+    try:
+        spec, output, cache = (folder / "bench-map.toml", folder / "bench-map.nc",
+                               folder / "cache")
+        spec.write_text(SPEC.format(n=n, f_lo=F_RANGE[0], f_hi=F_RANGE[1], a_lo=A_RANGE[0],
+                                    a_hi=A_RANGE[1], **STRUCTURE))
+
+        def fresh() -> None:
+            output.unlink(missing_ok=True)
+            shutil.rmtree(cache, ignore_errors=True)
+
+        def nothing() -> None:
+            pass
+
+        row = {"side": n, "points": n * n}
+        row["bare"] = _best("bare", n, folder, repeats, block_points, nothing)
+        row["run"] = _best("run", n, folder, repeats, block_points, fresh)
+        row["file_size"] = output.stat().st_size
+        row["cache_size"] = _folder_size(cache)
+        row["rerun"] = _best("rerun", n, folder, repeats, block_points, nothing)
+        row["reuse"] = _best("reuse", n, folder, repeats, block_points,
+                             lambda: output.unlink(missing_ok=True))
+        assert row["rerun"]["up_to_date"] and not row["reuse"]["points_computed"]
+        return row
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def table(rows: list[dict], about: str) -> str:
+    mib = 2**20
+    lines = [
+        about, "",
+        "| points | bare `steady_velocity` | `study run` | ratio | rerun, unchanged | "
+        "rerun, cache only | peak RSS bare / run / rerun / cache only | file | cache |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for row in rows:
+        lines.append(
+            f"| {row['side']} x {row['side']} = {row['points']:.3g} "
+            f"| {row['bare']['seconds']:.2f} s | {row['run']['seconds']:.2f} s "
+            f"| **{row['run']['seconds'] / row['bare']['seconds']:.2f}x** "
+            f"| {row['rerun']['seconds']:.3f} s | {row['reuse']['seconds']:.2f} s "
+            f"| {row['bare']['max_rss'] / mib:.0f} / {row['run']['max_rss'] / mib:.0f} / "
+            f"{row['rerun']['max_rss'] / mib:.0f} / {row['reuse']['max_rss'] / mib:.0f} MiB "
+            f"| {row['file_size'] / 1e6:.1f} MB | {row['cache_size'] / 1e6:.1f} MB |"
+        )
+    return "\n".join(lines)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", type=int, default=1000)
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--sizes", nargs="+", type=float, default=[1e6, 1e7, 1e8],
+                        help="grid points per study (square grids)")
+    parser.add_argument("--repeats", type=int, default=None,
+                        help="processes per measurement (default 3, 1 above 3e7 points)")
+    parser.add_argument("--block-points", type=int, default=10_000_000,
+                        help="the bare call above this many points goes in row blocks")
+    parser.add_argument("--output", type=Path, default=Path("results/bench-study.md"))
+    parser.add_argument("--scratch", type=Path, default=None,
+                        help="folder for the temporary studies (default: system temp)")
+    parser.add_argument("--child", choices=KINDS, help=argparse.SUPPRESS)
+    parser.add_argument("--side", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args()
-    n = args.size
-    structure = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
-    f = np.linspace(10.0, 20.0, n)[:, None]
-    a = np.linspace(0.0, 12.0, n)[None, :]
-    study.steady_velocity(structure, f[:4], a)  # compile / load the cache
-
-    kernel = np.inf
-    for _ in range(args.repeats):
-        start = time.perf_counter()
-        study.steady_velocity(structure, f, a)
-        kernel = min(kernel, time.perf_counter() - start)
-
-    with tempfile.TemporaryDirectory() as folder:
-        spec_path = Path(folder) / "bench-map.toml"
-        spec_path.write_text(SPEC.format(n=n))
-        output = Path(folder) / "bench-map.nc"
-        run_study(spec_path, output, progress=False)  # warm the dask and netCDF imports
-        whole = np.inf
-        for _ in range(args.repeats):
-            start = time.perf_counter()
-            report = run_study(spec_path, output, progress=False, force=True)
-            whole = min(whole, time.perf_counter() - start)
-        size_mb = output.stat().st_size / 1e6
-        start = time.perf_counter()
-        up_to_date = run_study(spec_path, output, progress=False)
-        check = time.perf_counter() - start
-    print(f"machine: {os.cpu_count()} cores; {n} x {n} = {n * n} points, "
-          f"{report.chunks} chunks")
-    print(f"steady_velocity on the grid (2 numba threads): {kernel:.3f} s")
-    print(f"study run, netCDF write and validation included: {whole:.3f} s "
-          f"(overhead {whole - kernel:.3f} s = {whole / kernel:.2f}x the solver call), "
-          f"file {size_mb:.1f} MB")
-    print(f"rerun of the unchanged study (fingerprint check only): {check:.3f} s, "
-          f"up to date: {up_to_date.up_to_date}")
+    if args.child:
+        child(args.child, args.side, args.folder, args.block_points)
+        return
+    rows = []
+    for points in args.sizes:
+        repeats = args.repeats or (3 if points <= 3e7 else 1)
+        print(f"{points:.3g} points, {repeats} process(es) per measurement", flush=True)
+        rows.append(measure_size(points, repeats, args.block_points,
+                                 args.scratch or Path(tempfile.gettempdir())))
+    stamp = time.strftime("%Y-%m-%d")
+    about = (f"Measured {stamp}, one run of `benchmarks/bench_study_overhead.py`; {machine()}. "
+             "Velocity studies of the paper's structure; each cell a fresh process, time = "
+             "minimum over repeats, after imports and kernel loading; `study run` = "
+             "`run_study(force=True)` with an empty cache (2 worker threads), the bare call "
+             "uses numba's 2 threads; peak RSS = largest `ru_maxrss`.")
+    text = table(rows, about)
+    print()
+    print(text)
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    args.output.write_text(text + "\n")
 
 
 if __name__ == "__main__":
