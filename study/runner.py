@@ -334,7 +334,7 @@ class _Run:
 
     def _open(self, path: Path) -> GridWriter:
         spec = self.spec
-        writer = GridWriter(path, _standard_attrs(spec))
+        writer = GridWriter(path, _standard_attrs(spec), self.output)
         for axis in spec.axes:
             writer.coordinate(axis.name, (axis.name,), axis.values,
                               _coordinate_attrs(axis.units, axis.long_name))
