@@ -1,9 +1,10 @@
 """Run a study: the only module that crosses spec -> sweep -> store.
 
-Chunks are fanned out over dask.distributed: by default an in-process local
-cluster with one thread per core (the numba kernel releases the GIL), or any
-cluster given by its scheduler address, unchanged. Each finished chunk is stored
-as it arrives, so an interrupted run loses nothing and the next run resumes.
+Chunks are fanned out by :mod:`study.cluster`: by default over threads in this
+process (the numba kernel releases the GIL), or over the workers of a dask
+scheduler given by its address, once they are shown to run this code. Each
+finished chunk is stored as it arrives, so an interrupted run loses nothing and
+the next run resumes.
 """
 
 from __future__ import annotations
@@ -14,11 +15,13 @@ import shlex
 import sys
 import time
 from collections.abc import Callable
-from contextlib import contextmanager
+from contextlib import closing, contextmanager
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
+from study.cluster import Executor, executor
 from study.provenance import (
     code_sha256,
     environment,
@@ -80,30 +83,6 @@ def is_up_to_date(spec: StudySpec, output: Path) -> bool:
     return dataset.attrs.get("study_fingerprint") == fingerprint(spec.sha256)
 
 
-@contextmanager
-def _client(scheduler: str | None, workers: int | None):
-    from distributed import Client, LocalCluster
-
-    if scheduler is None:
-        threads = workers or os.cpu_count() or 1
-        # Threads, not processes: the kernel releases the GIL, and nothing is pickled.
-        cluster = LocalCluster(n_workers=1, threads_per_worker=threads, processes=False,
-                               dashboard_address=None)
-        client = Client(cluster)
-        try:
-            yield client, "local", threads
-        finally:
-            client.close()
-            cluster.close()
-    else:
-        client = Client(scheduler, timeout="30s")
-        try:
-            threads = sum(client.nthreads().values())
-            yield client, scheduler, threads
-        finally:
-            client.close()
-
-
 class _Progress:
     """A one-line text progress bar on stderr (only when it is a terminal or forced)."""
 
@@ -140,6 +119,7 @@ def run_study(
     stop_after: int | None = None,
     command: str | None = None,
     on_chunk: Callable[[int], None] | None = None,
+    on_start: Callable[[Executor], None] | None = None,
 ) -> RunReport:
     """Run a study and write its result file.
 
@@ -150,9 +130,10 @@ def run_study(
     output : path, optional
         Result file; default ``results/<spec file stem>.nc``.
     scheduler : str, optional
-        Address of a dask.distributed scheduler; default: a local in-process cluster.
+        Address of a dask.distributed scheduler; default: threads in this process.
+        Its workers must run this code (:class:`study.cluster.ClusterError` if not).
     workers : int, optional
-        Threads of the local cluster (default: one per core).
+        Threads of a local run (default: one per core).
     progress : bool, optional
         Show a progress bar (default: when stderr is a terminal).
     force : bool
@@ -164,10 +145,19 @@ def run_study(
         The command line recorded in the file's history.
     on_chunk : callable, optional
         Called with the chunk number each time a chunk is stored.
+    on_start : callable, optional
+        Called with the :class:`study.cluster.Executor` once it is ready, before
+        any chunk is computed (to show where the run goes, e.g. the dashboard).
 
     Returns
     -------
     RunReport
+
+    Raises
+    ------
+    study.cluster.ClusterError
+        The scheduler cannot be reached, has no worker, or a worker does not run
+        this code; nothing is written then.
     """
     started = time.perf_counter()
     started_utc = utc_now()
@@ -184,7 +174,8 @@ def run_study(
     output.parent.mkdir(parents=True, exist_ok=True)
     with _exclusive(output):
         return _run_locked(spec, output, chunks, run_fingerprint, started, started_utc,
-                           scheduler, workers, progress, stop_after, command, on_chunk)
+                           scheduler, workers, progress, stop_after, command, on_chunk,
+                           on_start)
 
 
 def _frontier_arrays(spec: StudySpec, arrays: dict[str, Any]) -> dict[str, Any]:
@@ -250,41 +241,36 @@ def _exclusive(output: Path):
 
 
 def _run_locked(spec, output, chunks, run_fingerprint, started, started_utc, scheduler,
-                workers, progress, stop_after, command, on_chunk) -> RunReport:
-    store = ChunkStore(partial_folder(output), run_fingerprint)
-    command = command or "study.run_study(" + shlex.quote(spec.path) + ")"
-    store.start_run(f"{started_utc}: {command} (study {package_version()})")
-    done = store.completed()
-    pending = [chunk for chunk in chunks if chunk.number not in done]
-    reused = len(chunks) - len(pending)
-    show = sys.stderr.isatty() if progress is None else progress
-    bar = _Progress(len(pending), spec.name, show and bool(pending))
-    computed = 0
-    with _client(scheduler, workers) as (client, scheduler_name, threads):
-        if pending:
-            from distributed import as_completed
-
-            futures = {
-                client.submit(compute_chunk, spec, chunk, key=f"{spec.name}-chunk-"
-                              f"{chunk.number}-{run_fingerprint[:12]}", pure=False): chunk
-                for chunk in pending
-            }
-            try:
-                for future in as_completed(futures):
-                    chunk = futures[future]
-                    store.save(chunk, future.result())
-                    computed += 1
-                    bar.advance()
-                    if on_chunk is not None:
-                        on_chunk(chunk.number)
-                    if stop_after is not None and computed >= stop_after:
-                        raise StudyInterrupted(
-                            f"stopped after {computed} chunks on request; "
-                            f"{len(pending) - computed} left, kept in {store.folder}"
-                        )
-            finally:
-                client.cancel(list(futures))
-        arrays = assemble(spec, chunks, store)
+                workers, progress, stop_after, command, on_chunk, on_start) -> RunReport:
+    # The executor first: a cluster that cannot run this code leaves nothing behind.
+    with executor(scheduler, workers, code_sha256()) as pool:
+        if on_start is not None:
+            on_start(pool)
+        store = ChunkStore(partial_folder(output), run_fingerprint)
+        command = command or "study.run_study(" + shlex.quote(spec.path) + ")"
+        store.start_run(f"{started_utc}: {command} (study {package_version()})")
+        done = store.completed()
+        pending = [chunk for chunk in chunks if chunk.number not in done]
+        reused = len(chunks) - len(pending)
+        show = sys.stderr.isatty() if progress is None else progress
+        bar = _Progress(len(pending), spec.name, show and bool(pending))
+        computed = 0
+        results = pool.run_unordered(partial(compute_chunk, spec), pending,
+                                     label=f"{spec.name}-{run_fingerprint[:12]}")
+        with closing(results):  # stopping early cancels the chunks not yet computed
+            for chunk, values in results:
+                store.save(chunk, values)
+                computed += 1
+                bar.advance()
+                if on_chunk is not None:
+                    on_chunk(chunk.number)
+                if stop_after is not None and computed >= stop_after:
+                    raise StudyInterrupted(
+                        f"stopped after {computed} chunks on request; "
+                        f"{len(pending) - computed} left, kept in {store.folder}"
+                    )
+        scheduler_name, threads = pool.name, pool.threads
+    arrays = assemble(spec, chunks, store)
     if "frontier" in spec.observables:
         arrays.update(_frontier_arrays(spec, arrays))
     finished_utc = utc_now()
