@@ -39,8 +39,9 @@ _SHOWN = 12
 # Ask again how many threads the cluster has at most this often [s].
 _REFRESH = 1.0
 
-# How long to sleep while no task has finished [s]: short against any chunk.
-_POLL = 0.02
+# Sleep while no task has finished [s]: from the shortest, doubling up to the
+# longest, so that quick tasks are collected at once and an idle wait costs nothing.
+_POLL = (0.001, 0.02)
 
 
 class ClusterError(RuntimeError):
@@ -339,13 +340,14 @@ class _DaskExecutor(Executor):
             "function and its arguments must be importable on every worker"
         )
 
-    def _watch(self, alone_since: float | None) -> float | None:
-        """Since when the cluster has had no worker (None: it has some).
+    def _watch(self, alone_since: float | None) -> tuple[int, float | None]:
+        """The threads of the cluster now, and since when it has had no worker.
 
-        Raises a ClusterError once that lasts longer than ``timeout``.
+        Raises a ClusterError once it has had none for longer than ``timeout``.
         """
-        if self._nthreads():
-            return None
+        threads = sum(self._nthreads().values())
+        if threads:
+            return threads, None
         now = time.monotonic()
         alone_since = now if alone_since is None else alone_since
         if now - alone_since > self.timeout:
@@ -353,7 +355,7 @@ class _DaskExecutor(Executor):
                 f"the dask scheduler at {self.name} has had no worker for "
                 f"{self.timeout:g} s; the run stopped (finished work is kept)"
             )
-        return alone_since
+        return threads, alone_since
 
     def _result(self, future) -> Any:
         """The value of a finished task, or the ClusterError that ends the run."""
@@ -367,7 +369,7 @@ class _DaskExecutor(Executor):
                 outcome = future.result(timeout=max(self.timeout / 10, _REFRESH))
                 break
             except TimeoutError:
-                alone_since = self._watch(alone_since)
+                _, alone_since = self._watch(alone_since)
             except KilledWorker as err:
                 raise ClusterError(
                     f"workers of {self.name} died while computing one task again and "
@@ -395,6 +397,7 @@ class _DaskExecutor(Executor):
         window = 2 * max(self.threads, 1)
         checked = time.monotonic()
         alone_since = None
+        pause = _POLL[0]
         try:
             while running or following < len(items):
                 while following < len(items) and len(running) < window:
@@ -412,11 +415,12 @@ class _DaskExecutor(Executor):
                         # Workers come and go: follow their threads, and never wait
                         # forever on a cluster that has none left.
                         checked = now
-                        window = 2 * max(sum(self._nthreads().values()), 1)
-                        alone_since = self._watch(alone_since)
-                    time.sleep(_POLL)
+                        threads, alone_since = self._watch(alone_since)
+                        window = 2 * max(threads, 1)
+                    time.sleep(pause)
+                    pause = min(2 * pause, _POLL[1])
                     continue
-                alone_since = None
+                alone_since, pause = None, _POLL[0]
                 for future in finished:
                     index = running.pop(future)
                     # Dropping the future (here and in finished) lets the worker

@@ -378,17 +378,18 @@ def test_workers_without_study_end_the_run_with_a_clear_error(small, empty, tmp_
     assert not output.exists() and not partial_folder(output).exists()
 
 
-def test_a_worker_joining_later_with_other_code_is_refused_at_its_first_task(
-        empty, other_code):
+def test_workers_leaving_or_joining_mid_run_never_hang_or_mix(empty, other_code):
+    """After the start: no worker left ends the run; a worker of other code is refused."""
     (good,) = empty.add_workers(1)
-    with executor(empty.address, None, code_sha256()) as pool:
+    with executor(empty.address, None, code_sha256(), timeout=2.0) as pool:
         assert pool.threads == 1
         assert pool.dashboard is None  # --no-dashboard: no page to show
         empty.kill(good)
+        with pytest.raises(ClusterError, match="has had no worker for 2 s"):
+            within(RUN, list, pool.run_unordered(abs, [-1, -2], label="alone"))
         (late,) = empty.add_workers(1, pythonpath=other_code)
-        results = pool.run_unordered(abs, [-1, -2], label="late")
         with pytest.raises(ClusterError, match="joined after the start") as refused:
-            within(RUN, list, results)
+            within(RUN, list, pool.run_unordered(abs, [-1, -2], label="late"))
     assert f"worker {late} " in str(refused.value)
     assert code_sha256()[:12] in str(refused.value)
 
@@ -439,3 +440,21 @@ def test_the_local_executor_yields_every_item_once():
     with executor(None, 3, code_sha256()) as pool:
         pairs = list(pool.run_unordered(lambda x: x * x, list(range(50)), label="squares"))
     assert sorted(pairs) == [(x, x * x) for x in range(50)]
+
+
+def test_the_time_reported_includes_writing_the_file(tmp_path, monkeypatch):
+    """The CLI prints ``RunReport.wall_seconds``: it must cover the write and its check."""
+    import study.runner
+
+    write = study.runner.write_atomic
+
+    def slow_write(*args, **kwargs):
+        write(*args, **kwargs)
+        time.sleep(0.5)  # a slow disk
+
+    monkeypatch.setattr(study.runner, "write_atomic", slow_write)
+    spec = write_spec(tmp_path, "timed", n_f=4, n_a=3, chunk_points=3)
+    report = run_study(spec, tmp_path / "timed.nc", workers=1, progress=False)
+    assert report.wall_seconds >= 0.5
+    provenance = json.loads(open_result(report.output).attrs["provenance"])
+    assert provenance["run"]["wall_seconds"] < report.wall_seconds
