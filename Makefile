@@ -5,6 +5,7 @@
 #   make test       set up .venv on a fresh machine, lint, run the test suite
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
+#   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
 
 PYTHON ?= python3
 VENV   := .venv
@@ -14,9 +15,9 @@ STAMP  := $(VENV)/.installed
 
 WORKFLOWS := $(wildcard workflows/*.toml)
 RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
-PACKAGE   := $(shell find study -name '*.py') $(wildcard results_schema/*.json)
+PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs test test-slow lint bench cf-check list clean
+.PHONY: all results figures docs test test-slow lint bench cf-check list clean schemas
 
 all: results
 
@@ -32,6 +33,13 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
+
+# The package reads study/schemas/ (package data, shipped in the wheel); results_schema/
+# keeps an identical copy at the top of the repo (a test checks they agree).
+schemas: $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
+
+results_schema/%.json: study/schemas/%.json
+	cp $< $@
 
 # Figures, each redrawn from its result file alone: figures/NAME.png and .pdf.
 FIGURES := thresholds velocity-curves regime-map force-traces mass-ratio \

@@ -33,6 +33,14 @@ def _run_scene(args: argparse.Namespace) -> int:
     return 0
 
 
+def _show_cluster(pool) -> None:
+    """Where a run on a dask scheduler goes, and its dashboard if it has one."""
+    line = f"study: {pool.threads} threads on the workers of {pool.name}"
+    if pool.dashboard:
+        line += f"; dashboard: {pool.dashboard}"
+    print(line, file=sys.stderr, flush=True)
+
+
 def _run(args: argparse.Namespace) -> int:
     from study.runner import StudyInterrupted, run_study
     from study.scene import is_scene_file
@@ -52,6 +60,7 @@ def _run(args: argparse.Namespace) -> int:
             force=args.force,
             command=command,
             cache=args.cache,
+            on_start=_show_cluster if args.scheduler else None,
         )
     except StudyInterrupted as err:
         print(f"study: {err}", file=sys.stderr)
@@ -206,9 +215,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("-o", "--output", type=Path,
                      help="result file (default: results/<spec file stem>.nc)")
     run.add_argument("--scheduler", metavar="ADDR",
-                     help="dask.distributed scheduler address (default: local cluster)")
+                     help="dask.distributed scheduler address, e.g. tcp://host:8786 "
+                          "(default: threads in this process)")
     run.add_argument("--workers", type=int, metavar="N",
-                     help="threads of the local cluster (default: one per core)")
+                     help="threads of a local run (default: one per core)")
     run.add_argument("--force", action="store_true",
                      help="recompute even when the result is up to date")
     run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from study.cache import ResultCache, entry_key
+from study.cluster import Executor, executor
 from study.observables import Method, Observable, resolve
 from study.progress import Progress
 from study.provenance import (
@@ -165,6 +166,7 @@ def run_study(
     command: str | None = None,
     on_chunk: Callable[[int], None] | None = None,
     cache: str | Path | None = None,
+    on_start: Callable[[Executor], None] | None = None,
 ) -> RunReport:
     """Run a study and write its result file.
 
@@ -192,10 +194,21 @@ def run_study(
         Called with the chunk number each time a computed chunk is written.
     cache : path, optional
         Folder of kept values (default :func:`default_cache`).
+    on_start : callable, optional
+        Called with the :class:`study.cluster.Executor` once it is ready, before any
+        chunk is computed (to show where the run goes, e.g. the dashboard).
 
     Returns
     -------
     RunReport
+
+    Raises
+    ------
+    study.cluster.ClusterError
+        The scheduler cannot be reached, has no worker, or a worker does not run this
+        code; nothing is written then.
+    study.store.StoreError, study.store.StoreBusy
+        The result cannot be written, or another process is writing it.
     """
     started = time.perf_counter()
     started_utc = utc_now()
@@ -218,7 +231,7 @@ def run_study(
                              time.perf_counter() - started, metadata_updated=True)
         return _Run(spec, output, started, started_utc, command,
                     ResultCache(Path(cache) if cache is not None else default_cache(output)),
-                    on_chunk).execute(scheduler, workers, progress, stop_after)
+                    on_chunk).execute(scheduler, workers, progress, stop_after, on_start)
 
 
 def _plan(spec: StudySpec) -> list[Chunk]:
@@ -334,7 +347,7 @@ class _Run:
 
     def _open(self, path: Path) -> GridWriter:
         spec = self.spec
-        writer = GridWriter(path, _standard_attrs(spec))
+        writer = GridWriter(path, _standard_attrs(spec), self.output)
         for axis in spec.axes:
             writer.coordinate(axis.name, (axis.name,), axis.values,
                               _coordinate_attrs(axis.units, axis.long_name))
@@ -435,9 +448,8 @@ class _Run:
         self.progress.update(size)
 
     def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
-                stop_after: int | None) -> RunReport:
-        from study.cluster import executor
-
+                stop_after: int | None, on_start: Callable[[Executor], None] | None
+                ) -> RunReport:
         self.cache.clean_temporaries()
         temporary = new_temporary(self.output)
         try:
@@ -450,6 +462,8 @@ class _Run:
             try:
                 with executor(scheduler, workers, self.code) as pool:
                     self.scheduler_name, self.threads = pool.name, pool.threads
+                    if on_start is not None:
+                        on_start(pool)
                     for task, result in pool.run_unordered(compute_task, self._tasks(pending),
                                                            label=self.spec.name):
                         self._finish(task, result, pending.pop(task.chunk.number))

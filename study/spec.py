@@ -56,7 +56,7 @@ __all__ = [
     "parse_spec",
 ]
 
-SPEC_SCHEMA_PATH = Path(__file__).resolve().parent.parent / "results_schema" / (
+SPEC_SCHEMA_PATH = Path(__file__).resolve().parent / "schemas" / (
     "study-spec-v1.schema.json"
 )
 

@@ -463,16 +463,19 @@ class GridWriter:
         The temporary file (see :func:`new_temporary`).
     attrs : dict
         Global attributes.
+    target : pathlib.Path, optional
+        The result file the temporary becomes (named in error messages).
     """
 
-    def __init__(self, path: Path, attrs: dict[str, Any]) -> None:
+    def __init__(self, path: Path, attrs: dict[str, Any], target: Path | None = None) -> None:
         import netCDF4
 
         self.path = path
+        self.target = path if target is None else target
         try:
             self.dataset = netCDF4.Dataset(path, "w", format="NETCDF4")
         except OSError as err:
-            raise _store_error(path, err) from None
+            raise _store_error(self.target, err) from None
         self.dataset.set_auto_mask(False)
         self.dataset.setncatts(attrs)
 
@@ -503,9 +506,12 @@ class GridWriter:
     def write(self, name: str, index: tuple[Any, ...], values: np.ndarray) -> None:
         """Write ``values`` at ``index`` of variable ``name``."""
         try:
-            self.dataset.variables[name][index] = values
+            self._put(name, index, values)
         except OSError as err:
-            raise _store_error(self.path, err) from None
+            raise _store_error(self.target, err) from None
+
+    def _put(self, name: str, index: tuple[Any, ...], values: np.ndarray) -> None:
+        self.dataset.variables[name][index] = values
 
     def read(self, name: str, index: tuple[Any, ...]) -> np.ndarray:
         """Read back part of a variable."""
@@ -521,4 +527,4 @@ class GridWriter:
             try:
                 self.dataset.close()
             except OSError as err:
-                raise _store_error(self.path, err) from None
+                raise _store_error(self.target, err) from None

@@ -207,8 +207,9 @@ def test_distributed_cluster_gives_the_local_result(tmp_path, finished):
 
     _, _, local = finished
     spec_path = write_spec(tmp_path)
+    # dashboard_address=None still opens the scheduler's HTTP server on 8787: port 0.
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster:
+                      dashboard_address="127.0.0.1:0") as cluster:
         report = run_study(spec_path, tmp_path / "d.nc", scheduler=cluster.scheduler_address,
                            progress=False)
     remote = open_result(tmp_path / "d.nc")
