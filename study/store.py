@@ -501,10 +501,17 @@ class GridWriter:
         fill = np.nan if dtype_.kind == "f" else False
         var = self.dataset.createVariable(name, dtype_, dims, zlib=True, complevel=1,
                                           shuffle=True, chunksizes=chunks, fill_value=fill)
+        # Every write covers whole chunks, written once: with a cache too small for any
+        # chunk, HDF5 compresses and writes each chunk during ``write`` (while the
+        # workers compute the next ones) instead of holding up to the default 64 MiB
+        # per variable and compressing it all in ``close``, after the last chunk, when
+        # nothing overlaps. (A size of 0 would mean "keep the default" to netCDF.)
+        var.set_var_chunk_cache(size=1, nelems=1, preemption=1.0)
         var.setncatts(attrs)
 
     def write(self, name: str, index: tuple[Any, ...], values: np.ndarray) -> None:
-        """Write ``values`` at ``index`` of variable ``name``."""
+        """Write ``values`` at ``index`` of variable ``name`` (whole chunks of a data
+        variable, each once: partial chunks are read, changed and compressed again)."""
         try:
             self._put(name, index, values)
         except OSError as err:
