@@ -4,13 +4,25 @@ Values of the cached observables are kept in *entries*, one per (observable,
 structure, solver settings, code fingerprint): the entry's key is the sha256 of
 that content, so values are found again whatever grid they are part of. An entry
 is a folder ``<root>/<key[:2]>/<key>/`` holding ``entry.json`` (the content the key
-hashes) and *blocks*: rectangles of drive frequencies x accelerations, each one
-zip file (the npz layout, deflate level 1) with the block's own copy of the key,
-its layout and a sha256 of every array. A block is verified against all of that
-before its values are used; one that fails is removed, never reused.
+hashes), *axis files* and *blocks*.
 
-Blocks are written to a temporary name and renamed, so a reader never sees half
-a block and several writers (processes) can share a cache.
+A block is a rectangle of drive frequencies x accelerations: one zip file holding
+``meta.json`` (the block's own copy of the key, its layout, the dtype and sha256 of
+every array), ``f.bin`` and one ``<variable>.bin`` per variable. Arrays are stored
+byte-shuffled (the k-th bytes of all values together) and deflated with run-length
+matching: for solver output (exact zeros, NaN, repeated flags, smooth values) this
+is smaller than plain deflate and about twice as fast, which matters because every
+computed value is kept. The acceleration axis of a block, the same for every block
+of a grid, is kept once per entry in ``axis-<sha256>.bin`` (named by the sha256 of
+its values) instead of in each block: at 1e8 points it was a third of the cache.
+A block is verified against its key, layout and the checksum of every array read
+(and of its axis file) before its values are used; one that fails is removed,
+never reused.
+
+Blocks are encoded by :func:`encode_block`, a pure function that a worker can run
+beside the solver, and written by :meth:`ResultCache.store_encoded` to a temporary
+name and renamed, so a reader never sees half a block and several writers
+(processes) can share a cache.
 """
 
 from __future__ import annotations
@@ -23,6 +35,7 @@ import shutil
 import time
 import uuid
 import zipfile
+import zlib
 from collections import OrderedDict
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -32,12 +45,22 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CACHE_FORMAT", "CacheEntry", "ResultCache", "entry_key"]
+__all__ = [
+    "CACHE_FORMAT",
+    "CacheEntry",
+    "ResultCache",
+    "decode_array",
+    "encode_array",
+    "encode_block",
+    "entry_key",
+]
 
 #: Version of the on-disk layout; part of every key.
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2
 _ENTRY = "entry.json"
 _META = "meta.json"
+#: How arrays are stored in blocks and axis files (recorded in each block).
+_ENCODING = "shuffle-deflate-rle"
 #: Decompressed blocks kept in memory while a chunk's values are gathered.
 _BLOCKS_IN_MEMORY = 8
 
@@ -50,7 +73,97 @@ def entry_key(content: dict[str, Any]) -> str:
 
 
 def _array_sha256(array: NDArray[Any]) -> str:
-    return hashlib.sha256(np.ascontiguousarray(array).tobytes()).hexdigest()
+    return hashlib.sha256(np.ascontiguousarray(array).data).hexdigest()
+
+
+def encode_array(array: NDArray[Any]) -> bytes:
+    """An array's bytes, byte-shuffled and deflated (raw deflate, run-length matching).
+
+    Shape and dtype are not included: a block's ``meta.json`` records them.
+    """
+    array = np.ascontiguousarray(array)
+    raw = array.view(np.uint8).reshape(-1, array.itemsize).T.tobytes() if array.size else b""
+    compressor = zlib.compressobj(1, zlib.DEFLATED, -15, 8, zlib.Z_RLE)
+    return compressor.compress(raw) + compressor.flush()
+
+
+def decode_array(data: bytes, dtype: str | np.dtype, shape: tuple[int, ...]) -> NDArray[Any]:
+    """The array :func:`encode_array` encoded, given its dtype and shape.
+
+    Raises
+    ------
+    ValueError
+        If ``data`` does not inflate to exactly that many values.
+    """
+    dtype = np.dtype(dtype)
+    count = int(np.prod(shape, dtype=np.int64))
+    raw = _inflate(data, count * dtype.itemsize)
+    if len(raw) != count * dtype.itemsize:
+        raise ValueError(f"{len(raw)} bytes, expected {count * dtype.itemsize}")
+    return _unshuffle(raw, dtype, shape)
+
+
+def _inflate(data: bytes, size: int) -> bytes:
+    try:
+        # At most one byte more than expected is inflated: enough to see a wrong size.
+        inflater = zlib.decompressobj(-15)
+        return inflater.decompress(data, size + 1)
+    except zlib.error as err:
+        raise ValueError(f"not a deflate stream ({err})") from None
+
+
+def _unshuffle(raw: bytes, dtype: np.dtype, shape: tuple[int, ...]) -> NDArray[Any]:
+    planes = np.frombuffer(raw, dtype=np.uint8).reshape(dtype.itemsize, -1)
+    return planes.T.copy().view(dtype).reshape(shape)
+
+
+def _decode_axis(data: bytes) -> NDArray[np.float64]:
+    """An axis file's values (float64; their number follows from the inflated length)."""
+    try:
+        raw = zlib.decompress(data, -15)
+    except zlib.error as err:
+        raise ValueError(f"not a deflate stream ({err})") from None
+    if len(raw) % 8:
+        raise ValueError(f"{len(raw)} bytes is not a whole number of float64 values")
+    return _unshuffle(raw, np.dtype("<f8"), (len(raw) // 8,))
+
+
+def encode_block(key: str, f: NDArray[np.float64], a: NDArray[np.float64],
+                 arrays: dict[str, NDArray[Any]]) -> bytes:
+    """A block of computed values ``f x a`` as the bytes of its file.
+
+    A pure function of its arguments (no file is touched), so that a worker can
+    encode the values it computed; :meth:`ResultCache.store_encoded` writes them.
+
+    Parameters
+    ----------
+    key : str
+        Entry key (:func:`entry_key`).
+    f, a : numpy.ndarray
+        ``(n_f,)`` drive frequencies [Hz] and ``(n_a,)`` accelerations [m s^-2].
+    arrays : dict
+        Variable name -> ``(n_f, n_a)`` array.
+    """
+    f = np.ascontiguousarray(f, dtype=np.float64)
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    payload = {"f": f, **{name: np.ascontiguousarray(v) for name, v in arrays.items()}}
+    meta = {
+        "key": key,
+        "encoding": _ENCODING,
+        "variables": sorted(arrays),
+        "shape": [int(f.size), int(a.size)],
+        "a_sha256": _array_sha256(a),
+        "dtypes": {name: array.dtype.str for name, array in payload.items()},
+        "sha256": {name: _array_sha256(array) for name, array in payload.items()},
+        "created": time.time(),
+    }
+    buffer = io.BytesIO()
+    # Members are compressed by encode_array; the zip only adds names and CRC-32s.
+    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_STORED) as archive:
+        archive.writestr(_META, json.dumps(meta, sort_keys=True))
+        for name, array in payload.items():
+            archive.writestr(f"{name}.bin", encode_array(array))
+    return buffer.getvalue()
 
 
 @dataclass(frozen=True)
@@ -70,6 +183,9 @@ class CacheEntry:
         Bytes on disk.
     modified : float
         Newest block's modification time (POSIX seconds).
+    current_format : bool
+        Written in this version's layout (:data:`CACHE_FORMAT`); entries of other
+        layouts are never read and can be pruned.
     """
 
     key: str
@@ -79,14 +195,18 @@ class CacheEntry:
     points: int
     size: int
     modified: float
+    current_format: bool = True
 
 
 class _Index:
-    """Rows (f values) of every block of one entry, sorted for lookups."""
+    """Rows (f values) of every block of one entry, sorted for lookups; each distinct
+    acceleration axis once."""
 
-    def __init__(self, blocks: list[tuple[Path, NDArray[np.float64], NDArray[np.float64]]]):
+    def __init__(self, blocks: list[tuple[Path, NDArray[np.float64], str]]):
         self.paths = [path for path, _, _ in blocks]
-        self.a_values = [a for _, _, a in blocks]
+        self.a_keys = [a_sha for _, _, a_sha in blocks]
+        #: a-axis sha256 -> (values, argsort of the values), filled as axes are read.
+        self.axes: dict[str, tuple[NDArray[np.float64], NDArray[np.intp]] | None] = {}
         if blocks:
             f_all = np.concatenate([f for _, f, _ in blocks])
             block = np.concatenate([np.full(f.size, i) for i, (_, f, _) in enumerate(blocks)])
@@ -112,6 +232,8 @@ class ResultCache:
         self.root = Path(root)
         self._indexes: dict[str, _Index] = {}
         self._blocks: OrderedDict[Path, dict[str, NDArray[Any]] | None] = OrderedDict()
+        #: Axis files known to exist (written or verified) in this session.
+        self._axes_written: set[Path] = set()
         #: Blocks found corrupt or foreign and removed in this session.
         self.discarded: list[str] = []
 
@@ -120,6 +242,9 @@ class ResultCache:
     def entry_path(self, key: str) -> Path:
         """Folder of the entry ``key``."""
         return self.root / key[:2] / key
+
+    def _axis_path(self, key: str, a_sha256: str) -> Path:
+        return self.entry_path(key) / f"axis-{a_sha256}.bin"
 
     def _block_paths(self, key: str) -> list[Path]:
         folder = self.entry_path(key)
@@ -134,37 +259,67 @@ class ResultCache:
         path.unlink(missing_ok=True)
 
     def _open_block(self, path: Path, key: str, axes_only: bool = False
-                    ) -> dict[str, NDArray[Any]] | None:
-        """A block's arrays (only ``f`` and ``a`` if ``axes_only``) after verifying its
+                    ) -> tuple[dict[str, Any], dict[str, NDArray[Any]]] | None:
+        """A block's meta and arrays (only ``f`` if ``axes_only``) after verifying its
         key, layout and the checksum of every array read; a bad block is removed."""
         try:
             with zipfile.ZipFile(path) as archive:
                 meta = json.loads(archive.read(_META))
-                names = ("f", "a") if axes_only else ("f", "a", *meta["variables"])
+                if meta.get("key") != key:
+                    self._discard(path, "belongs to another entry")
+                    return None
+                if meta.get("encoding") != _ENCODING:
+                    self._discard(path, f"unknown encoding {meta.get('encoding')!r}")
+                    return None
+                n_f, n_a = (int(n) for n in meta["shape"])
+                names = ("f",) if axes_only else ("f", *meta["variables"])
                 arrays = {}
                 for name in names:
-                    with archive.open(f"{name}.npy") as stream:
-                        arrays[name] = np.lib.format.read_array(
-                            io.BytesIO(stream.read()), allow_pickle=False)
-                problem = _check_block(meta, arrays, key)
+                    shape = (n_f,) if name == "f" else (n_f, n_a)
+                    arrays[name] = decode_array(archive.read(f"{name}.bin"),
+                                                meta["dtypes"][name], shape)
+                problem = _check_block(meta, arrays)
         except (OSError, ValueError, KeyError, TypeError, IndexError, zipfile.BadZipFile,
-                EOFError) as err:
+                EOFError, zlib.error) as err:
             self._discard(path, f"unreadable ({type(err).__name__}: {err})")
             return None
         if problem:
             self._discard(path, problem)
             return None
-        return arrays
+        return meta, arrays
 
     def _block(self, path: Path, key: str) -> dict[str, NDArray[Any]] | None:
         if path in self._blocks:
             self._blocks.move_to_end(path)
             return self._blocks[path]
-        arrays = self._open_block(path, key)
+        opened = self._open_block(path, key)
+        arrays = None if opened is None else opened[1]
         self._blocks[path] = arrays
         if len(self._blocks) > _BLOCKS_IN_MEMORY:
             self._blocks.popitem(last=False)
         return arrays
+
+    def _axis(self, key: str, index: _Index, a_sha256: str
+              ) -> tuple[NDArray[np.float64], NDArray[np.intp]] | None:
+        """An acceleration axis of the entry and its sort order, read once per session
+        and verified against the sha256 that names it; a bad axis file is removed."""
+        if a_sha256 not in index.axes:
+            path = self._axis_path(key, a_sha256)
+            axis = None
+            try:
+                values = _decode_axis(path.read_bytes())
+            except (OSError, ValueError) as err:
+                values = None
+                if path.exists():
+                    self._discard(path, f"unreadable ({type(err).__name__}: {err})")
+            if values is not None:
+                if _array_sha256(values) == a_sha256:
+                    axis = (values, np.argsort(values, kind="stable"))
+                    self._axes_written.add(path)
+                else:
+                    self._discard(path, "does not match its checksum")
+            index.axes[a_sha256] = axis
+        return index.axes[a_sha256]
 
     def _index(self, key: str) -> _Index:
         """The entry's row index, read once per session (blocks written later by this
@@ -172,9 +327,10 @@ class ResultCache:
         if key not in self._indexes:
             layouts = []
             for path in self._block_paths(key):
-                arrays = self._open_block(path, key, axes_only=True)
-                if arrays is not None:
-                    layouts.append((path, arrays["f"], arrays["a"]))
+                opened = self._open_block(path, key, axes_only=True)
+                if opened is not None:
+                    meta, arrays = opened
+                    layouts.append((path, arrays["f"], str(meta["a_sha256"])))
             self._indexes[key] = _Index(layouts)
         return self._indexes[key]
 
@@ -222,8 +378,11 @@ class ResultCache:
             mine = index.block[hits_arr] == b
             rows_here = query_rows_arr[mine]
             block_rows = index.row[hits_arr[mine]]
-            block_a = index.a_values[b]
-            sorter = np.argsort(block_a, kind="stable")
+            axis = self._axis(key, index, index.a_keys[b])
+            if axis is None:
+                self._discard(index.paths[b], "its acceleration axis is missing or damaged")
+                continue
+            block_a, sorter = axis
             pos = np.searchsorted(block_a, a, sorter=sorter)
             pos = np.minimum(pos, block_a.size - 1)
             columns = sorter[pos]
@@ -233,12 +392,19 @@ class ResultCache:
             arrays = self._block(index.paths[b], key)
             if arrays is None or not all(name in arrays for name in variables):
                 continue
+            rows_query = rows_here
             cols_query = np.flatnonzero(match)
             cols_block = columns[match]
+            whole = (cols_query.size == a.size and cols_block.size == block_a.size
+                     and np.array_equal(cols_block, np.arange(block_a.size)))
             for name in variables:
-                values[name][np.ix_(rows_here, cols_query)] = (
-                    arrays[name][np.ix_(block_rows, cols_block)])
-            found[np.ix_(rows_here, cols_query)] = True
+                if whole:
+                    # The usual case (a whole chunk kept as one block): rows only.
+                    values[name][rows_query] = arrays[name][block_rows]
+                else:
+                    values[name][np.ix_(rows_query, cols_query)] = (
+                        arrays[name][np.ix_(block_rows, cols_block)])
+            found[np.ix_(rows_query, cols_query)] = True
         return values, found
 
     # -- writing ---------------------------------------------------------------
@@ -246,33 +412,27 @@ class ResultCache:
     def store(self, key: str, content: dict[str, Any], f: NDArray[np.float64],
               a: NDArray[np.float64], arrays: dict[str, NDArray[Any]]) -> Path:
         """Keep a computed block ``f x a`` (each array ``(n_f, n_a)``) under ``key``."""
+        return self.store_encoded(key, content, a, encode_block(key, f, a, arrays))
+
+    def store_encoded(self, key: str, content: dict[str, Any], a: NDArray[np.float64],
+                      block: bytes) -> Path:
+        """Keep a block encoded by :func:`encode_block` under ``key``; ``a`` is the
+        block's acceleration axis (written once per entry)."""
         folder = self.entry_path(key)
         folder.mkdir(parents=True, exist_ok=True)
         entry_file = folder / _ENTRY
         if not entry_file.exists():
             _write_atomic_bytes(entry_file, json.dumps(
-                {"key": key, "content": content}, sort_keys=True, indent=1).encode())
-        payload = {"f": np.asarray(f, dtype=np.float64), "a": np.asarray(a, dtype=np.float64),
-                   **arrays}
-        meta = {
-            "key": key,
-            "variables": sorted(arrays),
-            "shape": [int(np.size(f)), int(np.size(a))],
-            "dtypes": {name: array.dtype.str for name, array in payload.items()},
-            "sha256": {name: _array_sha256(array) for name, array in payload.items()},
-            "created": time.time(),
-        }
-        buffer = io.BytesIO()
-        with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_DEFLATED,
-                             compresslevel=1) as archive:
-            archive.writestr(_META, json.dumps(meta, sort_keys=True))
-            for name, array in payload.items():
-                stream = io.BytesIO()
-                np.lib.format.write_array(stream, np.ascontiguousarray(array),
-                                          allow_pickle=False)
-                archive.writestr(f"{name}.npy", stream.getvalue())
+                {"key": key, "cache_format": CACHE_FORMAT, "content": content},
+                sort_keys=True, indent=1).encode())
+        a = np.ascontiguousarray(a, dtype=np.float64)
+        axis_file = self._axis_path(key, _array_sha256(a))
+        if axis_file not in self._axes_written:
+            if not axis_file.exists():
+                _write_atomic_bytes(axis_file, encode_array(a))
+            self._axes_written.add(axis_file)
         target = folder / f"block-{uuid.uuid4().hex}.npz"
-        _write_atomic_bytes(target, buffer.getvalue())
+        _write_atomic_bytes(target, block)
         return target
 
     # -- housekeeping ----------------------------------------------------------
@@ -303,12 +463,14 @@ class ResultCache:
                 key=folder.name, path=folder, content=content, blocks=len(blocks),
                 points=points, size=sum(p.stat().st_size for p in files),
                 modified=max((p.stat().st_mtime for p in files), default=0.0),
+                current_format=bool(content) and entry_key(content) == folder.name,
             )
 
     def remove(self, key: str) -> None:
         """Delete one entry."""
         shutil.rmtree(self.entry_path(key), ignore_errors=True)
         self._indexes.pop(key, None)
+        self._axes_written = {p for p in self._axes_written if p.parent.name != key}
 
     def clean_temporaries(self, older_than: float = 3600.0) -> int:
         """Remove block temporaries left by killed writers (older than ``older_than`` s)."""
@@ -326,18 +488,10 @@ class ResultCache:
         return removed
 
 
-def _check_block(meta: dict[str, Any], arrays: dict[str, NDArray[Any]], key: str) -> str:
-    """Why a block cannot be used, or '' if it can."""
-    if meta.get("key") != key:
-        return "belongs to another entry"
-    n_f, n_a = meta["shape"]
-    if arrays["f"].shape != (n_f,) or arrays["a"].shape != (n_a,):
-        return "layout does not match its axes"
+def _check_block(meta: dict[str, Any], arrays: dict[str, NDArray[Any]]) -> str:
+    """Why a block's arrays cannot be used, or '' if they can (shapes were decoded from
+    the block's layout, so the checksums decide)."""
     for name, array in arrays.items():
-        if name not in ("f", "a") and array.shape != (n_f, n_a):
-            return f"{name} has shape {array.shape}, expected {(n_f, n_a)}"
-        if meta["dtypes"].get(name) != array.dtype.str:
-            return f"{name} has dtype {array.dtype.str}"
         if meta["sha256"].get(name) != _array_sha256(array):
             return f"{name} does not match its checksum"
     return ""

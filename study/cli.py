@@ -117,7 +117,7 @@ def _cache(args: argparse.Namespace) -> int:
     doomed = [
         e for e in entries
         if args.all
-        or (args.stale and e.content.get("code_sha256") != current)
+        or (args.stale and (e.content.get("code_sha256") != current or not e.current_format))
         or (args.older_than is not None and now - e.modified > args.older_than * 86400)
     ]
     if not (args.all or args.stale or args.older_than is not None):
@@ -235,7 +235,8 @@ def _parser() -> argparse.ArgumentParser:
                        default=Path(os.environ.get("STUDY_CACHE") or "results/.study-cache"),
                        help="cache folder (default: $STUDY_CACHE, else results/.study-cache)")
     cache.add_argument("--stale", action="store_true",
-                       help="prune: entries computed by other code than this")
+                       help="prune: entries computed by other code than this, or kept in an "
+                       "older cache layout")
     cache.add_argument("--older-than", type=float, metavar="DAYS",
                        help="prune: entries not written for DAYS days")
     cache.add_argument("--all", action="store_true", help="prune: everything")

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import study
+from study.cache import decode_array, encode_array
 from study.cli import main
 from study.progress import Progress
 from study.runner import run_study
@@ -126,7 +127,7 @@ def blocks(folder: Path) -> list[Path]:
     return sorted((folder / ".study-cache").glob("??/*/block-*.npz"))
 
 
-@pytest.mark.parametrize("damage", ["truncate", "values", "foreign"])
+@pytest.mark.parametrize("damage", ["truncate", "values", "foreign", "axis"])
 def test_a_damaged_kept_block_is_removed_and_recomputed(tmp_path, damage):
     _, reference = run(tmp_path, spec_text())
     reference = reference["velocity"].values.copy()
@@ -137,13 +138,17 @@ def test_a_damaged_kept_block_is_removed_and_recomputed(tmp_path, damage):
         # Rewrite the block with velocities x 1.01 but the recorded checksums unchanged.
         with zipfile.ZipFile(target) as archive:
             members = {name: archive.read(name) for name in archive.namelist()}
-        velocity = np.load(io.BytesIO(members["velocity.npy"]))
-        stream = io.BytesIO()
-        np.save(stream, velocity * 1.01)
-        members["velocity.npy"] = stream.getvalue()
+        meta = json.loads(members["meta.json"])
+        velocity = decode_array(members["velocity.bin"], meta["dtypes"]["velocity"],
+                                tuple(meta["shape"]))
+        members["velocity.bin"] = encode_array(velocity * 1.01)
         with zipfile.ZipFile(target, "w") as archive:
             for name, data in members.items():
                 archive.writestr(name, data)
+    elif damage == "axis":
+        # The acceleration axis the blocks share, changed in place.
+        axis = next(target.parent.glob("axis-*.bin"))
+        axis.write_bytes(encode_array(np.linspace(2.0, 10.0, 5) * 1.01))
     else:
         # A block of another entry (other cs) moved into this entry's folder.
         run(tmp_path, spec_text(structure={**BASE, "cs": 0.3}), name="other")
