@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from study.cache import ResultCache, entry_key
+from study.cache import ResultCache, encode_block, entry_key
 from study.cluster import Executor, executor
 from study.observables import Method, Observable, resolve
 from study.progress import Progress
@@ -294,6 +294,39 @@ def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
     }
 
 
+@dataclass(frozen=True)
+class _Job:
+    """A task and the cache entries its computed values go to: what a worker gets."""
+
+    task: Task
+    #: (entry key, variable names) of each solver observable the task computes.
+    entries: tuple[tuple[str, tuple[str, ...]], ...]
+
+
+def _compute_and_encode(job: _Job) -> tuple[dict[str, np.ndarray], list[dict[str, Any]],
+                                            list[list[bytes]]]:
+    """Compute a task and encode its values as cache blocks, on the worker: compression
+    and checksums run beside the solver, in parallel, not on the one thread that
+    writes the file (and a remote worker sends compressed blocks).
+
+    Returns
+    -------
+    rows, rectangles
+        As :func:`study.sweep.compute_task`.
+    blocks : list of list of bytes
+        For each rectangle, one encoded block per entry of ``job.entries``.
+    """
+    rows, rectangles = compute_task(job.task)
+    task = job.task
+    blocks = [
+        [encode_block(key, task.f[rectangle.rows], task.a[rectangle.columns],
+                      {v: computed[v] for v in variables})
+         for key, variables in job.entries]
+        for rectangle, computed in zip(task.rectangles, rectangles, strict=True)
+    ]
+    return rows, rectangles, blocks
+
+
 def _coordinate_attrs(units: str, long_name: str) -> dict[str, Any]:
     return {"units": units, "long_name": long_name, "coverage_content_type": "coordinate"}
 
@@ -387,7 +420,7 @@ class _Run:
 
     # -- the work --------------------------------------------------------------------
 
-    def _tasks(self, pending: dict[int, Any]) -> Iterator[Task]:
+    def _jobs(self, pending: dict[int, Any]) -> Iterator[_Job]:
         """Look each chunk up in the cache; yield what needs computing. Chunks found
         whole are written at once (``pending`` keeps the found values until the
         task's result arrives)."""
@@ -408,15 +441,20 @@ class _Run:
                         rectangles, self.method)
             pending[chunk.number] = found
             if not rectangles and not self.rows:
-                self._finish(task, ({}, []), pending.pop(chunk.number))
+                self._finish(task, ({}, [], []), pending.pop(chunk.number))
                 continue
-            yield task
+            entries = tuple((self.key(chunk.structure_index, observable)[0],
+                             observable.variables)
+                            for observable in self.points if observable.name in needed)
+            yield _Job(task, entries)
 
-    def _finish(self, task: Task, result: tuple[dict[str, np.ndarray], list[dict[str, Any]]],
+    def _finish(self, task: Task,
+                result: tuple[dict[str, np.ndarray], list[dict[str, Any]], list[list[bytes]]],
                 found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]]) -> None:
-        """Write one chunk into the file and its computed values into the cache."""
+        """Write one chunk into the file and its computed values (encoded by the
+        worker) into the cache."""
         chunk = task.chunk
-        rows, blocks = result
+        rows, blocks, encoded = result
         where_rows = (*chunk.structure_index, slice(chunk.f_start, chunk.f_stop))
         for name, values in rows.items():
             self.writer.write(name, where_rows, values)
@@ -429,14 +467,11 @@ class _Run:
                         values[name][np.ix_(rectangle.rows, rectangle.columns)] = computed[name]
             for name in observable.variables:
                 self.writer.write(name, where_points, values[name])
-        for rectangle, computed in zip(task.rectangles, blocks, strict=True):
-            for observable in self.points:
-                if observable.name not in task.points:
-                    continue
+        stored = [o for o in self.points if o.name in task.points]
+        for rectangle, datas in zip(task.rectangles, encoded, strict=True):
+            for observable, data in zip(stored, datas, strict=True):
                 key, content = self.key(chunk.structure_index, observable)
-                self.cache.store(key, content, task.f[rectangle.rows],
-                                 task.a[rectangle.columns],
-                                 {v: computed[v] for v in observable.variables})
+                self.cache.store_encoded(key, content, task.a[rectangle.columns], data)
         size = chunk.size * max(self.a.size, 1)
         computed_points = task.point_count if self.points else size
         self.points_computed += computed_points
@@ -464,8 +499,10 @@ class _Run:
                     self.scheduler_name, self.threads = pool.name, pool.threads
                     if on_start is not None:
                         on_start(pool)
-                    for task, result in pool.run_unordered(compute_task, self._tasks(pending),
-                                                           label=self.spec.name):
+                    for job, result in pool.run_unordered(_compute_and_encode,
+                                                          self._jobs(pending),
+                                                          label=self.spec.name):
+                        task = job.task
                         self._finish(task, result, pending.pop(task.chunk.number))
                         if task.rectangles:
                             computed_chunks += 1
