@@ -15,7 +15,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -87,6 +86,30 @@ class Method:
         return steady_state(structure, f, a, self.solver, parallel=parallel)
 
 
+class _solved_once:
+    """``functools.cached_property`` without its lock.
+
+    Before Python 3.12, ``cached_property`` holds one lock per property shared by
+    *all* instances while it computes: worker threads solving different tasks would
+    take turns, one core doing the work of all. A :class:`PointWork` belongs to one
+    task on one thread, so its values need no lock.
+    """
+
+    def __init__(self, function: Callable[[Any], Any]) -> None:
+        self.function = function
+        self.__doc__ = function.__doc__
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, instance: Any, owner: type | None = None) -> Any:
+        if instance is None:
+            return self
+        # Stored under the same name: the instance's value hides this descriptor.
+        value = instance.__dict__[self.name] = self.function(instance)
+        return value
+
+
 @dataclass
 class PointWork:
     """Drive points of one task and the solves its observables share.
@@ -105,12 +128,12 @@ class PointWork:
     a: NDArray[np.float64]
     method: Method
 
-    @cached_property
+    @_solved_once
     def solution(self) -> SteadyState:
         """Steady state by the study's method (computed once per task)."""
         return self.method.solve(self.structure, self.f, self.a)
 
-    @cached_property
+    @_solved_once
     def one_way(self) -> SteadyState:
         """Steady state of the paper's one-way model by the exact solver."""
         return steady_state(self.structure, self.f, self.a, self.method.solver, parallel=False)
