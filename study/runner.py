@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import os
 import shlex
+import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -327,6 +328,14 @@ def _compute_and_encode(job: _Job) -> tuple[dict[str, np.ndarray], list[dict[str
     return rows, rectangles, blocks
 
 
+def _gather_provenance(found: dict[str, Any]) -> None:
+    """Fill the caches of :func:`git_state` and :func:`environment`; the package
+    version (read from its metadata) goes into ``found``."""
+    git_state()
+    environment()
+    found["version"] = package_version()
+
+
 def _coordinate_attrs(units: str, long_name: str) -> dict[str, Any]:
     return {"units": units, "long_name": long_name, "coverage_content_type": "coordinate"}
 
@@ -486,6 +495,13 @@ class _Run:
                 stop_after: int | None, on_start: Callable[[Executor], None] | None
                 ) -> RunReport:
         self.cache.clean_temporaries()
+        # What the provenance records of the checkout and the machine (a git
+        # subprocess, package metadata) does not depend on the run: gathered while the
+        # workers compute, not after the last chunk, when nothing overlaps it.
+        self.gathered: dict[str, Any] = {}
+        gathering = threading.Thread(target=_gather_provenance, args=(self.gathered,),
+                                     daemon=True)
+        gathering.start()
         temporary = new_temporary(self.output)
         try:
             self.writer = self._open(temporary)
@@ -516,6 +532,7 @@ class _Run:
                 self.progress.close()
             if self.frontier is not None:
                 self._write_frontier()
+            gathering.join()
             self.writer.set_attributes(self._provenance_attrs())
             self.writer.close()
         except BaseException:
@@ -563,12 +580,13 @@ class _Run:
         finished_utc = utc_now()
         git = git_state()
         run_fingerprint = fingerprint(spec.sha256)
+        version = self.gathered.get("version") or package_version()
         provenance: dict[str, Any] = {
             "result_schema": RESULT_SCHEMA,
             "study": {"name": spec.name, "spec_path": spec.path, "spec_sha256": spec.sha256,
                       "canonical_spec": spec.canonical},
             "code": {"code_sha256": self.code, "fingerprint": run_fingerprint},
-            "package": {"name": "study", "version": package_version(), **git},
+            "package": {"name": "study", "version": version, **git},
             "environment": environment(),
             "run": {
                 "started_utc": self.started_utc,
@@ -589,11 +607,11 @@ class _Run:
             },
         }
         return {
-            "history": f"{self.started_utc}: {self.command} (study {package_version()})",
+            "history": f"{self.started_utc}: {self.command} (study {version})",
             "date_created": finished_utc,
             "date_modified": finished_utc,
-            "product_version": package_version(),
-            "study_version": package_version(),
+            "product_version": version,
+            "study_version": version,
             "study_code_sha256": self.code,
             "study_fingerprint": run_fingerprint,
             "git_commit": str(git["git_commit"]),
