@@ -52,6 +52,7 @@ __all__ = [
     "MassModel",
     "SpecError",
     "StudySpec",
+    "default_chunk_points",
     "load_spec",
     "parse_spec",
 ]
@@ -161,7 +162,8 @@ class StudySpec:
     integrator : IntegratorSettings
         Accuracy and budgets of the time integrator (used with ``method = "integrator"``).
     chunk_points : int
-        Target number of grid points per parallel task.
+        Target number of grid points per parallel task (default
+        :func:`default_chunk_points`).
     frontier_tolerance : float
         Bracket width at which frontier roots are accepted [Hz].
     text : str
@@ -261,6 +263,24 @@ def load_spec(path: str | Path) -> StudySpec:
             f"{path}: a study spec must be UTF-8 text (TOML); byte {err.start} is not"
         ) from None
     return parse_spec(text, str(path))
+
+
+#: Grid points per chunk without ``[solver] chunk_points``: at least ...
+CHUNK_POINTS_MIN = 20_000
+#: ... and at most.
+CHUNK_POINTS_MAX = 100_000
+
+
+def default_chunk_points(points: int) -> int:
+    """Points per chunk for a study of ``points`` grid points in all.
+
+    A sixteenth of the study, within [:data:`CHUNK_POINTS_MIN`,
+    :data:`CHUNK_POINTS_MAX`]: a small study keeps enough chunks to share among
+    threads, and a large one pays the fixed cost of a chunk (a task, a cache block
+    file, an HDF5 chunk: 2-3 ms) on fewer chunks (a 1e7-point velocity study: 8.1
+    instead of 9.2 s of CPU with 100 000 instead of 20 000 points per chunk).
+    """
+    return int(min(CHUNK_POINTS_MAX, max(CHUNK_POINTS_MIN, points // 16)))
 
 
 def parse_spec(text: str, path: str = "<string>") -> StudySpec:
@@ -454,7 +474,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         )
     except ValueError as err:
         raise SpecError(f"{path}: [solver] {err}") from None
-    chunk_points = int(solver_table.get("chunk_points", 20_000))
+    chunk_points = int(solver_table.get("chunk_points", default_chunk_points(
+        int(np.prod([len(axis) for axis in axes], dtype=np.int64)))))
     frontier_tolerance = float(solver_table.get("frontier_tolerance", 1e-9))
 
     # Defaults written out: a spec that spells them out is the same study.
