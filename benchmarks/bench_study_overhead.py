@@ -16,9 +16,11 @@ c. ``rerun``: the unchanged study again (reads the file's metadata only);
 d. ``reuse``: the study again after deleting the result but keeping the cache
    (every value is read back from the cache, nothing is computed).
 
-Each timing is the minimum over ``--repeats`` processes (other work on the machine
-only ever adds time); the peak RSS is the largest seen (``ru_maxrss`` of the child).
-Timings are reported, never asserted. The table goes to ``results/bench-study.md``.
+The four measurements alternate ``--repeats`` times, so that each repeat sees the
+machine in one state; each timing is the minimum (other work on the machine only ever
+adds time), with the CPU time of the same process beside it, and the peak RSS is the
+largest seen (``ru_maxrss`` of the child). Timings are reported, never asserted. The
+table goes to ``results/bench-study.md``.
 
 Usage: ``python benchmarks/bench_study_overhead.py [--sizes 1e6 1e7 1e8] [--repeats 3]``
 """
@@ -92,6 +94,7 @@ def _bare(n: int, block_points: int) -> dict[str, float]:
     structure = study.Structure(**STRUCTURE)
     f = np.linspace(*F_RANGE, n)
     a = np.linspace(*A_RANGE, n)
+    cpu = time.process_time()
     start = time.perf_counter()
     if n * n <= block_points:
         velocity, status = study.steady_velocity(structure, f[:, None], a[None, :])
@@ -104,16 +107,18 @@ def _bare(n: int, block_points: int) -> dict[str, float]:
             velocity[lo:hi], status[lo:hi] = study.steady_velocity(
                 structure, f[lo:hi, None], a[None, :])
     seconds = time.perf_counter() - start
-    return {"seconds": seconds, "moving": float(np.mean(status == 2))}
+    return {"seconds": seconds, "cpu": time.process_time() - cpu}
 
 
 def _run(spec: Path, output: Path, cache: Path, force: bool) -> dict[str, float]:
     from study.runner import run_study
 
+    cpu = time.process_time()
     start = time.perf_counter()
     report = run_study(spec, output, progress=False, force=force, cache=cache)
     seconds = time.perf_counter() - start
-    return {"seconds": seconds, "up_to_date": report.up_to_date, "chunks": report.chunks,
+    return {"seconds": seconds, "cpu": time.process_time() - cpu,
+            "up_to_date": report.up_to_date, "chunks": report.chunks,
             "points_computed": report.points_computed, "points_reused": report.points_reused}
 
 
@@ -148,21 +153,15 @@ def _folder_size(path: Path) -> int:
     return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
 
 
-def _best(kind: str, n: int, folder: Path, repeats: int, block_points: int,
-          before: callable) -> dict[str, float]:
-    """Minimum time and largest peak RSS over ``repeats`` fresh processes."""
-    best: dict[str, float] | None = None
-    for _ in range(repeats):
-        before()
-        result = _measure(kind, n, folder, block_points)
-        if best is None:
-            best = dict(result)
-        best["seconds"] = min(best["seconds"], result["seconds"])
-        best["max_rss"] = max(best["max_rss"], result["max_rss"])
-        print(f"  {kind:>5} {n} x {n}: {result['seconds']:.3f} s, "
-              f"peak RSS {result['max_rss'] / 2**20:.0f} MiB", flush=True)
-    assert best is not None
-    return best
+def _keep_best(best: dict[str, dict], kind: str, result: dict[str, float], n: int) -> None:
+    """Minimum time (and CPU time) and largest peak RSS seen for ``kind``."""
+    print(f"  {kind:>5} {n} x {n}: {result['seconds']:.3f} s, {result['cpu']:.3f} s CPU, "
+          f"peak RSS {result['max_rss'] / 2**20:.0f} MiB", flush=True)
+    if kind not in best:
+        best[kind] = dict(result)
+        return
+    for key, pick in (("seconds", min), ("cpu", min), ("max_rss", max)):
+        best[kind][key] = pick(best[kind][key], result[key])
 
 
 def machine() -> str:
@@ -193,21 +192,21 @@ def measure_size(points: float, repeats: int, block_points: int, root: Path) -> 
         spec.write_text(SPEC.format(n=n, f_lo=F_RANGE[0], f_hi=F_RANGE[1], a_lo=A_RANGE[0],
                                     a_hi=A_RANGE[1], **STRUCTURE))
 
-        def fresh() -> None:
+        row: dict = {"side": n, "points": n * n}
+        best: dict[str, dict] = {}
+        # The four measurements alternate, so that each repeat sees the machine in the
+        # same state for all of them (other work on the machine only ever adds time).
+        for _ in range(repeats):
+            _keep_best(best, "bare", _measure("bare", n, folder, block_points), n)
             output.unlink(missing_ok=True)
             shutil.rmtree(cache, ignore_errors=True)
-
-        def nothing() -> None:
-            pass
-
-        row = {"side": n, "points": n * n}
-        row["bare"] = _best("bare", n, folder, repeats, block_points, nothing)
-        row["run"] = _best("run", n, folder, repeats, block_points, fresh)
-        row["file_size"] = output.stat().st_size
-        row["cache_size"] = _folder_size(cache)
-        row["rerun"] = _best("rerun", n, folder, repeats, block_points, nothing)
-        row["reuse"] = _best("reuse", n, folder, repeats, block_points,
-                             lambda: output.unlink(missing_ok=True))
+            _keep_best(best, "run", _measure("run", n, folder, block_points), n)
+            row["file_size"] = output.stat().st_size
+            row["cache_size"] = _folder_size(cache)
+            _keep_best(best, "rerun", _measure("rerun", n, folder, block_points), n)
+            output.unlink()
+            _keep_best(best, "reuse", _measure("reuse", n, folder, block_points), n)
+        row.update(best)
         assert row["rerun"]["up_to_date"] and not row["reuse"]["points_computed"]
         return row
     finally:
@@ -215,21 +214,25 @@ def measure_size(points: float, repeats: int, block_points: int, root: Path) -> 
 
 
 def table(rows: list[dict], about: str) -> str:
+    """The markdown table of the measured sizes."""
     mib = 2**20
     lines = [
         about, "",
-        "| points | bare `steady_velocity` | `study run` | ratio | rerun, unchanged | "
-        "rerun, cache only | peak RSS bare / run / rerun / cache only | file | cache |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| points | bare `steady_velocity` | `study run` | ratio | CPU bare / run "
+        "| rerun, unchanged | rerun, cache only | peak RSS bare / run / rerun / cache only "
+        "| file | cache |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in rows:
+        bare, run, rerun, reuse = (row[k] for k in KINDS)
         lines.append(
             f"| {row['side']} x {row['side']} = {row['points']:.3g} "
-            f"| {row['bare']['seconds']:.2f} s | {row['run']['seconds']:.2f} s "
-            f"| **{row['run']['seconds'] / row['bare']['seconds']:.2f}x** "
-            f"| {row['rerun']['seconds']:.3f} s | {row['reuse']['seconds']:.2f} s "
-            f"| {row['bare']['max_rss'] / mib:.0f} / {row['run']['max_rss'] / mib:.0f} / "
-            f"{row['rerun']['max_rss'] / mib:.0f} / {row['reuse']['max_rss'] / mib:.0f} MiB "
+            f"| {bare['seconds']:.2f} s | {run['seconds']:.2f} s "
+            f"| **{run['seconds'] / bare['seconds']:.2f}x** "
+            f"| {bare['cpu']:.2f} / {run['cpu']:.2f} s "
+            f"| {rerun['seconds']:.3f} s | {reuse['seconds']:.2f} s "
+            f"| {bare['max_rss'] / mib:.0f} / {run['max_rss'] / mib:.0f} / "
+            f"{rerun['max_rss'] / mib:.0f} / {reuse['max_rss'] / mib:.0f} MiB "
             f"| {row['file_size'] / 1e6:.1f} MB | {row['cache_size'] / 1e6:.1f} MB |"
         )
     return "\n".join(lines)
@@ -254,17 +257,24 @@ def main() -> None:
         child(args.child, args.side, args.folder, args.block_points)
         return
     rows = []
+    load = os.getloadavg()[0]
     for points in args.sizes:
         repeats = args.repeats or (3 if points <= 3e7 else 1)
         print(f"{points:.3g} points, {repeats} process(es) per measurement", flush=True)
         rows.append(measure_size(points, repeats, args.block_points,
                                  args.scratch or Path(tempfile.gettempdir())))
     stamp = time.strftime("%Y-%m-%d")
-    about = (f"Measured {stamp}, one run of `benchmarks/bench_study_overhead.py`; {machine()}. "
-             "Velocity studies of the paper's structure; each cell a fresh process, time = "
-             "minimum over repeats, after imports and kernel loading; `study run` = "
-             "`run_study(force=True)` with an empty cache (2 worker threads), the bare call "
-             "uses numba's 2 threads; peak RSS = largest `ru_maxrss`.")
+    repeats = args.repeats or "3 (1 above 3e7 points)"
+    about = (
+        f"Measured {stamp}, one run of `benchmarks/bench_study_overhead.py`; {machine()}; "
+        f"load average {load:.1f} before and {os.getloadavg()[0]:.1f} after. Velocity "
+        "studies of the paper's structure; every measurement a fresh process (after imports "
+        f"and loading the compiled kernels), alternated, {repeats} times; time = minimum, "
+        "peak RSS = largest `ru_maxrss`. `study run` = `run_study(force=True)` with an "
+        "empty cache (2 worker threads; writing, sealing and validating the file included); "
+        "the bare call uses numba's 2 threads"
+        + (f" (in blocks of {args.block_points:.3g} points above that)" if max(args.sizes)
+           > args.block_points else "") + ".")
     text = table(rows, about)
     print()
     print(text)
