@@ -71,8 +71,12 @@ KINDS = ("bare", "run", "rerun", "reuse")
 
 
 def _warm() -> None:
-    """Import what a run uses and load both compiled kernels (serial and parallel), so
-    that timings measure the work, not the first use of numba or netCDF."""
+    """Import what a run uses (also the libraries it imports on first use: jsonschema
+    for the spec, dask through xarray when the file is validated) and load both
+    compiled kernels (serial and parallel), so that timings measure the work, not
+    imports or the first use of numba."""
+    import dask  # noqa: F401
+    import jsonschema  # noqa: F401
     import netCDF4  # noqa: F401
     import xarray  # noqa: F401
 
