@@ -69,12 +69,12 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _validate(args: argparse.Namespace) -> int:
-    from study.store import ResultError, open_result
+    from study.validate import ResultError, validate_file
 
     status = 0
     for path in args.files:
         try:
-            open_result(path)
+            validate_file(path)
         except ResultError as err:
             print(f"study: {err}", file=sys.stderr)
             status = 1
@@ -84,16 +84,17 @@ def _validate(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
-    from study.store import describe, open_result
+    from study.validate import describe, validate_file
 
-    dataset = open_result(args.file)
-    print(describe(dataset, str(args.file)))
+    # Both read the file in slabs: info works on results larger than memory.
+    validate_file(args.file)
+    print(describe(args.file, str(args.file)))
     return 0
 
 
 def _figure(args: argparse.Namespace) -> int:
     from study.figures import draw_figure
-    from study.store import open_result
+    from study.validate import open_result
 
     dataset = open_result(args.file)
     output = args.output or Path("figures") / args.name
@@ -192,7 +193,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``study`` console script."""
     from study.figures import FigureError
     from study.spec import SpecError
-    from study.store import ResultError
+    from study.validate import ResultError
 
     parser = _parser()
     argv = sys.argv[1:] if argv is None else list(argv)
