@@ -609,6 +609,27 @@ def _parse_embedded(attrs: dict[str, Any], source: str,
                       f"{_short(str(err))})"]
 
 
+def _provenance_spec_problems(attrs: dict[str, Any], spec: Any, section: str) -> list[str]:
+    """What the provenance repeats of the spec (``provenance[section]``, if there) must be
+    the embedded spec's."""
+    try:
+        document = json.loads(str(attrs.get("provenance")))
+    except (ValueError, RecursionError):
+        return []  # reported with the provenance's structure
+    part = document.get(section) if isinstance(document, dict) else None
+    if not isinstance(part, dict):
+        return []
+    try:
+        canonical = json.loads(json.dumps(spec.canonical, sort_keys=True))
+    except (TypeError, ValueError):
+        canonical = None
+    expected = {"name": spec.name, "spec_sha256": spec.sha256, "canonical_spec": canonical,
+                "kind": getattr(spec, "kind", None)}
+    return [f"provenance: {section}.{key} differs from the embedded spec"
+            for key, value in expected.items()
+            if key in part and value is not None and part[key] != value]
+
+
 def _identity_problems(attrs: dict[str, Any], spec: Any) -> list[str]:
     problems = []
     if spec.sha256 != attrs.get("study_spec_sha256"):
@@ -638,6 +659,7 @@ def _study_problems(nc: Any, meta: _File, source: str) -> list[str]:
     problems += spec_problems
     if spec is not None:
         problems += _identity_problems(attrs, spec)
+        problems += _provenance_spec_problems(attrs, spec, "study")
         for key, value in (("study_solver_method", spec.method),
                            ("study_coupling", spec.coupling)):
             if attrs.get(key) != value:
@@ -749,6 +771,7 @@ def _scene_problems(nc: Any, meta: _File, source: str) -> list[str]:
     problems += spec_problems
     if spec is not None:
         problems += _identity_problems(attrs, spec)
+        problems += _provenance_spec_problems(attrs, spec, "scene")
         if spec.kind != attrs.get("study_scene_kind"):
             problems.append("study_scene_kind does not match the embedded spec")
         for key, value in _scene_attribute_values(spec).items():

@@ -122,7 +122,8 @@ def rewrite(source: Path, target: Path, *, drop: tuple[str, ...] = (),
             fill = attrs.pop("_FillValue", None)
             dtype = str if var.dtype is str else np.dtype(dtypes.get(name, var.dtype))
             if fill is not None and dtype is not str:
-                fill = np.asarray(fill).astype(dtype)
+                # A NaN fill value has no integer form: integers get none.
+                fill = None if dtype.kind in "iu" else np.asarray(fill).astype(dtype)
             options = {"zlib": True, "complevel": 4} if compress and dims else {}
             new = dst.createVariable(name, dtype, dims, fill_value=fill, **options)
             new.set_auto_maskandscale(False)
@@ -130,5 +131,6 @@ def rewrite(source: Path, target: Path, *, drop: tuple[str, ...] = (),
             if dtype is str:
                 new[...] = np.asarray(data, dtype=object)
             else:
-                new[...] = np.asarray(data).astype(dtype)
+                with np.errstate(invalid="ignore", over="ignore"):  # NaN or huge -> int
+                    new[...] = np.asarray(data).astype(dtype)
     return target

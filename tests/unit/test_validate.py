@@ -169,6 +169,10 @@ def _first_f(var) -> None:
     var[0] = 9.0
 
 
+def _other_spec(document: dict) -> None:
+    document["study"]["spec_sha256"] = "0" * 64
+
+
 def _inconsistent_points(document: dict) -> None:
     document["run"].update(points=12, points_computed=5, points_reused=5)
 
@@ -185,6 +189,7 @@ STUDY_CORRUPTIONS = {
     "provenance {}": (_set("provenance", "{}"), ["provenance", "'code' is a required"]),
     "provenance not json": (_set("provenance", "not json"), ["'provenance' is not a JSON"]),
     "provenance points": (_provenance(_inconsistent_points), ["points_computed"]),
+    "provenance spec": (_provenance(_other_spec), ["provenance: study.spec_sha256 differs"]),
     "fingerprint removed": (_delete("study_fingerprint"), ["'study_fingerprint' is a required"]),
     "fingerprint changed": (_set("study_fingerprint", "ab" * 32),
                             ["study_fingerprint does not match"]),
