@@ -435,6 +435,11 @@ def _is_number(value: Any) -> bool:
             and not isinstance(value, bool | np.bool_))
 
 
+def _same_text(value: Any, expected: str) -> bool:
+    # Attributes may be arrays or numbers: never compare them elementwise.
+    return isinstance(value, str) and value == expected
+
+
 def _same_number(value: Any, expected: float) -> bool:
     return _is_number(value) and float(value) == float(expected)
 
@@ -476,12 +481,12 @@ def _provenance_problems(attrs: dict[str, Any], kind: str) -> list[str]:
         return problems
     code, run = document["code"], document["run"]
     for key, attr in (("code_sha256", "study_code_sha256"), ("fingerprint", "study_fingerprint")):
-        if code[key] != attrs.get(attr):
+        if not _same_text(attrs.get(attr), code[key]):
             problems.append(f"provenance: code.{key} differs from the attribute {attr}")
     if document["result_schema"] != kind:
         problems.append(f"provenance: result_schema {document['result_schema']!r} differs "
                         f"from the file's {kind!r}")
-    if document["package"]["version"] != attrs.get("study_version"):
+    if not _same_text(attrs.get("study_version"), document["package"]["version"]):
         problems.append("provenance: package.version differs from the attribute study_version")
     if not math.isfinite(run["wall_seconds"]):
         problems.append("provenance: run.wall_seconds is not finite")
@@ -632,11 +637,11 @@ def _provenance_spec_problems(attrs: dict[str, Any], spec: Any, section: str) ->
 
 def _identity_problems(attrs: dict[str, Any], spec: Any) -> list[str]:
     problems = []
-    if spec.sha256 != attrs.get("study_spec_sha256"):
+    if not _same_text(attrs.get("study_spec_sha256"), spec.sha256):
         problems.append("study_spec_sha256 does not match the embedded spec")
-    if spec.name != attrs.get("study_name"):
+    if not _same_text(attrs.get("study_name"), spec.name):
         problems.append("study_name differs from the embedded spec's name")
-    if spec.title != attrs.get("title"):
+    if not _same_text(attrs.get("title"), spec.title):
         problems.append("title differs from the embedded spec's title")
     return problems
 
@@ -662,7 +667,7 @@ def _study_problems(nc: Any, meta: _File, source: str) -> list[str]:
         problems += _provenance_spec_problems(attrs, spec, "study")
         for key, value in (("study_solver_method", spec.method),
                            ("study_coupling", spec.coupling)):
-            if attrs.get(key) != value:
+            if not _same_text(attrs.get(key), value):
                 problems.append(f"{key} differs from the embedded spec ({value!r})")
         problems += _study_content_problems(check, meta, spec)
     problems += _checksum_problems(nc, meta)
@@ -679,13 +684,13 @@ def _study_content_problems(check: _Checker, meta: _File, spec: Any) -> list[str
             problems.append(f"coordinate {axis.name!r} of the embedded spec is missing")
         elif var.dims != (axis.name,) or var.type_name != "float64":
             problems.append(f"coordinate {axis.name!r} must be float64 over ({axis.name},)")
-        elif var.attrs.get("units") != axis.units:
+        elif not _same_text(var.attrs.get("units"), axis.units):
             problems.append(f"coordinate {axis.name!r}: units {var.attrs.get('units')!r}, "
                             f"declared {axis.units!r}")
         elif not check.equals(axis.name, axis.values):
             problems.append(f"coordinate {axis.name!r} differs from the embedded spec")
     structure = spec.canonical.get("structure") if isinstance(spec.canonical, dict) else None
-    for name, value in (structure or {}).items():
+    for name, value in (structure.items() if isinstance(structure, dict) else ()):
         var = variables.get(name)
         if var is None or var.shape != () or not _is_number(value):
             continue  # the spec layer's form; the checksum covers the value
@@ -712,7 +717,7 @@ def _study_content_problems(check: _Checker, meta: _File, spec: Any) -> list[str
         if var.type_name != declared.dtype:
             problems.append(f"{name} is {var.type_name}; declared {declared.dtype}")
         for key in ("units", "long_name"):
-            if var.attrs.get(key) != getattr(declared, key):
+            if not _same_text(var.attrs.get(key), getattr(declared, key)):
                 problems.append(f"{name}: {key} {_short(repr(var.attrs.get(key)), 80)}; "
                                 f"declared {getattr(declared, key)!r}")
         if declared.is_flag:
@@ -721,7 +726,7 @@ def _study_content_problems(check: _Checker, meta: _File, spec: Any) -> list[str
                     or flag_values.tolist() != list(declared.flag_values)):
                 problems.append(f"{name}: flag_values {flag_values.tolist()}; declared "
                                 f"{list(declared.flag_values)} ({declared.dtype})")
-            if var.attrs.get("flag_meanings") != " ".join(declared.flags):
+            if not _same_text(var.attrs.get("flag_meanings"), " ".join(declared.flags)):
                 problems.append(f"{name}: flag_meanings differ from the declared "
                                 f"{' '.join(declared.flags)!r}")
         elif "flag_values" in var.attrs or "flag_meanings" in var.attrs:
@@ -772,10 +777,10 @@ def _scene_problems(nc: Any, meta: _File, source: str) -> list[str]:
     if spec is not None:
         problems += _identity_problems(attrs, spec)
         problems += _provenance_spec_problems(attrs, spec, "scene")
-        if spec.kind != attrs.get("study_scene_kind"):
+        if not _same_text(attrs.get("study_scene_kind"), spec.kind):
             problems.append("study_scene_kind does not match the embedded spec")
         for key, value in _scene_attribute_values(spec).items():
-            if not _same_number(attrs.get(key), value):
+            if value is not None and not _same_number(attrs.get(key), value):
                 problems.append(f"{key} differs from the embedded spec ({value!r})")
     for key in ("study_end_time",):
         if key in attrs and not (_is_number(attrs[key]) and math.isfinite(attrs[key])):
@@ -843,7 +848,7 @@ def validate_file(path: str | Path) -> None:
             raise ResultError(
                 f"{path}: not a study result file (no 'study_result_schema' attribute; "
                 f"global attributes: {_short(', '.join(sorted(attrs)) or 'none')})")
-        if kind not in (RESULT_SCHEMA, SCENE_SCHEMA):
+        if not (_same_text(kind, RESULT_SCHEMA) or _same_text(kind, SCENE_SCHEMA)):
             raise ResultError(
                 f"{path}: written with result schema {_short(repr(_jsonable(kind)), 80)}; "
                 f"this version of study reads {RESULT_SCHEMA!r} and {SCENE_SCHEMA!r}. Rerun "
@@ -928,7 +933,7 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
     run = _section(provenance, "run")
     package = _section(provenance, "package")
     lines = [f"{path or attrs.get('study_name')}: {attrs.get('title')}"]
-    kind = attrs.get("study_scene_kind")
+    kind = attrs.get("study_scene_kind") if isinstance(attrs.get("study_scene_kind"), str) else ""
     lines.append(f"  {'scene' if kind else 'study'} {attrs.get('study_name')!r}"
                  f"{f' ({kind})' if kind else ''}, spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "

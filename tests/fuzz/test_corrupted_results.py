@@ -119,10 +119,13 @@ def attribute_edit(rng, source: Path, target: Path) -> str:
             name = _pick(rng, ["provenance", "study_spec", "study_fingerprint",
                                "study_content_sha256", "study_code_sha256", name])
         value = nc.getncattr(name)
-        operation = int(rng.integers(5))
+        operation = int(rng.integers(6))
         if operation == 0:
             nc.delncattr(name)
             return f"delete {name}"
+        if operation == 5:  # an array where one value belongs
+            nc.setncattr(name, _pick(rng, [np.array([1, 2]), ["a", "b"], np.zeros(3)]))
+            return f"array {name}"
         if operation == 1:
             nc.setncattr(name, _random_number(rng))
             return f"number {name}"
@@ -174,7 +177,11 @@ def variable_attribute_edit(rng, source: Path, target: Path) -> str:
     with netCDF4.Dataset(target, "a") as nc:
         var = nc[_pick(rng, sorted(nc.variables))]
         names = sorted(a for a in var.ncattrs() if a != "_FillValue")
-        operation = int(rng.integers(5))
+        operation = int(rng.integers(6))
+        if operation == 4 and names:
+            name = _pick(rng, names)
+            var.setncattr(name, _pick(rng, [np.array([1, 2]), ["a", "b"], np.zeros(3)]))
+            return f"{var.name}.{name}: array"
         if operation == 0 or not names:
             var.setncattr("units" if rng.random() < 0.5 else "extra", "furlong")
             return f"{var.name}: add"
