@@ -488,7 +488,8 @@ def _provenance_problems(attrs: dict[str, Any], kind: str) -> list[str]:
                         f"from the file's {kind!r}")
     if not _same_text(attrs.get("study_version"), document["package"]["version"]):
         problems.append("provenance: package.version differs from the attribute study_version")
-    if not math.isfinite(run["wall_seconds"]):
+    wall = run["wall_seconds"]
+    if isinstance(wall, float) and not math.isfinite(wall):  # JSON allows NaN, Infinity
         problems.append("provenance: run.wall_seconds is not finite")
     if _finished_before_started(run):
         problems.append("provenance: run.finished_utc is before run.started_utc")
