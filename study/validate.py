@@ -693,9 +693,11 @@ def _study_content_problems(check: _Checker, meta: _File, spec: Any) -> list[str
     structure = spec.canonical.get("structure") if isinstance(spec.canonical, dict) else None
     for name, value in (structure.items() if isinstance(structure, dict) else ()):
         var = variables.get(name)
-        if var is None or var.shape != () or not _is_number(value):
-            continue  # the spec layer's form; the checksum covers the value
-        if not check.equals(name, np.array([value], dtype=np.float64)):
+        if not _is_number(value):
+            continue  # not a fixed value in the spec layer's form
+        if var is None or var.shape != () or var.type_name != "float64":
+            problems.append(f"fixed parameter {name!r} must be a float64 scalar")
+        elif not check.equals(name, np.array([value], dtype=np.float64)):
             problems.append(f"{name} differs from the embedded spec's {value!r}")
     structure_dims = tuple(axis.name for axis in spec.axes if axis.name not in ("f", "a"))
     wanted = variables_of(spec.observables)

@@ -302,8 +302,8 @@ def guarded(attrs: dict[str, Any]) -> dict[str, Any]:
     return kept
 
 
-def _kept(value: Any, original: Any) -> bool:
-    if isinstance(value, tuple) and isinstance(value[-1], dict):  # the provenance
+def _kept(key: str, value: Any, original: Any) -> bool:
+    if key == "provenance":
         spec = value[-1]
         return (str(value[:-1]) == str(original[:-1])
                 and all(original[-1].get(k) == v for k, v in spec.items()))
@@ -358,8 +358,9 @@ def test_corrupted_results_are_refused_or_unchanged(sealed, tmp_path: Path) -> N
             try:
                 if content_sha256(target) != checksum:
                     failures.append(f"{label}: accepted with changed content")
-                changed = {k for k, v in guarded(read_attributes(target)).items()
-                           if not _kept(v, attributes.get(k))}
+                now = guarded(read_attributes(target))
+                changed = {k for k in {*now, *attributes}
+                           if not _kept(k, now.get(k), attributes.get(k))}
                 if changed:
                     failures.append(f"{label}: accepted with changed {sorted(changed)}")
                 assert isinstance(describe(target), str)

@@ -227,8 +227,9 @@ def test_a_corrupted_study_is_refused(copy, corruption: str) -> None:
          ["a_star_plus: units 'furlong'"]),
         ("thresholds", _variable("f0", lambda v: v.assignValue(15.0)),
          ["f0 differs from the embedded spec"]),
+        ("thresholds", _rewritten(drop=("cs",)), ["fixed parameter 'cs' must be"]),
     ],
-    ids=["transposed-status", "changed-Q", "units-furlong", "changed-f0"],
+    ids=["transposed-status", "changed-Q", "units-furlong", "changed-f0", "dropped-cs"],
 )
 def test_other_studies_are_checked_against_their_spec(copy, name, edit, words) -> None:
     path = copy(name)
