@@ -134,12 +134,12 @@ def _cache(args: argparse.Namespace) -> int:
 
 
 def _validate(args: argparse.Namespace) -> int:
-    from study.store import ResultError, open_result
+    from study.validate import ResultError, validate_file
 
     status = 0
     for path in args.files:
         try:
-            open_result(path)
+            validate_file(path)
         except ResultError as err:
             print(f"study: {err}", file=sys.stderr)
             status = 1
@@ -149,16 +149,17 @@ def _validate(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
-    from study.store import describe, open_result
+    from study.validate import describe, validate_file
 
-    dataset = open_result(args.file)
-    print(describe(dataset, str(args.file)))
+    # Both read the file in slabs: info works on results larger than memory.
+    validate_file(args.file)
+    print(describe(args.file, str(args.file)))
     return 0
 
 
 def _figure(args: argparse.Namespace) -> int:
     from study.figures import draw_figure
-    from study.store import open_result
+    from study.validate import open_result
 
     dataset = open_result(args.file)
     output = args.output or Path("figures") / args.name
@@ -275,7 +276,8 @@ def main(argv: list[str] | None = None) -> int:
     from study.cluster import ClusterError
     from study.figures import FigureError
     from study.spec import SpecError
-    from study.store import ResultError, StoreBusy, StoreError
+    from study.store import StoreBusy, StoreError
+    from study.validate import ResultError
 
     parser = _parser()
     argv = sys.argv[1:] if argv is None else list(argv)

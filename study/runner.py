@@ -37,6 +37,7 @@ from study.provenance import (
 )
 from study.spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec, load_spec
 from study.store import (
+    PAPER_REFERENCE,
     RESULT_SCHEMA,
     GridWriter,
     StoreBusy,
@@ -61,11 +62,6 @@ __all__ = [
     "is_up_to_date",
     "run_study",
 ]
-
-PAPER_REFERENCE = (
-    "T. Barois, A. Boucherie, L. Tadrist and H. Kellay, Controlled locomotion of a "
-    "minimal soft structure by stick-slip nonlinearity"
-)
 
 #: Another process is writing the same result (re-exported for callers of the runner).
 StudyBusy = StoreBusy
@@ -141,6 +137,8 @@ def _state(spec: StudySpec, output: Path) -> str:
     """"current", "metadata" (same numbers, other spec text) or "stale"."""
     attrs = file_attributes(output)
     if attrs is None or attrs.get("study_result_schema") != RESULT_SCHEMA:
+        return "stale"
+    if "study_content_sha256" not in attrs:  # never sealed: not a finished result
         return "stale"
     if attrs.get("study_fingerprint") != fingerprint(spec.sha256):
         return "stale"
