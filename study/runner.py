@@ -523,7 +523,7 @@ class _Run:
         spec = self.spec
         finished_utc = utc_now()
         git = git_state()
-        run_fingerprint = fingerprint(spec.sha256)
+        run_fingerprint = fingerprint(spec.sha256, self.code)
         provenance: dict[str, Any] = {
             "result_schema": RESULT_SCHEMA,
             "study": {"name": spec.name, "spec_path": spec.path, "spec_sha256": spec.sha256,

@@ -38,6 +38,7 @@ import numpy as np
 import xarray as xr
 
 from study.observables import variables_of
+from study.provenance import fingerprint
 from study.spec import SPEC_SCHEMA_PATH, SpecError, parse_spec
 from study.status import INVALID_STATUSES, Status
 from study.variables import VARIABLES
@@ -458,8 +459,7 @@ def _fingerprint_problems(attrs: dict[str, Any]) -> list[str]:
         return []  # the schema reports a missing or malformed fingerprint
     if not isinstance(spec_sha, str) or not isinstance(code_sha, str):
         return []
-    expected = hashlib.sha256(f"{spec_sha}:{code_sha}".encode()).hexdigest()
-    if value != expected:
+    if value != fingerprint(spec_sha, code_sha):
         return ["study_fingerprint does not match study_spec_sha256 and study_code_sha256"]
     return []
 

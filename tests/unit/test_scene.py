@@ -247,7 +247,8 @@ seed = 3
 
 
 def test_a_second_writer_is_refused_while_one_runs(tmp_path):
-    from study.runner import StudyBusy, _exclusive
+    from study.runner import StudyBusy
+    from study.store import exclusive as _exclusive
 
     spec = parse_scene(TRAJECTORY, "tiny.toml")
     output = tmp_path / "tiny.nc"
