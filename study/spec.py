@@ -18,7 +18,7 @@ grid, the observables wanted and optional solver settings::
     f = { start = 10.0, stop = 20.0, num = 401 }
     a = { start = 0.0, stop = 12.0, num = 241 }
 
-The machine-readable schema is ``results_schema/study-spec-v1.schema.json``; the
+The machine-readable schema is ``study/schemas/study-spec-v1.schema.json``; the
 checks that a JSON schema cannot express (a parameter both fixed and swept, every
 swept structure being valid) are made here. Every refusal is a :class:`SpecError`
 naming the file, the key and what is allowed.
@@ -56,9 +56,9 @@ __all__ = [
     "parse_spec",
 ]
 
-SPEC_SCHEMA_PATH = Path(__file__).resolve().parent.parent / "results_schema" / (
-    "study-spec-v1.schema.json"
-)
+#: JSON schemas ship inside the package (``study/schemas/``); the top-level
+#: ``results_schema/`` folder holds an exact copy for readers of the repository.
+SPEC_SCHEMA_PATH = Path(__file__).resolve().parent / "schemas" / "study-spec-v1.schema.json"
 
 #: Observables a study can ask for, in the order they appear in a dataset.
 OBSERVABLES = (
@@ -231,7 +231,7 @@ def _build_structure(params: dict[str, float], mass: MassModel | None) -> Struct
 
 @cache
 def spec_schema() -> dict[str, Any]:
-    """The JSON schema of study specs (``results_schema/study-spec-v1.schema.json``)."""
+    """The JSON schema of study specs (``study/schemas/study-spec-v1.schema.json``)."""
     return json.loads(SPEC_SCHEMA_PATH.read_text())
 
 
