@@ -595,7 +595,7 @@ REFUSALS = [
         id="ck-above-cs",
     ),
     pytest.param(
-        {"structure": {"Q": math.nan}}, ["[structure]", "'Q'", "finite"], id="Q-nan"
+        {"structure": {"Q": math.nan}}, ["[structure] Q = nan", "finite"], id="Q-nan"
     ),
     pytest.param(
         {"sweep": {"a": {"start": 0.0, "stop": 12.0, "num": -1}}},
@@ -665,7 +665,7 @@ REFUSALS = [
     ),
     pytest.param(
         {"sweep": {"a": {"values": [0.0, math.nan]}}},
-        ["[sweep] a", "values must be finite"],
+        ["[sweep] a.values[1] = nan", "finite"],
         id="nan-value",
     ),
     # structure parameters: where they are given
