@@ -16,7 +16,8 @@ __all__ = ["main"]
 
 def _run_scene(args: argparse.Namespace) -> int:
     from study.runner import StudyBusy
-    from study.scene import load_scene, run_scene
+    from study.scene import load_scene
+    from study.scene_run import run_scene
 
     spec = load_scene(args.spec)
     output = args.output or Path("results") / f"{Path(args.spec).stem}.nc"
@@ -34,10 +35,10 @@ def _run_scene(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from study.runner import StudyBusy, StudyInterrupted, run_study
-    from study.scene import is_scene_file
     from study.spec import load_spec
+    from study.specfile import detect_kind
 
-    if is_scene_file(args.spec):
+    if detect_kind(args.spec) == "scene":
         return _run_scene(args)
     spec = load_spec(args.spec)
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
@@ -104,8 +105,10 @@ def _figure(args: argparse.Namespace) -> int:
 
 def _list(args: argparse.Namespace) -> int:
     from study.runner import is_up_to_date, partial_folder
-    from study.scene import is_scene_file, load_scene, scene_up_to_date
+    from study.scene import load_scene
+    from study.scene_run import scene_up_to_date
     from study.spec import SpecError, load_spec
+    from study.specfile import detect_kind
 
     specs = sorted(Path(args.workflows).glob("*.toml"))
     if not specs:
@@ -113,7 +116,12 @@ def _list(args: argparse.Namespace) -> int:
         return 0
     for path in specs:
         output = Path(args.results) / f"{path.stem}.nc"
-        if is_scene_file(path):
+        try:
+            kind = detect_kind(path)
+        except SpecError as err:
+            print(f"{path}: INVALID SPEC: {str(err).splitlines()[0]}")
+            continue
+        if kind == "scene":
             try:
                 scene = load_scene(path)
             except SpecError as err:

@@ -182,7 +182,7 @@ def run_study(
                          time.perf_counter() - started)
 
     output.parent.mkdir(parents=True, exist_ok=True)
-    with _exclusive(output):
+    with exclusive(output):
         return _run_locked(spec, output, chunks, run_fingerprint, started, started_utc,
                            scheduler, workers, progress, stop_after, command, on_chunk)
 
@@ -224,7 +224,7 @@ class StudyBusy(RuntimeError):
 
 
 @contextmanager
-def _exclusive(output: Path):
+def exclusive(output: Path):
     """Hold an exclusive lock on ``output`` for the whole run (one writer per file)."""
     import fcntl
 

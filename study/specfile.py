@@ -21,6 +21,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 import tomllib
 from collections.abc import Mapping
 from functools import cache
@@ -31,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "AXIS_FORMS",
     "KINDS",
     "MAX_AXIS_VALUES",
     "MAX_NESTING",
@@ -42,8 +44,10 @@ __all__ = [
     "canonical_json",
     "canonical_sha256",
     "check_schema",
+    "decode_spec_bytes",
     "detect_kind",
     "jsonable",
+    "kind_of",
     "load_schema",
     "parse_toml",
     "read_spec_text",
@@ -86,12 +90,17 @@ _BOMS = (
 )
 
 
-def decode_spec_bytes(data: bytes, path: str, what: str = "spec") -> str:
-    """Bytes of a spec file as text, or a :class:`SpecError` saying what is wrong."""
+def decode_spec_bytes(data: bytes, path: str, what: str = "spec", size: int | None = None
+                      ) -> str:
+    """Bytes of a spec file as text, or a :class:`SpecError` saying what is wrong.
+
+    ``size`` is the file's size when ``data`` holds only its start.
+    """
     if len(data) > MAX_SPEC_BYTES:
+        total = max(size or 0, len(data))
         raise SpecError(
-            f"{path}: {what} is {len(data)} bytes or more; allowed at most "
-            f"{MAX_SPEC_BYTES} bytes (is this really a spec?)"
+            f"{path}: {what} is {total} bytes; allowed at most {MAX_SPEC_BYTES} bytes "
+            "(is this really a spec?)"
         )
     for mark, encoding in _BOMS:
         if encoding is not None and data.startswith(mark):
@@ -127,10 +136,11 @@ def read_spec_text(path: str | Path, what: str = "spec") -> str:
         with path.open("rb") as handle:
             # One byte more than allowed tells "too large" without reading a huge file.
             data = handle.read(MAX_SPEC_BYTES + 1)
+            size = os.fstat(handle.fileno()).st_size
     except OSError as err:
         reason = err.strerror or str(err)
         raise SpecError(f"{path}: cannot read the {what} ({reason})") from None
-    return decode_spec_bytes(data, str(path), what)
+    return decode_spec_bytes(data, str(path), what, size)
 
 
 def _depth_and_non_finite(raw: Any) -> tuple[int, tuple[list[Any], float] | None]:
@@ -246,14 +256,14 @@ def load_schema(name: str) -> dict[str, Any]:
 
 
 def where(location: list[Any] | tuple[Any, ...]) -> str:
-    """A location in a spec as the user wrote it: ``[sweep] f.num``, ``[[plate]] #2 Q``."""
+    """A location in a spec as the user wrote it: ``[sweep] f.num``, ``[plate #2] Q``."""
     if not location:
         return "top level"
     table, *rest = location
     head = f"[{table}]"
     if rest and isinstance(rest[0], int):
         # An array of tables: number its entries from 1, as a reader counts them.
-        head = f"[[{table}]] #{rest[0] + 1}"
+        head = f"[{table} #{rest[0] + 1}]"
         rest = rest[1:]
     key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in rest).lstrip(".")
     return head + (f" {key}" if key else "")

@@ -13,7 +13,8 @@ from numpy.testing import assert_allclose
 from study.cli import main
 from study.planar import periodic_motion, rest_state, simulate_planar
 from study.planner import arc_displacement, calibrate_commands, plan_leg
-from study.scene import SceneError, load_scene, parse_scene, run_scene
+from study.scene import SceneError, load_scene, parse_scene
+from study.scene_run import run_scene
 from study.store import ResultError, open_result
 from study.transient import IntegratorSettings, Schedule
 
@@ -77,7 +78,7 @@ def test_the_workflows_share_one_disk():
     ("edit", "words"),
     [
         (lambda t: t.replace('kind = "trajectory"', 'kind = "trajectroy"'),
-         ["kind", "trajectroy", "trajectory, calibration, plan"]),
+         ["kind", "trajectroy", "'trajectory', 'calibration', 'plan'"]),
         (lambda t: t.replace("Q = 17.5", "Q = -17.5"), ["plate", "Q", "> 0"]),
         (lambda t: t.replace("radius = 0.02", "raduis = 0.02"),
          ["raduis", "[disk]", "radius"]),
@@ -247,10 +248,10 @@ seed = 3
 
 
 def test_a_second_writer_is_refused_while_one_runs(tmp_path):
-    from study.runner import StudyBusy, _exclusive
+    from study.runner import StudyBusy, exclusive
 
     spec = parse_scene(TRAJECTORY, "tiny.toml")
     output = tmp_path / "tiny.nc"
-    with _exclusive(output), pytest.raises(StudyBusy, match="another run"):
+    with exclusive(output), pytest.raises(StudyBusy, match="another run"):
         run_scene(spec, output)
     assert not output.exists()
