@@ -112,10 +112,14 @@ MAX_SCENE_SAMPLES = 10_000_000
 #: Drive periods a calibration may integrate at most (points x max_periods): about
 #: 1 ms each on one core, so the budget is about three core-hours.
 MAX_CALIBRATION_PERIODS = 10_000_000
-#: Simulated drive time of a plan at most [s]: the planned flight times the runs
-#: flown (strategies x realisations). The workflow needs 38 s x 15 = 576 s, about
-#: 30 s of computing; 36 000 s (10 h of drive) is about half an hour.
-MAX_PLAN_DRIVE_SECONDS = 36_000.0
+#: Simulated drive time of a plan at most [s]: the planned flight times the flights
+#: simulated (every strategy's run per realisation, and up to
+#: :data:`_CORRECTIONS` corrective flights for the open-loop route and for each
+#: closed-loop run). The workflow needs 38 s x 45 = 1.7e3 s, about 20 s of computing;
+#: 2e4 s is about 5 minutes.
+MAX_PLAN_DRIVE_SECONDS = 20_000.0
+#: Correction iterations of the planner's refined legs (its default, used here).
+_CORRECTIONS = 5
 
 #: Gyration radius over the disk's radius [1]. At most 1: all the mass within the
 #: disk's footprint (a thin ring is the extreme). At least 1/4: a uniform disk has
@@ -506,22 +510,25 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
     return variables, {}
 
 
-def _check_plan_size(spec: SceneSpec, route: list, runs: int) -> None:
+def _check_plan_size(spec: SceneSpec, route: list, count: int) -> None:
     """Refuse a plan whose flights or samples would be absurd, before flying any.
 
-    The calibrated route (closed form, milliseconds) tells how long the flights take;
-    the model's own legs differ by the command-switch transients only.
+    The calibrated route (closed form, milliseconds) tells how long a flight takes;
+    the model's own legs differ by the command-switch transients only. ``count``
+    runs per strategy are flown (realisations + 1).
     """
     options = spec.options
     flight = math.fsum(leg.turn_duration + leg.straight_duration
                        for legs in route for leg in legs)
-    if flight * runs > MAX_PLAN_DRIVE_SECONDS:
+    flights = len(STRATEGIES) * count + _CORRECTIONS * (1 + count)
+    if flight * flights > MAX_PLAN_DRIVE_SECONDS:
         raise SceneError(
             f"{spec.path}: [plan] waypoints: the planned route takes {flight:.4g} s of "
-            f"drive, flown {runs} times ({len(STRATEGIES)} strategies x (realisations + 1)): "
-            f"{flight * runs:.3g} s to simulate; allowed at most {MAX_PLAN_DRIVE_SECONDS:.3g} "
-            "s: nearer waypoints or fewer realisations"
+            f"drive, simulated up to {flights} times (strategies and corrections for "
+            f"realisations = {count - 1}): {flight * flights:.3g} s; allowed at most "
+            f"{MAX_PLAN_DRIVE_SECONDS:.3g} s: nearer waypoints or fewer realisations"
         )
+    runs = len(STRATEGIES) * count
     samples = runs * flight / options["sample_interval"]
     if samples > MAX_SCENE_SAMPLES:
         raise SceneError(
@@ -535,22 +542,24 @@ def _check_plan_size(spec: SceneSpec, route: list, runs: int) -> None:
 def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     options = spec.options
     disk = spec.disk
+    strategies = STRATEGIES
+    count = options["realisations"] + 1
+    waypoints = options["waypoints"]
     try:
         commands = calibrate_commands(disk, options["frequencies"], options["acceleration"],
                                       settings=spec.settings, slaving=spec.slaving)
-        waypoints = options["waypoints"]
         # The blind strategies' legs do not depend on the noise: plan them once.
+        calibrated = plan_route(options["start"], waypoints, commands)
+        # Before the first simulated flight (the open-loop corrections fly the route).
+        _check_plan_size(spec, calibrated, count)
         routes = {
-            "calibration": plan_route(options["start"], waypoints, commands),
+            "calibration": calibrated,
             "open_loop": refined_route(disk, options["start"], waypoints, commands,
                                        spec.settings, slaving=spec.slaving),
             "closed_loop": None,
         }
     except PlanError as err:
         raise SceneError(f"{spec.path}: [plan]: {err}") from None
-    strategies = STRATEGIES
-    count = options["realisations"] + 1
-    _check_plan_size(spec, routes["calibration"], len(strategies) * count)
     noise = _heading_noise(options["heading_drift"], disk)
     runs = {}
     for s, strategy in enumerate(strategies):

@@ -285,6 +285,11 @@ def _explain(error: Any) -> str:
     if error.validator == "required":
         return f"{at}: {error.message}" + (f"; {hint}" if hint else "")
     if error.validator in ("oneOf", "anyOf"):
+        chosen = _chosen_branch(error)
+        if chosen:
+            # The form the user evidently meant (its required keys are there): say
+            # what is wrong inside it, e.g. a string among an axis's values.
+            return "\n  ".join(dict.fromkeys(_explain(e) for e in chosen))
         from jsonschema.exceptions import best_match
 
         detail = best_match(error.context) if error.context else None
@@ -297,7 +302,8 @@ def _explain(error: Any) -> str:
         limits = " and ".join(
             f"{_BOUNDS[key]} {error.schema[key]}" for key in _BOUNDS if key in error.schema
         )
-        return f"{at} = {_short(error.instance)} is out of range; allowed: {limits}"
+        return (f"{at} = {_short(error.instance)} is out of range; allowed: {limits}"
+                + (f" ({hint})" if hint else ""))
     if error.validator == "type":
         expected = error.validator_value
         return (
@@ -305,6 +311,19 @@ def _explain(error: Any) -> str:
             + (f" ({hint})" if hint else "")
         )
     return f"{at}: {error.message}" + (f"; allowed: {hint}" if hint else "")
+
+
+def _chosen_branch(error: Any) -> list[Any]:
+    """The errors of the one ``oneOf`` branch whose required keys the instance has."""
+    if not isinstance(error.instance, dict) or not error.context:
+        return []
+    branches = error.schema.get(error.validator, [])
+    meant = [i for i, branch in enumerate(branches)
+             if branch.get("required") and set(branch["required"]) <= set(error.instance)]
+    if len(meant) != 1:
+        return []
+    return [e for e in error.context if e.relative_schema_path
+            and e.relative_schema_path[0] == meant[0]]
 
 
 def _short(value: Any, limit: int = 80) -> str:
