@@ -289,11 +289,12 @@ def _explain(error: Any) -> str:
         if chosen:
             # The form the user evidently meant (its required keys are there): say
             # what is wrong inside it, e.g. a string among an axis's values.
-            return "\n  ".join(dict.fromkeys(_explain(e) for e in chosen))
-        from jsonschema.exceptions import best_match
+            reason = " (" + "; ".join(dict.fromkeys(_explain(e) for e in chosen)) + ")"
+        else:
+            from jsonschema.exceptions import best_match
 
-        detail = best_match(error.context) if error.context else None
-        reason = f" ({detail.message})" if detail is not None else ""
+            detail = best_match(error.context) if error.context else None
+            reason = f" ({detail.message})" if detail is not None else ""
         return f"{at}: {_short(error.instance)} does not match any allowed form{reason}; {hint}"
     if error.validator == "enum":
         allowed = ", ".join(map(repr, error.validator_value))
