@@ -87,6 +87,7 @@ from study.transient import IntegratorSettings, Schedule
 
 __all__ = [
     "MAX_CALIBRATION_PERIODS",
+    "MAX_CALIBRATION_POINTS",
     "MAX_PLAN_DRIVE_SECONDS",
     "MAX_SCENE_SAMPLES",
     "SCENE_KINDS",
@@ -109,8 +110,11 @@ _KIND_TABLES = {"trajectory": ("segment", "trajectory"), "calibration": ("calibr
 #: Stored samples of a scene at most (values of its largest variable): 1e7 doubles
 #: are 80 MB per variable, and the integrator's own output several times that.
 MAX_SCENE_SAMPLES = 10_000_000
+#: Points of a calibration at most (the workflow has 324; each costs about 3 ms).
+MAX_CALIBRATION_POINTS = 100_000
 #: Drive periods a calibration may integrate at most (points x max_periods): about
-#: 1 ms each on one core, so the budget is about three core-hours.
+#: 1 ms each on one core, so the budget for points that never settle is about three
+#: core-hours.
 MAX_CALIBRATION_PERIODS = 10_000_000
 #: Simulated drive time of a plan at most [s]: the planned flight times the flights
 #: simulated (every strategy's run per realisation, and up to
@@ -323,6 +327,12 @@ def _calibration_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
     table = raw["calibration"]
     max_periods = table.get("max_periods", 400)
     points = axis_length(table["f"]) * axis_length(table["a"])
+    if points > MAX_CALIBRATION_POINTS:
+        raise SceneError(
+            f"{path}: [calibration] f x a = {axis_length(table['f'])} x "
+            f"{axis_length(table['a'])} = {points:.3g} points; allowed at most "
+            f"{MAX_CALIBRATION_POINTS:.3g}"
+        )
     if points * max_periods > MAX_CALIBRATION_PERIODS:
         raise SceneError(
             f"{path}: [calibration] f x a x max_periods = {axis_length(table['f'])} x "
