@@ -108,6 +108,13 @@ def decode_spec_bytes(data: bytes, path: str, what: str = "spec", size: int | No
                 f"{path}: a {what} must be UTF-8 text (TOML); this file is {encoding} "
                 "(save it as UTF-8)"
             )
+    nul = data.find(b"\x00")
+    if nul >= 0:
+        # Valid UTF-8 but never TOML: most likely UTF-16 or UTF-32 without a mark.
+        raise SpecError(
+            f"{path}: a {what} must be UTF-8 text (TOML); byte {nul} is a NUL (is the file "
+            "UTF-16 or UTF-32? save it as UTF-8)"
+        )
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as err:
