@@ -465,6 +465,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             raise SpecError(f"{path}: [sweep] a: drive accelerations must be >= 0 m s-2")
         if axis.name == "m_add" and np.any(axis.values < 0):
             raise SpecError(f"{path}: [sweep] m_add: added masses must be >= 0 kg")
+        if axis.name not in STRUCTURE_PARAMETERS:
+            _check_bounds(axis, path)
 
     coupling = solver_table.get("coupling", "one-way")
     # The exact solver covers the paper's (one-way) model; two-way coupling needs time
@@ -560,17 +562,21 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         integrator=integrator,
     )
     _check_structures(spec, path)
-    for axis in axes:
-        # Swept values obey the ranges of the schema's parameters, as fixed ones do
-        # (the structure's own checks, above, have the better words where they apply).
-        allowed, inside = _parameter_bounds(axis.name)
-        outside = axis.values[~inside(axis.values)]
-        if outside.size:
-            raise SpecError(
-                f"{path}: [sweep] {axis.name}: value {float(outside[0])!r} is out of range; "
-                f"allowed: {allowed}"
-            )
+    # After the structure's own checks: they have the better words where they apply.
+    for axis in spec.structure_axes:
+        _check_bounds(axis, path)
     return spec
+
+
+def _check_bounds(axis: Axis, path: str) -> None:
+    """Swept values obey the ranges of the schema's parameters, as fixed ones do."""
+    allowed, inside = _parameter_bounds(axis.name)
+    outside = axis.values[~inside(axis.values)]
+    if outside.size:
+        raise SpecError(
+            f"{path}: [sweep] {axis.name}: value {float(outside[0])!r} is out of range; "
+            f"allowed: {allowed}"
+        )
 
 
 def _check_structures(spec: StudySpec, path: str) -> None:

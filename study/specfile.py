@@ -403,13 +403,12 @@ def axis_values(table: Mapping[str, Any], at: str) -> NDArray[np.float64]:
         start, stop = float(table["start"]), float(table["stop"])
         if not (math.isfinite(start) and math.isfinite(stop)):
             raise SpecError(f"{at}: start and stop must be finite numbers")
-        if table.get("spacing", "linear") == "log":
-            if start <= 0 or stop <= 0:
-                raise SpecError(f"{at}: log spacing needs start > 0 and stop > 0")
-            values = np.geomspace(start, stop, num)
-        else:
-            with np.errstate(over="ignore", invalid="ignore"):
-                values = np.linspace(start, stop, num)
+        log = table.get("spacing", "linear") == "log"
+        if log and (start <= 0 or stop <= 0):
+            raise SpecError(f"{at}: log spacing needs start > 0 and stop > 0")
+        # Ends near the largest double overflow in between: refused as not finite below.
+        with np.errstate(over="ignore", invalid="ignore"):
+            values = np.geomspace(start, stop, num) if log else np.linspace(start, stop, num)
     if values.size == 0:
         raise SpecError(f"{at}: empty axis; give at least one value")
     if not np.all(np.isfinite(values)):

@@ -241,3 +241,20 @@ def test_study_and_scene_hashes_are_the_canonical_hash():
     scene = parse_scene(SCENE)
     assert study.sha256 == canonical_sha256(study.canonical)
     assert scene.sha256 == canonical_sha256(scene.canonical)
+
+
+def test_study_list_marks_an_unreadable_spec_invalid(tmp_path, capsys):
+    (tmp_path / "a.toml").write_bytes(STUDY.encode("utf-16"))
+    (tmp_path / "b.toml").write_text("x = " + "[" * 5000 + "]" * 5000, encoding="utf-8")
+    assert main(["list", "--workflows", str(tmp_path), "--results", str(tmp_path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith(f"{tmp_path / 'a.toml'}: INVALID SPEC: ")
+    assert "UTF-16" in lines[0]
+    assert lines[1].startswith(f"{tmp_path / 'b.toml'}: INVALID SPEC: ")
+    assert "nested too deeply" in lines[1]
+
+
+def test_log_spacing_up_to_the_largest_double_raises_no_warning():
+    values = axis_values({"start": 1e-3, "stop": 1.7976931348623157e308, "num": 5,
+                          "spacing": "log"}, "s.toml: [sweep] f")
+    assert values[-1] == 1.7976931348623157e308
