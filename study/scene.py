@@ -119,8 +119,8 @@ MAX_CALIBRATION_PERIODS = 10_000_000
 #: Simulated drive time of a plan at most [s]: the planned flight times the flights
 #: simulated (every strategy's run per realisation, and up to
 #: :data:`_CORRECTIONS` corrective flights for the open-loop route and for each
-#: closed-loop run). The workflow needs 38 s x 45 = 1.7e3 s, about 20 s of computing;
-#: 2e4 s is about 5 minutes.
+#: closed-loop run). The workflow needs 38 s x 45 = 1.7e3 s, 20-70 s of computing
+#: on a 2-core machine; 2e4 s is 11 times that.
 MAX_PLAN_DRIVE_SECONDS = 20_000.0
 #: Correction iterations of the planner's refined legs (its default, used here).
 _CORRECTIONS = 5
