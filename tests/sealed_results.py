@@ -1,6 +1,6 @@
 """Small sealed result files of every kind, for the validation tests and the fuzz tier.
 
-Made with today's runners (:func:`study.runner.run_study`, :func:`study.scene.run_scene`),
+Made with today's runners (:func:`study.runner.run_study`, :func:`study.runner.run_scene`),
 then sealed with :func:`study.validate.seal`, as the streaming writer does.
 """
 
@@ -9,8 +9,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from study.runner import run_study
-from study.scene import run_scene
+from study.runner import run_scene, run_study
 from study.validate import seal
 
 WORKFLOWS = Path(__file__).resolve().parents[1] / "workflows"
@@ -77,7 +76,7 @@ def make_sealed_results(folder: Path) -> dict[str, Path]:
         files[name] = run_study(spec, folder / f"{name}.nc", progress=False, workers=1).output
     spec = folder / "steering.toml"
     spec.write_text(scene_text())
-    files["steering"] = run_scene(spec, folder / "steering.nc")[0]
+    files["steering"] = run_scene(spec, folder / "steering.nc").output
     for path in files.values():
         seal(path)
     return files
