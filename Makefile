@@ -37,7 +37,12 @@ $(STAMP): pyproject.toml
 
 # The package reads study/schemas/ (package data, shipped in the wheel); results_schema/
 # keeps an identical copy at the top of the repo (a test checks they agree).
-schemas: $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
+# The spec schema's observables are exported from study/observables.py; results_schema/
+# is the repository's copy of the package's schemas (a test checks both).
+schemas: | $(STAMP)
+	$(PY) -c "from study.spec import export_spec_schema as e; \
+	open('study/schemas/study-spec-v1.schema.json', 'w').write(e())"
+	$(MAKE) $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
 
 results_schema/%.json: study/schemas/%.json
 	cp $< $@

@@ -36,6 +36,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from study.observables import METHODS, variables_of
+from study.observables import OBSERVABLES as OBSERVABLE_REGISTRY
 from study.solver import SolverSettings
 from study.specfile import (
     SCHEMA_DIR,
@@ -68,15 +70,13 @@ SPEC_SCHEMA = "study-spec-v1"
 #: The JSON schema of study specs (package data; ``results_schema/`` holds a copy).
 SPEC_SCHEMA_PATH = SCHEMA_DIR / f"{SPEC_SCHEMA}.schema.json"
 
-#: Observables a study can ask for, in the order they appear in a dataset.
-OBSERVABLES = (
-    "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "paper_model", "frontier",
-)
+#: Observables a study can ask for, in the order they appear in a dataset (declared
+#: in :mod:`study.observables`).
+OBSERVABLES = tuple(OBSERVABLE_REGISTRY)
 #: Observables that need the steady-state solver (and hence the drive acceleration a).
-SOLVER_OBSERVABLES = ("velocity", "diagnostics", "paper_model", "frontier")
-
-#: Velocity solvers a spec can choose with ``[solver] method``.
-METHODS = ("exact", "integrator")
+SOLVER_OBSERVABLES = tuple(
+    name for name, o in OBSERVABLE_REGISTRY.items() if o.needs_acceleration
+)
 #: ``[solver]`` keys of the exact solver and of the time integrator.
 EXACT_KEYS = ("max_events", "max_map_iterations")
 INTEGRATOR_KEYS = (
@@ -233,8 +233,24 @@ def _build_structure(params: dict[str, float], mass: MassModel | None) -> Struct
 
 
 def spec_schema() -> dict[str, Any]:
-    """The JSON schema of study specs (``study/schemas/study-spec-v1.schema.json``)."""
-    return load_schema(SPEC_SCHEMA)
+    """The JSON schema of study specs (``study/schemas/study-spec-v1.schema.json``).
+
+    The observables allowed and their descriptions come from :mod:`study.observables`
+    (the file on disk is their export, see :func:`export_spec_schema`).
+    """
+    schema = load_schema(SPEC_SCHEMA)
+    items = schema["properties"]["study"]["properties"]["observables"]["items"]
+    items["enum"] = list(OBSERVABLES)
+    items["description"] = "; ".join(
+        f"{name}: {o.summary}" for name, o in OBSERVABLE_REGISTRY.items())
+    return schema
+
+
+def export_spec_schema() -> str:
+    """The spec schema as written to ``study/schemas`` (``make schemas``)."""
+    import json
+
+    return json.dumps(spec_schema(), indent=2) + "\n"
 
 
 def load_spec(path: str | Path) -> StudySpec:
@@ -296,20 +312,6 @@ MAX_CHUNK_BYTES = 256 * 2**20
 #: chunks scale with it.
 MAX_CHUNKS = 1_000_000
 
-#: Bytes stored per grid point by each observable: (per (structures, f) point,
-#: per (structures, f, a) point); velocity and status come with every solver observable.
-_BYTES_PER_POINT = {
-    "resonance": (16, 0),
-    "thresholds": (16, 0),
-    "lift_off": (8, 0),
-    "velocity": (0, 0),
-    "diagnostics": (0, 3 * 8 + 4 + 1),
-    "paper_model": (0, 8 + 1),
-    "frontier": (0, 0),
-}
-_SOLVER_BYTES = 8 + 1  # velocity and status
-
-
 def _size(n: float) -> str:
     for unit in ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if n < 1024 or unit == "PiB":
@@ -346,10 +348,10 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
     structures = math.prod(n for name, n in lengths.items() if name not in DRIVE_PARAMETERS)
     n_f = lengths.get("f", 1)
     n_a = lengths.get("a", 1) if needs_solver else 1
-    per_f_bytes = sum(_BYTES_PER_POINT[o][0] for o in observables)
-    per_point_bytes = (_SOLVER_BYTES if needs_solver else 0) + sum(
-        _BYTES_PER_POINT[o][1] for o in observables
-    )
+    # What each variable holds per point, from its declaration.
+    variables = variables_of(observables)
+    per_f_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "row")
+    per_point_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "point")
     swept = [name for name in lengths if needs_solver or name != "a"]
     keys = " x ".join(swept)
     sizes = " x ".join(str(lengths[name]) for name in swept)

@@ -46,3 +46,15 @@ def test_every_schema_is_a_json_schema(name: str) -> None:
 
 def test_the_code_reads_the_package_folder() -> None:
     assert SPEC_SCHEMA_PATH.parent == PACKAGE_SCHEMAS
+
+
+def test_the_spec_schema_file_is_the_export_of_the_observable_declarations() -> None:
+    """Adding an observable touches study/observables.py only; `make schemas` writes
+    the file, and this test says so when it has not been run."""
+    from study.observables import OBSERVABLES
+    from study.spec import export_spec_schema, spec_schema
+
+    on_disk = (Path(study.__file__).parent / "schemas" / "study-spec-v1.schema.json")
+    assert on_disk.read_text(encoding="utf-8") == export_spec_schema(), "run `make schemas`"
+    enum = spec_schema()["properties"]["study"]["properties"]["observables"]["items"]["enum"]
+    assert enum == list(OBSERVABLES)
