@@ -72,9 +72,9 @@ def package_version() -> str:
     try:
         return metadata.version("study")
     except metadata.PackageNotFoundError:  # running from a source tree
-        from study import __version__
+        from study.version import VERSION
 
-        return __version__
+        return VERSION
 
 
 @cache
