@@ -3,6 +3,7 @@
 #                   (parameter studies and the steering scenes alike)
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
 #   make test       set up .venv on a fresh machine, lint, run the test suite
+#   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
@@ -17,7 +18,7 @@ WORKFLOWS := $(wildcard workflows/*.toml)
 RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs test test-slow lint bench cf-check list clean schemas
+.PHONY: all results figures docs test test-slow fuzz lint bench cf-check list clean schemas
 
 all: results
 
@@ -36,7 +37,12 @@ $(STAMP): pyproject.toml
 
 # The package reads study/schemas/ (package data, shipped in the wheel); results_schema/
 # keeps an identical copy at the top of the repo (a test checks they agree).
-schemas: $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
+# The spec schema's observables are exported from study/observables.py; results_schema/
+# is the repository's copy of the package's schemas (a test checks both).
+schemas: | $(STAMP)
+	$(PY) -c "from study.spec import export_spec_schema as e; \
+	open('study/schemas/study-spec-v1.schema.json', 'w').write(e())"
+	$(MAKE) $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
 
 results_schema/%.json: study/schemas/%.json
 	cp $< $@
@@ -72,10 +78,14 @@ lint: $(STAMP)
 	$(PY) -m ruff check study tests benchmarks
 
 test: $(STAMP) lint
-	$(PY) -m pytest -m "not slow"
+	$(PY) -m pytest -m "not slow and not fuzz"
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow
+
+# Seeded fuzz tiers (corrupted result files...): CI runs them.
+fuzz: $(STAMP)
+	$(PY) -m pytest -m fuzz
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_velocity_map.py

@@ -16,8 +16,7 @@ from study.physics import (
 from study.solver import SolverSettings, SteadyState, steady_state, steady_velocity
 from study.status import NonConvergence, Status
 from study.structure import Structure
-
-__version__ = "0.1.0"
+from study.version import VERSION as __version__
 
 __all__ = [
     "NonConvergence",

@@ -15,24 +15,6 @@ from pathlib import Path
 __all__ = ["main"]
 
 
-def _run_scene(args: argparse.Namespace) -> int:
-    from study.runner import StudyBusy
-    from study.scene import load_scene, run_scene
-
-    spec = load_scene(args.spec)
-    output = args.output or Path("results") / f"{Path(args.spec).stem}.nc"
-    try:
-        path, up_to_date, wall = run_scene(spec, output, force=args.force)
-    except StudyBusy as err:
-        print(f"study: {err}", file=sys.stderr)
-        return 1
-    if up_to_date:
-        print(f"{path}: up to date (scene and code unchanged)")
-    else:
-        print(f"{path}: {spec.kind} scene computed in {wall:.2f} s")
-    return 0
-
-
 def _show_cluster(pool) -> None:
     """Where a run on a dask scheduler goes, and its dashboard if it has one."""
     line = f"study: {pool.threads} threads on the workers of {pool.name}"
@@ -42,16 +24,12 @@ def _show_cluster(pool) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from study.runner import StudyInterrupted, run_study
-    from study.scene import is_scene_file
-    from study.spec import load_spec
+    from study.runner import StudyInterrupted, load_any, run
 
-    if is_scene_file(args.spec):
-        return _run_scene(args)
-    spec = load_spec(args.spec)
+    spec = load_any(args.spec)
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
     try:
-        report = run_study(
+        report = run(
             spec,
             args.output,
             scheduler=args.scheduler,
@@ -73,6 +51,9 @@ def _run(args: argparse.Namespace) -> int:
         print(f"{report.output}: metadata updated (numbers unchanged, nothing recomputed)")
     elif report.up_to_date:
         print(f"{report.output}: up to date (spec and code unchanged)")
+    elif report.kind.startswith("scene:"):
+        print(f"{report.output}: {report.kind.split(':')[1]} scene computed in "
+              f"{report.wall_seconds:.2f} s")
     else:
         print(
             f"{report.output}: {report.points} points ({report.points_computed} computed, "
@@ -134,12 +115,12 @@ def _cache(args: argparse.Namespace) -> int:
 
 
 def _validate(args: argparse.Namespace) -> int:
-    from study.store import ResultError, open_result
+    from study.validate import ResultError, validate_file
 
     status = 0
     for path in args.files:
         try:
-            open_result(path)
+            validate_file(path)
         except ResultError as err:
             print(f"study: {err}", file=sys.stderr)
             status = 1
@@ -149,16 +130,17 @@ def _validate(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
-    from study.store import describe, open_result
+    from study.validate import describe, validate_file
 
-    dataset = open_result(args.file)
-    print(describe(dataset, str(args.file)))
+    # Both read the file in slabs: info works on results larger than memory.
+    validate_file(args.file)
+    print(describe(args.file, str(args.file)))
     return 0
 
 
 def _figure(args: argparse.Namespace) -> int:
     from study.figures import draw_figure
-    from study.store import open_result
+    from study.validate import open_result
 
     dataset = open_result(args.file)
     output = args.output or Path("figures") / args.name
@@ -168,9 +150,8 @@ def _figure(args: argparse.Namespace) -> int:
 
 
 def _list(args: argparse.Namespace) -> int:
-    from study.runner import is_up_to_date
-    from study.scene import is_scene_file, load_scene, scene_up_to_date
-    from study.spec import SpecError, load_spec
+    from study.runner import is_up_to_date, load_any
+    from study.spec import SpecError
 
     specs = sorted(Path(args.workflows).glob("*.toml"))
     if not specs:
@@ -178,18 +159,8 @@ def _list(args: argparse.Namespace) -> int:
         return 0
     for path in specs:
         output = Path(args.results) / f"{path.stem}.nc"
-        if is_scene_file(path):
-            try:
-                scene = load_scene(path)
-            except SpecError as err:
-                print(f"{path}: INVALID SPEC: {str(err).splitlines()[0]}")
-                continue
-            state = ("up to date" if scene_up_to_date(scene, output)
-                     else "out of date" if output.exists() else "not run")
-            print(f"{path}  ->  {output}: {state}")
-            continue
         try:
-            spec = load_spec(path)
+            spec = load_any(path)
         except SpecError as err:
             print(f"{path}: INVALID SPEC: {str(err).splitlines()[0]}")
             continue
@@ -276,7 +247,8 @@ def main(argv: list[str] | None = None) -> int:
     from study.cluster import ClusterError
     from study.figures import FigureError
     from study.spec import SpecError
-    from study.store import ResultError, StoreBusy, StoreError
+    from study.store import StoreBusy, StoreError
+    from study.validate import ResultError
 
     parser = _parser()
     argv = sys.argv[1:] if argv is None else list(argv)

@@ -30,6 +30,8 @@ from functools import cache, lru_cache
 from importlib import metadata
 from pathlib import Path
 
+from study.kinds import RESULT_KINDS
+
 __all__ = [
     "RESULT_KIND_ENTRIES",
     "CodeFingerprint",
@@ -40,10 +42,10 @@ __all__ = [
 
 PACKAGE = "study"
 
-# The modules whose import closure decides the numbers of each result kind.
+#: The modules whose import closure decides the numbers of each result kind
+#: (declared with the kinds in :mod:`study.kinds`).
 RESULT_KIND_ENTRIES: dict[str, tuple[str, ...]] = {
-    "study": ("study.sweep", "study.analysis", "study.spec"),
-    "scene": ("study.scene",),
+    name: kind.entry_modules for name, kind in RESULT_KINDS.items()
 }
 
 # Libraries whose version can change computed values (the kernels are compiled by

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import planar as _kernel
 from study.physics import mode_response
-from study.structure import _require_finite
+from study.structure import require_finite
 from study.transient import IntegratorSettings, Schedule
 
 __all__ = [
@@ -112,7 +112,7 @@ class Plate:
             ("direction", "degree", lambda v: True, "finite"),
         )
         for name, units, ok, allowed in checks:
-            value = _require_finite(f"Plate.{name}", getattr(self, name))
+            value = require_finite(f"Plate.{name}", getattr(self, name))
             if not ok(value):
                 raise ValueError(
                     f"Plate {self.name!r}: {name} = {value!r} [{units}] is out of range; "
@@ -126,7 +126,7 @@ class Plate:
                 f"{self.attachment!r}"
             )
         object.__setattr__(self, "attachment", tuple(
-            _require_finite(f"Plate.attachment[{i}]", v) for i, v in enumerate(point)
+            require_finite(f"Plate.attachment[{i}]", v) for i, v in enumerate(point)
         ))
 
     @property
@@ -182,7 +182,7 @@ class Disk:
     _names: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        radius = _require_finite("Disk.radius", self.radius)
+        radius = require_finite("Disk.radius", self.radius)
         if radius <= 0.0:
             raise ValueError(f"Disk: radius = {radius!r} [m] must be > 0")
         plates = tuple(self.plates)
@@ -194,19 +194,19 @@ class Disk:
                 f"Disk: the plates' mass ratios sum to {total:g} > 1 (each M is a share of "
                 "the whole structure's mass)"
             )
-        cs = _require_finite("Disk.cs", self.cs)
+        cs = require_finite("Disk.cs", self.cs)
         if cs <= 0.0:
             raise ValueError(f"Disk: cs = {cs!r} must be > 0")
-        ck = cs if self.ck is None else _require_finite("Disk.ck", self.ck)
+        ck = cs if self.ck is None else require_finite("Disk.ck", self.ck)
         if not 0.0 < ck <= cs:
             raise ValueError(f"Disk: ck = {ck!r} must be in (0, cs = {cs!r}]")
-        g = _require_finite("Disk.g", self.g)
+        g = require_finite("Disk.g", self.g)
         if g <= 0.0:
             raise ValueError(f"Disk: g = {g!r} [m s^-2] must be > 0")
         gyration = radius / math.sqrt(2.0) if self.gyration_radius is None else (
-            _require_finite("Disk.gyration_radius", self.gyration_radius))
+            require_finite("Disk.gyration_radius", self.gyration_radius))
         length = 2.0 * radius / 3.0 if self.friction_length is None else (
-            _require_finite("Disk.friction_length", self.friction_length))
+            require_finite("Disk.friction_length", self.friction_length))
         for name, value in (("gyration_radius", gyration), ("friction_length", length)):
             if value <= 0.0:
                 raise ValueError(f"Disk: {name} = {value!r} [m] must be > 0")
@@ -356,7 +356,7 @@ class PlanarTrajectory:
 def _check_slaving(slaving: float) -> float:
     # Without slaving (0) a slip's onset is stiff for the explicit integrator: tiny
     # steps until the budget runs out.
-    value = _require_finite("slaving", slaving)
+    value = require_finite("slaving", slaving)
     if not 0.0 < value <= 0.1:
         raise ValueError(f"slaving = {slaving!r} [1] is out of range; allowed: (0, 0.1]")
     return value
@@ -431,7 +431,7 @@ def simulate_planar(
     if settings.steps_per_period is not None:
         raise ValueError("simulate_planar: fixed steps (steps_per_period) are not offered; "
                          "set tolerance instead")
-    noise = _require_finite("heading_noise", heading_noise)
+    noise = require_finite("heading_noise", heading_noise)
     if noise < 0.0:
         raise ValueError(f"heading_noise = {noise!r} [rad m^-1/2] must be >= 0")
     names = state_names(disk)
@@ -622,8 +622,8 @@ def periodic_motion(
 
     plates, disk_vector = disk_parameters(disk)
     settings = IntegratorSettings() if settings is None else settings
-    f = _require_finite("f", f)
-    a = _require_finite("a", a)
+    f = require_finite("f", f)
+    a = require_finite("a", a)
     if f <= 0.0 or a < 0.0:
         raise ValueError(f"periodic_motion: need f > 0 [Hz] and a >= 0 [m s^-2], got {f}, {a}")
     omega = 2.0 * math.pi * f

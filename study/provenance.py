@@ -53,9 +53,18 @@ def scene_fingerprint(spec_sha256: str) -> str:
     return hashlib.sha256(f"{spec_sha256}:{scene_code_sha256()}".encode()).hexdigest()
 
 
-def fingerprint(spec_sha256: str) -> str:
-    """What a result depends on: the canonical spec and the computing code."""
-    return hashlib.sha256(f"{spec_sha256}:{code_sha256()}".encode()).hexdigest()
+def fingerprint(spec_sha256: str, code: str | None = None) -> str:
+    """What a result depends on: the canonical spec and the computing code.
+
+    Parameters
+    ----------
+    spec_sha256 : str
+        Hash of the spec's canonical form.
+    code : str, optional
+        Code hash (default: this code's, :func:`code_sha256`).
+    """
+    code = code_sha256() if code is None else code
+    return hashlib.sha256(f"{spec_sha256}:{code}".encode()).hexdigest()
 
 
 def package_version() -> str:
@@ -63,9 +72,9 @@ def package_version() -> str:
     try:
         return metadata.version("study")
     except metadata.PackageNotFoundError:  # running from a source tree
-        from study import __version__
+        from study.version import VERSION
 
-        return __version__
+        return VERSION
 
 
 @cache

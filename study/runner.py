@@ -1,4 +1,5 @@
-"""Run a study: the only module that crosses spec -> sweep -> cache -> store.
+"""The one engine: runs studies and scenes; the only module that crosses
+spec -> sweep -> cache -> store.
 
 A run plans the grid in chunks, looks every chunk up in the cache of kept values,
 sends what is missing to the executor (local threads, or a dask scheduler), and
@@ -34,11 +35,16 @@ from study.provenance import (
     fingerprint,
     git_state,
     package_version,
+    scene_code_sha256,
     utc_now,
 )
+from study.scene import SceneSpec, load_scene, scene_dataset
 from study.spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec, load_spec
+from study.specfile import detect_kind
 from study.store import (
+    PAPER_REFERENCE,
     RESULT_SCHEMA,
+    SCENE_SCHEMA,
     GridWriter,
     StoreBusy,
     clean_temporaries,
@@ -47,6 +53,7 @@ from study.store import (
     file_attributes,
     new_temporary,
     rewrite_attributes,
+    write_atomic,
 )
 from study.structure import Structure
 from study.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
@@ -62,11 +69,6 @@ __all__ = [
     "is_up_to_date",
     "run_study",
 ]
-
-PAPER_REFERENCE = (
-    "T. Barois, A. Boucherie, L. Tadrist and H. Kellay, Controlled locomotion of a "
-    "minimal soft structure by stick-slip nonlinearity"
-)
 
 #: Another process is writing the same result (re-exported for callers of the runner).
 StudyBusy = StoreBusy
@@ -94,6 +96,9 @@ class RunReport:
         Grid points of the study, computed in this run, and taken from the cache.
     metadata_updated : bool
         Only the file's metadata was rewritten (title, description, spec text).
+    kind : str
+        Result kind (:mod:`study.kinds`); for a scene, its scene kind follows:
+        ``"scene:trajectory"``.
     """
 
     output: Path
@@ -106,9 +111,15 @@ class RunReport:
     points_computed: int = 0
     points_reused: int = 0
     metadata_updated: bool = False
+    kind: str = "study"
 
 
-def default_output(spec: StudySpec) -> Path:
+def load_any(path: str | Path) -> StudySpec | SceneSpec:
+    """Read and validate a spec of any result kind (:mod:`study.kinds`)."""
+    return load_scene(path) if detect_kind(Path(path)) == "scene" else load_spec(path)
+
+
+def default_output(spec: StudySpec | SceneSpec) -> Path:
     """``results/<spec file stem>.nc`` (what ``make`` and ``study list`` use), or
     ``results/<study name>.nc`` for a spec that did not come from a file."""
     source = Path(spec.path)
@@ -138,21 +149,144 @@ def _metadata_attrs(spec: StudySpec) -> dict[str, Any]:
     }
 
 
-def _state(spec: StudySpec, output: Path) -> str:
-    """"current", "metadata" (same numbers, other spec text) or "stale"."""
+def _scene_metadata_attrs(spec: SceneSpec) -> dict[str, Any]:
+    return {
+        "title": spec.title,
+        "summary": spec.description or (
+            f"Steering scene '{spec.name}' ({spec.kind}) of a rigid disk with resonant plates "
+            "on a vertically shaken table: planar stick-slip with an ellipsoidal limit "
+            "surface, integrated with events (study.planar)."),
+        "id": f"{spec.name}-{spec.sha256[:16]}",
+        "study_name": spec.name,
+        "study_spec": spec.text,
+        "study_spec_path": spec.path,
+    }
+
+
+def _identity(spec: StudySpec | SceneSpec) -> tuple[str, str, dict[str, Any]]:
+    """Result schema, fingerprint and metadata attributes a current file must carry."""
+    if isinstance(spec, SceneSpec):
+        return (SCENE_SCHEMA, fingerprint(spec.sha256, scene_code_sha256()),
+                _scene_metadata_attrs(spec))
+    return RESULT_SCHEMA, fingerprint(spec.sha256), _metadata_attrs(spec)
+
+
+def _state(spec: StudySpec | SceneSpec, output: Path) -> str:
+    """"current", "metadata" (same numbers, other spec text) or "stale"; reads only the
+    file's attributes."""
+    schema, wanted_fingerprint, wanted = _identity(spec)
     attrs = file_attributes(output)
-    if attrs is None or attrs.get("study_result_schema") != RESULT_SCHEMA:
+    if attrs is None or attrs.get("study_result_schema") != schema:
         return "stale"
-    if attrs.get("study_fingerprint") != fingerprint(spec.sha256):
+    if "study_content_sha256" not in attrs:  # never sealed: not a finished result
         return "stale"
-    wanted = _metadata_attrs(spec)
+    if attrs.get("study_fingerprint") != wanted_fingerprint:
+        return "stale"
     return "current" if all(attrs.get(k) == v for k, v in wanted.items()) else "metadata"
 
 
-def is_up_to_date(spec: StudySpec, output: Path) -> bool:
+def is_up_to_date(spec: StudySpec | SceneSpec, output: Path) -> bool:
     """Whether ``output`` holds this spec's numbers computed by this code (reads only
     the file's attributes; ``study validate`` checks the data)."""
     return _state(spec, Path(output)) != "stale"
+
+
+def _update_metadata(spec: StudySpec | SceneSpec, output: Path, command: str,
+                     when: str) -> None:
+    """Rewrite the metadata of a current file whose spec text changed (data untouched)."""
+    _, _, wanted = _identity(spec)
+    attrs = file_attributes(output) or {}
+    history = f"{attrs.get('history', '')}\n{when}: {command} (metadata only)".strip()
+    rewrite_attributes(output, {**wanted, "history": history, "date_modified": when})
+
+
+def run(spec: StudySpec | SceneSpec | str | Path, output: str | Path | None = None,
+        **options: Any) -> RunReport:
+    """Run a spec of any kind: :func:`run_study` or :func:`run_scene`."""
+    if not isinstance(spec, StudySpec | SceneSpec):
+        spec = load_any(spec)
+    if isinstance(spec, SceneSpec):
+        scene_options = {k: options[k] for k in ("force", "command") if k in options}
+        return run_scene(spec, output, **scene_options)
+    return run_study(spec, output, **options)
+
+
+def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
+              force: bool = False, command: str | None = None) -> RunReport:
+    """Compute a steering scene and write its result (one task; same lock, atomic
+    write, seal, up-to-date and metadata rules as a study).
+
+    Parameters
+    ----------
+    spec : SceneSpec or path
+    output : path, optional
+        Result file; default ``results/<spec file stem>.nc``.
+    force : bool
+        Recompute even if the result is up to date.
+    command : str, optional
+        The command line recorded in the file's history.
+    """
+    started = time.perf_counter()
+    started_utc = utc_now()
+    if not isinstance(spec, SceneSpec):
+        spec = load_scene(spec)
+    output = Path(output) if output is not None else default_output(spec)
+    command = command or "study.run_scene(" + shlex.quote(spec.path) + ")"
+    if not force and _state(spec, output) == "current":
+        output.touch()
+        return RunReport(output, True, 1, 0, 1, time.perf_counter() - started,
+                         kind=f"scene:{spec.kind}")
+    with exclusive(output):
+        clean_temporaries(output)
+        if not force and _state(spec, output) == "metadata":
+            _update_metadata(spec, output, command, started_utc)
+            return RunReport(output, True, 1, 0, 1, time.perf_counter() - started,
+                             metadata_updated=True, kind=f"scene:{spec.kind}")
+        dataset = scene_dataset(spec)
+        finished_utc = utc_now()
+        provenance = _scene_provenance(spec, started_utc, finished_utc,
+                                       time.perf_counter() - started, command)
+        # Provenance first, then what the scene says of itself (the order ncdump shows).
+        dataset.attrs = {"Conventions": provenance.pop("Conventions"), **dataset.attrs,
+                         **provenance}
+        write_atomic(dataset, output)
+    return RunReport(output, False, 1, 1, 0, time.perf_counter() - started, 1, 1, 0,
+                     kind=f"scene:{spec.kind}")
+
+
+def _scene_provenance(spec: SceneSpec, started_utc: str, finished_utc: str,
+                      wall_seconds: float, command: str) -> dict[str, Any]:
+    """The ACDD and provenance attributes of a scene result computed by this code."""
+    git = git_state()
+    code = scene_code_sha256()
+    run_fingerprint = fingerprint(spec.sha256, code)
+    provenance = {
+        "result_schema": SCENE_SCHEMA,
+        "scene": {"name": spec.name, "kind": spec.kind, "spec_path": spec.path,
+                  "spec_sha256": spec.sha256, "canonical_spec": spec.canonical},
+        "code": {"code_sha256": code, "fingerprint": run_fingerprint},
+        "package": {"name": "study", "version": package_version(), **git},
+        "environment": environment(),
+        "run": {"started_utc": started_utc, "finished_utc": finished_utc,
+                "wall_seconds": wall_seconds},
+    }
+    return {
+        "Conventions": "CF-1.11, ACDD-1.3",
+        **_scene_metadata_attrs(spec),
+        "naming_authority": "study",
+        "processing_level": "model output",
+        "references": PAPER_REFERENCE,
+        "history": f"{started_utc}: {command} (study {package_version()})",
+        "date_created": finished_utc,
+        "study_result_schema": SCENE_SCHEMA,
+        "study_spec_sha256": spec.sha256,
+        "study_code_sha256": code,
+        "study_fingerprint": run_fingerprint,
+        "study_version": package_version(),
+        "git_commit": str(git["git_commit"]),
+        "git_dirty": str(git["git_dirty"]).lower(),
+        "provenance": json.dumps(provenance, sort_keys=True),
+    }
 
 
 def run_study(
@@ -224,10 +358,7 @@ def run_study(
     with exclusive(output):
         clean_temporaries(output)
         if not force and _state(spec, output) == "metadata":
-            attrs = file_attributes(output) or {}
-            history = f"{attrs.get('history', '')}\n{started_utc}: {command} (metadata only)"
-            rewrite_attributes(output, {**_metadata_attrs(spec), "history": history.strip(),
-                                        "date_modified": started_utc})
+            _update_metadata(spec, output, command, started_utc)
             return RunReport(output, True, n_chunks, 0, n_chunks,
                              time.perf_counter() - started, metadata_updated=True)
         return _Run(spec, output, started, started_utc, command,
@@ -579,7 +710,7 @@ class _Run:
         spec = self.spec
         finished_utc = utc_now()
         git = git_state()
-        run_fingerprint = fingerprint(spec.sha256)
+        run_fingerprint = fingerprint(spec.sha256, self.code)
         version = self.gathered.get("version") or package_version()
         provenance: dict[str, Any] = {
             "result_schema": RESULT_SCHEMA,

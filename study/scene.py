@@ -1,4 +1,4 @@
-"""Steering scenes: specs, runs and result datasets of the planar disk (paper Fig. 4).
+"""Steering scenes: specs and computed datasets of the planar disk (paper Fig. 4).
 
 A scene spec is a TOML file under ``workflows/`` with a ``[scene]`` table (a study
 spec has ``[study]`` instead)::
@@ -27,18 +27,23 @@ spec has ``[study]`` instead)::
     duration = 20.0              # s
 
 ``kind = "calibration"`` takes ``[calibration] f = {start, stop, num}`` and ``a =
-{values = [...]}``; ``kind = "plan"`` takes ``[plan]`` with the waypoints, the four
-command frequencies and the operating acceleration. Every refusal is a
-:class:`SceneError` naming the file, the key and what is allowed.
+{values = [...]}`` (the axis grammar of study sweeps); ``kind = "plan"`` takes
+``[plan]`` with the waypoints, the four command frequencies and the operating
+acceleration.
+
+Specs go through :mod:`study.specfile` and the JSON schema
+``study/schemas/study-scene-spec-v1.schema.json`` (types, ranges, keys); the checks a
+schema cannot express (the kind's tables, ranges relative to the disk's radius, the
+size budgets) are made here. Every refusal is a :class:`SceneError` naming the file,
+the key and what is allowed, before anything is computed.
+
+This module parses and computes (:func:`scene_dataset`); writing result files with
+their provenance is :mod:`study.scene_run`'s.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
-import time
-import tomllib
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -65,38 +70,68 @@ from study.planner import (
     refined_route,
     run_plan,
 )
-from study.spec import SpecError
+from study.specfile import (
+    SpecError,
+    axis_length,
+    axis_values,
+    canonical_sha256,
+    check_schema,
+    jsonable,
+    kind_of,
+    load_schema,
+    parse_toml,
+    read_spec_text,
+)
 from study.status import Status
 from study.transient import IntegratorSettings, Schedule
 
 __all__ = [
+    "MAX_CALIBRATION_PERIODS",
+    "MAX_CALIBRATION_POINTS",
+    "MAX_PLAN_DRIVE_SECONDS",
+    "MAX_SCENE_SAMPLES",
     "SCENE_KINDS",
+    "SCENE_SPEC_SCHEMA",
     "SceneError",
     "SceneSpec",
     "is_scene_file",
     "load_scene",
     "parse_scene",
-    "run_scene",
+    "scene_dataset",
 ]
 
 SCENE_KINDS = ("trajectory", "calibration", "plan")
+#: The JSON schema of scene specs (package data in ``study/schemas/``).
+SCENE_SPEC_SCHEMA = "study-scene-spec-v1"
 
-_TOP = {"scene", "disk", "plate", "integrator", "segment", "trajectory", "calibration", "plan"}
-_SCENE_KEYS = {"name": str, "kind": str, "title": str, "description": str}
-_DISK_KEYS = {"radius": "m", "cs": "1", "ck": "1", "g": "m s-2", "gyration_radius": "m",
-              "friction_length": "m"}
-_PLATE_KEYS = {"name": "", "f0": "Hz", "Q": "1", "alpha": "degree", "M": "1",
-               "direction": "degree", "attachment": "m"}
-_INTEGRATOR_KEYS = {"tolerance": "1", "slaving": "1"}
-_SEGMENT_KEYS = {"label": "", "f": "Hz", "a": "m s-2", "duration": "s"}
-_TRAJECTORY_KEYS = {"sample_interval": "s", "start": "m, m, degree", "heading_drift": "rad",
-                    "seed": ""}
-_CALIBRATION_KEYS = {"f": "Hz", "a": "m s-2", "max_periods": ""}
-_PLAN_KEYS = {"acceleration": "m s-2", "forward": "Hz", "backward": "Hz", "left": "Hz",
-              "right": "Hz", "waypoints": "m", "start": "m, m, degree",
-              "heading_drift": "rad", "realisations": "", "seed": "", "sample_interval": "s"}
 _KIND_TABLES = {"trajectory": ("segment", "trajectory"), "calibration": ("calibration",),
                 "plan": ("plan",)}
+
+#: Stored samples of a scene at most (values of its largest variable): 1e7 doubles
+#: are 80 MB per variable, and the integrator's own output several times that.
+MAX_SCENE_SAMPLES = 10_000_000
+#: Points of a calibration at most (the workflow has 324; each costs about 3 ms).
+MAX_CALIBRATION_POINTS = 100_000
+#: Drive periods a calibration may integrate at most (points x max_periods): about
+#: 1 ms each on one core, so the budget for points that never settle is about three
+#: core-hours.
+MAX_CALIBRATION_PERIODS = 10_000_000
+#: Simulated drive time of a plan at most [s]: the planned flight times the flights
+#: simulated (every strategy's run per realisation, and up to
+#: :data:`_CORRECTIONS` corrective flights for the open-loop route and for each
+#: closed-loop run). The workflow needs 38 s x 45 = 1.7e3 s, 20-70 s of computing
+#: on a 2-core machine; 2e4 s is 11 times that.
+MAX_PLAN_DRIVE_SECONDS = 20_000.0
+#: Correction iterations of the planner's refined legs (its default, used here).
+_CORRECTIONS = 5
+
+#: Gyration radius over the disk's radius [1]. At most 1: all the mass within the
+#: disk's footprint (a thin ring is the extreme). At least 1/4: a uniform disk has
+#: 1/sqrt(2); below 1/4 the disk's spin is so light that the slips chatter in
+#: rotation and the integrator's steps grow about as (radius / gyration_radius)^5
+#: (a 3 s segment at 14.2 Hz: 7e4 steps at 1/4, 9e5 at 0.15, over 1e6 at 0.1),
+#: and at 50 000 (gyration_radius = 1000 m) a 36 s schedule did not end in an hour.
+GYRATION_RATIO = (0.25, 1.0)
 
 
 class SceneError(SpecError):
@@ -136,226 +171,197 @@ class SceneSpec:
         """What the numbers depend on, in a canonical form (for the hash)."""
         return {"kind": self.kind, "disk": describe_disk(self.disk),
                 "integrator": {"tolerance": self.settings.tolerance, "slaving": self.slaving},
-                "options": _jsonable(self.options)}
+                "options": jsonable(self.options)}
 
     @property
     def sha256(self) -> str:
         """Hash of the canonical spec: comments and key order do not change it."""
-        text = json.dumps(self.canonical, sort_keys=True)
-        return hashlib.sha256(text.encode()).hexdigest()
+        return canonical_sha256(self.canonical)
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
+def scene_spec_schema() -> dict[str, Any]:
+    """The JSON schema of scene specs (``study/schemas/study-scene-spec-v1.schema.json``)."""
+    return load_schema(SCENE_SPEC_SCHEMA)
 
 
 def is_scene_file(path: str | Path) -> bool:
-    """True if ``path`` is a TOML file with a ``[scene]`` table (not a study spec)."""
+    """True if ``path`` is a readable TOML file with a ``[scene]`` table."""
     try:
-        raw = tomllib.loads(Path(path).read_text())
-    except (OSError, tomllib.TOMLDecodeError):
+        return kind_of(parse_toml(read_spec_text(path), str(path)), str(path)) == "scene"
+    except SpecError:
         return False
-    return "scene" in raw
 
 
 def load_scene(path: str | Path) -> SceneSpec:
-    """Read and validate a scene spec file."""
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as err:
-        raise SceneError(f"{path}: cannot read the scene spec: {err}") from None
-    return parse_scene(text, str(path))
+    """Read and validate a scene spec file (see :func:`parse_scene`)."""
+    return parse_scene(read_spec_text(path, "scene spec"), str(path))
 
 
-def _keys(table: Any, where: str, allowed: dict[str, Any], path: str,
-          required: tuple[str, ...] = ()) -> dict[str, Any]:
-    if not isinstance(table, dict):
-        raise SceneError(f"{path}: [{where}] must be a table")
-    for key in table:
-        if key not in allowed:
-            raise SceneError(
-                f"{path}: unknown key {key!r} in [{where}]; allowed: {', '.join(sorted(allowed))}"
-            )
-    for key in required:
-        if key not in table:
-            raise SceneError(f"{path}: [{where}] needs {key!r}")
-    return table
-
-
-def _number(table: dict[str, Any], key: str, where: str, path: str, *, low: float = -math.inf,
-            high: float = math.inf, low_open: bool = False, units: str = "") -> float:
-    value = table[key]
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SceneError(f"{path}: [{where}] {key} must be a finite number, got {value!r}")
-    if value < low or value > high or (low_open and value == low):
-        bracket = "(" if low_open else "["
-        raise SceneError(
-            f"{path}: [{where}] {key} = {value!r}{' ' + units if units else ''} is out of "
-            f"range; allowed: {bracket}{low}, {high}]"
-        )
-    return float(value)
-
-
-def _axis(table: dict[str, Any], key: str, where: str, path: str) -> np.ndarray:
-    value = table[key]
-    if isinstance(value, dict):
-        if set(value) == {"values"} and isinstance(value["values"], list) and value["values"]:
-            out = np.array(value["values"], dtype=float)
-        elif set(value) == {"start", "stop", "num"}:
-            num = value["num"]
-            if isinstance(num, bool) or not isinstance(num, int) or num < 1:
-                raise SceneError(f"{path}: [{where}] {key}.num must be an integer >= 1")
-            out = np.linspace(float(value["start"]), float(value["stop"]), num)
-        else:
-            raise SceneError(f"{path}: [{where}] {key} must be {{start, stop, num}} or "
-                             "{values = [...]}")
-    else:
-        raise SceneError(f"{path}: [{where}] {key} must be {{start, stop, num}} or "
-                         "{values = [...]}")
-    if not np.all(np.isfinite(out)) or np.any(out <= 0.0):
-        raise SceneError(f"{path}: [{where}] {key} values must be finite and > 0")
-    return out
-
-
-def _pose(value: Any, where: str, path: str) -> tuple[float, float, float]:
-    if (not isinstance(value, list) or len(value) != 3
-            or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)):
-        raise SceneError(f"{path}: [{where}] start must be [x (m), y (m), heading (degree)]")
+def _pose(value: list[float]) -> tuple[float, float, float]:
+    """``[x (m), y (m), heading (degree)]`` as ``(x, y, heading [rad])``."""
     return float(value[0]), float(value[1]), math.radians(float(value[2]))
 
 
 def parse_scene(text: str, path: str = "<string>") -> SceneSpec:
-    """Validate a scene spec's text."""
+    """Validate a scene spec's text.
+
+    Raises
+    ------
+    SceneError
+        If the text is not a valid scene spec or the scene would be absurdly large;
+        the message names the file, the key and what is allowed.
+    """
     try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise SceneError(f"{path}: not valid TOML: {err}") from None
-    for key in raw:
-        if key not in _TOP:
-            raise SceneError(f"{path}: unknown table {key!r}; allowed: {', '.join(sorted(_TOP))}")
-    scene = _keys(raw.get("scene"), "scene", _SCENE_KEYS, path, ("name", "kind"))
+        raw = parse_toml(text, path)
+        check_schema(raw, scene_spec_schema(), path, "scene spec")
+    except SceneError:
+        raise
+    except SpecError as err:
+        raise SceneError(str(err)) from None
+    scene = raw["scene"]
     kind = scene["kind"]
-    if kind not in SCENE_KINDS:
-        raise SceneError(f"{path}: [scene] kind = {kind!r}; allowed: {', '.join(SCENE_KINDS)}")
-    for table in {"segment", "trajectory", "calibration", "plan"} - set(_KIND_TABLES[kind]):
-        if table in raw:
+    for table in ("segment", "trajectory", "calibration", "plan"):
+        if table in raw and table not in _KIND_TABLES[kind]:
             raise SceneError(f"{path}: [{table}] does not belong to a {kind!r} scene; "
                              f"a {kind!r} scene takes {', '.join(_KIND_TABLES[kind])}")
-    disk_table = _keys(raw.get("disk"), "disk", _DISK_KEYS, path, ("radius", "cs"))
-    plates_raw = raw.get("plate")
-    if not isinstance(plates_raw, list) or not plates_raw:
-        raise SceneError(f"{path}: at least one [[plate]] is needed")
-    plates = []
-    for i, entry in enumerate(plates_raw):
-        where = f"plate #{i + 1}"
-        table = _keys(entry, where, _PLATE_KEYS, path, ("f0", "Q", "alpha", "M"))
-        try:
-            plates.append(Plate(
-                f0=table["f0"], Q=table["Q"], alpha=table["alpha"], M=table["M"],
-                direction=table.get("direction", 0.0),
-                attachment=tuple(table.get("attachment", (0.0, 0.0))),
-                name=str(table.get("name", f"plate{i + 1}")),
-            ))
-        except (TypeError, ValueError) as err:
-            raise SceneError(f"{path}: [[plate]] #{i + 1}: {err}") from None
-    try:
-        disk = Disk(plates=tuple(plates), **disk_table)
-    except (TypeError, ValueError) as err:
-        raise SceneError(f"{path}: [disk]: {err}") from None
-    integrator = _keys(raw.get("integrator", {}), "integrator", _INTEGRATOR_KEYS, path)
-    tolerance = 1e-9
-    if "tolerance" in integrator:
-        tolerance = _number(integrator, "tolerance", "integrator", path, low=0.0, high=1e-3,
-                            low_open=True)
-    slaving = 1e-4
-    if "slaving" in integrator:
-        slaving = _number(integrator, "slaving", "integrator", path, low=0.0, high=0.1,
-                          low_open=True)
+    disk = _disk(raw, path)
+    integrator = raw.get("integrator", {})
+    tolerance = float(integrator.get("tolerance", 1e-9))
+    slaving = float(integrator.get("slaving", 1e-4))
     options = _kind_options(kind, raw, path)
     return SceneSpec(
-        name=str(scene["name"]), kind=kind, title=str(scene.get("title", scene["name"])),
-        description=str(scene.get("description", "")), disk=disk,
+        name=scene["name"], kind=kind, title=scene.get("title", scene["name"]),
+        description=scene.get("description", ""), disk=disk,
         settings=IntegratorSettings(tolerance=tolerance), slaving=slaving, options=options,
         text=text, path=path,
     )
 
 
+def _disk(raw: dict[str, Any], path: str) -> Disk:
+    table = raw["disk"]
+    plates = []
+    for i, entry in enumerate(raw["plate"]):
+        try:
+            plates.append(Plate(
+                f0=entry["f0"], Q=entry["Q"], alpha=entry["alpha"], M=entry["M"],
+                direction=entry.get("direction", 0.0),
+                attachment=tuple(entry.get("attachment", (0.0, 0.0))),
+                name=entry.get("name", f"plate{i + 1}"),
+            ))
+        except ValueError as err:
+            raise SceneError(f"{path}: [plate #{i + 1}]: {err}") from None
+    try:
+        disk = Disk(plates=tuple(plates), **table)
+    except ValueError as err:
+        raise SceneError(f"{path}: [disk]: {err}") from None
+    radius = disk.radius
+    low, high = GYRATION_RATIO
+    if not low * radius <= disk.gyration_radius <= high * radius:
+        raise SceneError(
+            f"{path}: [disk] gyration_radius = {disk.gyration_radius!r} m is out of range; "
+            f"allowed: radius/4 to radius ({low * radius:g} to {high * radius:g} m; a "
+            "uniform disk has radius/sqrt(2))"
+        )
+    if not disk.friction_length <= radius:
+        raise SceneError(
+            f"{path}: [disk] friction_length = {disk.friction_length!r} m is out of range; "
+            f"allowed: > 0 and <= radius ({radius:g} m): the friction torque's lever cannot "
+            "exceed the contact's radius (uniform pressure gives 2 radius/3)"
+        )
+    return disk
+
+
+def _calibration_axis(table: dict[str, Any], key: str, path: str) -> np.ndarray:
+    values = axis_values(table[key], f"{path}: [calibration] {key}")
+    maximum = scene_spec_schema()["$defs"]["parameter"][key]["maximum"]
+    outside = values[(values <= 0.0) | (values > maximum)]
+    if outside.size:
+        raise SceneError(f"{path}: [calibration] {key}: value {float(outside[0])!r} is out of "
+                         f"range; allowed: > 0 and <= {maximum}")
+    return values
+
+
 def _kind_options(kind: str, raw: dict[str, Any], path: str) -> dict[str, Any]:
-    if kind == "trajectory":
-        segments = raw.get("segment")
-        if not isinstance(segments, list) or not segments:
-            raise SceneError(f"{path}: a trajectory scene needs [[segment]] tables "
-                             "(label, f [Hz], a [m s-2], duration [s])")
-        rows = []
-        for i, entry in enumerate(segments):
-            where = f"segment #{i + 1}"
-            table = _keys(entry, where, _SEGMENT_KEYS, path, ("f", "a", "duration"))
-            rows.append({
-                "label": str(table.get("label", f"segment {i + 1}")),
-                "f": _number(table, "f", where, path, low=0.0, low_open=True, units="Hz"),
-                "a": _number(table, "a", where, path, low=0.0, units="m s-2"),
-                "duration": _number(table, "duration", where, path, low=0.0, low_open=True,
-                                    units="s"),
-            })
-        table = _keys(raw.get("trajectory", {}), "trajectory", _TRAJECTORY_KEYS, path)
-        return {
-            "segments": rows,
-            "sample_interval": _number(table, "sample_interval", "trajectory", path, low=0.0,
-                                       low_open=True, units="s")
-            if "sample_interval" in table else 0.05,
-            "start": _pose(table["start"], "trajectory", path) if "start" in table
-            else (0.0, 0.0, math.pi / 2),
-            "heading_drift": _number(table, "heading_drift", "trajectory", path, low=0.0,
-                                     units="rad") if "heading_drift" in table else 0.0,
-            "seed": int(table.get("seed", 0)),
-        }
-    if kind == "calibration":
-        table = _keys(raw.get("calibration"), "calibration", _CALIBRATION_KEYS, path, ("f", "a"))
-        max_periods = table.get("max_periods", 400)
-        if isinstance(max_periods, bool) or not isinstance(max_periods, int) or max_periods < 2:
-            raise SceneError(f"{path}: [calibration] max_periods must be an integer >= 2")
-        return {"f": _axis(table, "f", "calibration", path),
-                "a": _axis(table, "a", "calibration", path), "max_periods": max_periods}
-    table = _keys(raw.get("plan"), "plan", _PLAN_KEYS, path,
-                  ("acceleration", "waypoints", *COMMANDS))
-    waypoints = table["waypoints"]
-    if (not isinstance(waypoints, list) or not waypoints
-            or not all(isinstance(p, list) and len(p) == 2 for p in waypoints)):
-        raise SceneError(f"{path}: [plan] waypoints must be a list of [x, y] pairs (m)")
-    points = np.array(waypoints, dtype=float)
-    if not np.all(np.isfinite(points)):
-        raise SceneError(f"{path}: [plan] waypoints must be finite")
-    realisations = table.get("realisations", 4)
-    if isinstance(realisations, bool) or not isinstance(realisations, int) or realisations < 0:
-        raise SceneError(f"{path}: [plan] realisations must be an integer >= 0")
+    try:
+        if kind == "trajectory":
+            return _trajectory_options(raw, path)
+        if kind == "calibration":
+            return _calibration_options(raw, path)
+        return _plan_options(raw, path)
+    except SceneError:
+        raise
+    except SpecError as err:  # the shared axis grammar's refusals
+        raise SceneError(str(err)) from None
+
+
+def _trajectory_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
+    if "segment" not in raw:
+        raise SceneError(f"{path}: a trajectory scene needs [[segment]] tables "
+                         "(label, f [Hz], a [m s-2], duration [s])")
+    rows = [{"label": entry.get("label", f"segment {i + 1}"), "f": float(entry["f"]),
+             "a": float(entry["a"]), "duration": float(entry["duration"])}
+            for i, entry in enumerate(raw["segment"])]
+    table = raw.get("trajectory", {})
+    interval = float(table.get("sample_interval", 0.05))
+    total = math.fsum(row["duration"] for row in rows)
+    samples = total / interval
+    if samples > MAX_SCENE_SAMPLES:
+        raise SceneError(
+            f"{path}: [trajectory] sample_interval = {interval!r} s over the schedule's "
+            f"{total:g} s ([[segment]] duration) gives {samples:.3g} samples; allowed at "
+            f"most {MAX_SCENE_SAMPLES:.3g}: sample_interval >= {total / MAX_SCENE_SAMPLES:.3g} s"
+        )
     return {
-        "acceleration": _number(table, "acceleration", "plan", path, low=0.0, low_open=True,
-                                units="m s-2"),
-        "frequencies": {name: _number(table, name, "plan", path, low=0.0, low_open=True,
-                                      units="Hz") for name in COMMANDS},
-        "waypoints": points,
-        "start": _pose(table["start"], "plan", path) if "start" in table else (0.0, 0.0, 0.0),
-        "heading_drift": _number(table, "heading_drift", "plan", path, low=0.0, units="rad")
-        if "heading_drift" in table else 0.1,
-        "realisations": realisations,
+        "segments": rows,
+        "sample_interval": interval,
+        "start": _pose(table["start"]) if "start" in table else (0.0, 0.0, math.pi / 2),
+        "heading_drift": float(table.get("heading_drift", 0.0)),
         "seed": int(table.get("seed", 0)),
-        "sample_interval": _number(table, "sample_interval", "plan", path, low=0.0,
-                                   low_open=True, units="s")
-        if "sample_interval" in table else 0.05,
+    }
+
+
+def _calibration_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
+    if "calibration" not in raw:
+        raise SceneError(f"{path}: a calibration scene needs a [calibration] table "
+                         "(f and a axes, max_periods)")
+    table = raw["calibration"]
+    max_periods = table.get("max_periods", 400)
+    points = axis_length(table["f"]) * axis_length(table["a"])
+    if points > MAX_CALIBRATION_POINTS:
+        raise SceneError(
+            f"{path}: [calibration] f x a = {axis_length(table['f'])} x "
+            f"{axis_length(table['a'])} = {points:.3g} points; allowed at most "
+            f"{MAX_CALIBRATION_POINTS:.3g}"
+        )
+    if points * max_periods > MAX_CALIBRATION_PERIODS:
+        raise SceneError(
+            f"{path}: [calibration] f x a x max_periods = {axis_length(table['f'])} x "
+            f"{axis_length(table['a'])} x {max_periods} = {points * max_periods:.3g} drive "
+            f"periods; allowed at most {MAX_CALIBRATION_PERIODS:.3g}: fewer points or periods"
+        )
+    return {"f": _calibration_axis(table, "f", path), "a": _calibration_axis(table, "a", path),
+            "max_periods": max_periods}
+
+
+def _plan_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
+    if "plan" not in raw:
+        raise SceneError(f"{path}: a plan scene needs a [plan] table (acceleration, "
+                         f"waypoints, {', '.join(COMMANDS)})")
+    table = raw["plan"]
+    return {
+        "acceleration": float(table["acceleration"]),
+        "frequencies": {name: float(table[name]) for name in COMMANDS},
+        "waypoints": np.array(table["waypoints"], dtype=float),
+        "start": _pose(table["start"]) if "start" in table else (0.0, 0.0, 0.0),
+        "heading_drift": float(table.get("heading_drift", 0.1)),
+        "realisations": table.get("realisations", 4),
+        "seed": int(table.get("seed", 0)),
+        "sample_interval": float(table.get("sample_interval", 0.05)),
     }
 
 
 # ---------------------------------------------------------------------------
-# Running
+# Computing
 
 
 def _variable(dims, values, units: str | None, long_name: str, **attrs: Any) -> xr.Variable:
@@ -514,16 +520,50 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
     return variables, {}
 
 
+def _check_plan_size(spec: SceneSpec, route: list, count: int) -> None:
+    """Refuse a plan whose flights or samples would be absurd, before flying any.
+
+    The calibrated route (closed form, milliseconds) tells how long a flight takes;
+    the model's own legs differ by the command-switch transients only. ``count``
+    runs per strategy are flown (realisations + 1).
+    """
+    options = spec.options
+    flight = math.fsum(leg.turn_duration + leg.straight_duration
+                       for legs in route for leg in legs)
+    flights = len(STRATEGIES) * count + _CORRECTIONS * (1 + count)
+    if flight * flights > MAX_PLAN_DRIVE_SECONDS:
+        raise SceneError(
+            f"{spec.path}: [plan] waypoints: the planned route takes {flight:.4g} s of "
+            f"drive, simulated up to {flights} times (strategies and corrections for "
+            f"realisations = {count - 1}): {flight * flights:.3g} s; allowed at most "
+            f"{MAX_PLAN_DRIVE_SECONDS:.3g} s: nearer waypoints or fewer realisations"
+        )
+    runs = len(STRATEGIES) * count
+    samples = runs * flight / options["sample_interval"]
+    if samples > MAX_SCENE_SAMPLES:
+        raise SceneError(
+            f"{spec.path}: [plan] sample_interval = {options['sample_interval']!r} s gives "
+            f"{samples:.3g} samples over {runs} runs of {flight:.4g} s; allowed at most "
+            f"{MAX_SCENE_SAMPLES:.3g}: sample_interval >= "
+            f"{runs * flight / MAX_SCENE_SAMPLES:.3g} s"
+        )
+
+
 def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     options = spec.options
     disk = spec.disk
+    strategies = STRATEGIES
+    count = options["realisations"] + 1
+    waypoints = options["waypoints"]
     try:
         commands = calibrate_commands(disk, options["frequencies"], options["acceleration"],
                                       settings=spec.settings, slaving=spec.slaving)
-        waypoints = options["waypoints"]
         # The blind strategies' legs do not depend on the noise: plan them once.
+        calibrated = plan_route(options["start"], waypoints, commands)
+        # Before the first simulated flight (the open-loop corrections fly the route).
+        _check_plan_size(spec, calibrated, count)
         routes = {
-            "calibration": plan_route(options["start"], waypoints, commands),
+            "calibration": calibrated,
             "open_loop": refined_route(disk, options["start"], waypoints, commands,
                                        spec.settings, slaving=spec.slaving),
             "closed_loop": None,
@@ -531,8 +571,6 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     except PlanError as err:
         raise SceneError(f"{spec.path}: [plan]: {err}") from None
     noise = _heading_noise(options["heading_drift"], disk)
-    strategies = STRATEGIES
-    count = options["realisations"] + 1
     runs = {}
     for s, strategy in enumerate(strategies):
         for r in range(count):
@@ -607,64 +645,33 @@ _RUNNERS = {"trajectory": _run_trajectory, "calibration": _run_calibration, "pla
 
 
 def scene_dataset(spec: SceneSpec) -> xr.Dataset:
-    """Compute a scene and return its labelled dataset (with provenance attributes)."""
-    from study.provenance import (
-        environment,
-        git_state,
-        package_version,
-        scene_code_sha256,
-        scene_fingerprint,
-        utc_now,
-    )
-    from study.store import PAPER_REFERENCE, SCENE_SCHEMA
+    """Compute a scene: its labelled dataset with the scene's own attributes.
 
-    started = time.perf_counter()
-    started_utc = utc_now()
+    The attributes describe the scene (title, summary, the disk, the integrator and
+    how the run ended); provenance (spec text and hash, code, environment, history)
+    is added by :func:`study.scene_run.run_scene` when the result is written.
+
+    Raises
+    ------
+    SceneError
+        For a plan whose commands cannot steer the disk, or whose flights would be
+        absurdly long (checked before any flight is simulated).
+    """
     variables, extra = _RUNNERS[spec.kind](spec)
-    finished = utc_now()
-    git = git_state()
     disk = spec.disk
-    provenance = {
-        "result_schema": SCENE_SCHEMA,
-        "scene": {"name": spec.name, "kind": spec.kind, "spec_path": spec.path,
-                  "spec_sha256": spec.sha256, "canonical_spec": spec.canonical},
-        "code": {"code_sha256": scene_code_sha256(),
-                 "fingerprint": scene_fingerprint(spec.sha256)},
-        "package": {"name": "study", "version": package_version(), **git},
-        "environment": environment(),
-        "run": {"started_utc": started_utc, "finished_utc": finished,
-                "wall_seconds": time.perf_counter() - started},
-    }
     attrs = {
-        "Conventions": "CF-1.11, ACDD-1.3",
         "title": spec.title,
         "summary": spec.description or (
             f"Steering scene '{spec.name}' ({spec.kind}) of a rigid disk with resonant plates "
             "on a vertically shaken table: planar stick-slip with an ellipsoidal limit "
             "surface, integrated with events (study.planar)."),
         "keywords": "stick-slip, friction, locomotion, steering, limit surface, resonance",
-        "id": f"{spec.name}-{spec.sha256[:16]}",
-        "naming_authority": "study",
         "source": "study.planar: Dormand-Prince 5(4) time integration with events of the "
                   "planar disk with resonant plates",
-        "processing_level": "model output",
-        "references": PAPER_REFERENCE,
         "comment": "SI units; angles in rad, counterclockwise positive; the body frame's x "
                    "axis is the heading.",
-        "history": f"{finished} study run {spec.path}",
-        "date_created": finished,
-        "study_result_schema": SCENE_SCHEMA,
         "study_scene_kind": spec.kind,
         "study_name": spec.name,
-        "study_spec": spec.text,
-        "study_spec_path": spec.path,
-        "study_spec_sha256": spec.sha256,
-        "study_code_sha256": scene_code_sha256(),
-        "study_fingerprint": scene_fingerprint(spec.sha256),
-        "study_version": package_version(),
-        "git_commit": str(git["git_commit"]),
-        "git_dirty": str(git["git_dirty"]).lower(),
-        "provenance": json.dumps(provenance, sort_keys=True),
         "disk_radius": disk.radius,
         "disk_cs": disk.cs,
         "disk_ck": disk.ck,
@@ -696,43 +703,3 @@ def scene_dataset(spec: SceneSpec) -> xr.Dataset:
                                                           "waypoint")}
     data = {k: v for k, v in {**variables, **plate_vars}.items() if k not in coords}
     return xr.Dataset(data, coords=coords, attrs=attrs)
-
-
-def scene_up_to_date(spec: SceneSpec, output: Path) -> bool:
-    """True if ``output`` holds this scene computed by the current code."""
-    from study.provenance import scene_fingerprint
-
-    if not output.is_file():
-        return False
-    try:
-        with xr.open_dataset(output, engine="netcdf4") as dataset:
-            return dataset.attrs.get("study_fingerprint") == scene_fingerprint(spec.sha256)
-    except Exception:  # unreadable: recompute
-        return False
-
-
-def run_scene(spec: SceneSpec | str | Path, output: str | Path, *, force: bool = False
-              ) -> tuple[Path, bool, float]:
-    """Compute a scene and write its result atomically.
-
-    Returns
-    -------
-    (path, up_to_date, wall_seconds)
-    """
-    from study.store import write_atomic
-
-    started = time.perf_counter()
-    if not isinstance(spec, SceneSpec):
-        spec = load_scene(spec)
-    output = Path(output)
-    if not force and scene_up_to_date(spec, output):
-        output.touch()
-        return output, True, time.perf_counter() - started
-    from study.store import exclusive as _exclusive
-
-    output.parent.mkdir(parents=True, exist_ok=True)
-    # One writer per result file (the write itself is atomic: temporary, check, rename).
-    with _exclusive(output):
-        dataset = scene_dataset(spec)
-        write_atomic(dataset, output)
-    return output, False, time.perf_counter() - started

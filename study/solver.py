@@ -84,7 +84,7 @@ class SteadyState:
     orbit_period: NDArray[np.int32]
 
 
-def _check_structure(structure: object) -> Structure:
+def check_structure(structure: object) -> Structure:
     if not isinstance(structure, Structure):
         raise TypeError(
             f"structure must be a study.Structure, got {type(structure).__name__}"
@@ -126,7 +126,7 @@ def steady_state(
     SteadyState
         Velocity, status and diagnostics, each of the broadcast shape of ``f`` and ``a``.
     """
-    structure = _check_structure(structure)
+    structure = check_structure(structure)
     settings = SolverSettings() if settings is None else settings
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape

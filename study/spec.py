@@ -18,7 +18,7 @@ grid, the observables wanted and optional solver settings::
     f = { start = 10.0, stop = 20.0, num = 401 }
     a = { start = 0.0, stop = 12.0, num = 241 }
 
-The machine-readable schema is ``results_schema/study-spec-v1.schema.json``; the
+The machine-readable schema is ``study/schemas/study-spec-v1.schema.json``; the
 checks that a JSON schema cannot express (a parameter both fixed and swept, every
 swept structure being valid) are made here. Every refusal is a :class:`SpecError`
 naming the file, the key and what is allowed.
@@ -26,20 +26,30 @@ naming the file, the key and what is allowed.
 
 from __future__ import annotations
 
-import hashlib
 import itertools
-import json
-import tomllib
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from functools import cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from study.observables import METHODS, variables_of
+from study.observables import OBSERVABLES as OBSERVABLE_REGISTRY
 from study.solver import SolverSettings
+from study.specfile import (
+    SCHEMA_DIR,
+    SpecError,
+    axis_length,
+    axis_values,
+    canonical_sha256,
+    check_schema,
+    load_schema,
+    parse_toml,
+    read_spec_text,
+)
 from study.structure import Structure
 from study.transient import IntegratorSettings
 
@@ -57,19 +67,17 @@ __all__ = [
     "parse_spec",
 ]
 
-SPEC_SCHEMA_PATH = Path(__file__).resolve().parent / "schemas" / (
-    "study-spec-v1.schema.json"
-)
+SPEC_SCHEMA = "study-spec-v1"
+#: The JSON schema of study specs (package data; ``results_schema/`` holds a copy).
+SPEC_SCHEMA_PATH = SCHEMA_DIR / f"{SPEC_SCHEMA}.schema.json"
 
-#: Observables a study can ask for, in the order they appear in a dataset.
-OBSERVABLES = (
-    "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "paper_model", "frontier",
-)
+#: Observables a study can ask for, in the order they appear in a dataset (declared
+#: in :mod:`study.observables`).
+OBSERVABLES = tuple(OBSERVABLE_REGISTRY)
 #: Observables that need the steady-state solver (and hence the drive acceleration a).
-SOLVER_OBSERVABLES = ("velocity", "diagnostics", "paper_model", "frontier")
-
-#: Velocity solvers a spec can choose with ``[solver] method``.
-METHODS = ("exact", "integrator")
+SOLVER_OBSERVABLES = tuple(
+    name for name, o in OBSERVABLE_REGISTRY.items() if o.needs_acceleration
+)
 #: ``[solver]`` keys of the exact solver and of the time integrator.
 EXACT_KEYS = ("max_events", "max_map_iterations")
 INTEGRATOR_KEYS = (
@@ -94,10 +102,6 @@ MASS_PARAMETERS = {
     "m_add": ("kg", "added non-resonant mass"),
 }
 SWEEPABLE = {**STRUCTURE_PARAMETERS, **MASS_PARAMETERS, **DRIVE_PARAMETERS}
-
-
-class SpecError(ValueError):
-    """A study spec that cannot be run; the message names file, key and what is allowed."""
 
 
 @dataclass(frozen=True)
@@ -192,8 +196,7 @@ class StudySpec:
     @property
     def sha256(self) -> str:
         """Hash of the canonical form: formatting, comments and key order do not count."""
-        blob = json.dumps(self.canonical, sort_keys=True, separators=(",", ":"))
-        return hashlib.sha256(blob.encode()).hexdigest()
+        return canonical_sha256(self.canonical)
 
     @property
     def structure_axes(self) -> tuple[Axis, ...]:
@@ -231,10 +234,25 @@ def _build_structure(params: dict[str, float], mass: MassModel | None) -> Struct
     return Structure(**params)
 
 
-@cache
 def spec_schema() -> dict[str, Any]:
-    """The JSON schema of study specs (``results_schema/study-spec-v1.schema.json``)."""
-    return json.loads(SPEC_SCHEMA_PATH.read_text())
+    """The JSON schema of study specs (``study/schemas/study-spec-v1.schema.json``).
+
+    The observables allowed and their descriptions come from :mod:`study.observables`
+    (the file on disk is their export, see :func:`export_spec_schema`).
+    """
+    schema = load_schema(SPEC_SCHEMA)
+    items = schema["properties"]["study"]["properties"]["observables"]["items"]
+    items["enum"] = list(OBSERVABLES)
+    items["description"] = "; ".join(
+        f"{name}: {o.summary}" for name, o in OBSERVABLE_REGISTRY.items())
+    return schema
+
+
+def export_spec_schema() -> str:
+    """The spec schema as written to ``study/schemas`` (``make schemas``)."""
+    import json
+
+    return json.dumps(spec_schema(), indent=2) + "\n"
 
 
 def load_spec(path: str | Path) -> StudySpec:
@@ -243,26 +261,16 @@ def load_spec(path: str | Path) -> StudySpec:
     Parameters
     ----------
     path : str or pathlib.Path
-        A TOML file.
+        A TOML file (UTF-8, at most :data:`study.specfile.MAX_SPEC_BYTES` bytes).
 
     Raises
     ------
     SpecError
         If the file cannot be read or parsed, or any key is unknown, mistyped or
-        out of range; nothing has been computed at that point.
+        out of range, or the study would be absurdly large; nothing has been
+        computed at that point.
     """
-    path = Path(path)
-    try:
-        data = path.read_bytes()
-    except OSError as err:
-        raise SpecError(f"{path}: cannot read the study spec ({err.strerror})") from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as err:
-        raise SpecError(
-            f"{path}: a study spec must be UTF-8 text (TOML); byte {err.start} is not"
-        ) from None
-    return parse_spec(text, str(path))
+    return parse_spec(read_spec_text(path, "study spec"), str(path))
 
 
 #: Grid points per chunk without ``[solver] chunk_points``: at least ...
@@ -285,91 +293,122 @@ def default_chunk_points(points: int) -> int:
 
 def parse_spec(text: str, path: str = "<string>") -> StudySpec:
     """Validate a study spec given as TOML text (see :func:`load_spec`)."""
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise SpecError(f"{path}: not valid TOML: {err}") from None
-    _check_schema(raw, path)
+    raw = parse_toml(text, path)
+    check_schema(raw, spec_schema(), path, "study spec")
     return _build(raw, text, path)
 
 
-def _where(location: list[Any]) -> str:
-    if not location:
-        return "top level"
-    table, *rest = location
-    key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in rest).lstrip(".")
-    return f"[{table}]" + (f" {key}" if key else "")
-
-
-def _check_schema(raw: dict[str, Any], path: str) -> None:
-    import jsonschema
-
-    schema = spec_schema()
-    validator = jsonschema.Draft202012Validator(schema)
-    errors = sorted(validator.iter_errors(raw), key=lambda e: list(map(str, e.absolute_path)))
-    if not errors:
-        return
-    messages = [_explain(error, schema) for error in errors]
-    raise SpecError(f"{path}: invalid study spec:\n  " + "\n  ".join(dict.fromkeys(messages)))
-
-
-def _explain(error: Any, schema: dict[str, Any]) -> str:
-    """One schema violation as 'where: what is wrong; allowed: what'."""
-    location = list(error.absolute_path)
-    where = _where(location)
-    if error.validator == "additionalProperties":
-        allowed = sorted(error.schema.get("properties", {}))
-        extra = sorted(set(error.instance) - set(allowed))
-        what = "unknown key" + ("s " if len(extra) > 1 else " ") + ", ".join(map(repr, extra))
-        return f"{where}: {what}; allowed keys: {', '.join(allowed)}"
-    if error.validator == "required":
-        return f"{where}: {error.message}"
-    hint = error.schema.get("description", "")
-    if error.validator in ("oneOf", "anyOf"):
-        from jsonschema.exceptions import best_match
-
-        detail = best_match(error.context) if error.context else None
-        reason = f" ({detail.message})" if detail is not None else ""
-        return f"{where}: {error.instance!r} does not match any allowed form{reason}; {hint}"
-    if error.validator == "enum":
-        allowed = ", ".join(map(repr, error.validator_value))
-        return f"{where}: {error.instance!r} is not allowed; allowed: {allowed}"
-    bounds = {
-        "minimum": ">=", "exclusiveMinimum": ">", "maximum": "<=", "exclusiveMaximum": "<",
+def _parameter_bounds(name: str) -> tuple[str, Any]:
+    """The schema's range of a parameter: its text and a test of an array against it."""
+    definition = spec_schema()["$defs"]["parameter"][name]
+    operators = {
+        "minimum": (np.greater_equal, ">="), "exclusiveMinimum": (np.greater, ">"),
+        "maximum": (np.less_equal, "<="), "exclusiveMaximum": (np.less, "<"),
     }
-    if error.validator in bounds:
-        limits = " and ".join(
-            f"{bounds[key]} {error.schema[key]}" for key in bounds if key in error.schema
+    checks = [(*operators[k], definition[k]) for k in operators if k in definition]
+    text = " and ".join(f"{symbol} {bound}" for _, symbol, bound in checks)
+
+    def inside(values: NDArray[np.float64]) -> NDArray[np.bool_]:
+        ok = np.ones(values.shape, dtype=bool)
+        for compare, _, bound in checks:
+            ok &= compare(values, bound)
+        return ok
+
+    return text, inside
+
+
+# ---------------------------------------------------------------------------
+# Size guard: refuse a study whose output or memory would be absurd, before any work
+
+#: Grid points of a study at most: 20 times the 1e8-point benchmark study (at about
+#: 1e6 points per second and core, 2e9 points already take hours on a workstation).
+MAX_POINTS = 2_000_000_000
+#: Result file size at most [bytes] (uncompressed values).
+MAX_OUTPUT_BYTES = 64 * 2**30
+#: Values one chunk (one parallel task) holds at most [bytes]: every worker thread
+#: holds one or two chunks, so a 16-thread run stays within a few GiB.
+MAX_CHUNK_BYTES = 256 * 2**20
+#: Chunks (parallel tasks) of a study at most: the plan, the progress and the kept
+#: chunks scale with it.
+MAX_CHUNKS = 1_000_000
+
+def _size(n: float) -> str:
+    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} EiB"  # pragma: no cover
+
+
+def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_points: int,
+               path: str) -> None:
+    """Refuse a study whose output or memory would be absurd, before any work.
+
+    Parameters
+    ----------
+    lengths : dict
+        Swept parameter -> number of values, in dataset dimension order (``f`` and
+        ``a`` last).
+    observables : tuple of str
+        Requested observables.
+    chunk_points : int
+        ``[solver] chunk_points``.
+    path : str
+        The spec file, for messages.
+
+    Raises
+    ------
+    SpecError
+        Naming the sweep keys (or ``chunk_points``), the size and the limit, when the
+        study has more than :data:`MAX_POINTS` points, more than :data:`MAX_OUTPUT_BYTES`
+        of output, a chunk larger than :data:`MAX_CHUNK_BYTES` or more than
+        :data:`MAX_CHUNKS` chunks.
+    """
+    needs_solver = any(o in observables for o in SOLVER_OBSERVABLES)
+    structures = math.prod(n for name, n in lengths.items() if name not in DRIVE_PARAMETERS)
+    n_f = lengths.get("f", 1)
+    n_a = lengths.get("a", 1) if needs_solver else 1
+    # What each variable holds per point, from its declaration.
+    variables = variables_of(observables)
+    per_f_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "row")
+    per_point_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "point")
+    swept = [name for name in lengths if needs_solver or name != "a"]
+    keys = " x ".join(swept)
+    sizes = " x ".join(str(lengths[name]) for name in swept)
+    points = structures * n_f * n_a
+    output = structures * n_f * (per_f_bytes + n_a * per_point_bytes)
+    if points > MAX_POINTS or output > MAX_OUTPUT_BYTES:
+        raise SpecError(
+            f"{path}: [sweep] {keys} = {sizes} = {points:.3g} points ({_size(output)} of "
+            f"output); allowed at most {MAX_POINTS:.3g} points and {_size(MAX_OUTPUT_BYTES)}: "
+            "sweep fewer values"
         )
-        return f"{where} = {error.instance!r} is out of range; allowed: {limits}"
-    if error.validator == "type":
-        return f"{where}: {error.instance!r} has the wrong type; expected {error.validator_value}"
-    return f"{where}: {error.message}" + (f"; allowed: {hint}" if hint else "")
-
-
-def _axis_values(name: str, table: dict[str, Any], path: str) -> NDArray[np.float64]:
-    where = f"{path}: [sweep] {name}"
-    if "values" in table:
-        values = np.asarray(table["values"], dtype=np.float64)
-    else:
-        if not isinstance(table["num"], int):
-            raise SpecError(f"{where}: num = {table['num']!r} must be an integer")
-        start, stop, num = float(table["start"]), float(table["stop"]), table["num"]
-        if not (np.isfinite(start) and np.isfinite(stop)):
-            raise SpecError(f"{where}: start and stop must be finite numbers")
-        if table.get("spacing", "linear") == "log":
-            if start <= 0 or stop <= 0:
-                raise SpecError(f"{where}: log spacing needs start > 0 and stop > 0")
-            values = np.geomspace(start, stop, num)
-        else:
-            values = np.linspace(start, stop, num)
-    if values.size == 0:
-        raise SpecError(f"{where}: empty axis; give at least one value")
-    if not np.all(np.isfinite(values)):
-        raise SpecError(f"{where}: values must be finite")
-    if np.unique(values).size != values.size:
-        raise SpecError(f"{where}: values must be distinct")
-    return values
+    # How study.sweep cuts the grid: whole frequency rows (every a), about
+    # chunk_points points per chunk.
+    f_per_chunk = max(1, min(n_f, chunk_points // n_a))
+    chunk_bytes = f_per_chunk * (per_f_bytes + n_a * per_point_bytes)
+    if chunk_bytes > MAX_CHUNK_BYTES:
+        if f_per_chunk == 1:
+            raise SpecError(
+                f"{path}: [sweep] a: one frequency row of {n_a} accelerations holds "
+                f"{_size(chunk_bytes)}, more than one task may hold "
+                f"({_size(MAX_CHUNK_BYTES)}); allowed: at most "
+                f"{MAX_CHUNK_BYTES // max(per_point_bytes, 1)} values of a"
+            )
+        per_chunk_point = chunk_bytes / (f_per_chunk * n_a)
+        raise SpecError(
+            f"{path}: [solver] chunk_points = {chunk_points} makes tasks of "
+            f"{_size(chunk_bytes)}; allowed: at most {int(MAX_CHUNK_BYTES // per_chunk_point)} "
+            "points per chunk"
+        )
+    chunks = structures * math.ceil(n_f / f_per_chunk)
+    if chunks > MAX_CHUNKS:
+        smallest = math.ceil(points / MAX_CHUNKS)
+        raise SpecError(
+            f"{path}: [solver] chunk_points = {chunk_points} cuts [sweep] {keys} into "
+            f"{chunks:.3g} chunks; allowed at most {MAX_CHUNKS:.3g}: raise chunk_points to "
+            f"at least {smallest} or sweep fewer structures"
+        )
 
 
 def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
@@ -428,12 +467,19 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             f"{', '.join(o for o in observables if o in SOLVER_OBSERVABLES)}"
         )
 
-    axes = []
     order = [name for name in sweep if name not in DRIVE_PARAMETERS]
     order += [name for name in ("f", "a") if name in sweep]
+    # The size guard needs only the axis lengths: refuse an absurd study before a
+    # single value is generated.
+    lengths = {name: axis_length(sweep[name]) for name in order}
+    chunk_points = int(solver_table.get("chunk_points",
+                                        default_chunk_points(math.prod(lengths.values()))))
+    check_size(lengths, observables, chunk_points, path)
+    axes = []
     for name in order:
         units, long_name = SWEEPABLE[name]
-        axes.append(Axis(name, _axis_values(name, sweep[name], path), units, long_name))
+        values = axis_values(sweep[name], f"{path}: [sweep] {name}")
+        axes.append(Axis(name, values, units, long_name))
 
     for axis in axes:
         if axis.name == "f" and np.any(axis.values <= 0):
@@ -442,6 +488,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             raise SpecError(f"{path}: [sweep] a: drive accelerations must be >= 0 m s-2")
         if axis.name == "m_add" and np.any(axis.values < 0):
             raise SpecError(f"{path}: [sweep] m_add: added masses must be >= 0 kg")
+        if axis.name not in STRUCTURE_PARAMETERS:
+            _check_bounds(axis, path)
 
     coupling = solver_table.get("coupling", "one-way")
     # The exact solver covers the paper's (one-way) model; two-way coupling needs time
@@ -474,9 +522,16 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         )
     except ValueError as err:
         raise SpecError(f"{path}: [solver] {err}") from None
-    chunk_points = int(solver_table.get("chunk_points", default_chunk_points(
-        int(np.prod([len(axis) for axis in axes], dtype=np.int64)))))
     frontier_tolerance = float(solver_table.get("frontier_tolerance", 1e-9))
+    # Bisection halves a bracket until it is narrower than the tolerance: below the
+    # spacing of doubles near the largest f the midpoint stops moving and it never is.
+    f_values = next(axis for axis in axes if axis.name == "f").values
+    finest = 4.0 * float(np.spacing(np.max(f_values)))
+    if frontier_tolerance < finest:
+        raise SpecError(
+            f"{path}: [solver] frontier_tolerance = {frontier_tolerance!r} Hz is finer than "
+            f"doubles resolve near the largest f; allowed: >= {finest:.3g} Hz"
+        )
 
     # Defaults written out: a spec that spells them out is the same study.
     structure_canonical = dict(fixed)
@@ -530,7 +585,21 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         integrator=integrator,
     )
     _check_structures(spec, path)
+    # After the structure's own checks: they have the better words where they apply.
+    for axis in spec.structure_axes:
+        _check_bounds(axis, path)
     return spec
+
+
+def _check_bounds(axis: Axis, path: str) -> None:
+    """Swept values obey the ranges of the schema's parameters, as fixed ones do."""
+    allowed, inside = _parameter_bounds(axis.name)
+    outside = axis.values[~inside(axis.values)]
+    if outside.size:
+        raise SpecError(
+            f"{path}: [sweep] {axis.name}: value {float(outside[0])!r} is out of range; "
+            f"allowed: {allowed}"
+        )
 
 
 def _check_structures(spec: StudySpec, path: str) -> None:

@@ -11,24 +11,32 @@ a killed writer are removed by the next writer of the same file.
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
-from functools import cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from study.observables import variables_of
-from study.spec import SPEC_SCHEMA_PATH, SpecError, parse_spec
-from study.status import INVALID_STATUSES, Status
+# Validation and reading live in study.validate; re-exported for callers of the store.
+from study.validate import (  # noqa: F401
+    RESULT_SCHEMA,
+    RESULT_SCHEMA_PATH,
+    SCENE_SCHEMA,
+    SCENE_SCHEMA_PATH,
+    ResultError,
+    describe,
+    header,
+    open_result,
+    seal,
+)
 
 __all__ = [
+    "PAPER_REFERENCE",
     "RESULT_SCHEMA",
     "GridWriter",
     "ResultError",
@@ -42,15 +50,8 @@ __all__ = [
     "new_temporary",
     "open_result",
     "rewrite_attributes",
-    "validate_dataset",
     "write_atomic",
 ]
-
-RESULT_SCHEMA = "study-result-v1"
-RESULT_SCHEMA_PATH = SPEC_SCHEMA_PATH.parent / f"{RESULT_SCHEMA}.schema.json"
-#: Result files of steering scenes (study.scene): trajectories, calibrations, plans.
-SCENE_SCHEMA = "study-scene-v1"
-SCENE_SCHEMA_PATH = SPEC_SCHEMA_PATH.parent / f"{SCENE_SCHEMA}.schema.json"
 
 PAPER_REFERENCE = (
     "T. Barois, A. Boucherie, L. Tadrist and H. Kellay, Controlled locomotion of a "
@@ -58,167 +59,8 @@ PAPER_REFERENCE = (
 )
 
 
-class ResultError(ValueError):
-    """A result file that is unreadable, foreign, outdated or inconsistent."""
-
-
 # ---------------------------------------------------------------------------
-# Validation
-
-
-@cache
-def result_schema() -> dict[str, Any]:
-    """The JSON schema of result-file headers (``results_schema/study-result-v1...``)."""
-    return json.loads(RESULT_SCHEMA_PATH.read_text())
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
-def header(dataset: xr.Dataset) -> dict[str, Any]:
-    """The dataset's structure as plain JSON data: what the result schema validates."""
-    variables = {}
-    for name, var in dataset.variables.items():
-        variables[str(name)] = {
-            "dims": list(var.dims),
-            "dtype": str(var.dtype),
-            "attrs": {k: _jsonable(v) for k, v in var.attrs.items()},
-        }
-    return {
-        "attrs": {k: _jsonable(v) for k, v in dataset.attrs.items()},
-        "dims": {str(k): int(v) for k, v in dataset.sizes.items()},
-        "variables": variables,
-    }
-
-
-def validate_dataset(dataset: xr.Dataset, source: str = "dataset") -> None:
-    """Check a result dataset against the result schema and its own provenance.
-
-    Raises
-    ------
-    ResultError
-        Naming the file (``source``) and every problem found.
-    """
-    import jsonschema
-
-    attrs = dataset.attrs
-    if "study_result_schema" not in attrs:
-        raise ResultError(
-            f"{source}: not a study result file (no 'study_result_schema' attribute; "
-            f"global attributes: {', '.join(sorted(attrs)) or 'none'})"
-        )
-    if attrs["study_result_schema"] == SCENE_SCHEMA:
-        _validate_scene(dataset, source)
-        return
-    if attrs["study_result_schema"] != RESULT_SCHEMA:
-        raise ResultError(
-            f"{source}: written with result schema {attrs['study_result_schema']!r}; this "
-            f"version of study reads {RESULT_SCHEMA!r}. Rerun its study to rewrite it."
-        )
-    validator = jsonschema.Draft202012Validator(result_schema())
-    problems = [
-        f"{'/'.join(map(str, e.absolute_path)) or 'file'}: {e.message}"
-        for e in sorted(validator.iter_errors(header(dataset)), key=lambda e: str(e.path))
-    ]
-    try:
-        spec = parse_spec(str(attrs["study_spec"]), f"{source} (embedded spec)")
-    except (SpecError, KeyError) as err:
-        problems.append(f"embedded study spec does not parse: {err}")
-    else:
-        if spec.sha256 != attrs.get("study_spec_sha256"):
-            problems.append("study_spec_sha256 does not match the embedded spec")
-        for axis in spec.axes:
-            if axis.name not in dataset.coords or not np.array_equal(
-                dataset[axis.name].values, axis.values
-            ):
-                problems.append(f"coordinate {axis.name!r} differs from the embedded spec")
-        wanted = [v.name for v in variables_of(spec.observables)]
-        for name in wanted:
-            if name not in dataset.data_vars:
-                problems.append(f"variable {name!r} asked for by the spec is missing")
-    try:
-        json.loads(attrs.get("provenance", ""))
-    except ValueError:
-        problems.append("global attribute 'provenance' is not a JSON document")
-    for v_name, s_name in (("velocity", "status"), ("velocity_one_way", "status_one_way")):
-        if v_name not in dataset or s_name not in dataset:
-            continue
-        velocity = dataset[v_name].values
-        status = dataset[s_name].values
-        flagged = np.isin(status, INVALID_STATUSES)
-        mismatched = int(np.count_nonzero(np.isnan(velocity) != flagged))
-        if mismatched:
-            problems.append(
-                f"{v_name} must be NaN exactly where {s_name} is lift_off, not_converged or "
-                "friction_paradox; "
-                f"{mismatched} points disagree"
-            )
-        if np.any(velocity[status == Status.STATIC] != 0.0):
-            problems.append(f"{v_name} is not 0 where {s_name} is static")
-    if problems:
-        problems = list(dict.fromkeys(problems))  # two schema branches may see one fault
-        raise ResultError(f"{source}: invalid study result:\n  " + "\n  ".join(problems))
-
-
-def _validate_scene(dataset: xr.Dataset, source: str) -> None:
-    """Check a steering-scene result against its schema and its embedded spec."""
-    import jsonschema
-
-    from study.scene import SceneError, parse_scene
-
-    schema = json.loads(SCENE_SCHEMA_PATH.read_text())
-    validator = jsonschema.Draft202012Validator(schema)
-    problems = [
-        f"{'/'.join(map(str, e.absolute_path)) or 'file'}: {e.message}"
-        for e in sorted(validator.iter_errors(header(dataset)), key=lambda e: str(e.path))
-    ]
-    attrs = dataset.attrs
-    if not problems:
-        try:
-            spec = parse_scene(str(attrs["study_spec"]), f"{source} (embedded spec)")
-        except SceneError as err:
-            problems.append(f"embedded spec: {err}")
-        else:
-            if spec.sha256 != attrs["study_spec_sha256"]:
-                problems.append("study_spec_sha256 does not match the embedded spec")
-            if spec.kind != attrs["study_scene_kind"]:
-                problems.append("study_scene_kind does not match the embedded spec")
-    for name, var in dataset.data_vars.items():
-        if var.dtype.kind == "f" and "units" not in var.attrs:
-            problems.append(f"{name} has no units")
-    if problems:
-        raise ResultError(f"{source}: invalid steering scene result:\n  " + "\n  ".join(problems))
-
-
-def open_result(path: str | Path) -> xr.Dataset:
-    """Open and validate a result file, loaded into memory (the file is closed).
-
-    Raises
-    ------
-    ResultError
-        For a missing, truncated, foreign, outdated or inconsistent file.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise ResultError(f"{path}: no such file")
-    try:
-        with xr.open_dataset(path, engine="netcdf4", mask_and_scale=True) as dataset:
-            dataset = dataset.load()
-    except Exception as err:  # netCDF4 raises OSError, RuntimeError, ValueError...
-        raise ResultError(
-            f"{path}: not a readable netCDF file (truncated or corrupt?): {err}"
-        ) from None
-    validate_dataset(dataset, str(path))
-    return dataset
-
-
-# ---------------------------------------------------------------------------
-# Writing
+# Writing a dataset held in memory (small results: scenes)
 
 
 def _encoding(dataset: xr.Dataset) -> dict[str, dict[str, Any]]:
@@ -239,8 +81,9 @@ def _encoding(dataset: xr.Dataset) -> dict[str, dict[str, Any]]:
 def write_atomic(dataset: xr.Dataset, path: str | Path) -> Path:
     """Write a result file so that ``path`` is never half-written.
 
-    Writes ``dataset`` to a temporary file in the same folder, closes it, reopens
-    and validates it, then renames it over ``path`` (atomic on POSIX).
+    Writes ``dataset`` to a temporary file in the same folder, closes it, seals it
+    (content checksum, then validation: :func:`study.validate.seal`), then renames
+    it over ``path`` (atomic on POSIX).
 
     Raises
     ------
@@ -248,80 +91,18 @@ def write_atomic(dataset: xr.Dataset, path: str | Path) -> Path:
         If the written file does not validate; ``path`` is then left untouched.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(handle)
-    temporary = Path(temporary)
-    # mkstemp makes the file private (0600); a result is for sharing: follow the umask.
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(temporary, 0o666 & ~umask)
+    temporary = new_temporary(path)
     try:
         dataset.to_netcdf(temporary, engine="netcdf4", format="NETCDF4",
                           encoding=_encoding(dataset))
-        open_result(temporary)
-        os.replace(temporary, path)
-    finally:
+    except OSError as err:
         temporary.unlink(missing_ok=True)
-    return path
+        raise _store_error(path, err) from None
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    return commit(temporary, path)
 
-
-# ---------------------------------------------------------------------------
-# Reading for people
-
-
-def describe(dataset: xr.Dataset, path: str = "") -> str:
-    """A readable summary of a result: what was swept, what is inside, where it came from."""
-    attrs = dataset.attrs
-    provenance = json.loads(attrs.get("provenance", "{}"))
-    run = provenance.get("run", {})
-    package = provenance.get("package", {})
-    lines = [f"{path or attrs.get('study_name')}: {attrs.get('title')}"]
-    lines.append(f"  study {attrs.get('study_name')!r}, spec sha256 "
-                 f"{attrs.get('study_spec_sha256', '')[:16]}, schema "
-                 f"{attrs.get('study_result_schema')}")
-    for name, size in dataset.sizes.items():
-        if name not in dataset.coords:
-            lines.append(f"  dim {name:>7}: {size:6d}")
-            continue
-        coord = dataset[name]
-        if coord.dtype.kind in "USO":
-            lines.append(f"  axis {name:>6}: {', '.join(map(str, coord.values))}")
-            continue
-        lines.append(
-            f"  axis {name:>6}: {size:6d} values, {float(coord.min()):.6g} .. "
-            f"{float(coord.max()):.6g} {coord.attrs.get('units', '')}"
-        )
-    for name, coord in dataset.coords.items():
-        if coord.ndim == 1 and name not in dataset.dims:
-            lines.append(
-                f"  {name} along {coord.dims[0]}: "
-                + ", ".join(f"{v:.6g}" for v in coord.values)
-                + f" {coord.attrs.get('units', '')}"
-            )
-    fixed = [f"{name}={float(dataset[name]):.6g}" for name in dataset.coords
-             if dataset[name].ndim == 0]
-    if fixed:
-        lines.append("  fixed: " + ", ".join(fixed))
-    for name, var in dataset.data_vars.items():
-        lines.append(f"  {name} {var.dims} [{var.attrs.get('units', '')}]: "
-                     f"{var.attrs.get('long_name', '')}")
-    if "status" in dataset:
-        values, counts = np.unique(dataset["status"].values, return_counts=True)
-        total = counts.sum()
-        parts = [f"{Status(int(v)).name.lower()} {c / total:.1%}" for v, c in zip(values, counts,
-                                                                               strict=True)]
-        lines.append("  status: " + ", ".join(parts))
-    lines.append(
-        f"  made by study {package.get('version')} (git {str(package.get('git_commit'))[:12]}"
-        f"{', dirty' if package.get('git_dirty') is True else ''}) on {run.get('host')}, "
-        f"{run.get('started_utc')} .. {run.get('finished_utc')} "
-        f"({run.get('wall_seconds', float('nan')):.2f} s, scheduler {run.get('scheduler')}, "
-        f"{run.get('workers')} workers)"
-    )
-    for line in str(attrs.get("history", "")).splitlines():
-        lines.append(f"  history: {line}")
-    return "\n".join(lines)
 
 
 # ---------------------------------------------------------------------------
@@ -406,17 +187,13 @@ def clean_temporaries(output: Path) -> int:
     return removed
 
 
-def _seal(path: Path) -> None:
-    open_result(path)
-
-
 def commit(temporary: Path, output: Path) -> Path:
     """Seal and validate ``temporary``, then rename it over ``output`` (atomic).
 
     On any failure ``temporary`` is removed and ``output`` is left as it was.
     """
     try:
-        _seal(temporary)
+        seal(temporary)  # the content checksum, then streaming validation
         os.replace(temporary, output)
     except OSError as err:
         raise _store_error(output, err) from None

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 __all__ = ["Structure"]
 
 
-def _require_finite(name: str, value: float) -> float:
+def require_finite(name: str, value: float) -> float:
     if isinstance(value, bool):
         raise ValueError(f"Structure parameter {name!r} must be a real number, got {value!r}")
     try:
@@ -67,8 +67,8 @@ class Structure:
     def __post_init__(self) -> None:
         values = {}
         for name in ("f0", "Q", "alpha", "M", "cs", "g"):
-            values[name] = _require_finite(name, getattr(self, name))
-        ck = values["cs"] if self.ck is None else _require_finite("ck", self.ck)
+            values[name] = require_finite(name, getattr(self, name))
+        ck = values["cs"] if self.ck is None else require_finite("ck", self.ck)
         values["ck"] = ck
 
         def refuse(name: str, allowed: str) -> None:

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
-from study.solver import PARALLEL_THRESHOLD, SteadyState, _check_structure
+from study.solver import PARALLEL_THRESHOLD, SteadyState, check_structure
 from study.status import NonConvergence, Status
 from study.structure import Structure
 
@@ -275,7 +275,7 @@ def _check_coupling(coupling: str) -> bool:
 
 def model_parameters(structure: Structure, coupling: str = "one-way") -> NDArray[np.float64]:
     """Parameter vector of the integrator kernel for ``structure`` and ``coupling``."""
-    structure = _check_structure(structure)
+    structure = check_structure(structure)
     two_way = _check_coupling(coupling)
     p = np.empty(_kernel.N_PARAMETERS)
     w0 = structure.omega0
@@ -339,7 +339,7 @@ def simulate(
     -------
     Trajectory
     """
-    structure = _check_structure(structure)
+    structure = check_structure(structure)
     if not isinstance(schedule, Schedule):
         raise TypeError(f"schedule must be a study.transient.Schedule, got {type(schedule)}")
     settings = IntegratorSettings() if settings is None else settings
@@ -459,7 +459,7 @@ def integrated_steady_state(
         way (with two-way coupling it can come from the sliding itself),
         ``FRICTION_PARADOX`` when a two-way slip has no unique solution.
     """
-    structure = _check_structure(structure)
+    structure = check_structure(structure)
     settings = IntegratorSettings() if settings is None else settings
     p = model_parameters(structure, coupling)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))

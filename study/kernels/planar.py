@@ -39,12 +39,12 @@ from numba import njit
 
 from study.kernels import transient as dp
 from study.kernels.transient import (
-    _dense,
-    _drive,
-    _error_and_dense,
-    _error_norm,
-    _solution,
-    _stage_state,
+    dense_output,
+    error_and_dense,
+    error_norm,
+    solution_step,
+    stage_state,
+    table_drive,
 )
 
 # Contact modes. A slip that starts from rest is in its ONSET phase until its twist
@@ -331,13 +331,13 @@ def _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, den
     """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL)."""
     seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
     for stage in range(1, 6):
-        _stage_state(stage, y, h, k, tmp)
-        drive, _ = _drive(t + dp.STAGE_NODES[stage] * h, seg, seg_t0, seg_omega, seg_a,
+        stage_state(stage, y, h, k, tmp)
+        drive, _ = table_drive(t + dp.STAGE_NODES[stage] * h, seg, seg_t0, seg_omega, seg_a,
                           seg_phase0)
         _rhs(plates, disk, mode, reference, drive, tmp, k[stage], work)
-    _solution(y, h, k, y_new)
+    solution_step(y, h, k, y_new)
     _rhs(plates, disk, mode, reference, drive, y_new, k[6], work)
-    _error_and_dense(y, h, k, y_new, err, dense)
+    error_and_dense(y, h, k, y_new, err, dense)
     if mode == STICK:
         # The pose is exactly frozen while stuck.
         for i in range(MODES):
@@ -354,8 +354,8 @@ def _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, den
 def _values_at(theta, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
                values, rates, work):
     seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
-    _dense(theta, h, dense, ystate)
-    drive, rate = _drive(t + theta * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+    dense_output(theta, h, dense, ystate)
+    drive, rate = table_drive(t + theta * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
     _event_values(plates, disk, mode, reference, drive, rate, ystate, values, rates,
                   work)
 
@@ -549,7 +549,7 @@ def _integrate(
             need_rhs = True
         drive_args = (seg, seg_t0, seg_omega, seg_a, seg_phase0)
         if need_rhs:
-            drive, rate = _drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+            drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
             if mode == STICK:
                 y[VX] = 0.0
                 y[VY] = 0.0
@@ -578,7 +578,7 @@ def _integrate(
             continue
         if mode != STICK:
             # The slip end is watched along the friction direction at the step start.
-            drive, _ = _drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+            drive, _ = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
             loads = work[0:8]
             wrench = work[8:14]
             _loads(plates, disk, drive, 0.0, y, loads)
@@ -596,7 +596,7 @@ def _integrate(
         _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, dense, tmp, work)
         steps += 1
         stats[0] += 1.0
-        norm = _error_norm(err, y, y_new, scale, rtol, atol)
+        norm = error_norm(err, y, y_new, scale, rtol, atol)
         if not norm <= 1.0:
             stats[1] += 1.0
             factor = dp.MIN_FACTOR if not math.isfinite(norm) else max(
@@ -618,7 +618,7 @@ def _integrate(
             t_end = limit
         while out_box[0] < out_t.shape[0] and out_t[out_box[0]] <= t_end:
             j = out_box[0]
-            _dense((out_t[j] - t) / h, h, dense, ystate)
+            dense_output((out_t[j] - t) / h, h, dense, ystate)
             for i in range(n):
                 out_y[j, i] = ystate[i]
             out_mode[j] = mode
@@ -639,12 +639,12 @@ def _integrate(
                 if twist > disk[DK_SLAVED]:
                     mode = SLIP
             continue
-        _dense(theta, h, dense, ystate)
+        dense_output(theta, h, dense, ystate)
         for i in range(n):
             y[i] = ystate[i]
         t = t_end
         need_rhs = True
-        drive, rate = _drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+        drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
         if which == 1:
             _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
             mode_box[0] = mode

@@ -114,7 +114,7 @@ MAX_ROOT_ITERATIONS = 200
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0):
+def table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0):
     phase = seg_phase0[seg] + seg_omega[seg] * (t - seg_t0[seg])
     return seg_a[seg] * math.cos(phase), seg_a[seg] * seg_omega[seg] * math.sin(phase)
 
@@ -196,7 +196,7 @@ def _event_values(p, mode, drive, drive_rate_neg, y, values, rates):
 
 
 @njit(cache=True, nogil=True)
-def _dense(theta, h, dense, out):
+def dense_output(theta, h, dense, out):
     """State at ``t0 + theta h`` from the step's continuous extension."""
     one_minus = 1.0 - theta
     for i in range(out.shape[0]):
@@ -207,7 +207,7 @@ def _dense(theta, h, dense, out):
 
 
 @njit(cache=True, nogil=True)
-def _stage_state(stage, y, h, k, out):
+def stage_state(stage, y, h, k, out):
     """``out = y + h sum_l a_{stage, l} k[l]``: the state at which stage ``stage`` (1-5)
     of a Dormand-Prince step evaluates the right-hand side."""
     for i in range(y.shape[0]):
@@ -218,7 +218,7 @@ def _stage_state(stage, y, h, k, out):
 
 
 @njit(cache=True, nogil=True)
-def _solution(y, h, k, y_new):
+def solution_step(y, h, k, y_new):
     """The step's 5th-order solution from the stages ``k[0..5]``."""
     for i in range(y.shape[0]):
         y_new[i] = y[i] + h * (
@@ -227,7 +227,7 @@ def _solution(y, h, k, y_new):
 
 
 @njit(cache=True, nogil=True)
-def _error_and_dense(y, h, k, y_new, err, dense):
+def error_and_dense(y, h, k, y_new, err, dense):
     """Embedded error estimate and Shampine's dense-output coefficients (needs the FSAL
     stage ``k[6] = f(t + h, y_new)``)."""
     for i in range(y.shape[0]):
@@ -256,13 +256,13 @@ def _step(p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp):
     """
     seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
     for stage in range(1, 6):
-        _stage_state(stage, y, h, k, tmp)
-        drive, _ = _drive(t + STAGE_NODES[stage] * h, seg, seg_t0, seg_omega, seg_a,
+        stage_state(stage, y, h, k, tmp)
+        drive, _ = table_drive(t + STAGE_NODES[stage] * h, seg, seg_t0, seg_omega, seg_a,
                           seg_phase0)
         _rhs(p, mode, drive, tmp, k[stage])
-    _solution(y, h, k, y_new)
+    solution_step(y, h, k, y_new)
     _rhs(p, mode, drive, y_new, k[6])
-    _error_and_dense(y, h, k, y_new, err, dense)
+    error_and_dense(y, h, k, y_new, err, dense)
     if mode == STICK:
         # x and v are exactly constant while stuck.
         y_new[2] = y[2]
@@ -272,7 +272,7 @@ def _step(p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp):
 
 
 @njit(cache=True, nogil=True)
-def _error_norm(err, y, y_new, scale, rtol, atol):
+def error_norm(err, y, y_new, scale, rtol, atol):
     total = 0.0
     for i in range(err.shape[0]):
         size = atol * scale[i] + rtol * max(abs(y[i]), abs(y_new[i]))
@@ -284,10 +284,10 @@ def _error_norm(err, y, y_new, scale, rtol, atol):
 @njit(cache=True, nogil=True)
 def _values_at(theta, p, mode, t, h, dense, drive_args, ystate, values, rates):
     seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
-    _dense(theta, h, dense, ystate)
+    dense_output(theta, h, dense, ystate)
     if mode == STICK:
         ystate[3] = 0.0
-    drive, rate = _drive(t + theta * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+    drive, rate = table_drive(t + theta * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
     _event_values(p, mode, drive, rate, ystate, values, rates)
 
 
@@ -486,7 +486,7 @@ def _integrate(
             need_rhs = True
         drive_args = (seg, seg_t0, seg_omega, seg_a, seg_phase0)
         if need_rhs:
-            drive, rate = _drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+            drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
             if mode == STICK:
                 y[3] = 0.0
                 new_mode = _mode_after_rest(p, drive, y)
@@ -531,7 +531,7 @@ def _integrate(
         steps += 1
         stats[0] += 1.0
         if fixed_step <= 0.0:
-            norm = _error_norm(err, y, y_new, scale, rtol, atol)
+            norm = error_norm(err, y, y_new, scale, rtol, atol)
             if not norm <= 1.0:
                 stats[1] += 1.0
                 factor = MIN_FACTOR if not math.isfinite(norm) else max(
@@ -556,7 +556,7 @@ def _integrate(
         # Output samples inside the accepted part of the step.
         while out_box[0] < out_t.shape[0] and out_t[out_box[0]] <= t_end:
             j = out_box[0]
-            _dense((out_t[j] - t) / h, h, dense, ystate)
+            dense_output((out_t[j] - t) / h, h, dense, ystate)
             if mode == STICK:
                 ystate[3] = 0.0
                 ystate[2] = y[2]
@@ -579,14 +579,14 @@ def _integrate(
             h *= factor
             fresh = False
             continue
-        _dense(theta, h, dense, ystate)
+        dense_output(theta, h, dense, ystate)
         for i in range(n):
             y[i] = ystate[i]
         if mode == STICK:
             y[3] = 0.0
         t = t_end
         need_rhs = True
-        drive, rate = _drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+        drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
         if which == 2:
             _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
             mode_box[0] = mode

@@ -125,7 +125,7 @@ def test_cli_figures_and_schemas(copy: Path):
         for path, original in originals.items():
             path.write_bytes(original)
     # The schemas the spec layer reads do count.
-    schema = sorted((copy.parent / "results_schema").glob("*.json"))[0]
+    schema = sorted((copy / "schemas").glob("*.json"))[0]
     original = schema.read_bytes()
     schema.write_bytes(original + b"\n")
     try:

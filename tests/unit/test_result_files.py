@@ -279,7 +279,7 @@ def test_write_atomic_keeps_the_old_file_when_validation_fails(
     def refuse(path):
         raise ResultError(f"{path}: refused on purpose")
 
-    monkeypatch.setattr(study.store, "open_result", refuse)
+    monkeypatch.setattr(study.store, "seal", refuse)
     with pytest.raises(ResultError, match="refused on purpose"):
         write_atomic(result, existing)
     assert existing.read_bytes() == before

@@ -13,7 +13,8 @@ from numpy.testing import assert_allclose
 from study.cli import main
 from study.planar import periodic_motion, rest_state, simulate_planar
 from study.planner import arc_displacement, calibrate_commands, plan_leg
-from study.scene import SceneError, load_scene, parse_scene, run_scene
+from study.runner import run_scene
+from study.scene import SceneError, load_scene, parse_scene
 from study.store import ResultError, open_result
 from study.transient import IntegratorSettings, Schedule
 
@@ -77,7 +78,7 @@ def test_the_workflows_share_one_disk():
     ("edit", "words"),
     [
         (lambda t: t.replace('kind = "trajectory"', 'kind = "trajectroy"'),
-         ["kind", "trajectroy", "trajectory, calibration, plan"]),
+         ["kind", "trajectroy", "'trajectory', 'calibration', 'plan'"]),
         (lambda t: t.replace("Q = 17.5", "Q = -17.5"), ["plate", "Q", "> 0"]),
         (lambda t: t.replace("radius = 0.02", "raduis = 0.02"),
          ["raduis", "[disk]", "radius"]),
@@ -138,9 +139,9 @@ def test_trajectory_scene_end_to_end(tmp_path):
                              slaving=spec.slaving)
     assert_allclose(float(data.x[-1]), direct.x[-1], rtol=0, atol=1e-12)
     # A second run is up to date; editing a comment keeps it so.
-    assert run_scene(spec_path, output)[1]
+    assert run_scene(spec_path, output).up_to_date
     spec_path.write_text("# note\n" + TRAJECTORY)
-    assert run_scene(spec_path, output)[1]
+    assert run_scene(spec_path, output).up_to_date
     assert main(["validate", str(output)]) == 0
     assert main(["info", str(output)]) == 0
 
@@ -148,7 +149,7 @@ def test_trajectory_scene_end_to_end(tmp_path):
 def test_lift_off_is_a_segment_status_not_a_number(tmp_path):
     text = TRAJECTORY.replace("f = 7.2\na = 7.0", "f = 14.44\na = 9.8")
     spec = parse_scene(text, "lift.toml")
-    output = run_scene(spec, tmp_path / "lift.nc")[0]
+    output = run_scene(spec, tmp_path / "lift.nc").output
     data = open_result(output)
     meanings = data.segment_status.attrs["flag_meanings"].split()
     assert meanings[int(data.segment_status[1])] == "lift_off"
@@ -160,7 +161,7 @@ def test_lift_off_is_a_segment_status_not_a_number(tmp_path):
 def test_truncated_and_tampered_scene_files_are_refused(tmp_path):
     spec_path = tmp_path / "tiny.toml"
     spec_path.write_text(TRAJECTORY)
-    output = run_scene(spec_path, tmp_path / "tiny.nc")[0]
+    output = run_scene(spec_path, tmp_path / "tiny.nc").output
     truncated = tmp_path / "truncated.nc"
     truncated.write_bytes(output.read_bytes()[:2000])
     with pytest.raises(ResultError, match="truncated"):
@@ -182,7 +183,7 @@ def test_calibration_scene_matches_periodic_motion(tmp_path):
     text = "[scene]\nname = \"cal\"\nkind = \"calibration\"\n" + DISK + (
         "\n[calibration]\nf = { values = [7.2, 14.2, 14.44] }\na = { values = [2.0, 7.0, 9.8] }\n")
     spec = parse_scene(text, "cal.toml")
-    data = open_result(run_scene(spec, tmp_path / "cal.nc")[0])
+    data = open_result(run_scene(spec, tmp_path / "cal.nc").output)
     direct = periodic_motion(spec.disk, 14.2, 7.0, settings=spec.settings)
     assert_allclose(float(data.forward_speed.sel(f=14.2, a=7.0)), direct.forward_speed,
                     rtol=1e-12)
@@ -230,7 +231,7 @@ realisations = 1
 seed = 3
 """
     spec = parse_scene(text, "plan.toml")
-    data = open_result(run_scene(spec, tmp_path / "plan.nc")[0])
+    data = open_result(run_scene(spec, tmp_path / "plan.nc").output)
     miss = data.miss_distance
     assert list(data.strategy_name.values) == ["calibration", "open_loop", "closed_loop"]
     miss = miss.swap_dims(strategy="strategy_name")
@@ -247,10 +248,11 @@ seed = 3
 
 
 def test_a_second_writer_is_refused_while_one_runs(tmp_path):
-    from study.runner import StudyBusy, _exclusive
+    from study.runner import StudyBusy
+    from study.store import exclusive
 
     spec = parse_scene(TRAJECTORY, "tiny.toml")
     output = tmp_path / "tiny.nc"
-    with _exclusive(output), pytest.raises(StudyBusy, match="another run"):
+    with exclusive(output), pytest.raises(StudyBusy, match="another run"):
         run_scene(spec, output)
     assert not output.exists()

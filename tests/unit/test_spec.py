@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+import study.observables
 import study.physics
 import study.physics.forces
 import study.solver
@@ -468,7 +469,9 @@ def no_computation(monkeypatch):
         (study.solver, ["steady_state", "steady_velocity"]),
         (study.physics, ["thresholds", "lift_off_acceleration"]),
         (study.physics.forces, ["thresholds", "lift_off_acceleration", "force_amplitudes"]),
-        (study.sweep, ["steady_state", "thresholds", "lift_off_acceleration", "compute_chunk"]),
+        (study.observables, ["steady_state", "thresholds", "lift_off_acceleration",
+                             "integrated_steady_state"]),
+        (study.sweep, ["compute_task"]),
     ]:
         for name in names:
             monkeypatch.setattr(module, name, forbidden)
@@ -595,7 +598,7 @@ REFUSALS = [
         id="ck-above-cs",
     ),
     pytest.param(
-        {"structure": {"Q": math.nan}}, ["[structure]", "'Q'", "finite"], id="Q-nan"
+        {"structure": {"Q": math.nan}}, ["[structure] Q = nan", "finite"], id="Q-nan"
     ),
     pytest.param(
         {"sweep": {"a": {"start": 0.0, "stop": 12.0, "num": -1}}},
@@ -665,7 +668,7 @@ REFUSALS = [
     ),
     pytest.param(
         {"sweep": {"a": {"values": [0.0, math.nan]}}},
-        ["[sweep] a", "values must be finite"],
+        ["[sweep] a.values[1] = nan", "finite"],
         id="nan-value",
     ),
     # structure parameters: where they are given
