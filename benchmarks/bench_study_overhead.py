@@ -6,9 +6,12 @@ size, every measurement runs in a fresh Python process (so its peak RSS is its
 own) that first imports what it needs and loads the compiled kernels, then times:
 
 a. ``bare``: ``study.steady_velocity(structure, f[:, None], a[None, :])`` on the same
-   points (above ``--block-points`` points, in blocks of whole f rows, each block's
-   result copied into one preallocated velocity/status pair of the whole grid, so the
-   solver's temporaries stay bounded and the values are kept, as a study keeps them);
+   points in one call (up to 3e7 points: its temporaries take about 150 bytes per
+   point), and ``blocks``: the same in blocks of whole f rows of about
+   ``--block-points`` points (default 1e6), each block's values copied into one
+   velocity/status pair of the whole grid. A whole-grid call streams its
+   temporaries through memory and is slower than blocks from 1e7 points on; the
+   blocked call is the stronger reference;
 b. ``run``: ``run_study(..., force=True)`` with an empty cache folder: everything is
    computed, written into the netCDF file and kept in the cache, and the file is
    sealed (validated) before the atomic rename;
@@ -16,7 +19,7 @@ c. ``rerun``: the unchanged study again (reads the file's metadata only);
 d. ``reuse``: the study again after deleting the result but keeping the cache
    (every value is read back from the cache, nothing is computed).
 
-The four measurements alternate ``--repeats`` times, so that each repeat sees the
+The measurements alternate ``--repeats`` times, so that each repeat sees the
 machine in one state; each timing is the minimum (other work on the machine only ever
 adds time), with the CPU time of the same process beside it, and the peak RSS is the
 largest seen (``ru_maxrss`` of the child). Timings are reported, never asserted. The
@@ -63,7 +66,10 @@ f = {{ start = {f_lo}, stop = {f_hi}, num = {n} }}
 a = {{ start = {a_lo}, stop = {a_hi}, num = {n} }}
 """
 
-KINDS = ("bare", "run", "rerun", "reuse")
+KINDS = ("bare", "blocks", "run", "rerun", "reuse")
+#: The whole-grid call is measured up to this many points (its temporaries take about
+#: 150 bytes per point: 15 GB at 1e8).
+WHOLE_MAX = 3e7
 
 
 # ---------------------------------------------------------------------------
@@ -92,7 +98,10 @@ def _warm() -> None:
     steady_state(structure, f[:4], a, parallel=False)
 
 
-def _bare(n: int, block_points: int) -> dict[str, float]:
+def _bare(n: int, block_points: int | None) -> dict[str, float]:
+    """One ``steady_velocity`` call on the whole grid (``block_points`` None), or one
+    per block of whole f rows of about ``block_points`` points, each block's values
+    copied into one velocity and status array of the whole grid."""
     import study
 
     structure = study.Structure(**STRUCTURE)
@@ -100,7 +109,7 @@ def _bare(n: int, block_points: int) -> dict[str, float]:
     a = np.linspace(*A_RANGE, n)
     cpu = time.process_time()
     start = time.perf_counter()
-    if n * n <= block_points:
+    if block_points is None:
         velocity, status = study.steady_velocity(structure, f[:, None], a[None, :])
     else:
         velocity = np.empty((n, n))
@@ -143,8 +152,8 @@ def child(kind: str, n: int, folder: Path, block_points: int) -> None:
     """Run one measurement and print it as one JSON line."""
     _warm()
     spec, output, cache = folder / "bench-map.toml", folder / "bench-map.nc", folder / "cache"
-    if kind == "bare":
-        result = _bare(n, block_points)
+    if kind in ("bare", "blocks"):
+        result = _bare(n, block_points if kind == "blocks" else None)
     else:
         result = _run(spec, output, cache, force=kind == "run")
     result["max_rss"] = _max_rss()
@@ -215,7 +224,9 @@ def measure_size(points: float, repeats: int, block_points: int, root: Path) -> 
         # The four measurements alternate, so that each repeat sees the machine in the
         # same state for all of them (other work on the machine only ever adds time).
         for _ in range(repeats):
-            _keep_best(best, "bare", _measure("bare", n, folder, block_points), n)
+            if n * n <= WHOLE_MAX:
+                _keep_best(best, "bare", _measure("bare", n, folder, block_points), n)
+            _keep_best(best, "blocks", _measure("blocks", n, folder, block_points), n)
             output.unlink(missing_ok=True)
             shutil.rmtree(cache, ignore_errors=True)
             _keep_best(best, "run", _measure("run", n, folder, block_points), n)
@@ -236,21 +247,28 @@ def table(rows: list[dict], about: str) -> str:
     mib = 2**20
     lines = [
         about, "",
-        "| points | bare `steady_velocity` | `study run` | ratio | CPU bare / run "
-        "| rerun, unchanged | rerun, cache only | peak RSS bare / run (before sealing) / "
-        "rerun / cache only | file | cache |",
+        "| points | bare call, whole grid / in row blocks | `study run` | ratio to whole "
+        "/ blocks | CPU whole / blocks / run | rerun, unchanged | rerun, cache only "
+        "| peak RSS whole / blocks / run (before sealing) / rerun / cache only "
+        "| file | cache |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in rows:
-        bare, run, rerun, reuse = (row[k] for k in KINDS)
+        bare, blocks, run, rerun, reuse = (row.get(k) for k in KINDS)
+
+        def whole(key: str, form: str, scale: float = 1.0, bare: dict | None = bare) -> str:
+            return "-" if bare is None else format(bare[key] / scale, form)
+
         lines.append(
             f"| {row['side']} x {row['side']} = {row['points']:.3g} "
-            f"| {bare['seconds']:.2f} s | {run['seconds']:.2f} s "
-            f"| **{run['seconds'] / bare['seconds']:.2f}x** "
-            f"| {bare['cpu']:.2f} / {run['cpu']:.2f} s "
+            f"| {whole('seconds', '.2f')} / {blocks['seconds']:.2f} s "
+            f"| {run['seconds']:.2f} s "
+            f"| {'-' if bare is None else format(run['seconds'] / bare['seconds'], '.2f')} / "
+            f"**{run['seconds'] / blocks['seconds']:.2f}x** "
+            f"| {whole('cpu', '.2f')} / {blocks['cpu']:.2f} / {run['cpu']:.2f} s "
             f"| {rerun['seconds']:.3f} s | {reuse['seconds']:.2f} s "
-            f"| {bare['max_rss'] / mib:.0f} / {run['max_rss'] / mib:.0f} "
-            f"({run['max_rss_computing'] / mib:.0f}) / "
+            f"| {whole('max_rss', '.0f', mib)} / {blocks['max_rss'] / mib:.0f} / "
+            f"{run['max_rss'] / mib:.0f} ({run['max_rss_computing'] / mib:.0f}) / "
             f"{rerun['max_rss'] / mib:.0f} / {reuse['max_rss'] / mib:.0f} MiB "
             f"| {row['file_size'] / 1e6:.1f} MB | {row['cache_size'] / 1e6:.1f} MB |"
         )
@@ -263,8 +281,8 @@ def main() -> None:
                         help="grid points per study (square grids)")
     parser.add_argument("--repeats", type=int, default=None,
                         help="processes per measurement (default 3, 1 above 3e7 points)")
-    parser.add_argument("--block-points", type=int, default=10_000_000,
-                        help="the bare call above this many points goes in row blocks")
+    parser.add_argument("--block-points", type=int, default=1_000_000,
+                        help="points per block of the blocked bare call")
     parser.add_argument("--output", type=Path, default=Path("results/bench-study.md"))
     parser.add_argument("--scratch", type=Path, default=None,
                         help="folder for the temporary studies (default: system temp)")
@@ -292,9 +310,10 @@ def main() -> None:
         "peak RSS = largest `ru_maxrss` (before sealing: when the last chunk was written, "
         "before `commit` validates the file). `study run` = `run_study(force=True)` with an "
         "empty cache (2 worker threads; writing, sealing and validating the file included); "
-        "the bare call uses numba's 2 threads"
-        + (f" (in blocks of {args.block_points:.3g} points above that)" if max(args.sizes)
-           > args.block_points else "") + ".")
+        f"the bare call uses numba's 2 threads, on the whole grid (up to {WHOLE_MAX:.3g} "
+        f"points) and in blocks of whole f rows of about {args.block_points:.3g} points, "
+        "each block's values copied into one velocity and status array of the grid; the "
+        "ratio in bold is to the faster, blocked call.")
     text = table(rows, about)
     print()
     print(text)
