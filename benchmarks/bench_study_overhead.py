@@ -25,7 +25,8 @@ adds time), with the CPU time of the same process beside it, and the peak RSS is
 largest seen (``ru_maxrss`` of the child). Timings are reported, never asserted. The
 table goes to ``results/bench-study.md``.
 
-Usage: ``python benchmarks/bench_study_overhead.py [--sizes 1e6 1e7 1e8] [--repeats 3]``
+Usage: ``python benchmarks/bench_study_overhead.py [--sizes 1e6 1e7 1e8] [--repeats 3]
+[--repeats-large 1]``
 """
 
 from __future__ import annotations
@@ -282,8 +283,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", nargs="+", type=float, default=[1e6, 1e7, 1e8],
                         help="grid points per study (square grids)")
-    parser.add_argument("--repeats", type=int, default=None,
-                        help="processes per measurement (default 3, 1 above 3e7 points)")
+    parser.add_argument("--repeats", type=int, default=3,
+                        help="processes per measurement up to 3e7 points")
+    parser.add_argument("--repeats-large", type=int, default=1,
+                        help="processes per measurement above 3e7 points")
     parser.add_argument("--block-points", type=int, default=1_000_000,
                         help="points per block of the blocked bare call")
     parser.add_argument("--output", type=Path, default=Path("results/bench-study.md"))
@@ -299,12 +302,12 @@ def main() -> None:
     rows = []
     load = os.getloadavg()[0]
     for points in args.sizes:
-        repeats = args.repeats or (3 if points <= 3e7 else 1)
+        repeats = args.repeats if points <= 3e7 else args.repeats_large
         print(f"{points:.3g} points, {repeats} process(es) per measurement", flush=True)
         rows.append(measure_size(points, repeats, args.block_points,
                                  args.scratch or Path(tempfile.gettempdir())))
     stamp = time.strftime("%Y-%m-%d")
-    repeats = args.repeats or "3 (1 above 3e7 points)"
+    repeats = f"{args.repeats} ({args.repeats_large} above 3e7 points)"
     about = (
         f"Measured {stamp}, one run of `benchmarks/bench_study_overhead.py`; {machine()}; "
         f"load average {load:.1f} before and {os.getloadavg()[0]:.1f} after. Velocity "
