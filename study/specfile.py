@@ -340,6 +340,22 @@ def _short(value: Any, limit: int = 80) -> str:
     return text if len(text) <= limit else text[: limit - 5] + " ...]"
 
 
+def _is_integer(checker: Any, instance: Any) -> bool:
+    # TOML tells integers from floats; JSON schema counts 60.0 as an integer, and a
+    # count written 60.0 would reach range() and numpy shapes as a float.
+    return isinstance(instance, int) and not isinstance(instance, bool)
+
+
+@cache
+def _validator_class() -> Any:
+    """Draft 2020-12 with TOML's integers: ``num = 3.0`` is a float, not an integer."""
+    import jsonschema
+
+    base = jsonschema.Draft202012Validator
+    return jsonschema.validators.extend(
+        base, type_checker=base.TYPE_CHECKER.redefine("integer", _is_integer))
+
+
 def check_schema(raw: Mapping[str, Any], schema: Mapping[str, Any], path: str,
                  what: str = "spec") -> None:
     """Validate parsed tables against a JSON schema (Draft 2020-12).
@@ -349,9 +365,7 @@ def check_schema(raw: Mapping[str, Any], schema: Mapping[str, Any], path: str,
     SpecError
         Listing every violation, one per line, as ``[table] key: problem; allowed: ...``.
     """
-    import jsonschema
-
-    validator = jsonschema.Draft202012Validator(schema)
+    validator = _validator_class()(schema)
     errors = sorted(validator.iter_errors(raw), key=lambda e: list(map(str, e.absolute_path)))
     if not errors:
         return
