@@ -64,3 +64,36 @@ def test_study_run_refuses_a_float_count_with_one_line(tmp_path, capsys):
     assert captured.err.startswith(f"study: {spec}: invalid scene spec:")
     assert "[calibration] max_periods: 60.0 has the wrong type; expected integer" in captured.err
     assert not (tmp_path / "out.nc").exists()
+
+
+# --------------------------------------------------------------------------- messages
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "where"),
+    [
+        ("Q = 17.5", "Q = " + "[" * 9 + "1" + "]" * 9, "at [structure] Q;"),
+        ("a = { start = 0.0, stop = 12.0, num = 241 }",
+         "a = { values = " + "[" * 12 + "1" + "]" * 12 + " }", "at [sweep] a.values;"),
+        # Too deep for the TOML parser itself: found by a scan of the text.
+        ("Q = 17.5", "Q = " + "[" * 3000 + "]" * 3000, "at line 9 (Q);"),
+    ],
+)
+def test_too_deep_nesting_is_refused_naming_the_key(old, new, where):
+    text = workflow("regime-map")
+    assert old in text
+    message = refusal(parse_spec, text.replace(old, new))
+    assert "tables or arrays nested" in message
+    assert where in message
+    assert message.endswith("allowed at most 8 levels")
+
+
+def test_a_missing_table_or_key_is_refused_naming_what_is_required():
+    text = workflow("frontier")
+    message = refusal(parse_spec, text.replace("[structure]", "[structures]"))
+    assert "top level: 'structure' is a required property; required tables: study, " \
+           "structure, sweep" in message
+    # Not the schema's whole description: one line per problem.
+    assert "declarative" not in message
+    message = refusal(parse_scene, workflow("steering").replace("radius = 0.02", ""))
+    assert "[disk]: 'radius' is a required property; required keys: radius, cs" in message
