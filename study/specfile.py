@@ -150,27 +150,66 @@ def read_spec_text(path: str | Path, what: str = "spec") -> str:
     return decode_spec_bytes(data, str(path), what, size)
 
 
-def _depth_and_non_finite(raw: Any) -> tuple[int, tuple[list[Any], float] | None]:
-    """Deepest nesting of ``raw`` and the location and value of a non-finite number.
+def _depth_and_non_finite(raw: Any) -> tuple[list[Any] | None, tuple[list[Any], float] | None]:
+    """Where ``raw`` is nested deeper than :data:`MAX_NESTING` (None: it is not), and the
+    location and value of a non-finite number.
 
     Iterative (an explicit stack): the input may be nested deep enough to exhaust
     Python's recursion limit.
     """
-    deepest = 0
     bad: tuple[list[Any], float] | None = None
     stack: list[tuple[Any, int, list[Any]]] = [(raw, 0, [])]
     while stack:
         value, depth, location = stack.pop()
         if isinstance(value, dict | list):
             depth += 1
-            deepest = max(deepest, depth)
             if depth > MAX_NESTING:
-                return deepest, bad
+                return location, bad
             items = value.items() if isinstance(value, dict) else enumerate(value)
             stack.extend((item, depth, [*location, key]) for key, item in items)
         elif isinstance(value, float) and not math.isfinite(value) and bad is None:
             bad = (location, value)
-    return deepest, bad
+    return None, bad
+
+
+def _key_of(location: list[Any]) -> list[Any]:
+    """A location cut after its last key: ``[plate #2] f0``, not the indices below it."""
+    last = max((i for i, part in enumerate(location) if isinstance(part, str)), default=-1)
+    return location[:last + 1]
+
+
+def _too_deep_line(text: str) -> str:
+    """The line where brackets first nest deeper than :data:`MAX_NESTING`, as
+    ``line N (key)``, found by a scan of the text (for input too deep to parse)."""
+    depth = 0
+    quote = ""
+    key = ""
+    for number, line in enumerate(text.splitlines(), 1):
+        if depth == 0 and line.lstrip().startswith("["):
+            continue  # a table header
+        escaped = False
+        for position, char in enumerate(line):
+            if quote:
+                if escaped:
+                    escaped = False
+                elif char == "\\" and quote == '"':
+                    escaped = True
+                elif char == quote:
+                    quote = ""
+            elif char in "\"'":
+                quote = char
+            elif char == "#":
+                break
+            elif char in "[{":
+                if depth == 0 and "=" in line[:position]:
+                    key = line[:line.index("=")].strip()
+                depth += 1
+                if depth > MAX_NESTING:
+                    return f"line {number}" + (f" ({key})" if key else "")
+            elif char in "]}":
+                depth = max(depth - 1, 0)
+        quote = ""  # basic and literal strings end with their line
+    return "the file"
 
 
 def parse_toml(text: str, path: str = "<string>") -> dict[str, Any]:
@@ -194,13 +233,14 @@ def parse_toml(text: str, path: str = "<string>") -> dict[str, Any]:
         raise SpecError(f"{path}: not valid TOML: {err}") from None
     except RecursionError:
         raise SpecError(
-            f"{path}: tables or arrays nested too deeply; allowed at most {MAX_NESTING} levels"
+            f"{path}: tables or arrays nested too deeply at {_too_deep_line(body)}; allowed at "
+            f"most {MAX_NESTING} levels"
         ) from None
-    depth, bad = _depth_and_non_finite(raw)
-    if depth > MAX_NESTING:
+    too_deep, bad = _depth_and_non_finite(raw)
+    if too_deep is not None:
         raise SpecError(
-            f"{path}: tables or arrays nested {depth} levels deep or more; allowed at most "
-            f"{MAX_NESTING} levels"
+            f"{path}: tables or arrays nested {MAX_NESTING + 1} levels deep or more at "
+            f"{where(_key_of(too_deep))}; allowed at most {MAX_NESTING} levels"
         )
     if bad is not None:
         location, value = bad
@@ -290,7 +330,12 @@ def _explain(error: Any) -> str:
         what = "unknown key" + ("s " if len(extra) > 1 else " ") + ", ".join(map(repr, extra))
         return f"{at}: {what}; allowed keys: {', '.join(allowed)}"
     if error.validator == "required":
-        return f"{at}: {error.message}" + (f"; {hint}" if hint else "")
+        required = list(error.validator_value)
+        if not location:
+            # The top level's description is the whole schema's prose: name the tables.
+            return f"{at}: {error.message}; required tables: {', '.join(required)}"
+        return f"{at}: {error.message}; required keys: {', '.join(required)}" + (
+            f" ({hint})" if hint else "")
     if error.validator in ("oneOf", "anyOf"):
         chosen = _chosen_branch(error)
         if chosen:
@@ -340,6 +385,22 @@ def _short(value: Any, limit: int = 80) -> str:
     return text if len(text) <= limit else text[: limit - 5] + " ...]"
 
 
+def _is_integer(checker: Any, instance: Any) -> bool:
+    # TOML tells integers from floats; JSON schema counts 60.0 as an integer, and a
+    # count written 60.0 would reach range() and numpy shapes as a float.
+    return isinstance(instance, int) and not isinstance(instance, bool)
+
+
+@cache
+def _validator_class() -> Any:
+    """Draft 2020-12 with TOML's integers: ``num = 3.0`` is a float, not an integer."""
+    import jsonschema
+
+    base = jsonschema.Draft202012Validator
+    return jsonschema.validators.extend(
+        base, type_checker=base.TYPE_CHECKER.redefine("integer", _is_integer))
+
+
 def check_schema(raw: Mapping[str, Any], schema: Mapping[str, Any], path: str,
                  what: str = "spec") -> None:
     """Validate parsed tables against a JSON schema (Draft 2020-12).
@@ -349,9 +410,7 @@ def check_schema(raw: Mapping[str, Any], schema: Mapping[str, Any], path: str,
     SpecError
         Listing every violation, one per line, as ``[table] key: problem; allowed: ...``.
     """
-    import jsonschema
-
-    validator = jsonschema.Draft202012Validator(schema)
+    validator = _validator_class()(schema)
     errors = sorted(validator.iter_errors(raw), key=lambda e: list(map(str, e.absolute_path)))
     if not errors:
         return

@@ -1,0 +1,99 @@
+"""Defects the spec-run fuzz tier (tests/fuzz/test_spec_runs.py) found, one test each.
+
+Each was a traceback, a hang or an unhelpful message of ``study run`` on a mutated
+workflow; these tests pin the fix on the smallest spec that showed it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from study.cli import main
+from study.scene import parse_scene
+from study.spec import parse_spec
+from study.specfile import SpecError
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def workflow(name: str) -> str:
+    return (REPO / "workflows" / f"{name}.toml").read_text(encoding="utf-8")
+
+
+def refusal(parse, text: str, path: str = "case.toml") -> str:
+    with pytest.raises(SpecError) as excinfo:
+        parse(text, path)
+    message = str(excinfo.value)
+    assert message.startswith(f"{path}: ")
+    return message
+
+
+# --------------------------------------------------------------------------- integers
+
+
+@pytest.mark.parametrize(
+    ("name", "old", "new", "key"),
+    [
+        # Was a TypeError in range() deep in the calibration.
+        ("steering-calibration", "max_periods = 400", "max_periods = 400.0",
+         "[calibration] max_periods"),
+        ("steering-plan", "realisations = 4", "realisations = 4.0", "[plan] realisations"),
+        ("steering-plan", "seed = 7", "seed = 7.0", "[plan] seed"),
+        ("frontier", "num = 131", "num = 131.0", "[sweep] a"),
+    ],
+)
+def test_a_float_where_an_integer_belongs_is_refused_by_the_schema(name, old, new, key):
+    """JSON schema counts 400.0 as an integer; TOML does not, and neither do specs."""
+    text = workflow(name)
+    assert old in text
+    parse = parse_scene if "[scene]" in text else parse_spec
+    message = refusal(parse, text.replace(old, new))
+    assert key in message
+    assert "wrong type; expected integer" in message
+
+
+def test_study_run_refuses_a_float_count_with_one_line(tmp_path, capsys):
+    spec = tmp_path / "cal.toml"
+    spec.write_text(workflow("steering-calibration").replace("max_periods = 400",
+                                                             "max_periods = 60.0"))
+    assert main(["run", str(spec), "-o", str(tmp_path / "out.nc"), "--no-progress"]) == 1
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith(f"study: {spec}: invalid scene spec:")
+    assert "[calibration] max_periods: 60.0 has the wrong type; expected integer" in captured.err
+    assert not (tmp_path / "out.nc").exists()
+
+
+# --------------------------------------------------------------------------- messages
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "where"),
+    [
+        ("Q = 17.5", "Q = " + "[" * 9 + "1" + "]" * 9, "at [structure] Q;"),
+        ("a = { start = 0.0, stop = 12.0, num = 241 }",
+         "a = { values = " + "[" * 12 + "1" + "]" * 12 + " }", "at [sweep] a.values;"),
+        # Too deep for the TOML parser itself: found by a scan of the text.
+        ("Q = 17.5", "Q = " + "[" * 3000 + "]" * 3000, "at line 9 (Q);"),
+    ],
+)
+def test_too_deep_nesting_is_refused_naming_the_key(old, new, where):
+    text = workflow("regime-map")
+    assert old in text
+    message = refusal(parse_spec, text.replace(old, new))
+    assert "tables or arrays nested" in message
+    assert where in message
+    assert message.endswith("allowed at most 8 levels")
+
+
+def test_a_missing_table_or_key_is_refused_naming_what_is_required():
+    text = workflow("frontier")
+    message = refusal(parse_spec, text.replace("[structure]", "[structures]"))
+    assert "top level: 'structure' is a required property; required tables: study, " \
+           "structure, sweep" in message
+    # Not the schema's whole description: one line per problem.
+    assert "declarative" not in message
+    message = refusal(parse_scene, workflow("steering").replace("radius = 0.02", ""))
+    assert "[disk]: 'radius' is a required property; required keys: radius, cs" in message
