@@ -97,3 +97,27 @@ def test_a_missing_table_or_key_is_refused_naming_what_is_required():
     assert "declarative" not in message
     message = refusal(parse_scene, workflow("steering").replace("radius = 0.02", ""))
     assert "[disk]: 'radius' is a required property; required keys: radius, cs" in message
+
+
+# --------------------------------------------------------------------------- study ranges
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "fragment"),
+    [
+        # Was a RuntimeWarning (overflow in sin(alpha)/cs), an error under -W error.
+        ("cs = 0.25", "cs = 5e-324", "[structure] cs = 5e-324 is out of range; allowed: >= 1e-06"),
+        ("cs = 0.25", "cs = 0.25\nck = 1e-300", "[structure] ck = 1e-300 is out of range"),
+        # Was a hang: the two-way integrator's steps follow Q / (pi f0).
+        ("Q = 17.5", "Q = 1e-06", "[structure] Q = 1e-06 is out of range; allowed: >= 0.01"),
+    ],
+)
+def test_absurd_structure_values_are_refused(old, new, fragment):
+    assert fragment in refusal(parse_spec, workflow("coupling").replace(old, new, 1))
+
+
+def test_swept_values_obey_the_same_minimum():
+    text = workflow("threshold-collapse").replace("[3.0, 10.0, 17.5, 50.0, 150.0]",
+                                                  "[0.001, 10.0]")
+    assert "[sweep] Q: value 0.001 is out of range; allowed: >= 0.01" in refusal(
+        parse_spec, text)
