@@ -121,3 +121,25 @@ def test_swept_values_obey_the_same_minimum():
                                                   "[0.001, 10.0]")
     assert "[sweep] Q: value 0.001 is out of range; allowed: >= 0.01" in refusal(
         parse_spec, text)
+
+
+# --------------------------------------------------------------------------- scenes
+
+
+@pytest.mark.parametrize(
+    ("name", "old", "new", "fragment"),
+    [
+        # Was a ZeroDivisionError in the integrator (the radius squared underflows).
+        ("steering", "radius = 0.02 ", "radius = 1e-300 #",
+         "[disk] radius = 1e-300 is out of range; allowed: >= 0.0001"),
+        # Was a hang: a calibration point at Q = 1e-6 did not end in a minute.
+        ("steering-calibration", "Q = 10.0", "Q = 1e-06",
+         "[plate #2] Q = 1e-06 is out of range; allowed: >= 0.01"),
+        ("steering", "cs = 0.25 ", "cs = 5e-324 #", "[disk] cs = 5e-324 is out of range"),
+    ],
+)
+def test_absurd_disk_and_plate_values_are_refused(name, old, new, fragment):
+    text = workflow(name)
+    assert old in text
+    assert fragment in refusal(parse_scene, text.replace(old, new, 1))
+
