@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from study.cli import main
-from study.scene import parse_scene
+from study.scene import MAX_TRAJECTORY_PERIODS, parse_scene, period_weight
 from study.spec import parse_spec
 from study.specfile import SpecError
 
@@ -142,4 +142,27 @@ def test_absurd_disk_and_plate_values_are_refused(name, old, new, fragment):
     text = workflow(name)
     assert old in text
     assert fragment in refusal(parse_scene, text.replace(old, new, 1))
+
+
+def test_a_calibration_far_below_the_plates_resonance_is_refused_before_work():
+    # Was a hang: at 1e-12 Hz each period ran the integrator to its step budget (42 s).
+    text = workflow("steering-calibration").replace(
+        "f = { start = 6.0, stop = 16.0, num = 81 }", "f = { values = [1e-12, 7.0, 8.0] }")
+    message = refusal(parse_scene, text)
+    assert "[calibration] f: 3 x 4 points x max_periods = 400 from 1e-12 Hz, below the " \
+           "plates' f0 up to 14.44 Hz" in message
+    assert "drive periods of work; allowed at most 1e+07: higher f" in message
+    # The workflow itself weighs little more than its periods.
+    spec = parse_scene(workflow("steering-calibration"), "cal.toml")
+    weight = period_weight(spec.options["f"], spec.disk)
+    assert 1.0 < weight.min() and weight.max() < 1.07
+
+
+def test_a_trajectory_of_absurd_drive_time_is_refused_though_its_samples_are_few():
+    text = workflow("steering").replace("sample_interval = 0.05", "sample_interval = 1000.0")
+    text = text.replace("duration = 8.0", "duration = 1000000.0")
+    message = refusal(parse_scene, text)
+    assert "[[segment]] duration x f: the schedule's" in message
+    assert f"allowed at most {MAX_TRAJECTORY_PERIODS:.3g}: shorter segments" in message
+    assert parse_scene(workflow("steering"), "steering.toml").kind == "trajectory"
 
