@@ -90,6 +90,8 @@ __all__ = [
     "MAX_CALIBRATION_POINTS",
     "MAX_PLAN_DRIVE_SECONDS",
     "MAX_SCENE_SAMPLES",
+    "MAX_TRAJECTORY_PERIODS",
+    "PLATE_OSCILLATION_COST",
     "SCENE_KINDS",
     "SCENE_SPEC_SCHEMA",
     "SceneError",
@@ -97,6 +99,7 @@ __all__ = [
     "is_scene_file",
     "load_scene",
     "parse_scene",
+    "period_weight",
     "scene_dataset",
 ]
 
@@ -112,10 +115,20 @@ _KIND_TABLES = {"trajectory": ("segment", "trajectory"), "calibration": ("calibr
 MAX_SCENE_SAMPLES = 10_000_000
 #: Points of a calibration at most (the workflow has 324; each costs about 3 ms).
 MAX_CALIBRATION_POINTS = 100_000
-#: Drive periods a calibration may integrate at most (points x max_periods): about
-#: 1 ms each on one core, so the budget for points that never settle is about three
-#: core-hours.
+#: Drive periods a calibration may integrate at most (points x max_periods, then
+#: each weighted by :func:`period_weight`): about 1 ms each on one core, so the
+#: budget for points that never settle is about three core-hours.
 MAX_CALIBRATION_PERIODS = 10_000_000
+#: Drive periods a trajectory integrates at most (each weighted by
+#: :func:`period_weight`): about 4 ms each on one core (the workflow's 430 periods
+#: take 2 s), so about three core-hours. Samples alone do not bound the work: 1e7
+#: samples 1000 s apart are 1e10 s of drive.
+MAX_TRAJECTORY_PERIODS = 2_500_000
+#: What one oscillation of a plate's mode costs the integrator, relative to one drive
+#: period near the plates' resonance: far below it each drive period holds f0/f of
+#: them (measured: 1 ms per period near f0; 2.4 s at 0.1 Hz against a 1e4 Hz plate;
+#: 42 s, the step budget, at 1e-12 Hz against 14 Hz).
+PLATE_OSCILLATION_COST = 1.0 / 40.0
 #: Simulated drive time of a plan at most [s]: the planned flight times the flights
 #: simulated (every strategy's run per realisation, and up to
 #: :data:`_CORRECTIONS` corrective flights for the open-loop route and for each
@@ -132,6 +145,13 @@ _CORRECTIONS = 5
 #: (a 3 s segment at 14.2 Hz: 7e4 steps at 1/4, 9e5 at 0.15, over 1e6 at 0.1),
 #: and at 50 000 (gyration_radius = 1000 m) a 36 s schedule did not end in an hour.
 GYRATION_RATIO = (0.25, 1.0)
+
+
+def period_weight(f: Any, disk: Disk) -> Any:
+    """Work of one drive period at ``f`` [Hz], in periods near the plates' resonance:
+    ``1 + PLATE_OSCILLATION_COST * max(f0) / f``."""
+    f0 = max(plate.f0 for plate in disk.plates)
+    return 1.0 + PLATE_OSCILLATION_COST * f0 / np.asarray(f, dtype=np.float64)
 
 
 class SceneError(SpecError):
@@ -228,7 +248,7 @@ def parse_scene(text: str, path: str = "<string>") -> SceneSpec:
     integrator = raw.get("integrator", {})
     tolerance = float(integrator.get("tolerance", 1e-9))
     slaving = float(integrator.get("slaving", 1e-4))
-    options = _kind_options(kind, raw, path)
+    options = _kind_options(kind, raw, path, disk)
     return SceneSpec(
         name=scene["name"], kind=kind, title=scene.get("title", scene["name"]),
         description=scene.get("description", ""), disk=disk,
@@ -281,12 +301,12 @@ def _calibration_axis(table: dict[str, Any], key: str, path: str) -> np.ndarray:
     return values
 
 
-def _kind_options(kind: str, raw: dict[str, Any], path: str) -> dict[str, Any]:
+def _kind_options(kind: str, raw: dict[str, Any], path: str, disk: Disk) -> dict[str, Any]:
     try:
         if kind == "trajectory":
-            return _trajectory_options(raw, path)
+            return _trajectory_options(raw, path, disk)
         if kind == "calibration":
-            return _calibration_options(raw, path)
+            return _calibration_options(raw, path, disk)
         return _plan_options(raw, path)
     except SceneError:
         raise
@@ -294,7 +314,7 @@ def _kind_options(kind: str, raw: dict[str, Any], path: str) -> dict[str, Any]:
         raise SceneError(str(err)) from None
 
 
-def _trajectory_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
+def _trajectory_options(raw: dict[str, Any], path: str, disk: Disk) -> dict[str, Any]:
     if "segment" not in raw:
         raise SceneError(f"{path}: a trajectory scene needs [[segment]] tables "
                          "(label, f [Hz], a [m s-2], duration [s])")
@@ -311,6 +331,15 @@ def _trajectory_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
             f"{total:g} s ([[segment]] duration) gives {samples:.3g} samples; allowed at "
             f"most {MAX_SCENE_SAMPLES:.3g}: sample_interval >= {total / MAX_SCENE_SAMPLES:.3g} s"
         )
+    periods = math.fsum(row["duration"] * row["f"] * float(period_weight(row["f"], disk))
+                        for row in rows)
+    if periods > MAX_TRAJECTORY_PERIODS:
+        raise SceneError(
+            f"{path}: [[segment]] duration x f: the schedule's {total:g} s of drive are "
+            f"{periods:.3g} drive periods of work (a period far below the plates' f0 counts "
+            f"{PLATE_OSCILLATION_COST:g} x f0/f more); allowed at most "
+            f"{MAX_TRAJECTORY_PERIODS:.3g}: shorter segments"
+        )
     return {
         "segments": rows,
         "sample_interval": interval,
@@ -320,7 +349,7 @@ def _trajectory_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
     }
 
 
-def _calibration_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
+def _calibration_options(raw: dict[str, Any], path: str, disk: Disk) -> dict[str, Any]:
     if "calibration" not in raw:
         raise SceneError(f"{path}: a calibration scene needs a [calibration] table "
                          "(f and a axes, max_periods)")
@@ -339,8 +368,18 @@ def _calibration_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
             f"{axis_length(table['a'])} x {max_periods} = {points * max_periods:.3g} drive "
             f"periods; allowed at most {MAX_CALIBRATION_PERIODS:.3g}: fewer points or periods"
         )
-    return {"f": _calibration_axis(table, "f", path), "a": _calibration_axis(table, "a", path),
-            "max_periods": max_periods}
+    f = _calibration_axis(table, "f", path)
+    a = _calibration_axis(table, "a", path)
+    work = a.size * max_periods * float(np.sum(period_weight(f, disk)))
+    if work > MAX_CALIBRATION_PERIODS:
+        raise SceneError(
+            f"{path}: [calibration] f: {f.size} x {a.size} points x max_periods = "
+            f"{max_periods} from {float(np.min(f)):g} Hz, below the plates' f0 up to "
+            f"{max(p.f0 for p in disk.plates):g} Hz (a period counts "
+            f"{PLATE_OSCILLATION_COST:g} x f0/f more): {work:.3g} drive periods of work; "
+            f"allowed at most {MAX_CALIBRATION_PERIODS:.3g}: higher f, fewer points or periods"
+        )
+    return {"f": f, "a": a, "max_periods": max_periods}
 
 
 def _plan_options(raw: dict[str, Any], path: str) -> dict[str, Any]:

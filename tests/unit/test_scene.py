@@ -79,7 +79,7 @@ def test_the_workflows_share_one_disk():
     [
         (lambda t: t.replace('kind = "trajectory"', 'kind = "trajectroy"'),
          ["kind", "trajectroy", "'trajectory', 'calibration', 'plan'"]),
-        (lambda t: t.replace("Q = 17.5", "Q = -17.5"), ["plate", "Q", "> 0"]),
+        (lambda t: t.replace("Q = 17.5", "Q = -17.5"), ["plate", "Q", ">= 0.01"]),
         (lambda t: t.replace("radius = 0.02", "raduis = 0.02"),
          ["raduis", "[disk]", "radius"]),
         (lambda t: t.replace("duration = 1.0\n[[segment]]", "duration = -1.0\n[[segment]]"),

@@ -569,8 +569,8 @@ REFUSALS = [
         {"study": {"name": 7}}, ["[study] name", "wrong type", "string"], id="name-not-string"
     ),
     # out of range
-    pytest.param({"structure": {"Q": -1}}, ["[structure] Q = -1", "allowed: > 0"], id="Q-neg"),
-    pytest.param({"structure": {"Q": 0}}, ["[structure] Q = 0", "allowed: > 0"], id="Q-zero"),
+    pytest.param({"structure": {"Q": -1}}, ["[structure] Q = -1", "allowed: >= 0.01"], id="Q-neg"),
+    pytest.param({"structure": {"Q": 0}}, ["[structure] Q = 0", "allowed: >= 0.01"], id="Q-zero"),
     pytest.param(
         {"structure": {"f0": 0.0}}, ["[structure] f0 = 0.0", "allowed: > 0"], id="f0-zero"
     ),
@@ -590,7 +590,8 @@ REFUSALS = [
     pytest.param(
         {"structure": {"M": 0}}, ["[structure] M = 0", "allowed: > 0 and <= 1"], id="M-zero"
     ),
-    pytest.param({"structure": {"cs": 0}}, ["[structure] cs = 0", "allowed: > 0"], id="cs-zero"),
+    pytest.param({"structure": {"cs": 0}}, ["[structure] cs = 0", "allowed: >= 1e-06"],
+                 id="cs-zero"),
     pytest.param({"structure": {"g": -9.8}}, ["[structure] g = -9.8", "> 0"], id="g-neg"),
     pytest.param(
         {"structure": {"ck": 0.3}},

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from study.cli import main
-from study.scene import parse_scene
+from study.scene import MAX_TRAJECTORY_PERIODS, parse_scene, period_weight
 from study.spec import parse_spec
 from study.specfile import SpecError
 
@@ -97,3 +97,72 @@ def test_a_missing_table_or_key_is_refused_naming_what_is_required():
     assert "declarative" not in message
     message = refusal(parse_scene, workflow("steering").replace("radius = 0.02", ""))
     assert "[disk]: 'radius' is a required property; required keys: radius, cs" in message
+
+
+# --------------------------------------------------------------------------- study ranges
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "fragment"),
+    [
+        # Was a RuntimeWarning (overflow in sin(alpha)/cs), an error under -W error.
+        ("cs = 0.25", "cs = 5e-324", "[structure] cs = 5e-324 is out of range; allowed: >= 1e-06"),
+        ("cs = 0.25", "cs = 0.25\nck = 1e-300", "[structure] ck = 1e-300 is out of range"),
+        # Was a hang: the two-way integrator's steps follow Q / (pi f0).
+        ("Q = 17.5", "Q = 1e-06", "[structure] Q = 1e-06 is out of range; allowed: >= 0.01"),
+    ],
+)
+def test_absurd_structure_values_are_refused(old, new, fragment):
+    assert fragment in refusal(parse_spec, workflow("coupling").replace(old, new, 1))
+
+
+def test_swept_values_obey_the_same_minimum():
+    text = workflow("threshold-collapse").replace("[3.0, 10.0, 17.5, 50.0, 150.0]",
+                                                  "[0.001, 10.0]")
+    assert "[sweep] Q: value 0.001 is out of range; allowed: >= 0.01" in refusal(
+        parse_spec, text)
+
+
+# --------------------------------------------------------------------------- scenes
+
+
+@pytest.mark.parametrize(
+    ("name", "old", "new", "fragment"),
+    [
+        # Was a ZeroDivisionError in the integrator (the radius squared underflows).
+        ("steering", "radius = 0.02 ", "radius = 1e-300 #",
+         "[disk] radius = 1e-300 is out of range; allowed: >= 0.0001"),
+        # Was a hang: a calibration point at Q = 1e-6 did not end in a minute.
+        ("steering-calibration", "Q = 10.0", "Q = 1e-06",
+         "[plate #2] Q = 1e-06 is out of range; allowed: >= 0.01"),
+        ("steering", "cs = 0.25 ", "cs = 5e-324 #", "[disk] cs = 5e-324 is out of range"),
+    ],
+)
+def test_absurd_disk_and_plate_values_are_refused(name, old, new, fragment):
+    text = workflow(name)
+    assert old in text
+    assert fragment in refusal(parse_scene, text.replace(old, new, 1))
+
+
+def test_a_calibration_far_below_the_plates_resonance_is_refused_before_work():
+    # Was a hang: at 1e-12 Hz each period ran the integrator to its step budget (42 s).
+    text = workflow("steering-calibration").replace(
+        "f = { start = 6.0, stop = 16.0, num = 81 }", "f = { values = [1e-12, 7.0, 8.0] }")
+    message = refusal(parse_scene, text)
+    assert "[calibration] f: 3 x 4 points x max_periods = 400 from 1e-12 Hz, below the " \
+           "plates' f0 up to 14.44 Hz" in message
+    assert "drive periods of work; allowed at most 1e+07: higher f" in message
+    # The workflow itself weighs little more than its periods.
+    spec = parse_scene(workflow("steering-calibration"), "cal.toml")
+    weight = period_weight(spec.options["f"], spec.disk)
+    assert 1.0 < weight.min() and weight.max() < 1.07
+
+
+def test_a_trajectory_of_absurd_drive_time_is_refused_though_its_samples_are_few():
+    text = workflow("steering").replace("sample_interval = 0.05", "sample_interval = 1000.0")
+    text = text.replace("duration = 8.0", "duration = 1000000.0")
+    message = refusal(parse_scene, text)
+    assert "[[segment]] duration x f: the schedule's" in message
+    assert f"allowed at most {MAX_TRAJECTORY_PERIODS:.3g}: shorter segments" in message
+    assert parse_scene(workflow("steering"), "steering.toml").kind == "trajectory"
+
