@@ -166,3 +166,19 @@ def test_a_trajectory_of_absurd_drive_time_is_refused_though_its_samples_are_few
     assert f"allowed at most {MAX_TRAJECTORY_PERIODS:.3g}: shorter segments" in message
     assert parse_scene(workflow("steering"), "steering.toml").kind == "trajectory"
 
+
+
+# --------------------------------------------------------------------------- titles
+
+
+@pytest.mark.parametrize("name", ["thresholds", "steering"])
+def test_an_empty_title_is_refused_before_any_work(name, tmp_path, capsys):
+    """Was computed in full, then refused by the result's own validation, naming the
+    temporary file rather than the spec."""
+    spec = tmp_path / f"{name}.toml"
+    spec.write_text(workflow(name).replace('title = "', 'title = "" # "', 1))
+    assert main(["run", str(spec), "-o", str(tmp_path / "out.nc"), "--no-progress"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"study: {spec}: invalid ")
+    assert "title: '' should be non-empty" in err
+    assert not any(tmp_path.glob("*.nc*"))
