@@ -151,7 +151,10 @@ def period_weight(f: Any, disk: Disk) -> Any:
     """Work of one drive period at ``f`` [Hz], in periods near the plates' resonance:
     ``1 + PLATE_OSCILLATION_COST * max(f0) / f``."""
     f0 = max(plate.f0 for plate in disk.plates)
-    return 1.0 + PLATE_OSCILLATION_COST * f0 / np.asarray(f, dtype=np.float64)
+    # A frequency as small as a double allows gives an infinite weight: a refusal,
+    # not an overflow warning.
+    with np.errstate(divide="ignore", over="ignore"):
+        return 1.0 + PLATE_OSCILLATION_COST * f0 / np.asarray(f, dtype=np.float64)
 
 
 class SceneError(SpecError):
@@ -331,7 +334,9 @@ def _trajectory_options(raw: dict[str, Any], path: str, disk: Disk) -> dict[str,
             f"{total:g} s ([[segment]] duration) gives {samples:.3g} samples; allowed at "
             f"most {MAX_SCENE_SAMPLES:.3g}: sample_interval >= {total / MAX_SCENE_SAMPLES:.3g} s"
         )
-    periods = math.fsum(row["duration"] * row["f"] * float(period_weight(row["f"], disk))
+    # duration f (1 + c f0 / f) = duration (f + c f0): no overflow for a tiny f.
+    f0 = max(plate.f0 for plate in disk.plates)
+    periods = math.fsum(row["duration"] * (row["f"] + PLATE_OSCILLATION_COST * f0)
                         for row in rows)
     if periods > MAX_TRAJECTORY_PERIODS:
         raise SceneError(
