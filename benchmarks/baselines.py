@@ -1,6 +1,6 @@
 """Baselines of the work-precision benchmark: how a typical user would compute the velocity.
 
-Two time integrators of the paper's one-way stick-slip model (PHYSICS.md section 1),
+Two time integrators of the paper's one-way stick-slip model (README, "How the solver works"),
 written independently of :mod:`study`'s kernels (only :class:`study.Structure`, the
 input checks and the :class:`study.Status` codes are shared):
 

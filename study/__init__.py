@@ -1,7 +1,7 @@
 """study: parameter studies of vibration-driven stick-slip locomotion.
 
 A soft structure with a resonant plate, on a vertically shaken table, walks forward
-or backward by stick-slip (Barois, Boucherie, Tadrist & Kellay). See PHYSICS.md.
+or backward by stick-slip (Barois, Boucherie, Tadrist & Kellay). See README.md.
 """
 
 from study.analysis import frontier, minimum_threshold

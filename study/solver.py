@@ -102,7 +102,7 @@ def steady_state(
 ) -> SteadyState:
     """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
 
-    Event-driven and closed form between events (PHYSICS.md section 3); no time
+    Event-driven and closed form between events (README, "How the solver works"); no time
     step. The orbit is the one reached from rest at drive phase 0 with the mode on
     its steady response. Runs in parallel over points and releases the GIL.
 

@@ -24,7 +24,7 @@ def require_finite(name: str, value: float) -> float:
 
 @dataclass(frozen=True)
 class Structure:
-    """A rigid base carrying one tilted resonant plate (PHYSICS.md section 1).
+    """A rigid base carrying one tilted resonant plate (README, "How the solver works").
 
     All forces in the model are per unit total mass, so the structure is fully
     described by its mode and its friction with the table.

@@ -1,7 +1,7 @@
 """High-precision reference for the steady mean velocity of the stick-slip model.
 
 A slow but exact (to ``dps`` significant digits) event-driven solver of the
-single-plate model of ``PHYSICS.md (shared with the project)`` (sections 1-3), written with
+single-plate model described in the README ("How the solver works"), written with
 :mod:`mpmath` only. It is deliberately independent of the ``study`` package: nothing
 is imported from it, every formula is re-derived here, so that it can be used to check
 that the fast float64 solver is accurate to machine precision.

@@ -8,7 +8,7 @@ terminal event location, restarting at every event with the updated discrete
 mode. The only closed form used is the steady harmonic response of the plate
 mode, to set its initial state.
 
-Model (per unit total mass, table frame, SI units; see ``PHYSICS.md`` sec. 1)
+Model (per unit total mass, table frame, SI units; see the README, "How the solver works")
 ---------------------------------------------------------------------------
 State ``y = (delta, ddelta_dt, x, v)``; drive acceleration ``a cos(w t)``.
 

@@ -1,4 +1,4 @@
-"""Closed-form physics of the single-plate model, pure numpy (PHYSICS.md sections 1-2)."""
+"""Closed-form physics of the single-plate model, pure numpy (README, "How the solver works")."""
 
 from study.physics.forces import (
     force_amplitudes,

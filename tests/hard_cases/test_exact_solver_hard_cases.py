@@ -155,7 +155,7 @@ class _SlidingModel:
     """Reversal map of continuous sliding, in ``CYCLE_DPS``-digit mpmath.
 
     Built on the slip primitives of ``exact_reference`` (closed-form slip end and
-    displacement); the amplitudes are re-derived here from the model (PHYSICS.md).
+    displacement); the amplitudes are re-derived here from the model (see the README).
     """
 
     def __init__(self, s: study.Structure, f, a):

@@ -1,6 +1,6 @@
 """Paper Fig. 1: thresholds (1B) and the sign of the velocity against frequency (1C).
 
-Statements checked (PHYSICS.md section 4): forward motion below the resonance
+Statements checked (README, "How the solver works"): forward motion below the resonance
 (10-14.5 Hz), backward above (15-20 Hz); the minimum threshold lies near the
 resonance, a few m s^-2, well below g.
 """

@@ -22,7 +22,7 @@ Part 2 compares ``study.planar.simulate_planar`` with the reference: the 1-D
 reduction, the paper's two-plate steering disk (forward, backward, turning, and a
 frequency switch mid-run), symmetries, and the free-slide closed forms.
 
-The steering disk (PHYSICS.md sec. 6): radius R = 0.02 m, cs = ck = 0.25; head plate
+The steering disk (README, "Steering"): radius R = 0.02 m, cs = ck = 0.25; head plate
 f0 = 14.44 Hz, Q = 17.5, alpha = 64 deg, M = 0.08, along the heading at (R, 0); tail
 plate f0 = 8.5 Hz, Q = 10, alpha = 64 deg, M = 0.05, across the heading at (-R, 0).
 """

@@ -13,7 +13,7 @@ checked here against things that do not share its formulation:
 * Painleve's paradox: the boundary ``1 - M sin(alpha) (sin(alpha) + s ck cos(alpha)) = 0``
   and the ``"friction_paradox"`` status only when the bad direction is entered.
 
-Paper structure (PHYSICS.md sec. 1): f0 = 14.44 Hz, Q = 17.5, alpha = 64 deg,
+Paper structure (README, "Steering"): f0 = 14.44 Hz, Q = 17.5, alpha = 64 deg,
 cs = ck = 0.25, g = 9.8 m s^-2.
 """
 
@@ -66,7 +66,7 @@ def test_one_way_default_unchanged():
 def test_two_way_tends_to_one_way_for_small_mass():
     """M = 1e-4: mean velocities agree to 1e-3 (observed 9e-5, i.e. about M).
 
-    As M -> 0 the motion thresholds tend to g (PHYSICS.md sec. 2), so at M = 1e-4
+    As M -> 0 the motion thresholds tend to g (README, "Steering"), so at M = 1e-4
     stick-slip exists only in the narrow window a*_+ = 9.785 < a < a_lift = 9.798
     (f = 14 Hz); (13 Hz, 8.5) is static there.
     """
