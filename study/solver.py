@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from study.kernels import orbit as _orbit
 from study.kernels import steady as _kernel
 from study.physics import (
     as_acceleration,
@@ -18,10 +19,21 @@ from study.physics import (
 from study.status import NonConvergence, Status
 from study.structure import Structure
 
-__all__ = ["SolverSettings", "SteadyState", "steady_state", "steady_velocity"]
+__all__ = [
+    "COUPLINGS",
+    "SolverSettings",
+    "SteadyState",
+    "check_coupling",
+    "steady_state",
+    "steady_velocity",
+]
 
 #: Version of the steady-state algorithm; changes whenever its results may change.
-SOLVER_VERSION = "2"
+SOLVER_VERSION = "3"
+
+#: How the sliding base and the mode interact: the paper's model, or the physical one
+#: in which the base's sliding acceleration also forces the mode.
+COUPLINGS = ("one-way", "two-way")
 
 #: Inputs with at least this many points are solved by the parallel kernel.
 PARALLEL_THRESHOLD = 2048
@@ -73,6 +85,11 @@ class SteadyState:
         Fractions of the drive period spent slipping forward and backward [1].
     orbit_period : numpy.ndarray of int32
         Period of the orbit in drive periods (0 when there is no orbit).
+    floquet_multiplier : numpy.ndarray or None
+        Largest modulus of the orbit's Floquet multipliers on the state
+        ``(delta, delta', v)`` [1] (< 1: the orbit attracts its neighbours; 0 for
+        ``STATIC``, NaN without an orbit). Computed by the two-way solver; ``None``
+        from solvers that do not compute it.
     """
 
     velocity: NDArray[np.float64]
@@ -82,6 +99,7 @@ class SteadyState:
     forward_fraction: NDArray[np.float64]
     backward_fraction: NDArray[np.float64]
     orbit_period: NDArray[np.int32]
+    floquet_multiplier: NDArray[np.float64] | None = None
 
 
 def check_structure(structure: object) -> Structure:
@@ -92,12 +110,58 @@ def check_structure(structure: object) -> Structure:
     return structure
 
 
+def check_coupling(coupling: object) -> str:
+    """``coupling`` if it is one of :data:`COUPLINGS`, else a ValueError naming them."""
+    if coupling not in COUPLINGS:
+        raise ValueError(f"coupling must be one of {', '.join(map(repr, COUPLINGS))}; "
+                         f"got {coupling!r}")
+    return str(coupling)
+
+
+def structure_vector(structure: Structure, coupling: str) -> NDArray[np.float64]:
+    """The orbit kernel's structure vector (SI) for ``structure`` and ``coupling``."""
+    vector = np.zeros(_orbit.N_STRUCTURE)
+    w0 = structure.omega0
+    vector[_orbit.S_DAMPING] = w0 / structure.Q
+    vector[_orbit.S_STIFFNESS] = w0 * w0
+    vector[_orbit.S_COS] = np.cos(structure.alpha_rad)
+    vector[_orbit.S_SIN] = np.sin(structure.alpha_rad)
+    vector[_orbit.S_MASS] = structure.M
+    vector[_orbit.S_CS] = structure.cs
+    vector[_orbit.S_CK] = structure.ck
+    vector[_orbit.S_G] = structure.g
+    vector[_orbit.S_COUPLED] = 1.0 if check_coupling(coupling) == "two-way" else 0.0
+    return vector
+
+
+def _orbit_state(
+    structure: Structure,
+    f_flat: NDArray[np.float64],
+    a_flat: NDArray[np.float64],
+    coupling: str,
+    settings: SolverSettings,
+    parallel: bool | None,
+) -> NDArray[np.float64]:
+    """Rows ``(status, reason, velocity, slips, forward, backward, period, multiplier,
+    z...)`` of the orbit kernel at each point."""
+    lifted = a_flat > lift_off_acceleration(structure, f_flat)
+    omega = 2.0 * np.pi * f_flat
+    out = np.empty((f_flat.size, _orbit.N_OUT))
+    if parallel is None:
+        parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
+    kernel = _orbit._solve_points if parallel else _orbit._solve_points_serial
+    kernel(structure_vector(structure, coupling), omega, a_flat, lifted,
+           int(settings.max_events), int(settings.max_map_iterations), out)
+    return out
+
+
 def steady_state(
     structure: Structure,
     f: ArrayLike,
     a: ArrayLike,
     settings: SolverSettings | None = None,
     *,
+    coupling: str = "one-way",
     parallel: bool | None = None,
 ) -> SteadyState:
     """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
@@ -105,6 +169,11 @@ def steady_state(
     Event-driven and closed form between events (README, "How the solver works"); no time
     step. The orbit is the one reached from rest at drive phase 0 with the mode on
     its steady response. Runs in parallel over points and releases the GIL.
+
+    With ``coupling="two-way"`` the base's sliding acceleration also forces the mode,
+    which becomes a state of the orbit: the orbit is the fixed point of the period map,
+    found by Newton's method with the exact Jacobian (README, "Two-way coupling,
+    exact"), and its largest Floquet multiplier is returned.
 
     Parameters
     ----------
@@ -116,6 +185,8 @@ def steady_state(
         Drive acceleration amplitude [m s^-2], >= 0.
     settings : SolverSettings, optional
         Solver budgets; defaults to ``SolverSettings()``.
+    coupling : {"one-way", "two-way"}
+        The paper's model (mode driven by the table only) or the physical one.
     parallel : bool, optional
         Spread points over all cores (numba threads). By default only inputs of
         at least ``PARALLEL_THRESHOLD`` points do; pass ``False`` when the caller
@@ -127,11 +198,24 @@ def steady_state(
         Velocity, status and diagnostics, each of the broadcast shape of ``f`` and ``a``.
     """
     structure = check_structure(structure)
+    coupling = check_coupling(coupling)
     settings = SolverSettings() if settings is None else settings
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape
-    f_flat = np.ascontiguousarray(f_arr).ravel()
-    a_flat = np.ascontiguousarray(a_arr).ravel()
+    f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
+    a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
+    if coupling == "two-way":
+        out = _orbit_state(structure, f_flat, a_flat, coupling, settings, parallel)
+        return SteadyState(
+            velocity=out[:, 2].reshape(shape),
+            status=out[:, 0].astype(np.int8).reshape(shape),
+            reason=out[:, 1].astype(np.int8).reshape(shape),
+            slips_per_period=out[:, 3].reshape(shape),
+            forward_fraction=out[:, 4].reshape(shape),
+            backward_fraction=out[:, 5].reshape(shape),
+            orbit_period=out[:, 6].astype(np.int32).reshape(shape),
+            floquet_multiplier=out[:, 7].reshape(shape),
+        )
     a_plus, a_minus = release_amplitudes(structure, f_flat, a_flat)
     b_plus, b_minus = slip_amplitudes(structure, f_flat, a_flat)
     lifted = a_flat > lift_off_acceleration(structure, f_flat)
@@ -183,6 +267,8 @@ def steady_velocity(
     f: ArrayLike,
     a: ArrayLike,
     settings: SolverSettings | None = None,
+    *,
+    coupling: str = "one-way",
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
     """Mean steady velocity and status at each ``(f, a)``.
 
@@ -196,6 +282,8 @@ def steady_velocity(
         Drive acceleration amplitude [m s^-2], >= 0.
     settings : SolverSettings, optional
         Solver budgets.
+    coupling : {"one-way", "two-way"}
+        See :func:`steady_state`.
 
     Returns
     -------
@@ -209,7 +297,7 @@ def steady_velocity(
     --------
     steady_state : the same with diagnostics.
     """
-    result = steady_state(structure, f, a, settings)
+    result = steady_state(structure, f, a, settings, coupling=coupling)
     return result.velocity, result.status
 
 

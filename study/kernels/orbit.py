@@ -1,0 +1,1092 @@
+"""Exact event-driven periodic orbits with the mode as a state: either coupling.
+
+State ``z = (delta, d delta/dt, v)`` at time ``t`` and a contact mode: stick (0),
+forward slip (+1), backward slip (-1). Per unit total mass, table frame, drive
+``A = a cos(w t)``; ``c = w0/Q``, ``k = w0^2``. In every contact mode the mode obeys a
+linear ODE with constant coefficients and harmonic forcing (README, "Two-way
+coupling, exact")::
+
+    stick:         delta'' + c delta' + k delta = A cos(alpha)
+    slip s:   D_s delta'' + c delta' + k delta = A (cos(alpha) - s ck sin(alpha))
+                                                 + s ck g sin(alpha)
+    D_s = 1 - M sin(alpha) (sin(alpha) + s ck cos(alpha))        (two-way)
+    D_s = 1 and the stick's forcing                               (one-way)
+
+    slip s:   v' = -K_s delta'' - s ck g + s ck A,    K_s = M (sin(alpha) + s ck cos(alpha))
+
+so between events ``delta`` is a particular harmonic (plus a constant) plus a damped
+homogeneous part ``h = E(t - t0) h0`` (closed form, any damping), and ``v`` is
+``v0 - K_s (delta' - delta'_0)`` plus a sinusoid and a linear term.
+
+Events are the first zero of a function ``phi(t) < 0`` (release ``s tau - cs n``
+in a stick, ``-s v`` in a slip, ``-n`` for lift-off). ``phi`` is a sinusoid plus a
+linear part plus a functional of ``h``; its second derivative is bounded on the
+rest of the piece by ``|sinusoid| w^2 + ||l A^2|| sqrt(k h^2 + D h'^2)`` (the energy
+of a damped oscillator never grows). From ``t`` no zero can occur before the first
+root of ``phi + phi' s + bound s^2 / 2``: stepping by that amount never skips an event
+(grazing contacts included) and converges quadratically onto a simple root.
+
+The steady orbit is the fixed point of the period map ``z(0) -> z(N T)``, found by
+Newton's method on ``P^N(z) - z`` with the exact Jacobian: the flow's matrix
+exponential between events and a saltation matrix at each event. The Floquet
+multipliers are the eigenvalues of that Jacobian at the fixed point.
+
+Everything here is private: :mod:`study.solver` validates, allocates and calls.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from study.kernels.transient import (
+    CONTINUOUS_SLIDING,
+    FRICTION_PARADOX,
+    LIFT_OFF,
+    NOT_CONVERGED,
+    REASON_EVENT_BUDGET,
+    REASON_NO_PERIODIC_ORBIT,
+    REASON_NONE,
+    STATIC,
+    STICK_SLIP,
+)
+
+TWO_PI = 2.0 * math.pi
+EPS = 2.220446049250313e-16
+
+# Indices of the structure vector.
+S_DAMPING = 0  # c = w0 / Q [s^-1]
+S_STIFFNESS = 1  # k = w0^2 [s^-2]
+S_COS = 2
+S_SIN = 3
+S_MASS = 4
+S_CS = 5
+S_CK = 6
+S_G = 7
+S_COUPLED = 8  # 1.0: two-way coupling
+N_STRUCTURE = 9
+
+# Columns of the per-point mode table (rows: stick, forward slip, backward slip).
+M_D = 0  # D (1 in a stick)
+M_SIGMA = 1  # c / (2 D)
+M_NU2 = 2  # k / D - sigma^2
+M_KD = 3  # k / D
+M_CD = 4  # c / D
+M_PRE = 5  # particular response Re
+M_PIM = 6  # particular response Im
+M_OFFSET = 7  # constant part of the particular solution, G / k [m]
+M_K = 8  # K_s = M (sin + s ck cos) (0 for the stick)
+M_SIGN = 9
+M_FORCE = 10  # forcing amplitude F [m s^-2]
+M_GCONST = 11  # constant forcing G [m s^-2]
+N_MODE = 12
+
+# Event functions, as bits of a mask.
+EV_RELEASE_FORWARD = 1
+EV_RELEASE_BACKWARD = 2
+EV_SLIP_END = 4
+EV_LIFT_OFF = 8
+
+# Outcome of a stretch of the orbit.
+RUN_OK = 0
+RUN_LIFT_OFF = 1
+RUN_PARADOX = 2
+RUN_BUDGET = 3
+
+# Steps of the event search before a stretch is abandoned (EVENT_BUDGET).
+MAX_SEARCH_STEPS = 100_000
+# Newton iterations on the period map before falling back to the map's iteration.
+MAX_NEWTON = 24
+# A Newton iterate is a fixed point when the scaled residual is below this, or below
+# LOOSE_TOLERANCE and no longer decreasing (the rounding floor of the map).
+NEWTON_TOLERANCE = 1e-13
+LOOSE_TOLERANCE = 1e-9
+# A Newton step this small (scaled) ends the iteration: its own error is ~ its square.
+NEWTON_STEP = 1e-7
+# The orbit's last pass must close to this (scaled); else Newton resumes.
+FINAL_TOLERANCE = 1e-12
+# Period-map iterates closing to this (scaled) start a Newton search for that period.
+CYCLE_DETECTION = 1e-3
+# Longest orbit searched for, in drive periods.
+MAX_PERIOD = 16
+# An orbit is stable when its largest Floquet multiplier is below 1 + this.
+STABILITY_MARGIN = 1e-6
+# A slip starting with s v' below this fraction of its acceleration scale has no
+# first-order start (rounding of a release where ck = cs): its start is nudged.
+START_SLOPE = 1e-9
+# Nudge [drive periods] past a slip start that does not accelerate at first order.
+NUDGE = 1e-6
+
+# Accumulator slots of a stretch.
+A_DISPLACEMENT = 0
+A_SLIPS = 1
+A_FORWARD = 2
+A_BACKWARD = 3
+A_STICK = 4
+A_EVENTS = 5
+A_STEPS = 6
+N_ACC = 7
+
+
+@njit(cache=True, nogil=True)
+def mode_table(structure, omega, a, table):
+    """Fill ``table`` (3 x N_MODE) for drive ``omega`` [rad s^-1], ``a`` [m s^-2].
+
+    Returns
+    -------
+    bool
+        False when a slip's ``D_s <= 0`` (Painleve's paradox) for that sign; its
+        row is then left with ``D = 0``.
+    """
+    c = structure[S_DAMPING]
+    k = structure[S_STIFFNESS]
+    ca = structure[S_COS]
+    sa = structure[S_SIN]
+    m = structure[S_MASS]
+    ck = structure[S_CK]
+    g = structure[S_G]
+    coupled = structure[S_COUPLED] != 0.0
+    for row in range(3):
+        s = 0.0 if row == 0 else (1.0 if row == 1 else -1.0)
+        if row == 0 or not coupled:
+            d = 1.0
+            force = a * ca
+            gconst = 0.0
+        else:
+            d = 1.0 - m * sa * (sa + s * ck * ca)
+            force = a * (ca - s * ck * sa)
+            gconst = s * ck * g * sa
+        table[row, M_SIGN] = s
+        table[row, M_K] = 0.0 if row == 0 else m * (sa + s * ck * ca)
+        table[row, M_D] = d
+        table[row, M_FORCE] = force
+        table[row, M_GCONST] = gconst
+        if d <= 0.0:
+            table[row, M_D] = 0.0
+            continue
+        sigma = 0.5 * c / d
+        table[row, M_SIGMA] = sigma
+        table[row, M_KD] = k / d
+        table[row, M_CD] = c / d
+        table[row, M_NU2] = k / d - sigma * sigma
+        re = k - d * omega * omega
+        im = c * omega
+        den = re * re + im * im
+        table[row, M_PRE] = force * re / den
+        table[row, M_PIM] = -force * im / den
+        table[row, M_OFFSET] = gconst / k
+    return table[1, M_D] > 0.0, table[2, M_D] > 0.0
+
+
+@njit(cache=True, nogil=True)
+def _propagator(sigma, nu2, tau):
+    """``exp(A tau) = e^{-sigma tau} (C I + S (A + sigma I))``: returns ``e C``, ``e S``.
+
+    ``C = cos(nu tau)``, ``S = sin(nu tau) / nu`` (``cosh``/``sinh`` when overdamped,
+    series near critical damping, exponentials combined when ``e^{-sigma tau}`` and
+    ``cosh`` would overflow).
+    """
+    z = nu2 * tau * tau
+    if abs(z) < 1e-2:
+        c = 1.0 + z * (-0.5 + z * (1.0 / 24.0 + z * (-1.0 / 720.0 + z / 40320.0)))
+        s = tau * (1.0 + z * (-1.0 / 6.0 + z * (1.0 / 120.0 + z * (-1.0 / 5040.0
+                                                                  + z / 362880.0))))
+        e = math.exp(-sigma * tau)
+        return e * c, e * s
+    if z > 0.0:
+        nu = math.sqrt(nu2)
+        e = math.exp(-sigma * tau)
+        return e * math.cos(nu * tau), e * math.sin(nu * tau) / nu
+    mu = math.sqrt(-nu2)
+    # mu - sigma = -(k/D) / (sigma + mu), without cancellation.
+    slow = math.exp(-((sigma * sigma + nu2) / (sigma + mu)) * tau)
+    fast = math.exp(-(sigma + mu) * tau)
+    return 0.5 * (slow + fast), 0.5 * (slow - fast) / mu
+
+
+@njit(cache=True, nogil=True)
+def _homogeneous(row, tau, h0, hd0):
+    """``(h, h')`` after ``tau`` [s] from ``(h0, hd0)`` in the mode of ``row``,
+    and the 2x2 propagator ``(e11, e12, e21, e22)``."""
+    sigma = row[M_SIGMA]
+    ec, es = _propagator(sigma, row[M_NU2], tau)
+    e11 = ec + es * sigma
+    e12 = es
+    e21 = -es * row[M_KD]
+    e22 = ec - es * sigma
+    return e11 * h0 + e12 * hd0, e21 * h0 + e22 * hd0, e11, e12, e21, e22
+
+
+@njit(cache=True, nogil=True)
+def _particular(row, omega, cw, sw):
+    """Particular solution ``(delta, delta', delta'', delta''')`` of a mode at phase
+    with ``cos = cw``, ``sin = sw``."""
+    pr = row[M_PRE]
+    pi = row[M_PIM]
+    re = pr * cw - pi * sw
+    im = pr * sw + pi * cw
+    w2 = omega * omega
+    return re + row[M_OFFSET], -omega * im, -w2 * re, w2 * omega * im
+
+
+@njit(cache=True, nogil=True)
+def _sin_minus_x(d):
+    """``sin(d) - d`` without cancellation for small ``d``."""
+    if abs(d) >= 0.5:
+        return math.sin(d) - d
+    x2 = d * d
+    series = 1.0 - x2 / 272.0
+    series = 1.0 - x2 / 210.0 * series
+    series = 1.0 - x2 / 156.0 * series
+    series = 1.0 - x2 / 110.0 * series
+    series = 1.0 - x2 / 72.0 * series
+    series = 1.0 - x2 / 42.0 * series
+    series = 1.0 - x2 / 20.0 * series
+    return -d * x2 / 6.0 * series
+
+
+@njit(cache=True, nogil=True)
+def _one_minus_cos(d):
+    half = math.sin(0.5 * d)
+    return 2.0 * half * half
+
+
+@njit(cache=True, nogil=True)
+def _safe_step(phi, dphi, bound):
+    """Longest step over which ``phi`` (< 0, or 0 and decreasing) cannot reach 0,
+    given ``|phi''| <= bound``."""
+    if bound <= 0.0:
+        if dphi > 0.0:
+            return -phi / dphi
+        return np.inf
+    disc = math.sqrt(dphi * dphi - 2.0 * bound * phi)
+    if dphi > 0.0:
+        return -2.0 * phi / (dphi + disc)
+    return (disc - dphi) / bound
+
+
+@njit(cache=True, nogil=True)
+def _cubic(phi, d1, d2, m3, h):
+    return phi + h * (d1 + h * (0.5 * d2 + h * m3 / 6.0))
+
+
+@njit(cache=True, nogil=True)
+def _cubic_step(phi, d1, d2, m3):
+    """First root ``h > 0`` of ``phi + d1 h + d2 h^2/2 + m3 h^3/6`` (``phi <= 0``,
+    ``m3 > 0``).
+
+    With ``m3`` a bound of the third derivative of ``phi`` this cubic bounds
+    ``phi(t + h)`` from above, so no zero of ``phi`` comes sooner. The cubic is
+    monotone between its critical points; the root is polished by bracketed Newton.
+    """
+    # Break points 0 < c1 < c2 (critical points, when positive), then an upper bound.
+    c1 = np.inf
+    c2 = np.inf
+    disc = d2 * d2 - 2.0 * m3 * d1
+    if disc > 0.0:
+        root = math.sqrt(disc)
+        low = (-d2 - root) / m3
+        high = (-d2 + root) / m3
+        if low > 0.0:
+            c1 = low
+            c2 = high
+        elif high > 0.0:
+            c1 = high
+    last = 0.0 if c1 == np.inf else (c1 if c2 == np.inf else c2)
+    # Beyond ``last`` the cubic increases; from there it exceeds phi(last) + m3 x^3/6 only
+    # where also convex, so grow the candidate until it is positive (a few doublings).
+    scale = max(last, 1e-300)
+    base = _cubic(phi, d1, d2, m3, last)
+    if base < 0.0:
+        scale = max(scale, math.exp(math.log(-6.0 * base / m3) / 3.0))
+    upper = last + scale
+    for _ in range(200):
+        if _cubic(phi, d1, d2, m3, upper) > 0.0:
+            break
+        upper += scale
+        scale *= 2.0
+    for i in range(3):
+        lo = 0.0 if i == 0 else (c1 if i == 1 else c2)
+        hi = c1 if i == 0 else (c2 if i == 1 else upper)
+        if lo == np.inf:
+            break
+        if hi == np.inf:
+            hi = upper
+        if hi <= lo or _cubic(phi, d1, d2, m3, hi) < 0.0:
+            continue
+        x = lo
+        for _ in range(60):
+            value = _cubic(phi, d1, d2, m3, x)
+            if value < 0.0:
+                lo = x
+            else:
+                hi = x
+            slope = d1 + x * (d2 + 0.5 * m3 * x)
+            nxt = x - value / slope if slope > 0.0 else 0.5 * (lo + hi)
+            if abs(nxt - x) <= 1e-12 * hi:
+                break
+            if not lo < nxt < hi:
+                nxt = 0.5 * (lo + hi)
+            x = nxt
+        # lo is on the safe side of the root.
+        return lo
+    return upper
+
+
+@njit(cache=True, nogil=True)
+def _arc_entry(t, omega, cr, ci, level):
+    """Earliest time >= ``t`` [s] at which ``Re[(cr + i ci) e^{i w t}] >= level``
+    (``inf`` if never)."""
+    amplitude = math.hypot(cr, ci)
+    if level > amplitude:
+        return np.inf
+    if level <= -amplitude:
+        return t
+    beta = math.acos(level / amplitude)
+    psi = omega * t + math.atan2(ci, cr)
+    psi -= TWO_PI * math.floor(psi / TWO_PI)
+    if psi <= beta or psi >= TWO_PI - beta:
+        return t
+    return t + (TWO_PI - beta - psi) / omega
+
+
+@njit(cache=True, nogil=True)
+def _dual_norm(row, l1, l2, k):
+    """``max |l1 h + l2 h'|`` over states of unit energy ``k h^2 + D h'^2``."""
+    return math.sqrt(l1 * l1 / k + l2 * l2 / row[M_D])
+
+
+@njit(cache=True, nogil=True)
+def _functional_bound(row, l1, l2, k, power):
+    """``||l A^power||`` in the dual of the energy norm ``sqrt(k h^2 + D h'^2)``:
+    bounds the ``power``-th derivative of ``l . (h, h')`` per unit energy norm."""
+    kd = row[M_KD]
+    cd = row[M_CD]
+    for _ in range(power):
+        # (l1, l2) A with A = [[0, 1], [-kd, -cd]]
+        l1, l2 = -kd * l2, l1 - cd * l2
+    return math.sqrt(l1 * l1 / k + l2 * l2 / row[M_D])
+
+
+@njit(cache=True, nogil=True)
+def _search(structure, table, j, omega, a, t0, h0, hd0, v0, dd0, t_from, t_end, mask,
+            horizon):
+    """First event of the functions in ``mask`` in ``(t0, t_end]`` for a stretch in
+    contact mode ``j`` (row of ``table``) starting at ``t0`` [s] with homogeneous state
+    ``(h0, hd0)``, speed ``v0`` and ``delta'(t0) = dd0``, looking from ``t_from``.
+
+    Returns
+    -------
+    kind, t
+        The event's bit (0: none before ``t_end``, -1: step budget) and its time [s].
+    """
+    row = table[j]
+    k = structure[S_STIFFNESS]
+    ca = structure[S_COS]
+    sa = structure[S_SIN]
+    m = structure[S_MASS]
+    cs = structure[S_CS]
+    ck = structure[S_CK]
+    g = structure[S_G]
+    d = row[M_D]
+    s = row[M_SIGN]
+    kk = row[M_K]
+    kd = row[M_KD]
+    cd = row[M_CD]
+    w2 = omega * omega
+    pr = row[M_PRE]
+    pi = row[M_PIM]
+    # Bounds of |phi''|: sinusoid amplitude * w^2 and the homogeneous functional.
+    sin_p = 0.0
+    sin_m = 0.0
+    hom_p = 0.0
+    hom_m = 0.0
+    hom3_p = 0.0
+    hom3_m = 0.0
+    hom3_v = 0.0
+    hom3_n = 0.0
+    kappa_p = -m * (sa + cs * ca)
+    kappa_m = -m * (-sa + cs * ca)
+    if mask & EV_RELEASE_FORWARD:
+        sin_p = w2 * math.hypot(-kappa_p * w2 * pr + cs * a, -kappa_p * w2 * pi)
+        hom_p = abs(kappa_p) * _functional_bound(row, -kd, -cd, k, 2)
+        hom3_p = abs(kappa_p) * _functional_bound(row, -kd, -cd, k, 3)
+    if mask & EV_RELEASE_BACKWARD:
+        sin_m = w2 * math.hypot(-kappa_m * w2 * pr + cs * a, -kappa_m * w2 * pi)
+        hom_m = abs(kappa_m) * _functional_bound(row, -kd, -cd, k, 2)
+        hom3_m = abs(kappa_m) * _functional_bound(row, -kd, -cd, k, 3)
+    sin_v = 0.0
+    hom_v = 0.0
+    if mask & EV_SLIP_END:
+        # v's sinusoid: -K delta_p' + s ck a sin(wt) / w.
+        sin_v = w2 * math.hypot(kk * omega * pi, kk * omega * pr + s * ck * a / omega)
+        hom_v = _functional_bound(row, 0.0, s * kk, k, 2)
+        hom3_v = _functional_bound(row, 0.0, s * kk, k, 3)
+    sin_n = 0.0
+    hom_n = 0.0
+    if mask & EV_LIFT_OFF:
+        sin_n = w2 * math.hypot(a + m * ca * w2 * pr, m * ca * w2 * pi)
+        hom_n = m * ca * _functional_bound(row, kd, cd, k, 2)
+        hom3_n = m * ca * _functional_bound(row, kd, cd, k, 3)
+    sin_w0 = math.sin(omega * t0)
+    t = t_from
+    first = t_from == t0
+    # Functions made of a sinusoid, a constant and a functional of h cannot reach 0
+    # before the sinusoid reaches -(constant + bound of the functional): with the energy
+    # non-increasing, that arc's entry is a safe first look (one step over a stick).
+    energy0 = math.sqrt(max(k * h0 * h0 + d * hd0 * hd0, 0.0))
+    wait_p = t
+    wait_m = t
+    wait_n = t
+    if mask & EV_RELEASE_FORWARD:
+        slack = abs(kappa_p) * _dual_norm(row, kd, cd, k) * energy0
+        wait_p = _arc_entry(t, omega, -kappa_p * w2 * pr + cs * a, -kappa_p * w2 * pi,
+                            cs * g - slack)
+    if mask & EV_RELEASE_BACKWARD:
+        slack = abs(kappa_m) * _dual_norm(row, kd, cd, k) * energy0
+        wait_m = _arc_entry(t, omega, -kappa_m * w2 * pr + cs * a, -kappa_m * w2 * pi,
+                            cs * g - slack)
+    if mask & EV_LIFT_OFF:
+        slack = m * ca * _dual_norm(row, kd, cd, k) * energy0
+        wait_n = _arc_entry(t, omega, a + m * ca * w2 * pr, m * ca * w2 * pi, g - slack)
+    for steps in range(MAX_SEARCH_STEPS):
+        tau = t - t0
+        h, hd, _, _, _, _ = _homogeneous(row, tau, h0, hd0)
+        ph = omega * t
+        cw = math.cos(ph)
+        sw = math.sin(ph)
+        dp, dpd, dpdd, dpddd = _particular(row, omega, cw, sw)
+        hdd = -(kd * h + cd * hd)
+        hddd = -(kd * hd + cd * hdd)
+        dd = dpd + hd
+        ddd = dpdd + hdd  # delta'' in this mode
+        dddd = dpddd + hddd
+        # delta = w^4 Re[P e^{iwt}] + h
+        ddddd = w2 * w2 * (dp - row[M_OFFSET]) - (kd * hdd + cd * hddd)
+        energy = math.sqrt(max(k * h * h + d * hd * hd, 0.0))
+        step = np.inf
+        kind = 0
+        drive = a * cw
+        ddrive = -a * omega * sw
+        if mask & (EV_RELEASE_FORWARD | EV_RELEASE_BACKWARD):
+            # Stick only: delta'' is the stick's.
+            for bit in (EV_RELEASE_FORWARD, EV_RELEASE_BACKWARD):
+                if not mask & bit:
+                    continue
+                if bit == EV_RELEASE_FORWARD:
+                    kappa = kappa_p
+                    bound = sin_p + hom_p * energy
+                    wait = wait_p
+                else:
+                    kappa = kappa_m
+                    bound = sin_m + hom_m * energy
+                    wait = wait_m
+                if wait > t:
+                    if wait - t < step:
+                        step = wait - t
+                        kind = 0
+                    continue
+                phi = kappa * ddd - cs * g + cs * drive
+                dphi = kappa * dddd + cs * ddrive
+                if phi > 0.0 or (phi == 0.0 and dphi > 0.0):
+                    return bit, t, steps
+                h_step = _safe_step(phi, dphi, bound)
+                d2phi = kappa * ddddd - cs * drive * w2
+                bound3 = omega * (sin_p if bit == EV_RELEASE_FORWARD else sin_m) + (
+                    hom3_p if bit == EV_RELEASE_FORWARD else hom3_m) * energy
+                if bound3 > 0.0:
+                    h_step = max(h_step, _cubic_step(phi, dphi, d2phi, bound3))
+                if h_step < step:
+                    step = h_step
+                    kind = bit
+        if mask & EV_SLIP_END:
+            # s v = s v0 - s K (delta' - delta'_0) - ck g tau + ck a (sin wt - sin wt0) / w
+            sv = (s * v0 - s * kk * (dd - dd0) - ck * g * tau
+                  + ck * a * (sw - sin_w0) / omega)
+            dsv = -s * kk * ddd - ck * g + ck * drive
+            phi = -sv
+            dphi = -dsv
+            bound = sin_v + hom_v * energy
+            if first and v0 == 0.0:
+                phi = 0.0
+                if dphi >= -START_SLOPE * (ck * (g + a) + abs(kk * ddd)):
+                    # No first-order start (a release where ck = cs): the slip moves
+                    # only if s v > 0 just after. A slip ending within the nudge would
+                    # move by O(nudge^3) of the amplitude.
+                    nudge = NUDGE * TWO_PI / omega
+                    tn = t + nudge
+                    _, hdn, _, _, _, _ = _homogeneous(row, tn - t0, h0, hd0)
+                    _, dpdn, _, _ = _particular(row, omega, math.cos(omega * tn),
+                                                math.sin(omega * tn))
+                    svn = (-s * kk * (dpdn + hdn - dd0) - ck * g * (tn - t0)
+                           + ck * a * (math.sin(omega * tn) - sin_w0) / omega)
+                    if svn <= 0.0 or tn >= t_end:
+                        return EV_SLIP_END, t, steps
+                    t = tn
+                    first = False
+                    continue
+            if phi > 0.0 or (phi == 0.0 and dphi > 0.0):
+                return EV_SLIP_END, t, steps
+            h_step = _safe_step(phi, dphi, bound)
+            d2phi = s * kk * dddd + ck * a * omega * sw
+            bound3 = omega * sin_v + hom3_v * energy
+            if bound3 > 0.0:
+                h_step = max(h_step, _cubic_step(phi, dphi, d2phi, bound3))
+            if h_step < step:
+                step = h_step
+                kind = EV_SLIP_END
+        if mask & EV_LIFT_OFF and wait_n > t:
+            if wait_n - t < step:
+                step = wait_n - t
+                kind = 0
+        elif mask & EV_LIFT_OFF:
+            phi = -(g - drive + m * ca * ddd)
+            dphi = -(-ddrive + m * ca * dddd)
+            bound = sin_n + hom_n * energy
+            if phi > 0.0:
+                return EV_LIFT_OFF, t, steps
+            h_step = _safe_step(phi, dphi, bound)
+            d2phi = -(drive * w2 + m * ca * ddddd)
+            bound3 = omega * sin_n + hom3_n * energy
+            if bound3 > 0.0:
+                h_step = max(h_step, _cubic_step(phi, dphi, d2phi, bound3))
+            if h_step < step:
+                step = h_step
+                kind = EV_LIFT_OFF
+        first = False
+        if t + step >= t_end:
+            return 0, t_end, steps
+        if kind != 0 and step <= 4.0 * EPS * horizon:
+            return kind, t + step, steps
+        t = t + step
+    return -1, t, MAX_SEARCH_STEPS
+
+
+@njit(cache=True, nogil=True)
+def _stick_releases(structure, table, omega, a, t, dl, dld):
+    """Release functions ``s tau - cs n`` (stick forces) at state ``(dl, dld)``, ``t``."""
+    ca = structure[S_COS]
+    sa = structure[S_SIN]
+    m = structure[S_MASS]
+    cs = structure[S_CS]
+    g = structure[S_G]
+    drive = a * math.cos(omega * t)
+    ddd0 = drive * ca - structure[S_DAMPING] * dld - structure[S_STIFFNESS] * dl
+    base = -cs * g + cs * drive
+    return -m * (sa + cs * ca) * ddd0 + base, -m * (-sa + cs * ca) * ddd0 + base, ddd0
+
+
+@njit(cache=True, nogil=True)
+def _mode_acceleration(structure, row, omega, a, t, dl, dld):
+    """``delta''`` in the mode of ``row`` at state ``(dl, dld)`` and time ``t``."""
+    drive = math.cos(omega * t)
+    return (row[M_FORCE] * drive + row[M_GCONST] - structure[S_DAMPING] * dld
+            - structure[S_STIFFNESS] * dl) / row[M_D]
+
+
+@njit(cache=True, nogil=True)
+def _slip_acceleration(structure, row, omega, a, t, ddd):
+    """``v'`` in the slip of ``row`` with mode acceleration ``ddd``."""
+    s = row[M_SIGN]
+    ck = structure[S_CK]
+    return -row[M_K] * ddd - s * ck * structure[S_G] + s * ck * a * math.cos(omega * t)
+
+
+@njit(cache=True, nogil=True)
+def _mat_left(jac, r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    """``jac <- R jac`` for the 3x3 matrix ``R`` given by rows."""
+    for col in range(3):
+        x0 = jac[0, col]
+        x1 = jac[1, col]
+        x2 = jac[2, col]
+        jac[0, col] = r00 * x0 + r01 * x1 + r02 * x2
+        jac[1, col] = r10 * x0 + r11 * x1 + r12 * x2
+        jac[2, col] = r20 * x0 + r21 * x1 + r22 * x2
+
+
+@njit(cache=True, nogil=True)
+def _initial_mode(structure, table, omega, a, t, z):
+    """Contact mode of state ``z`` at ``t``: the sign of ``v``, or the stick test."""
+    if z[2] > 0.0:
+        return 1
+    if z[2] < 0.0:
+        return -1
+    r_p, r_m, _ = _stick_releases(structure, table, omega, a, t, z[0], z[1])
+    if r_p > 0.0:
+        return 1
+    if r_m > 0.0:
+        return -1
+    return 0
+
+
+@njit(cache=True, nogil=True)
+def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, check_lift,
+        max_events, acc):
+    """Follow the state ``z`` (in place) from ``t_begin`` to ``t_stop`` [s].
+
+    ``acc`` receives the displacement [m], slips, forward/backward slip and stick
+    time [s] and events; ``jac`` (3x3) is multiplied on the left by the flow's
+    Jacobian when ``want_jac``.
+
+    Returns
+    -------
+    int
+        ``RUN_OK``, ``RUN_LIFT_OFF``, ``RUN_PARADOX`` or ``RUN_BUDGET``.
+    """
+    horizon = max(abs(t_stop), TWO_PI / omega)
+    t = t_begin
+    mode = _initial_mode(structure, table, omega, a, t, z)
+    if mode != 0:
+        if table[1 if mode > 0 else 2, M_D] <= 0.0:
+            return RUN_PARADOX
+        if z[2] == 0.0:
+            acc[A_SLIPS] += 1.0
+    events = 0
+    # Where the next search starts looking (after a slip that could not move).
+    t_from = t
+    while t < t_stop:
+        events += 1
+        if events > max_events:
+            acc[A_EVENTS] += events
+            return RUN_BUDGET
+        j = 0 if mode == 0 else (1 if mode > 0 else 2)
+        row = table[j]
+        cw = math.cos(omega * t)
+        sw = math.sin(omega * t)
+        dp, dpd, _, _ = _particular(row, omega, cw, sw)
+        h0 = z[0] - dp
+        hd0 = z[1] - dpd
+        v0 = z[2]
+        dd0 = z[1]
+        if mode == 0:
+            mask = EV_RELEASE_FORWARD | EV_RELEASE_BACKWARD
+        else:
+            mask = EV_SLIP_END
+        if check_lift:
+            mask |= EV_LIFT_OFF
+        kind, te, steps = _search(structure, table, j, omega, a, t, h0, hd0, v0, dd0,
+                           max(t, t_from), t_stop, mask, horizon)
+        acc[A_STEPS] += steps
+        if kind < 0:
+            acc[A_EVENTS] += events
+            return RUN_BUDGET
+        if kind == EV_LIFT_OFF:
+            acc[A_EVENTS] += events
+            return RUN_LIFT_OFF
+        tau = te - t
+        h, hd, e11, e12, e21, e22 = _homogeneous(row, tau, h0, hd0)
+        ph = omega * te
+        cwe = math.cos(ph)
+        swe = math.sin(ph)
+        dpe, dpde, _, _ = _particular(row, omega, cwe, swe)
+        dl = dpe + h
+        dld = dpde + hd
+        if mode == 0:
+            acc[A_STICK] += tau
+            z[0] = dl
+            z[1] = dld
+            z[2] = 0.0
+            if want_jac:
+                _mat_left(jac, e11, e12, 0.0, e21, e22, 0.0, 0.0, 0.0, 0.0)
+        else:
+            s = row[M_SIGN]
+            kk = row[M_K]
+            ck = structure[S_CK]
+            g = structure[S_G]
+            tw = omega * tau
+            # v and the displacement over the slip, cancellation-free in tau.
+            dsin = (cw * math.sin(tw) - sw * _one_minus_cos(tw)) / omega
+            v_end = v0 - kk * (dld - dd0) - s * ck * g * tau + s * ck * a * dsin
+            # integral of (sin wt - sin wt0) / w dt = [cw0 (1 - cos) + sw0 (sin - tw)] / w^2
+            iint = (cw * _one_minus_cos(tw) + sw * _sin_minus_x(tw)) / (omega * omega)
+            dp_full = (dpe - dp) - dpd * tau  # particular: delta1 - delta0 - delta0' tau
+            dh_full = (h - h0) - hd0 * tau
+            displacement = (v0 * tau - kk * (dp_full + dh_full) - 0.5 * s * ck * g * tau * tau
+                            + s * ck * a * iint)
+            acc[A_DISPLACEMENT] += displacement
+            if s > 0:
+                acc[A_FORWARD] += tau
+            else:
+                acc[A_BACKWARD] += tau
+            z[0] = dl
+            z[1] = dld
+            z[2] = 0.0 if kind == EV_SLIP_END else v_end
+            if want_jac:
+                _mat_left(jac, e11, e12, 0.0, e21, e22, 0.0,
+                          -kk * e21, -kk * (e22 - 1.0), 1.0)
+        t = te
+        if kind == 0:
+            break
+        # An event at te: decide the next contact mode and apply the saltation.
+        r_p, r_m, acc0 = _stick_releases(structure, table, omega, a, te, dl, dld)
+        if mode == 0:
+            new = 1 if kind == EV_RELEASE_FORWARD else -1
+            jn = 1 if new > 0 else 2
+            if table[jn, M_D] <= 0.0:
+                acc[A_EVENTS] += events
+                return RUN_PARADOX
+            acc[A_SLIPS] += 1.0
+            if want_jac:
+                rown = table[jn]
+                accn = _mode_acceleration(structure, rown, omega, a, te, dl, dld)
+                vdot = _slip_acceleration(structure, rown, omega, a, te, accn)
+                m = structure[S_MASS]
+                kap = -m * (new * structure[S_SIN] + structure[S_CS] * structure[S_COS])
+                # Gradient of s tau - cs n in (delta, delta'); time rate along the stick.
+                g_d = -kap * structure[S_STIFFNESS]
+                g_dd = -kap * structure[S_DAMPING]
+                swe2 = math.sin(omega * te)
+                ddd_rate = (-a * omega * swe2 * structure[S_COS]
+                            - structure[S_DAMPING] * acc0 - structure[S_STIFFNESS] * dld)
+                rate = kap * ddd_rate - structure[S_CS] * a * omega * swe2
+                if rate > 0.0:
+                    q = 1.0 / rate
+                    jump = accn - acc0
+                    _mat_left(jac, 1.0, 0.0, 0.0,
+                              jump * g_d * q, 1.0 + jump * g_dd * q, 0.0,
+                              vdot * g_d * q, vdot * g_dd * q, 1.0)
+            mode = new
+        else:
+            s = int(row[M_SIGN])
+            accm = _mode_acceleration(structure, row, omega, a, te, dl, dld)
+            vdot_minus = _slip_acceleration(structure, row, omega, a, te, accm)
+            if (s > 0 and r_m > 0.0) or (s < 0 and r_p > 0.0):
+                new = -s
+            else:
+                new = 0
+            if new != 0:
+                jn = 1 if new > 0 else 2
+                if table[jn, M_D] <= 0.0:
+                    acc[A_EVENTS] += events
+                    return RUN_PARADOX
+                acc[A_SLIPS] += 1.0
+                rown = table[jn]
+                accp = _mode_acceleration(structure, rown, omega, a, te, dl, dld)
+                vdot_plus = _slip_acceleration(structure, rown, omega, a, te, accp)
+            else:
+                accp = acc0
+                vdot_plus = 0.0
+            if want_jac and vdot_minus != 0.0:
+                q = 1.0 / vdot_minus
+                _mat_left(jac, 1.0, 0.0, 0.0,
+                          0.0, 1.0, (accp - accm) * q,
+                          0.0, 0.0, vdot_plus * q)
+            if new == 0 and tau == 0.0:
+                # The slip could not move: do not release it again at once.
+                t_from = te + NUDGE * TWO_PI / omega
+            mode = new
+    acc[A_EVENTS] += events
+    return RUN_OK
+
+
+@njit(cache=True, nogil=True)
+def _solve3(m, r, out):
+    """Solve ``m x = r`` (3x3, partial pivoting) into ``out``; False when singular."""
+    a = m.copy()
+    b = r.copy()
+    for col in range(3):
+        piv = col
+        for i in range(col + 1, 3):
+            if abs(a[i, col]) > abs(a[piv, col]):
+                piv = i
+        if a[piv, col] == 0.0 or not math.isfinite(a[piv, col]):
+            return False
+        if piv != col:
+            for jj in range(3):
+                a[col, jj], a[piv, jj] = a[piv, jj], a[col, jj]
+            b[col], b[piv] = b[piv], b[col]
+        for i in range(col + 1, 3):
+            f = a[i, col] / a[col, col]
+            for jj in range(col, 3):
+                a[i, jj] -= f * a[col, jj]
+            b[i] -= f * b[col]
+    for i in range(2, -1, -1):
+        x = b[i]
+        for jj in range(i + 1, 3):
+            x -= a[i, jj] * out[jj]
+        out[i] = x / a[i, i]
+    return True
+
+
+@njit(cache=True, nogil=True)
+def spectral_radius(jac):
+    """Largest modulus of the eigenvalues of the 3x3 ``jac`` (the Floquet multipliers)."""
+    if not np.all(np.isfinite(jac)):
+        return np.inf
+    if jac[2, 0] == 0.0 and jac[2, 1] == 0.0:
+        # A stick on the orbit: v is reset, one multiplier is jac[2, 2] (0).
+        half = 0.5 * (jac[0, 0] + jac[1, 1])
+        det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
+        disc = half * half - det
+        if disc < 0.0:
+            rho = math.sqrt(max(det, 0.0))
+        else:
+            root = math.sqrt(disc)
+            rho = max(abs(half + root), abs(half - root))
+        return max(rho, abs(jac[2, 2]))
+    values = np.linalg.eigvals(jac.astype(np.complex128))
+    return np.max(np.abs(values))
+
+
+@njit(cache=True, nogil=True)
+def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc, work):
+    """Newton's method on ``P^periods(z) - z`` from ``z`` (updated in place).
+
+    Returns
+    -------
+    flag, converged
+        The last stretch's ``RUN_*`` flag and whether ``z`` is a fixed point; ``jac``
+        then holds the Jacobian of ``P^periods`` there and ``acc`` its statistics.
+    """
+    span = periods * TWO_PI / omega
+    previous = np.inf
+    step = np.empty(3)
+    residual = np.empty(3)
+    for _ in range(MAX_NEWTON):
+        for i in range(3):
+            work[i] = z[i]
+            for jj in range(3):
+                jac[i, jj] = 1.0 if i == jj else 0.0
+        acc[:] = 0.0
+        flag = run(structure, table, omega, a, work, 0.0, span, jac, True, False,
+                   max_events, acc)
+        if flag != RUN_OK:
+            return flag, False
+        res = 0.0
+        for i in range(3):
+            residual[i] = z[i] - work[i]
+            res = max(res, abs(residual[i]) / scales[i])
+        if res <= NEWTON_TOLERANCE or (res <= LOOSE_TOLERANCE and res >= 0.5 * previous):
+            return RUN_OK, True
+        if res > previous:
+            # Diverging (an event appeared or vanished): take the map's step instead.
+            for i in range(3):
+                z[i] = work[i]
+            previous = np.inf
+            continue
+        previous = res
+        for i in range(3):
+            jac[i, i] -= 1.0
+        solved = _solve3(jac, residual, step)
+        for i in range(3):
+            jac[i, i] += 1.0
+        if not solved:
+            for i in range(3):
+                z[i] = work[i]
+            continue
+        size = 0.0
+        for i in range(3):
+            z[i] += step[i]
+            size = max(size, abs(step[i]) / scales[i])
+        if size <= NEWTON_STEP:
+            # Quadratic convergence: the error after this step is ~ size^2.
+            return RUN_OK, True
+    return RUN_OK, False
+
+
+@njit(cache=True, nogil=True)
+def _scales(structure, table, omega, a):
+    """Natural sizes of ``(delta, delta', v)`` for residuals [m, m s^-1, m s^-1]."""
+    amp = math.hypot(table[0, M_PRE], table[0, M_PIM])
+    k = structure[S_STIFFNESS]
+    size = max(amp, a / (k + omega * omega), 1e-300)
+    return size, size * max(omega, math.sqrt(k)), max(a / omega, 1e-300)
+
+
+@njit(cache=True, nogil=True)
+def _start(table, omega, t, z, factor):
+    """Rest at ``t`` with the mode on ``factor`` times its steady stick response."""
+    cw = math.cos(omega * t)
+    sw = math.sin(omega * t)
+    dp, dpd, _, _ = _particular(table[0], omega, cw, sw)
+    z[0] = factor * dp
+    z[1] = factor * dpd
+    z[2] = 0.0
+
+
+@njit(cache=True, nogil=True)
+def _is_static(structure, table, omega, a):
+    """Neither release can happen with the mode on its steady response."""
+    w2 = omega * omega
+    m = structure[S_MASS]
+    ca = structure[S_COS]
+    sa = structure[S_SIN]
+    cs = structure[S_CS]
+    pr = table[0, M_PRE]
+    pi = table[0, M_PIM]
+    level = cs * structure[S_G] * (1.0 + 8.0 * EPS)
+    for sign in (1.0, -1.0):
+        kappa = -m * (sign * sa + cs * ca)
+        if math.hypot(-kappa * w2 * pr + cs * a, -kappa * w2 * pi) > level:
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, scales,
+           jac, acc, work, history):
+    """Periodic orbit reached from state ``z`` at ``t_start`` (in the first period).
+
+    Returns
+    -------
+    status, reason, periods
+        ``periods`` > 0 and ``z`` the orbit's state at phase 0 when found; ``jac``
+        and ``acc`` then belong to one pass around it.
+    """
+    period = TWO_PI / omega
+    acc[:] = 0.0
+    flag = RUN_OK
+    if t_start != 0.0:
+        flag = run(structure, table, omega, a, z, t_start, period, jac, False, False,
+                   max_events, acc)
+    if flag == RUN_PARADOX:
+        return FRICTION_PARADOX, REASON_NONE, 0
+    if flag == RUN_BUDGET:
+        return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
+    guess = z.copy()
+    flag, converged = _newton(structure, table, omega, a, z, 1, scales, max_events, jac,
+                              acc, work)
+    if converged and spectral_radius(jac) < 1.0 + STABILITY_MARGIN:
+        return STICK_SLIP, REASON_NONE, 1
+    if flag == RUN_PARADOX:
+        return FRICTION_PARADOX, REASON_NONE, 0
+    # No stable fixed point near: iterate the map from the warmed-up state and look
+    # for a cycle of up to MAX_PERIOD periods, then solve for it by Newton.
+    for i in range(3):
+        z[i] = guess[i]
+    tried = np.full(MAX_PERIOD + 1, np.inf)
+    for iteration in range(max_iterations):
+        slot = iteration % MAX_PERIOD
+        for i in range(3):
+            history[slot, i] = z[i]
+        flag = run(structure, table, omega, a, z, 0.0, period, jac, False, False,
+                   max_events, acc)
+        if flag == RUN_PARADOX:
+            return FRICTION_PARADOX, REASON_NONE, 0
+        if flag != RUN_OK:
+            return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
+        for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
+            back = (iteration - periods + 1) % MAX_PERIOD
+            gap = 0.0
+            for i in range(3):
+                gap = max(gap, abs(z[i] - history[back, i]) / scales[i])
+            if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
+                tried[periods] = gap
+                for i in range(3):
+                    work[i] = history[back, i]
+                candidate = work[:3].copy()
+                flag, converged = _newton(structure, table, omega, a, candidate, periods,
+                                          scales, max_events, jac, acc, work)
+                if converged and spectral_radius(jac) < 1.0 + STABILITY_MARGIN:
+                    for i in range(3):
+                        z[i] = candidate[i]
+                    return STICK_SLIP, REASON_NONE, periods
+                break
+    return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0
+
+
+@njit(cache=True, nogil=True)
+def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start, factor,
+                out):
+    """Steady orbit at one drive point; ``out`` receives
+    ``(status, reason, velocity, slips, forward, backward, period, multiplier, z0, z1, z2)``.
+
+    ``t_start`` [s] and ``factor`` choose the starting state (rest, mode on ``factor``
+    times its steady response).
+    """
+    table = np.zeros((3, N_MODE))
+    mode_table(structure, omega, a, table)
+    out[:] = np.nan
+    out[1] = REASON_NONE
+    out[6] = 0.0
+    if _is_static(structure, table, omega, a):
+        out[0] = LIFT_OFF if lifted else STATIC
+        if not lifted:
+            out[2] = 0.0
+            out[3] = 0.0
+            out[4] = 0.0
+            out[5] = 0.0
+            out[7] = 0.0
+        return
+    scales = np.empty(3)
+    scales[0], scales[1], scales[2] = _scales(structure, table, omega, a)
+    z = np.empty(3)
+    _start(table, omega, t_start, z, factor)
+    jac = np.empty((3, 3))
+    acc = np.zeros(N_ACC)
+    work = np.empty(3)
+    history = np.empty((MAX_PERIOD, 3))
+    status, reason, periods = _orbit(structure, table, omega, a, z, t_start, max_events,
+                                     max_iterations, scales, jac, acc, work, history)
+    out[0] = status
+    out[1] = reason
+    if periods == 0:
+        return
+    multiplier = spectral_radius(jac)
+    span = periods * TWO_PI / omega
+    for attempt in range(3):
+        # One more pass around the orbit, watching n > 0; it confirms the fixed point
+        # (Newton stopped on a small step, whose error is about its square).
+        for i in range(3):
+            work[i] = z[i]
+        acc[:] = 0.0
+        flag = run(structure, table, omega, a, work, 0.0, span, jac, False, True,
+                   max_events, acc)
+        if flag != RUN_OK:
+            break
+        res = 0.0
+        for i in range(3):
+            res = max(res, abs(work[i] - z[i]) / scales[i])
+        if res <= FINAL_TOLERANCE or attempt == 2:
+            break
+        newton_flag, converged = _newton(structure, table, omega, a, z, periods, scales,
+                                         max_events, jac, acc, work)
+        if newton_flag != RUN_OK or not converged:
+            out[0] = NOT_CONVERGED
+            out[1] = REASON_NO_PERIODIC_ORBIT
+            return
+    if flag == RUN_LIFT_OFF:
+        out[0] = LIFT_OFF
+        return
+    if flag != RUN_OK:
+        out[0] = NOT_CONVERGED
+        out[1] = REASON_EVENT_BUDGET
+        return
+    out[0] = STICK_SLIP if acc[A_STICK] > 0.0 else CONTINUOUS_SLIDING
+    out[2] = acc[A_DISPLACEMENT] / span
+    out[3] = acc[A_SLIPS] / periods
+    out[4] = acc[A_FORWARD] / span
+    out[5] = acc[A_BACKWARD] / span
+    out[6] = periods
+    out[7] = multiplier
+    out[8] = z[0]
+    out[9] = z[1]
+    out[10] = z[2]
+
+
+N_OUT = 11
+
+
+@njit(cache=True, nogil=True)
+def _solve_into(i, structure, omega, a, lifted, max_events, max_iterations, out):
+    solve_point(structure, omega[i], a[i], lifted[i], max_events, max_iterations, 0.0, 1.0,
+                out[i])
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _solve_points(structure, omega, a, lifted, max_events, max_iterations, out):
+    """Fill ``out`` (n x N_OUT) in parallel over points, interleaved (see steady.py)."""
+    n = omega.shape[0]
+    lanes = min(n, 256)
+    for lane in prange(lanes):
+        for i in range(lane, n, lanes):
+            _solve_into(i, structure, omega, a, lifted, max_events, max_iterations, out)
+
+
+@njit(cache=True, nogil=True)
+def _solve_points_serial(structure, omega, a, lifted, max_events, max_iterations, out):
+    """Same as :func:`_solve_points` on one thread."""
+    for i in range(omega.shape[0]):
+        _solve_into(i, structure, omega, a, lifted, max_events, max_iterations, out)
