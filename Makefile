@@ -4,7 +4,8 @@
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
 #   make test       set up .venv on a fresh machine, lint, run the test suite
 #   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash
-#   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc
+#   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc,
+#                   one-thread map against a single-purpose floor -> results/bench-floor.md
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
 
@@ -89,6 +90,7 @@ fuzz: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_velocity_map.py
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/floor_one_way.py
 	$(PY) benchmarks/bench_study_overhead.py
 	$(PY) benchmarks/bench_work_precision.py
 	$(PY) benchmarks/bench_planar.py

@@ -297,8 +297,42 @@ def steady_velocity(
     --------
     steady_state : the same with diagnostics.
     """
-    result = steady_state(structure, f, a, settings, coupling=coupling)
-    return result.velocity, result.status
+    if check_coupling(coupling) != "one-way":
+        result = steady_state(structure, f, a, settings, coupling=coupling)
+        return result.velocity, result.status
+    structure = check_structure(structure)
+    settings = SolverSettings() if settings is None else settings
+    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    velocity, status = _velocity_only(
+        structure, np.ascontiguousarray(f_arr).ravel(), np.ascontiguousarray(a_arr).ravel(),
+        settings,
+    )
+    return velocity.reshape(f_arr.shape), status.reshape(f_arr.shape)
+
+
+def _velocity_only(
+    structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+    settings: SolverSettings,
+) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
+    """The orbits of :func:`steady_state` on flat ``f``, ``a``, velocity and status only.
+
+    The kernel evaluates the force amplitudes of ``study.physics`` point by point
+    (bit-identical to the arrays :func:`steady_state` computes) and keeps no
+    diagnostics: the same velocity and status, bit for bit, without the temporaries.
+    """
+    n = f.size
+    velocity = np.empty(n)
+    status = np.empty(n, dtype=np.int8)
+    kernel = (_kernel._steady_velocity if n >= PARALLEL_THRESHOLD
+              else _kernel._steady_velocity_serial)
+    kernel(
+        f, a, structure.omega0, 1.0 / structure.Q, structure.M,
+        float(np.cos(structure.alpha_rad)), float(np.sin(structure.alpha_rad)),
+        structure.cs, structure.ck, structure.g,
+        structure.cs * structure.g, structure.ck * structure.g,
+        int(settings.max_events), int(settings.max_map_iterations), velocity, status,
+    )
+    return velocity, status
 
 
 # The kernel mirrors the enums as plain integers; keep them in step.

@@ -54,6 +54,9 @@ CYCLE_DETECTION = 1e-2
 # Newton refinement of a cycle stops once the cycle closes to this phase [rad].
 CYCLE_TOLERANCE = 1e-12
 
+# A release needs |A_s| > cs g times this (see _constants).
+RELEASE_MARGIN = 1.0 + 8.0 * 2.220446049250313e-16
+
 # Round-trip status of a sequence of slips.
 _ROUND_OK = 0
 _ROUND_STUCK = 1
@@ -411,7 +414,7 @@ def _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g):
     r_m = abs(a_minus)
     # A release needs |A_s| > cs g. Within a few ulps the comparison is rounding, and
     # at alpha = 0, a = a_lift it is exactly the lift-off touch (tau = 0, n = 0): no slip.
-    release_level = cs_g * (1.0 + 8.0 * 2.220446049250313e-16)
+    release_level = cs_g * RELEASE_MARGIN
     ok_p = r_p > release_level
     ok_m = r_m > release_level
     entry_p = 0.0
@@ -581,3 +584,110 @@ def _steady_state_serial(
             i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
             max_events, max_rounds, velocity, status, reason, slips, forward, backward, period,
         )
+
+
+# Velocity only (``study.solver.steady_velocity``): the same orbits, nothing else.
+# Points are dealt to threads in blocks of this many consecutive points (whole cache
+# lines of every array), blocks interleaved over the lanes as in _steady_state.
+VELOCITY_BLOCK = 64
+
+
+@njit(cache=True, nogil=True)
+def _amplitudes(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g):
+    """Force amplitudes at one point, operation for operation as numpy evaluates
+    ``study.physics`` there, so that they are bit-identical to the arrays
+    :func:`_steady_state` receives: ``release_amplitudes``, ``slip_amplitudes``, the
+    lift-off test ``a > lift_off_acceleration`` and ``w = 2 pi f``.
+
+    numpy multiplies a real by a complex as ``(x + 0j) * z`` and divides by a real
+    ``q`` as ``z * (1 / q)`` (Smith's algorithm); the zero products are kept so that
+    signed zeros come out as numpy's. ``inv_q = 1 / Q``, ``m = M``, ``cos_a`` and
+    ``sin_a`` are numpy's ``cos``/``sin`` of the tilt, ``w0`` is ``Structure.omega0``.
+    """
+    w = TWO_PI * f
+    # G = 1 / (w0^2 - w^2 + 1j * w0 * w / Q)
+    d_re = w0 * w0 - w * w + 0.0
+    d_im = 0.0 + (0.0 * 0.0 + w0 * w) * inv_q
+    if abs(d_re) >= abs(d_im):
+        rat = d_im / d_re
+        scl = 1.0 / (d_re + d_im * rat)
+        g_re = (1.0 + 0.0 * rat) * scl
+        g_im = (0.0 - 1.0 * rat) * scl
+    else:
+        rat = d_re / d_im
+        scl = 1.0 / (d_im + d_re * rat)
+        g_re = (1.0 * rat + 0.0) * scl
+        g_im = (0.0 * rat - 1.0) * scl
+    # k = w^2 M cos(alpha) G
+    x = w * w * m * cos_a
+    k_re = x * g_re - 0.0 * g_im
+    k_im = x * g_im + 0.0 * g_re
+    # 1 + k cos(alpha), N = -a (1 + k cos(alpha)), T = a k sin(alpha)
+    one_re = 1.0 + (k_re * cos_a - k_im * 0.0)
+    one_im = 0.0 + (k_re * 0.0 + k_im * cos_a)
+    lifted = a > g / math.hypot(one_re, one_im)
+    na = -a
+    n_re = na * one_re - 0.0 * one_im
+    n_im = na * one_im + 0.0 * one_re
+    ak_re = a * k_re - 0.0 * k_im
+    ak_im = a * k_im + 0.0 * k_re
+    t_re = ak_re * sin_a - ak_im * 0.0
+    t_im = ak_re * 0.0 + ak_im * sin_a
+    # s T - c N for c = cs (release) and ck (slip)
+    csn_re = cs * n_re - 0.0 * n_im
+    csn_im = cs * n_im + 0.0 * n_re
+    ckn_re = ck * n_re - 0.0 * n_im
+    ckn_im = ck * n_im + 0.0 * n_re
+    a_plus = complex(t_re - csn_re, t_im - csn_im)
+    a_minus = complex(-t_re - csn_re, -t_im - csn_im)
+    b_plus = complex(t_re - ckn_re, t_im - ckn_im)
+    b_minus = complex(-t_re - ckn_re, -t_im - ckn_im)
+    return a_plus, a_minus, b_plus, b_minus, lifted, w
+
+
+@njit(cache=True, nogil=True)
+def _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                   max_events, max_rounds, velocity, status):
+    """Solve point ``i`` for its velocity and status only."""
+    a_plus, a_minus, b_plus, b_minus, lifted, w = _amplitudes(
+        f[i], a[i], w0, inv_q, m, cos_a, sin_a, cs, ck, g
+    )
+    if lifted:
+        velocity[i] = np.nan
+        status[i] = LIFT_OFF
+        return
+    # Most points of a map never slip: decided before the slip constants are computed.
+    release_level = cs_g * RELEASE_MARGIN
+    if not (abs(a_plus) > release_level or abs(a_minus) > release_level):
+        velocity[i] = 0.0
+        status[i] = STATIC
+        return
+    # The diagnostics _solve_point also returns are dead code here, and compiled away.
+    st, _, mean, _, _, _, _ = _solve_point(
+        a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_rounds
+    )
+    status[i] = st
+    velocity[i] = np.nan if st == NOT_CONVERGED else mean / w
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _steady_velocity(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                     max_events, max_rounds, velocity, status):
+    """Velocity and status of every point of the flat ``f``, ``a``, in parallel."""
+    n = f.shape[0]
+    blocks = (n + VELOCITY_BLOCK - 1) // VELOCITY_BLOCK
+    lanes = min(blocks, 256)
+    for lane in prange(lanes):
+        for block in range(lane, blocks, lanes):
+            for i in range(block * VELOCITY_BLOCK, min(n, (block + 1) * VELOCITY_BLOCK)):
+                _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                               max_events, max_rounds, velocity, status)
+
+
+@njit(cache=True, nogil=True)
+def _steady_velocity_serial(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                            max_events, max_rounds, velocity, status):
+    """Same as :func:`_steady_velocity` on one thread."""
+    for i in range(f.shape[0]):
+        _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                       max_events, max_rounds, velocity, status)
