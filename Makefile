@@ -41,8 +41,8 @@ $(STAMP): pyproject.toml
 # The spec schema's observables are exported from study/observables.py; results_schema/
 # is the repository's copy of the package's schemas (a test checks both).
 schemas: | $(STAMP)
-	$(PY) -c "from study.spec import export_spec_schema as e; \
-	open('study/schemas/study-spec-v1.schema.json', 'w').write(e())"
+	$(PY) -c "from study.spec import export_spec_schema as e; text = e(); \
+	open('study/schemas/study-spec-v1.schema.json', 'w').write(text)"
 	$(MAKE) $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
 
 results_schema/%.json: study/schemas/%.json

@@ -83,7 +83,8 @@ class Method:
         if self.name == "integrator":
             return integrated_steady_state(structure, f, a, coupling=self.coupling,
                                            settings=self.integrator, parallel=parallel)
-        return steady_state(structure, f, a, self.solver, parallel=parallel)
+        return steady_state(structure, f, a, self.solver, coupling=self.coupling,
+                            parallel=parallel)
 
 
 class _solved_once:
@@ -203,6 +204,13 @@ def _diagnostics(work: PointWork) -> dict[str, NDArray[Any]]:
             "nonconvergence": s.reason}
 
 
+def _floquet(work: PointWork) -> dict[str, NDArray[Any]]:
+    multiplier = work.solution.floquet_multiplier
+    if multiplier is None:  # the spec refuses it; a direct caller gets this message
+        raise ValueError("floquet needs the exact solver with two-way coupling")
+    return {"floquet_multiplier": multiplier}
+
+
 def _paper_model(work: PointWork) -> dict[str, NDArray[Any]]:
     return {"velocity_one_way": work.one_way.velocity, "status_one_way": work.one_way.status}
 
@@ -229,6 +237,9 @@ _DECLARED = (
                "converged", "point",
                ("slips_per_period", "forward_slip_fraction", "backward_slip_fraction",
                 "orbit_period", "nonconvergence"), _diagnostics, requires=("velocity",),
+               cached=True),
+    Observable("floquet", "largest Floquet multiplier of the orbit (exact two-way solver "
+               "only)", "point", ("floquet_multiplier",), _floquet, requires=("velocity",),
                cached=True),
     Observable("paper_model", "the paper's one-way velocity beside a two-way study", "point",
                ("velocity_one_way", "status_one_way"), _paper_model, requires=("velocity",),

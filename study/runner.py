@@ -383,6 +383,12 @@ def _method(spec: StudySpec) -> Method:
 
 def _method_text(spec: StudySpec) -> str:
     """How the velocities were computed, for the file's own description."""
+    if spec.method == "exact" and spec.coupling == "two-way":
+        return (
+            "the exact event-driven steady-state solver (closed form between events; "
+            "two-way coupling: the sliding base also forces the mode, the orbit is the "
+            "fixed point of the period map found by Newton's method)"
+        )
     if spec.method == "exact":
         return (
             "the exact event-driven steady-state solver (closed form between events; "

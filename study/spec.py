@@ -162,7 +162,7 @@ class StudySpec:
         Velocity solver: the exact steady-state solver, or time integration until
         the orbit repeats.
     coupling : {"one-way", "two-way"}
-        Whether the sliding base also forces the mode (two-way, integrator only).
+        Whether the sliding base also forces the mode (two-way; either method).
     integrator : IntegratorSettings
         Accuracy and budgets of the time integrator (used with ``method = "integrator"``).
     chunk_points : int
@@ -241,7 +241,10 @@ def spec_schema() -> dict[str, Any]:
     (the file on disk is their export, see :func:`export_spec_schema`).
     """
     schema = load_schema(SPEC_SCHEMA)
-    items = schema["properties"]["study"]["properties"]["observables"]["items"]
+    listed = schema["properties"]["study"]["properties"]["observables"]
+    listed["description"] = ("a non-empty list of distinct names from: "
+                             + ", ".join(OBSERVABLES))
+    items = listed["items"]
     items["enum"] = list(OBSERVABLES)
     items["description"] = "; ".join(
         f"{name}: {o.summary}" for name, o in OBSERVABLE_REGISTRY.items())
@@ -492,20 +495,21 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             _check_bounds(axis, path)
 
     coupling = solver_table.get("coupling", "one-way")
-    # The exact solver covers the paper's (one-way) model; two-way coupling needs time
-    # integration. A spec that says nothing gets the cheapest model that covers it.
-    method = solver_table.get("method", "exact" if coupling == "one-way" else "integrator")
-    if method == "exact" and coupling != "one-way":
-        raise SpecError(
-            f'{path}: [solver] coupling = "{coupling}" needs method = "integrator"; the exact '
-            'solver models the paper\'s one-way coupling only (allowed with method = "exact": '
-            'coupling = "one-way")'
-        )
+    # The exact solver covers both couplings (closed form between events; with two-way
+    # coupling the mode is a state of the orbit, found by Newton on the period map).
+    method = solver_table.get("method", "exact")
     if "paper_model" in observables and coupling == "one-way":
         raise SpecError(
             f'{path}: [study] observable "paper_model" (the one-way model beside a two-way '
             'study) needs [solver] coupling = "two-way"; a one-way study\'s velocity already '
             "is the paper's model"
+        )
+    if "floquet" in observables and (method, coupling) != ("exact", "two-way"):
+        raise SpecError(
+            f'{path}: [study] observable "floquet" (the orbit\'s largest Floquet multiplier) '
+            f'needs [solver] coupling = "two-way" with method = "exact" (the solver that '
+            f'computes it); got coupling = "{coupling}", method = "{method}" (allowed: '
+            'coupling = "two-way", method = "exact")'
         )
     wrong = sorted(
         k for k in solver_table if k in (INTEGRATOR_KEYS if method == "exact" else EXACT_KEYS)

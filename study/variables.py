@@ -122,6 +122,12 @@ _DECLARED = (
              "why the solver found no periodic orbit",
              flags=tuple(r.name.lower() for r in NonConvergence),
              flag_values=tuple(int(r) for r in NonConvergence)),
+    Variable("floquet_multiplier", "point", "float64", "1",
+             "largest modulus of the Floquet multipliers of the steady orbit on the state "
+             "(plate deflection, its rate, sliding velocity)",
+             comment="below 1: the orbit attracts nearby states; exactly 0 when static; "
+             "NaN (missing) where status is lift_off, not_converged or friction_paradox",
+             invalid_where="status"),
     Variable("velocity_one_way", "point", "float64", "m s-1",
              "mean steady velocity of the paper's one-way model at the same point "
              "(exact solver), for comparison with the two-way velocity",

@@ -123,6 +123,31 @@ def test_other_structure_solver_or_code_never_reuses(tmp_path, monkeypatch):
     assert report.points_reused == 0
 
 
+def test_the_two_couplings_never_share_kept_values(tmp_path):
+    """Same structure, grid and exact solver: only the coupling differs."""
+    run(tmp_path, spec_text())
+    two_way = spec_text(observables='"velocity", "floquet"') + 'coupling = "two-way"\n'
+    report, ds = run(tmp_path, two_way)
+    assert report.points_reused == 0 and report.points_computed == 45
+    assert ds.attrs["study_coupling"] == "two-way"
+    assert ds.attrs["study_solver_method"] == "exact"
+    s = study.Structure(**BASE)
+    expected = study.steady_state(s, ds["f"].values[:, None], ds["a"].values[None, :],
+                                  coupling="two-way")
+    np.testing.assert_array_equal(ds["velocity"].values, expected.velocity)
+    np.testing.assert_array_equal(ds["status"].values, expected.status)
+    np.testing.assert_array_equal(ds["floquet_multiplier"].values,
+                                  expected.floquet_multiplier)
+    # Rerun from the cache alone: the two-way values come back, the one-way ones stay.
+    (tmp_path / "inc.nc").unlink()
+    report, again = run(tmp_path, two_way)
+    assert report.points_reused == 45 and report.points_computed == 0
+    np.testing.assert_array_equal(again["velocity"].values, expected.velocity)
+    report, one_way = run(tmp_path, spec_text(), force=True)
+    assert report.points_reused == 45 and report.points_computed == 0
+    assert_same_as_solver(one_way)
+
+
 def blocks(folder: Path) -> list[Path]:
     return sorted((folder / ".study-cache").glob("??/*/block-*.npz"))
 

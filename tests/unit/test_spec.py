@@ -186,11 +186,11 @@ def test_minimal_spec_has_one_structure_the_papers():
 def test_observables_are_kept_in_canonical_order():
     spec = parse({"study": {"observables": ["frontier", "paper_model", "diagnostics",
                                             "velocity", "thresholds", "resonance",
-                                            "lift_off"]},
+                                            "floquet", "lift_off"]},
                   "solver": {"coupling": "two-way"}})
     assert spec.observables == OBSERVABLES == (
-        "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "paper_model",
-        "frontier",
+        "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "floquet",
+        "paper_model", "frontier",
     )
 
 
@@ -203,8 +203,9 @@ def test_solver_settings_and_chunk_points_are_read():
 def test_example_workflow_is_valid():
     path = REPO / "workflows" / "regime-map.toml"
     spec = load_spec(path)
-    # Every observable of a one-way study (paper_model belongs to two-way studies).
-    assert spec.observables == tuple(o for o in OBSERVABLES if o != "paper_model")
+    # Every observable of a one-way study (paper_model and floquet belong to two-way ones).
+    assert spec.observables == tuple(o for o in OBSERVABLES
+                                     if o not in ("paper_model", "floquet"))
     assert spec.title == "Regime map of the paper's structure (Fig. 2)"
     assert axis_names(spec) == ["f", "a"]
     assert [len(axis) for axis in spec.axes] == [401, 241]
@@ -487,8 +488,8 @@ def _mass(**keys: Any) -> dict[str, Any]:
 
 
 _OBS_ALLOWED = (
-    "'resonance', 'thresholds', 'lift_off', 'velocity', 'diagnostics', 'paper_model', "
-    "'frontier'"
+    "'resonance', 'thresholds', 'lift_off', 'velocity', 'diagnostics', 'floquet', "
+    "'paper_model', 'frontier'"
 )
 _FORMS = "allowed forms: { start = x, stop = y, num = n }"
 

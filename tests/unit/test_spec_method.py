@@ -15,7 +15,7 @@ from study.solver import steady_state
 from study.spec import SpecError, parse_spec
 from study.status import Status
 from study.store import open_result
-from study.transient import IntegratorSettings, integrated_steady_state
+from study.transient import integrated_steady_state
 
 BASE = """\
 [study]
@@ -49,10 +49,23 @@ def test_default_is_the_exact_solver_with_one_way_coupling():
     assert spec.canonical["solver"]["method"] == "exact"
 
 
-def test_two_way_coupling_defaults_to_the_integrator():
+def test_two_way_coupling_defaults_to_the_exact_solver():
     spec = parse('coupling = "two-way"')
-    assert (spec.method, spec.coupling) == ("integrator", "two-way")
-    assert spec.canonical["solver"]["tolerance"] == IntegratorSettings().tolerance
+    assert (spec.method, spec.coupling) == ("exact", "two-way")
+    assert spec.canonical["solver"]["method"] == "exact"
+    assert spec.canonical["solver"]["coupling"] == "two-way"
+
+
+def test_floquet_needs_the_exact_two_way_solver():
+    spec = parse_spec(BASE.replace('"diagnostics"', '"floquet"')
+                      .format(solver='coupling = "two-way"'), PATH)
+    assert spec.observables == ("velocity", "floquet")
+    for solver in ("", 'method = "integrator"\ncoupling = "two-way"'):
+        with pytest.raises(SpecError) as caught:
+            parse_spec(BASE.replace('"diagnostics"', '"floquet"').format(solver=solver), PATH)
+        message = str(caught.value)
+        for fragment in (PATH, '"floquet"', 'coupling = "two-way"', 'method = "exact"'):
+            assert fragment in message, (fragment, message)
 
 
 def test_integrator_settings_are_read():
@@ -66,13 +79,15 @@ def test_method_changes_the_hash_spelled_defaults_do_not():
     assert parse("").sha256 == parse('method = "exact"\ncoupling = "one-way"').sha256
     assert parse("").sha256 != parse('method = "integrator"').sha256
     assert (parse('coupling = "two-way"').sha256
+            == parse('method = "exact"\ncoupling = "two-way"\nmax_events = 10000').sha256)
+    assert parse('coupling = "two-way"').sha256 != parse("").sha256
+    assert (parse('method = "integrator"\ncoupling = "two-way"').sha256
             == parse('method = "integrator"\ncoupling = "two-way"\ntolerance = 1e-10').sha256)
 
 
 @pytest.mark.parametrize(
     ("solver", "fragments"),
     [
-        ('method = "exact"\ncoupling = "two-way"', ["coupling", "integrator", "one-way"]),
         ('method = "rk4"', ["method", "exact", "integrator"]),
         ('coupling = "twoway"', ["coupling", "one-way", "two-way"]),
         ("tolerance = 1e-8", ["tolerance", '"exact"', "max_events"]),
@@ -94,7 +109,8 @@ def test_bad_method_settings_are_refused_by_name(solver, fragments):
 def two_way_run(tmp_path_factory):
     folder = tmp_path_factory.mktemp("two-way")
     spec = folder / "two-way.toml"
-    spec.write_text(BASE.format(solver='coupling = "two-way"\nchunk_points = 3'))
+    spec.write_text(BASE.format(
+        solver='method = "integrator"\ncoupling = "two-way"\nchunk_points = 3'))
     run_study(spec, folder / "two-way.nc", progress=False, workers=2)
     return open_result(folder / "two-way.nc")
 
