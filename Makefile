@@ -52,6 +52,10 @@ results_schema/%.json: study/schemas/%.json
 FIGURES := thresholds velocity-curves regime-map force-traces mass-ratio \
            threshold-collapse mass-ratio-limit coupling \
            steering steering-calibration steering-plan
+# The same figures drawn from the two-way studies: figures/NAME-two-way.png is figure
+# NAME of a *-two-way result (each figure's title says which coupling its file holds).
+TWO_WAY_FIGURES := regime-map velocity-curves force-traces mass-ratio-limit
+FIGURES += $(addsuffix -two-way,$(TWO_WAY_FIGURES))
 figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 
 figures/thresholds.png: results/thresholds.nc
@@ -65,8 +69,15 @@ figures/coupling.png: results/coupling.nc
 figures/steering.png: results/steering.nc
 figures/steering-calibration.png: results/steering-calibration.nc
 figures/steering-plan.png: results/steering-plan.nc
+figures/regime-map-two-way.png: results/regime-map-two-way.nc
+figures/force-traces-two-way.png: results/regime-map-two-way.nc
+figures/velocity-curves-two-way.png: results/velocity-curves-two-way.nc
+figures/mass-ratio-limit-two-way.png: results/mass-ratio-limit-two-way.nc
 figures/%.png: $(PACKAGE) | $(STAMP)
 	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*
+# The shorter stem wins: NAME-two-way.png is figure NAME.
+figures/%-two-way.png: $(PACKAGE) | $(STAMP)
+	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-two-way
 
 # The README's pictures are the figures of a full run.
 docs: figures

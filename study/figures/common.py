@@ -17,7 +17,9 @@ from study.status import Status
 __all__ = [
     "PAPER_POINTS",
     "VALID",
+    "coupling_label",
     "grid_minimum",
+    "one_way_velocity",
     "parameter_text",
     "provenance_line",
     "save",
@@ -133,6 +135,33 @@ def single_structure(dataset: xr.Dataset, figure: str) -> None:
             f"{dataset.attrs.get('study_name')!r}) sweeps {', '.join(swept)}; draw it from "
             "a file with fixed structure parameters"
         )
+
+
+def coupling_label(dataset: xr.Dataset) -> str:
+    """Which coupling (and solver) computed the file's velocities, for titles.
+
+    From the file's ``study_coupling`` and ``study_solver_method`` attributes: the
+    paper's one-way model, or two-way coupling in which the sliding base also forces
+    the plate's mode.
+    """
+    coupling = str(dataset.attrs.get("study_coupling", "one-way"))
+    method = str(dataset.attrs.get("study_solver_method", "exact"))
+    if coupling == "two-way":
+        text = "two-way coupling (the sliding base also forces the mode)"
+    else:
+        text = "one-way coupling (the paper's model)"
+    return text + (", time integration" if method == "integrator" else "")
+
+
+def one_way_velocity(dataset: xr.Dataset, *order: str) -> np.ndarray | None:
+    """The paper's one-way velocity held beside a two-way study (``paper_model``),
+    NaN where that model does not move, transposed to ``order``; None if absent."""
+    if "velocity_one_way" not in dataset or "status_one_way" not in dataset:
+        return None
+    velocity = dataset["velocity_one_way"].transpose(*order).values
+    status = dataset["status_one_way"].transpose(*order).values
+    moving = np.isin(status, (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING))
+    return np.where(moving & (velocity != 0), velocity, np.nan)
 
 
 def parameter_text(dataset: xr.Dataset) -> str:

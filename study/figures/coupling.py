@@ -16,7 +16,7 @@ import xarray as xr
 
 from study.analysis import coupling_effect
 from study.figures import FigureError
-from study.figures.common import VALID, save
+from study.figures.common import VALID, coupling_label, save
 
 __all__ = ["draw"]
 
@@ -77,6 +77,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         f"{name} = {float(dataset[name]):g}" for name in ("f0", "Q", "alpha", "cs", "ck")
         if name in dataset.coords and dataset[name].ndim == 0
     )
-    fig.suptitle(f"Sliding feeding back on the mode (two-way coupling), M swept; {fixed}",
-                 fontsize=9)
-    return save(fig, output, dataset, "Two-way against one-way coupling over M")
+    solver = ("exact solver" if dataset.attrs.get("study_solver_method") == "exact"
+              else "time integration")
+    fig.suptitle(f"Sliding feeding back on the mode: {coupling_label(dataset)}, {solver},\n"
+                 f"against the paper's one-way model; M swept, {fixed}", fontsize=9.5)
+    return save(fig, output, dataset,
+                f"Two-way against one-way coupling over M; velocities: {coupling_label(dataset)}")

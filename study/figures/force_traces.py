@@ -17,7 +17,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from study.figures import common
-from study.figures.common import PAPER_POINTS, parameter_text, single_structure
+from study.figures.common import PAPER_POINTS, coupling_label, parameter_text, single_structure
 from study.physics.forces import normal_force, tangential_force, thresholds
 from study.status import Status
 
@@ -49,7 +49,14 @@ def _grid_text(dataset: xr.Dataset, f_point: float, a_point: float) -> str:
         return f"{where}: static, v = 0"
     if not np.isfinite(velocity):
         return f"{where}: no velocity"
-    return f"{where}: v = {1e3 * velocity:+.3g} mm s$^{{-1}}$"
+    text = f"{where}: v = {1e3 * velocity:+.3g} mm s$^{{-1}}$"
+    if "velocity_one_way" in near and "status_one_way" in near:
+        # A two-way study with the paper's model beside it.
+        paper = float(near["velocity_one_way"])
+        text += (f"\nthe one-way (paper's) model: v = {1e3 * paper:+.3g} mm s$^{{-1}}$"
+                 if np.isfinite(paper)
+                 else "\nthe one-way (paper's) model: no velocity")
+    return text
 
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
@@ -127,7 +134,14 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         handles.append(Patch(facecolor="none", edgecolor="0.4", hatch="xx",
                              label="n < 0: lift-off, model invalid"))
     title = "Contact forces over two drive periods at the paper's points S, P, N, PN"
-    fig.suptitle(f"{title}\n{parameter_text(dataset)}", fontsize=11)
+    traces = "forces with the base at rest and the mode on its steady response"
+    if dataset.attrs.get("study_coupling") == "two-way":
+        # Two-way coupling changes the forces only once the base slides: the traces
+        # still decide where slips start, the velocities are the file's.
+        traces += " (as in both couplings until a slip starts)"
+    title = f"{title}; velocities: {coupling_label(dataset)}"
+    fig.suptitle(f"{title.replace('; ', chr(10), 1)}\n{traces}\n{parameter_text(dataset)}",
+                 fontsize=10.5)
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,
                frameon=False)
     return common.save(fig, output, dataset, title)

@@ -21,7 +21,7 @@ import xarray as xr
 import study
 from study.analysis import minimum_threshold, resonance_threshold
 from study.figures import FigureError
-from study.figures.common import grid_minimum, save, structure_from_dataset
+from study.figures.common import coupling_label, grid_minimum, save, structure_from_dataset
 
 __all__ = ["draw"]
 
@@ -154,5 +154,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         f"Fig. 3: motion threshold with on-board loads (f0 = {base.f0:g} Hz, Q = {base.Q:g}, "
         f"alpha = {base.alpha:g} deg, cs = {base.cs:g})"
     )
-    fig.suptitle(title, fontsize=11)
+    if "velocity" in dataset:
+        # Thresholds are computed with the base at rest: the same in both couplings.
+        title += (f"; file computed with {coupling_label(dataset)}: the thresholds (base at "
+                  "rest) are the same in both couplings")
+    fig.suptitle(title.replace("; ", "\n", 1), fontsize=11)
     return save(fig, output, dataset, title)

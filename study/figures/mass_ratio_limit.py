@@ -24,7 +24,7 @@ from matplotlib.patches import Patch
 
 import study
 from study.figures import FigureError
-from study.figures.common import VALID, save, structure_from_dataset
+from study.figures.common import VALID, coupling_label, save, structure_from_dataset
 from study.status import Status
 
 __all__ = ["draw", "panel_indices", "valid_velocity_mm_s"]
@@ -170,7 +170,8 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     s = structure_from_dataset(dataset, **ats[0])
     title = (
         "The limit M -> 1: steady velocity over (f, a) as the resonant share of the mass "
-        f"grows (f0 = {s.f0:g} Hz, Q = {s.Q:g}, alpha = {s.alpha:g} deg, cs = {s.cs:g})"
+        f"grows, {coupling_label(dataset)} (f0 = {s.f0:g} Hz, Q = {s.Q:g}, "
+        f"alpha = {s.alpha:g} deg, cs = {s.cs:g})"
     )
     fig.suptitle(title.replace(" (f0", "\n(f0", 1) + "; PN: above both thresholds",
                  fontsize=11)

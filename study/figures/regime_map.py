@@ -16,7 +16,14 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from study.figures import common
-from study.figures.common import PAPER_POINTS, VALID, parameter_text, single_structure
+from study.figures.common import (
+    PAPER_POINTS,
+    VALID,
+    coupling_label,
+    one_way_velocity,
+    parameter_text,
+    single_structure,
+)
 from study.status import Status
 
 __all__ = ["draw"]
@@ -91,6 +98,14 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                 markevery=max(1, found // 25), zorder=4)
     handles.append(Line2D([], [], color="black", lw=1.2, marker="o", ms=2.5,
                           label="frontier f*(a): v changes sign"))
+    # A two-way study with the paper's model beside it: where the one-way velocity
+    # changes sign (the paper's frontier), for comparison.
+    paper = one_way_velocity(dataset, "a", "f")
+    if paper is not None and np.any(paper > 0) and np.any(paper < 0):
+        ax.contour(f, a, np.ma.masked_invalid(paper), levels=[0.0], colors="0.25",
+                   linewidths=1.1, linestyles="--", zorder=4)
+        handles.append(Line2D([], [], color="0.25", lw=1.1, ls="--",
+                              label="one-way (paper's) model: v changes sign"))
     handles.append(Patch(facecolor="0.62", edgecolor="0.3", lw=0.5,
                          label="lift-off: model invalid, no velocity"))
     if any(f[0] <= fp <= f[-1] and a[0] <= ap <= a[-1] for fp, ap in PAPER_POINTS.values()):
@@ -111,8 +126,10 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                         ha="left", va="bottom", fontsize=12, fontweight="bold", zorder=5,
                         bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.3",
                                   alpha=0.85))
-    title = "Mean steady velocity over drive frequency and acceleration"
-    ax.set_title(f"{title}\n{parameter_text(dataset)}", fontsize=11)
+    title = (f"Mean steady velocity over drive frequency and acceleration, "
+             f"{coupling_label(dataset)}")
+    ax.set_title(title.replace(", ", "\n", 1) + f"\n{parameter_text(dataset)}",
+                 fontsize=11)
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,
                frameon=False)
     return common.save(fig, output, dataset, title)

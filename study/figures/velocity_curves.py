@@ -17,7 +17,13 @@ from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 
 from study.figures import common
-from study.figures.common import VALID, parameter_text, single_structure
+from study.figures.common import (
+    VALID,
+    coupling_label,
+    one_way_velocity,
+    parameter_text,
+    single_structure,
+)
 from study.status import Status
 
 __all__ = ["FREQUENCY_COLORS", "draw", "frequency_position"]
@@ -68,6 +74,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     velocity = 1e3 * dataset["velocity"].transpose("f", "a").values  # mm/s
     status = dataset["status"].transpose("f", "a").values
     positions = frequency_position(f, structure.f0)
+    paper = one_way_velocity(dataset, "f", "a")  # beside a two-way study
 
     fig, ax = plt.subplots(figsize=(8.0, 5.2), layout="constrained")
     ax.axhline(0.0, color="black", lw=0.8)
@@ -81,6 +88,8 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         shown = np.where(valid, velocity[i, :end], np.nan)
         (line,) = ax.plot(a[:end], shown, color=color, lw=1.6, label=f"{frequency:g} Hz")
         handles.append(line)
+        if paper is not None:
+            ax.plot(a, 1e3 * paper[i], color=color, lw=0.9, ls="--", alpha=0.8)
         if lifted.size and end > 0 and valid[-1]:
             any_lift = True
             ax.plot(a[end - 1], shown[-1], ls="none", marker="o", ms=5.5, mfc="white",
@@ -90,6 +99,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
             any_stuck = True
             ax.plot(a[stuck], np.full(stuck.size, 0.03), ls="none", marker="x", ms=5,
                     color=color, transform=ax.get_xaxis_transform(), clip_on=False)
+    if paper is not None:
+        handles.append(Line2D([], [], color="0.3", lw=0.9, ls="--",
+                              label="one-way (paper's) model,\nsame frequency"))
     if any_lift:
         handles.append(Line2D([], [], ls="none", marker="o", ms=5.5, mfc="white", mec="0.3",
                               mew=1.6, label="curve ends: lift-off\nabove (model invalid)"))
@@ -98,8 +110,10 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                               label="not converged at this a\n(no velocity; gap)"))
     ax.set(xlim=(a[0], a[-1]), xlabel="drive acceleration a [m s$^{-2}$]",
            ylabel="mean velocity v [mm s$^{-1}$]  (> 0: forward)")
-    title = "Mean steady velocity against drive acceleration at fixed frequencies"
-    ax.set_title(f"{title}\n{parameter_text(dataset)}", fontsize=11)
+    title = ("Mean steady velocity against drive acceleration at fixed frequencies, "
+             f"{coupling_label(dataset)}")
+    ax.set_title(title.replace("frequencies, ", "frequencies\n", 1)
+                 + f"\n{parameter_text(dataset)}", fontsize=11)
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
               borderaxespad=0.0, fontsize=8.5, title="drive frequency f\n(blue < $f_0$ < red)",
               title_fontsize=9, frameon=False)
