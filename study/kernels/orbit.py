@@ -109,6 +109,8 @@ NEWTON_STEP = 1e-7
 FINAL_TOLERANCE = 1e-12
 # Period-map iterates closing to this (scaled) start a Newton search for that period.
 CYCLE_DETECTION = 1e-3
+# Periods of the map's iteration before its iterates are watched for lift-off.
+BURN_IN = 8
 # Longest orbit searched for, in drive periods.
 MAX_PERIOD = 16
 # An orbit is stable when its largest Floquet multiplier is below 1 + this.
@@ -961,10 +963,14 @@ def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, s
         slot = iteration % MAX_PERIOD
         for i in range(3):
             history[slot, i] = z[i]
-        flag = run(structure, table, omega, a, z, 0.0, period, jac, False, False,
-                   max_events, acc)
+        # Past a burn-in the iterates trace the attractor: one that leaves the table is
+        # outside the model (LIFT_OFF), converged or not.
+        flag = run(structure, table, omega, a, z, 0.0, period, jac, False,
+                   iteration >= BURN_IN, max_events, acc)
         if flag == RUN_PARADOX:
             return FRICTION_PARADOX, REASON_NONE, 0
+        if flag == RUN_LIFT_OFF:
+            return LIFT_OFF, REASON_NONE, 0
         if flag != RUN_OK:
             return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
@@ -1090,3 +1096,75 @@ def _solve_points_serial(structure, omega, a, lifted, max_events, max_iterations
     """Same as :func:`_solve_points` on one thread."""
     for i in range(omega.shape[0]):
         _solve_into(i, structure, omega, a, lifted, max_events, max_iterations, out)
+
+
+# Starting states of the multistability check: rest at these drive phases [periods]
+# with the mode on these multiples of its steady response.
+START_PHASES = (0.0, 0.25, 0.5, 0.75)
+START_FACTORS = (1.0, 0.0, 2.0)
+# Two orbits are the same attractor when their periods agree and their mean velocities
+# agree to this fraction of the velocity scale a / w.
+SAME_ORBIT = 1e-9
+
+
+@njit(cache=True, nogil=True)
+def attractors_point(structure, omega, a, lifted, max_events, max_iterations, out):
+    """Distinct stable orbits reached from the starting states above.
+
+    ``out`` receives ``(count, spread, starts_converged)``: the number of distinct
+    orbits (LIFT_OFF or FRICTION_PARADOX outcomes count as one outcome each), the
+    spread of their mean velocities [m s^-1], and how many starts reached an outcome.
+    """
+    row = np.empty(N_OUT)
+    n_starts = len(START_PHASES) * len(START_FACTORS)
+    velocities = np.empty(n_starts)
+    periods = np.empty(n_starts)
+    count = 0
+    converged = 0
+    others = 0  # bit 1: lift-off seen, bit 2: paradox seen
+    scale = a / omega
+    for phase in START_PHASES:
+        for factor in START_FACTORS:
+            solve_point(structure, omega, a, lifted, max_events, max_iterations,
+                        phase * TWO_PI / omega, factor, row)
+            status = int(row[0])
+            if status == STATIC:
+                out[0] = 1.0
+                out[1] = 0.0
+                out[2] = n_starts
+                return
+            if status == NOT_CONVERGED:
+                continue
+            converged += 1
+            if status == LIFT_OFF:
+                others |= 1
+                continue
+            if status == FRICTION_PARADOX:
+                others |= 2
+                continue
+            new = True
+            for i in range(count):
+                if periods[i] == row[6] and abs(velocities[i] - row[2]) <= SAME_ORBIT * scale:
+                    new = False
+                    break
+            if new:
+                velocities[count] = row[2]
+                periods[count] = row[6]
+                count += 1
+    spread = 0.0
+    if count > 0:
+        spread = np.max(velocities[:count]) - np.min(velocities[:count])
+    out[0] = count + (others & 1) + ((others >> 1) & 1)
+    out[1] = spread
+    out[2] = converged
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _attractors_points(structure, omega, a, lifted, max_events, max_iterations, out):
+    """Fill ``out`` (n x 3) in parallel over points."""
+    n = omega.shape[0]
+    lanes = min(n, 256)
+    for lane in prange(lanes):
+        for i in range(lane, n, lanes):
+            attractors_point(structure, omega[i], a[i], lifted[i], max_events,
+                             max_iterations, out[i])
