@@ -130,6 +130,10 @@ MAX_DEPTH = 80
 PIECES = 16
 #: Iterations of the bracketed Newton refinement of an event time.
 MAX_REFINE = 400
+#: An orbit is accepted once the canonical start's iterate is this close to it (natural
+#: units); otherwise the start is followed for more periods (up to ``ROUNDS`` times).
+APPROACH_LIMIT = mpf("0.01")
+ROUNDS = 4
 
 STICK = 0
 
@@ -795,7 +799,9 @@ def reference_orbit(
         Longest orbit period looked for [drive periods].
     pre_iterations : int, optional
         Drive periods followed from the canonical start (at ``low_dps``) before Newton's
-        method; default about five e-folds of the mode's decay, 20 to 150.
+        method; default about five e-folds of the mode's decay, 20 to 150. When no
+        stable orbit is found, or the one found is farther than ``APPROACH_LIMIT`` from
+        the start's iterate, as many more periods are followed, up to ``ROUNDS`` times.
     low_dps : int
         Precision of those first periods.
 
@@ -807,70 +813,78 @@ def reference_orbit(
     """
     params = _params(structure)
     n_pre = _default_pre_iterations(params, f) if pre_iterations is None else pre_iterations
-    history = []
     with mp.workdps(low_dps):
         low = TwoWayModel(params, f, a, coupling)
-        z = low.stick_state()
-        history.append(z)
-        try:
-            for _ in range(n_pre):
-                z = period_map(low, z).state
-                history.append(z)
-        except _Stop as stop:
-            return _invalid(stop.status, dps, f"from the start: {stop.where}")
-    with mp.workdps(dps):
-        model = TwoWayModel(params, f, a, coupling)
-        z = tuple(mpf(x) for x in history[-1])
-        tol = mpf(10) ** (-(dps - 6))
-        for n in range(1, max_period + 1):
-            found = _newton(model, z, n, tol)
-            if found is None:
-                continue
-            zstar, residual = found
-            dims = (0, 1) if zstar[2] == 0 else (0, 1, 2)
+        z_low = low.stick_state()
+    found = None
+    for _ in range(ROUNDS):
+        with mp.workdps(low_dps):
             try:
-                jac = _jacobian(model, zstar, n, dims, mpf(10) ** (-(dps // 3)), central=True)
-            except _Stop:
-                continue
-            multipliers = sorted(
-                mpmath.eig(jac, left=False, right=False), key=lambda m: -abs(m)
-            )
-            floquet = abs(multipliers[0])
-            if floquet >= 1:
-                continue
+                for _ in range(n_pre):
+                    z_low = period_map(low, z_low).state
+            except _Stop as stop:
+                return _invalid(stop.status, dps, f"from the start: {stop.where}")
+        with mp.workdps(dps):
+            model = TwoWayModel(params, f, a, coupling)
             try:
-                orbit = period_map(model, zstar, n, record=True)
+                found = _find_orbit(model, tuple(mpf(x) for x in z_low), max_period)
             except _Stop as stop:
                 return _invalid(stop.status, dps, f"on the orbit: {stop.where}")
-            duration = n * model.T
-            if orbit.slips == 0:
-                status, velocity = "STATIC", mpf(0)
-            else:
-                status = "STICK_SLIP" if orbit.stick_time > 0 else "CONTINUOUS_SLIDING"
-                velocity = orbit.dx / duration
-            scale = model.scale
-            residual = max(abs(orbit.state[i] - zstar[i]) / scale[i] for i in range(3))
-            phase_states = [zstar]
-            for _ in range(n - 1):
-                phase_states.append(period_map(model, phase_states[-1]).state)
-            approach = min(
-                max(abs(z[i] - y[i]) / scale[i] for i in range(3)) for y in phase_states
-            )
-            return ReferenceOrbit(
-                velocity=velocity,
-                status=status,
-                orbit_period=n,
-                floquet=floquet,
-                state=zstar,
-                slips_per_period=mpf(orbit.slips) / n,
-                forward_fraction=orbit.forward_time / duration,
-                backward_fraction=orbit.backward_time / duration,
-                residual=residual,
-                multipliers=tuple(multipliers),
-                approach=approach,
-                dps=dps,
-            )
+        if found is not None and found.approach < APPROACH_LIMIT:
+            return found
+    if found is not None:
+        return found
     return _invalid("NOT_CONVERGED", dps, f"no stable orbit of period <= {max_period}")
+
+
+def _find_orbit(model: TwoWayModel, z: tuple, max_period: int) -> ReferenceOrbit | None:
+    """The first stable fixed point of ``P^N``, ``N = 1, 2, ...``, found by Newton from ``z``."""
+    dps = mp.dps
+    tol = mpf(10) ** (-(dps - 6))
+    for n in range(1, max_period + 1):
+        found = _newton(model, z, n, tol)
+        if found is None:
+            continue
+        zstar, residual = found
+        dims = (0, 1) if zstar[2] == 0 else (0, 1, 2)
+        try:
+            jac = _jacobian(model, zstar, n, dims, mpf(10) ** (-(dps // 3)), central=True)
+        except _Stop:
+            continue
+        multipliers = sorted(mpmath.eig(jac, left=False, right=False), key=lambda m: -abs(m))
+        floquet = abs(multipliers[0])
+        if floquet >= 1:
+            continue
+        orbit = period_map(model, zstar, n, record=True)  # _Stop: the orbit leaves the model
+        duration = n * model.T
+        if orbit.slips == 0:
+            status, velocity = "STATIC", mpf(0)
+        else:
+            status = "STICK_SLIP" if orbit.stick_time > 0 else "CONTINUOUS_SLIDING"
+            velocity = orbit.dx / duration
+        scale = model.scale
+        residual = max(abs(orbit.state[i] - zstar[i]) / scale[i] for i in range(3))
+        phase_states = [zstar]
+        for _ in range(n - 1):
+            phase_states.append(period_map(model, phase_states[-1]).state)
+        approach = min(
+            max(abs(z[i] - y[i]) / scale[i] for i in range(3)) for y in phase_states
+        )
+        return ReferenceOrbit(
+            velocity=velocity,
+            status=status,
+            orbit_period=n,
+            floquet=floquet,
+            state=zstar,
+            slips_per_period=mpf(orbit.slips) / n,
+            forward_fraction=orbit.forward_time / duration,
+            backward_fraction=orbit.backward_time / duration,
+            residual=residual,
+            multipliers=tuple(multipliers),
+            approach=approach,
+            dps=dps,
+        )
+    return None
 
 
 # --- cached reference points -------------------------------------------------------------
