@@ -1014,7 +1014,14 @@ def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start
             out[3] = 0.0
             out[4] = 0.0
             out[5] = 0.0
-            out[7] = 0.0
+            # The orbit is the mode's steady response: perturbations decay with it.
+            _, _, e11, e12, e21, e22 = _homogeneous(table[0], TWO_PI / omega, 0.0, 0.0)
+            free = np.zeros((3, 3))
+            free[0, 0] = e11
+            free[0, 1] = e12
+            free[1, 0] = e21
+            free[1, 1] = e22
+            out[7] = spectral_radius(free)
         return
     scales = np.empty(3)
     scales[0], scales[1], scales[2] = _scales(structure, table, omega, a)
