@@ -276,65 +276,63 @@ def _cubic(phi, d1, d2, m3, h):
 
 @njit(cache=True, nogil=True)
 def _cubic_step(phi, d1, d2, m3):
-    """First root ``h > 0`` of ``phi + d1 h + d2 h^2/2 + m3 h^3/6`` (``phi <= 0``,
-    ``m3 > 0``).
+    """First root ``h > 0`` of ``p(h) = phi + d1 h + d2 h^2/2 + m3 h^3/6`` (``phi <= 0``,
+    ``m3 > 0``), from below.
 
     With ``m3`` a bound of the third derivative of ``phi`` this cubic bounds
-    ``phi(t + h)`` from above, so no zero of ``phi`` comes sooner. The cubic is
-    monotone between its critical points; the root is polished by bracketed Newton.
+    ``phi(t + h)`` from above, so no zero of ``phi`` comes sooner. ``p`` rises up to
+    its first critical point (concave there: Newton from the left stays left of the
+    root), falls to the second, and rises convex beyond it (Newton from the right
+    stays right; the result is then stepped back by a relative 1e-12).
     """
-    # Break points 0 < c1 < c2 (critical points, when positive), then an upper bound.
-    c1 = np.inf
-    c2 = np.inf
     disc = d2 * d2 - 2.0 * m3 * d1
+    lo = 0.0
     if disc > 0.0:
         root = math.sqrt(disc)
-        low = (-d2 - root) / m3
-        high = (-d2 + root) / m3
-        if low > 0.0:
-            c1 = low
-            c2 = high
-        elif high > 0.0:
-            c1 = high
-    last = 0.0 if c1 == np.inf else (c1 if c2 == np.inf else c2)
-    # Beyond ``last`` the cubic increases; from there it exceeds phi(last) + m3 x^3/6 only
-    # where also convex, so grow the candidate until it is positive (a few doublings).
-    scale = max(last, 1e-300)
-    base = _cubic(phi, d1, d2, m3, last)
-    if base < 0.0:
-        scale = max(scale, math.exp(math.log(-6.0 * base / m3) / 3.0))
-    upper = last + scale
-    for _ in range(200):
-        if _cubic(phi, d1, d2, m3, upper) > 0.0:
-            break
-        upper += scale
-        scale *= 2.0
-    for i in range(3):
-        lo = 0.0 if i == 0 else (c1 if i == 1 else c2)
-        hi = c1 if i == 0 else (c2 if i == 1 else upper)
-        if lo == np.inf:
-            break
-        if hi == np.inf:
-            hi = upper
-        if hi <= lo or _cubic(phi, d1, d2, m3, hi) < 0.0:
-            continue
-        x = lo
-        for _ in range(60):
-            value = _cubic(phi, d1, d2, m3, x)
-            if value < 0.0:
-                lo = x
-            else:
-                hi = x
-            slope = d1 + x * (d2 + 0.5 * m3 * x)
-            nxt = x - value / slope if slope > 0.0 else 0.5 * (lo + hi)
-            if abs(nxt - x) <= 1e-12 * hi:
-                break
-            if not lo < nxt < hi:
-                nxt = 0.5 * (lo + hi)
-            x = nxt
-        # lo is on the safe side of the root.
+        c1 = (-d2 - root) / m3
+        c2 = (-d2 + root) / m3
+        if c1 > 0.0 and _cubic(phi, d1, d2, m3, c1) >= 0.0:
+            return _newton_left(phi, d1, d2, m3)
+        if c2 > 0.0:
+            lo = c2
+    else:
+        # p rises everywhere, concave up to its inflection point.
+        inflection = -d2 / m3
+        if inflection > 0.0:
+            if _cubic(phi, d1, d2, m3, inflection) >= 0.0:
+                return _newton_left(phi, d1, d2, m3)
+            lo = inflection
+    # Beyond lo, p rises and is convex: p(lo + x) >= p(lo) + m3 x^3 / 6.
+    base = _cubic(phi, d1, d2, m3, lo)
+    if base >= 0.0:
         return lo
-    return upper
+    x = lo + math.exp(math.log(-6.0 * base / m3) / 3.0)
+    for _ in range(60):
+        value = _cubic(phi, d1, d2, m3, x)
+        slope = d1 + x * (d2 + 0.5 * m3 * x)
+        if slope <= 0.0:
+            break
+        step = value / slope
+        x -= step
+        if step <= 1e-13 * x:
+            break
+    return max(lo, x * (1.0 - 1e-12))
+
+
+@njit(cache=True, nogil=True)
+def _newton_left(phi, d1, d2, m3):
+    """Root of the cubic on its rising concave stretch from 0, approached from the left."""
+    x = 0.0
+    for _ in range(60):
+        value = _cubic(phi, d1, d2, m3, x)
+        slope = d1 + x * (d2 + 0.5 * m3 * x)
+        if value >= 0.0 or slope <= 0.0:
+            break
+        step = -value / slope
+        x += step
+        if step <= 1e-13 * x:
+            break
+    return x
 
 
 @njit(cache=True, nogil=True)
