@@ -15,7 +15,6 @@ from study.physics import (
     release_amplitudes,
     slip_amplitudes,
 )
-from study.status import NonConvergence, Status
 from study.structure import Structure
 
 __all__ = ["SolverSettings", "SteadyState", "steady_state", "steady_velocity"]
@@ -211,8 +210,3 @@ def steady_velocity(
     """
     result = steady_state(structure, f, a, settings)
     return result.velocity, result.status
-
-
-# The kernel mirrors the enums as plain integers; keep them in step.
-assert _kernel.STATIC == Status.STATIC and _kernel.LIFT_OFF == Status.LIFT_OFF
-assert _kernel.REASON_EVENT_BUDGET == NonConvergence.EVENT_BUDGET

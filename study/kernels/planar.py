@@ -25,8 +25,9 @@ zero of ``u . d`` with ``d`` the twist direction at the start of the step (near 
 end a slip's twist shrinks to zero along a converging direction, so the projection
 changes sign there).
 
-Events are located as in :mod:`study.kernels.transient`: sampled on the dense output,
-watched at their minima, refined by the Illinois method. Everything here is private:
+Steps are :mod:`study.kernels.dopri`'s; events are located by
+:mod:`study.kernels.events`: sampled on the dense output, watched at their minima,
+refined by the Illinois method. Everything here is private:
 :mod:`study.planar` validates, allocates and calls.
 """
 
@@ -37,32 +38,32 @@ import math
 import numpy as np
 from numba import njit
 
-from study.kernels import transient as dp
-from study.kernels.transient import (
+from study.kernels.codes import (
+    EVENT_LIFT_OFF,
+    EVENT_RELEASE,
+    EVENT_SLIP_END,
+    RUN_BUDGET,
+    RUN_DONE,
+    RUN_LIFT_OFF,
+    STICK,
+)
+from study.kernels.dopri import (
     dense_output,
-    error_and_dense,
     error_norm,
-    solution_step,
-    stage_state,
+    growth_factor,
+    shrink_factor,
+    step,
     table_drive,
 )
+from study.kernels.dopri import workspace as step_workspace
+from study.kernels.events import first_event, record
+from study.kernels.events import workspace as event_workspace
 
-# Contact modes. A slip that starts from rest is in its ONSET phase until its twist
-# exceeds the slaving threshold: there its direction is the slaved one, which removes
-# the stiffness (relaxation rate ck n / |u|) of the direction near u = 0.
-STICK = 0
+# Contact modes besides STICK. A slip that starts from rest is in its ONSET phase until
+# its twist exceeds the slaving threshold: there its direction is the slaved one, which
+# removes the stiffness (relaxation rate ck n / |u|) of the direction near u = 0.
 SLIP = 1
 ONSET = 2
-
-# Run outcomes.
-RUN_DONE = 0
-RUN_LIFT_OFF = 1
-RUN_BUDGET = 2
-
-# Event kinds recorded in trajectories.
-EVENT_RELEASE = 1
-EVENT_SLIP_END = 3
-EVENT_LIFT_OFF = 4
 
 # State layout.
 X = 0
@@ -326,18 +327,19 @@ def _event_values(plates, disk, mode, reference, drive, drive_rate_neg, y, value
     rates[1] = loads[4]
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _model_rhs(model, mode, drive, y, out):
+    """:func:`_rhs` in the form the shared stepper calls, ``model = (plates, disk,
+    reference, work)``."""
+    plates, disk, reference, work = model
+    _rhs(plates, disk, mode, reference, drive, y, out, work)
+
+
 @njit(cache=True, nogil=True)
 def _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, dense, tmp, work):
     """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL)."""
-    seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
-    for stage in range(1, 6):
-        stage_state(stage, y, h, k, tmp)
-        drive, _ = table_drive(t + dp.STAGE_NODES[stage] * h, seg, seg_t0, seg_omega, seg_a,
-                          seg_phase0)
-        _rhs(plates, disk, mode, reference, drive, tmp, k[stage], work)
-    solution_step(y, h, k, y_new)
-    _rhs(plates, disk, mode, reference, drive, y_new, k[6], work)
-    error_and_dense(y, h, k, y_new, err, dense)
+    step(_model_rhs, (plates, disk, reference, work), mode, t, h, y, k, drive_args, y_new,
+         err, dense, tmp)
     if mode == STICK:
         # The pose is exactly frozen while stuck.
         for i in range(MODES):
@@ -350,130 +352,17 @@ def _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, den
         y_new[SPIN] = 0.0
 
 
-@njit(cache=True, nogil=True)
-def _values_at(theta, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-               values, rates, work):
+@njit(cache=True, nogil=True, inline="always")
+def _values_at(theta, model, mode, t, h, dense, drive_args, ystate, values, rates):
+    """Event functions at ``t + theta h`` on the dense output (the form
+    :func:`study.kernels.events.first_event` calls), ``model = (plates, disk,
+    reference, work)``."""
+    plates, disk, reference, work = model
     seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
     dense_output(theta, h, dense, ystate)
     drive, rate = table_drive(t + theta * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
     _event_values(plates, disk, mode, reference, drive, rate, ystate, values, rates,
                   work)
-
-
-@njit(cache=True, nogil=True)
-def _refine(which, lo, hi, plates, disk, mode, reference, t, h, dense, drive_args,
-            ystate, values, rates, work, xtol):
-    """Illinois iteration on event ``which`` over ``[lo, hi]`` (clear at ``lo``,
-    triggered at ``hi``); returns the triggered end of a bracket narrower than ``xtol``.
-    """
-    _values_at(lo, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-               values, rates, work)
-    f_lo = values[which]
-    _values_at(hi, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-               values, rates, work)
-    f_hi = values[which]
-    side = 0
-    for _ in range(dp.MAX_ROOT_ITERATIONS):
-        if hi - lo <= xtol:
-            break
-        if f_lo - f_hi > 0.0 and math.isfinite(f_lo - f_hi):
-            mid = lo + (hi - lo) * f_lo / (f_lo - f_hi)
-        else:
-            mid = 0.5 * (lo + hi)
-        width = hi - lo
-        mid = min(max(mid, lo + 0.01 * width), hi - 0.01 * width)
-        _values_at(mid, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-                   values, rates, work)
-        f_mid = values[which]
-        triggered = f_mid <= 0.0 if which == 0 and mode != STICK else f_mid < 0.0
-        if triggered:
-            hi = mid
-            f_hi = f_mid
-            if side == -1:
-                f_lo *= 0.5
-            side = -1
-        else:
-            lo = mid
-            f_lo = f_mid
-            if side == 1:
-                f_hi *= 0.5
-            side = 1
-    return hi
-
-
-@njit(cache=True, nogil=True)
-def _minimum(which, lo, hi, plates, disk, mode, reference, t, h, dense, drive_args,
-             ystate, values, rates, work, xtol):
-    """Bisection for the minimum of event ``which`` (its rate negative at ``lo``,
-    positive at ``hi``)."""
-    for _ in range(dp.MAX_ROOT_ITERATIONS):
-        if hi - lo <= xtol:
-            break
-        mid = 0.5 * (lo + hi)
-        _values_at(mid, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-                   values, rates, work)
-        if rates[which] < 0.0:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
-@njit(cache=True, nogil=True)
-def _first_event(plates, disk, mode, reference, t, h, dense, drive_args, samples, xtol,
-                 fresh, ystate, values, rates, prev_values, prev_rates, work):
-    """Earliest event in the step: ``(which, theta)`` or ``(-1, 1.0)``.
-
-    ``which`` is 0 (release, or slip end) or 1 (lift-off). At a fresh slip's start the
-    slip-end function is zero and rising: its first sample interval counts as clear.
-    """
-    best_which = -1
-    best_theta = 2.0
-    _values_at(0.0, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-               prev_values, prev_rates, work)
-    theta_prev = 0.0
-    for j in range(1, samples + 1):
-        theta = j / samples
-        _values_at(theta, plates, disk, mode, reference, t, h, dense, drive_args,
-                   ystate, values, rates, work)
-        for which in range(2):
-            before = prev_values[which]
-            after = values[which]
-            slip_end = which == 0 and mode != STICK
-            now_triggered = after <= 0.0 if slip_end else after < 0.0
-            was_clear = before > 0.0 if slip_end else before >= 0.0
-            if slip_end and j == 1 and fresh:
-                was_clear = True
-            root_hi = -1.0
-            if was_clear and now_triggered:
-                root_hi = theta
-            elif was_clear and prev_rates[which] < 0.0 and rates[which] > 0.0:
-                theta_min = _minimum(which, theta_prev, theta, plates, disk, mode,
-                                     reference, t, h, dense, drive_args, ystate, values, rates,
-                                     work, xtol)
-                _values_at(theta_min, plates, disk, mode, reference, t, h, dense,
-                           drive_args, ystate, values, rates, work)
-                dip = values[which]
-                if (dip <= 0.0) if slip_end else (dip < 0.0):
-                    root_hi = theta_min
-                _values_at(theta, plates, disk, mode, reference, t, h, dense,
-                           drive_args, ystate, values, rates, work)
-            if root_hi >= 0.0:
-                root = _refine(which, theta_prev, root_hi, plates, disk, mode,
-                               reference, t, h, dense, drive_args, ystate, values, rates, work,
-                               xtol)
-                if root < best_theta:
-                    best_theta = root
-                    best_which = which
-                _values_at(theta, plates, disk, mode, reference, t, h, dense,
-                           drive_args, ystate, values, rates, work)
-        if best_which >= 0:
-            return best_which, best_theta
-        for which in range(2):
-            prev_values[which] = values[which]
-            prev_rates[which] = rates[which]
-        theta_prev = theta
-    return -1, 1.0
 
 
 @njit(cache=True, nogil=True)
@@ -487,17 +376,6 @@ def _mode_after_rest(plates, disk, drive, y, work):
     if size > disk[DK_CS] * loads[0]:
         return ONSET
     return STICK
-
-
-@njit(cache=True, nogil=True)
-def _record(ev_t, ev_kind, ev_y, ev_box, t, kind, y):
-    j = ev_box[0]
-    if j < ev_t.shape[0]:
-        ev_t[j] = t
-        ev_kind[j] = kind
-        for i in range(y.shape[0]):
-            ev_y[j, i] = y[i]
-    ev_box[0] = j + 1
 
 
 @njit(cache=True, nogil=True)
@@ -517,17 +395,9 @@ def _integrate(
     accumulates ``[steps, rejected, slips, stuck time, slipping time]``.
     """
     n = y.shape[0]
-    k = np.empty((7, n))
-    y_new = np.empty(n)
-    err = np.empty(n)
-    dense = np.empty((5, n))
-    tmp = np.empty(n)
-    ystate = np.empty(n)
+    k, y_new, err, dense, tmp, ystate = step_workspace(n)
+    values, rates, prev_values, prev_rates = event_workspace(2)
     work = np.empty(17)
-    values = np.empty(2)
-    rates = np.empty(2)
-    prev_values = np.empty(2)
-    prev_rates = np.empty(2)
     reference = np.zeros(3)
     mode = mode_box[0]
     t = t_box[0]
@@ -558,10 +428,10 @@ def _integrate(
                     mode = ONSET
                     fresh = True
                     stats[2] += 1.0
-                    _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
+                    record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
             _event_values(plates, disk, mode, reference, drive, rate, y, values, rates, work)
             if values[1] < 0.0:
-                _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
+                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
                 mode_box[0] = mode
                 t_box[0] = t
                 return RUN_LIFT_OFF
@@ -599,19 +469,16 @@ def _integrate(
         norm = error_norm(err, y, y_new, scale, rtol, atol)
         if not norm <= 1.0:
             stats[1] += 1.0
-            factor = dp.MIN_FACTOR if not math.isfinite(norm) else max(
-                dp.MIN_FACTOR, dp.SAFETY * norm ** -0.2
-            )
-            h *= factor
+            h *= shrink_factor(norm)
             if h < 1e-14 * max(abs(t), max_step):
                 mode_box[0] = mode
                 t_box[0] = t
                 return RUN_BUDGET
             continue
-        factor = dp.MAX_FACTOR if norm == 0.0 else min(dp.MAX_FACTOR, dp.SAFETY * norm ** -0.2)
-        which, theta = _first_event(
-            plates, disk, mode, reference, t, h, dense, drive_args, samples,
-            xtol_time / h, fresh, ystate, values, rates, prev_values, prev_rates, work,
+        factor = growth_factor(norm)
+        which, theta = first_event(
+            _values_at, (plates, disk, reference, work), mode, t, h, dense, drive_args,
+            samples, xtol_time / h, fresh, ystate, values, rates, prev_values, prev_rates,
         )
         t_end = t + theta * h if which >= 0 else t + h
         if last and which < 0:
@@ -646,7 +513,7 @@ def _integrate(
         need_rhs = True
         drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
         if which == 1:
-            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
+            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
             mode_box[0] = mode
             t_box[0] = t
             return RUN_LIFT_OFF
@@ -654,17 +521,17 @@ def _integrate(
             mode = ONSET
             fresh = True
             stats[2] += 1.0
-            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
+            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
         else:
             y[VX] = 0.0
             y[VY] = 0.0
             y[SPIN] = 0.0
-            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_SLIP_END, y)
+            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_SLIP_END, y)
             mode = _mode_after_rest(plates, disk, drive, y, work)
             fresh = mode == ONSET
             if fresh:
                 stats[2] += 1.0
-                _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
+                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
     mode_box[0] = mode
     t_box[0] = t
     t_box[1] = h
