@@ -17,6 +17,14 @@ and ``rho`` the gyration radius. In the scaled twist ``u`` the limit surface is 
 sphere and the sliding law reads ``u' = K (W - ck n uhat)`` with ``K = diag(1, 1,
 c^2/rho^2)``.
 
+Two-way coupling (``disk[DK_TWO_WAY] = 1``): while sliding, plate i's base (its
+attachment point ``r_i``) accelerates along ``e_i`` at ``b_i = e_i . a + (r_i x e_i)
+spin' - spin^2 (r_i . e_i)`` (body frame), and ``delta_i'' = F_i - sin(alpha_i) b_i``
+replaces ``F_i`` in the mode, the plate forces and ``n``: a 3x3 linear system for
+``(a, spin')`` per slip direction (:func:`_two_way`), the single-plate two-way model
+along each plate. Its determinant ``<= 0`` is Painleve's paradox: the run stops
+(``RUN_PARADOX``). While stuck both couplings are the same.
+
 A slip starts from rest along the direction ``uhat`` whose acceleration is parallel to
 itself, ``K (W - ck n uhat) = lambda uhat`` with ``lambda >= 0``, i.e. ``uhat_j =
 W_j / (lambda / K_j + ck n)`` with ``|uhat| = 1`` (a monotone scalar equation in
@@ -40,11 +48,13 @@ from numba import njit
 
 from study.kernels.codes import (
     EVENT_LIFT_OFF,
+    EVENT_PARADOX,
     EVENT_RELEASE,
     EVENT_SLIP_END,
     RUN_BUDGET,
     RUN_DONE,
     RUN_LIFT_OFF,
+    RUN_PARADOX,
     STICK,
 )
 from study.kernels.dopri import (
@@ -84,7 +94,8 @@ PL_MASS = 4  # M
 PL_EX = 5  # body-frame direction, forward component
 PL_EY = 6  # body-frame direction, left component
 PL_LEVER = 7  # r x e [m]
-N_PLATE_PARAMETERS = 8
+PL_REACH = 8  # r . e [m]
+N_PLATE_PARAMETERS = 9
 
 # Entries of the disk parameter vector.
 DK_CS = 0
@@ -93,7 +104,8 @@ DK_G = 2
 DK_LENGTH = 3  # limit-surface length c [m]
 DK_GYRATION2 = 4  # rho^2 [m^2]
 DK_SLAVED = 5  # twist below which its direction is the slaved one [m s^-1]
-N_DISK_PARAMETERS = 6
+DK_TWO_WAY = 6  # 1.0 for two-way coupling of the plates
+N_DISK_PARAMETERS = 7
 
 # Safeguarded Newton iterations of the slaved-direction equation (converges in a few).
 SLAVED_ITERATIONS = 100
@@ -263,8 +275,89 @@ def _friction_direction(disk, mode, reference, y, n, wrench, out):
 
 
 @njit(cache=True, nogil=True)
+def _two_way(plates, disk, y, loads, direction, accel):
+    """Accelerations of a two-way coupled slip against the friction direction
+    ``direction`` (unit, scaled twist, world frame).
+
+    Plate i's base accelerates along its direction ``e_i`` at ``b_i = g_i . q -
+    spin^2 (r_i . e_i)`` (the attachment point's rigid-body acceleration, ``g_i =
+    (e_i, r_i x e_i)`` and ``q = (a_x, a_y, spin')`` in the body frame), which
+    forces its mode: ``delta_i'' = F_i - sin(alpha_i) b_i``. The plates' forces and
+    the normal force then use ``delta_i''``; with the sliding law this is the linear
+    system ``A q = w`` with ``A = diag(1, 1, rho^2) - sum_i M_i sin(alpha_i) (sin(alpha_i)
+    g_i + ck cos(alpha_i) d) g_i^T`` (``d`` the friction direction, unscaled: ``(d_x,
+    d_y, c d_3)``). ``loads`` are the one-way loads (:func:`_loads`).
+
+    Fills ``accel = (a_x, a_y, spin')`` in the world frame [m s^-2, rad s^-2] and
+    ``q`` in ``accel[3:6]``; returns ``(n, det A)`` with ``n`` the coupled normal force
+    per unit mass [m s^-2]. ``det A <= 0`` is Painleve's paradox (then ``accel`` is
+    not filled).
+    """
+    heading = y[HEADING]
+    c = math.cos(heading)
+    s = math.sin(heading)
+    length = disk[DK_LENGTH]
+    ck = disk[DK_CK]
+    n0 = loads[0]
+    dx = c * direction[0] + s * direction[1]
+    dy = -s * direction[0] + c * direction[1]
+    dz = length * direction[2]
+    spin2 = y[SPIN] * y[SPIN]
+    a00, a01, a02 = 1.0, 0.0, 0.0
+    a10, a11, a12 = 0.0, 1.0, 0.0
+    a20, a21, a22 = 0.0, 0.0, disk[DK_GYRATION2]
+    r0 = loads[1] - ck * n0 * dx
+    r1 = loads[2] - ck * n0 * dy
+    r2 = loads[3] - ck * n0 * dz
+    for i in range(plates.shape[0]):
+        sa = plates[i, PL_SIN]
+        ca = plates[i, PL_COS]
+        coef = plates[i, PL_MASS] * sa
+        g0 = plates[i, PL_EX]
+        g1 = plates[i, PL_EY]
+        g2 = plates[i, PL_LEVER]
+        v0 = sa * g0 + ck * ca * dx
+        v1 = sa * g1 + ck * ca * dy
+        v2 = sa * g2 + ck * ca * dz
+        a00 -= coef * v0 * g0
+        a01 -= coef * v0 * g1
+        a02 -= coef * v0 * g2
+        a10 -= coef * v1 * g0
+        a11 -= coef * v1 * g1
+        a12 -= coef * v1 * g2
+        a20 -= coef * v2 * g0
+        a21 -= coef * v2 * g1
+        a22 -= coef * v2 * g2
+        kappa = -spin2 * plates[i, PL_REACH]
+        r0 += coef * kappa * v0
+        r1 += coef * kappa * v1
+        r2 += coef * kappa * v2
+    m00 = a11 * a22 - a12 * a21
+    m01 = a10 * a22 - a12 * a20
+    m02 = a10 * a21 - a11 * a20
+    det = a00 * m00 - a01 * m01 + a02 * m02
+    if not det > 0.0:
+        return n0, det
+    q0 = (r0 * m00 - a01 * (r1 * a22 - a12 * r2) + a02 * (r1 * a21 - a11 * r2)) / det
+    q1 = (a00 * (r1 * a22 - a12 * r2) - r0 * m01 + a02 * (a10 * r2 - r1 * a20)) / det
+    q2 = (a00 * (a11 * r2 - r1 * a21) - a01 * (a10 * r2 - r1 * a20) + r0 * m02) / det
+    n = n0
+    for i in range(plates.shape[0]):
+        base = plates[i, PL_EX] * q0 + plates[i, PL_EY] * q1 + plates[i, PL_LEVER] * q2 \
+            - spin2 * plates[i, PL_REACH]
+        n -= plates[i, PL_MASS] * plates[i, PL_COS] * plates[i, PL_SIN] * base
+    accel[0] = c * q0 - s * q1
+    accel[1] = s * q0 + c * q1
+    accel[2] = q2
+    accel[3] = q0
+    accel[4] = q1
+    accel[5] = q2
+    return n, det
+
+
+@njit(cache=True, nogil=True)
 def _rhs(plates, disk, mode, reference, drive, y, out, work):
-    """Time derivative of the state; ``work`` is scratch of length >= 17."""
+    """Time derivative of the state; ``work`` is scratch of length >= 23."""
     loads = work[0:8]
     wrench = work[8:14]
     direction = work[14:17]
@@ -285,11 +378,23 @@ def _rhs(plates, disk, mode, reference, drive, y, out, work):
         return
     _world_wrench(disk, y[HEADING], loads, wrench)
     _friction_direction(disk, mode, reference, y, loads[0], wrench, direction)
+    out[PATH] = math.sqrt(y[VX] * y[VX] + y[VY] * y[VY])
+    if disk[DK_TWO_WAY] != 0.0:
+        accel = work[17:23]
+        _two_way(plates, disk, y, loads, direction, accel)
+        out[VX] = accel[0]
+        out[VY] = accel[1]
+        out[SPIN] = accel[2]
+        spin2 = y[SPIN] * y[SPIN]
+        for i in range(plates.shape[0]):
+            base = plates[i, PL_EX] * accel[3] + plates[i, PL_EY] * accel[4] \
+                + plates[i, PL_LEVER] * accel[5] - spin2 * plates[i, PL_REACH]
+            out[MODES + 2 * i + 1] -= plates[i, PL_SIN] * base
+        return
     friction = disk[DK_CK] * loads[0]
     out[VX] = wrench[0] - friction * direction[0]
     out[VY] = wrench[1] - friction * direction[1]
     out[SPIN] = (loads[3] - friction * disk[DK_LENGTH] * direction[2]) / disk[DK_GYRATION2]
-    out[PATH] = math.sqrt(y[VX] * y[VX] + y[VY] * y[VY])
 
 
 @njit(cache=True, nogil=True)
@@ -298,7 +403,9 @@ def _event_values(plates, disk, mode, reference, drive, drive_rate_neg, y, value
     """Event functions of the current mode, positive while nothing happens.
 
     stick: ``cs n - |W|`` (release); slip: ``u . d`` (slip end, ``d`` the reference
-    direction); always: ``n`` (lift-off).
+    direction); always: ``n`` (lift-off). In a two-way coupled slip the rate of ``n``
+    leaves out the plates' coupling (it only serves to watch for a dip of ``n``
+    between samples; ``n`` itself is the coupled one).
     """
     loads = work[0:8]
     wrench = work[8:14]
@@ -316,10 +423,18 @@ def _event_values(plates, disk, mode, reference, drive, drive_rate_neg, y, value
     else:
         _friction_direction(disk, mode, reference, y, loads[0], wrench, direction)
         length = disk[DK_LENGTH]
-        friction = disk[DK_CK] * loads[0]
-        ax = wrench[0] - friction * direction[0]
-        ay = wrench[1] - friction * direction[1]
-        aspin = (loads[3] - friction * length * direction[2]) / disk[DK_GYRATION2]
+        if disk[DK_TWO_WAY] != 0.0:
+            accel = work[17:23]
+            n, _ = _two_way(plates, disk, y, loads, direction, accel)
+            loads[0] = n
+            ax = accel[0]
+            ay = accel[1]
+            aspin = accel[2]
+        else:
+            friction = disk[DK_CK] * loads[0]
+            ax = wrench[0] - friction * direction[0]
+            ay = wrench[1] - friction * direction[1]
+            aspin = (loads[3] - friction * length * direction[2]) / disk[DK_GYRATION2]
         values[0] = y[VX] * reference[0] + y[VY] * reference[1] \
             + length * y[SPIN] * reference[2]
         rates[0] = ax * reference[0] + ay * reference[1] + length * aspin * reference[2]
@@ -397,7 +512,7 @@ def _integrate(
     n = y.shape[0]
     k, y_new, err, dense, tmp, ystate = step_workspace(n)
     values, rates, prev_values, prev_rates = event_workspace(2)
-    work = np.empty(17)
+    work = np.empty(23)
     reference = np.zeros(3)
     mode = mode_box[0]
     t = t_box[0]
@@ -460,6 +575,13 @@ def _integrate(
                 reference[2] = length * y[SPIN] / size
             else:
                 _slaved_direction(disk, loads[0], wrench, reference)
+            if disk[DK_TWO_WAY] != 0.0:
+                _, det = _two_way(plates, disk, y, loads, reference, work[17:23])
+                if not det > 0.0:
+                    record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_PARADOX, y)
+                    mode_box[0] = mode
+                    t_box[0] = t
+                    return RUN_PARADOX
             if mode == SLIP and size <= disk[DK_SLAVED]:
                 # The frozen direction of this step differs from the last step's.
                 _rhs(plates, disk, mode, reference, drive, y, k[0], work)
