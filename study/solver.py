@@ -16,15 +16,14 @@ from study.physics import (
     release_amplitudes,
     slip_amplitudes,
 )
-from study.status import NonConvergence, Status
 from study.structure import Structure
 
 __all__ = [
     "COUPLINGS",
     "Attractors",
-    "attractors",
     "SolverSettings",
     "SteadyState",
+    "attractors",
     "check_coupling",
     "steady_state",
     "steady_velocity",
@@ -427,7 +426,3 @@ def _velocity_only(
     )
     return velocity, status
 
-
-# The kernel mirrors the enums as plain integers; keep them in step.
-assert _kernel.STATIC == Status.STATIC and _kernel.LIFT_OFF == Status.LIFT_OFF
-assert _kernel.REASON_EVENT_BUDGET == NonConvergence.EVENT_BUDGET

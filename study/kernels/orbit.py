@@ -41,7 +41,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from study.kernels.transient import (
+from study.kernels.codes import (
     CONTINUOUS_SLIDING,
     FRICTION_PARADOX,
     LIFT_OFF,

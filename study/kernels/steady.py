@@ -24,19 +24,18 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from study.kernels.codes import (
+    CONTINUOUS_SLIDING,
+    LIFT_OFF,
+    NOT_CONVERGED,
+    REASON_EVENT_BUDGET,
+    REASON_NO_PERIODIC_ORBIT,
+    REASON_NONE,
+    STATIC,
+    STICK_SLIP,
+)
+
 TWO_PI = 2.0 * math.pi
-
-# Status codes, mirrored by study.status.Status (tested to agree).
-STATIC = 0
-STICK_SLIP = 1
-CONTINUOUS_SLIDING = 2
-LIFT_OFF = 3
-NOT_CONVERGED = 4
-
-# Reasons for NOT_CONVERGED, mirrored by study.status.NonConvergence.
-REASON_NONE = 0
-REASON_NO_PERIODIC_ORBIT = 1
-REASON_EVENT_BUDGET = 2
 
 # A release that would start this close before the end of its arc (in phase, rad)
 # is a rounding artefact of a slip that ended exactly on the arc's edge: its slip
