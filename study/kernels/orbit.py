@@ -126,7 +126,7 @@ MAX_NEWTON = 24
 # A Newton iterate is a fixed point when the scaled residual is below this, or below
 # LOOSE_TOLERANCE and no longer decreasing (the rounding floor of the map).
 NEWTON_TOLERANCE = 1e-13
-LOOSE_TOLERANCE = 1e-9
+LOOSE_TOLERANCE = 1e-11
 # A Newton step this small (scaled) ends the iteration: its own error is ~ its square.
 NEWTON_STEP = 1e-7
 # Newton iterates after a step below this (scaled) are watched for lift-off.
@@ -673,7 +673,9 @@ def _initial_mode(structure, table, omega, a, t, z):
     if z[2] < 0.0:
         return -1
     r_p, r_m, _ = _stick_releases(structure, a, math.cos(omega * t), z[0], z[1])
-    if r_p > 0.0:
+    # Both positive only off the table (n < 0): the larger wins, as the mirror image
+    # alpha -> -alpha swaps them.
+    if r_p > 0.0 and r_p >= r_m:
         return 1
     if r_m > 0.0:
         return -1
@@ -945,13 +947,17 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
     flag, converged
         ``RUN_LIFT_OFF`` when a watched iterate leaves the table; else the last
         stretch's flag and whether ``z`` is the fixed point. ``jac`` then holds the
-        Jacobian of ``P^periods`` and ``acc`` the orbit's statistics, corrected to
-        first order in the last Newton step (the gradients in ``grad``), which
-        leaves an error of the order of its square.
+        Jacobian of ``P^periods`` at the last iterate and ``acc`` the orbit's
+        statistics, moved to the fixed point along their gradients (``grad``) by the
+        last Newton step: what is left is of the order of the step's square.
     """
     span = periods * TWO_PI / omega
     previous = np.inf
     last_step = np.inf
+    # Events and slips of the previous pass: a step is only trusted as the last one
+    # when the pass it came from has the same sequence of events.
+    last_events = -1.0
+    last_slips = -1.0
     step = np.empty(3)
     residual = np.empty(3)
     for _ in range(MAX_NEWTON):
@@ -972,20 +978,14 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
         for i in range(3):
             residual[i] = z[i] - work[i]
             res = max(res, abs(residual[i]) / scales[i])
-        if res <= NEWTON_TOLERANCE or (res <= LOOSE_TOLERANCE and res >= 0.5 * previous):
-            if margin < 0.0:
-                # Converged at once: this pass was not watched for lift-off.
-                last_step = 0.0
-                continue
-            return RUN_OK, True
-        if res > previous:
+        if res > previous and res > NEWTON_TOLERANCE:
             # Diverging (an event appeared or vanished): take the map's step instead.
             for i in range(3):
                 z[i] = work[i]
             previous = np.inf
             last_step = np.inf
+            last_events = -1.0
             continue
-        previous = res
         for i in range(3):
             jac[i, i] -= 1.0
         solved = _solve3(jac, residual, step)
@@ -995,21 +995,31 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
             for i in range(3):
                 z[i] = work[i]
             last_step = np.inf
+            last_events = -1.0
             continue
         size = 0.0
         for i in range(3):
             size = max(size, abs(step[i]) / scales[i])
-        if size <= NEWTON_STEP and margin >= 0.0:
-            # Quadratic convergence: the error after this step is ~ size^2. Move the
-            # statistics to the fixed point along their gradients.
+        same_events = acc[A_EVENTS] == last_events and acc[A_SLIPS] == last_slips
+        last_events = acc[A_EVENTS]
+        last_slips = acc[A_SLIPS]
+        done = res <= NEWTON_TOLERANCE or (
+            same_events and (size <= NEWTON_STEP
+                             or (res <= LOOSE_TOLERANCE and res >= 0.5 * previous)))
+        if done and margin < 0.0:
+            # Converged before any pass was watched for lift-off: one more.
+            done = False
+            size = 0.0
+        for i in range(3):
+            z[i] += step[i]
+        if done:
+            # Move the statistics to the fixed point along their gradients.
             for i in range(3):
-                z[i] += step[i]
                 acc[A_DISPLACEMENT] += grad[0, i] * step[i]
                 acc[A_FORWARD] += grad[1, i] * step[i]
                 acc[A_BACKWARD] += grad[2, i] * step[i]
             return RUN_OK, True
-        for i in range(3):
-            z[i] += step[i]
+        previous = res
         last_step = size
     return RUN_OK, False
 
@@ -1118,6 +1128,30 @@ def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, s
                 if converged and spectral_radius(jac) < 1.0 + STABILITY_MARGIN:
                     for i in range(3):
                         z[i] = candidate[i]
+                    # Report the orbit's own period, not a multiple that closed first.
+                    for shorter in range(1, periods):
+                        if periods % shorter:
+                            continue
+                        for i in range(3):
+                            work[i] = z[i]
+                        flag = run(structure, table, omega, a, work, 0.0, shorter * period,
+                                   jac, False, -1.0, max_events, acc, grad)
+                        gap = 0.0
+                        for i in range(3):
+                            gap = max(gap, abs(work[i] - z[i]) / scales[i])
+                        if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
+                            flag, converged = _newton(structure, table, omega, a, z,
+                                                      shorter, scales, max_events, jac,
+                                                      acc, work, grad)
+                            if flag == RUN_LIFT_OFF:
+                                return LIFT_OFF, REASON_NONE, 0
+                            if converged:
+                                return STICK_SLIP, REASON_NONE, shorter
+                    # Statistics of the full cycle (the checks above overwrote them).
+                    flag, converged = _newton(structure, table, omega, a, z, periods,
+                                              scales, max_events, jac, acc, work, grad)
+                    if flag == RUN_LIFT_OFF:
+                        return LIFT_OFF, REASON_NONE, 0
                     return STICK_SLIP, REASON_NONE, periods
                 break
     return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0
@@ -1223,6 +1257,7 @@ def attractors_point(structure, omega, a, lifted, max_events, max_iterations, ou
     ``out`` receives ``(count, spread, starts_converged)``: the number of distinct
     orbits (LIFT_OFF or FRICTION_PARADOX outcomes count as one outcome each), the
     spread of their mean velocities [m s^-1], and how many starts reached an outcome.
+    Starts off the table (``n < 0``) are skipped.
     """
     row = np.empty(N_OUT)
     n_starts = len(START_PHASES) * len(START_FACTORS)
@@ -1232,10 +1267,21 @@ def attractors_point(structure, omega, a, lifted, max_events, max_iterations, ou
     converged = 0
     others = 0  # bit 1: lift-off seen, bit 2: paradox seen
     scale = a / omega
+    table = np.zeros((3, N_MODE))
+    mode_table(structure, omega, a, table)
+    start = np.empty(3)
     for phase in START_PHASES:
         for factor in START_FACTORS:
+            t_start = phase * TWO_PI / omega
+            _start(table, omega, t_start, start, factor)
+            _, _, acc0 = _stick_releases(structure, a, math.cos(omega * t_start), start[0],
+                                         start[1])
+            if (structure[S_G] - a * math.cos(omega * t_start)
+                    + structure[S_MASS] * structure[S_COS] * acc0) < 0.0:
+                # A start off the table is no state of the model.
+                continue
             solve_point(structure, omega, a, lifted, max_events, max_iterations,
-                        phase * TWO_PI / omega, factor, row)
+                        t_start, factor, row)
             status = int(row[0])
             if status == STATIC:
                 out[0] = 1.0
