@@ -29,7 +29,7 @@ __all__ = [
 ]
 
 #: Version of the steady-state algorithm; changes whenever its results may change.
-SOLVER_VERSION = "3"
+SOLVER_VERSION = "4"
 
 #: How the sliding base and the mode interact: the paper's model, or the physical one
 #: in which the base's sliding acceleration also forces the mode.

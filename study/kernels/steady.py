@@ -54,8 +54,13 @@ CYCLE_DETECTION = 1e-2
 # Newton refinement of a cycle stops once the cycle closes to this phase [rad].
 CYCLE_TOLERANCE = 1e-12
 
+EPS = 2.220446049250313e-16
 # A release needs |A_s| > cs g times this (see _constants).
-RELEASE_MARGIN = 1.0 + 8.0 * 2.220446049250313e-16
+RELEASE_MARGIN = 1.0 + 8.0 * EPS
+# A slip end is found once the slip speed there is below this many ulps of the sum of
+# the absolute values of its terms (its rounding error), or once the Newton correction
+# or the bracket is below this many ulps of the phase (see _slip).
+SLIP_END_ULPS = 4.0
 
 # Round-trip status of a sequence of slips.
 _ROUND_OK = 0
@@ -146,35 +151,43 @@ def _slip(psi0, c, h, gamma):
         return 0.0, 0.0, slope0, slope0, False
     hi = lo + TWO_PI - 2.0 * gamma
     speed_hi, _ = _slip_speed(hi, slope0, h, cos0, sin0)
-    # U is monotone decreasing on [lo, hi], U(lo) > 0 > U(hi): start from regula falsi.
+    # U is monotone decreasing on [lo, hi], U(lo) > 0 > U(hi): start from regula falsi,
+    # then Newton, bisecting whenever a step would leave the bracket.
     d = lo + (hi - lo) * speed_lo / (speed_lo - speed_hi)
-    for _ in range(200):
-        speed, accel = _slip_speed(d, slope0, h, cos0, sin0)
+    for iteration in range(200):
+        sin_d = math.sin(d)
+        half = math.sin(0.5 * d)
+        one_minus_cos = 2.0 * half * half
+        sin_minus_d = _sin_minus_x(d, sin_d)
+        speed = slope0 * d + h * (cos0 * sin_minus_d - sin0 * one_minus_cos)
+        accel = slope0 - h * (cos0 * one_minus_cos + sin0 * sin_d)
+        # The root is as accurate as the evaluation of U allows once |U(d)| is below
+        # the rounding error of that evaluation: a few ulps of the sum of the absolute
+        # values of its terms (for d >= 1, sin(d) - d is a difference of its terms).
+        size = abs(sin_minus_d) if d < 1.0 else abs(sin_d) + d
+        noise = SLIP_END_ULPS * EPS * (abs(slope0) * d + h * (abs(cos0) * size
+                                                              + abs(sin0) * one_minus_cos))
+        if abs(speed) <= noise or iteration == 199:
+            break
         if speed > 0.0:
             lo = d
-        elif speed < 0.0:
-            hi = d
         else:
-            break
+            hi = d
         step_ok = accel < 0.0
         if step_ok:
             d_new = d - speed / accel
             step_ok = lo < d_new < hi
         if not step_ok:
             d_new = 0.5 * (lo + hi)
-        if abs(d_new - d) <= 1e-14 * d_new or hi - lo <= 4e-16 * hi:
-            d = d_new
+        # A correction or a bracket of a few ulps of d: d is the root to rounding.
+        if abs(d_new - d) <= SLIP_END_ULPS * EPS * d or hi - lo <= SLIP_END_ULPS * EPS * hi:
             break
         d = d_new
-    sin_d = math.sin(d)
-    half = math.sin(0.5 * d)
-    one_minus_cos = 2.0 * half * half
+    # d is the last point evaluated: its sines give the distance and the end slope.
     distance = 0.5 * slope0 * d * d + h * (
-        cos0 * _one_minus_cos_minus_half_square(d, one_minus_cos)
-        + sin0 * _sin_minus_x(d, sin_d)
+        cos0 * _one_minus_cos_minus_half_square(d, one_minus_cos) + sin0 * sin_minus_d
     )
-    _, slope_end = _slip_speed(d, slope0, h, cos0, sin0)
-    return d, distance, slope0, slope_end, True
+    return d, distance, slope0, accel, True
 
 
 @njit(cache=True, nogil=True)
