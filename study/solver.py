@@ -30,7 +30,7 @@ __all__ = [
 ]
 
 #: Version of the steady-state algorithm; changes whenever its results may change.
-SOLVER_VERSION = "3"
+SOLVER_VERSION = "4"
 
 #: How the sliding base and the mode interact: the paper's model, or the physical one
 #: in which the base's sliding acceleration also forces the mode.
@@ -417,12 +417,25 @@ def _velocity_only(
     status = np.empty(n, dtype=np.int8)
     kernel = (_kernel._steady_velocity if n >= PARALLEL_THRESHOLD
               else _kernel._steady_velocity_serial)
-    kernel(
-        f, a, structure.omega0, 1.0 / structure.Q, structure.M,
+    constants = (
+        structure.omega0, 1.0 / structure.Q, structure.M,
         float(np.cos(structure.alpha_rad)), float(np.sin(structure.alpha_rad)),
         structure.cs, structure.ck, structure.g,
         structure.cs * structure.g, structure.ck * structure.g,
-        int(settings.max_events), int(settings.max_map_iterations), velocity, status,
+        int(settings.max_events), int(settings.max_map_iterations),
     )
+    kernel(f, a, *constants, velocity, status)
+    # Points within 1e-13 of the lift-off threshold: numpy's rounding of |z| decides,
+    # as in steady_state.
+    undecided = np.flatnonzero(status == _kernel.LIFT_UNDECIDED)
+    if undecided.size:
+        f_u, a_u = f[undecided], a[undecided]
+        v_u = np.empty(undecided.size)
+        s_u = np.empty(undecided.size, dtype=np.int8)
+        _kernel._steady_velocity_given(
+            f_u, a_u, a_u > lift_off_acceleration(structure, f_u), *constants, v_u, s_u
+        )
+        velocity[undecided] = v_u
+        status[undecided] = s_u
     return velocity, status
 
