@@ -616,8 +616,8 @@ SURE_BELOW = 1.0 - 1e-13
 @njit(cache=True, nogil=True)
 def _lift_off(f, a, w0, inv_q, m, cos_a, g):
     """The mode coupling ``k = w^2 M cos(alpha) G`` at one point and the lift-off
-    test ``a > lift_off_acceleration`` (1, 0 or LIFT_UNDECIDED), operation for operation as numpy evaluates
-    ``study.physics`` there (see :func:`_forces`).
+    test ``a > lift_off_acceleration`` (1, 0 or LIFT_UNDECIDED), operation for operation
+    as numpy evaluates ``study.physics`` there (see :func:`_forces`).
 
     numpy multiplies a real by a complex as ``(x + 0j) * z`` and divides by a real
     ``q`` as ``z * (1 / q)`` (Smith's algorithm); the zero products are kept so that
