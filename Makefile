@@ -5,7 +5,8 @@
 #   make test       set up .venv on a fresh machine, lint, run the test suite
 #   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc,
-#                   one-thread map against a single-purpose floor -> results/bench-floor.md
+#                   one-thread map against a single-purpose floor -> results/bench-floor.md,
+#                   exact two-way solver vs integrator -> results/bench-two-way-agreement.md
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
 
@@ -105,6 +106,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_study_overhead.py
 	$(PY) benchmarks/bench_work_precision.py
 	$(PY) benchmarks/bench_planar.py
+	$(PY) benchmarks/two_way_agreement.py
 	mkdir -p docs && cp figures/work-precision.png docs/
 
 cf-check: $(RESULTS)

@@ -3,12 +3,13 @@
 The paper's Fig. 4 structure is a disk with two soft plates: a head plate that moves
 it forward or backward and a tail plate, across the head-tail axis, that turns it.
 Each plate is the single-plate model of paper eqs. 2-4 (a first mode driven by the
-table, one-way coupled), mounted at a point of the disk along a direction in its
-body frame. The disk's contact is planar Coulomb friction with an ellipsoidal limit
-surface (the friction force and torque at sliding lie on the ellipsoid
-``|f|^2 / (mu n)^2 + tau^2 / (mu n c)^2 = 1``; the twist is normal to it), with
-stick and slip for force and torque together. See :mod:`study.kernels.planar` for
-the equations and README "Steering" for the choices.
+table; one-way coupled by default, or two-way: the disk's sliding acceleration at the
+plate's attachment, projected on its direction, forces the plate too), mounted at a
+point of the disk along a direction in its body frame. The disk's contact is planar
+Coulomb friction with an ellipsoidal limit surface (the friction force and torque at
+sliding lie on the ellipsoid ``|f|^2 / (mu n)^2 + tau^2 / (mu n c)^2 = 1``; the twist
+is normal to it), with stick and slip for force and torque together. See
+:mod:`study.kernels.planar` for the equations and README "Steering" for the choices.
 
 Per unit total mass, SI units: lengths in m, angles in rad inside (degrees in the
 plate definition, as in :class:`study.structure.Structure`).
@@ -26,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels import planar as _kernel
 from study.physics import mode_response
 from study.structure import require_finite
-from study.transient import IntegratorSettings, Schedule
+from study.transient import COUPLINGS, IntegratorSettings, Schedule
 
 __all__ = [
     "EVENT_KINDS",
@@ -55,6 +56,7 @@ OUTCOMES = {
     _kernel.RUN_DONE: "completed",
     _kernel.RUN_LIFT_OFF: "lift_off",
     _kernel.RUN_BUDGET: "step_budget",
+    _kernel.RUN_PARADOX: "friction_paradox",
 }
 
 #: Event kinds recorded in trajectories.
@@ -62,6 +64,7 @@ EVENT_KINDS = {
     _kernel.EVENT_RELEASE: "release",
     _kernel.EVENT_SLIP_END: "slip_end",
     _kernel.EVENT_LIFT_OFF: "lift_off",
+    _kernel.EVENT_PARADOX: "friction_paradox",
 }
 
 #: Default slaving threshold of a slip's onset, in units of ``ck g / w`` [1].
@@ -170,6 +173,13 @@ class Disk:
         Length ``c`` of the ellipsoidal limit surface, the maximum friction torque
         over the maximum friction force [m]; default ``2 radius / 3`` (uniform
         pressure on the full disk).
+    coupling : {"one-way", "two-way"}
+        ``"one-way"`` (default): each plate's mode is forced by the table only.
+        ``"two-way"``: while the disk slides, the acceleration of each plate's
+        attachment point projected on its direction, ``b_i``, forces it too,
+        ``delta_i'' = F_i - sin(alpha_i) b_i`` (as :func:`study.transient.simulate`'s
+        two-way model); a slip whose coupled equations have no unique solution
+        (Painleve's paradox) stops a run with outcome ``friction_paradox``.
     """
 
     radius: float
@@ -179,6 +189,7 @@ class Disk:
     g: float = 9.8
     gyration_radius: float | None = None
     friction_length: float | None = None
+    coupling: str = "one-way"
     _names: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -207,6 +218,8 @@ class Disk:
             require_finite("Disk.gyration_radius", self.gyration_radius))
         length = 2.0 * radius / 3.0 if self.friction_length is None else (
             require_finite("Disk.friction_length", self.friction_length))
+        if self.coupling not in COUPLINGS:
+            raise ValueError(f"Disk: coupling = {self.coupling!r} must be one of {COUPLINGS}")
         for name, value in (("gyration_radius", gyration), ("friction_length", length)):
             if value <= 0.0:
                 raise ValueError(f"Disk: {name} = {value!r} [m] must be > 0")
@@ -222,7 +235,7 @@ class Disk:
 
 
 def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The kernel's plate table ``(P, 8)`` and disk vector ``(5,)``."""
+    """The kernel's plate table ``(P, 9)`` and disk vector ``(7,)``."""
     if not isinstance(disk, Disk):
         raise TypeError(f"disk must be a study.planar.Disk, got {type(disk).__name__}")
     plates = np.empty((len(disk.plates), _kernel.N_PLATE_PARAMETERS))
@@ -238,6 +251,7 @@ def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64
         plates[i, _kernel.PL_EX] = ex
         plates[i, _kernel.PL_EY] = ey
         plates[i, _kernel.PL_LEVER] = plate.lever
+        plates[i, _kernel.PL_REACH] = plate.attachment[0] * ex + plate.attachment[1] * ey
     vector = np.empty(_kernel.N_DISK_PARAMETERS)
     vector[_kernel.DK_CS] = disk.cs
     vector[_kernel.DK_CK] = disk.ck
@@ -245,6 +259,7 @@ def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64
     vector[_kernel.DK_LENGTH] = disk.friction_length
     vector[_kernel.DK_GYRATION2] = disk.gyration_radius**2
     vector[_kernel.DK_SLAVED] = 0.0
+    vector[_kernel.DK_TWO_WAY] = 1.0 if disk.coupling == "two-way" else 0.0
     return plates, vector
 
 
@@ -527,6 +542,9 @@ def describe_disk(disk: Disk) -> dict[str, Any]:
     return {
         "radius": disk.radius, "cs": disk.cs, "ck": disk.ck, "g": disk.g,
         "gyration_radius": disk.gyration_radius, "friction_length": disk.friction_length,
+        # Named only when two-way, so a one-way disk's description (and the hash of
+        # every scene spec written before the option) stays as it was.
+        **({"coupling": disk.coupling} if disk.coupling != "one-way" else {}),
         "plates": [
             {"name": p.name, "f0": p.f0, "Q": p.Q, "alpha": p.alpha, "M": p.M,
              "direction": p.direction, "attachment": list(p.attachment)}
@@ -661,6 +679,9 @@ def periodic_motion(
         )
         if code == _kernel.RUN_LIFT_OFF:
             return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.LIFT_OFF),
+                                  int(Reason.NONE), count, math.nan, math.nan, 0)
+        if code == _kernel.RUN_PARADOX:
+            return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.FRICTION_PARADOX),
                                   int(Reason.NONE), count, math.nan, math.nan, 0)
         if code != _kernel.RUN_DONE:
             return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),

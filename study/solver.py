@@ -16,20 +16,21 @@ from study.physics import (
     release_amplitudes,
     slip_amplitudes,
 )
-from study.status import NonConvergence, Status
 from study.structure import Structure
 
 __all__ = [
     "COUPLINGS",
+    "Attractors",
     "SolverSettings",
     "SteadyState",
+    "attractors",
     "check_coupling",
     "steady_state",
     "steady_velocity",
 ]
 
 #: Version of the steady-state algorithm; changes whenever its results may change.
-SOLVER_VERSION = "3"
+SOLVER_VERSION = "4"
 
 #: How the sliding base and the mode interact: the paper's model, or the physical one
 #: in which the base's sliding acceleration also forces the mode.
@@ -262,6 +263,97 @@ def steady_state(
     )
 
 
+@dataclass(frozen=True)
+class Attractors:
+    """Stable periodic orbits reached from several starting states, per drive point.
+
+    Attributes
+    ----------
+    count : numpy.ndarray of int32
+        Distinct outcomes found [1]: stable orbits told apart by period and mean
+        velocity, plus one for lift-off and one for the friction paradox when some
+        start ends there. 1 for ``STATIC`` points; > 1 flags multistability.
+    velocity_spread : numpy.ndarray
+        Largest minus smallest mean velocity among the orbits found [m s^-1].
+    starts_converged : numpy.ndarray of int32
+        Starting states (of :data:`ATTRACTOR_STARTS`) that reached an outcome [1].
+    """
+
+    count: NDArray[np.int32]
+    velocity_spread: NDArray[np.float64]
+    starts_converged: NDArray[np.int32]
+
+
+#: Starting states of :func:`attractors`: rest at each drive phase [periods], with the
+#: mode on each multiple of its steady response.
+ATTRACTOR_STARTS = {"phases": _orbit.START_PHASES, "mode_factors": _orbit.START_FACTORS}
+
+
+def attractors(
+    structure: Structure,
+    f: ArrayLike,
+    a: ArrayLike,
+    settings: SolverSettings | None = None,
+    *,
+    coupling: str = "two-way",
+    parallel: bool | None = None,
+) -> Attractors:
+    """Multistability check: the distinct stable orbits reached from several starts.
+
+    From rest at four drive phases, with the mode at 0, 1 and 2 times its steady
+    response (:data:`ATTRACTOR_STARTS`), the exact orbit solver (README, "Two-way
+    coupling, exact") finds the attracting periodic orbit each start leads to; orbits
+    are the same when their periods agree and their mean velocities agree to
+    ``1e-9 a / w``. Costs twelve solves per point.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    f : array_like
+        Drive frequency [Hz], > 0.
+    a : array_like
+        Drive acceleration amplitude [m s^-2], >= 0.
+    settings : SolverSettings, optional
+        Solver budgets.
+    coupling : {"one-way", "two-way"}
+        The model; with ``"one-way"`` the mode's transient decays on its own and the
+        starts differ in the phase of the first release.
+    parallel : bool, optional
+        Spread points over all cores.
+
+    Returns
+    -------
+    Attractors
+    """
+    structure = check_structure(structure)
+    coupling = check_coupling(coupling)
+    settings = SolverSettings() if settings is None else settings
+    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    shape = f_arr.shape
+    f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
+    a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
+    lifted = a_flat > lift_off_acceleration(structure, f_flat)
+    out = np.empty((f_flat.size, 3))
+    if parallel is None:
+        parallel = f_flat.size >= 16
+    vector = structure_vector(structure, coupling)
+    omega = 2.0 * np.pi * f_flat
+    if parallel:
+        _orbit._attractors_points(vector, omega, a_flat, lifted, int(settings.max_events),
+                                  int(settings.max_map_iterations), out)
+    else:
+        for i in range(f_flat.size):
+            _orbit.attractors_point(vector, omega[i], a_flat[i], lifted[i],
+                                    int(settings.max_events),
+                                    int(settings.max_map_iterations), out[i])
+    return Attractors(
+        count=out[:, 0].astype(np.int32).reshape(shape),
+        velocity_spread=out[:, 1].reshape(shape),
+        starts_converged=out[:, 2].astype(np.int32).reshape(shape),
+    )
+
+
 def steady_velocity(
     structure: Structure,
     f: ArrayLike,
@@ -325,16 +417,25 @@ def _velocity_only(
     status = np.empty(n, dtype=np.int8)
     kernel = (_kernel._steady_velocity if n >= PARALLEL_THRESHOLD
               else _kernel._steady_velocity_serial)
-    kernel(
-        f, a, structure.omega0, 1.0 / structure.Q, structure.M,
+    constants = (
+        structure.omega0, 1.0 / structure.Q, structure.M,
         float(np.cos(structure.alpha_rad)), float(np.sin(structure.alpha_rad)),
         structure.cs, structure.ck, structure.g,
         structure.cs * structure.g, structure.ck * structure.g,
-        int(settings.max_events), int(settings.max_map_iterations), velocity, status,
+        int(settings.max_events), int(settings.max_map_iterations),
     )
+    kernel(f, a, *constants, velocity, status)
+    # Points within 1e-13 of the lift-off threshold: numpy's rounding of |z| decides,
+    # as in steady_state.
+    undecided = np.flatnonzero(status == _kernel.LIFT_UNDECIDED)
+    if undecided.size:
+        f_u, a_u = f[undecided], a[undecided]
+        v_u = np.empty(undecided.size)
+        s_u = np.empty(undecided.size, dtype=np.int8)
+        _kernel._steady_velocity_given(
+            f_u, a_u, a_u > lift_off_acceleration(structure, f_u), *constants, v_u, s_u
+        )
+        velocity[undecided] = v_u
+        status[undecided] = s_u
     return velocity, status
 
-
-# The kernel mirrors the enums as plain integers; keep them in step.
-assert _kernel.STATIC == Status.STATIC and _kernel.LIFT_OFF == Status.LIFT_OFF
-assert _kernel.REASON_EVENT_BUDGET == NonConvergence.EVENT_BUDGET

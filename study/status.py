@@ -1,8 +1,13 @@
-"""Status codes stored with every solved point (a CF flag variable on disk)."""
+"""Status codes stored with every solved point (a CF flag variable on disk).
+
+The values are :mod:`study.kernels.codes`' (the kernels return them as plain integers).
+"""
 
 from __future__ import annotations
 
 from enum import IntEnum
+
+from study.kernels import codes
 
 __all__ = ["INVALID_STATUSES", "NonConvergence", "Status"]
 
@@ -30,12 +35,12 @@ class Status(IntEnum):
         for ``M`` close to 1 at steep tilt. Outside the model; no velocity (NaN).
     """
 
-    STATIC = 0
-    STICK_SLIP = 1
-    CONTINUOUS_SLIDING = 2
-    LIFT_OFF = 3
-    NOT_CONVERGED = 4
-    FRICTION_PARADOX = 5
+    STATIC = codes.STATIC
+    STICK_SLIP = codes.STICK_SLIP
+    CONTINUOUS_SLIDING = codes.CONTINUOUS_SLIDING
+    LIFT_OFF = codes.LIFT_OFF
+    NOT_CONVERGED = codes.NOT_CONVERGED
+    FRICTION_PARADOX = codes.FRICTION_PARADOX
 
 
 class NonConvergence(IntEnum):
@@ -53,9 +58,9 @@ class NonConvergence(IntEnum):
         The event loop exhausted its budget without closing an orbit.
     """
 
-    NONE = 0
-    NO_PERIODIC_ORBIT = 1
-    EVENT_BUDGET = 2
+    NONE = codes.REASON_NONE
+    NO_PERIODIC_ORBIT = codes.REASON_NO_PERIODIC_ORBIT
+    EVENT_BUDGET = codes.REASON_EVENT_BUDGET
 
 
 #: Statuses outside the model's validity or without a solution: no velocity (NaN).

@@ -28,7 +28,6 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
 from study.solver import PARALLEL_THRESHOLD, SteadyState, check_structure
-from study.status import NonConvergence, Status
 from study.structure import Structure
 
 __all__ = [
@@ -495,9 +494,3 @@ def integrated_steady_state(
         backward_fraction=results[:, 5].reshape(shape),
         orbit_period=results[:, 6].astype(np.int32).reshape(shape),
     )
-
-
-# The kernel's codes mirror the public enums.
-assert _kernel.FRICTION_PARADOX == Status.FRICTION_PARADOX
-assert _kernel.NOT_CONVERGED == Status.NOT_CONVERGED
-assert _kernel.REASON_EVENT_BUDGET == NonConvergence.EVENT_BUDGET

@@ -41,7 +41,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from study.kernels.transient import (
+from study.kernels.codes import (
     CONTINUOUS_SLIDING,
     FRICTION_PARADOX,
     LIFT_OFF,
@@ -81,7 +81,31 @@ M_K = 8  # K_s = M (sin + s ck cos) (0 for the stick)
 M_SIGN = 9
 M_FORCE = 10  # forcing amplitude F [m s^-2]
 M_GCONST = 11  # constant forcing G [m s^-2]
-N_MODE = 12
+# Bounds of the event functions of this mode (per point constants): the sinusoid's
+# amplitude times w^2, the dual energy norms of the homogeneous functional and of its
+# second and third derivatives, and the sinusoid's amplitude and phase (for the arcs).
+M_SIN_P = 12
+M_HOM0_P = 13
+M_HOM2_P = 14
+M_HOM3_P = 15
+M_AMP_P = 16
+M_ARG_P = 17
+M_SIN_M = 18
+M_HOM0_M = 19
+M_HOM2_M = 20
+M_HOM3_M = 21
+M_AMP_M = 22
+M_ARG_M = 23
+M_SIN_V = 24
+M_HOM2_V = 25
+M_HOM3_V = 26
+M_SIN_N = 27
+M_HOM0_N = 28
+M_HOM2_N = 29
+M_HOM3_N = 30
+M_AMP_N = 31
+M_ARG_N = 32
+N_MODE = 33
 
 # Event functions, as bits of a mask.
 EV_RELEASE_FORWARD = 1
@@ -102,13 +126,15 @@ MAX_NEWTON = 24
 # A Newton iterate is a fixed point when the scaled residual is below this, or below
 # LOOSE_TOLERANCE and no longer decreasing (the rounding floor of the map).
 NEWTON_TOLERANCE = 1e-13
-LOOSE_TOLERANCE = 1e-9
+LOOSE_TOLERANCE = 1e-11
 # A Newton step this small (scaled) ends the iteration: its own error is ~ its square.
 NEWTON_STEP = 1e-7
-# The orbit's last pass must close to this (scaled); else Newton resumes.
-FINAL_TOLERANCE = 1e-12
+# Newton iterates after a step below this (scaled) are watched for lift-off.
+LIFT_WATCH = 1e-3
 # Period-map iterates closing to this (scaled) start a Newton search for that period.
 CYCLE_DETECTION = 1e-3
+# Periods of the map's iteration before its iterates are watched for lift-off.
+BURN_IN = 8
 # Longest orbit searched for, in drive periods.
 MAX_PERIOD = 16
 # An orbit is stable when its largest Floquet multiplier is below 1 + this.
@@ -177,7 +203,50 @@ def mode_table(structure, omega, a, table):
         table[row, M_PRE] = force * re / den
         table[row, M_PIM] = -force * im / den
         table[row, M_OFFSET] = gconst / k
+        _event_bounds(structure, table[row], omega, a)
     return table[1, M_D] > 0.0, table[2, M_D] > 0.0
+
+
+@njit(cache=True, nogil=True)
+def _event_bounds(structure, row, omega, a):
+    """Fill the bound columns of one mode's row (see ``M_SIN_P``...)."""
+    k = structure[S_STIFFNESS]
+    ca = structure[S_COS]
+    sa = structure[S_SIN]
+    m = structure[S_MASS]
+    cs = structure[S_CS]
+    ck = structure[S_CK]
+    kd = row[M_KD]
+    cd = row[M_CD]
+    s = row[M_SIGN]
+    kk = row[M_K]
+    pr = row[M_PRE]
+    pi = row[M_PIM]
+    w2 = omega * omega
+    for sign, col in ((1.0, M_SIN_P), (-1.0, M_SIN_M)):
+        # Release s tau - cs n = kappa delta'' - cs g + cs A (a stick's delta'').
+        kappa = -m * (sign * sa + cs * ca)
+        cr = -kappa * w2 * pr + cs * a
+        ci = -kappa * w2 * pi
+        row[col] = w2 * math.hypot(cr, ci)
+        row[col + 1] = abs(kappa) * _functional_bound(row, -kd, -cd, k, 0)
+        row[col + 2] = abs(kappa) * _functional_bound(row, -kd, -cd, k, 2)
+        row[col + 3] = abs(kappa) * _functional_bound(row, -kd, -cd, k, 3)
+        row[col + 4] = math.hypot(cr, ci)
+        row[col + 5] = math.atan2(ci, cr)
+    # s v: sinusoid -s K delta_p' + ck a sin(wt) / w; homogeneous -s K h'.
+    row[M_SIN_V] = w2 * math.hypot(kk * omega * pi, kk * omega * pr + s * ck * a / omega)
+    row[M_HOM2_V] = _functional_bound(row, 0.0, kk, k, 2)
+    row[M_HOM3_V] = _functional_bound(row, 0.0, kk, k, 3)
+    # -n = A - g - M cos(alpha) delta''.
+    cr = a + m * ca * w2 * pr
+    ci = m * ca * w2 * pi
+    row[M_SIN_N] = w2 * math.hypot(cr, ci)
+    row[M_HOM0_N] = m * ca * _functional_bound(row, kd, cd, k, 0)
+    row[M_HOM2_N] = m * ca * _functional_bound(row, kd, cd, k, 2)
+    row[M_HOM3_N] = m * ca * _functional_bound(row, kd, cd, k, 3)
+    row[M_AMP_N] = math.hypot(cr, ci)
+    row[M_ARG_N] = math.atan2(ci, cr)
 
 
 @njit(cache=True, nogil=True)
@@ -274,82 +343,82 @@ def _cubic(phi, d1, d2, m3, h):
 
 @njit(cache=True, nogil=True)
 def _cubic_step(phi, d1, d2, m3):
-    """First root ``h > 0`` of ``phi + d1 h + d2 h^2/2 + m3 h^3/6`` (``phi <= 0``,
-    ``m3 > 0``).
+    """First root ``h > 0`` of ``p(h) = phi + d1 h + d2 h^2/2 + m3 h^3/6`` (``phi <= 0``,
+    ``m3 > 0``), from below.
 
     With ``m3`` a bound of the third derivative of ``phi`` this cubic bounds
-    ``phi(t + h)`` from above, so no zero of ``phi`` comes sooner. The cubic is
-    monotone between its critical points; the root is polished by bracketed Newton.
+    ``phi(t + h)`` from above, so no zero of ``phi`` comes sooner. ``p`` rises up to
+    its first critical point (concave there: Newton from the left stays left of the
+    root), falls to the second, and rises convex beyond it (Newton from the right
+    stays right; the result is then stepped back by a relative 1e-12).
     """
-    # Break points 0 < c1 < c2 (critical points, when positive), then an upper bound.
-    c1 = np.inf
-    c2 = np.inf
     disc = d2 * d2 - 2.0 * m3 * d1
+    lo = 0.0
     if disc > 0.0:
         root = math.sqrt(disc)
-        low = (-d2 - root) / m3
-        high = (-d2 + root) / m3
-        if low > 0.0:
-            c1 = low
-            c2 = high
-        elif high > 0.0:
-            c1 = high
-    last = 0.0 if c1 == np.inf else (c1 if c2 == np.inf else c2)
-    # Beyond ``last`` the cubic increases; from there it exceeds phi(last) + m3 x^3/6 only
-    # where also convex, so grow the candidate until it is positive (a few doublings).
-    scale = max(last, 1e-300)
-    base = _cubic(phi, d1, d2, m3, last)
-    if base < 0.0:
-        scale = max(scale, math.exp(math.log(-6.0 * base / m3) / 3.0))
-    upper = last + scale
-    for _ in range(200):
-        if _cubic(phi, d1, d2, m3, upper) > 0.0:
-            break
-        upper += scale
-        scale *= 2.0
-    for i in range(3):
-        lo = 0.0 if i == 0 else (c1 if i == 1 else c2)
-        hi = c1 if i == 0 else (c2 if i == 1 else upper)
-        if lo == np.inf:
-            break
-        if hi == np.inf:
-            hi = upper
-        if hi <= lo or _cubic(phi, d1, d2, m3, hi) < 0.0:
-            continue
-        x = lo
-        for _ in range(60):
-            value = _cubic(phi, d1, d2, m3, x)
-            if value < 0.0:
-                lo = x
-            else:
-                hi = x
-            slope = d1 + x * (d2 + 0.5 * m3 * x)
-            nxt = x - value / slope if slope > 0.0 else 0.5 * (lo + hi)
-            if abs(nxt - x) <= 1e-12 * hi:
-                break
-            if not lo < nxt < hi:
-                nxt = 0.5 * (lo + hi)
-            x = nxt
-        # lo is on the safe side of the root.
+        c1 = (-d2 - root) / m3
+        c2 = (-d2 + root) / m3
+        if c1 > 0.0 and _cubic(phi, d1, d2, m3, c1) >= 0.0:
+            return _newton_left(phi, d1, d2, m3)
+        if c2 > 0.0:
+            lo = c2
+    else:
+        # p rises everywhere, concave up to its inflection point.
+        inflection = -d2 / m3
+        if inflection > 0.0:
+            if _cubic(phi, d1, d2, m3, inflection) >= 0.0:
+                return _newton_left(phi, d1, d2, m3)
+            lo = inflection
+    # Beyond lo, p rises and is convex: p(lo + x) >= p(lo) + m3 x^3 / 6.
+    base = _cubic(phi, d1, d2, m3, lo)
+    if base >= 0.0:
         return lo
-    return upper
+    x = lo + math.exp(math.log(-6.0 * base / m3) / 3.0)
+    for _ in range(60):
+        value = _cubic(phi, d1, d2, m3, x)
+        slope = d1 + x * (d2 + 0.5 * m3 * x)
+        if slope <= 0.0:
+            break
+        step = value / slope
+        x -= step
+        if step <= 1e-13 * x:
+            break
+    return max(lo, x * (1.0 - 1e-12))
 
 
 @njit(cache=True, nogil=True)
-def _arc_entry(t, omega, cr, ci, level):
-    """Earliest time >= ``t`` [s] at which ``Re[(cr + i ci) e^{i w t}] >= level``
-    (``inf`` if never)."""
-    amplitude = math.hypot(cr, ci)
+def _newton_left(phi, d1, d2, m3):
+    """Root of the cubic on its rising concave stretch from 0, approached from the left."""
+    x = 0.0
+    for _ in range(60):
+        value = _cubic(phi, d1, d2, m3, x)
+        slope = d1 + x * (d2 + 0.5 * m3 * x)
+        if value >= 0.0 or slope <= 0.0:
+            break
+        step = -value / slope
+        x += step
+        if step <= 1e-13 * x:
+            break
+    return x
+
+
+@njit(cache=True, nogil=True)
+def _arc_window(t, omega, amplitude, arg, level):
+    """The current or next stretch of time from ``t`` [s] on which
+    ``amplitude cos(w t + arg) >= level``: ``(entry, exit)`` (``inf`` if never)."""
     if level > amplitude:
-        return np.inf
+        return np.inf, np.inf
     if level <= -amplitude:
-        return t
+        return t, np.inf
     beta = math.acos(level / amplitude)
-    psi = omega * t + math.atan2(ci, cr)
+    psi = omega * t + arg
     psi -= TWO_PI * math.floor(psi / TWO_PI)
-    if psi <= beta or psi >= TWO_PI - beta:
-        return t
-    return t + (TWO_PI - beta - psi) / omega
+    if psi <= beta:
+        return t, t + (beta - psi) / omega
+    if psi >= TWO_PI - beta:
+        return t, t + (TWO_PI + beta - psi) / omega
+    entry = t + (TWO_PI - beta - psi) / omega
+    return entry, entry + 2.0 * beta / omega
 
 
 @njit(cache=True, nogil=True)
@@ -371,11 +440,13 @@ def _functional_bound(row, l1, l2, k, power):
 
 
 @njit(cache=True, nogil=True)
-def _search(structure, table, j, omega, a, t0, h0, hd0, v0, dd0, t_from, t_end, mask,
-            horizon):
+def _search(structure, table, j, omega, a, t0, sin_w0, h0, hd0, v0, dd0, t_from, t_end,
+            mask, horizon, lift_level):
     """First event of the functions in ``mask`` in ``(t0, t_end]`` for a stretch in
     contact mode ``j`` (row of ``table``) starting at ``t0`` [s] with homogeneous state
-    ``(h0, hd0)``, speed ``v0`` and ``delta'(t0) = dd0``, looking from ``t_from``.
+    ``(h0, hd0)``, speed ``v0`` and ``delta'(t0) = dd0``, looking from ``t_from``;
+    ``sin_w0 = sin(w t0)``.
+    Lift-off is ``n < g - lift_level`` [m s^-2] (``lift_level = g``: ``n < 0``).
 
     Returns
     -------
@@ -396,61 +467,41 @@ def _search(structure, table, j, omega, a, t0, h0, hd0, v0, dd0, t_from, t_end, 
     kd = row[M_KD]
     cd = row[M_CD]
     w2 = omega * omega
-    pr = row[M_PRE]
-    pi = row[M_PIM]
-    # Bounds of |phi''|: sinusoid amplitude * w^2 and the homogeneous functional.
-    sin_p = 0.0
-    sin_m = 0.0
-    hom_p = 0.0
-    hom_m = 0.0
-    hom3_p = 0.0
-    hom3_m = 0.0
-    hom3_v = 0.0
-    hom3_n = 0.0
     kappa_p = -m * (sa + cs * ca)
     kappa_m = -m * (-sa + cs * ca)
-    if mask & EV_RELEASE_FORWARD:
-        sin_p = w2 * math.hypot(-kappa_p * w2 * pr + cs * a, -kappa_p * w2 * pi)
-        hom_p = abs(kappa_p) * _functional_bound(row, -kd, -cd, k, 2)
-        hom3_p = abs(kappa_p) * _functional_bound(row, -kd, -cd, k, 3)
-    if mask & EV_RELEASE_BACKWARD:
-        sin_m = w2 * math.hypot(-kappa_m * w2 * pr + cs * a, -kappa_m * w2 * pi)
-        hom_m = abs(kappa_m) * _functional_bound(row, -kd, -cd, k, 2)
-        hom3_m = abs(kappa_m) * _functional_bound(row, -kd, -cd, k, 3)
-    sin_v = 0.0
-    hom_v = 0.0
-    if mask & EV_SLIP_END:
-        # v's sinusoid: -K delta_p' + s ck a sin(wt) / w.
-        sin_v = w2 * math.hypot(kk * omega * pi, kk * omega * pr + s * ck * a / omega)
-        hom_v = _functional_bound(row, 0.0, s * kk, k, 2)
-        hom3_v = _functional_bound(row, 0.0, s * kk, k, 3)
-    sin_n = 0.0
-    hom_n = 0.0
-    if mask & EV_LIFT_OFF:
-        sin_n = w2 * math.hypot(a + m * ca * w2 * pr, m * ca * w2 * pi)
-        hom_n = m * ca * _functional_bound(row, kd, cd, k, 2)
-        hom3_n = m * ca * _functional_bound(row, kd, cd, k, 3)
-    sin_w0 = math.sin(omega * t0)
+    sin_p = row[M_SIN_P]
+    hom_p = row[M_HOM2_P]
+    hom3_p = row[M_HOM3_P]
+    sin_m = row[M_SIN_M]
+    hom_m = row[M_HOM2_M]
+    hom3_m = row[M_HOM3_M]
+    sin_v = row[M_SIN_V]
+    hom_v = row[M_HOM2_V]
+    hom3_v = row[M_HOM3_V]
+    sin_n = row[M_SIN_N]
+    hom_n = row[M_HOM2_N]
+    hom3_n = row[M_HOM3_N]
     t = t_from
     first = t_from == t0
     # Functions made of a sinusoid, a constant and a functional of h cannot reach 0
     # before the sinusoid reaches -(constant + bound of the functional): with the energy
     # non-increasing, that arc's entry is a safe first look (one step over a stick).
     energy0 = math.sqrt(max(k * h0 * h0 + d * hd0 * hd0, 0.0))
-    wait_p = t
-    wait_m = t
-    wait_n = t
+    entry_p = np.inf
+    exit_p = np.inf
+    entry_m = np.inf
+    exit_m = np.inf
+    entry_n = np.inf
+    exit_n = np.inf
+    level_p = cs * g - row[M_HOM0_P] * energy0
+    level_m = cs * g - row[M_HOM0_M] * energy0
+    level_n = lift_level - row[M_HOM0_N] * energy0
     if mask & EV_RELEASE_FORWARD:
-        slack = abs(kappa_p) * _dual_norm(row, kd, cd, k) * energy0
-        wait_p = _arc_entry(t, omega, -kappa_p * w2 * pr + cs * a, -kappa_p * w2 * pi,
-                            cs * g - slack)
+        entry_p, exit_p = _arc_window(t, omega, row[M_AMP_P], row[M_ARG_P], level_p)
     if mask & EV_RELEASE_BACKWARD:
-        slack = abs(kappa_m) * _dual_norm(row, kd, cd, k) * energy0
-        wait_m = _arc_entry(t, omega, -kappa_m * w2 * pr + cs * a, -kappa_m * w2 * pi,
-                            cs * g - slack)
+        entry_m, exit_m = _arc_window(t, omega, row[M_AMP_M], row[M_ARG_M], level_m)
     if mask & EV_LIFT_OFF:
-        slack = m * ca * _dual_norm(row, kd, cd, k) * energy0
-        wait_n = _arc_entry(t, omega, a + m * ca * w2 * pr, m * ca * w2 * pi, g - slack)
+        entry_n, exit_n = _arc_window(t, omega, row[M_AMP_N], row[M_ARG_N], level_n)
     for steps in range(MAX_SEARCH_STEPS):
         tau = t - t0
         h, hd, _, _, _, _ = _homogeneous(row, tau, h0, hd0)
@@ -478,11 +529,17 @@ def _search(structure, table, j, omega, a, t0, h0, hd0, v0, dd0, t_from, t_end, 
                 if bit == EV_RELEASE_FORWARD:
                     kappa = kappa_p
                     bound = sin_p + hom_p * energy
-                    wait = wait_p
+                    if t >= exit_p:
+                        entry_p, exit_p = _arc_window(t, omega, row[M_AMP_P], row[M_ARG_P],
+                                                      level_p)
+                    wait = entry_p
                 else:
                     kappa = kappa_m
                     bound = sin_m + hom_m * energy
-                    wait = wait_m
+                    if t >= exit_m:
+                        entry_m, exit_m = _arc_window(t, omega, row[M_AMP_M], row[M_ARG_M],
+                                                      level_m)
+                    wait = entry_m
                 if wait > t:
                     if wait - t < step:
                         step = wait - t
@@ -537,12 +594,14 @@ def _search(structure, table, j, omega, a, t0, h0, hd0, v0, dd0, t_from, t_end, 
             if h_step < step:
                 step = h_step
                 kind = EV_SLIP_END
-        if mask & EV_LIFT_OFF and wait_n > t:
-            if wait_n - t < step:
-                step = wait_n - t
+        if mask & EV_LIFT_OFF and t >= exit_n:
+            entry_n, exit_n = _arc_window(t, omega, row[M_AMP_N], row[M_ARG_N], level_n)
+        if mask & EV_LIFT_OFF and entry_n > t:
+            if entry_n - t < step:
+                step = entry_n - t
                 kind = 0
         elif mask & EV_LIFT_OFF:
-            phi = -(g - drive + m * ca * ddd)
+            phi = -(lift_level - drive + m * ca * ddd)
             dphi = -(-ddrive + m * ca * dddd)
             bound = sin_n + hom_n * energy
             if phi > 0.0:
@@ -565,33 +624,33 @@ def _search(structure, table, j, omega, a, t0, h0, hd0, v0, dd0, t_from, t_end, 
 
 
 @njit(cache=True, nogil=True)
-def _stick_releases(structure, table, omega, a, t, dl, dld):
-    """Release functions ``s tau - cs n`` (stick forces) at state ``(dl, dld)``, ``t``."""
+def _stick_releases(structure, a, cw, dl, dld):
+    """Release functions ``s tau - cs n`` (stick forces) at state ``(dl, dld)`` and drive
+    phase with cosine ``cw``."""
     ca = structure[S_COS]
     sa = structure[S_SIN]
     m = structure[S_MASS]
     cs = structure[S_CS]
     g = structure[S_G]
-    drive = a * math.cos(omega * t)
+    drive = a * cw
     ddd0 = drive * ca - structure[S_DAMPING] * dld - structure[S_STIFFNESS] * dl
     base = -cs * g + cs * drive
     return -m * (sa + cs * ca) * ddd0 + base, -m * (-sa + cs * ca) * ddd0 + base, ddd0
 
 
 @njit(cache=True, nogil=True)
-def _mode_acceleration(structure, row, omega, a, t, dl, dld):
-    """``delta''`` in the mode of ``row`` at state ``(dl, dld)`` and time ``t``."""
-    drive = math.cos(omega * t)
-    return (row[M_FORCE] * drive + row[M_GCONST] - structure[S_DAMPING] * dld
+def _mode_acceleration(structure, row, cw, dl, dld):
+    """``delta''`` in the mode of ``row`` at state ``(dl, dld)``, drive phase cosine ``cw``."""
+    return (row[M_FORCE] * cw + row[M_GCONST] - structure[S_DAMPING] * dld
             - structure[S_STIFFNESS] * dl) / row[M_D]
 
 
 @njit(cache=True, nogil=True)
-def _slip_acceleration(structure, row, omega, a, t, ddd):
+def _slip_acceleration(structure, row, a, cw, ddd):
     """``v'`` in the slip of ``row`` with mode acceleration ``ddd``."""
     s = row[M_SIGN]
     ck = structure[S_CK]
-    return -row[M_K] * ddd - s * ck * structure[S_G] + s * ck * a * math.cos(omega * t)
+    return -row[M_K] * ddd - s * ck * structure[S_G] + s * ck * a * cw
 
 
 @njit(cache=True, nogil=True)
@@ -613,8 +672,10 @@ def _initial_mode(structure, table, omega, a, t, z):
         return 1
     if z[2] < 0.0:
         return -1
-    r_p, r_m, _ = _stick_releases(structure, table, omega, a, t, z[0], z[1])
-    if r_p > 0.0:
+    r_p, r_m, _ = _stick_releases(structure, a, math.cos(omega * t), z[0], z[1])
+    # Both positive only off the table (n < 0): the larger wins, as the mirror image
+    # alpha -> -alpha swaps them.
+    if r_p > 0.0 and r_p >= r_m:
         return 1
     if r_m > 0.0:
         return -1
@@ -622,13 +683,16 @@ def _initial_mode(structure, table, omega, a, t, z):
 
 
 @njit(cache=True, nogil=True)
-def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, check_lift,
-        max_events, acc):
+def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_margin,
+        max_events, acc, grad):
     """Follow the state ``z`` (in place) from ``t_begin`` to ``t_stop`` [s].
 
     ``acc`` receives the displacement [m], slips, forward/backward slip and stick
     time [s] and events; ``jac`` (3x3) is multiplied on the left by the flow's
-    Jacobian when ``want_jac``.
+    Jacobian when ``want_jac``, and the rows of ``grad`` (3x3) receive the gradients
+    of the displacement and of the forward and backward slip times with respect to
+    the state the Jacobian started from. Lift-off is watched when ``lift_margin >= 0``:
+    ``n < -lift_margin`` [m s^-2] ends the stretch.
 
     Returns
     -------
@@ -646,6 +710,14 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, check_lif
     events = 0
     # Where the next search starts looking (after a slip that could not move).
     t_from = t
+    # Cosine and sine of the drive phase at t_trig (reused at the next piece's start).
+    t_trig = np.nan
+    cw = 1.0
+    sw = 0.0
+    # Gradient of the current slip's start time with respect to the initial state.
+    ds0 = 0.0
+    ds1 = 0.0
+    ds2 = 0.0
     while t < t_stop:
         events += 1
         if events > max_events:
@@ -653,8 +725,9 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, check_lif
             return RUN_BUDGET
         j = 0 if mode == 0 else (1 if mode > 0 else 2)
         row = table[j]
-        cw = math.cos(omega * t)
-        sw = math.sin(omega * t)
+        if t != t_trig:
+            cw = math.cos(omega * t)
+            sw = math.sin(omega * t)
         dp, dpd, _, _ = _particular(row, omega, cw, sw)
         h0 = z[0] - dp
         hd0 = z[1] - dpd
@@ -664,10 +737,11 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, check_lif
             mask = EV_RELEASE_FORWARD | EV_RELEASE_BACKWARD
         else:
             mask = EV_SLIP_END
-        if check_lift:
+        if lift_margin >= 0.0:
             mask |= EV_LIFT_OFF
-        kind, te, steps = _search(structure, table, j, omega, a, t, h0, hd0, v0, dd0,
-                           max(t, t_from), t_stop, mask, horizon)
+        kind, te, steps = _search(structure, table, j, omega, a, t, sw, h0, hd0, v0, dd0,
+                           max(t, t_from), t_stop, mask, horizon,
+                           structure[S_G] + max(lift_margin, 0.0))
         acc[A_STEPS] += steps
         if kind < 0:
             acc[A_EVENTS] += events
@@ -714,13 +788,40 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, check_lif
             z[1] = dld
             z[2] = 0.0 if kind == EV_SLIP_END else v_end
             if want_jac:
+                # The displacement's gradient at fixed ends (v = 0 at event ends).
+                gx0 = -kk * (e11 - 1.0)
+                gx1 = -kk * (e12 - tau)
+                for col in range(3):
+                    grad[0, col] += gx0 * jac[0, col] + gx1 * jac[1, col] + tau * jac[2, col]
                 _mat_left(jac, e11, e12, 0.0, e21, e22, 0.0,
                           -kk * e21, -kk * (e22 - 1.0), 1.0)
+                # The slip time's gradient: end time minus start time.
+                which = 1 if s > 0 else 2
+                grad[which, 0] -= ds0
+                grad[which, 1] -= ds1
+                grad[which, 2] -= ds2
+                ds0 = 0.0
+                ds1 = 0.0
+                ds2 = 0.0
+                if kind == EV_SLIP_END:
+                    v_rate = _slip_acceleration(
+                        structure, row, a, cwe,
+                        _mode_acceleration(structure, row, cwe, dl, dld))
+                    if v_rate != 0.0:
+                        ds0 = -jac[2, 0] / v_rate
+                        ds1 = -jac[2, 1] / v_rate
+                        ds2 = -jac[2, 2] / v_rate
+                    grad[which, 0] += ds0
+                    grad[which, 1] += ds1
+                    grad[which, 2] += ds2
         t = te
+        t_trig = te
+        cw = cwe
+        sw = swe
         if kind == 0:
             break
         # An event at te: decide the next contact mode and apply the saltation.
-        r_p, r_m, acc0 = _stick_releases(structure, table, omega, a, te, dl, dld)
+        r_p, r_m, acc0 = _stick_releases(structure, a, cwe, dl, dld)
         if mode == 0:
             new = 1 if kind == EV_RELEASE_FORWARD else -1
             jn = 1 if new > 0 else 2
@@ -730,19 +831,22 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, check_lif
             acc[A_SLIPS] += 1.0
             if want_jac:
                 rown = table[jn]
-                accn = _mode_acceleration(structure, rown, omega, a, te, dl, dld)
-                vdot = _slip_acceleration(structure, rown, omega, a, te, accn)
+                accn = _mode_acceleration(structure, rown, cwe, dl, dld)
+                vdot = _slip_acceleration(structure, rown, a, cwe, accn)
                 m = structure[S_MASS]
                 kap = -m * (new * structure[S_SIN] + structure[S_CS] * structure[S_COS])
                 # Gradient of s tau - cs n in (delta, delta'); time rate along the stick.
                 g_d = -kap * structure[S_STIFFNESS]
                 g_dd = -kap * structure[S_DAMPING]
-                swe2 = math.sin(omega * te)
+                swe2 = swe
                 ddd_rate = (-a * omega * swe2 * structure[S_COS]
                             - structure[S_DAMPING] * acc0 - structure[S_STIFFNESS] * dld)
                 rate = kap * ddd_rate - structure[S_CS] * a * omega * swe2
                 if rate > 0.0:
                     q = 1.0 / rate
+                    ds0 = -(g_d * jac[0, 0] + g_dd * jac[1, 0]) * q
+                    ds1 = -(g_d * jac[0, 1] + g_dd * jac[1, 1]) * q
+                    ds2 = -(g_d * jac[0, 2] + g_dd * jac[1, 2]) * q
                     jump = accn - acc0
                     _mat_left(jac, 1.0, 0.0, 0.0,
                               jump * g_d * q, 1.0 + jump * g_dd * q, 0.0,
@@ -750,8 +854,8 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, check_lif
             mode = new
         else:
             s = int(row[M_SIGN])
-            accm = _mode_acceleration(structure, row, omega, a, te, dl, dld)
-            vdot_minus = _slip_acceleration(structure, row, omega, a, te, accm)
+            accm = _mode_acceleration(structure, row, cwe, dl, dld)
+            vdot_minus = _slip_acceleration(structure, row, a, cwe, accm)
             if (s > 0 and r_m > 0.0) or (s < 0 and r_p > 0.0):
                 new = -s
             else:
@@ -763,8 +867,8 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, check_lif
                     return RUN_PARADOX
                 acc[A_SLIPS] += 1.0
                 rown = table[jn]
-                accp = _mode_acceleration(structure, rown, omega, a, te, dl, dld)
-                vdot_plus = _slip_acceleration(structure, rown, omega, a, te, accp)
+                accp = _mode_acceleration(structure, rown, cwe, dl, dld)
+                vdot_plus = _slip_acceleration(structure, rown, a, cwe, accp)
             else:
                 accp = acc0
                 vdot_plus = 0.0
@@ -831,17 +935,29 @@ def spectral_radius(jac):
 
 
 @njit(cache=True, nogil=True)
-def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc, work):
+def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc, work,
+            grad):
     """Newton's method on ``P^periods(z) - z`` from ``z`` (updated in place).
+
+    Iterates within ~1e-6 of the orbit (their previous Newton step was below
+    ``LIFT_WATCH``; Newton converges quadratically) are watched for lift-off.
 
     Returns
     -------
     flag, converged
-        The last stretch's ``RUN_*`` flag and whether ``z`` is a fixed point; ``jac``
-        then holds the Jacobian of ``P^periods`` there and ``acc`` its statistics.
+        ``RUN_LIFT_OFF`` when a watched iterate leaves the table; else the last
+        stretch's flag and whether ``z`` is the fixed point. ``jac`` then holds the
+        Jacobian of ``P^periods`` at the last iterate and ``acc`` the orbit's
+        statistics, moved to the fixed point along their gradients (``grad``) by the
+        last Newton step: what is left is of the order of the step's square.
     """
     span = periods * TWO_PI / omega
     previous = np.inf
+    last_step = np.inf
+    # Events and slips of the previous pass: a step is only trusted as the last one
+    # when the pass it came from has the same sequence of events.
+    last_events = -1.0
+    last_slips = -1.0
     step = np.empty(3)
     residual = np.empty(3)
     for _ in range(MAX_NEWTON):
@@ -849,24 +965,27 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
             work[i] = z[i]
             for jj in range(3):
                 jac[i, jj] = 1.0 if i == jj else 0.0
+                grad[i, jj] = 0.0
         acc[:] = 0.0
-        flag = run(structure, table, omega, a, work, 0.0, span, jac, True, False,
-                   max_events, acc)
+        margin = 0.0 if last_step <= LIFT_WATCH else -1.0
+        flag = run(structure, table, omega, a, work, 0.0, span, jac, True, margin,
+                   max_events, acc, grad)
+        if flag == RUN_LIFT_OFF:
+            return RUN_LIFT_OFF, False
         if flag != RUN_OK:
             return flag, False
         res = 0.0
         for i in range(3):
             residual[i] = z[i] - work[i]
             res = max(res, abs(residual[i]) / scales[i])
-        if res <= NEWTON_TOLERANCE or (res <= LOOSE_TOLERANCE and res >= 0.5 * previous):
-            return RUN_OK, True
-        if res > previous:
+        if res > previous and res > NEWTON_TOLERANCE:
             # Diverging (an event appeared or vanished): take the map's step instead.
             for i in range(3):
                 z[i] = work[i]
             previous = np.inf
+            last_step = np.inf
+            last_events = -1.0
             continue
-        previous = res
         for i in range(3):
             jac[i, i] -= 1.0
         solved = _solve3(jac, residual, step)
@@ -875,14 +994,33 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
         if not solved:
             for i in range(3):
                 z[i] = work[i]
+            last_step = np.inf
+            last_events = -1.0
             continue
         size = 0.0
         for i in range(3):
-            z[i] += step[i]
             size = max(size, abs(step[i]) / scales[i])
-        if size <= NEWTON_STEP:
-            # Quadratic convergence: the error after this step is ~ size^2.
+        same_events = acc[A_EVENTS] == last_events and acc[A_SLIPS] == last_slips
+        last_events = acc[A_EVENTS]
+        last_slips = acc[A_SLIPS]
+        done = res <= NEWTON_TOLERANCE or (
+            same_events and (size <= NEWTON_STEP
+                             or (res <= LOOSE_TOLERANCE and res >= 0.5 * previous)))
+        if done and margin < 0.0:
+            # Converged before any pass was watched for lift-off: one more.
+            done = False
+            size = 0.0
+        for i in range(3):
+            z[i] += step[i]
+        if done:
+            # Move the statistics to the fixed point along their gradients.
+            for i in range(3):
+                acc[A_DISPLACEMENT] += grad[0, i] * step[i]
+                acc[A_FORWARD] += grad[1, i] * step[i]
+                acc[A_BACKWARD] += grad[2, i] * step[i]
             return RUN_OK, True
+        previous = res
+        last_step = size
     return RUN_OK, False
 
 
@@ -926,7 +1064,7 @@ def _is_static(structure, table, omega, a):
 
 @njit(cache=True, nogil=True)
 def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, scales,
-           jac, acc, work, history):
+           jac, acc, work, history, grad):
     """Periodic orbit reached from state ``z`` at ``t_start`` (in the first period).
 
     Returns
@@ -939,32 +1077,39 @@ def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, s
     acc[:] = 0.0
     flag = RUN_OK
     if t_start != 0.0:
-        flag = run(structure, table, omega, a, z, t_start, period, jac, False, False,
-                   max_events, acc)
+        flag = run(structure, table, omega, a, z, t_start, period, jac, False, -1.0,
+                   max_events, acc, grad)
     if flag == RUN_PARADOX:
         return FRICTION_PARADOX, REASON_NONE, 0
     if flag == RUN_BUDGET:
         return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
     guess = z.copy()
     flag, converged = _newton(structure, table, omega, a, z, 1, scales, max_events, jac,
-                              acc, work)
+                              acc, work, grad)
+    if flag == RUN_LIFT_OFF:
+        return LIFT_OFF, REASON_NONE, 0
     if converged and spectral_radius(jac) < 1.0 + STABILITY_MARGIN:
         return STICK_SLIP, REASON_NONE, 1
     if flag == RUN_PARADOX:
         return FRICTION_PARADOX, REASON_NONE, 0
-    # No stable fixed point near: iterate the map from the warmed-up state and look
-    # for a cycle of up to MAX_PERIOD periods, then solve for it by Newton.
+    # No stable fixed point near: iterate the map from the start and look for a cycle
+    # of up to MAX_PERIOD periods, then solve for it by Newton.
     for i in range(3):
         z[i] = guess[i]
     tried = np.full(MAX_PERIOD + 1, np.inf)
+    candidate = np.empty(3)
     for iteration in range(max_iterations):
         slot = iteration % MAX_PERIOD
         for i in range(3):
             history[slot, i] = z[i]
-        flag = run(structure, table, omega, a, z, 0.0, period, jac, False, False,
-                   max_events, acc)
+        # Past a burn-in the iterates trace the attractor: one that leaves the table is
+        # outside the model (LIFT_OFF), converged or not.
+        flag = run(structure, table, omega, a, z, 0.0, period, jac, False,
+                   0.0 if iteration >= BURN_IN else -1.0, max_events, acc, grad)
         if flag == RUN_PARADOX:
             return FRICTION_PARADOX, REASON_NONE, 0
+        if flag == RUN_LIFT_OFF:
+            return LIFT_OFF, REASON_NONE, 0
         if flag != RUN_OK:
             return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
@@ -975,13 +1120,38 @@ def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, s
             if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
                 tried[periods] = gap
                 for i in range(3):
-                    work[i] = history[back, i]
-                candidate = work[:3].copy()
+                    candidate[i] = history[back, i]
                 flag, converged = _newton(structure, table, omega, a, candidate, periods,
-                                          scales, max_events, jac, acc, work)
+                                          scales, max_events, jac, acc, work, grad)
+                if flag == RUN_LIFT_OFF:
+                    return LIFT_OFF, REASON_NONE, 0
                 if converged and spectral_radius(jac) < 1.0 + STABILITY_MARGIN:
                     for i in range(3):
                         z[i] = candidate[i]
+                    # Report the orbit's own period, not a multiple that closed first.
+                    for shorter in range(1, periods):
+                        if periods % shorter:
+                            continue
+                        for i in range(3):
+                            work[i] = z[i]
+                        flag = run(structure, table, omega, a, work, 0.0, shorter * period,
+                                   jac, False, -1.0, max_events, acc, grad)
+                        gap = 0.0
+                        for i in range(3):
+                            gap = max(gap, abs(work[i] - z[i]) / scales[i])
+                        if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
+                            flag, converged = _newton(structure, table, omega, a, z,
+                                                      shorter, scales, max_events, jac,
+                                                      acc, work, grad)
+                            if flag == RUN_LIFT_OFF:
+                                return LIFT_OFF, REASON_NONE, 0
+                            if converged:
+                                return STICK_SLIP, REASON_NONE, shorter
+                    # Statistics of the full cycle (the checks above overwrote them).
+                    flag, converged = _newton(structure, table, omega, a, z, periods,
+                                              scales, max_events, jac, acc, work, grad)
+                    if flag == RUN_LIFT_OFF:
+                        return LIFT_OFF, REASON_NONE, 0
                     return STICK_SLIP, REASON_NONE, periods
                 break
     return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0
@@ -1008,59 +1178,38 @@ def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start
             out[3] = 0.0
             out[4] = 0.0
             out[5] = 0.0
-            out[7] = 0.0
+            # The orbit is the mode's steady response: perturbations decay with it.
+            _, _, e11, e12, e21, e22 = _homogeneous(table[0], TWO_PI / omega, 0.0, 0.0)
+            free = np.zeros((3, 3))
+            free[0, 0] = e11
+            free[0, 1] = e12
+            free[1, 0] = e21
+            free[1, 1] = e22
+            out[7] = spectral_radius(free)
         return
     scales = np.empty(3)
     scales[0], scales[1], scales[2] = _scales(structure, table, omega, a)
     z = np.empty(3)
     _start(table, omega, t_start, z, factor)
     jac = np.empty((3, 3))
+    grad = np.empty((3, 3))
     acc = np.zeros(N_ACC)
     work = np.empty(3)
     history = np.empty((MAX_PERIOD, 3))
     status, reason, periods = _orbit(structure, table, omega, a, z, t_start, max_events,
-                                     max_iterations, scales, jac, acc, work, history)
+                                     max_iterations, scales, jac, acc, work, history, grad)
     out[0] = status
     out[1] = reason
     if periods == 0:
         return
-    multiplier = spectral_radius(jac)
     span = periods * TWO_PI / omega
-    for attempt in range(3):
-        # One more pass around the orbit, watching n > 0; it confirms the fixed point
-        # (Newton stopped on a small step, whose error is about its square).
-        for i in range(3):
-            work[i] = z[i]
-        acc[:] = 0.0
-        flag = run(structure, table, omega, a, work, 0.0, span, jac, False, True,
-                   max_events, acc)
-        if flag != RUN_OK:
-            break
-        res = 0.0
-        for i in range(3):
-            res = max(res, abs(work[i] - z[i]) / scales[i])
-        if res <= FINAL_TOLERANCE or attempt == 2:
-            break
-        newton_flag, converged = _newton(structure, table, omega, a, z, periods, scales,
-                                         max_events, jac, acc, work)
-        if newton_flag != RUN_OK or not converged:
-            out[0] = NOT_CONVERGED
-            out[1] = REASON_NO_PERIODIC_ORBIT
-            return
-    if flag == RUN_LIFT_OFF:
-        out[0] = LIFT_OFF
-        return
-    if flag != RUN_OK:
-        out[0] = NOT_CONVERGED
-        out[1] = REASON_EVENT_BUDGET
-        return
     out[0] = STICK_SLIP if acc[A_STICK] > 0.0 else CONTINUOUS_SLIDING
     out[2] = acc[A_DISPLACEMENT] / span
     out[3] = acc[A_SLIPS] / periods
     out[4] = acc[A_FORWARD] / span
     out[5] = acc[A_BACKWARD] / span
     out[6] = periods
-    out[7] = multiplier
+    out[7] = spectral_radius(jac)
     out[8] = z[0]
     out[9] = z[1]
     out[10] = z[2]
@@ -1090,3 +1239,87 @@ def _solve_points_serial(structure, omega, a, lifted, max_events, max_iterations
     """Same as :func:`_solve_points` on one thread."""
     for i in range(omega.shape[0]):
         _solve_into(i, structure, omega, a, lifted, max_events, max_iterations, out)
+
+
+# Starting states of the multistability check: rest at these drive phases [periods]
+# with the mode on these multiples of its steady response.
+START_PHASES = (0.0, 0.25, 0.5, 0.75)
+START_FACTORS = (1.0, 0.0, 2.0)
+# Two orbits are the same attractor when their periods agree and their mean velocities
+# agree to this fraction of the velocity scale a / w.
+SAME_ORBIT = 1e-9
+
+
+@njit(cache=True, nogil=True)
+def attractors_point(structure, omega, a, lifted, max_events, max_iterations, out):
+    """Distinct stable orbits reached from the starting states above.
+
+    ``out`` receives ``(count, spread, starts_converged)``: the number of distinct
+    orbits (LIFT_OFF or FRICTION_PARADOX outcomes count as one outcome each), the
+    spread of their mean velocities [m s^-1], and how many starts reached an outcome.
+    Starts off the table (``n < 0``) are skipped.
+    """
+    row = np.empty(N_OUT)
+    n_starts = len(START_PHASES) * len(START_FACTORS)
+    velocities = np.empty(n_starts)
+    periods = np.empty(n_starts)
+    count = 0
+    converged = 0
+    others = 0  # bit 1: lift-off seen, bit 2: paradox seen
+    scale = a / omega
+    table = np.zeros((3, N_MODE))
+    mode_table(structure, omega, a, table)
+    start = np.empty(3)
+    for phase in START_PHASES:
+        for factor in START_FACTORS:
+            t_start = phase * TWO_PI / omega
+            _start(table, omega, t_start, start, factor)
+            _, _, acc0 = _stick_releases(structure, a, math.cos(omega * t_start), start[0],
+                                         start[1])
+            if (structure[S_G] - a * math.cos(omega * t_start)
+                    + structure[S_MASS] * structure[S_COS] * acc0) < 0.0:
+                # A start off the table is no state of the model.
+                continue
+            solve_point(structure, omega, a, lifted, max_events, max_iterations,
+                        t_start, factor, row)
+            status = int(row[0])
+            if status == STATIC:
+                out[0] = 1.0
+                out[1] = 0.0
+                out[2] = n_starts
+                return
+            if status == NOT_CONVERGED:
+                continue
+            converged += 1
+            if status == LIFT_OFF:
+                others |= 1
+                continue
+            if status == FRICTION_PARADOX:
+                others |= 2
+                continue
+            new = True
+            for i in range(count):
+                if periods[i] == row[6] and abs(velocities[i] - row[2]) <= SAME_ORBIT * scale:
+                    new = False
+                    break
+            if new:
+                velocities[count] = row[2]
+                periods[count] = row[6]
+                count += 1
+    spread = 0.0
+    if count > 0:
+        spread = np.max(velocities[:count]) - np.min(velocities[:count])
+    out[0] = count + (others & 1) + ((others >> 1) & 1)
+    out[1] = spread
+    out[2] = converged
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _attractors_points(structure, omega, a, lifted, max_events, max_iterations, out):
+    """Fill ``out`` (n x 3) in parallel over points."""
+    n = omega.shape[0]
+    lanes = min(n, 256)
+    for lane in prange(lanes):
+        for i in range(lane, n, lanes):
+            attractors_point(structure, omega[i], a[i], lifted[i], max_events,
+                             max_iterations, out[i])

@@ -17,6 +17,14 @@ and ``rho`` the gyration radius. In the scaled twist ``u`` the limit surface is 
 sphere and the sliding law reads ``u' = K (W - ck n uhat)`` with ``K = diag(1, 1,
 c^2/rho^2)``.
 
+Two-way coupling (``disk[DK_TWO_WAY] = 1``): while sliding, plate i's base (its
+attachment point ``r_i``) accelerates along ``e_i`` at ``b_i = e_i . a + (r_i x e_i)
+spin' - spin^2 (r_i . e_i)`` (body frame), and ``delta_i'' = F_i - sin(alpha_i) b_i``
+replaces ``F_i`` in the mode, the plate forces and ``n``: a 3x3 linear system for
+``(a, spin')`` per slip direction (:func:`_two_way`), the single-plate two-way model
+along each plate. Its determinant ``<= 0`` is Painleve's paradox: the run stops
+(``RUN_PARADOX``). While stuck both couplings are the same.
+
 A slip starts from rest along the direction ``uhat`` whose acceleration is parallel to
 itself, ``K (W - ck n uhat) = lambda uhat`` with ``lambda >= 0``, i.e. ``uhat_j =
 W_j / (lambda / K_j + ck n)`` with ``|uhat| = 1`` (a monotone scalar equation in
@@ -25,8 +33,9 @@ zero of ``u . d`` with ``d`` the twist direction at the start of the step (near 
 end a slip's twist shrinks to zero along a converging direction, so the projection
 changes sign there).
 
-Events are located as in :mod:`study.kernels.transient`: sampled on the dense output,
-watched at their minima, refined by the Illinois method. Everything here is private:
+Steps are :mod:`study.kernels.dopri`'s; events are located by
+:mod:`study.kernels.events`: sampled on the dense output, watched at their minima,
+refined by the Illinois method. Everything here is private:
 :mod:`study.planar` validates, allocates and calls.
 """
 
@@ -37,32 +46,34 @@ import math
 import numpy as np
 from numba import njit
 
-from study.kernels import transient as dp
-from study.kernels.transient import (
+from study.kernels.codes import (
+    EVENT_LIFT_OFF,
+    EVENT_PARADOX,
+    EVENT_RELEASE,
+    EVENT_SLIP_END,
+    RUN_BUDGET,
+    RUN_DONE,
+    RUN_LIFT_OFF,
+    RUN_PARADOX,
+    STICK,
+)
+from study.kernels.dopri import (
     dense_output,
-    error_and_dense,
     error_norm,
-    solution_step,
-    stage_state,
+    growth_factor,
+    shrink_factor,
+    step,
     table_drive,
 )
+from study.kernels.dopri import workspace as step_workspace
+from study.kernels.events import first_event, record
+from study.kernels.events import workspace as event_workspace
 
-# Contact modes. A slip that starts from rest is in its ONSET phase until its twist
-# exceeds the slaving threshold: there its direction is the slaved one, which removes
-# the stiffness (relaxation rate ck n / |u|) of the direction near u = 0.
-STICK = 0
+# Contact modes besides STICK. A slip that starts from rest is in its ONSET phase until
+# its twist exceeds the slaving threshold: there its direction is the slaved one, which
+# removes the stiffness (relaxation rate ck n / |u|) of the direction near u = 0.
 SLIP = 1
 ONSET = 2
-
-# Run outcomes.
-RUN_DONE = 0
-RUN_LIFT_OFF = 1
-RUN_BUDGET = 2
-
-# Event kinds recorded in trajectories.
-EVENT_RELEASE = 1
-EVENT_SLIP_END = 3
-EVENT_LIFT_OFF = 4
 
 # State layout.
 X = 0
@@ -83,7 +94,8 @@ PL_MASS = 4  # M
 PL_EX = 5  # body-frame direction, forward component
 PL_EY = 6  # body-frame direction, left component
 PL_LEVER = 7  # r x e [m]
-N_PLATE_PARAMETERS = 8
+PL_REACH = 8  # r . e [m]
+N_PLATE_PARAMETERS = 9
 
 # Entries of the disk parameter vector.
 DK_CS = 0
@@ -92,7 +104,8 @@ DK_G = 2
 DK_LENGTH = 3  # limit-surface length c [m]
 DK_GYRATION2 = 4  # rho^2 [m^2]
 DK_SLAVED = 5  # twist below which its direction is the slaved one [m s^-1]
-N_DISK_PARAMETERS = 6
+DK_TWO_WAY = 6  # 1.0 for two-way coupling of the plates
+N_DISK_PARAMETERS = 7
 
 # Safeguarded Newton iterations of the slaved-direction equation (converges in a few).
 SLAVED_ITERATIONS = 100
@@ -262,8 +275,89 @@ def _friction_direction(disk, mode, reference, y, n, wrench, out):
 
 
 @njit(cache=True, nogil=True)
+def _two_way(plates, disk, y, loads, direction, accel):
+    """Accelerations of a two-way coupled slip against the friction direction
+    ``direction`` (unit, scaled twist, world frame).
+
+    Plate i's base accelerates along its direction ``e_i`` at ``b_i = g_i . q -
+    spin^2 (r_i . e_i)`` (the attachment point's rigid-body acceleration, ``g_i =
+    (e_i, r_i x e_i)`` and ``q = (a_x, a_y, spin')`` in the body frame), which
+    forces its mode: ``delta_i'' = F_i - sin(alpha_i) b_i``. The plates' forces and
+    the normal force then use ``delta_i''``; with the sliding law this is the linear
+    system ``A q = w`` with ``A = diag(1, 1, rho^2) - sum_i M_i sin(alpha_i) (sin(alpha_i)
+    g_i + ck cos(alpha_i) d) g_i^T`` (``d`` the friction direction, unscaled: ``(d_x,
+    d_y, c d_3)``). ``loads`` are the one-way loads (:func:`_loads`).
+
+    Fills ``accel = (a_x, a_y, spin')`` in the world frame [m s^-2, rad s^-2] and
+    ``q`` in ``accel[3:6]``; returns ``(n, det A)`` with ``n`` the coupled normal force
+    per unit mass [m s^-2]. ``det A <= 0`` is Painleve's paradox (then ``accel`` is
+    not filled).
+    """
+    heading = y[HEADING]
+    c = math.cos(heading)
+    s = math.sin(heading)
+    length = disk[DK_LENGTH]
+    ck = disk[DK_CK]
+    n0 = loads[0]
+    dx = c * direction[0] + s * direction[1]
+    dy = -s * direction[0] + c * direction[1]
+    dz = length * direction[2]
+    spin2 = y[SPIN] * y[SPIN]
+    a00, a01, a02 = 1.0, 0.0, 0.0
+    a10, a11, a12 = 0.0, 1.0, 0.0
+    a20, a21, a22 = 0.0, 0.0, disk[DK_GYRATION2]
+    r0 = loads[1] - ck * n0 * dx
+    r1 = loads[2] - ck * n0 * dy
+    r2 = loads[3] - ck * n0 * dz
+    for i in range(plates.shape[0]):
+        sa = plates[i, PL_SIN]
+        ca = plates[i, PL_COS]
+        coef = plates[i, PL_MASS] * sa
+        g0 = plates[i, PL_EX]
+        g1 = plates[i, PL_EY]
+        g2 = plates[i, PL_LEVER]
+        v0 = sa * g0 + ck * ca * dx
+        v1 = sa * g1 + ck * ca * dy
+        v2 = sa * g2 + ck * ca * dz
+        a00 -= coef * v0 * g0
+        a01 -= coef * v0 * g1
+        a02 -= coef * v0 * g2
+        a10 -= coef * v1 * g0
+        a11 -= coef * v1 * g1
+        a12 -= coef * v1 * g2
+        a20 -= coef * v2 * g0
+        a21 -= coef * v2 * g1
+        a22 -= coef * v2 * g2
+        kappa = -spin2 * plates[i, PL_REACH]
+        r0 += coef * kappa * v0
+        r1 += coef * kappa * v1
+        r2 += coef * kappa * v2
+    m00 = a11 * a22 - a12 * a21
+    m01 = a10 * a22 - a12 * a20
+    m02 = a10 * a21 - a11 * a20
+    det = a00 * m00 - a01 * m01 + a02 * m02
+    if not det > 0.0:
+        return n0, det
+    q0 = (r0 * m00 - a01 * (r1 * a22 - a12 * r2) + a02 * (r1 * a21 - a11 * r2)) / det
+    q1 = (a00 * (r1 * a22 - a12 * r2) - r0 * m01 + a02 * (a10 * r2 - r1 * a20)) / det
+    q2 = (a00 * (a11 * r2 - r1 * a21) - a01 * (a10 * r2 - r1 * a20) + r0 * m02) / det
+    n = n0
+    for i in range(plates.shape[0]):
+        base = plates[i, PL_EX] * q0 + plates[i, PL_EY] * q1 + plates[i, PL_LEVER] * q2 \
+            - spin2 * plates[i, PL_REACH]
+        n -= plates[i, PL_MASS] * plates[i, PL_COS] * plates[i, PL_SIN] * base
+    accel[0] = c * q0 - s * q1
+    accel[1] = s * q0 + c * q1
+    accel[2] = q2
+    accel[3] = q0
+    accel[4] = q1
+    accel[5] = q2
+    return n, det
+
+
+@njit(cache=True, nogil=True)
 def _rhs(plates, disk, mode, reference, drive, y, out, work):
-    """Time derivative of the state; ``work`` is scratch of length >= 17."""
+    """Time derivative of the state; ``work`` is scratch of length >= 23."""
     loads = work[0:8]
     wrench = work[8:14]
     direction = work[14:17]
@@ -284,11 +378,23 @@ def _rhs(plates, disk, mode, reference, drive, y, out, work):
         return
     _world_wrench(disk, y[HEADING], loads, wrench)
     _friction_direction(disk, mode, reference, y, loads[0], wrench, direction)
+    out[PATH] = math.sqrt(y[VX] * y[VX] + y[VY] * y[VY])
+    if disk[DK_TWO_WAY] != 0.0:
+        accel = work[17:23]
+        _two_way(plates, disk, y, loads, direction, accel)
+        out[VX] = accel[0]
+        out[VY] = accel[1]
+        out[SPIN] = accel[2]
+        spin2 = y[SPIN] * y[SPIN]
+        for i in range(plates.shape[0]):
+            base = plates[i, PL_EX] * accel[3] + plates[i, PL_EY] * accel[4] \
+                + plates[i, PL_LEVER] * accel[5] - spin2 * plates[i, PL_REACH]
+            out[MODES + 2 * i + 1] -= plates[i, PL_SIN] * base
+        return
     friction = disk[DK_CK] * loads[0]
     out[VX] = wrench[0] - friction * direction[0]
     out[VY] = wrench[1] - friction * direction[1]
     out[SPIN] = (loads[3] - friction * disk[DK_LENGTH] * direction[2]) / disk[DK_GYRATION2]
-    out[PATH] = math.sqrt(y[VX] * y[VX] + y[VY] * y[VY])
 
 
 @njit(cache=True, nogil=True)
@@ -297,7 +403,9 @@ def _event_values(plates, disk, mode, reference, drive, drive_rate_neg, y, value
     """Event functions of the current mode, positive while nothing happens.
 
     stick: ``cs n - |W|`` (release); slip: ``u . d`` (slip end, ``d`` the reference
-    direction); always: ``n`` (lift-off).
+    direction); always: ``n`` (lift-off). In a two-way coupled slip the rate of ``n``
+    leaves out the plates' coupling (it only serves to watch for a dip of ``n``
+    between samples; ``n`` itself is the coupled one).
     """
     loads = work[0:8]
     wrench = work[8:14]
@@ -315,10 +423,18 @@ def _event_values(plates, disk, mode, reference, drive, drive_rate_neg, y, value
     else:
         _friction_direction(disk, mode, reference, y, loads[0], wrench, direction)
         length = disk[DK_LENGTH]
-        friction = disk[DK_CK] * loads[0]
-        ax = wrench[0] - friction * direction[0]
-        ay = wrench[1] - friction * direction[1]
-        aspin = (loads[3] - friction * length * direction[2]) / disk[DK_GYRATION2]
+        if disk[DK_TWO_WAY] != 0.0:
+            accel = work[17:23]
+            n, _ = _two_way(plates, disk, y, loads, direction, accel)
+            loads[0] = n
+            ax = accel[0]
+            ay = accel[1]
+            aspin = accel[2]
+        else:
+            friction = disk[DK_CK] * loads[0]
+            ax = wrench[0] - friction * direction[0]
+            ay = wrench[1] - friction * direction[1]
+            aspin = (loads[3] - friction * length * direction[2]) / disk[DK_GYRATION2]
         values[0] = y[VX] * reference[0] + y[VY] * reference[1] \
             + length * y[SPIN] * reference[2]
         rates[0] = ax * reference[0] + ay * reference[1] + length * aspin * reference[2]
@@ -326,18 +442,19 @@ def _event_values(plates, disk, mode, reference, drive, drive_rate_neg, y, value
     rates[1] = loads[4]
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _model_rhs(model, mode, drive, y, out):
+    """:func:`_rhs` in the form the shared stepper calls, ``model = (plates, disk,
+    reference, work)``."""
+    plates, disk, reference, work = model
+    _rhs(plates, disk, mode, reference, drive, y, out, work)
+
+
 @njit(cache=True, nogil=True)
 def _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, dense, tmp, work):
     """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL)."""
-    seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
-    for stage in range(1, 6):
-        stage_state(stage, y, h, k, tmp)
-        drive, _ = table_drive(t + dp.STAGE_NODES[stage] * h, seg, seg_t0, seg_omega, seg_a,
-                          seg_phase0)
-        _rhs(plates, disk, mode, reference, drive, tmp, k[stage], work)
-    solution_step(y, h, k, y_new)
-    _rhs(plates, disk, mode, reference, drive, y_new, k[6], work)
-    error_and_dense(y, h, k, y_new, err, dense)
+    step(_model_rhs, (plates, disk, reference, work), mode, t, h, y, k, drive_args, y_new,
+         err, dense, tmp)
     if mode == STICK:
         # The pose is exactly frozen while stuck.
         for i in range(MODES):
@@ -350,130 +467,17 @@ def _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, den
         y_new[SPIN] = 0.0
 
 
-@njit(cache=True, nogil=True)
-def _values_at(theta, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-               values, rates, work):
+@njit(cache=True, nogil=True, inline="always")
+def _values_at(theta, model, mode, t, h, dense, drive_args, ystate, values, rates):
+    """Event functions at ``t + theta h`` on the dense output (the form
+    :func:`study.kernels.events.first_event` calls), ``model = (plates, disk,
+    reference, work)``."""
+    plates, disk, reference, work = model
     seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
     dense_output(theta, h, dense, ystate)
     drive, rate = table_drive(t + theta * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
     _event_values(plates, disk, mode, reference, drive, rate, ystate, values, rates,
                   work)
-
-
-@njit(cache=True, nogil=True)
-def _refine(which, lo, hi, plates, disk, mode, reference, t, h, dense, drive_args,
-            ystate, values, rates, work, xtol):
-    """Illinois iteration on event ``which`` over ``[lo, hi]`` (clear at ``lo``,
-    triggered at ``hi``); returns the triggered end of a bracket narrower than ``xtol``.
-    """
-    _values_at(lo, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-               values, rates, work)
-    f_lo = values[which]
-    _values_at(hi, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-               values, rates, work)
-    f_hi = values[which]
-    side = 0
-    for _ in range(dp.MAX_ROOT_ITERATIONS):
-        if hi - lo <= xtol:
-            break
-        if f_lo - f_hi > 0.0 and math.isfinite(f_lo - f_hi):
-            mid = lo + (hi - lo) * f_lo / (f_lo - f_hi)
-        else:
-            mid = 0.5 * (lo + hi)
-        width = hi - lo
-        mid = min(max(mid, lo + 0.01 * width), hi - 0.01 * width)
-        _values_at(mid, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-                   values, rates, work)
-        f_mid = values[which]
-        triggered = f_mid <= 0.0 if which == 0 and mode != STICK else f_mid < 0.0
-        if triggered:
-            hi = mid
-            f_hi = f_mid
-            if side == -1:
-                f_lo *= 0.5
-            side = -1
-        else:
-            lo = mid
-            f_lo = f_mid
-            if side == 1:
-                f_hi *= 0.5
-            side = 1
-    return hi
-
-
-@njit(cache=True, nogil=True)
-def _minimum(which, lo, hi, plates, disk, mode, reference, t, h, dense, drive_args,
-             ystate, values, rates, work, xtol):
-    """Bisection for the minimum of event ``which`` (its rate negative at ``lo``,
-    positive at ``hi``)."""
-    for _ in range(dp.MAX_ROOT_ITERATIONS):
-        if hi - lo <= xtol:
-            break
-        mid = 0.5 * (lo + hi)
-        _values_at(mid, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-                   values, rates, work)
-        if rates[which] < 0.0:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
-@njit(cache=True, nogil=True)
-def _first_event(plates, disk, mode, reference, t, h, dense, drive_args, samples, xtol,
-                 fresh, ystate, values, rates, prev_values, prev_rates, work):
-    """Earliest event in the step: ``(which, theta)`` or ``(-1, 1.0)``.
-
-    ``which`` is 0 (release, or slip end) or 1 (lift-off). At a fresh slip's start the
-    slip-end function is zero and rising: its first sample interval counts as clear.
-    """
-    best_which = -1
-    best_theta = 2.0
-    _values_at(0.0, plates, disk, mode, reference, t, h, dense, drive_args, ystate,
-               prev_values, prev_rates, work)
-    theta_prev = 0.0
-    for j in range(1, samples + 1):
-        theta = j / samples
-        _values_at(theta, plates, disk, mode, reference, t, h, dense, drive_args,
-                   ystate, values, rates, work)
-        for which in range(2):
-            before = prev_values[which]
-            after = values[which]
-            slip_end = which == 0 and mode != STICK
-            now_triggered = after <= 0.0 if slip_end else after < 0.0
-            was_clear = before > 0.0 if slip_end else before >= 0.0
-            if slip_end and j == 1 and fresh:
-                was_clear = True
-            root_hi = -1.0
-            if was_clear and now_triggered:
-                root_hi = theta
-            elif was_clear and prev_rates[which] < 0.0 and rates[which] > 0.0:
-                theta_min = _minimum(which, theta_prev, theta, plates, disk, mode,
-                                     reference, t, h, dense, drive_args, ystate, values, rates,
-                                     work, xtol)
-                _values_at(theta_min, plates, disk, mode, reference, t, h, dense,
-                           drive_args, ystate, values, rates, work)
-                dip = values[which]
-                if (dip <= 0.0) if slip_end else (dip < 0.0):
-                    root_hi = theta_min
-                _values_at(theta, plates, disk, mode, reference, t, h, dense,
-                           drive_args, ystate, values, rates, work)
-            if root_hi >= 0.0:
-                root = _refine(which, theta_prev, root_hi, plates, disk, mode,
-                               reference, t, h, dense, drive_args, ystate, values, rates, work,
-                               xtol)
-                if root < best_theta:
-                    best_theta = root
-                    best_which = which
-                _values_at(theta, plates, disk, mode, reference, t, h, dense,
-                           drive_args, ystate, values, rates, work)
-        if best_which >= 0:
-            return best_which, best_theta
-        for which in range(2):
-            prev_values[which] = values[which]
-            prev_rates[which] = rates[which]
-        theta_prev = theta
-    return -1, 1.0
 
 
 @njit(cache=True, nogil=True)
@@ -487,17 +491,6 @@ def _mode_after_rest(plates, disk, drive, y, work):
     if size > disk[DK_CS] * loads[0]:
         return ONSET
     return STICK
-
-
-@njit(cache=True, nogil=True)
-def _record(ev_t, ev_kind, ev_y, ev_box, t, kind, y):
-    j = ev_box[0]
-    if j < ev_t.shape[0]:
-        ev_t[j] = t
-        ev_kind[j] = kind
-        for i in range(y.shape[0]):
-            ev_y[j, i] = y[i]
-    ev_box[0] = j + 1
 
 
 @njit(cache=True, nogil=True)
@@ -517,17 +510,9 @@ def _integrate(
     accumulates ``[steps, rejected, slips, stuck time, slipping time]``.
     """
     n = y.shape[0]
-    k = np.empty((7, n))
-    y_new = np.empty(n)
-    err = np.empty(n)
-    dense = np.empty((5, n))
-    tmp = np.empty(n)
-    ystate = np.empty(n)
-    work = np.empty(17)
-    values = np.empty(2)
-    rates = np.empty(2)
-    prev_values = np.empty(2)
-    prev_rates = np.empty(2)
+    k, y_new, err, dense, tmp, ystate = step_workspace(n)
+    values, rates, prev_values, prev_rates = event_workspace(2)
+    work = np.empty(23)
     reference = np.zeros(3)
     mode = mode_box[0]
     t = t_box[0]
@@ -558,10 +543,10 @@ def _integrate(
                     mode = ONSET
                     fresh = True
                     stats[2] += 1.0
-                    _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
+                    record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
             _event_values(plates, disk, mode, reference, drive, rate, y, values, rates, work)
             if values[1] < 0.0:
-                _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
+                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
                 mode_box[0] = mode
                 t_box[0] = t
                 return RUN_LIFT_OFF
@@ -590,6 +575,13 @@ def _integrate(
                 reference[2] = length * y[SPIN] / size
             else:
                 _slaved_direction(disk, loads[0], wrench, reference)
+            if disk[DK_TWO_WAY] != 0.0:
+                _, det = _two_way(plates, disk, y, loads, reference, work[17:23])
+                if not det > 0.0:
+                    record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_PARADOX, y)
+                    mode_box[0] = mode
+                    t_box[0] = t
+                    return RUN_PARADOX
             if mode == SLIP and size <= disk[DK_SLAVED]:
                 # The frozen direction of this step differs from the last step's.
                 _rhs(plates, disk, mode, reference, drive, y, k[0], work)
@@ -599,19 +591,16 @@ def _integrate(
         norm = error_norm(err, y, y_new, scale, rtol, atol)
         if not norm <= 1.0:
             stats[1] += 1.0
-            factor = dp.MIN_FACTOR if not math.isfinite(norm) else max(
-                dp.MIN_FACTOR, dp.SAFETY * norm ** -0.2
-            )
-            h *= factor
+            h *= shrink_factor(norm)
             if h < 1e-14 * max(abs(t), max_step):
                 mode_box[0] = mode
                 t_box[0] = t
                 return RUN_BUDGET
             continue
-        factor = dp.MAX_FACTOR if norm == 0.0 else min(dp.MAX_FACTOR, dp.SAFETY * norm ** -0.2)
-        which, theta = _first_event(
-            plates, disk, mode, reference, t, h, dense, drive_args, samples,
-            xtol_time / h, fresh, ystate, values, rates, prev_values, prev_rates, work,
+        factor = growth_factor(norm)
+        which, theta = first_event(
+            _values_at, (plates, disk, reference, work), mode, t, h, dense, drive_args,
+            samples, xtol_time / h, fresh, ystate, values, rates, prev_values, prev_rates,
         )
         t_end = t + theta * h if which >= 0 else t + h
         if last and which < 0:
@@ -646,7 +635,7 @@ def _integrate(
         need_rhs = True
         drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
         if which == 1:
-            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
+            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
             mode_box[0] = mode
             t_box[0] = t
             return RUN_LIFT_OFF
@@ -654,17 +643,17 @@ def _integrate(
             mode = ONSET
             fresh = True
             stats[2] += 1.0
-            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
+            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
         else:
             y[VX] = 0.0
             y[VY] = 0.0
             y[SPIN] = 0.0
-            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_SLIP_END, y)
+            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_SLIP_END, y)
             mode = _mode_after_rest(plates, disk, drive, y, work)
             fresh = mode == ONSET
             if fresh:
                 stats[2] += 1.0
-                _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
+                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
     mode_box[0] = mode
     t_box[0] = t
     t_box[1] = h

@@ -24,19 +24,18 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from study.kernels.codes import (
+    CONTINUOUS_SLIDING,
+    LIFT_OFF,
+    NOT_CONVERGED,
+    REASON_EVENT_BUDGET,
+    REASON_NO_PERIODIC_ORBIT,
+    REASON_NONE,
+    STATIC,
+    STICK_SLIP,
+)
+
 TWO_PI = 2.0 * math.pi
-
-# Status codes, mirrored by study.status.Status (tested to agree).
-STATIC = 0
-STICK_SLIP = 1
-CONTINUOUS_SLIDING = 2
-LIFT_OFF = 3
-NOT_CONVERGED = 4
-
-# Reasons for NOT_CONVERGED, mirrored by study.status.NonConvergence.
-REASON_NONE = 0
-REASON_NO_PERIODIC_ORBIT = 1
-REASON_EVENT_BUDGET = 2
 
 # A release that would start this close before the end of its arc (in phase, rad)
 # is a rounding artefact of a slip that ended exactly on the arc's edge: its slip
@@ -54,8 +53,13 @@ CYCLE_DETECTION = 1e-2
 # Newton refinement of a cycle stops once the cycle closes to this phase [rad].
 CYCLE_TOLERANCE = 1e-12
 
+EPS = 2.220446049250313e-16
 # A release needs |A_s| > cs g times this (see _constants).
-RELEASE_MARGIN = 1.0 + 8.0 * 2.220446049250313e-16
+RELEASE_MARGIN = 1.0 + 8.0 * EPS
+# A slip end is found once the slip speed there is below this many ulps of the sum of
+# the absolute values of its terms (its rounding error), or once the Newton correction
+# or the bracket is below this many ulps of the phase (see _slip).
+SLIP_END_ULPS = 4.0
 
 # Round-trip status of a sequence of slips.
 _ROUND_OK = 0
@@ -146,35 +150,43 @@ def _slip(psi0, c, h, gamma):
         return 0.0, 0.0, slope0, slope0, False
     hi = lo + TWO_PI - 2.0 * gamma
     speed_hi, _ = _slip_speed(hi, slope0, h, cos0, sin0)
-    # U is monotone decreasing on [lo, hi], U(lo) > 0 > U(hi): start from regula falsi.
+    # U is monotone decreasing on [lo, hi], U(lo) > 0 > U(hi): start from regula falsi,
+    # then Newton, bisecting whenever a step would leave the bracket.
     d = lo + (hi - lo) * speed_lo / (speed_lo - speed_hi)
-    for _ in range(200):
-        speed, accel = _slip_speed(d, slope0, h, cos0, sin0)
+    for iteration in range(200):
+        sin_d = math.sin(d)
+        half = math.sin(0.5 * d)
+        one_minus_cos = 2.0 * half * half
+        sin_minus_d = _sin_minus_x(d, sin_d)
+        speed = slope0 * d + h * (cos0 * sin_minus_d - sin0 * one_minus_cos)
+        accel = slope0 - h * (cos0 * one_minus_cos + sin0 * sin_d)
+        # The root is as accurate as the evaluation of U allows once |U(d)| is below
+        # the rounding error of that evaluation: a few ulps of the sum of the absolute
+        # values of its terms (for d >= 1, sin(d) - d is a difference of its terms).
+        size = abs(sin_minus_d) if d < 1.0 else abs(sin_d) + d
+        noise = SLIP_END_ULPS * EPS * (abs(slope0) * d + h * (abs(cos0) * size
+                                                              + abs(sin0) * one_minus_cos))
+        if abs(speed) <= noise or iteration == 199:
+            break
         if speed > 0.0:
             lo = d
-        elif speed < 0.0:
-            hi = d
         else:
-            break
+            hi = d
         step_ok = accel < 0.0
         if step_ok:
             d_new = d - speed / accel
             step_ok = lo < d_new < hi
         if not step_ok:
             d_new = 0.5 * (lo + hi)
-        if abs(d_new - d) <= 1e-14 * d_new or hi - lo <= 4e-16 * hi:
-            d = d_new
+        # A correction or a bracket of a few ulps of d: d is the root to rounding.
+        if abs(d_new - d) <= SLIP_END_ULPS * EPS * d or hi - lo <= SLIP_END_ULPS * EPS * hi:
             break
         d = d_new
-    sin_d = math.sin(d)
-    half = math.sin(0.5 * d)
-    one_minus_cos = 2.0 * half * half
+    # d is the last point evaluated: its sines give the distance and the end slope.
     distance = 0.5 * slope0 * d * d + h * (
-        cos0 * _one_minus_cos_minus_half_square(d, one_minus_cos)
-        + sin0 * _sin_minus_x(d, sin_d)
+        cos0 * _one_minus_cos_minus_half_square(d, one_minus_cos) + sin0 * sin_minus_d
     )
-    _, slope_end = _slip_speed(d, slope0, h, cos0, sin0)
-    return d, distance, slope0, slope_end, True
+    return d, distance, slope0, accel, True
 
 
 @njit(cache=True, nogil=True)
@@ -590,19 +602,27 @@ def _steady_state_serial(
 # Points are dealt to threads in blocks of this many consecutive points (whole cache
 # lines of every array), blocks interleaved over the lanes as in _steady_state.
 VELOCITY_BLOCK = 64
+# Squares of the normal doubles in (1e-140, 1e140): products of three of them are
+# still normal, so their rounding error is a few ulps.
+SQUARES_LOW = 1e-280
+SQUARES_HIGH = 1e280
+# Status of a point the velocity path leaves to numpy's lift-off test.
+LIFT_UNDECIDED = -1
+# Comparisons of squares decided with this relative margin (rounding is < 1e-15).
+SURE_ABOVE = 1.0 + 1e-13
+SURE_BELOW = 1.0 - 1e-13
 
 
 @njit(cache=True, nogil=True)
-def _amplitudes(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g):
-    """Force amplitudes at one point, operation for operation as numpy evaluates
-    ``study.physics`` there, so that they are bit-identical to the arrays
-    :func:`_steady_state` receives: ``release_amplitudes``, ``slip_amplitudes``, the
-    lift-off test ``a > lift_off_acceleration`` and ``w = 2 pi f``.
+def _lift_off(f, a, w0, inv_q, m, cos_a, g):
+    """The mode coupling ``k = w^2 M cos(alpha) G`` at one point and the lift-off
+    test ``a > lift_off_acceleration`` (1, 0 or LIFT_UNDECIDED), operation for operation
+    as numpy evaluates ``study.physics`` there (see :func:`_forces`).
 
     numpy multiplies a real by a complex as ``(x + 0j) * z`` and divides by a real
     ``q`` as ``z * (1 / q)`` (Smith's algorithm); the zero products are kept so that
-    signed zeros come out as numpy's. ``inv_q = 1 / Q``, ``m = M``, ``cos_a`` and
-    ``sin_a`` are numpy's ``cos``/``sin`` of the tilt, ``w0`` is ``Structure.omega0``.
+    signed zeros come out as numpy's. ``inv_q = 1 / Q``, ``m = M``, ``cos_a`` is
+    numpy's ``cos`` of the tilt, ``w0`` is ``Structure.omega0``.
     """
     w = TWO_PI * f
     # G = 1 / (w0^2 - w^2 + 1j * w0 * w / Q)
@@ -622,10 +642,32 @@ def _amplitudes(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g):
     x = w * w * m * cos_a
     k_re = x * g_re - 0.0 * g_im
     k_im = x * g_im + 0.0 * g_re
-    # 1 + k cos(alpha), N = -a (1 + k cos(alpha)), T = a k sin(alpha)
+    # 1 + k cos(alpha)
     one_re = 1.0 + (k_re * cos_a - k_im * 0.0)
     one_im = 0.0 + (k_re * 0.0 + k_im * cos_a)
-    lifted = a > g / math.hypot(one_re, one_im)
+    # Lifted if a > g / |1 + k cos(alpha)|, decided on squares (no square root) where
+    # that is sure: farther than 1e-13 from the threshold, all squares normal. Nearer,
+    # the answer depends on how numpy rounds |z| (its SIMD loops do not call hypot):
+    # LIFT_UNDECIDED, for the caller to decide with numpy.
+    a2 = a * a
+    q2 = one_re * one_re + one_im * one_im
+    g2 = g * g
+    lhs = a2 * q2
+    lift = LIFT_UNDECIDED
+    if (SQUARES_LOW < a2 < SQUARES_HIGH and SQUARES_LOW < q2 < SQUARES_HIGH
+            and SQUARES_LOW < g2 < SQUARES_HIGH):
+        if lhs > g2 * SURE_ABOVE:
+            lift = 1
+        elif lhs < g2 * SURE_BELOW:
+            lift = 0
+    return lift, w, k_re, k_im, one_re, one_im
+
+
+@njit(cache=True, nogil=True)
+def _forces(a, k_re, k_im, one_re, one_im, sin_a, cs, ck):
+    """Release and slip amplitudes ``A_s``, ``B_s`` at one point, bit-identical to
+    ``study.physics``' ``release_amplitudes`` and ``slip_amplitudes`` there."""
+    # N = -a (1 + k cos(alpha)), T = a k sin(alpha)
     na = -a
     n_re = na * one_re - 0.0 * one_im
     n_im = na * one_im + 0.0 * one_re
@@ -642,23 +684,32 @@ def _amplitudes(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g):
     a_minus = complex(-t_re - csn_re, -t_im - csn_im)
     b_plus = complex(t_re - ckn_re, t_im - ckn_im)
     b_minus = complex(-t_re - ckn_re, -t_im - ckn_im)
-    return a_plus, a_minus, b_plus, b_minus, lifted, w
+    return a_plus, a_minus, b_plus, b_minus
 
 
 @njit(cache=True, nogil=True)
 def _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                   max_events, max_rounds, velocity, status):
-    """Solve point ``i`` for its velocity and status only."""
-    a_plus, a_minus, b_plus, b_minus, lifted, w = _amplitudes(
-        f[i], a[i], w0, inv_q, m, cos_a, sin_a, cs, ck, g
-    )
-    if lifted:
+                   max_events, max_rounds, velocity, status, given):
+    """Solve point ``i`` for its velocity and status only.
+
+    ``given`` is the lift-off decision if known (0 or 1), else LIFT_UNDECIDED: then a
+    point too near the lift-off threshold to decide here gets that status (velocity
+    NaN), to be solved again with the decision numpy makes.
+    """
+    lift, w, k_re, k_im, one_re, one_im = _lift_off(f[i], a[i], w0, inv_q, m, cos_a, g)
+    if given != LIFT_UNDECIDED:
+        lift = given
+    if lift != 0:
         velocity[i] = np.nan
-        status[i] = LIFT_OFF
+        status[i] = LIFT_OFF if lift == 1 else LIFT_UNDECIDED
         return
-    # Most points of a map never slip: decided before the slip constants are computed.
-    release_level = cs_g * RELEASE_MARGIN
-    if not (abs(a_plus) > release_level or abs(a_minus) > release_level):
+    a_plus, a_minus, b_plus, b_minus = _forces(a[i], k_re, k_im, one_re, one_im, sin_a, cs, ck)
+    # Most points of a map never slip: decided before the slip constants are computed,
+    # on squares where that is sure (else _solve_point decides, as steady_state does).
+    level2 = cs_g * cs_g * SURE_BELOW
+    p2 = a_plus.real * a_plus.real + a_plus.imag * a_plus.imag
+    m2 = a_minus.real * a_minus.real + a_minus.imag * a_minus.imag
+    if p2 < level2 and m2 < level2 and SQUARES_LOW < level2 < SQUARES_HIGH:
         velocity[i] = 0.0
         status[i] = STATIC
         return
@@ -681,7 +732,7 @@ def _steady_velocity(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
         for block in range(lane, blocks, lanes):
             for i in range(block * VELOCITY_BLOCK, min(n, (block + 1) * VELOCITY_BLOCK)):
                 _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                               max_events, max_rounds, velocity, status)
+                               max_events, max_rounds, velocity, status, LIFT_UNDECIDED)
 
 
 @njit(cache=True, nogil=True)
@@ -690,4 +741,13 @@ def _steady_velocity_serial(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, c
     """Same as :func:`_steady_velocity` on one thread."""
     for i in range(f.shape[0]):
         _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                       max_events, max_rounds, velocity, status)
+                       max_events, max_rounds, velocity, status, LIFT_UNDECIDED)
+
+
+@njit(cache=True, nogil=True)
+def _steady_velocity_given(f, a, lifted, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                           max_events, max_rounds, velocity, status):
+    """Same as :func:`_steady_velocity_serial` with the lift-off decisions given."""
+    for i in range(f.shape[0]):
+        _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                       max_events, max_rounds, velocity, status, 1 if lifted[i] else 0)

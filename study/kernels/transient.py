@@ -21,7 +21,8 @@ located on the step's dense output (Shampine's 4th-order continuous extension, a
 in Hairer's DOPRI5), never by step-end sign tests alone: each event function is
 sampled at ``samples`` points per step *and* watched at its minima (where its
 derivative, computed from the model, changes sign), then bracketed and refined by
-the Illinois method to the event tolerance.
+the Illinois method to the event tolerance (:mod:`study.kernels.events`). The
+Dormand-Prince step, its error norm and dense output are :mod:`study.kernels.dopri`'s.
 
 Everything here is private: :mod:`study.transient` validates, allocates and calls.
 """
@@ -33,32 +34,37 @@ import math
 import numpy as np
 from numba import njit, prange
 
-# Contact modes.
-STICK = 0
-
-# Run outcomes (``_integrate`` return codes).
-RUN_DONE = 0
-RUN_LIFT_OFF = 1
-RUN_BUDGET = 2
-RUN_PARADOX = 3
-
-# Event kinds recorded in trajectories.
-EVENT_RELEASE_FORWARD = 1
-EVENT_RELEASE_BACKWARD = 2
-EVENT_SLIP_END = 3
-EVENT_LIFT_OFF = 4
-EVENT_PARADOX = 5
-
-# Status codes, mirrored by study.status.Status (tested to agree).
-STATIC = 0
-STICK_SLIP = 1
-CONTINUOUS_SLIDING = 2
-LIFT_OFF = 3
-NOT_CONVERGED = 4
-FRICTION_PARADOX = 5
-REASON_NONE = 0
-REASON_NO_PERIODIC_ORBIT = 1
-REASON_EVENT_BUDGET = 2
+from study.kernels.codes import (
+    CONTINUOUS_SLIDING,
+    EVENT_LIFT_OFF,
+    EVENT_PARADOX,
+    EVENT_RELEASE_BACKWARD,
+    EVENT_RELEASE_FORWARD,
+    EVENT_SLIP_END,
+    FRICTION_PARADOX,
+    LIFT_OFF,
+    NOT_CONVERGED,
+    REASON_EVENT_BUDGET,
+    REASON_NO_PERIODIC_ORBIT,
+    RUN_BUDGET,
+    RUN_DONE,
+    RUN_LIFT_OFF,
+    RUN_PARADOX,
+    STATIC,
+    STICK,
+    STICK_SLIP,
+)
+from study.kernels.dopri import (
+    dense_output,
+    error_norm,
+    growth_factor,
+    shrink_factor,
+    step,
+    table_drive,
+)
+from study.kernels.dopri import workspace as step_workspace
+from study.kernels.events import first_event, record
+from study.kernels.events import workspace as event_workspace
 
 # Indices of the model parameter vector ``p``.
 P_DAMPING = 0  # w0 / Q [s^-1]
@@ -71,52 +77,6 @@ P_CK = 6
 P_G = 7
 P_TWO_WAY = 8  # 1.0 for two-way coupling
 N_PARAMETERS = 9
-
-# Dormand-Prince 5(4) tableau (Dormand & Prince 1980) with Shampine's (1986)
-# continuous extension in Hairer's form.
-C2, C3, C4, C5 = 0.2, 0.3, 0.8, 8.0 / 9.0
-A21 = 0.2
-A31, A32 = 3.0 / 40.0, 9.0 / 40.0
-A41, A42, A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
-A51, A52, A53, A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
-A61, A62, A63, A64, A65 = (
-    9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0
-)
-B1, B3, B4, B5, B6 = 35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0
-E1, E3, E4, E5, E6, E7 = (
-    71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0
-)
-D1 = -12715105075.0 / 11282082432.0
-D3 = 87487479700.0 / 32700410799.0
-D4 = -10690763975.0 / 1880347072.0
-D5 = 701980252875.0 / 199316789632.0
-D6 = -1453857185.0 / 822651844.0
-D7 = 69997945.0 / 29380423.0
-
-# The stages' coefficients as tables, for the loops shared by every kernel's step.
-STAGE_NODES = np.array([0.0, C2, C3, C4, C5, 1.0])
-STAGE_WEIGHTS = np.array([
-    [0.0, 0.0, 0.0, 0.0, 0.0],
-    [A21, 0.0, 0.0, 0.0, 0.0],
-    [A31, A32, 0.0, 0.0, 0.0],
-    [A41, A42, A43, 0.0, 0.0],
-    [A51, A52, A53, A54, 0.0],
-    [A61, A62, A63, A64, A65],
-])
-
-# Step-size controller (standard for a 5th-order pair with local extrapolation).
-SAFETY = 0.9
-MIN_FACTOR = 0.2
-MAX_FACTOR = 5.0
-# Bisection-safeguarded Illinois iterations per event (each halves the bracket at worst
-# every other step): enough for any tolerance down to the rounding of t.
-MAX_ROOT_ITERATIONS = 200
-
-
-@njit(cache=True, nogil=True, inline="always")
-def table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0):
-    phase = seg_phase0[seg] + seg_omega[seg] * (t - seg_t0[seg])
-    return seg_a[seg] * math.cos(phase), seg_a[seg] * seg_omega[seg] * math.sin(phase)
 
 
 @njit(cache=True, nogil=True)
@@ -196,89 +156,19 @@ def _event_values(p, mode, drive, drive_rate_neg, y, values, rates):
 
 
 @njit(cache=True, nogil=True)
-def dense_output(theta, h, dense, out):
-    """State at ``t0 + theta h`` from the step's continuous extension."""
-    one_minus = 1.0 - theta
-    for i in range(out.shape[0]):
-        out[i] = dense[0, i] + theta * (
-            dense[1, i]
-            + one_minus * (dense[2, i] + theta * (dense[3, i] + one_minus * dense[4, i]))
-        )
-
-
-@njit(cache=True, nogil=True)
-def stage_state(stage, y, h, k, out):
-    """``out = y + h sum_l a_{stage, l} k[l]``: the state at which stage ``stage`` (1-5)
-    of a Dormand-Prince step evaluates the right-hand side."""
-    for i in range(y.shape[0]):
-        total = STAGE_WEIGHTS[stage, 0] * k[0, i]
-        for j in range(1, stage):
-            total += STAGE_WEIGHTS[stage, j] * k[j, i]
-        out[i] = y[i] + h * total
-
-
-@njit(cache=True, nogil=True)
-def solution_step(y, h, k, y_new):
-    """The step's 5th-order solution from the stages ``k[0..5]``."""
-    for i in range(y.shape[0]):
-        y_new[i] = y[i] + h * (
-            B1 * k[0, i] + B3 * k[2, i] + B4 * k[3, i] + B5 * k[4, i] + B6 * k[5, i]
-        )
-
-
-@njit(cache=True, nogil=True)
-def error_and_dense(y, h, k, y_new, err, dense):
-    """Embedded error estimate and Shampine's dense-output coefficients (needs the FSAL
-    stage ``k[6] = f(t + h, y_new)``)."""
-    for i in range(y.shape[0]):
-        err[i] = h * (
-            E1 * k[0, i] + E3 * k[2, i] + E4 * k[3, i] + E5 * k[4, i] + E6 * k[5, i]
-            + E7 * k[6, i]
-        )
-        dense[0, i] = y[i]
-        rise = y_new[i] - y[i]
-        dense[1, i] = rise
-        slope_gap = h * k[0, i] - rise
-        dense[2, i] = slope_gap
-        dense[3, i] = rise - h * k[6, i] - slope_gap
-        dense[4, i] = h * (
-            D1 * k[0, i] + D3 * k[2, i] + D4 * k[3, i] + D5 * k[4, i] + D6 * k[5, i]
-            + D7 * k[6, i]
-        )
-
-
-@njit(cache=True, nogil=True)
 def _step(p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp):
     """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL).
 
     Fills ``k[1..6]``, the 5th-order solution ``y_new``, the error estimate ``err``
     and the dense-output coefficients.
     """
-    seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
-    for stage in range(1, 6):
-        stage_state(stage, y, h, k, tmp)
-        drive, _ = table_drive(t + STAGE_NODES[stage] * h, seg, seg_t0, seg_omega, seg_a,
-                          seg_phase0)
-        _rhs(p, mode, drive, tmp, k[stage])
-    solution_step(y, h, k, y_new)
-    _rhs(p, mode, drive, y_new, k[6])
-    error_and_dense(y, h, k, y_new, err, dense)
+    step(_rhs, p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp)
     if mode == STICK:
         # x and v are exactly constant while stuck.
         y_new[2] = y[2]
         y_new[3] = 0.0
         err[2] = 0.0
         err[3] = 0.0
-
-
-@njit(cache=True, nogil=True)
-def error_norm(err, y, y_new, scale, rtol, atol):
-    total = 0.0
-    for i in range(err.shape[0]):
-        size = atol * scale[i] + rtol * max(abs(y[i]), abs(y_new[i]))
-        r = err[i] / size
-        total += r * r
-    return math.sqrt(total / err.shape[0])
 
 
 @njit(cache=True, nogil=True)
@@ -289,124 +179,6 @@ def _values_at(theta, p, mode, t, h, dense, drive_args, ystate, values, rates):
         ystate[3] = 0.0
     drive, rate = table_drive(t + theta * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
     _event_values(p, mode, drive, rate, ystate, values, rates)
-
-
-@njit(cache=True, nogil=True)
-def _refine(which, lo, hi, p, mode, t, h, dense, drive_args, ystate, values, rates, xtol):
-    """Illinois iteration on event ``which`` over ``[lo, hi]`` (positive at ``lo``,
-    triggered at ``hi``); returns the triggered end of a bracket narrower than ``xtol``.
-    """
-    _values_at(lo, p, mode, t, h, dense, drive_args, ystate, values, rates)
-    f_lo = values[which]
-    _values_at(hi, p, mode, t, h, dense, drive_args, ystate, values, rates)
-    f_hi = values[which]
-    side = 0
-    for _ in range(MAX_ROOT_ITERATIONS):
-        if hi - lo <= xtol:
-            break
-        if f_lo - f_hi > 0.0 and math.isfinite(f_lo - f_hi):
-            mid = lo + (hi - lo) * f_lo / (f_lo - f_hi)
-        else:
-            mid = 0.5 * (lo + hi)
-        # Keep the iterate inside the bracket and away from its ends.
-        width = hi - lo
-        mid = min(max(mid, lo + 0.01 * width), hi - 0.01 * width)
-        _values_at(mid, p, mode, t, h, dense, drive_args, ystate, values, rates)
-        f_mid = values[which]
-        triggered = f_mid <= 0.0 if which == 0 and mode != STICK else f_mid < 0.0
-        if triggered:
-            hi = mid
-            f_hi = f_mid
-            if side == -1:
-                f_lo *= 0.5
-            side = -1
-        else:
-            lo = mid
-            f_lo = f_mid
-            if side == 1:
-                f_hi *= 0.5
-            side = 1
-    return hi
-
-
-@njit(cache=True, nogil=True)
-def _minimum(which, lo, hi, p, mode, t, h, dense, drive_args, ystate, values, rates, xtol):
-    """Bisection for the zero of event ``which``'s rate (negative at ``lo``, positive at
-    ``hi``): the position of the event function's minimum on ``[lo, hi]``."""
-    for _ in range(MAX_ROOT_ITERATIONS):
-        if hi - lo <= xtol:
-            break
-        mid = 0.5 * (lo + hi)
-        _values_at(mid, p, mode, t, h, dense, drive_args, ystate, values, rates)
-        if rates[which] < 0.0:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
-@njit(cache=True, nogil=True)
-def _first_event(
-    p, mode, t, h, dense, drive_args, samples, xtol, fresh, ystate, values, rates,
-    prev_values, prev_rates,
-):
-    """Earliest event in the step: ``(which, theta)`` or ``(-1, 1.0)``.
-
-    ``which`` is 0 or 1 (release forward/backward, or slip end) or 2 (lift-off).
-    The slip-end function ``s v`` is zero at the start of a slip, where it rises
-    (``s dv/dt >= 0`` there): at a ``fresh`` slip's start it counts as clear, so a slip
-    shorter than one sample interval still ends. After a tangential touch (a slip end
-    followed by a slip the same way) the first interval is not watched, which stops
-    a rounding-level root from repeating.
-    """
-    best_which = -1
-    best_theta = 2.0
-    _values_at(0.0, p, mode, t, h, dense, drive_args, ystate, prev_values, prev_rates)
-    theta_prev = 0.0
-    for j in range(1, samples + 1):
-        theta = j / samples
-        _values_at(theta, p, mode, t, h, dense, drive_args, ystate, values, rates)
-        for which in range(3):
-            if which == 1 and mode != STICK:
-                continue
-            before = prev_values[which]
-            after = values[which]
-            slip_end = which == 0 and mode != STICK
-            now_triggered = after <= 0.0 if slip_end else after < 0.0
-            was_clear = before > 0.0 if slip_end else before >= 0.0
-            if slip_end and j == 1 and fresh:
-                was_clear = True
-            root_hi = -1.0
-            if was_clear and now_triggered:
-                root_hi = theta
-            elif was_clear and prev_rates[which] < 0.0 and rates[which] > 0.0:
-                # Both ends clear but the function dips in between: look at its minimum.
-                theta_min = _minimum(
-                    which, theta_prev, theta, p, mode, t, h, dense, drive_args, ystate,
-                    values, rates, xtol,
-                )
-                _values_at(theta_min, p, mode, t, h, dense, drive_args, ystate, values, rates)
-                dip = values[which]
-                if (dip <= 0.0) if slip_end else (dip < 0.0):
-                    root_hi = theta_min
-                # Restore the sample at theta for the next sub-interval.
-                _values_at(theta, p, mode, t, h, dense, drive_args, ystate, values, rates)
-            if root_hi >= 0.0:
-                root = _refine(
-                    which, theta_prev, root_hi, p, mode, t, h, dense, drive_args, ystate,
-                    values, rates, xtol,
-                )
-                if root < best_theta:
-                    best_theta = root
-                    best_which = which
-                _values_at(theta, p, mode, t, h, dense, drive_args, ystate, values, rates)
-        if best_which >= 0:
-            return best_which, best_theta
-        for which in range(3):
-            prev_values[which] = values[which]
-            prev_rates[which] = rates[which]
-        theta_prev = theta
-    return -1, 1.0
 
 
 @njit(cache=True, nogil=True)
@@ -456,16 +228,8 @@ def _integrate(
     Returns a ``RUN_*`` code.
     """
     n = y.shape[0]
-    k = np.empty((7, n))
-    y_new = np.empty(n)
-    err = np.empty(n)
-    dense = np.empty((5, n))
-    tmp = np.empty(n)
-    ystate = np.empty(n)
-    values = np.empty(3)
-    rates = np.empty(3)
-    prev_values = np.empty(3)
-    prev_rates = np.empty(3)
+    k, y_new, err, dense, tmp, ystate = step_workspace(n)
+    values, rates, prev_values, prev_rates = event_workspace(3)
     mode = mode_box[0]
     t = t_box[0]
     t_origin = t
@@ -494,16 +258,16 @@ def _integrate(
                     mode = new_mode
                     fresh = True
                     stats[2] += 1.0
-                    _record(ev_t, ev_kind, ev_y, ev_box, t,
+                    record(ev_t, ev_kind, ev_y, ev_box, t,
                             EVENT_RELEASE_FORWARD if mode > 0 else EVENT_RELEASE_BACKWARD, y)
             if _paradox(p, mode):
-                _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_PARADOX, y)
+                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_PARADOX, y)
                 mode_box[0] = mode
                 t_box[0] = t
                 return RUN_PARADOX
             _event_values(p, mode, drive, rate, y, values, rates)
             if values[2] < 0.0:
-                _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
+                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
                 mode_box[0] = mode
                 t_box[0] = t
                 return RUN_LIFT_OFF
@@ -534,21 +298,18 @@ def _integrate(
             norm = error_norm(err, y, y_new, scale, rtol, atol)
             if not norm <= 1.0:
                 stats[1] += 1.0
-                factor = MIN_FACTOR if not math.isfinite(norm) else max(
-                    MIN_FACTOR, SAFETY * norm ** -0.2
-                )
-                h *= factor
+                h *= shrink_factor(norm)
                 if h < 1e-14 * max(abs(t), max_step):
                     mode_box[0] = mode
                     t_box[0] = t
                     return RUN_BUDGET
                 continue
-            factor = MAX_FACTOR if norm == 0.0 else min(MAX_FACTOR, SAFETY * norm ** -0.2)
+            factor = growth_factor(norm)
         else:
             factor = 1.0
-        which, theta = _first_event(
-            p, mode, t, h, dense, drive_args, samples, xtol_time / h, fresh, ystate,
-            values, rates, prev_values, prev_rates,
+        which, theta = first_event(
+            _values_at, p, mode, t, h, dense, drive_args, samples, xtol_time / h, fresh,
+            ystate, values, rates, prev_values, prev_rates,
         )
         t_end = t + theta * h if which >= 0 else t + h
         if last and which < 0:
@@ -588,7 +349,7 @@ def _integrate(
         need_rhs = True
         drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
         if which == 2:
-            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
+            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
             mode_box[0] = mode
             t_box[0] = t
             return RUN_LIFT_OFF
@@ -596,15 +357,15 @@ def _integrate(
             mode = 1 if which == 0 else -1
             fresh = True
             stats[2] += 1.0
-            _record(ev_t, ev_kind, ev_y, ev_box, t,
+            record(ev_t, ev_kind, ev_y, ev_box, t,
                     EVENT_RELEASE_FORWARD if mode > 0 else EVENT_RELEASE_BACKWARD, y)
         else:
             y[3] = 0.0
-            _record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_SLIP_END, y)
+            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_SLIP_END, y)
             after = _mode_after_rest(p, drive, y)
             if after == -mode:
                 stats[2] += 1.0
-                _record(ev_t, ev_kind, ev_y, ev_box, t,
+                record(ev_t, ev_kind, ev_y, ev_box, t,
                         EVENT_RELEASE_FORWARD if after > 0 else EVENT_RELEASE_BACKWARD, y)
             # A reversal starts a fresh slip; a tangential touch continues the old one.
             fresh = after == -mode
@@ -613,17 +374,6 @@ def _integrate(
     t_box[0] = t
     t_box[1] = h
     return RUN_DONE
-
-
-@njit(cache=True, nogil=True)
-def _record(ev_t, ev_kind, ev_y, ev_box, t, kind, y):
-    j = ev_box[0]
-    if j < ev_t.shape[0]:
-        ev_t[j] = t
-        ev_kind[j] = kind
-        for i in range(y.shape[0]):
-            ev_y[j, i] = y[i]
-    ev_box[0] = j + 1
 
 
 @njit(cache=True, nogil=True)

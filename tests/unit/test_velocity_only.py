@@ -70,3 +70,20 @@ def test_budgets_bit_identical(paper_structure, settings):
     a = np.linspace(0.0, 12.0, 53)[None, :]
     status = _assert_same_bits(s, f, a, settings)
     assert (status == Status.NOT_CONVERGED).any()
+
+
+def test_thresholds_to_the_ulp_bit_identical():
+    """The velocity path decides lift-off and static points on squares where that is
+    sure: within ulps of either threshold it must still decide as ``steady_state``."""
+    rng = np.random.default_rng(20261123)
+    ulps = np.arange(-8, 9) * np.finfo(float).eps
+    seen = set()
+    for structure in _random_structures(rng, 12):
+        f = structure.f0 * rng.uniform(0.2, 3.0, 40)
+        lift = study.lift_off_acceleration(structure, f)
+        a_plus, a_minus = study.thresholds(structure, f)
+        for edge in (lift, a_plus, a_minus, np.minimum(a_plus, a_minus)):
+            a = (edge[:, None] * (1.0 + ulps)).ravel()
+            statuses = _assert_same_bits(structure, np.repeat(f, ulps.size), a)
+            seen.update(int(s) for s in np.unique(statuses))
+    assert {Status.STATIC, Status.LIFT_OFF} <= seen
