@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from study.analysis import frontier_from_grid
 from study.physics import lift_off_acceleration, mode_response, thresholds
-from study.solver import SolverSettings, SteadyState, steady_state
+from study.solver import SolverSettings, SteadyState, attractors, steady_state
 from study.structure import Structure
 from study.transient import IntegratorSettings, integrated_steady_state
 from study.variables import VARIABLES, Variable
@@ -211,6 +211,13 @@ def _floquet(work: PointWork) -> dict[str, NDArray[Any]]:
     return {"floquet_multiplier": multiplier}
 
 
+def _attractors(work: PointWork) -> dict[str, NDArray[Any]]:
+    found = attractors(work.structure, work.f, work.a, work.method.solver,
+                       coupling=work.method.coupling, parallel=False)
+    return {"attractor_count": found.count, "attractor_velocity_spread": found.velocity_spread,
+            "attractor_starts_converged": found.starts_converged}
+
+
 def _paper_model(work: PointWork) -> dict[str, NDArray[Any]]:
     return {"velocity_one_way": work.one_way.velocity, "status_one_way": work.one_way.status}
 
@@ -241,6 +248,10 @@ _DECLARED = (
     Observable("floquet", "largest Floquet multiplier of the orbit (exact two-way solver "
                "only)", "point", ("floquet_multiplier",), _floquet, requires=("velocity",),
                cached=True),
+    Observable("attractors", "multistability: distinct stable orbits from 12 starting "
+               "states and their velocity spread (exact solver; 12 solves per point)", "point",
+               ("attractor_count", "attractor_velocity_spread", "attractor_starts_converged"),
+               _attractors, requires=("velocity",), cached=True),
     Observable("paper_model", "the paper's one-way velocity beside a two-way study", "point",
                ("velocity_one_way", "status_one_way"), _paper_model, requires=("velocity",),
                cached=True),

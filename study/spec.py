@@ -504,6 +504,12 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             'study) needs [solver] coupling = "two-way"; a one-way study\'s velocity already '
             "is the paper's model"
         )
+    if "attractors" in observables and method != "exact":
+        raise SpecError(
+            f'{path}: [study] observable "attractors" (stable orbits from several starting '
+            f'states) needs [solver] method = "exact" (the solver that computes it), got '
+            f'method = "{method}" (allowed: method = "exact", with either coupling)'
+        )
     if "floquet" in observables and (method, coupling) != ("exact", "two-way"):
         raise SpecError(
             f'{path}: [study] observable "floquet" (the orbit\'s largest Floquet multiplier) '

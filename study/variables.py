@@ -125,9 +125,21 @@ _DECLARED = (
     Variable("floquet_multiplier", "point", "float64", "1",
              "largest modulus of the Floquet multipliers of the steady orbit on the state "
              "(plate deflection, its rate, sliding velocity)",
-             comment="below 1: the orbit attracts nearby states; exactly 0 when static; "
-             "NaN (missing) where status is lift_off, not_converged or friction_paradox",
-             invalid_where="status"),
+             comment="below 1: the orbit attracts nearby states; where static, the mode's "
+             "free decay over one drive period; NaN (missing) where status is lift_off, "
+             "not_converged or friction_paradox"),
+    Variable("attractor_count", "point", "int32", "1",
+             "distinct stable outcomes reached from 12 starting states (rest at four drive "
+             "phases, the mode at 0, 1 and 2 times its steady response)",
+             comment="stable orbits told apart by period and mean velocity, lift-off and "
+             "the friction paradox one outcome each; 1 where static; > 1: multistable; "
+             "0: no start converged"),
+    Variable("attractor_velocity_spread", "point", "float64", "m s-1",
+             "largest minus smallest mean velocity among the stable orbits found",
+             comment="0 with a single orbit or none"),
+    Variable("attractor_starts_converged", "point", "int32", "1",
+             "starting states (of 12) that reached a stable orbit, lift-off or the "
+             "friction paradox"),
     Variable("velocity_one_way", "point", "float64", "m s-1",
              "mean steady velocity of the paper's one-way model at the same point "
              "(exact solver), for comparison with the two-way velocity",

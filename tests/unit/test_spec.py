@@ -186,11 +186,11 @@ def test_minimal_spec_has_one_structure_the_papers():
 def test_observables_are_kept_in_canonical_order():
     spec = parse({"study": {"observables": ["frontier", "paper_model", "diagnostics",
                                             "velocity", "thresholds", "resonance",
-                                            "floquet", "lift_off"]},
+                                            "floquet", "attractors", "lift_off"]},
                   "solver": {"coupling": "two-way"}})
     assert spec.observables == OBSERVABLES == (
         "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "floquet",
-        "paper_model", "frontier",
+        "attractors", "paper_model", "frontier",
     )
 
 
@@ -203,9 +203,10 @@ def test_solver_settings_and_chunk_points_are_read():
 def test_example_workflow_is_valid():
     path = REPO / "workflows" / "regime-map.toml"
     spec = load_spec(path)
-    # Every observable of a one-way study (paper_model and floquet belong to two-way ones).
+    # Every observable of a one-way study but the multistability check (paper_model and
+    # floquet belong to two-way ones).
     assert spec.observables == tuple(o for o in OBSERVABLES
-                                     if o not in ("paper_model", "floquet"))
+                                     if o not in ("paper_model", "floquet", "attractors"))
     assert spec.title == "Regime map of the paper's structure (Fig. 2)"
     assert axis_names(spec) == ["f", "a"]
     assert [len(axis) for axis in spec.axes] == [401, 241]
@@ -489,7 +490,7 @@ def _mass(**keys: Any) -> dict[str, Any]:
 
 _OBS_ALLOWED = (
     "'resonance', 'thresholds', 'lift_off', 'velocity', 'diagnostics', 'floquet', "
-    "'paper_model', 'frontier'"
+    "'attractors', 'paper_model', 'frontier'"
 )
 _FORMS = "allowed forms: { start = x, stop = y, num = n }"
 

@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 
 from study import Structure
 from study.runner import run_study
-from study.solver import steady_state
+from study.solver import attractors, steady_state
 from study.spec import SpecError, parse_spec
 from study.status import Status
 from study.store import open_result
@@ -103,6 +103,43 @@ def test_bad_method_settings_are_refused_by_name(solver, fragments):
     assert PATH in message
     for fragment in fragments:
         assert fragment in message, (fragment, message)
+
+
+def test_attractors_need_the_exact_solver():
+    text = BASE.replace('"diagnostics"', '"attractors"')
+    for solver in ("", 'coupling = "two-way"'):
+        assert parse_spec(text.format(solver=solver), PATH).observables == (
+            "velocity", "attractors")
+    with pytest.raises(SpecError) as caught:
+        parse_spec(text.format(solver='method = "integrator"'), PATH)
+    for fragment in (PATH, '"attractors"', 'method = "exact"', '"integrator"'):
+        assert fragment in str(caught.value), (fragment, str(caught.value))
+
+
+def test_an_exact_two_way_study_holds_the_solvers_values(tmp_path):
+    spec = tmp_path / "exact-two-way.toml"
+    spec.write_text(BASE.replace('"diagnostics"', '"diagnostics", "floquet", "attractors"')
+                    .format(solver='coupling = "two-way"\nchunk_points = 3'))
+    run_study(spec, tmp_path / "exact-two-way.nc", progress=False, workers=2)
+    dataset = open_result(tmp_path / "exact-two-way.nc")
+    assert dataset.attrs["study_solver_method"] == "exact"
+    assert dataset.attrs["study_coupling"] == "two-way"
+    assert "two-way" in dataset.attrs["source"] and "Newton" in dataset.attrs["source"]
+    paper = Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
+    f = dataset["f"].values[:, None]
+    a = dataset["a"].values[None, :]
+    direct = steady_state(paper, f, a, coupling="two-way")
+    np.testing.assert_array_equal(dataset["status"].values, direct.status)
+    np.testing.assert_array_equal(dataset["velocity"].values, direct.velocity)
+    np.testing.assert_array_equal(dataset["slips_per_period"].values, direct.slips_per_period)
+    np.testing.assert_array_equal(dataset["floquet_multiplier"].values,
+                                  direct.floquet_multiplier)
+    found = attractors(paper, f, a, coupling="two-way")
+    np.testing.assert_array_equal(dataset["attractor_count"].values, found.count)
+    np.testing.assert_array_equal(dataset["attractor_velocity_spread"].values,
+                                  found.velocity_spread)
+    np.testing.assert_array_equal(dataset["attractor_starts_converged"].values,
+                                  found.starts_converged)
 
 
 @pytest.fixture(scope="module")
