@@ -97,6 +97,7 @@ f = { start = 12.0, stop = 16.0, num = 5 }
 a = { start = 6.0, stop = 10.0, num = 3 }
 
 [solver]
+method = "integrator"   # the exact two-way solver's studies: tests/unit/test_figures_two_way.py
 coupling = "two-way"
 tolerance = 1e-9
 """
