@@ -547,12 +547,14 @@ class _Checker:
         return [f"{name} holds values outside its flag_values "
                 f"{codes.tolist()}: {found}"]
 
-    def invalid_where(self, name: str, status: str) -> list[str]:
+    def invalid_where(self, name: str, status: str, zero_when_static: bool = True
+                      ) -> list[str]:
         mismatched = not_zero = 0
         invalid = [int(s) for s in INVALID_STATUSES]
         for values, codes in self.slabs(name, status):
             mismatched += int(np.count_nonzero(np.isnan(values) != np.isin(codes, invalid)))
-            not_zero += int(np.count_nonzero((codes == Status.STATIC) & ~(values == 0.0)))
+            if zero_when_static:
+                not_zero += int(np.count_nonzero((codes == Status.STATIC) & ~(values == 0.0)))
         problems = []
         if mismatched:
             problems.append(
@@ -743,7 +745,8 @@ def _study_content_problems(check: _Checker, meta: _File, spec: Any) -> list[str
             problems += check.flags_in_range(declared.name,
                                              np.asarray(declared.flag_values))
         if declared.invalid_where and declared.invalid_where in good:
-            problems += check.invalid_where(declared.name, declared.invalid_where)
+            problems += check.invalid_where(declared.name, declared.invalid_where,
+                                            declared.zero_when_static)
     return problems
 
 

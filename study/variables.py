@@ -47,8 +47,10 @@ class Variable:
         CF ``comment`` (optional).
     invalid_where : str
         For a float variable paired with a status flag: the name of that flag
-        variable; the value is NaN exactly where the status is invalid and 0 where
-        it is static.
+        variable; the value is NaN exactly where the status is invalid and (with
+        ``zero_when_static``) 0 where it is static.
+    zero_when_static : bool
+        Whether the value must be 0 where the status is static.
     """
 
     name: str
@@ -60,6 +62,7 @@ class Variable:
     flag_values: tuple[int, ...] = ()
     comment: str = ""
     invalid_where: str = ""
+    zero_when_static: bool = True
 
     def __post_init__(self) -> None:
         if self.grid not in GRIDS:
@@ -127,7 +130,8 @@ _DECLARED = (
              "(plate deflection, its rate, sliding velocity)",
              comment="below 1: the orbit attracts nearby states; where static, the mode's "
              "free decay over one drive period; NaN (missing) where status is lift_off, "
-             "not_converged or friction_paradox"),
+             "not_converged or friction_paradox", invalid_where="status",
+             zero_when_static=False),
     Variable("attractor_count", "point", "int32", "1",
              "distinct stable outcomes reached from 12 starting states (rest at four drive "
              "phases, the mode at 0, 1 and 2 times its steady response)",

@@ -91,6 +91,7 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         "forward_slip_fraction": ("status", _INVALID),
         "backward_slip_fraction": ("status", _INVALID),
         "velocity_one_way": ("status_one_way", _INVALID),
+        "floquet_multiplier": ("status", _INVALID),
         "frontier_frequency": ("frontier_kind", (0,)),
         "frontier_bracket": ("frontier_kind", (0,)),
     },
@@ -123,7 +124,7 @@ def tiny(raw: dict[str, Any]) -> dict[str, Any]:
                         for key, axis in raw["sweep"].items()}
         solver = raw.setdefault("solver", {})
         solver["chunk_points"] = 6  # several chunks: the runner's bookkeeping counts
-        if solver.get("coupling") == "two-way" or solver.get("method") == "integrator":
+        if solver.get("method") == "integrator":
             solver.update(tolerance=1e-6, max_periods=200)
         return raw
     raw["integrator"] = {"tolerance": 1e-5}
@@ -538,7 +539,7 @@ def m_many(rng, doc):
 
 
 _OBSERVABLES = ("resonance", "thresholds", "lift_off", "velocity", "diagnostics",
-                "paper_model", "frontier")
+                "floquet", "attractors", "paper_model", "frontier")
 
 
 def m_variation(rng, doc):
