@@ -129,7 +129,8 @@ NEWTON_TOLERANCE = 1e-13
 LOOSE_TOLERANCE = 1e-11
 # A Newton step this small (scaled) ends the iteration: its own error is ~ its square.
 NEWTON_STEP = 1e-7
-# Newton iterates after a step below this (scaled) are watched for lift-off.
+# Newton iterates after a step and residual below this (scaled), with the events of the
+# pass unchanged, are watched for lift-off.
 LIFT_WATCH = 1e-3
 # Period-map iterates closing to this (scaled) start a Newton search for that period.
 CYCLE_DETECTION = 1e-3
@@ -939,8 +940,9 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
             grad):
     """Newton's method on ``P^periods(z) - z`` from ``z`` (updated in place).
 
-    Iterates within ~1e-6 of the orbit (their previous Newton step was below
-    ``LIFT_WATCH``; Newton converges quadratically) are watched for lift-off.
+    Iterates within ~1e-6 of the orbit (their previous Newton step and residual were
+    below ``LIFT_WATCH`` with an unchanged sequence of events; Newton converges
+    quadratically) are watched for lift-off.
 
     Returns
     -------
@@ -953,7 +955,9 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
     """
     span = periods * TWO_PI / omega
     previous = np.inf
-    last_step = np.inf
+    # Watch the next pass for lift-off: the last step and residual were small and the
+    # events unchanged, so the iterate is within ~1e-6 of the orbit.
+    watch = False
     # Events and slips of the previous pass: a step is only trusted as the last one
     # when the pass it came from has the same sequence of events.
     last_events = -1.0
@@ -967,7 +971,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
                 jac[i, jj] = 1.0 if i == jj else 0.0
                 grad[i, jj] = 0.0
         acc[:] = 0.0
-        margin = 0.0 if last_step <= LIFT_WATCH else -1.0
+        margin = 0.0 if watch else -1.0
         flag = run(structure, table, omega, a, work, 0.0, span, jac, True, margin,
                    max_events, acc, grad)
         if flag == RUN_LIFT_OFF:
@@ -983,7 +987,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
             for i in range(3):
                 z[i] = work[i]
             previous = np.inf
-            last_step = np.inf
+            watch = False
             last_events = -1.0
             continue
         for i in range(3):
@@ -994,7 +998,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
         if not solved:
             for i in range(3):
                 z[i] = work[i]
-            last_step = np.inf
+            watch = False
             last_events = -1.0
             continue
         size = 0.0
@@ -1006,10 +1010,10 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
         done = res <= NEWTON_TOLERANCE or (
             same_events and (size <= NEWTON_STEP
                              or (res <= LOOSE_TOLERANCE and res >= 0.5 * previous)))
-        if done and margin < 0.0:
+        again = done and margin < 0.0
+        if again:
             # Converged before any pass was watched for lift-off: one more.
             done = False
-            size = 0.0
         for i in range(3):
             z[i] += step[i]
         if done:
@@ -1020,7 +1024,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
                 acc[A_BACKWARD] += grad[2, i] * step[i]
             return RUN_OK, True
         previous = res
-        last_step = size
+        watch = again or (same_events and size <= LIFT_WATCH and res <= LIFT_WATCH)
     return RUN_OK, False
 
 
