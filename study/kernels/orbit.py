@@ -157,7 +157,7 @@ A_STEPS = 6
 N_ACC = 7
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def mode_table(structure, omega, a, table):
     """Fill ``table`` (3 x N_MODE) for drive ``omega`` [rad s^-1], ``a`` [m s^-2].
 
@@ -208,7 +208,7 @@ def mode_table(structure, omega, a, table):
     return table[1, M_D] > 0.0, table[2, M_D] > 0.0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _event_bounds(structure, row, omega, a):
     """Fill the bound columns of one mode's row (see ``M_SIN_P``...)."""
     k = structure[S_STIFFNESS]
@@ -250,7 +250,7 @@ def _event_bounds(structure, row, omega, a):
     row[M_ARG_N] = math.atan2(ci, cr)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _propagator(sigma, nu2, tau):
     """``exp(A tau) = e^{-sigma tau} (C I + S (A + sigma I))``: returns ``e C``, ``e S``.
 
@@ -276,7 +276,7 @@ def _propagator(sigma, nu2, tau):
     return 0.5 * (slow + fast), 0.5 * (slow - fast) / mu
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _homogeneous(row, tau, h0, hd0):
     """``(h, h')`` after ``tau`` [s] from ``(h0, hd0)`` in the mode of ``row``,
     and the 2x2 propagator ``(e11, e12, e21, e22)``."""
@@ -289,7 +289,7 @@ def _homogeneous(row, tau, h0, hd0):
     return e11 * h0 + e12 * hd0, e21 * h0 + e22 * hd0, e11, e12, e21, e22
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _particular(row, omega, cw, sw):
     """Particular solution ``(delta, delta', delta'', delta''')`` of a mode at phase
     with ``cos = cw``, ``sin = sw``."""
@@ -301,7 +301,7 @@ def _particular(row, omega, cw, sw):
     return re + row[M_OFFSET], -omega * im, -w2 * re, w2 * omega * im
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _sin_minus_x(d):
     """``sin(d) - d`` without cancellation for small ``d``."""
     if abs(d) >= 0.5:
@@ -317,13 +317,13 @@ def _sin_minus_x(d):
     return -d * x2 / 6.0 * series
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _one_minus_cos(d):
     half = math.sin(0.5 * d)
     return 2.0 * half * half
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _safe_step(phi, dphi, bound):
     """Longest step over which ``phi`` (< 0, or 0 and decreasing) cannot reach 0,
     given ``|phi''| <= bound``."""
@@ -337,12 +337,12 @@ def _safe_step(phi, dphi, bound):
     return (disc - dphi) / bound
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _cubic(phi, d1, d2, m3, h):
     return phi + h * (d1 + h * (0.5 * d2 + h * m3 / 6.0))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _cubic_step(phi, d1, d2, m3):
     """First root ``h > 0`` of ``p(h) = phi + d1 h + d2 h^2/2 + m3 h^3/6`` (``phi <= 0``,
     ``m3 > 0``), from below.
@@ -387,7 +387,7 @@ def _cubic_step(phi, d1, d2, m3):
     return max(lo, x * (1.0 - 1e-12))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _newton_left(phi, d1, d2, m3):
     """Root of the cubic on its rising concave stretch from 0, approached from the left."""
     x = 0.0
@@ -403,7 +403,7 @@ def _newton_left(phi, d1, d2, m3):
     return x
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _arc_window(t, omega, amplitude, arg, level):
     """The current or next stretch of time from ``t`` [s] on which
     ``amplitude cos(w t + arg) >= level``: ``(entry, exit)`` (``inf`` if never)."""
@@ -422,13 +422,13 @@ def _arc_window(t, omega, amplitude, arg, level):
     return entry, entry + 2.0 * beta / omega
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _dual_norm(row, l1, l2, k):
     """``max |l1 h + l2 h'|`` over states of unit energy ``k h^2 + D h'^2``."""
     return math.sqrt(l1 * l1 / k + l2 * l2 / row[M_D])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _functional_bound(row, l1, l2, k, power):
     """``||l A^power||`` in the dual of the energy norm ``sqrt(k h^2 + D h'^2)``:
     bounds the ``power``-th derivative of ``l . (h, h')`` per unit energy norm."""
@@ -440,7 +440,7 @@ def _functional_bound(row, l1, l2, k, power):
     return math.sqrt(l1 * l1 / k + l2 * l2 / row[M_D])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _search(structure, table, j, omega, a, t0, sin_w0, h0, hd0, v0, dd0, t_from, t_end,
             mask, horizon, lift_level):
     """First event of the functions in ``mask`` in ``(t0, t_end]`` for a stretch in
@@ -624,7 +624,7 @@ def _search(structure, table, j, omega, a, t0, sin_w0, h0, hd0, v0, dd0, t_from,
     return -1, t, MAX_SEARCH_STEPS
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _stick_releases(structure, a, cw, dl, dld):
     """Release functions ``s tau - cs n`` (stick forces) at state ``(dl, dld)`` and drive
     phase with cosine ``cw``."""
@@ -639,14 +639,14 @@ def _stick_releases(structure, a, cw, dl, dld):
     return -m * (sa + cs * ca) * ddd0 + base, -m * (-sa + cs * ca) * ddd0 + base, ddd0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _mode_acceleration(structure, row, cw, dl, dld):
     """``delta''`` in the mode of ``row`` at state ``(dl, dld)``, drive phase cosine ``cw``."""
     return (row[M_FORCE] * cw + row[M_GCONST] - structure[S_DAMPING] * dld
             - structure[S_STIFFNESS] * dl) / row[M_D]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _slip_acceleration(structure, row, a, cw, ddd):
     """``v'`` in the slip of ``row`` with mode acceleration ``ddd``."""
     s = row[M_SIGN]
@@ -654,7 +654,7 @@ def _slip_acceleration(structure, row, a, cw, ddd):
     return -row[M_K] * ddd - s * ck * structure[S_G] + s * ck * a * cw
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _mat_left(jac, r00, r01, r02, r10, r11, r12, r20, r21, r22):
     """``jac <- R jac`` for the 3x3 matrix ``R`` given by rows."""
     for col in range(3):
@@ -666,7 +666,7 @@ def _mat_left(jac, r00, r01, r02, r10, r11, r12, r20, r21, r22):
         jac[2, col] = r20 * x0 + r21 * x1 + r22 * x2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _initial_mode(structure, table, omega, a, t, z):
     """Contact mode of state ``z`` at ``t``: the sign of ``v``, or the stick test."""
     if z[2] > 0.0:
@@ -683,7 +683,7 @@ def _initial_mode(structure, table, omega, a, t, z):
     return 0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_margin,
         max_events, acc, grad):
     """Follow the state ``z`` (in place) from ``t_begin`` to ``t_stop`` [s].
@@ -886,7 +886,7 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_marg
     return RUN_OK
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _solve3(m, r, out):
     """Solve ``m x = r`` (3x3, partial pivoting) into ``out``; False when singular."""
     a = m.copy()
@@ -915,7 +915,7 @@ def _solve3(m, r, out):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def spectral_radius(jac):
     """Largest modulus of the eigenvalues of the 3x3 ``jac`` (the Floquet multipliers)."""
     if not np.all(np.isfinite(jac)):
@@ -935,7 +935,7 @@ def spectral_radius(jac):
     return np.max(np.abs(values))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc, work,
             grad):
     """Newton's method on ``P^periods(z) - z`` from ``z`` (updated in place).
@@ -1028,7 +1028,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
     return RUN_OK, False
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _scales(structure, table, omega, a):
     """Natural sizes of ``(delta, delta', v)`` for residuals [m, m s^-1, m s^-1]."""
     amp = math.hypot(table[0, M_PRE], table[0, M_PIM])
@@ -1037,7 +1037,7 @@ def _scales(structure, table, omega, a):
     return size, size * max(omega, math.sqrt(k)), max(a / omega, 1e-300)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _start(table, omega, t, z, factor):
     """Rest at ``t`` with the mode on ``factor`` times its steady stick response."""
     cw = math.cos(omega * t)
@@ -1048,7 +1048,7 @@ def _start(table, omega, t, z, factor):
     z[2] = 0.0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _is_static(structure, table, omega, a):
     """Neither release can happen with the mode on its steady response."""
     w2 = omega * omega
@@ -1066,7 +1066,7 @@ def _is_static(structure, table, omega, a):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, scales,
            jac, acc, work, history, grad):
     """Periodic orbit reached from state ``z`` at ``t_start`` (in the first period).
@@ -1161,7 +1161,7 @@ def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, s
     return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start, factor,
                 out):
     """Steady orbit at one drive point; ``out`` receives
@@ -1222,13 +1222,13 @@ def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start
 N_OUT = 11
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _solve_into(i, structure, omega, a, lifted, max_events, max_iterations, out):
     solve_point(structure, omega[i], a[i], lifted[i], max_events, max_iterations, 0.0, 1.0,
                 out[i])
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 def _solve_points(structure, omega, a, lifted, max_events, max_iterations, out):
     """Fill ``out`` (n x N_OUT) in parallel over points, interleaved (see steady.py)."""
     n = omega.shape[0]
@@ -1238,7 +1238,7 @@ def _solve_points(structure, omega, a, lifted, max_events, max_iterations, out):
             _solve_into(i, structure, omega, a, lifted, max_events, max_iterations, out)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _solve_points_serial(structure, omega, a, lifted, max_events, max_iterations, out):
     """Same as :func:`_solve_points` on one thread."""
     for i in range(omega.shape[0]):
@@ -1254,7 +1254,7 @@ START_FACTORS = (1.0, 0.0, 2.0)
 SAME_ORBIT = 1e-9
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def attractors_point(structure, omega, a, lifted, max_events, max_iterations, out):
     """Distinct stable orbits reached from the starting states above.
 
@@ -1318,7 +1318,7 @@ def attractors_point(structure, omega, a, lifted, max_events, max_iterations, ou
     out[2] = converged
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 def _attractors_points(structure, omega, a, lifted, max_events, max_iterations, out):
     """Fill ``out`` (n x 3) in parallel over points."""
     n = omega.shape[0]
