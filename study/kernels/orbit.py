@@ -167,6 +167,14 @@ def mode_table(structure, omega, a, table):
         False when a slip's ``D_s <= 0`` (Painleve's paradox) for that sign; its
         row is then left with ``D = 0``.
     """
+    for row in range(3):
+        mode_row(structure, omega, a, table, row)
+    return table[1, M_D] > 0.0, table[2, M_D] > 0.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def mode_row(structure, omega, a, table, row):
+    """Fill one row of :func:`mode_table`: the stick (0), forward (1) or backward (2)."""
     c = structure[S_DAMPING]
     k = structure[S_STIFFNESS]
     ca = structure[S_COS]
@@ -175,37 +183,35 @@ def mode_table(structure, omega, a, table):
     ck = structure[S_CK]
     g = structure[S_G]
     coupled = structure[S_COUPLED] != 0.0
-    for row in range(3):
-        s = 0.0 if row == 0 else (1.0 if row == 1 else -1.0)
-        if row == 0 or not coupled:
-            d = 1.0
-            force = a * ca
-            gconst = 0.0
-        else:
-            d = 1.0 - m * sa * (sa + s * ck * ca)
-            force = a * (ca - s * ck * sa)
-            gconst = s * ck * g * sa
-        table[row, M_SIGN] = s
-        table[row, M_K] = 0.0 if row == 0 else m * (sa + s * ck * ca)
-        table[row, M_D] = d
-        table[row, M_FORCE] = force
-        table[row, M_GCONST] = gconst
-        if d <= 0.0:
-            table[row, M_D] = 0.0
-            continue
-        sigma = 0.5 * c / d
-        table[row, M_SIGMA] = sigma
-        table[row, M_KD] = k / d
-        table[row, M_CD] = c / d
-        table[row, M_NU2] = k / d - sigma * sigma
-        re = k - d * omega * omega
-        im = c * omega
-        den = re * re + im * im
-        table[row, M_PRE] = force * re / den
-        table[row, M_PIM] = -force * im / den
-        table[row, M_OFFSET] = gconst / k
-        _event_bounds(structure, table[row], omega, a)
-    return table[1, M_D] > 0.0, table[2, M_D] > 0.0
+    s = 0.0 if row == 0 else (1.0 if row == 1 else -1.0)
+    if row == 0 or not coupled:
+        d = 1.0
+        force = a * ca
+        gconst = 0.0
+    else:
+        d = 1.0 - m * sa * (sa + s * ck * ca)
+        force = a * (ca - s * ck * sa)
+        gconst = s * ck * g * sa
+    table[row, M_SIGN] = s
+    table[row, M_K] = 0.0 if row == 0 else m * (sa + s * ck * ca)
+    table[row, M_D] = d
+    table[row, M_FORCE] = force
+    table[row, M_GCONST] = gconst
+    if d <= 0.0:
+        table[row, M_D] = 0.0
+        return
+    sigma = 0.5 * c / d
+    table[row, M_SIGMA] = sigma
+    table[row, M_KD] = k / d
+    table[row, M_CD] = c / d
+    table[row, M_NU2] = k / d - sigma * sigma
+    re = k - d * omega * omega
+    im = c * omega
+    den = re * re + im * im
+    table[row, M_PRE] = force * re / den
+    table[row, M_PIM] = -force * im / den
+    table[row, M_OFFSET] = gconst / k
+    _event_bounds(structure, table[row], omega, a)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -1171,7 +1177,8 @@ def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start
     times its steady response).
     """
     table = np.zeros((3, N_MODE))
-    mode_table(structure, omega, a, table)
+    # The stick's row decides a static point; the slips' rows are needed only beyond.
+    mode_row(structure, omega, a, table, 0)
     out[:] = np.nan
     out[1] = REASON_NONE
     out[6] = 0.0
@@ -1191,6 +1198,8 @@ def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start
             free[1, 1] = e22
             out[7] = spectral_radius(free)
         return
+    mode_row(structure, omega, a, table, 1)
+    mode_row(structure, omega, a, table, 2)
     scales = np.empty(3)
     scales[0], scales[1], scales[2] = _scales(structure, table, omega, a)
     z = np.empty(3)
