@@ -170,10 +170,10 @@ def test_a_scene_exports_its_tables(scene: Path, tmp_path: Path) -> None:
     for table, (path, _, _) in zip(tables(dataset), written, strict=True):
         check_table(dataset, path, table.dims, list(table.variables))
     header, rows = read(tmp_path / "steering.segment.csv")
-    assert "heading_change [rad]" in header and "segment_status" in header
+    assert "heading_change [degree]" in header and "segment_status" in header
     assert [r["segment_label"] for r in rows] == [
         "forward", "right", "forward", "left", "forward", "backward"]
-    assert "heading [rad]" in read(tmp_path / "steering.csv")[0]
+    assert "heading [degree]" in read(tmp_path / "steering.csv")[0]
 
 
 def test_grouping_rule() -> None:
