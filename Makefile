@@ -5,7 +5,9 @@
 #   make test       set up .venv on a fresh machine, lint, run the test suite
 #   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc,
+#                   two-way work-precision -> results/bench-two-way.nc and .md,
 #                   one-thread map against a single-purpose floor -> results/bench-floor.md,
+#                   one-thread map, one-way against two-way -> results/bench-two-way-map.md,
 #                   exact two-way solver vs integrator -> results/bench-two-way-agreement.md
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
@@ -105,9 +107,11 @@ bench: $(STAMP)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/floor_one_way.py
 	$(PY) benchmarks/bench_study_overhead.py
 	$(PY) benchmarks/bench_work_precision.py
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_work_precision.py --coupling two-way
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_two_way_map.py
 	$(PY) benchmarks/bench_planar.py
 	$(PY) benchmarks/two_way_agreement.py
-	mkdir -p docs && cp figures/work-precision.png docs/
+	mkdir -p docs && cp figures/work-precision.png figures/work-precision-two-way.png docs/
 
 cf-check: $(RESULTS)
 	$(VENV)/bin/compliance-checker --test cf:1.11 --criteria strict $(RESULTS)

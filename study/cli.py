@@ -149,6 +149,20 @@ def _figure(args: argparse.Namespace) -> int:
     return 0
 
 
+def _export(args: argparse.Namespace) -> int:
+    from study.export import export_csv
+    from study.selection import select
+    from study.validate import open_result
+
+    dataset = open_result(args.file)
+    if args.sel:
+        dataset = select(dataset, args.sel, source=str(args.file))
+        print(f"selected {dataset.attrs['study_selection']}")
+    for path, rows, columns in export_csv(dataset, args.csv, args.var, source=str(args.file)):
+        print(f"wrote {path} ({rows} rows, {columns} columns)")
+    return 0
+
+
 def _list(args: argparse.Namespace) -> int:
     from study.runner import is_up_to_date, load_any
     from study.spec import SpecError
@@ -235,6 +249,22 @@ def _parser() -> argparse.ArgumentParser:
                         help="output stem (default: figures/NAME -> .png and .pdf)")
     figure.set_defaults(handler=_figure)
 
+    export = commands.add_parser(
+        "export", help="write a result file as tidy CSV tables (units in the header)",
+        description="One row per point, one column per coordinate and variable, "
+        "'name [units]' headers, status names instead of codes, NaN as an empty cell. "
+        "Variables over other dimensions than the main table's (the frontier, a scene's "
+        "segments or plates) go to OUT_STEM.DIMS.csv beside OUT.")
+    export.add_argument("file", type=Path, metavar="FILE", help="result file (netCDF)")
+    export.add_argument("--csv", type=Path, required=True, metavar="OUT",
+                        help="CSV file of the main table")
+    export.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
+                        help="select by coordinate: KEY=VALUE nearest, KEY==VALUE exact, "
+                        "KEY=START:STOP a range (repeatable)")
+    export.add_argument("--var", action="append", default=None, metavar="NAME",
+                        help="export only this variable (repeatable; default: all)")
+    export.set_defaults(handler=_export)
+
     listing = commands.add_parser("list", help="the workflows and whether results are current")
     listing.add_argument("--workflows", default="workflows", help="spec folder")
     listing.add_argument("--results", default="results", help="result folder")
@@ -245,7 +275,9 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``study`` console script."""
     from study.cluster import ClusterError
+    from study.export import ExportError
     from study.figures import FigureError
+    from study.selection import SelectionError
     from study.spec import SpecError
     from study.store import StoreBusy, StoreError
     from study.validate import ResultError
@@ -258,7 +290,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--workers must be >= 1, got {args.workers}")
     try:
         return args.handler(args)
-    except (SpecError, ResultError, FigureError, StoreError, StoreBusy, ClusterError) as err:
+    except (SpecError, ResultError, FigureError, StoreError, StoreBusy, ClusterError,
+            SelectionError, ExportError) as err:
         print(f"study: {err}", file=sys.stderr)
         return 1
 

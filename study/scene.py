@@ -92,6 +92,7 @@ __all__ = [
     "MAX_SCENE_SAMPLES",
     "MAX_TRAJECTORY_PERIODS",
     "PLATE_OSCILLATION_COST",
+    "SCENE_FORMAT",
     "SCENE_KINDS",
     "SCENE_SPEC_SCHEMA",
     "SceneError",
@@ -106,6 +107,10 @@ __all__ = [
 SCENE_KINDS = ("trajectory", "calibration", "plan")
 #: The JSON schema of scene specs (package data in ``study/schemas/``).
 SCENE_SPEC_SCHEMA = "study-scene-spec-v1"
+#: Layout of a scene result's values (``study_scene_format``): 2 stores angles in degree
+#: (heading, heading_change, start_heading; turn rates in degree s-1); files of format 1
+#: (no attribute, angles in rad) are refused by validation and rerun by ``study run``.
+SCENE_FORMAT = 2
 
 _KIND_TABLES = {"trajectory": ("segment", "trajectory"), "calibration": ("calibration",),
                 "plan": ("plan",)}
@@ -476,7 +481,7 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
     variables = {
         "x": _variable("t", run.x, "m", "x position of the disk's centre"),
         "y": _variable("t", run.y, "m", "y position of the disk's centre"),
-        "heading": _variable("t", run.heading, "rad",
+        "heading": _variable("t", np.degrees(run.heading), "degree",
                              "heading, counterclockwise from the x axis (unwrapped)"),
         "path_length": _variable("t", run.path, "m", "distance slid since the start"),
         "slipping": _flag("t", run.slipping.astype(np.int8), ("stuck", "slipping"),
@@ -497,7 +502,7 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
         "lateral_displacement": _variable(
             "segment", summary["lat"], "m",
             "displacement to the left of the heading at the segment's start"),
-        "heading_change": _variable("segment", summary["turn"], "rad",
+        "heading_change": _variable("segment", np.degrees(summary["turn"]), "degree",
                                     "heading change over the segment"),
         "segment_path_length": _variable("segment", summary["path"], "m",
                                          "distance slid in the segment"),
@@ -548,7 +553,7 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
                                    "steady mean velocity along the heading"),
         "lateral_speed": _variable(dims, fields["lateral_speed"], "m s-1",
                                    "steady mean velocity to the left of the heading"),
-        "turn_rate": _variable(dims, fields["turn_rate"], "rad s-1",
+        "turn_rate": _variable(dims, np.degrees(fields["turn_rate"]), "degree s-1",
                                "steady mean angular velocity, counterclockwise positive"),
         "slips_per_period": _variable(dims, fields["slips_per_period"], "1",
                                       "slips starting per drive period"),
@@ -659,7 +664,8 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
                                "y where the calibrated plan predicts the leg ends"),
         "x": _variable(dims, paths["x"], "m", "x position of the disk's centre"),
         "y": _variable(dims, paths["y"], "m", "y position of the disk's centre"),
-        "heading": _variable(dims, paths["heading"], "rad", "heading (unwrapped)"),
+        "heading": _variable(dims, np.degrees(paths["heading"]), "degree",
+                             "heading, counterclockwise from the x axis (unwrapped)"),
         "miss_distance": _variable(("strategy", "realisation", "waypoint"), miss, "m",
                                    "distance from the waypoint at the end of its leg"),
         "run_status": _flag(("strategy", "realisation"), outcome, SEGMENT_STATUS,
@@ -678,10 +684,10 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
         variables[f"command_{name}"] = xr.Variable((), command.frequency, {
             "units": "Hz", "long_name": f"{name} command frequency",
             "forward_speed": command.forward_speed, "lateral_speed": command.lateral_speed,
-            "turn_rate": command.turn_rate,
+            "turn_rate": math.degrees(command.turn_rate), "turn_rate_units": "degree s-1",
         })
     attrs = {"start_x": options["start"][0], "start_y": options["start"][1],
-             "start_heading": options["start"][2]}
+             "start_heading": math.degrees(options["start"][2])}
     return variables, attrs
 
 
@@ -712,8 +718,11 @@ def scene_dataset(spec: SceneSpec) -> xr.Dataset:
         "keywords": "stick-slip, friction, locomotion, steering, limit surface, resonance",
         "source": "study.planar: Dormand-Prince 5(4) time integration with events of the "
                   "planar disk with resonant plates",
-        "comment": "SI units; angles in rad, counterclockwise positive; the body frame's x "
-                   "axis is the heading.",
+        "comment": "SI units, except angles: degree (heading, heading changes, tilts, "
+                   "directions; turn rates in degree s-1), counterclockwise positive; the "
+                   "heading drift of the noise model is in rad per diameter, as in its spec. "
+                   "The body frame's x axis is the heading.",
+        "study_scene_format": SCENE_FORMAT,
         "study_scene_kind": spec.kind,
         "study_name": spec.name,
         "disk_radius": disk.radius,

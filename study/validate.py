@@ -763,14 +763,19 @@ def _scene_attribute_values(spec: Any) -> dict[str, float]:
     expected["integrator_slaving"] = spec.slaving
     if spec.kind == "plan":
         x, y, heading = spec.options["start"]
-        expected.update(start_x=x, start_y=y, start_heading=heading)
+        expected.update(start_x=x, start_y=y, start_heading=math.degrees(heading))
     return expected
 
 
 def _scene_problems(nc: Any, meta: _File, source: str) -> list[str]:
-    from study.scene import parse_scene
+    from study.scene import SCENE_FORMAT, parse_scene
 
     attrs = meta.attrs
+    written = attrs.get("study_scene_format", 1)
+    if not (_is_number(written) and written == SCENE_FORMAT):
+        # Its numbers would be misread (format 1 stored angles in rad): refuse it whole.
+        return [f"scene format {written!r} (angles in rad) is stale: this study reads "
+                f"format {SCENE_FORMAT} (angles in degree); rerun its spec"]
     problems = [p for p in _schema_problems(SCENE_SCHEMA_PATH, _file_header(meta))
                 if _not_required_checksum(p)]
     problems += _fingerprint_problems(attrs)

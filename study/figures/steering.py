@@ -28,6 +28,7 @@ from study.figures.common import save
 __all__ = [
     "LABEL_COLORS",
     "SEGMENT_STATUS",
+    "angle_values",
     "check_scene_kind",
     "draw",
     "flag_codes",
@@ -128,10 +129,27 @@ def value_range_text(values: np.ndarray) -> str:
     return f"{finite.min():g}-{finite.max():g}"
 
 
+def angle_values(dataset: xr.Dataset, name: str, figure: str,
+                 units: str = "degree") -> np.ndarray:
+    """The values of an angle (or angular rate) variable, which must be in ``units``.
+
+    Raises
+    ------
+    FigureError
+        When the variable states other units (an older file stored radians).
+    """
+    found = dataset[name].attrs.get("units")
+    if found != units:
+        raise FigureError(f"figure {figure!r} reads {name!r} in {units!r}; this file "
+                          f"states {found!r}: rerun its spec")
+    return dataset[name].values
+
+
 def heading_arrow(ax: plt.Axes, x: float, y: float, heading: float, length: float,
                   **style) -> None:
-    """An arrow of ``length`` from ``(x, y)`` along ``heading`` (rad, from +x)."""
-    end = (x + length * np.cos(heading), y + length * np.sin(heading))
+    """An arrow of ``length`` from ``(x, y)`` along ``heading`` (degree, from +x)."""
+    angle = np.radians(heading)
+    end = (x + length * np.cos(angle), y + length * np.sin(angle))
     ax.annotate("", xy=end, xytext=(x, y),
                 arrowprops={"arrowstyle": "-|>", "lw": 0.7, "color": "0.2",
                             "shrinkA": 0, "shrinkB": 0, "mutation_scale": 8, **style})
@@ -154,7 +172,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
             )
     x = 1e3 * dataset["x"].values
     y = 1e3 * dataset["y"].values
-    heading = dataset["heading"].values
+    heading = angle_values(dataset, "heading", "steering")  # degree
     time = dataset["t"].values
     if x.size == 0:
         raise FigureError("figure 'steering' needs a trajectory with samples; this one is empty")
@@ -245,7 +263,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
             continue
         if np.isfinite(t0) and np.isfinite(t1) and t1 > t0:
             right.axvspan(t0, t1, color=colors[label], alpha=0.18, lw=0)
-    degrees = np.degrees(heading)
+    degrees = heading
     right.plot(time, degrees, color="black", lw=1.2)
     for name, segments in failed.items():
         marker = STATUS_MARKERS.get(name, "x")

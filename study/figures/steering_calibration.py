@@ -23,7 +23,7 @@ from matplotlib.lines import Line2D
 
 from study.figures import FigureError
 from study.figures.common import save
-from study.figures.steering import check_scene_kind, flag_codes, flag_names
+from study.figures.steering import angle_values, check_scene_kind, flag_codes, flag_names
 from study.status import Status
 
 __all__ = ["COMMANDS", "draw"]
@@ -64,7 +64,8 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     f = dataset["f"].values
     a = dataset["a"].values
     forward = 1e3 * dataset["forward_speed"].transpose("a", "f").values  # mm/s over (a, f)
-    turn = dataset["turn_rate"].transpose("a", "f").values  # rad/s
+    angle_values(dataset, "turn_rate", "steering-calibration", "degree s-1")
+    turn = dataset["turn_rate"].transpose("a", "f").values  # degree/s
     status = flag_codes(dataset["status"].transpose("a", "f"), missing=Status.NOT_CONVERGED)
     names = flag_names(dataset["status"], STATUS_NAMES)
 
@@ -98,11 +99,9 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
 
     top.set_ylabel("forward speed [mm s$^{-1}$]")
     top.set_title("along the head-tail axis (> 0: forward)", fontsize=10)
-    bottom.set_ylabel("turn rate [rad s$^{-1}$]")
+    bottom.set_ylabel("turn rate [deg s$^{-1}$]")
     bottom.set_title("rotation of the heading (> 0: counterclockwise)", fontsize=10)
     bottom.set_xlabel("drive frequency f [Hz]")
-    right = bottom.secondary_yaxis("right", functions=(np.degrees, np.radians))
-    right.set_ylabel("turn rate [deg s$^{-1}$]")
 
     marks = [
         Line2D([], [], marker=marker, ls="none", color=color, ms=6, mew=1.2,

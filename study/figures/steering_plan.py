@@ -22,7 +22,7 @@ from matplotlib.patches import Circle
 
 from study.figures import FigureError
 from study.figures.common import save
-from study.figures.steering import check_scene_kind, heading_arrow, labels_of
+from study.figures.steering import angle_values, check_scene_kind, heading_arrow, labels_of
 
 __all__ = ["STRATEGY_STYLES", "draw"]
 
@@ -101,8 +101,9 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
              for k in ("start_x", "start_y")]
     if not np.all(np.isfinite(start)):
         start = [x[0, clean, 0], y[0, clean, 0]]
-    start_heading = float(dataset.attrs.get("start_heading", np.nan))
+    start_heading = float(dataset.attrs.get("start_heading", np.nan))  # degree
     if not np.isfinite(start_heading) and "heading" in dataset:
+        angle_values(dataset, "heading", "steering-plan")
         start_heading = float(dataset["heading"].transpose(*order).values[0, clean, 0])
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(12.5, 5.8), layout="constrained",

@@ -129,7 +129,8 @@ NEWTON_TOLERANCE = 1e-13
 LOOSE_TOLERANCE = 1e-11
 # A Newton step this small (scaled) ends the iteration: its own error is ~ its square.
 NEWTON_STEP = 1e-7
-# Newton iterates after a step below this (scaled) are watched for lift-off.
+# Newton iterates after a step and residual below this (scaled), with the events of the
+# pass unchanged, are watched for lift-off.
 LIFT_WATCH = 1e-3
 # Period-map iterates closing to this (scaled) start a Newton search for that period.
 CYCLE_DETECTION = 1e-3
@@ -156,7 +157,7 @@ A_STEPS = 6
 N_ACC = 7
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def mode_table(structure, omega, a, table):
     """Fill ``table`` (3 x N_MODE) for drive ``omega`` [rad s^-1], ``a`` [m s^-2].
 
@@ -166,6 +167,14 @@ def mode_table(structure, omega, a, table):
         False when a slip's ``D_s <= 0`` (Painleve's paradox) for that sign; its
         row is then left with ``D = 0``.
     """
+    for row in range(3):
+        mode_row(structure, omega, a, table, row)
+    return table[1, M_D] > 0.0, table[2, M_D] > 0.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def mode_row(structure, omega, a, table, row):
+    """Fill one row of :func:`mode_table`: the stick (0), forward (1) or backward (2)."""
     c = structure[S_DAMPING]
     k = structure[S_STIFFNESS]
     ca = structure[S_COS]
@@ -174,40 +183,38 @@ def mode_table(structure, omega, a, table):
     ck = structure[S_CK]
     g = structure[S_G]
     coupled = structure[S_COUPLED] != 0.0
-    for row in range(3):
-        s = 0.0 if row == 0 else (1.0 if row == 1 else -1.0)
-        if row == 0 or not coupled:
-            d = 1.0
-            force = a * ca
-            gconst = 0.0
-        else:
-            d = 1.0 - m * sa * (sa + s * ck * ca)
-            force = a * (ca - s * ck * sa)
-            gconst = s * ck * g * sa
-        table[row, M_SIGN] = s
-        table[row, M_K] = 0.0 if row == 0 else m * (sa + s * ck * ca)
-        table[row, M_D] = d
-        table[row, M_FORCE] = force
-        table[row, M_GCONST] = gconst
-        if d <= 0.0:
-            table[row, M_D] = 0.0
-            continue
-        sigma = 0.5 * c / d
-        table[row, M_SIGMA] = sigma
-        table[row, M_KD] = k / d
-        table[row, M_CD] = c / d
-        table[row, M_NU2] = k / d - sigma * sigma
-        re = k - d * omega * omega
-        im = c * omega
-        den = re * re + im * im
-        table[row, M_PRE] = force * re / den
-        table[row, M_PIM] = -force * im / den
-        table[row, M_OFFSET] = gconst / k
-        _event_bounds(structure, table[row], omega, a)
-    return table[1, M_D] > 0.0, table[2, M_D] > 0.0
+    s = 0.0 if row == 0 else (1.0 if row == 1 else -1.0)
+    if row == 0 or not coupled:
+        d = 1.0
+        force = a * ca
+        gconst = 0.0
+    else:
+        d = 1.0 - m * sa * (sa + s * ck * ca)
+        force = a * (ca - s * ck * sa)
+        gconst = s * ck * g * sa
+    table[row, M_SIGN] = s
+    table[row, M_K] = 0.0 if row == 0 else m * (sa + s * ck * ca)
+    table[row, M_D] = d
+    table[row, M_FORCE] = force
+    table[row, M_GCONST] = gconst
+    if d <= 0.0:
+        table[row, M_D] = 0.0
+        return
+    sigma = 0.5 * c / d
+    table[row, M_SIGMA] = sigma
+    table[row, M_KD] = k / d
+    table[row, M_CD] = c / d
+    table[row, M_NU2] = k / d - sigma * sigma
+    re = k - d * omega * omega
+    im = c * omega
+    den = re * re + im * im
+    table[row, M_PRE] = force * re / den
+    table[row, M_PIM] = -force * im / den
+    table[row, M_OFFSET] = gconst / k
+    _event_bounds(structure, table[row], omega, a)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _event_bounds(structure, row, omega, a):
     """Fill the bound columns of one mode's row (see ``M_SIN_P``...)."""
     k = structure[S_STIFFNESS]
@@ -249,7 +256,7 @@ def _event_bounds(structure, row, omega, a):
     row[M_ARG_N] = math.atan2(ci, cr)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _propagator(sigma, nu2, tau):
     """``exp(A tau) = e^{-sigma tau} (C I + S (A + sigma I))``: returns ``e C``, ``e S``.
 
@@ -275,7 +282,7 @@ def _propagator(sigma, nu2, tau):
     return 0.5 * (slow + fast), 0.5 * (slow - fast) / mu
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _homogeneous(row, tau, h0, hd0):
     """``(h, h')`` after ``tau`` [s] from ``(h0, hd0)`` in the mode of ``row``,
     and the 2x2 propagator ``(e11, e12, e21, e22)``."""
@@ -288,7 +295,7 @@ def _homogeneous(row, tau, h0, hd0):
     return e11 * h0 + e12 * hd0, e21 * h0 + e22 * hd0, e11, e12, e21, e22
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _particular(row, omega, cw, sw):
     """Particular solution ``(delta, delta', delta'', delta''')`` of a mode at phase
     with ``cos = cw``, ``sin = sw``."""
@@ -300,7 +307,7 @@ def _particular(row, omega, cw, sw):
     return re + row[M_OFFSET], -omega * im, -w2 * re, w2 * omega * im
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _sin_minus_x(d):
     """``sin(d) - d`` without cancellation for small ``d``."""
     if abs(d) >= 0.5:
@@ -316,13 +323,13 @@ def _sin_minus_x(d):
     return -d * x2 / 6.0 * series
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _one_minus_cos(d):
     half = math.sin(0.5 * d)
     return 2.0 * half * half
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _safe_step(phi, dphi, bound):
     """Longest step over which ``phi`` (< 0, or 0 and decreasing) cannot reach 0,
     given ``|phi''| <= bound``."""
@@ -336,12 +343,12 @@ def _safe_step(phi, dphi, bound):
     return (disc - dphi) / bound
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _cubic(phi, d1, d2, m3, h):
     return phi + h * (d1 + h * (0.5 * d2 + h * m3 / 6.0))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _cubic_step(phi, d1, d2, m3):
     """First root ``h > 0`` of ``p(h) = phi + d1 h + d2 h^2/2 + m3 h^3/6`` (``phi <= 0``,
     ``m3 > 0``), from below.
@@ -386,7 +393,7 @@ def _cubic_step(phi, d1, d2, m3):
     return max(lo, x * (1.0 - 1e-12))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _newton_left(phi, d1, d2, m3):
     """Root of the cubic on its rising concave stretch from 0, approached from the left."""
     x = 0.0
@@ -402,7 +409,7 @@ def _newton_left(phi, d1, d2, m3):
     return x
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _arc_window(t, omega, amplitude, arg, level):
     """The current or next stretch of time from ``t`` [s] on which
     ``amplitude cos(w t + arg) >= level``: ``(entry, exit)`` (``inf`` if never)."""
@@ -421,13 +428,13 @@ def _arc_window(t, omega, amplitude, arg, level):
     return entry, entry + 2.0 * beta / omega
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _dual_norm(row, l1, l2, k):
     """``max |l1 h + l2 h'|`` over states of unit energy ``k h^2 + D h'^2``."""
     return math.sqrt(l1 * l1 / k + l2 * l2 / row[M_D])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _functional_bound(row, l1, l2, k, power):
     """``||l A^power||`` in the dual of the energy norm ``sqrt(k h^2 + D h'^2)``:
     bounds the ``power``-th derivative of ``l . (h, h')`` per unit energy norm."""
@@ -439,7 +446,7 @@ def _functional_bound(row, l1, l2, k, power):
     return math.sqrt(l1 * l1 / k + l2 * l2 / row[M_D])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _search(structure, table, j, omega, a, t0, sin_w0, h0, hd0, v0, dd0, t_from, t_end,
             mask, horizon, lift_level):
     """First event of the functions in ``mask`` in ``(t0, t_end]`` for a stretch in
@@ -623,7 +630,7 @@ def _search(structure, table, j, omega, a, t0, sin_w0, h0, hd0, v0, dd0, t_from,
     return -1, t, MAX_SEARCH_STEPS
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _stick_releases(structure, a, cw, dl, dld):
     """Release functions ``s tau - cs n`` (stick forces) at state ``(dl, dld)`` and drive
     phase with cosine ``cw``."""
@@ -638,14 +645,14 @@ def _stick_releases(structure, a, cw, dl, dld):
     return -m * (sa + cs * ca) * ddd0 + base, -m * (-sa + cs * ca) * ddd0 + base, ddd0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _mode_acceleration(structure, row, cw, dl, dld):
     """``delta''`` in the mode of ``row`` at state ``(dl, dld)``, drive phase cosine ``cw``."""
     return (row[M_FORCE] * cw + row[M_GCONST] - structure[S_DAMPING] * dld
             - structure[S_STIFFNESS] * dl) / row[M_D]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _slip_acceleration(structure, row, a, cw, ddd):
     """``v'`` in the slip of ``row`` with mode acceleration ``ddd``."""
     s = row[M_SIGN]
@@ -653,7 +660,7 @@ def _slip_acceleration(structure, row, a, cw, ddd):
     return -row[M_K] * ddd - s * ck * structure[S_G] + s * ck * a * cw
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _mat_left(jac, r00, r01, r02, r10, r11, r12, r20, r21, r22):
     """``jac <- R jac`` for the 3x3 matrix ``R`` given by rows."""
     for col in range(3):
@@ -665,7 +672,7 @@ def _mat_left(jac, r00, r01, r02, r10, r11, r12, r20, r21, r22):
         jac[2, col] = r20 * x0 + r21 * x1 + r22 * x2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _initial_mode(structure, table, omega, a, t, z):
     """Contact mode of state ``z`` at ``t``: the sign of ``v``, or the stick test."""
     if z[2] > 0.0:
@@ -682,7 +689,7 @@ def _initial_mode(structure, table, omega, a, t, z):
     return 0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_margin,
         max_events, acc, grad):
     """Follow the state ``z`` (in place) from ``t_begin`` to ``t_stop`` [s].
@@ -885,7 +892,7 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_marg
     return RUN_OK
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _solve3(m, r, out):
     """Solve ``m x = r`` (3x3, partial pivoting) into ``out``; False when singular."""
     a = m.copy()
@@ -914,7 +921,7 @@ def _solve3(m, r, out):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def spectral_radius(jac):
     """Largest modulus of the eigenvalues of the 3x3 ``jac`` (the Floquet multipliers)."""
     if not np.all(np.isfinite(jac)):
@@ -934,13 +941,14 @@ def spectral_radius(jac):
     return np.max(np.abs(values))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc, work,
             grad):
     """Newton's method on ``P^periods(z) - z`` from ``z`` (updated in place).
 
-    Iterates within ~1e-6 of the orbit (their previous Newton step was below
-    ``LIFT_WATCH``; Newton converges quadratically) are watched for lift-off.
+    Iterates within ~1e-6 of the orbit (their previous Newton step and residual were
+    below ``LIFT_WATCH`` with an unchanged sequence of events; Newton converges
+    quadratically) are watched for lift-off.
 
     Returns
     -------
@@ -953,7 +961,9 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
     """
     span = periods * TWO_PI / omega
     previous = np.inf
-    last_step = np.inf
+    # Watch the next pass for lift-off: the last step and residual were small and the
+    # events unchanged, so the iterate is within ~1e-6 of the orbit.
+    watch = False
     # Events and slips of the previous pass: a step is only trusted as the last one
     # when the pass it came from has the same sequence of events.
     last_events = -1.0
@@ -967,7 +977,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
                 jac[i, jj] = 1.0 if i == jj else 0.0
                 grad[i, jj] = 0.0
         acc[:] = 0.0
-        margin = 0.0 if last_step <= LIFT_WATCH else -1.0
+        margin = 0.0 if watch else -1.0
         flag = run(structure, table, omega, a, work, 0.0, span, jac, True, margin,
                    max_events, acc, grad)
         if flag == RUN_LIFT_OFF:
@@ -983,7 +993,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
             for i in range(3):
                 z[i] = work[i]
             previous = np.inf
-            last_step = np.inf
+            watch = False
             last_events = -1.0
             continue
         for i in range(3):
@@ -994,7 +1004,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
         if not solved:
             for i in range(3):
                 z[i] = work[i]
-            last_step = np.inf
+            watch = False
             last_events = -1.0
             continue
         size = 0.0
@@ -1006,10 +1016,10 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
         done = res <= NEWTON_TOLERANCE or (
             same_events and (size <= NEWTON_STEP
                              or (res <= LOOSE_TOLERANCE and res >= 0.5 * previous)))
-        if done and margin < 0.0:
+        again = done and margin < 0.0
+        if again:
             # Converged before any pass was watched for lift-off: one more.
             done = False
-            size = 0.0
         for i in range(3):
             z[i] += step[i]
         if done:
@@ -1020,11 +1030,11 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
                 acc[A_BACKWARD] += grad[2, i] * step[i]
             return RUN_OK, True
         previous = res
-        last_step = size
+        watch = again or (same_events and size <= LIFT_WATCH and res <= LIFT_WATCH)
     return RUN_OK, False
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _scales(structure, table, omega, a):
     """Natural sizes of ``(delta, delta', v)`` for residuals [m, m s^-1, m s^-1]."""
     amp = math.hypot(table[0, M_PRE], table[0, M_PIM])
@@ -1033,7 +1043,7 @@ def _scales(structure, table, omega, a):
     return size, size * max(omega, math.sqrt(k)), max(a / omega, 1e-300)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _start(table, omega, t, z, factor):
     """Rest at ``t`` with the mode on ``factor`` times its steady stick response."""
     cw = math.cos(omega * t)
@@ -1044,7 +1054,7 @@ def _start(table, omega, t, z, factor):
     z[2] = 0.0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _is_static(structure, table, omega, a):
     """Neither release can happen with the mode on its steady response."""
     w2 = omega * omega
@@ -1062,7 +1072,7 @@ def _is_static(structure, table, omega, a):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, scales,
            jac, acc, work, history, grad):
     """Periodic orbit reached from state ``z`` at ``t_start`` (in the first period).
@@ -1157,7 +1167,7 @@ def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, s
     return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start, factor,
                 out):
     """Steady orbit at one drive point; ``out`` receives
@@ -1167,7 +1177,8 @@ def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start
     times its steady response).
     """
     table = np.zeros((3, N_MODE))
-    mode_table(structure, omega, a, table)
+    # The stick's row decides a static point; the slips' rows are needed only beyond.
+    mode_row(structure, omega, a, table, 0)
     out[:] = np.nan
     out[1] = REASON_NONE
     out[6] = 0.0
@@ -1187,6 +1198,8 @@ def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start
             free[1, 1] = e22
             out[7] = spectral_radius(free)
         return
+    mode_row(structure, omega, a, table, 1)
+    mode_row(structure, omega, a, table, 2)
     scales = np.empty(3)
     scales[0], scales[1], scales[2] = _scales(structure, table, omega, a)
     z = np.empty(3)
@@ -1218,13 +1231,13 @@ def solve_point(structure, omega, a, lifted, max_events, max_iterations, t_start
 N_OUT = 11
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _solve_into(i, structure, omega, a, lifted, max_events, max_iterations, out):
     solve_point(structure, omega[i], a[i], lifted[i], max_events, max_iterations, 0.0, 1.0,
                 out[i])
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 def _solve_points(structure, omega, a, lifted, max_events, max_iterations, out):
     """Fill ``out`` (n x N_OUT) in parallel over points, interleaved (see steady.py)."""
     n = omega.shape[0]
@@ -1234,7 +1247,7 @@ def _solve_points(structure, omega, a, lifted, max_events, max_iterations, out):
             _solve_into(i, structure, omega, a, lifted, max_events, max_iterations, out)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _solve_points_serial(structure, omega, a, lifted, max_events, max_iterations, out):
     """Same as :func:`_solve_points` on one thread."""
     for i in range(omega.shape[0]):
@@ -1250,7 +1263,7 @@ START_FACTORS = (1.0, 0.0, 2.0)
 SAME_ORBIT = 1e-9
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def attractors_point(structure, omega, a, lifted, max_events, max_iterations, out):
     """Distinct stable orbits reached from the starting states above.
 
@@ -1314,7 +1327,7 @@ def attractors_point(structure, omega, a, lifted, max_events, max_iterations, ou
     out[2] = converged
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 def _attractors_points(structure, omega, a, lifted, max_events, max_iterations, out):
     """Fill ``out`` (n x 3) in parallel over points."""
     n = omega.shape[0]

@@ -91,7 +91,8 @@ def trajectory_dataset(lift_off_in: int | None = None, dt: float = 0.01) -> xr.D
         {
             "x": _var("t", x, "m", "x of the disk's centre"),
             "y": _var("t", y, "m", "y of the disk's centre"),
-            "heading": _var("t", heading, "rad", "heading, counterclockwise from +x"),
+            "heading": _var("t", np.degrees(heading), "degree",
+                            "heading, counterclockwise from +x"),
             "path_length": _var("t", path, "m", "path length"),
             "slipping": _var("t", (speed != 0).astype(np.int8), None, "slipping",
                              flag_values=np.array([0, 1], dtype=np.int8),
@@ -105,7 +106,8 @@ def trajectory_dataset(lift_off_in: int | None = None, dt: float = 0.01) -> xr.D
             "end_time": _var("segment", end, "s", "end"),
             "forward_displacement": _var("segment", dx, "m", "forward displacement"),
             "lateral_displacement": _var("segment", dy, "m", "lateral displacement"),
-            "heading_change": _var("segment", per_segment(heading), "rad", "heading change"),
+            "heading_change": _var("segment", np.degrees(per_segment(heading)), "degree",
+                                   "heading change"),
             "segment_path_length": _var("segment", per_segment(path), "m", "path length"),
             "segment_status": _var("segment", status, None, "outcome", **SEGMENT_STATUS),
         },
@@ -132,7 +134,7 @@ def calibration_dataset(num_a: int = 3) -> xr.Dataset:
     for values in (forward, lateral, turn):
         values[invalid] = np.nan
     values = {"forward_speed": (forward, "m s-1"), "lateral_speed": (lateral, "m s-1"),
-              "turn_rate": (turn, "rad s-1")}
+              "turn_rate": (np.degrees(turn), "degree s-1")}
     data = {name: _var(("f", "a"), v, u, name.replace("_", " "))
             for name, (v, u) in values.items()}
     data["status"] = _var(("f", "a"), status, None, "regime", **STATUS)
@@ -182,7 +184,7 @@ def plan_dataset(realisations: int = 5, samples: int = 300) -> xr.Dataset:
             "planned_y": _var("waypoint", WAYPOINTS[:, 1] - 0.001, "m", "planned end y"),
             "x": _var(dims, x, "m", "x"),
             "y": _var(dims, y, "m", "y"),
-            "heading": _var(dims, heading, "rad", "heading"),
+            "heading": _var(dims, np.degrees(heading), "degree", "heading"),
             "miss_distance": _var(("strategy", "realisation", "waypoint"), miss, "m", "miss"),
             "realisation_heading_drift": _var("realisation", drift, "rad", "heading drift"),
             "segment_label": _var("segment", np.array(labels), None, "command"),

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import math
+import shutil
 from pathlib import Path
 
+import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
@@ -118,8 +120,14 @@ def test_trajectory_scene_end_to_end(tmp_path):
     assert main(["run", str(spec_path), "-o", str(output)]) == 0
     data = open_result(output)
     assert data.attrs["study_scene_kind"] == "trajectory"
-    for name in ("x", "y", "heading", "t"):
-        assert data[name].attrs["units"] in ("m", "rad", "s")
+    units = {name: data[name].attrs["units"] for name in ("x", "y", "heading", "t",
+                                                          "heading_change", "plate_alpha",
+                                                          "plate_direction")}
+    assert units == {"x": "m", "y": "m", "heading": "degree", "t": "s",
+                     "heading_change": "degree", "plate_alpha": "degree",
+                     "plate_direction": "degree"}
+    assert data.attrs["study_scene_format"] == 2
+    assert float(data.heading[0]) == 90.0  # the spec's start heading, in degree
     assert list(data.segment_label.values) == ["forward", "left"]
     assert np.all(data.segment_status.values == 0)
     # Segment boundaries are samples, and the summary matches the path there.
@@ -138,6 +146,14 @@ def test_trajectory_scene_end_to_end(tmp_path):
                              initial_state=state, output_times=[2.0], settings=spec.settings,
                              slaving=spec.slaving)
     assert_allclose(float(data.x[-1]), direct.x[-1], rtol=0, atol=1e-12)
+    assert_allclose(float(data.heading[-1]), math.degrees(direct.heading[-1]), rtol=1e-12)
+    # A file of scene format 1 (angles in rad) is stale, never misread.
+    old = Path(shutil.copyfile(output, tmp_path / "old.nc"))
+    with netCDF4.Dataset(old, "a") as nc:
+        nc.delncattr("study_scene_format")
+    with pytest.raises(ResultError, match=r"scene format 1 \(angles in rad\) is stale: this "
+                       r"study reads format 2 \(angles in degree\); rerun its spec"):
+        open_result(old)
     # A second run is up to date; editing a comment keeps it so.
     assert run_scene(spec_path, output).up_to_date
     spec_path.write_text("# note\n" + TRAJECTORY)
@@ -194,6 +210,9 @@ def test_calibration_scene_matches_periodic_motion(tmp_path):
     assert np.all(np.isnan(data.turn_rate.values[invalid]))
     assert np.all(np.isfinite(data.turn_rate.values[~invalid]))
     assert np.all(data.turn_rate.values[data.status.values == 0] == 0.0)
+    assert data.turn_rate.attrs["units"] == "degree s-1"
+    assert_allclose(float(data.turn_rate.sel(f=14.2, a=7.0)), math.degrees(direct.turn_rate),
+                    rtol=1e-12)
 
 
 def test_arc_displacement_is_the_integral_of_the_body_velocity():
