@@ -129,6 +129,10 @@ NEWTON_TOLERANCE = 1e-13
 LOOSE_TOLERANCE = 1e-11
 # A Newton step this small (scaled) ends the iteration: its own error is ~ its square.
 NEWTON_STEP = 1e-7
+# A slip shorter than this fraction of the orbit's span is a sliver (see _newton).
+SLIVER = 1e-6
+# A Newton iterate whose speed at phase 0 is below this (scaled) is put at rest.
+STICK_SNAP = 1e-8
 # Newton iterates after a step and residual below this (scaled), with the events of the
 # pass unchanged, are watched for lift-off.
 LIFT_WATCH = 1e-3
@@ -154,7 +158,8 @@ A_BACKWARD = 3
 A_STICK = 4
 A_EVENTS = 5
 A_STEPS = 6
-N_ACC = 7
+A_SHORTEST = 7  # shortest slip of the stretch that is not cut by its ends [s]
+N_ACC = 8
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -787,6 +792,8 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_marg
             displacement = (v0 * tau - kk * (dp_full + dh_full) - 0.5 * s * ck * g * tau * tau
                             + s * ck * a * iint)
             acc[A_DISPLACEMENT] += displacement
+            if kind == EV_SLIP_END and (tau < acc[A_SHORTEST] or acc[A_SHORTEST] == 0.0):
+                acc[A_SHORTEST] = tau
             if s > 0:
                 acc[A_FORWARD] += tau
             else:
@@ -971,6 +978,10 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
     step = np.empty(3)
     residual = np.empty(3)
     for _ in range(MAX_NEWTON):
+        if z[2] != 0.0 and abs(z[2]) <= STICK_SNAP * scales[2]:
+            # The orbit sticks across phase 0 and Newton approaches it through states
+            # with a sliver of slip there (the map has a kink at v = 0): stick.
+            z[2] = 0.0
         for i in range(3):
             work[i] = z[i]
             for jj in range(3):
@@ -1010,7 +1021,11 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
         size = 0.0
         for i in range(3):
             size = max(size, abs(step[i]) / scales[i])
-        same_events = acc[A_EVENTS] == last_events and acc[A_SLIPS] == last_slips
+        # A sliver of slip (far shorter than a period) means a kink of the map is near:
+        # its linearization does not reach across, so no step is trusted as the last.
+        sliver = 0.0 < acc[A_SHORTEST] < SLIVER * span
+        same_events = (acc[A_EVENTS] == last_events and acc[A_SLIPS] == last_slips
+                       and not sliver)
         last_events = acc[A_EVENTS]
         last_slips = acc[A_SLIPS]
         done = res <= NEWTON_TOLERANCE or (
