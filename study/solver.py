@@ -88,8 +88,9 @@ class SteadyState:
         Period of the orbit in drive periods (0 when there is no orbit).
     floquet_multiplier : numpy.ndarray or None
         Largest modulus of the orbit's Floquet multipliers on the state
-        ``(delta, delta', v)`` [1] (< 1: the orbit attracts its neighbours; 0 for
-        ``STATIC``, NaN without an orbit). Computed by the two-way solver; ``None``
+        ``(delta, delta', v)`` [1] (< 1: the orbit attracts its neighbours; for
+        ``STATIC`` the mode's free decay over a period; NaN without an orbit). Good to
+        about 1e-7 relative (taken within the last Newton step of the orbit). Computed by the two-way solver; ``None``
         from solvers that do not compute it.
     """
 

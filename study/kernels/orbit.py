@@ -131,8 +131,6 @@ LOOSE_TOLERANCE = 1e-11
 NEWTON_STEP = 1e-7
 # A slip shorter than this fraction of the orbit's span is a sliver (see _newton).
 SLIVER = 1e-6
-# A Newton iterate whose speed at phase 0 is below this (scaled) is put at rest.
-STICK_SNAP = 1e-8
 # Newton iterates after a step and residual below this (scaled), with the events of the
 # pass unchanged, are watched for lift-off.
 LIFT_WATCH = 1e-3
@@ -159,7 +157,8 @@ A_STICK = 4
 A_EVENTS = 5
 A_STEPS = 6
 A_SHORTEST = 7  # shortest slip of the stretch that is not cut by its ends [s]
-N_ACC = 8
+A_START_SLIVER = 8  # 1: the stretch starts in a slip that is a sliver
+N_ACC = 9
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -794,6 +793,9 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_marg
             acc[A_DISPLACEMENT] += displacement
             if kind == EV_SLIP_END and (tau < acc[A_SHORTEST] or acc[A_SHORTEST] == 0.0):
                 acc[A_SHORTEST] = tau
+            if kind == EV_SLIP_END and v0 != 0.0 and t == t_begin and (
+                    tau < SLIVER * (t_stop - t_begin)):
+                acc[A_START_SLIVER] = 1.0
             if s > 0:
                 acc[A_FORWARD] += tau
             else:
@@ -978,10 +980,6 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
     step = np.empty(3)
     residual = np.empty(3)
     for _ in range(MAX_NEWTON):
-        if z[2] != 0.0 and abs(z[2]) <= STICK_SNAP * scales[2]:
-            # The orbit sticks across phase 0 and Newton approaches it through states
-            # with a sliver of slip there (the map has a kink at v = 0): stick.
-            z[2] = 0.0
         for i in range(3):
             work[i] = z[i]
             for jj in range(3):
@@ -1037,6 +1035,11 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
             done = False
         for i in range(3):
             z[i] += step[i]
+        if acc[A_START_SLIVER] != 0.0 and not done:
+            # The pass began with a sliver of slip: the orbit sticks across phase 0 and
+            # Newton approaches it through states just off the stick (the map has a
+            # kink at v = 0, which its linearization does not reach across): stick.
+            z[2] = 0.0
         if done:
             # Move the statistics to the fixed point along their gradients.
             for i in range(3):

@@ -325,3 +325,24 @@ def test_two_way_refuses_bad_points(paper_structure):
     with pytest.raises(TypeError):
         steady_state({"f0": 14.44}, 13.0, 8.5, coupling="two-way")
     assert study.Structure is Structure
+
+
+def test_every_start_reaches_the_same_orbit_near_a_kink_of_the_period_map():
+    """(12.85 Hz, 6.5 m s^-2), just above the threshold: the orbit sticks across phase
+    0, and from rest at phase 3/4 with the mode at twice its steady response Newton
+    approaches it through states with a sliver of slip at phase 0. It once stopped there
+    9e-4 off in velocity, and the multistability check counted two orbits."""
+    s = Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
+    f, a = 12.85, 6.5
+    vector = structure_vector(s, "two-way")
+    omega = 2.0 * math.pi * f
+    canonical = _kernel_point(s, f, a, "two-way")
+    out = np.empty(_orbit.N_OUT)
+    for phase in _orbit.START_PHASES:
+        for factor in _orbit.START_FACTORS:
+            _orbit.solve_point(vector, omega, a, False, 10_000, 5_000, phase / f, factor, out)
+            assert Status(int(out[0])) == Status.STICK_SLIP
+            # v is 3.7e-6 a/w here: ill-conditioned, so compare in units of a/w (the
+            # bad start was 3.3e-9 a/w off).
+            assert abs(out[2] - canonical[2]) <= 1e-13 * _scale(f, a), (phase, factor)
+    assert int(attractors(s, f, a, coupling="two-way").count) == 1
