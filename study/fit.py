@@ -704,7 +704,10 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
     for j in np.flatnonzero(chosen):
         if progress is not None:
             progress(f"profiling {names[j]}")
-        values = np.linspace(lower[j], upper[j], npoints)
+        low, high = lower[j], upper[j]
+        if not problem.ratio:  # the constraint ck <= cs is in the search's bounds
+            low, high = problem.lower[j], problem.upper[j]
+        values = np.linspace(low, high, npoints)
         profile_values[j] = values
         profile_chi2[j] = _profile(spec, p, names[j], values)
     return FitResult(

@@ -118,7 +118,7 @@ def test_every_problem_is_listed_with_its_own_line() -> None:
 
 
 def test_unreadable_and_non_utf8_files_are_named(tmp_path: Path) -> None:
-    with pytest.raises(MeasurementError, match="missing.csv: cannot read"):
+    with pytest.raises(MeasurementError, match=r"missing\.csv: cannot read"):
         read_measurements(tmp_path / "missing.csv")
     bad = tmp_path / "bad.csv"
     bad.write_bytes(b"quantity,value\nthreshold\xff,1\n")
