@@ -735,7 +735,10 @@ def _profile(spec: FitSpec, best: dict[str, float | None], name: str,
         if name == "cs" and start.get("ck") is not None and start["ck"] > value:
             start["ck"] = float(value)
         if name == "ck" and start["ck"] > start["cs"]:
-            continue  # not a valid structure
+            if name in spec.free and "cs" in others:
+                start["cs"] = float(value)  # the least cs that holds this ck
+            else:
+                continue  # not a valid structure
         for n, (lo, hi) in others.items():
             start[n] = float(np.clip(start[n], lo, hi))
         try:
