@@ -46,6 +46,8 @@ $(STAMP): pyproject.toml
 schemas: | $(STAMP)
 	$(PY) -c "from study.spec import export_spec_schema as e; text = e(); \
 	open('study/schemas/study-spec-v1.schema.json', 'w').write(text)"
+	$(PY) -c "from study.measurements import export_measurement_schema as e; text = e(); \
+	open('study/schemas/study-measurements-v1.schema.json', 'w').write(text)"
 	$(MAKE) $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
 
 results_schema/%.json: study/schemas/%.json

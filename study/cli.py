@@ -163,6 +163,38 @@ def _export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _fit(args: argparse.Namespace) -> int:
+    from study.fit import PARAMETERS, fit, fit_dataset, load_fit_spec
+    from study.store import write_atomic
+
+    spec = load_fit_spec(args.spec)
+    output = args.output or Path("results") / f"{args.spec.stem}.nc"
+    result = fit(spec, progress=lambda line: print(f"study: {line}", file=sys.stderr,
+                                                    flush=True))
+    command = "study " + " ".join(shlex.quote(a) for a in args.argv)
+    dataset = fit_dataset(spec, result, command)
+    write_atomic(dataset, output)
+    rows = spec.measurements.sizes["measurement"]
+    print(f"{output}: fit '{spec.name}' of {len(result.names)} parameters to {rows} "
+          f"measurements ({spec.coupling} coupling), chi^2/dof = {result.chi2_per_dof:.4g} "
+          f"(chi^2 = {result.chi2:.4g}, {result.dof} dof), {result.evaluations} model "
+          f"evaluations in {result.wall_seconds:.1f} s")
+    for name, value, error, ok in zip(result.names, result.estimate, result.standard_error,
+                                      result.identifiable, strict=True):
+        units = PARAMETERS[name].units
+        units = "" if units == "1" else f" {units}"
+        flag = "" if ok else "   NOT IDENTIFIABLE"
+        print(f"  {name:<12} = {value:.6g} +- {error:.3g}{units}{flag}")
+    for warning in result.warnings:
+        print(f"study: warning: {warning}", file=sys.stderr)
+    if args.figure is not None:
+        from study.figures.fit import draw
+
+        for path in draw(dataset, args.figure):
+            print(f"wrote {path}")
+    return 0
+
+
 def _list(args: argparse.Namespace) -> int:
     from study.runner import is_up_to_date, load_any
     from study.spec import SpecError
@@ -264,6 +296,19 @@ def _parser() -> argparse.ArgumentParser:
     export.add_argument("--var", action="append", default=None, metavar="NAME",
                         help="export only this variable (repeatable; default: all)")
     export.set_defaults(handler=_export)
+
+    fitting = commands.add_parser(
+        "fit", help="fit free structure parameters to measurements (weighted least squares)",
+        description="Estimate the free parameters of a fit spec (TOML: [fit] measurements, "
+        "free = { NAME = [lower, upper] }, coupling; [structure] start values) from "
+        "measurement CSV files; writes estimates, standard errors, correlations, residuals "
+        "and chi^2 to a netCDF file (README: Measurements and fits).")
+    fitting.add_argument("spec", type=Path, help="fit spec (TOML)")
+    fitting.add_argument("-o", "--output", type=Path,
+                         help="result file (default: results/<spec file stem>.nc)")
+    fitting.add_argument("--figure", type=Path, metavar="STEM",
+                         help="also draw measurements over the fitted model (STEM.png, .pdf)")
+    fitting.set_defaults(handler=_fit)
 
     listing = commands.add_parser("list", help="the workflows and whether results are current")
     listing.add_argument("--workflows", default="workflows", help="spec folder")

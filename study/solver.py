@@ -90,8 +90,8 @@ class SteadyState:
         Largest modulus of the orbit's Floquet multipliers on the state
         ``(delta, delta', v)`` [1] (< 1: the orbit attracts its neighbours; for
         ``STATIC`` the mode's free decay over a period; NaN without an orbit). Good to
-        about 1e-7 relative (taken within the last Newton step of the orbit). Computed by the two-way solver; ``None``
-        from solvers that do not compute it.
+        about 1e-7 relative (taken within the last Newton step of the orbit).
+        Computed by the two-way solver; ``None`` from solvers that do not compute it.
     """
 
     velocity: NDArray[np.float64]

@@ -45,6 +45,8 @@ from study.variables import VARIABLES
 
 __all__ = [
     "CONTENT_ATTRIBUTE",
+    "FIT_SCHEMA",
+    "FIT_SCHEMA_PATH",
     "PROVENANCE_SCHEMA_PATH",
     "RESULT_SCHEMA",
     "RESULT_SCHEMA_PATH",
@@ -68,6 +70,9 @@ SCENE_SCHEMA = "study-scene-v1"
 _SCHEMA_DIR = SPEC_SCHEMA_PATH.parent
 RESULT_SCHEMA_PATH = _SCHEMA_DIR / f"{RESULT_SCHEMA}.schema.json"
 SCENE_SCHEMA_PATH = _SCHEMA_DIR / f"{SCENE_SCHEMA}.schema.json"
+#: Files written by ``study fit`` (:mod:`study.fit`).
+FIT_SCHEMA = "study-fit-v1"
+FIT_SCHEMA_PATH = _SCHEMA_DIR / f"{FIT_SCHEMA}.schema.json"
 #: The structure every result's ``provenance`` attribute (a JSON document) has.
 PROVENANCE_SCHEMA_PATH = _SCHEMA_DIR / "study-provenance-v1.schema.json"
 
@@ -820,6 +825,24 @@ def _scene_problems(nc: Any, meta: _File, source: str) -> list[str]:
     return problems
 
 
+def _fit_problems(nc: Any, meta: _File) -> list[str]:
+    """A fit result: its header against ``study-fit-v1``, sizes that agree, the checksum."""
+    problems = [p for p in _schema_problems(FIT_SCHEMA_PATH, _file_header(meta))
+                if _not_required_checksum(p)]
+    names = meta.dims.get("parameter")
+    if names is not None and meta.dims.get("parameter_2") != names:
+        problems.append("dimensions parameter and parameter_2 differ in size")
+    try:
+        json.loads(meta.attrs.get("provenance", ""))
+    except (TypeError, ValueError):
+        problems.append("provenance is not JSON")
+    for name, var in meta.variables.items():
+        if var.type_name.startswith("unsupported"):
+            problems.append(f"{name} has a type study never writes ({var.type_name})")
+    problems += _checksum_problems(nc, meta)
+    return problems
+
+
 # ---------------------------------------------------------------------------
 # The entry points
 
@@ -859,7 +882,7 @@ def validate_file(path: str | Path) -> None:
             raise ResultError(
                 f"{path}: not a study result file (no 'study_result_schema' attribute; "
                 f"global attributes: {_short(', '.join(sorted(attrs)) or 'none')})")
-        if not (_same_text(kind, RESULT_SCHEMA) or _same_text(kind, SCENE_SCHEMA)):
+        if not any(_same_text(kind, k) for k in (RESULT_SCHEMA, SCENE_SCHEMA, FIT_SCHEMA)):
             raise ResultError(
                 f"{path}: written with result schema {_short(repr(_jsonable(kind)), 80)}; "
                 f"this version of study reads {RESULT_SCHEMA!r} and {SCENE_SCHEMA!r}. Rerun "
@@ -868,13 +891,16 @@ def validate_file(path: str | Path) -> None:
             problems = [f"groups {', '.join(meta.groups)}: study writes no groups"]
         elif kind == RESULT_SCHEMA:
             problems = _study_problems(nc, meta, str(path))
+        elif kind == FIT_SCHEMA:
+            problems = _fit_problems(nc, meta)
         else:
             problems = _scene_problems(nc, meta, str(path))
     finally:
         nc.close()
     if problems:
         problems = list(dict.fromkeys(problems))  # two schema branches may see one fault
-        what = "study result" if kind == RESULT_SCHEMA else "steering scene result"
+        what = {RESULT_SCHEMA: "study result", FIT_SCHEMA: "fit result"}.get(
+            kind, "steering scene result")
         raise ResultError(f"{path}: invalid {what}:\n  " + "\n  ".join(problems))
 
 
