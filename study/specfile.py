@@ -183,7 +183,7 @@ def _too_deep_line(text: str) -> str:
     ``line N (key)``, found by a scan of the text (for input too deep to parse)."""
     depth = 0
     quote = ""
-    key = ""
+    keys: list[str] = []  # the key each open bracket belongs to ("" for none)
     for number, line in enumerate(text.splitlines(), 1):
         if depth == 0 and line.lstrip().startswith("["):
             continue  # a table header
@@ -201,13 +201,21 @@ def _too_deep_line(text: str) -> str:
             elif char == "#":
                 break
             elif char in "[{":
-                if depth == 0 and "=" in line[:position]:
-                    key = line[:line.index("=")].strip()
+                before = line[:position].rstrip()
+                key = ""
+                if before.endswith("="):
+                    # The key just before the "=": after the last separator.
+                    start = max(before.rfind(mark) for mark in "{[,")
+                    key = before[start + 1:-1].strip()
+                keys.append(key)
                 depth += 1
                 if depth > MAX_NESTING:
-                    return f"line {number}" + (f" ({key})" if key else "")
+                    path = ".".join(k for k in keys if k)
+                    return f"line {number}" + (f" ({path})" if path else "")
             elif char in "]}":
                 depth = max(depth - 1, 0)
+                if keys:
+                    keys.pop()
         quote = ""  # basic and literal strings end with their line
     return "the file"
 
