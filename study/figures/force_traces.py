@@ -38,7 +38,7 @@ from study.physics.forces import (
 )
 from study.status import Status
 
-__all__ = ["draw", "region_of", "regime_points"]
+__all__ = ["draw", "regime_points", "region_of"]
 
 #: Drive periods shown.
 PERIODS = 2.0
@@ -162,7 +162,7 @@ def draw(dataset: xr.Dataset, output: Path,
         ax.set_visible(False)
     lowest = highest = 0.0
     any_lift = False
-    for ax, (name, (f_point, a_point)) in zip(axes.flat, chosen.items()):
+    for ax, (name, (f_point, a_point)) in zip(axes.flat, chosen.items(), strict=False):
         t = phase / f_point
         n = normal_force(structure, f_point, a_point, t)
         tau = tangential_force(structure, f_point, a_point, t)

@@ -32,8 +32,8 @@ from study.measurements import QUANTITIES, read_measurements
 
 __all__ = [
     "MARKERS",
-    "M_RTOL",
     "M_ADD_ATOL",
+    "M_RTOL",
     "draw_rows",
     "load",
     "pick",

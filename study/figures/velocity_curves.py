@@ -187,8 +187,8 @@ def draw(dataset: xr.Dataset, output: Path,
                       f"{structure.f0:g} Hz < red)")
     if handles:
         ax.legend(handles=handles, loc="best" if colour_bar else "upper left",
-                  bbox_to_anchor=None if colour_bar else (1.01, 1.0), borderaxespad=0.0 if not colour_bar else 0.5,
-                  fontsize=8.5,
+                  bbox_to_anchor=None if colour_bar else (1.01, 1.0),
+                  borderaxespad=0.5 if colour_bar else 0.0, fontsize=8.5,
                   title=None if colour_bar else "drive frequency f\n(blue < $f_0$ < red)",
                   title_fontsize=9, frameon=colour_bar)
     return common.save(fig, output, dataset, title)
