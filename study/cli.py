@@ -144,9 +144,27 @@ def _figure(args: argparse.Namespace) -> int:
 
     dataset = open_result(args.file)
     output = args.output or Path("figures") / args.name
-    for path in draw_figure(args.name, dataset, output):
+    written = draw_figure(args.name, dataset, output, sel=args.sel, source=str(args.file),
+                          points=args.point, measurements=args.measurements)
+    for path in written:
         print(f"wrote {path}")
     return 0
+
+
+def _point(text: str) -> tuple[float, float]:
+    """``F,A`` of ``--point``: a drive frequency [Hz] and acceleration [m s^-2]."""
+    import math
+
+    parts = text.split(",")
+    try:
+        f, a = (float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: expected F,A (drive frequency in Hz, acceleration in m s-2), "
+            "e.g. 14.6,7.0") from None
+    if not (math.isfinite(f) and math.isfinite(a)) or f <= 0 or a < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: need f > 0 Hz and a >= 0 m s-2")
+    return f, a
 
 
 def _export(args: argparse.Namespace) -> int:
@@ -279,6 +297,20 @@ def _parser() -> argparse.ArgumentParser:
     figure.add_argument("file", type=Path, metavar="FILE", help="result file (netCDF)")
     figure.add_argument("-o", "--output", type=Path,
                         help="output stem (default: figures/NAME -> .png and .pdf)")
+    figure.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
+                        help="draw part of the file: KEY=VALUE nearest, KEY==VALUE exact, "
+                        "KEY=START:STOP a range (repeatable); a figure of fewer axes than "
+                        "the file says which keys to select")
+    figure.add_argument("--point", action="append", type=_point, default=None,
+                        metavar="F,A",
+                        help="force-traces: a drive point, frequency [Hz] and acceleration "
+                        "[m s-2] (repeatable; default: the paper's S, P, N, PN for its "
+                        "structure, else one point per region the file holds)")
+    figure.add_argument("--measurements", action="append", type=Path, default=None,
+                        metavar="CSV",
+                        help="thresholds, velocity-curves, mass-ratio: measurement file "
+                        "drawn with error bars over the model (repeatable; README: "
+                        "Measurements and fits)")
     figure.set_defaults(handler=_figure)
 
     export = commands.add_parser(

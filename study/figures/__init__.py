@@ -1,17 +1,24 @@
 """Figures redrawn from a result file alone: ``study figure NAME FILE``.
 
-Each figure module has ``draw(dataset, output) -> list[Path]`` and computes nothing
-the file does not hold (closed-form force traces at the paper's four points are
-evaluated from the structure parameters stored in the file).
+Each figure module has ``draw(dataset, output, **options) -> list[Path]`` and computes
+nothing the file does not hold (closed-form force traces are evaluated from the
+structure parameters stored in the file). :func:`draw_figure` first applies the
+``--sel`` selections (:mod:`study.selection`), so that every figure draws any study
+whose other axes are selected; a figure takes the options it declares
+(:attr:`Figure.options`): ``points`` (``--point F,A``) and ``measurements``
+(``--measurements FILE.csv``, :mod:`study.measurements`).
 """
 
 from __future__ import annotations
 
 import importlib
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import xarray as xr
+
+from study.selection import select
 
 __all__ = ["FIGURES", "FigureError", "draw_figure"]
 
@@ -22,12 +29,21 @@ class FigureError(ValueError):
 
 @dataclass(frozen=True)
 class Figure:
-    """A registered figure: its module, the workflow that makes its data, what it needs."""
+    """A registered figure: its module, the workflow that makes its data, what it needs,
+    and the options of :func:`draw_figure` it takes (``points``, ``measurements``)."""
 
     module: str
     workflow: str
     requires: tuple[str, ...]
     shows: str
+    options: tuple[str, ...] = ()
+
+    @property
+    def source(self) -> str:
+        """Where its data come from, for messages."""
+        if self.workflow == "fit":
+            return "a 'study fit' result (README: Measurements and fits)"
+        return f"the '{self.workflow}' workflow: workflows/{self.workflow}.toml"
 
 
 FIGURES: dict[str, Figure] = {
@@ -35,11 +51,13 @@ FIGURES: dict[str, Figure] = {
         "study.figures.thresholds", "thresholds",
         ("a_star_plus", "a_star_minus", "mode_gain"),
         "Fig. 1B: thresholds a*_+ and a*_- against frequency, the mode's resonance behind",
+        ("measurements",),
     ),
     "velocity-curves": Figure(
         "study.figures.velocity_curves", "velocity-curves",
         ("velocity", "status"),
-        "Fig. 1C inset: velocity against acceleration at fixed frequencies 10-20 Hz",
+        "Fig. 1C inset: velocity against acceleration at fixed frequencies",
+        ("measurements",),
     ),
     "regime-map": Figure(
         "study.figures.regime_map", "regime-map",
@@ -50,12 +68,14 @@ FIGURES: dict[str, Figure] = {
     "force-traces": Figure(
         "study.figures.force_traces", "regime-map",
         ("velocity",),
-        "Fig. 2 insets: n(t) and tau(t)/cs at the paper's points in S, P, N and PN",
+        "Fig. 2 insets: n(t) and tau(t)/cs at chosen points (the paper's S, P, N, PN)",
+        ("points",),
     ),
     "mass-ratio": Figure(
         "study.figures.mass_ratio", "mass-ratio",
         ("a_star_plus", "a_star_minus", "M"),
-        "Fig. 3: thresholds for the paper's loads and the minimum threshold against M",
+        "Fig. 3: thresholds for on-board loads and the minimum threshold against M",
+        ("measurements",),
     ),
     "threshold-collapse": Figure(
         "study.figures.threshold_collapse", "threshold-collapse",
@@ -87,27 +107,73 @@ FIGURES: dict[str, Figure] = {
         ("waypoint_x", "waypoint_y", "x", "y", "miss_distance"),
         "Steering through waypoints: open-loop plan against closed-loop correction",
     ),
+    "fit": Figure(
+        "study.figures.fit", "fit",
+        ("estimate", "standard_error", "quantity", "value", "sigma"),
+        "A fit: measurements with error bars over the fitted thresholds and velocities",
+    ),
 }
 
+#: The command-line spelling of each option, for messages.
+_OPTION_FLAGS = {"points": "--point", "measurements": "--measurements"}
 
-def draw_figure(name: str, dataset: xr.Dataset, output: str | Path) -> list[Path]:
+
+def draw_figure(name: str, dataset: xr.Dataset, output: str | Path, *,
+                sel: Iterable[str] = (), source: str = "",
+                points: Sequence[tuple[float, float]] | None = None,
+                measurements: Sequence[str | Path] | None = None) -> list[Path]:
     """Draw figure ``name`` from a (validated) result dataset into ``output.png/.pdf``.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`FIGURES`.
+    dataset : xarray.Dataset
+        The result.
+    output : path
+        File stem.
+    sel : iterable of str
+        ``--sel`` selections (``"Q=30"``, ``"M==0.1"``, ``"a=0:9"``) applied first; the
+        title says what was selected.
+    source : str
+        The file's name, for messages.
+    points : sequence of (f, a), optional
+        ``force-traces``: the drive points to draw (default: the paper's four for the
+        paper's structure, else one per region the file holds).
+    measurements : sequence of paths, optional
+        ``thresholds``, ``velocity-curves``, ``mass-ratio``: measurement files
+        (:mod:`study.measurements`) drawn with error bars over the model.
 
     Raises
     ------
     FigureError
-        For an unknown figure, or a dataset without the variables it needs (the
-        message names them and the workflow that makes them).
+        For an unknown figure, an option it does not take, a dataset without the
+        variables it needs (the message names them and the workflow that makes them),
+        or more axes than it draws (the message names the ``--sel`` keys to give).
+    study.selection.SelectionError
+        For a selection that does not apply (the available values listed).
+    study.measurements.MeasurementError
+        For an unreadable or invalid measurement file.
     """
     if name not in FIGURES:
         raise FigureError(f"unknown figure {name!r}; figures: {', '.join(FIGURES)}")
     figure = FIGURES[name]
+    options = {"points": points, "measurements": measurements}
+    for option, value in options.items():
+        if value and option not in figure.options:
+            takers = [n for n, f in FIGURES.items() if option in f.options]
+            raise FigureError(f"figure {name!r} takes no {_OPTION_FLAGS[option]}; it is "
+                              f"an option of {', '.join(takers)}")
     missing = [v for v in figure.requires if v not in dataset.variables]
     if missing:
         raise FigureError(
             f"figure {name!r} needs {', '.join(missing)}, which this file does not hold "
-            f"(study {dataset.attrs.get('study_name')!r}); it is drawn from the "
-            f"'{figure.workflow}' workflow: workflows/{figure.workflow}.toml"
+            f"(study {dataset.attrs.get('study_name')!r}); it is drawn from "
+            f"{figure.source}"
         )
+    sel = list(sel)
+    if sel:
+        dataset = select(dataset, sel, source=source)
     module = importlib.import_module(figure.module)
-    return module.draw(dataset, Path(output))
+    kwargs = {k: v for k, v in options.items() if v}
+    return module.draw(dataset, Path(output), **kwargs)

@@ -1,5 +1,6 @@
 """What the figures share: saving as PNG and PDF with provenance in the metadata, the
-structure a file was computed for, the paper's regime points, and a few checks."""
+structure a file was computed for, the paper's regime points (:mod:`study.paper`), what
+a figure needs selected, colours for many curves, and a few checks."""
 
 from __future__ import annotations
 
@@ -12,20 +13,30 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from study.paper import PAPER_POINTS, is_paper_structure
+from study.selection import available
 from study.status import Status
 
 __all__ = [
+    "MAX_LEGEND_ENTRIES",
     "PAPER_POINTS",
     "VALID",
     "coupling_label",
     "grid_minimum",
+    "is_paper_file",
     "one_way_velocity",
     "parameter_text",
     "provenance_line",
+    "require_dims",
     "save",
+    "selection_text",
     "single_structure",
     "structure_from_dataset",
+    "value_colours",
 ]
+
+#: Curves beyond this many get a colour bar instead of one legend entry each.
+MAX_LEGEND_ENTRIES = 8
 
 
 def provenance_line(dataset: xr.Dataset) -> str:
@@ -63,6 +74,9 @@ def save(fig: plt.Figure, output: str | Path, dataset: xr.Dataset, title: str) -
         stem = stem.with_suffix("")
     stem.parent.mkdir(parents=True, exist_ok=True)
     source = provenance_line(dataset)
+    selected = selection_text(dataset)
+    if selected and selected not in title:
+        title = f"{title} ({selected})"
     written = []
     png = stem.with_suffix(".png")
     fig.savefig(png, dpi=150, metadata={
@@ -106,35 +120,121 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
     return study.Structure(**params)
 
 
-#: The paper's points in its regions S, P, N and PN: name -> (f [Hz], a [m s^-2]).
-PAPER_POINTS: dict[str, tuple[float, float]] = {
-    "S": (13.0, 5.0),
-    "P": (13.0, 8.5),
-    "N": (16.5, 8.5),
-    "PN": (14.6, 7.0),
-}
-
 #: Statuses with a valid velocity (0 when static).
 VALID = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
 
 
-def single_structure(dataset: xr.Dataset, figure: str) -> None:
-    """Refuse a file that sweeps structure parameters (the figure draws one structure).
+def selection_text(dataset: xr.Dataset) -> str:
+    """``"selected: Q=30, M=0.1"`` for a dataset cut by ``--sel``, else ``""``."""
+    chosen = dataset.attrs.get("study_selection")
+    return f"selected: {chosen}" if chosen else ""
+
+
+def require_dims(dataset: xr.Dataset, figure: str, keep: tuple[str, ...],
+                 what: str, variable: str | None = None) -> None:
+    """Refuse a file with more dimensions than a figure draws, saying what to select.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The (possibly already selected) result.
+    figure : str
+        The figure's name, for the message.
+    keep : tuple of str
+        The dimensions the figure draws (``("f", "a", "branch")`` for one structure).
+    what : str
+        What the figure draws, for the message (``"one structure over (f, a)"``).
+    variable : str, optional
+        Only this variable's dimensions count (else every dimension of the file).
 
     Raises
     ------
     FigureError
-        Naming the swept parameters.
+        Naming every other dimension with its values and the ``--sel`` to give.
     """
     from study.figures import FigureError
 
-    swept = [str(d) for d in dataset.dims if d not in ("f", "a", "branch")]
-    if swept:
-        raise FigureError(
-            f"figure {figure!r} draws a single structure, but this file (study "
-            f"{dataset.attrs.get('study_name')!r}) sweeps {', '.join(swept)}; draw it from "
-            "a file with fixed structure parameters"
-        )
+    dims = dataset[variable].dims if variable is not None else tuple(dataset.dims)
+    extra = [str(d) for d in dims if d not in keep]
+    if not extra:
+        return
+    along = {str(c): dataset[c].variable for c in dataset.coords
+             if dataset[c].ndim == 1 and dataset[c].dims[0] in extra}
+    values = available(xr.Dataset(coords=along))
+    example = " ".join(f"--sel {d}={_first(dataset, d)}" for d in extra)
+    raise FigureError(
+        f"figure {figure!r} draws {what}, but this file (study "
+        f"{dataset.attrs.get('study_name')!r}) sweeps {', '.join(extra)}: select one value "
+        f"of each, e.g. {example}; available: {values}"
+    )
+
+
+def _first(dataset: xr.Dataset, dim: str) -> str:
+    if dim in dataset.coords and dataset[dim].ndim == 1 and dataset[dim].size:
+        value = dataset[dim].values[0]
+        return f"{float(value):g}" if np.asarray(value).dtype.kind in "iuf" else str(value)
+    return "0"
+
+
+def single_structure(dataset: xr.Dataset, figure: str) -> None:
+    """Refuse a file that sweeps structure parameters (the figure draws one structure),
+    naming the ``--sel`` keys to give and their values.
+
+    Raises
+    ------
+    FigureError
+        Naming the swept parameters and their values.
+    """
+    require_dims(dataset, figure, ("f", "a", "branch"), "a single structure")
+
+
+def is_paper_file(dataset: xr.Dataset, ignore: tuple[str, ...] = ()) -> bool:
+    """Whether the file's (selected) structure is the paper's (:mod:`study.paper`):
+    only then are the paper's points and statements drawn."""
+    params = {}
+    for name in ("f0", "Q", "alpha", "M", "cs", "ck", "g"):
+        if name in ignore:
+            continue
+        if name not in dataset.coords or dataset[name].ndim != 0:
+            if name in ("ck", "g"):
+                continue
+            return False
+        params[name] = float(dataset[name])
+    return is_paper_structure(params, ignore=ignore)
+
+
+def value_colours(values: np.ndarray, cmap="viridis", norm=None):
+    """Colours for curves labelled by ``values`` and whether they need a colour bar.
+
+    Returns ``(colours, mappable)``: one RGBA colour per value, and a
+    ``ScalarMappable`` for ``fig.colorbar`` when there are more than
+    :data:`MAX_LEGEND_ENTRIES` curves (else None: a legend entry each).
+    """
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    values = np.asarray(values, dtype=float)
+    cmap = colormaps[cmap] if isinstance(cmap, str) else cmap
+    if norm is None:
+        low, high = (float(values.min()), float(values.max())) if values.size else (0, 1)
+        norm = Normalize(low, high if high > low else low + 1.0)
+    if values.size == 1 and norm.vmin == values[0]:
+        colours = [cmap(0.0)]
+    else:
+        colours = [cmap(float(norm(v)) * (0.85 if cmap.name == "viridis" else 1.0))
+                   for v in values]
+    if values.size <= MAX_LEGEND_ENTRIES:
+        return colours, None
+    mappable = ScalarMappable(norm=norm, cmap=cmap if cmap.name != "viridis" else
+                              _truncated(cmap))
+    return colours, mappable
+
+
+def _truncated(cmap):
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap(cmap(np.linspace(0.0, 0.85, 256)), name=f"{cmap.name}-0.85")
 
 
 def coupling_label(dataset: xr.Dataset) -> str:
@@ -165,7 +265,8 @@ def one_way_velocity(dataset: xr.Dataset, *order: str) -> np.ndarray | None:
 
 
 def parameter_text(dataset: xr.Dataset) -> str:
-    """The structure's parameters, compactly, from the file's scalar coordinates."""
+    """The structure's parameters, compactly, from the file's scalar coordinates, and on
+    a second line what ``--sel`` selected, if anything."""
     s = structure_from_dataset(dataset)
     text = (
         f"$f_0$ = {s.f0:g} Hz, Q = {s.Q:g}, $\\alpha$ = {s.alpha:g}°, M = {s.M:g}, "
@@ -175,7 +276,8 @@ def parameter_text(dataset: xr.Dataset) -> str:
         text += f", $c_k$ = {s.ck:g}"
     if s.g != 9.8:
         text += f", g = {s.g:g} m s$^{{-2}}$"
-    return text
+    selected = selection_text(dataset)
+    return f"{text}\n{selected}" if selected else text
 
 
 #: The f grid resolves a threshold minimum when its step is below f0 / (RESOLUTION Q):

@@ -16,7 +16,7 @@ import xarray as xr
 
 from study.analysis import coupling_effect
 from study.figures import FigureError
-from study.figures.common import VALID, coupling_label, save
+from study.figures.common import VALID, coupling_label, require_dims, save, selection_text
 
 __all__ = ["draw"]
 
@@ -28,9 +28,8 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     """Draw the coupling figure from a ``coupling`` result file; returns PNG and PDF."""
     if "M" not in dataset.dims:
         raise FigureError("figure 'coupling' needs M swept (a dimension of the file)")
-    others = [d for d in dataset["velocity"].dims if d not in ("M", "f", "a")]
-    if others:
-        raise FigureError(f"figure 'coupling' sweeps M only; this file also sweeps {others}")
+    require_dims(dataset, "coupling", ("M", "f", "a"), "the effect of coupling over M",
+                 variable="velocity")
     effect = coupling_effect(dataset)
     m = dataset["M"].values
 
@@ -80,6 +79,8 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     solver = ("exact solver" if dataset.attrs.get("study_solver_method") == "exact"
               else "time integration")
     fig.suptitle(f"Sliding feeding back on the mode: {coupling_label(dataset)}, {solver},\n"
-                 f"against the paper's one-way model; M swept, {fixed}", fontsize=9.5)
+                 f"against the paper's one-way model; M swept, {fixed}"
+                 + (f"\n{selection_text(dataset)}" if "study_selection" in dataset.attrs
+                    else ""), fontsize=9.5)
     return save(fig, output, dataset,
                 f"Two-way against one-way coupling over M; velocities: {coupling_label(dataset)}")

@@ -1,13 +1,19 @@
-"""The paper's Fig. 2 insets: normal and tangential forces at its points S, P, N and PN.
+"""The paper's Fig. 2 insets: normal and tangential forces at drive points.
 
 ``n(t)/g`` and ``tau(t)/(cs g)`` over two drive periods, in closed form for the
 structure stored in the result file (``study figure force-traces FILE``); each panel
-also gives the velocity the file holds at the grid point nearest to the paper's point.
-A slip is possible forward where ``tau > cs n`` and backward where ``-tau > cs n``.
+also gives the velocity the file holds at the grid point nearest to its point. A slip
+is possible forward where ``tau > cs n`` and backward where ``-tau > cs n``.
+
+The points: those named with ``--point F,A`` (repeatable); by default the paper's four
+points S, P, N, PN for the paper's structure (:mod:`study.paper`), and for any other
+structure one point in each region the file's grid holds below lift-off (S, P, N, PN:
+the grid point nearest the middle of the region, :func:`regime_points`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -16,12 +22,23 @@ import xarray as xr
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from study.figures import common
-from study.figures.common import PAPER_POINTS, coupling_label, parameter_text, single_structure
-from study.physics.forces import normal_force, tangential_force, thresholds
+from study.figures import FigureError, common
+from study.figures.common import (
+    PAPER_POINTS,
+    coupling_label,
+    is_paper_file,
+    parameter_text,
+    single_structure,
+)
+from study.physics.forces import (
+    lift_off_acceleration,
+    normal_force,
+    tangential_force,
+    thresholds,
+)
 from study.status import Status
 
-__all__ = ["draw", "region_of"]
+__all__ = ["draw", "regime_points", "region_of"]
 
 #: Drive periods shown.
 PERIODS = 2.0
@@ -34,9 +51,49 @@ def region_of(a: float, a_plus: float, a_minus: float) -> str:
             (True, True): "PN"}[(bool(forward), bool(backward))]
 
 
+def _slack(values: np.ndarray) -> float:
+    """Half the mean spacing of a grid axis (0 for a single value)."""
+    return 0.5 * float(np.ptp(values)) / (values.size - 1) if values.size > 1 else 0.0
+
+
+def regime_points(dataset: xr.Dataset) -> dict[str, tuple[float, float]]:
+    """One drive point in each region (S, P, N, PN) the file's grid holds below
+    lift-off: the grid point of the region nearest to the region's mean position (in
+    coordinates scaled by the grid's ranges)."""
+    structure = common.structure_from_dataset(dataset)
+    f = np.atleast_1d(dataset["f"].values).astype(float)
+    a = np.atleast_1d(dataset["a"].values).astype(float)
+    a_plus, a_minus = thresholds(structure, f)
+    a_lift = lift_off_acceleration(structure, f)
+    ff, aa = np.meshgrid(f, a, indexing="ij")
+    usable = (aa < a_lift[:, None]) & (aa > 0)
+    if "status" in dataset and dataset["status"].dims == ("f", "a"):
+        usable &= dataset["status"].transpose("f", "a").values != Status.LIFT_OFF
+    forward, backward = aa > a_plus[:, None], aa > a_minus[:, None]
+    scale_f = max(float(np.ptp(f)), 1e-12)
+    scale_a = max(float(np.ptp(a)), 1e-12)
+    points = {}
+    for name, (fw, bw) in (("S", (False, False)), ("P", (True, False)),
+                           ("N", (False, True)), ("PN", (True, True))):
+        inside = usable & (forward == fw) & (backward == bw)
+        if not inside.any():
+            continue
+        fs, as_ = ff[inside], aa[inside]
+        distance = np.hypot((fs - fs.mean()) / scale_f, (as_ - as_.mean()) / scale_a)
+        k = int(np.argmin(distance))
+        points[name] = (float(fs[k]), float(as_[k]))
+    return points
+
+
 def _grid_text(dataset: xr.Dataset, f_point: float, a_point: float) -> str:
     """What the file holds at the grid point nearest to (f_point, a_point)."""
-    near = dataset.sel(f=f_point, a=a_point, method="nearest")
+    f, a = np.atleast_1d(dataset["f"].values), np.atleast_1d(dataset["a"].values)
+    if not (f.min() - _slack(f) <= f_point <= f.max() + _slack(f)
+            and a.min() - _slack(a) <= a_point <= a.max() + _slack(a)):
+        return (f"outside the file's grid (f {f.min():g}-{f.max():g} Hz, "
+                f"a {a.min():g}-{a.max():g} m s$^{{-2}}$): no velocity")
+    near = dataset.sel({d: v for d, v in (("f", f_point), ("a", a_point)) if d in dataset.dims},
+                       method="nearest")
     velocity = float(near["velocity"])
     where = (f"nearest grid point ({float(near['f']):.4g} Hz, "
              f"{float(near['a']):.3g} m s$^{{-2}}$)")
@@ -59,8 +116,9 @@ def _grid_text(dataset: xr.Dataset, f_point: float, a_point: float) -> str:
     return text
 
 
-def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
-    """Draw the force traces at the paper's four points into ``output.png/.pdf``.
+def draw(dataset: xr.Dataset, output: Path,
+         points: Sequence[tuple[float, float]] | None = None) -> list[Path]:
+    """Draw the force traces at drive points into ``output.png/.pdf``.
 
     Parameters
     ----------
@@ -69,6 +127,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         the structure's parameters as scalar coordinates.
     output : pathlib.Path
         File stem.
+    points : sequence of (f [Hz], a [m s^-2]), optional
+        The points (default: the paper's four for the paper's structure, else
+        :func:`regime_points`).
 
     Returns
     -------
@@ -79,12 +140,29 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     structure = common.structure_from_dataset(dataset)
     g, cs = structure.g, structure.cs
     phase = np.linspace(0.0, PERIODS, 1601)  # time in drive periods
-
-    fig, axes = plt.subplots(2, 2, figsize=(10.0, 7.2), sharex=True, sharey=True,
-                             layout="constrained")
+    paper = is_paper_file(dataset)
+    if points:
+        chosen = {f"point {k + 1}": (float(fp), float(ap))
+                  for k, (fp, ap) in enumerate(points)}
+        which = "at the points asked for"
+    elif paper:
+        chosen = dict(PAPER_POINTS)
+        which = "at the paper's points S, P, N, PN"
+    else:
+        chosen = regime_points(dataset)
+        which = "at a point of each region " + ", ".join(chosen) + " of the file's grid"
+        if not chosen:
+            raise FigureError("figure 'force-traces': the file's grid holds no point "
+                              "below lift-off; name points with --point F,A")
+    ncols = 1 if len(chosen) == 1 else 2
+    nrows = -(-len(chosen) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(5.0 * ncols, 3.3 * nrows + 0.6),
+                             sharex=True, sharey=True, layout="constrained", squeeze=False)
+    for ax in axes.flat[len(chosen):]:
+        ax.set_visible(False)
     lowest = highest = 0.0
     any_lift = False
-    for ax, (name, (f_point, a_point)) in zip(axes.flat, PAPER_POINTS.items(), strict=True):
+    for ax, (name, (f_point, a_point)) in zip(axes.flat, chosen.items(), strict=False):
         t = phase / f_point
         n = normal_force(structure, f_point, a_point, t)
         tau = tangential_force(structure, f_point, a_point, t)
@@ -109,7 +187,10 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
 
         a_plus, a_minus = (float(x) for x in thresholds(structure, f_point))
         model = region_of(a_point, a_plus, a_minus)
-        region = f"region {name}" if model == name else f"region {name} (model: {model})"
+        if name.startswith("point"):
+            region = f"{name}, region {model}"
+        else:
+            region = f"region {name}" if model == name else f"region {name} (model: {model})"
         ax.set_title(
             f"{region}: f = {f_point:g} Hz, a = {a_point:g} m s$^{{-2}}$\n"
             f"{_grid_text(dataset, f_point, a_point)}",
@@ -117,8 +198,10 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         )
     pad = 0.06 * (highest - lowest)
     axes[0, 0].set(xlim=(0.0, PERIODS), ylim=(lowest - pad, highest + pad))
-    for ax in axes[1]:
-        ax.set_xlabel("time t / T  (T = 1/f: drive periods)")
+    for k, ax in enumerate(axes.flat[:len(chosen)]):
+        if k + ncols >= len(chosen):
+            ax.set_xlabel("time t / T  (T = 1/f: drive periods)")
+            ax.xaxis.set_tick_params(labelbottom=True)
     for ax in axes[:, 0]:
         ax.set_ylabel("force per unit weight [1]")
 
@@ -133,7 +216,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     if any_lift:
         handles.append(Patch(facecolor="none", edgecolor="0.4", hatch="xx",
                              label="n < 0: lift-off, model invalid"))
-    title = "Contact forces over two drive periods at the paper's points S, P, N, PN"
+    title = f"Contact forces over two drive periods {which}"
     traces = "forces with the base at rest and the mode on its steady response"
     if dataset.attrs.get("study_coupling") == "two-way":
         # Two-way coupling changes the forces only once the base slides: the traces

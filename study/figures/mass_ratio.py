@@ -6,11 +6,17 @@ the frequency axis of the file against the mass ratio ``M = m1 / (m0 + m_add)``,
 with the closed form at resonance ``g / sqrt(1 + x^2)``
 (``x = max |x_pm|``, :func:`study.analysis.collapse_variable`) and the exact minimum
 over ``f`` of the closed-form thresholds (:func:`study.analysis.minimum_threshold`)
-over a fine range of ``M`` for the same structure.
+over a fine range of ``M`` for the same structure. The paper's statement (about g/2 at
+resonance for M = 6.6 %) is drawn only for the paper's structure (:mod:`study.paper`,
+``M`` aside). More than 8 loads get a colour bar of ``M`` instead of a legend entry
+each. With ``--measurements lab.csv``, the measured thresholds of rows naming their
+structure (``m_add`` or ``M``) are drawn with error bars: on the left in the colour of
+their load, on the right the lowest measured threshold of each structure at its ``M``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -20,8 +26,17 @@ import xarray as xr
 
 import study
 from study.analysis import minimum_threshold, resonance_threshold
-from study.figures import FigureError
-from study.figures.common import coupling_label, grid_minimum, save, structure_from_dataset
+from study.figures import FigureError, measured
+from study.figures.common import (
+    coupling_label,
+    grid_minimum,
+    is_paper_file,
+    require_dims,
+    save,
+    selection_text,
+    structure_from_dataset,
+    value_colours,
+)
 
 __all__ = ["draw"]
 
@@ -37,12 +52,8 @@ def _loads(dataset: xr.Dataset) -> tuple[str | None, np.ndarray, np.ndarray | No
     if ratio.ndim > 1:
         raise FigureError(f"figure 'mass-ratio' needs M along one axis, got dims {ratio.dims}")
     dim = ratio.dims[0] if ratio.ndim == 1 else None
-    extra = [d for d in dataset["a_star_plus"].dims if d not in ("f", dim)]
-    if extra:
-        raise FigureError(
-            "figure 'mass-ratio' draws thresholds over (load, f) only; this file also "
-            f"sweeps {', '.join(extra)}"
-        )
+    require_dims(dataset, "mass-ratio", ("f", dim), "thresholds over (load, f)",
+                 variable="a_star_plus")
     m_add = None
     if "m_add" in dataset.coords:
         m_add = np.atleast_1d(dataset["m_add"].values).astype(float)
@@ -55,13 +66,64 @@ def _label(ratio: float, m_add: float | None) -> str:
     return f"m_add = {1e3 * m_add:.1f} g, M = {100 * ratio:.1f} %"
 
 
-def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
-    """Draw Fig. 3 from a ``mass-ratio`` result file; returns the PNG and the PDF."""
+def _measured_structures(data: xr.Dataset, rows: np.ndarray, dataset: xr.Dataset,
+                         ratios: np.ndarray, m_add: np.ndarray | None
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per threshold row naming its structure: the row, its load index (-1: none of
+    the file's) and its mass ratio (from M, the file's load, or m1/(m0 + m_add))."""
+    m_rows = data["M"].values[rows]
+    add_rows = data["m_add"].values[rows]
+    named = np.isfinite(m_rows) | np.isfinite(add_rows)
+    if not named.any():
+        raise FigureError(
+            f"{data.attrs.get('study_measurement_files', 'measurements')}: figure "
+            "'mass-ratio' draws thresholds per structure; no threshold row names its "
+            "structure (give an m_add [kg] or M column)")
+    rows, m_rows, add_rows = rows[named], m_rows[named], add_rows[named]
+    load = np.full(rows.size, -1)
+    ratio = m_rows.copy()
+    m0 = float(dataset["m0"]) if "m0" in dataset.coords and dataset["m0"].ndim == 0 else None
+    m1 = float(dataset["m1"]) if "m1" in dataset.coords and dataset["m1"].ndim == 0 else None
+    for k in range(rows.size):
+        if np.isfinite(add_rows[k]):
+            if m_add is not None:
+                gap = np.abs(m_add - add_rows[k])
+                j = int(np.argmin(gap))
+                if gap[j] <= measured.M_ADD_ATOL + measured.M_RTOL * abs(m_add[j]):
+                    load[k] = j
+                    ratio[k] = ratios[j]
+            if not np.isfinite(ratio[k]) and m0 is not None and m1 is not None:
+                ratio[k] = m1 / (m0 + add_rows[k])
+        else:
+            gap = np.abs(ratios - m_rows[k])
+            j = int(np.argmin(gap))
+            if gap[j] <= measured.M_RTOL * ratios[j]:
+                load[k] = j
+    if not np.isfinite(ratio).all():
+        k = int(np.flatnonzero(~np.isfinite(ratio))[0])
+        raise FigureError(
+            f"{data['source'].values[rows[k]]}, line {int(data['line'][rows[k]])}: "
+            f"m_add = {add_rows[k]:g} kg is none of this file's loads and the file holds "
+            "no m0, m1 to give its M; give its M column instead")
+    return rows, load, ratio
+
+
+def draw(dataset: xr.Dataset, output: Path,
+         measurements: Sequence[str | Path] | None = None) -> list[Path]:
+    """Draw Fig. 3 from a ``mass-ratio`` result file; returns the PNG and the PDF.
+
+    ``measurements``: measurement files whose ``threshold`` rows with ``m_add`` or
+    ``M`` are drawn beside the model."""
     dim, ratios, m_add = _loads(dataset)
     f = dataset["f"].values
-    order = np.argsort(ratios)
-    colors = plt.cm.viridis(np.linspace(0.0, 0.85, ratios.size))
-    color_of = {int(i): colors[k] for k, i in enumerate(order)}
+    paper = is_paper_file(dataset, ignore=("M",))
+    colors, bar = value_colours(100 * ratios)
+    color_of = {i: colors[i] for i in range(ratios.size)}
+    rows = None
+    if measurements:
+        data = measured.load(measurements)
+        rows, row_load, row_ratio = _measured_structures(
+            data, measured.pick(data, "threshold", "mass-ratio"), dataset, ratios, m_add)
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12.5, 5.2), layout="constrained",
                                  gridspec_kw={"width_ratios": [1.25, 1.0]})
@@ -82,7 +144,8 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         label = _label(ratios[i], None if m_add is None else m_add[i])
         # A threshold above lift-off is outside the model: drawn faint, never as valid.
         valid = a_star < a_lift
-        ax.plot(f, np.where(valid, a_star, np.nan), color=color, lw=1.8, label=label)
+        ax.plot(f, np.where(valid, a_star, np.nan), color=color, lw=1.8,
+                label=None if bar is not None else label)
         if not valid.all():
             ax.plot(f, np.where(valid, np.nan, a_star), color=color, lw=1.0, ls=":",
                     alpha=0.6)
@@ -107,11 +170,21 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     ax.set(xlim=(f[0], f[-1]), ylim=(0.0, top), xlabel="drive frequency f [Hz]",
            ylabel="motion threshold $a^* = \\min(a^*_+, a^*_-)$ [m s$^{-2}$]",
            title="Threshold against frequency for each on-board load")
+    if rows is not None:
+        on_load = row_load >= 0
+        if on_load.any():
+            measured.draw_rows(ax, data, rows[on_load], "f",
+                               colours=[color_of[j] for j in row_load[on_load]])
+            ax.plot([], [], "o", mfc="0.6", mec="k", label="measured $\\pm\\sigma$ "
+                    "(colour of its load;\n^ forward, v backward, o unknown)")
+    if bar is not None:
+        fig.colorbar(bar, ax=ax, pad=0.01, label=f"mass ratio M [%] ({ratios.size} loads)")
     ax.legend(loc="lower left", fontsize=8, framealpha=0.9)
 
     # Right: the minimum over f against M, with the closed forms over a fine M range.
     base = structures[0]
-    fine = np.linspace(min(1e-3, 0.5 * ratios.min()), min(1.0, 1.25 * ratios.max()), 121)
+    spanned = ratios if rows is None else np.concatenate([ratios, row_ratio])
+    fine = np.linspace(min(1e-3, 0.5 * spanned.min()), min(1.0, 1.25 * spanned.max()), 121)
     at_resonance = np.array([min(resonance_threshold(replace(base, M=m))) for m in fine])
     f_range = (float(f[0]), float(f[-1]))
     exact_min = np.array([minimum_threshold(replace(base, M=m), f_range)[0] for m in fine])
@@ -128,35 +201,54 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     if any(m[2] for m in minima):
         bx.plot([], [], "o", mfc="none", mec="k", ms=8,
                 label="not resolved: f step > $f_0/(10Q)$ or at the range edge")
-    bx.axhline(g / 2, color="tab:red", lw=1.0, ls="-.", label="g/2")
-    bx.axvline(100 * PAPER_M, color="tab:red", lw=0.8, ls=":")
-    bx.annotate('paper: "about g/2 at resonance\nfor M = 6.6 %"',
-                xy=(100 * PAPER_M, g / 2), xytext=(0.7, 0.93), textcoords="axes fraction",
-                fontsize=8.5, color="tab:red", ha="center", bbox=_BOX,
-                arrowprops={"arrowstyle": "->", "color": "tab:red", "lw": 0.8})
-    paper = replace(base, M=PAPER_M)
-    paper_res = min(resonance_threshold(paper))
-    paper_min = minimum_threshold(paper, f_range)[0]
-    bx.text(0.7, 0.83,
-            f"model at M = 6.6 %: {paper_res:.2f} m s$^{{-2}}$ = {paper_res / g:.2f} g at "
-            f"$f_0$,\n{paper_min:.2f} m s$^{{-2}}$ = {paper_min / g:.2f} g at the minimum "
-            "over f",
-            transform=bx.transAxes, fontsize=8, ha="center", va="top", color="0.2", bbox=_BOX)
+    if rows is not None:
+        # The lowest measured threshold of each structure, at its mass ratio.
+        for value in np.unique(row_ratio):
+            group = np.flatnonzero(row_ratio == value)
+            k = group[int(np.argmin(data["value"].values[rows[group]]))]
+            colour = color_of[row_load[k]] if row_load[k] >= 0 else "white"
+            sigma = data["sigma"].values[rows[k]]
+            bx.errorbar(100 * value, data["value"].values[rows[k]],
+                        yerr=sigma if np.isfinite(sigma) else None, fmt="D", ms=6,
+                        mfc=colour, mec="k", ecolor="k", capsize=2.5, zorder=6)
+        bx.plot([], [], "D", mfc="0.6", mec="k",
+                label="measured: lowest threshold of each structure $\\pm\\sigma$")
+    if paper:
+        bx.axhline(g / 2, color="tab:red", lw=1.0, ls="-.", label="g/2")
+        bx.axvline(100 * PAPER_M, color="tab:red", lw=0.8, ls=":")
+        bx.annotate('paper: "about g/2 at resonance\nfor M = 6.6 %"',
+                    xy=(100 * PAPER_M, g / 2), xytext=(0.7, 0.93),
+                    textcoords="axes fraction", fontsize=8.5, color="tab:red", ha="center",
+                    bbox=_BOX, arrowprops={"arrowstyle": "->", "color": "tab:red", "lw": 0.8})
+        at_paper = replace(base, M=PAPER_M)
+        paper_res = min(resonance_threshold(at_paper))
+        paper_min = minimum_threshold(at_paper, f_range)[0]
+        bx.text(0.7, 0.83,
+                f"model at M = 6.6 %: {paper_res:.2f} m s$^{{-2}}$ = {paper_res / g:.2f} g "
+                f"at $f_0$,\n{paper_min:.2f} m s$^{{-2}}$ = {paper_min / g:.2f} g at the "
+                "minimum over f",
+                transform=bx.transAxes, fontsize=8, ha="center", va="top", color="0.2",
+                bbox=_BOX)
     bx.set(xlim=(0.0, 100 * fine[-1]), ylim=(0.0, 1.05 * g),
            xlabel="mass ratio M = m$_1$/m [%]",
            ylabel="minimum threshold over f, $a^*_{min}$ [m s$^{-2}$]",
            title="Minimum threshold against the mass ratio")
     secondary = bx.secondary_yaxis("right", functions=(lambda y: y / g, lambda y: y * g))
     secondary.set_ylabel("$a^*_{min}$ / g")
-    bx.legend(loc="lower left", fontsize=8, framealpha=0.9)
+    bx.legend(loc="best", fontsize=8, framealpha=0.9)
 
     title = (
-        f"Fig. 3: motion threshold with on-board loads (f0 = {base.f0:g} Hz, Q = {base.Q:g}, "
-        f"alpha = {base.alpha:g} deg, cs = {base.cs:g})"
+        f"{'Fig. 3: ' if paper else ''}motion threshold with on-board loads "
+        f"(f0 = {base.f0:g} Hz, Q = {base.Q:g}, alpha = {base.alpha:g} deg, "
+        f"cs = {base.cs:g}{'' if base.ck == base.cs else f', ck = {base.ck:g}'})"
     )
+    if rows is not None:
+        title += f", with {rows.size} measured"
     if "velocity" in dataset:
         # Thresholds are computed with the base at rest: the same in both couplings.
         title += (f"; file computed with {coupling_label(dataset)}: the thresholds (base at "
                   "rest) are the same in both couplings")
-    fig.suptitle(title.replace("; ", "\n", 1), fontsize=11)
+    selected = selection_text(dataset)
+    fig.suptitle(title.replace("; ", "\n", 1) + (f"\n{selected}" if selected else ""),
+                 fontsize=11)
     return save(fig, output, dataset, title)

@@ -23,8 +23,14 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 import study
-from study.figures import FigureError
-from study.figures.common import VALID, coupling_label, save, structure_from_dataset
+from study.figures.common import (
+    VALID,
+    coupling_label,
+    require_dims,
+    save,
+    selection_text,
+    structure_from_dataset,
+)
 from study.status import Status
 
 __all__ = ["draw", "panel_indices", "valid_velocity_mm_s"]
@@ -131,12 +137,8 @@ def _panel(fig, ax, dataset: xr.Dataset, at: dict) -> None:
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     """Draw the regime maps of a ``mass-ratio-limit`` result; returns the PNG and the PDF."""
-    extra = [d for d in dataset["velocity"].dims if d not in ("M", "f", "a")]
-    if extra:
-        raise FigureError(
-            "figure 'mass-ratio-limit' draws one map per M; this file also sweeps "
-            f"{', '.join(extra)}"
-        )
+    require_dims(dataset, "mass-ratio-limit", ("M", "f", "a"), "one regime map per M",
+                 variable="velocity")
     swept = "M" in dataset["velocity"].dims
     ats = [{"M": i} for i in panel_indices(dataset.sizes["M"])] if swept else [{}]
     ncols = min(len(ats), 3)
@@ -173,6 +175,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         f"grows, {coupling_label(dataset)} (f0 = {s.f0:g} Hz, Q = {s.Q:g}, "
         f"alpha = {s.alpha:g} deg, cs = {s.cs:g})"
     )
-    fig.suptitle(title.replace(" (f0", "\n(f0", 1) + "; PN: above both thresholds",
-                 fontsize=11)
+    selected = selection_text(dataset)
+    fig.suptitle(title.replace(" (f0", "\n(f0", 1) + "; PN: above both thresholds"
+                 + (f"\n{selected}" if selected else ""), fontsize=11)
     return save(fig, output, dataset, title)

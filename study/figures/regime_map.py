@@ -15,11 +15,12 @@ from matplotlib.colors import ListedColormap, TwoSlopeNorm
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from study.figures import common
+from study.figures import FigureError, common
 from study.figures.common import (
     PAPER_POINTS,
     VALID,
     coupling_label,
+    is_paper_file,
     one_way_velocity,
     parameter_text,
     single_structure,
@@ -43,6 +44,10 @@ def _layer(ax, f, a, mask, color, alpha=1.0):
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     """Draw the regime map of a ``regime-map`` result into ``output.png/.pdf``.
 
+    The paper's points S, P, N, PN are drawn only when the file's structure is the
+    paper's (:func:`study.paper.is_paper_structure`); a file sweeping the structure
+    is drawn for one structure selected with ``--sel``.
+
     Parameters
     ----------
     dataset : xarray.Dataset
@@ -57,6 +62,12 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         The PNG and the PDF.
     """
     single_structure(dataset, "regime-map")
+    for axis in ("f", "a"):
+        if axis not in dataset.dims or dataset.sizes[axis] < 2:
+            raise FigureError(f"figure 'regime-map' draws a map over (f, a); this file "
+                              f"(as selected) has {dataset.sizes.get(axis, 1)} value of "
+                              f"{axis}: select a range (--sel {axis}=START:STOP), not one "
+                              "value")
     f = dataset["f"].values
     a = dataset["a"].values
     velocity = 1e3 * dataset["velocity"].transpose("a", "f").values  # mm/s over (a, f)
@@ -108,7 +119,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                               label="one-way (paper's) model: v changes sign"))
     handles.append(Patch(facecolor="0.62", edgecolor="0.3", lw=0.5,
                          label="lift-off: model invalid, no velocity"))
-    if any(f[0] <= fp <= f[-1] and a[0] <= ap <= a[-1] for fp, ap in PAPER_POINTS.values()):
+    # The paper's points belong to the paper's structure: drawn on its maps only.
+    points = PAPER_POINTS if is_paper_file(dataset) else {}
+    if any(f[0] <= fp <= f[-1] and a[0] <= ap <= a[-1] for fp, ap in points.values()):
         handles.append(Line2D([], [], ls="none", marker="o", ms=5, mfc="white", mec="black",
                               label="the paper's points in regions S, P, N, PN"))
     if np.any(sliding):
@@ -119,7 +132,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
 
     ax.set(xlim=(f[0], f[-1]), ylim=(a[0], a[-1]), xlabel="drive frequency f [Hz]",
            ylabel="drive acceleration a [m s$^{-2}$]")
-    for name, (f_point, a_point) in PAPER_POINTS.items():
+    for name, (f_point, a_point) in points.items():
         if f[0] <= f_point <= f[-1] and a[0] <= a_point <= a[-1]:
             ax.plot(f_point, a_point, marker="o", ms=5, mfc="white", mec="black", zorder=5)
             ax.annotate(name, (f_point, a_point), xytext=(7, 5), textcoords="offset points",

@@ -9,7 +9,9 @@ over ``f`` sits slightly off resonance and below that value; for ``Q >> 1``,
 ``w^2 G`` runs on the circle of diameter ``Q`` through 0 and ``-i Q``, whose farthest
 point from ``-1/K`` gives the envelope ``min_f a*/g = sqrt(1 + x^2/4) - x/2`` (dashed).
 Both tend to ``1/x``: the paper's ``Q m1 ~ m``. Side panel: the same minima against
-``M`` alone, one line per ``Q``: what the collapse removes.
+``M`` alone, one line per ``Q`` (against ``Q`` when only ``Q`` is swept): what the
+collapse removes. The structures are coloured by ``Q`` when it is swept (else by
+``M``); more than 8 values get a colour bar instead of a legend entry each.
 """
 
 from __future__ import annotations
@@ -20,10 +22,18 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.colors import LogNorm, Normalize
+from matplotlib.ticker import NullFormatter
 
 from study.analysis import collapse_variable
-from study.figures import FigureError
-from study.figures.common import grid_minimum, save, structure_from_dataset
+from study.figures.common import (
+    grid_minimum,
+    require_dims,
+    save,
+    selection_text,
+    structure_from_dataset,
+    value_colours,
+)
 
 __all__ = ["draw"]
 
@@ -33,12 +43,8 @@ def _minima(dataset: xr.Dataset):
     """Per structure: its index, x, the minimum over f and whether it is at a range edge."""
     lower = np.minimum(dataset["a_star_plus"], dataset["a_star_minus"])
     dims = [d for d in lower.dims if d != "f"]
-    extra = [d for d in dims if d not in _AXES]
-    if extra:
-        raise FigureError(
-            "figure 'threshold-collapse' collapses the Q and M axes; this file also sweeps "
-            f"{', '.join(extra)}"
-        )
+    require_dims(dataset, "threshold-collapse", ("f", *_AXES),
+                 "minimum thresholds over the Q and M axes", variable="a_star_plus")
     lower = lower.transpose(*dims, "f").values
     f = dataset["f"].values
     rows = []
@@ -56,20 +62,29 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     """Draw the collapse from a ``threshold-collapse`` result; returns the PNG and the PDF."""
     dims, rows = _minima(dataset)
     f = dataset["f"].values
-    q_values = np.atleast_1d(dataset["Q"].values)
-    colors = plt.cm.viridis(np.linspace(0.0, 0.85, q_values.size))
-    by_q = "Q" in dims
+    # Colour by Q when it is swept, else by M: one legend entry each, or a colour bar.
+    by = "Q" if "Q" in dims else ("M" if "M" in dims else "Q")
+    c_values = np.atleast_1d(dataset[by].values).astype(float)
+    spread = c_values.max() / c_values.min() if c_values.min() > 0 else 1.0
+    norm = (LogNorm(c_values.min(), c_values.max()) if spread > 10 else
+            Normalize(c_values.min(), c_values.max() if c_values.max() > c_values.min()
+                      else c_values.min() + 1.0))
+    colors, bar = value_colours(c_values, norm=norm)
+    swept = by in dims
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12.0, 5.4), layout="constrained",
                                  gridspec_kw={"width_ratios": [1.7, 1.0]})
     xs = np.array([r[2] for r in rows])
     ys = np.array([r[3] for r in rows])
     edge = np.array([r[4] for r in rows])
-    for k, q in enumerate(q_values):
-        pick = [i for i, r in enumerate(rows) if not by_q or r[0]["Q"] == k]
+    groups = [[i for i, r in enumerate(rows) if not swept or r[0][by] == k]
+              for k in range(c_values.size)]
+    for k, value in enumerate(c_values):
+        pick = groups[k]
         inside = [i for i in pick if not edge[i]]
-        ax.plot(xs[inside], ys[inside], "o", ms=6, color=colors[k], mec="k", mew=0.4,
-                label=f"Q = {q:g}", zorder=3)
+        ax.plot(xs[inside], ys[inside], "o", ms=6 if len(rows) <= 200 else 3.5,
+                color=colors[k], mec="k", mew=0.4,
+                label=None if bar is not None else f"{by} = {value:g}", zorder=3)
         outside = [i for i in pick if edge[i]]
         if outside:
             ax.plot(xs[outside], ys[outside], "o", ms=6, mfc="none", mec=colors[k], zorder=3)
@@ -104,30 +119,38 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
            title="Minimum thresholds collapse on the resonance closed form")
     ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
 
-    # Side panel: the same minima against M alone.
-    if "M" in dims:
-        m_values = dataset["M"].values
-        for k, q in enumerate(q_values):
-            pick = [i for i, r in enumerate(rows) if not by_q or r[0]["Q"] == k]
-            order = sorted(pick, key=lambda i: rows[i][0]["M"])
-            ms = m_values[[rows[i][0]["M"] for i in order]]
-            bx.plot(ms, ys[order], "-", lw=1.2, color=colors[k], label=f"Q = {q:g}")
-            bx.plot(ms, np.where(edge[order], np.nan, ys[order]), "o", ms=3.5, color=colors[k])
-            bx.plot(ms, np.where(edge[order], ys[order], np.nan), "o", ms=4, mfc="none",
-                    mec=colors[k])
-        bx.set(xscale="log", xlabel="mass ratio M = m$_1$/m [1]")
-    else:
-        bx.plot(np.atleast_1d(dataset["M"].values).repeat(len(rows)), ys, "o",
-                color=colors[0], label=f"Q = {q_values[0]:g}")
-        bx.set(xlabel="mass ratio M = m$_1$/m [1]")
+    # Side panel: the same minima against M alone (or Q, when only Q is swept).
+    along = "M" if "M" in dims else ("Q" if "Q" in dims else "M")
+    axis_values = np.atleast_1d(dataset[along].values)
+    if along == by:  # one line through every structure, coloured point by point
+        order = sorted(range(len(rows)), key=lambda i: rows[i][0].get(along, 0))
+        xv = axis_values[[rows[i][0].get(along, 0) for i in order]]
+        bx.plot(xv, ys[order], "-", lw=1.0, color="0.6", zorder=1)
+        bx.scatter(xv, ys[order], s=22, zorder=2, edgecolors="k", linewidths=0.4,
+                   c=[colors[rows[i][0].get(by, 0)] for i in order])
+    for k, value in enumerate(c_values if along != by else []):
+        order = sorted(groups[k], key=lambda i: rows[i][0].get(along, 0))
+        xv = axis_values[[rows[i][0].get(along, 0) for i in order]]
+        bx.plot(xv, ys[order], "-", lw=1.2, color=colors[k],
+                label=None if bar is not None else f"{by} = {value:g}")
+        bx.plot(xv, np.where(edge[order], np.nan, ys[order]), "o", ms=3.5, color=colors[k])
+        bx.plot(xv, np.where(edge[order], ys[order], np.nan), "o", ms=4, mfc="none",
+                mec=colors[k])
+    names = {"M": "mass ratio M = m$_1$/m [1]", "Q": "quality factor Q [1]"}
+    bx.set(xscale="log" if along in dims else "linear", xlabel=names[along])
+    bx.xaxis.set_minor_formatter(NullFormatter())
     bx.set(yscale="log", ylabel="minimum threshold over f, $a^*_{min}/g$ [1]",
-           title="The same minima against M alone\n(not collapsed)")
-    bx.legend(loc="lower left", fontsize=8, framealpha=0.9)
+           title=f"The same minima against {along} alone\n(not collapsed)")
+    if bx.get_legend_handles_labels()[0]:
+        bx.legend(loc="lower left", fontsize=8, framealpha=0.9)
+    if bar is not None:
+        fig.colorbar(bar, ax=bx, pad=0.01, label=f"{by} ({c_values.size} values)")
 
     s = rows[0][1]
     title = (
         f"Q m1 ~ m: minimum motion threshold over f in [{f[0]:g}, {f[-1]:g}] Hz for "
         f"{len(rows)} structures (f0 = {s.f0:g} Hz, alpha = {s.alpha:g} deg, cs = {s.cs:g})"
     )
-    fig.suptitle(title, fontsize=11)
+    selected = selection_text(dataset)
+    fig.suptitle(title + (f"\n{selected}" if selected else ""), fontsize=11)
     return save(fig, output, dataset, title)

@@ -1,11 +1,14 @@
 """The paper's Fig. 1B: motion thresholds a*_+ and a*_- against drive frequency.
 
 Drawn from a ``thresholds`` result file alone (``study figure thresholds FILE``): the
-thresholds, the lift-off acceleration and the mode's resonance curve behind them.
+thresholds, the lift-off acceleration and the mode's resonance curve behind them; with
+``--measurements lab.csv`` the measured thresholds with their error bars
+(:mod:`study.figures.measured`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -13,14 +16,15 @@ import numpy as np
 import xarray as xr
 from matplotlib.patches import Patch
 
-from study.figures import common
+from study.figures import common, measured
 from study.figures.common import parameter_text, single_structure
 from study.physics.forces import lift_off_acceleration
 
 __all__ = ["draw"]
 
 
-def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+def draw(dataset: xr.Dataset, output: Path,
+         measurements: Sequence[str | Path] | None = None) -> list[Path]:
     """Draw the thresholds of a ``thresholds`` result into ``output.png/.pdf``.
 
     Parameters
@@ -31,6 +35,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         the structure stored in it).
     output : pathlib.Path
         File stem.
+    measurements : sequence of paths, optional
+        Measurement files whose ``threshold`` rows (of this structure) are drawn with
+        their error bars, marker by direction.
 
     Returns
     -------
@@ -49,6 +56,13 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         a_lift = lift_off_acceleration(structure, f)
     lowest = np.fmin(a_plus, a_minus)
     top = float(max(1.25 * np.nanmax(a_lift), 1.15 * np.nanmax(lowest), 1.1 * structure.g))
+    data = rows = None
+    if measurements:
+        data = measured.load(measurements)
+        rows = measured.same_structure(data, measured.pick(data, "threshold", "thresholds"),
+                                       dataset, "thresholds")
+        high = data["value"].values[rows] + np.nan_to_num(data["sigma"].values[rows])
+        top = max(top, 1.1 * float(np.max(high)))
 
     fig, ax = plt.subplots(figsize=(7.5, 5.0), layout="constrained")
     behind = ax.twinx()
@@ -69,7 +83,14 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     ax.plot(f, a_plus, color="tab:blue", lw=2.0)
     ax.plot(f, a_minus, color="tab:red", lw=2.0)
     ax.plot(f, a_lift, color="black", lw=1.4, ls="--")
-    ax.set(xlim=(f[0], f[-1]), ylim=(0.0, top), xlabel="drive frequency f [Hz]",
+    xlim = (float(f[0]), float(f[-1]))
+    if rows is not None:
+        colour = {"forward": "tab:blue", "backward": "tab:red", "unknown": "white"}
+        directions = data["direction"].values.astype(str)[rows]
+        measured.draw_rows(ax, data, rows, "f", colours=[colour[d] for d in directions])
+        xs = data["f"].values[rows]
+        xlim = (min(xlim[0], float(xs.min()) - 0.2), max(xlim[1], float(xs.max()) + 0.2))
+    ax.set(xlim=xlim, ylim=(0.0, top), xlabel="drive frequency f [Hz]",
            ylabel="drive acceleration a [m s$^{-2}$]")
 
     handles = [
@@ -83,7 +104,19 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         Patch(facecolor="0.88", edgecolor="0.65", lw=0.8,
               label=r"mode gain $|\omega_0^2 G|$ (right axis)"),
     ]
+    if rows is not None:
+        directions = set(data["direction"].values.astype(str)[rows])
+        for direction, colour, text in (
+                ("forward", "tab:blue", "measured, forward"),
+                ("backward", "tab:red", "measured, backward"),
+                ("unknown", "white", "measured, direction unknown")):
+            if direction in directions:
+                handles.append(plt.Line2D([], [], ls="none", marker=measured.MARKERS[direction],
+                                          ms=6, mfc=colour, mec="black",
+                                          label=f"{text} $\\pm\\sigma$"))
     title = "Motion thresholds against drive frequency"
+    if rows is not None:
+        title += f", with {rows.size} measured"
     ax.set_title(f"{title}\n{parameter_text(dataset)}", fontsize=11)
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,
                frameon=False)

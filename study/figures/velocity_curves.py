@@ -3,21 +3,27 @@
 Drawn from a ``velocity-curves`` result file alone (``study figure velocity-curves FILE``).
 Each curve stops at the first lift-off point of its frequency: beyond it the model
 does not apply. Points that did not converge leave gaps and are marked on the axis.
+Up to 8 curves get a legend entry each; more get a colour bar of the frequency. With
+``--measurements lab.csv`` the measured velocities are drawn with their error bars, each
+in the colour of the curve of the nearest frequency (:mod:`study.figures.measured`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib import colormaps
-from matplotlib.colors import ListedColormap
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import ListedColormap, Normalize
 from matplotlib.lines import Line2D
 
-from study.figures import common
+from study.figures import FigureError, common, measured
 from study.figures.common import (
+    MAX_LEGEND_ENTRIES,
     VALID,
     coupling_label,
     one_way_velocity,
@@ -52,15 +58,41 @@ def frequency_position(f: np.ndarray, f0: float) -> np.ndarray:
     return 0.5 + 0.5 * np.sign(offset) * np.sqrt(np.abs(offset) / span)
 
 
-def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+def _matched(data, rows: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rows whose frequency is a curve's, and the index of that curve: the nearest
+    within half the smallest spacing of the curves (1 % of f for a single curve)."""
+    if f.size > 1:
+        tolerance = 0.5 * float(np.min(np.diff(np.sort(f))))
+    else:
+        tolerance = 0.01 * float(f[0])
+    fr = data["f"].values[rows]
+    nearest = np.argmin(np.abs(fr[:, None] - f[None, :]), axis=1)
+    ok = np.abs(fr - f[nearest]) <= tolerance * (1 + 1e-9)
+    if not ok.any():
+        raise FigureError(
+            f"{data.attrs.get('study_measurement_files', 'measurements')}: no velocity row "
+            f"at a frequency of the curves (rows at {', '.join(f'{x:g}' for x in np.unique(fr))}"
+            f" Hz; curves at {', '.join(f'{x:g}' for x in f[:12])}"
+            f"{' ...' if f.size > 12 else ''} Hz, matched within {tolerance:.3g} Hz); "
+            "select the frequencies with --sel f=START:STOP or compute curves at the "
+            "measured frequencies")
+    return rows[ok], nearest[ok]
+
+
+def draw(dataset: xr.Dataset, output: Path,
+         measurements: Sequence[str | Path] | None = None) -> list[Path]:
     """Draw velocity against acceleration, one line per frequency, into ``output.png/.pdf``.
 
     Parameters
     ----------
     dataset : xarray.Dataset
-        A result holding velocity and status over (f, a).
+        A result holding velocity and status over (f, a), of one structure (or
+        selected to one with ``--sel``).
     output : pathlib.Path
         File stem.
+    measurements : sequence of paths, optional
+        Measurement files whose ``velocity`` rows (of this structure, at the curves'
+        frequencies) are drawn with their error bars.
 
     Returns
     -------
@@ -68,37 +100,70 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         The PNG and the PDF.
     """
     single_structure(dataset, "velocity-curves")
+    if "f" not in dataset.dims:
+        dataset = dataset.expand_dims("f")
+    if "a" not in dataset.dims or dataset.sizes["a"] < 2:
+        raise FigureError("figure 'velocity-curves' draws velocity against a: the file "
+                          "(as selected) needs several values of a; select a range "
+                          "(--sel a=START:STOP), not one value")
     structure = common.structure_from_dataset(dataset)
     f = dataset["f"].values
     a = dataset["a"].values
     velocity = 1e3 * dataset["velocity"].transpose("f", "a").values  # mm/s
     status = dataset["status"].transpose("f", "a").values
-    positions = frequency_position(f, structure.f0)
     paper = one_way_velocity(dataset, "f", "a")  # beside a two-way study
+    # The colours run over the frequency, centred on f0 (blue below, red above); many
+    # curves share one colour bar instead of a legend entry each.
+    fine = np.linspace(float(f.min()), float(f.max()), 256) if f.size > 1 else f
+    cmap = ListedColormap(FREQUENCY_COLORS(frequency_position(fine, structure.f0)))
+    norm = Normalize(float(f.min()), float(f.max()) if f.size > 1 else float(f[0]) + 1.0)
+    colour_bar = f.size > MAX_LEGEND_ENTRIES
+    colours = [FREQUENCY_COLORS(p) for p in frequency_position(f, structure.f0)]
+
+    data = rows = None
+    if measurements:
+        data = measured.load(measurements)
+        rows = measured.same_structure(data, measured.pick(data, "velocity",
+                                                           "velocity-curves"),
+                                       dataset, "velocity-curves")
+        valid_speed = np.where(np.isin(status, VALID), np.abs(velocity), 0.0)
+        measured.check_velocity_units(data, rows, 1e-3 * float(np.nanmax(valid_speed,
+                                                                          initial=0.0)))
+        rows, curve = _matched(data, rows, f)
 
     fig, ax = plt.subplots(figsize=(8.0, 5.2), layout="constrained")
     ax.axhline(0.0, color="black", lw=0.8)
     handles = []
     any_lift = any_stuck = False
+    lw = 1.6 if f.size <= 30 else 1.0
     for i, frequency in enumerate(f):
-        color = FREQUENCY_COLORS(positions[i])
+        color = colours[i]
         lifted = np.flatnonzero(status[i] == Status.LIFT_OFF)
         end = int(lifted[0]) if lifted.size else a.size
         valid = np.isin(status[i, :end], VALID)
         shown = np.where(valid, velocity[i, :end], np.nan)
-        (line,) = ax.plot(a[:end], shown, color=color, lw=1.6, label=f"{frequency:g} Hz")
-        handles.append(line)
+        (line,) = ax.plot(a[:end], shown, color=color, lw=lw, label=f"{frequency:g} Hz")
+        if not colour_bar:
+            handles.append(line)
         if paper is not None:
             ax.plot(a, 1e3 * paper[i], color=color, lw=0.9, ls="--", alpha=0.8)
         if lifted.size and end > 0 and valid[-1]:
             any_lift = True
-            ax.plot(a[end - 1], shown[-1], ls="none", marker="o", ms=5.5, mfc="white",
-                    mec=color, mew=1.6, zorder=4)
+            ax.plot(a[end - 1], shown[-1], ls="none", marker="o", ms=5.5 if lw > 1 else 3.5,
+                    mfc="white", mec=color, mew=1.6 if lw > 1 else 1.0, zorder=4)
         stuck = np.flatnonzero(status[i] == Status.NOT_CONVERGED)
         if stuck.size:
             any_stuck = True
             ax.plot(a[stuck], np.full(stuck.size, 0.03), ls="none", marker="x", ms=5,
                     color=color, transform=ax.get_xaxis_transform(), clip_on=False)
+    xlim = (float(a[0]), float(a[-1]))
+    if rows is not None:
+        measured.draw_rows(ax, data, rows, "a", scale=1e3,
+                           colours=[colours[c] for c in curve])
+        handles.append(Line2D([], [], ls="none", marker="o", ms=6, mfc="0.6", mec="black",
+                              label="measured $\\pm\\sigma$\n(colour of its curve)"))
+        xs = data["a"].values[rows]
+        xlim = (min(xlim[0], float(xs.min())), max(xlim[1], 1.03 * float(xs.max())))
     if paper is not None:
         handles.append(Line2D([], [], color="0.3", lw=0.9, ls="--",
                               label="one-way (paper's) model,\nsame frequency"))
@@ -108,13 +173,22 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     if any_stuck:
         handles.append(Line2D([], [], ls="none", marker="x", ms=5, color="0.3",
                               label="not converged at this a\n(no velocity; gap)"))
-    ax.set(xlim=(a[0], a[-1]), xlabel="drive acceleration a [m s$^{-2}$]",
+    ax.set(xlim=xlim, xlabel="drive acceleration a [m s$^{-2}$]",
            ylabel="mean velocity v [mm s$^{-1}$]  (> 0: forward)")
     title = ("Mean steady velocity against drive acceleration at fixed frequencies, "
              f"{coupling_label(dataset)}")
+    if rows is not None:
+        title += f", with {rows.size} measured"
     ax.set_title(title.replace("frequencies, ", "frequencies\n", 1)
                  + f"\n{parameter_text(dataset)}", fontsize=11)
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-              borderaxespad=0.0, fontsize=8.5, title="drive frequency f\n(blue < $f_0$ < red)",
-              title_fontsize=9, frameon=False)
+    if colour_bar:
+        bar = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, pad=0.01)
+        bar.set_label(f"drive frequency f [Hz] ({f.size} curves; blue < $f_0$ = "
+                      f"{structure.f0:g} Hz < red)")
+    if handles:
+        ax.legend(handles=handles, loc="best" if colour_bar else "upper left",
+                  bbox_to_anchor=None if colour_bar else (1.01, 1.0),
+                  borderaxespad=0.5 if colour_bar else 0.0, fontsize=8.5,
+                  title=None if colour_bar else "drive frequency f\n(blue < $f_0$ < red)",
+                  title_fontsize=9, frameon=colour_bar)
     return common.save(fig, output, dataset, title)
