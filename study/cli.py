@@ -120,12 +120,12 @@ def _validate(args: argparse.Namespace) -> int:
     status = 0
     for path in args.files:
         try:
-            validate_file(path)
+            what = validate_file(path)
         except ResultError as err:
             print(f"study: {err}", file=sys.stderr)
             status = 1
         else:
-            print(f"{path}: valid study result")
+            print(f"{path}: valid {what}")
     return status
 
 

@@ -847,7 +847,7 @@ def _fit_problems(nc: Any, meta: _File) -> list[str]:
 # The entry points
 
 
-def validate_file(path: str | Path) -> None:
+def validate_file(path: str | Path) -> str:
     """Check a result file of any kind, reading its data in bounded slabs.
 
     Studies (``study-result-v1``): the header against
@@ -867,6 +867,11 @@ def validate_file(path: str | Path) -> None:
     structure, units on every float variable, flag values within their
     ``flag_values``; the content checksum matches.
 
+    Returns
+    -------
+    str
+        What the file is: "study result", "steering scene result" or "fit result".
+
     Raises
     ------
     ResultError
@@ -885,7 +890,8 @@ def validate_file(path: str | Path) -> None:
         if not any(_same_text(kind, k) for k in (RESULT_SCHEMA, SCENE_SCHEMA, FIT_SCHEMA)):
             raise ResultError(
                 f"{path}: written with result schema {_short(repr(_jsonable(kind)), 80)}; "
-                f"this version of study reads {RESULT_SCHEMA!r} and {SCENE_SCHEMA!r}. Rerun "
+                f"this version of study reads {RESULT_SCHEMA!r}, {SCENE_SCHEMA!r} and "
+                f"{FIT_SCHEMA!r}. Rerun "
                 "its study to rewrite it.")
         if meta.groups:
             problems = [f"groups {', '.join(meta.groups)}: study writes no groups"]
@@ -897,11 +903,12 @@ def validate_file(path: str | Path) -> None:
             problems = _scene_problems(nc, meta, str(path))
     finally:
         nc.close()
+    what = {RESULT_SCHEMA: "study result", FIT_SCHEMA: "fit result"}.get(
+        kind, "steering scene result")
     if problems:
         problems = list(dict.fromkeys(problems))  # two schema branches may see one fault
-        what = {RESULT_SCHEMA: "study result", FIT_SCHEMA: "fit result"}.get(
-            kind, "steering scene result")
         raise ResultError(f"{path}: invalid {what}:\n  " + "\n  ".join(problems))
+    return what
 
 
 def open_result(path: str | Path) -> xr.Dataset:

@@ -364,7 +364,8 @@ def test_info_and_validate_commands_read_every_kind(sealed, capsys) -> None:
         assert main(["validate", str(path)]) == 0
         assert main(["info", str(path)]) == 0
     out = capsys.readouterr().out
-    assert out.count("valid study result") == len(sealed)
+    valid = out.count(": valid study result") + out.count(": valid steering scene result")
+    assert valid == len(sealed)
     assert "segment_status: completed" in out and "status: static" in out
 
 
