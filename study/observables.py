@@ -181,7 +181,8 @@ class Observable:
 
 def _resonance(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
     response = structure.omega0**2 * mode_response(structure, f)
-    return {"mode_gain": np.abs(response), "mode_phase": -np.angle(response)}
+    # The phase lag in degree (0 at low frequency, 90 at resonance, towards 180 above).
+    return {"mode_gain": np.abs(response), "mode_phase": np.degrees(-np.angle(response))}
 
 
 def _thresholds(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray[Any]]:

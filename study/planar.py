@@ -11,8 +11,13 @@ sliding lie on the ellipsoid ``|f|^2 / (mu n)^2 + tau^2 / (mu n c)^2 = 1``; the 
 is normal to it), with stick and slip for force and torque together. See
 :mod:`study.kernels.planar` for the equations and README "Steering" for the choices.
 
-Per unit total mass, SI units: lengths in m, angles in rad inside (degrees in the
-plate definition, as in :class:`study.structure.Structure`).
+Per unit total mass, SI units: lengths in m; every angle a caller passes or gets back
+is in degrees (the plates' tilt and direction, as in :class:`study.structure.Structure`;
+headings, spins and turn rates in degree and degree s^-1; the heading noise in degree
+m^-1/2), including the heading and spin of the state vectors (``initial_state``,
+``final_state``, :func:`rest_state`). The kernel (:mod:`study.kernels.planar`) works in
+radians; the conversion is made here, at the boundary (:func:`_to_kernel`,
+:func:`_from_kernel`).
 """
 
 from __future__ import annotations
@@ -48,8 +53,9 @@ __all__ = [
     "steady_plate_states",
 ]
 
-#: Bumped whenever the planar model or its numerics change the numbers it returns.
-PLANAR_VERSION = "1"
+#: Bumped whenever the planar model or its numerics change the numbers it returns
+#: (2: headings, spins and turn rates in degree, no longer rad).
+PLANAR_VERSION = "2"
 
 #: How a run ended, by kernel return code.
 OUTCOMES = {
@@ -72,6 +78,26 @@ SLAVING = 1e-4
 
 #: Names of the state components (``delta_i``, ``delta_i'`` follow, plate by plate).
 POSE_STATE = ("x", "y", "heading", "vx", "vy", "spin", "path")
+
+#: Units of the state components a caller sees (the kernel's heading and spin are in
+#: rad and rad s^-1).
+POSE_UNITS = ("m", "m", "degree", "m s-1", "m s-1", "degree s-1", "m")
+
+
+def _to_kernel(state: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A state vector in the caller's units (heading [degree], spin [degree s^-1]) as
+    the kernel's (rad, rad s^-1); a copy."""
+    out = np.array(state, dtype=float)
+    out[[_kernel.HEADING, _kernel.SPIN]] = np.radians(out[[_kernel.HEADING, _kernel.SPIN]])
+    return out
+
+
+def _from_kernel(state: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A kernel state vector (rad, rad s^-1) in the caller's units (degree, degree
+    s^-1); a copy."""
+    out = np.array(state, dtype=float)
+    out[[_kernel.HEADING, _kernel.SPIN]] = np.degrees(out[[_kernel.HEADING, _kernel.SPIN]])
+    return out
 
 
 @dataclass(frozen=True)
@@ -300,9 +326,10 @@ def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
 
 def rest_state(disk: Disk, pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
                drive: tuple[float, float] | None = None) -> NDArray[np.float64]:
-    """A state vector (see :func:`state_names`) with the disk at rest at ``pose``
-    ``(x [m], y [m], heading [rad])``: the plates at rest, or, with ``drive = (f [Hz],
-    a [m s^-2])``, on their steady response to it at drive phase 0."""
+    """A state vector (see :func:`state_names`; heading [degree], spin [degree s^-1])
+    with the disk at rest at ``pose`` ``(x [m], y [m], heading [degree])``: the plates at
+    rest, or, with ``drive = (f [Hz], a [m s^-2])``, on their steady response to it at
+    drive phase 0."""
     state = np.zeros(len(POSE_STATE) + 2 * len(disk.plates))
     state[:3] = pose
     if drive is not None:
@@ -321,11 +348,11 @@ class PlanarTrajectory:
     x, y : numpy.ndarray
         Position of the disk's centre [m].
     heading : numpy.ndarray
-        Heading, counterclockwise from the x axis, unwrapped [rad].
+        Heading, counterclockwise from the x axis, unwrapped [degree].
     vx, vy : numpy.ndarray
         Velocity [m s^-1].
     spin : numpy.ndarray
-        Angular velocity [rad s^-1].
+        Angular velocity, counterclockwise positive [degree s^-1].
     path : numpy.ndarray
         Distance slid since the start [m].
     plate_states : numpy.ndarray
@@ -342,9 +369,11 @@ class PlanarTrajectory:
     steps, rejected_steps, slips : int
         Work done.
     final_state : numpy.ndarray
-        State vector at ``end_time`` (see :func:`state_names`), to continue a run from.
+        State vector at ``end_time`` (see :func:`state_names`; heading [degree], spin
+        [degree s^-1]), to continue a run from.
     heading_kicks : numpy.ndarray
-        Heading noise added at the end of each drive period [rad] (zeros without noise).
+        Heading noise added at the end of each drive period [degree] (zeros without
+        noise).
     """
 
     time: NDArray[np.float64]
@@ -409,7 +438,7 @@ def simulate_planar(
     schedule : study.transient.Schedule
         The drive; the run ends at the end of its last segment (or at lift-off).
     initial_state : array_like, optional
-        ``(x [m], y [m], heading [rad], vx [m s^-1], vy [m s^-1], spin [rad s^-1],
+        ``(x [m], y [m], heading [degree], vx [m s^-1], vy [m s^-1], spin [degree s^-1],
         path [m], delta_1 [m], delta_1' [m s^-1], ...)`` at ``t = 0``; default all
         zero (at rest, plates at rest). With a non-zero twist the run starts sliding.
     output_times : array_like, optional
@@ -420,10 +449,10 @@ def simulate_planar(
         ``max_steps`` apply (periods are the schedule's shortest); fixed steps are not
         offered here.
     heading_noise : float
-        Phenomenological heading diffusion [rad m^-1/2]: at the end of every drive
+        Phenomenological heading diffusion [degree m^-1/2]: at the end of every drive
         period the heading gets a Gaussian kick of variance ``heading_noise^2 * s``,
-        ``s`` the distance slid in that period. ``0.1 / sqrt(diameter)`` gives the
-        paper's measured drift of 0.1 rad per diameter travelled.
+        ``s`` the distance slid in that period. ``5.73 / sqrt(diameter)`` gives the
+        paper's measured drift of 0.1 rad (5.73 degree) per diameter travelled.
     rng : numpy.random.Generator or int, optional
         Source (or seed) of the heading kicks.
     max_events : int
@@ -448,15 +477,17 @@ def simulate_planar(
                          "set tolerance instead")
     noise = require_finite("heading_noise", heading_noise)
     if noise < 0.0:
-        raise ValueError(f"heading_noise = {noise!r} [rad m^-1/2] must be >= 0")
+        raise ValueError(f"heading_noise = {noise!r} [degree m^-1/2] must be >= 0")
+    noise = math.radians(noise)  # the kernel's heading is in rad
     names = state_names(disk)
     size = len(names)
     y = np.zeros(size) if initial_state is None else np.array(initial_state, dtype=float)
     if y.shape != (size,) or not np.all(np.isfinite(y)):
         raise ValueError(
-            f"initial_state must be {size} finite numbers ({', '.join(names)}), got "
-            f"{initial_state!r}"
+            f"initial_state must be {size} finite numbers ({', '.join(names)}; heading "
+            f"[degree], spin [degree s^-1]), got {initial_state!r}"
         )
+    y = _to_kernel(y)
     end = float(schedule.ends[-1])
     shortest = float(1.0 / np.max(schedule.frequency))
     if output_times is None:
@@ -506,6 +537,8 @@ def simulate_planar(
     m = int(out_box[0])
     e = min(int(ev_box[0]), capacity)
     states = out_y[:m]
+    angles = [_kernel.HEADING, _kernel.SPIN]
+    states[:, angles] = np.degrees(states[:, angles])
     return PlanarTrajectory(
         time=out_t[:m].copy(),
         x=states[:, _kernel.X].copy(),
@@ -524,13 +557,14 @@ def simulate_planar(
         steps=int(stats[0]),
         rejected_steps=int(stats[1]),
         slips=int(stats[2]),
-        final_state=y.copy(),
-        heading_kicks=kicks,
+        final_state=_from_kernel(y),
+        heading_kicks=np.degrees(kicks),
     )
 
 
 def state_names(disk: Disk) -> tuple[str, ...]:
-    """Names of the components of a planar state vector."""
+    """Names of the components of a planar state vector (units: :data:`POSE_UNITS`,
+    then each plate's ``delta`` [m] and ``delta'`` [m s^-1])."""
     names: list[str] = list(POSE_STATE)
     for plate in disk.plates:
         names += [f"delta_{plate.name}", f"delta_rate_{plate.name}"]
@@ -567,7 +601,7 @@ class PeriodicMotion:
         Mean velocity along the heading and to its left, in the body frame at the
         period's start [m s^-1].
     turn_rate : float
-        Mean angular velocity, counterclockwise positive [rad s^-1].
+        Mean angular velocity, counterclockwise positive [degree s^-1].
     status : int
         A :class:`study.status.Status` code.
     reason : int
@@ -649,7 +683,7 @@ def periodic_motion(
     disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / omega
     scale = _scales(disk, omega)
     size = scale.size
-    y = rest_state(disk, drive=(f, a))
+    y = _to_kernel(rest_state(disk, drive=(f, a)))
     seg = (np.zeros(1), np.full(1, omega), np.full(1, float(a)), np.zeros(1), np.full(1, np.inf))
     mode_box = np.zeros(1, dtype=np.int64)
     t_box = np.array([0.0, settings.max_step * period])
@@ -714,7 +748,8 @@ def periodic_motion(
                 status = Status.CONTINUOUS_SLIDING
             return PeriodicMotion(
                 float((c * dx + s * dy) * rate), float((-s * dx + c * dy) * rate),
-                float((last[2] - first[2]) * rate), int(status), int(Reason.NONE), count,
+                math.degrees((last[2] - first[2]) * rate), int(status), int(Reason.NONE),
+                count,
                 float(slips), float(stuck), orbit,
             )
     return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),

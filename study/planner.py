@@ -11,12 +11,16 @@ command's duration are solved so that the predicted arc ends on the waypoint.
 Past the paper: the paper steers by hand. Between command switches the plate modes
 go through transients the calibration does not know, and the measured heading drift
 is random; :func:`run_plan` shows how much both cost by simulating the schedule.
+
+Angles: every heading, turn and turn rate a caller passes or gets back is in degree
+(degree s^-1), as in :mod:`study.planar`; the arc geometry inside works in radians
+(the private helpers ``_arc``, ``_rate``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -68,7 +72,7 @@ class Command:
     forward_speed, lateral_speed : float
         Steady body-frame velocity [m s^-1].
     turn_rate : float
-        Steady angular velocity, counterclockwise positive [rad s^-1].
+        Steady angular velocity, counterclockwise positive [degree s^-1].
     """
 
     name: str
@@ -81,7 +85,8 @@ class Command:
 
 @dataclass(frozen=True)
 class Leg:
-    """A planned leg: a turn then a straight command, and the predicted pose after it."""
+    """A planned leg: a turn then a straight command (durations [s]), and the predicted
+    pose ``(x [m], y [m], heading [degree])`` after it."""
 
     turn: str
     turn_duration: float
@@ -129,27 +134,39 @@ def calibrate_commands(disk: Disk, frequencies: dict[str, float], acceleration: 
         raise PlanError(
             "the left command must turn the disk counterclockwise and the right command "
             f"clockwise; calibrated turn rates {commands['left'].turn_rate:.3g} and "
-            f"{commands['right'].turn_rate:.3g} rad s^-1"
+            f"{commands['right'].turn_rate:.3g} degree s^-1"
         )
     return commands
 
 
+def _rate(command: Command) -> float:
+    """The command's turn rate [rad s^-1]."""
+    return math.radians(command.turn_rate)
+
+
 def arc_displacement(command: Command, duration: float) -> tuple[float, float, float]:
-    """Body-frame displacement ``(forward [m], left [m], turn [rad])`` after holding a
+    """Body-frame displacement ``(forward [m], left [m], turn [degree])`` after holding a
     command for ``duration`` [s] (a circular arc at constant body-frame velocity)."""
-    turn = command.turn_rate * duration
+    forward, left, turn = _arc(command, duration)
+    return forward, left, math.degrees(turn)
+
+
+def _arc(command: Command, duration: float) -> tuple[float, float, float]:
+    """:func:`arc_displacement` with the turn in rad."""
+    turn = _rate(command) * duration
     u, v = command.forward_speed, command.lateral_speed
     if abs(turn) < 1e-9:
         # Series of the arc for a tiny turn (avoids 0/0).
         return (duration * (u - v * turn / 2.0), duration * (v + u * turn / 2.0), turn)
     s, c = math.sin(turn), 1.0 - math.cos(turn)
-    w = command.turn_rate
+    w = _rate(command)
     return ((u * s - v * c) / w, (u * c + v * s) / w, turn)
 
 
 def _advance(pose: tuple[float, float, float], command: Command, duration: float
              ) -> tuple[float, float, float]:
-    forward, left, turn = arc_displacement(command, duration)
+    """Pose ``(x, y, heading [rad])`` after holding ``command`` from ``pose`` (rad)."""
+    forward, left, turn = _arc(command, duration)
     x, y, heading = pose
     c, s = math.cos(heading), math.sin(heading)
     return (x + c * forward - s * left, y + s * forward + c * left, heading + turn)
@@ -163,22 +180,23 @@ def _straight_time(command: Command, distance: float) -> float:
     """Time for the command's arc to reach ``distance`` from its start [s]."""
     speed = math.hypot(command.forward_speed, command.lateral_speed)
     guess = distance / speed
-    if abs(command.turn_rate) < 1e-12:
+    rate = abs(_rate(command))
+    if rate < 1e-12:
         return guess
     # The chord 2 (speed / w) |sin(w t / 2)| grows with t up to half a circle.
-    ratio = distance * abs(command.turn_rate) / (2.0 * speed)
+    ratio = distance * rate / (2.0 * speed)
     if ratio >= 1.0:
         raise PlanError(
             f"the {command.name!r} command veers on a circle of diameter "
-            f"{2 * speed / abs(command.turn_rate):.3g} m and cannot reach {distance:.3g} m"
+            f"{2 * speed / rate:.3g} m and cannot reach {distance:.3g} m"
         )
-    return 2.0 * math.asin(ratio) / abs(command.turn_rate)
+    return 2.0 * math.asin(ratio) / rate
 
 
 def _single_leg(pose: tuple[float, float, float], target: tuple[float, float],
                 commands: dict[str, Command], iterations: int) -> Leg | None:
-    """The fastest turn-then-straight pair from ``pose`` to ``target`` (None if no
-    straight command's arc reaches it)."""
+    """The fastest turn-then-straight pair from ``pose`` (heading in rad) to ``target``
+    (None if no straight command's arc reaches it); its predicted pose in rad."""
     best: Leg | None = None
     best_time = math.inf
     for straight in ("forward", "backward"):
@@ -189,12 +207,12 @@ def _single_leg(pose: tuple[float, float, float], target: tuple[float, float],
             # Fixed point: the turn moves the disk, which moves the heading needed.
             for _ in range(iterations):
                 dx, dy = target[0] - start[0], target[1] - start[1]
-                forward, left, _ = arc_displacement(
+                forward, left, _ = _arc(
                     command, _straight_time(command, math.hypot(dx, dy)))
                 # Heading at which the arc from `start` ends on the target.
                 change = _wrap(math.atan2(dy, dx) - math.atan2(left, forward) - pose[2])
                 turn_name = "left" if change >= 0.0 else "right"
-                previous, turn_duration = turn_duration, change / commands[turn_name].turn_rate
+                previous, turn_duration = turn_duration, change / _rate(commands[turn_name])
                 start = _advance(pose, commands[turn_name], turn_duration)
                 if abs(turn_duration - previous) <= 1e-13 * (1.0 + abs(turn_duration)):
                     break
@@ -212,7 +230,8 @@ def _single_leg(pose: tuple[float, float, float], target: tuple[float, float],
 
 def plan_leg(pose: tuple[float, float, float], target: tuple[float, float],
              commands: dict[str, Command], iterations: int = 100) -> list[Leg]:
-    """Turn-then-straight pairs from ``pose`` to ``target`` under the calibration.
+    """Turn-then-straight pairs from ``pose`` ``(x [m], y [m], heading [degree])`` to
+    ``target`` ``(x [m], y [m])`` under the calibration.
 
     A straight command veers (the plates are not perfectly aligned in their effect):
     its path is an arc of a circle, so a target farther than a third of that circle's
@@ -221,9 +240,10 @@ def plan_leg(pose: tuple[float, float, float], target: tuple[float, float],
     """
     forward = commands["forward"]
     diameter = 2.0 * math.hypot(forward.forward_speed, forward.lateral_speed) / max(
-        abs(forward.turn_rate), 1e-300)
+        abs(_rate(forward)), 1e-300)
     reach = diameter / 3.0
     legs: list[Leg] = []
+    pose = (pose[0], pose[1], math.radians(pose[2]))  # rad inside
     for _ in range(10_000):
         dx, dy = target[0] - pose[0], target[1] - pose[1]
         distance = math.hypot(dx, dy)
@@ -232,8 +252,8 @@ def plan_leg(pose: tuple[float, float, float], target: tuple[float, float],
         leg = _single_leg(pose, point, commands, iterations)
         if leg is None:
             raise PlanError(f"no command reaches {point} from {pose[:2]}")
-        legs.append(leg)
         pose = leg.predicted_pose
+        legs.append(replace(leg, predicted_pose=(pose[0], pose[1], math.degrees(pose[2]))))
         if step == 1.0:
             return legs
     raise PlanError(f"target {target} not reached in 10000 legs")
@@ -241,7 +261,8 @@ def plan_leg(pose: tuple[float, float, float], target: tuple[float, float],
 
 def plan_route(start: tuple[float, float, float], waypoints: NDArray[np.float64],
                commands: dict[str, Command]) -> list[list[Leg]]:
-    """Legs to every waypoint in turn, each planned from the previous prediction."""
+    """Legs to every waypoint in turn, each planned from the previous prediction
+    (``start`` and the predicted poses: ``(x [m], y [m], heading [degree])``)."""
     route = []
     pose = start
     for target in np.asarray(waypoints, dtype=float):
@@ -275,10 +296,10 @@ class PlanRun:
     """A simulated plan: the path, where each leg ended (NaN for legs never flown: the
     run stopped, see ``outcome``), the distance missed and the schedule flown."""
 
-    time: NDArray[np.float64]
-    x: NDArray[np.float64]
-    y: NDArray[np.float64]
-    heading: NDArray[np.float64]
+    time: NDArray[np.float64]  # [s]
+    x: NDArray[np.float64]  # [m]
+    y: NDArray[np.float64]  # [m]
+    heading: NDArray[np.float64]  # counterclockwise from the x axis, unwrapped [degree]
     leg_end: NDArray[np.float64]  # (waypoint, 2) position at each leg's end [m]
     miss_distance: NDArray[np.float64]  # (waypoint,) [m]
     schedule: Schedule | None
@@ -330,7 +351,8 @@ def refined_legs(disk: Disk, state: NDArray[np.float64], phase: float,
                  target: tuple[float, float], commands: dict[str, Command],
                  settings: IntegratorSettings | None = None, iterations: int = 5,
                  tolerance: float = 1e-4, slaving: float = SLAVING) -> list[Leg]:
-    """Legs to ``target`` corrected by simulating the model itself.
+    """Legs to ``target`` corrected by simulating the model itself (``state``: a
+    :mod:`study.planar` state vector, heading in degree; ``phase``: the drive's [rad]).
 
     The calibration knows only steady motion; after a command switch the plate modes
     ring (beating at ``|f - f0|``, decaying over ``2 Q / w0``) and the disk moves
@@ -357,7 +379,8 @@ def refined_route(disk: Disk, start: tuple[float, float, float],
                   settings: IntegratorSettings | None = None, iterations: int = 5,
                   slaving: float = SLAVING) -> list[list[Leg]]:
     """Legs to every waypoint in turn, each corrected (:func:`refined_legs`) from the
-    state the noise-free model reaches at the previous one."""
+    state the noise-free model reaches at the previous one (``start``: ``(x [m], y [m],
+    heading [degree])``)."""
     state, phase = rest_state(disk, start), 0.0
     route = []
     for target in np.asarray(waypoints, dtype=float):
@@ -385,8 +408,10 @@ def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[n
 
     Parameters
     ----------
+    start : tuple of float
+        ``(x [m], y [m], heading [degree])``, the disk at rest.
     heading_noise : float
-        Heading diffusion of the flown run [rad m^-1/2] (see
+        Heading diffusion of the flown run [degree m^-1/2] (see
         :func:`study.planar.simulate_planar`); the planner's own simulations are
         noise-free.
     sample_interval : float

@@ -57,7 +57,7 @@ from study.store import (
 )
 from study.structure import Structure
 from study.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
-from study.variables import VARIABLES
+from study.variables import RESULT_FORMAT, VARIABLES
 
 __all__ = [
     "PAPER_REFERENCE",
@@ -428,6 +428,7 @@ def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
         "acknowledgement": "Model of " + PAPER_REFERENCE,
         "creator_name": _creator(),
         "study_result_schema": RESULT_SCHEMA,
+        "study_result_format": RESULT_FORMAT,
         "study_spec_sha256": spec.sha256,
     }
 

@@ -107,10 +107,17 @@ __all__ = [
 SCENE_KINDS = ("trajectory", "calibration", "plan")
 #: The JSON schema of scene specs (package data in ``study/schemas/``).
 SCENE_SPEC_SCHEMA = "study-scene-spec-v1"
-#: Layout of a scene result's values (``study_scene_format``): 2 stores angles in degree
-#: (heading, heading_change, start_heading; turn rates in degree s-1); files of format 1
-#: (no attribute, angles in rad) are refused by validation and rerun by ``study run``.
-SCENE_FORMAT = 2
+#: Layout of a scene result's values (``study_scene_format``): 3 stores every angle in
+#: degree (heading, heading_change, start_heading; turn rates in degree s-1; the plan's
+#: realisation_heading_drift in degree per diameter, its spec key heading_drift_deg).
+#: Files of format 1 (no attribute, angles in rad) and 2 (heading drift in rad per
+#: diameter, spec key heading_drift) are refused by validation and rerun by ``study run``.
+SCENE_FORMAT = 3
+
+#: Spec keys renamed when their unit changed: old key -> (new key, old unit, new unit,
+#: factor from old to new). An old key is refused with the conversion, never read.
+RENAMED_KEYS = {"heading_drift": ("heading_drift_deg", "rad per diameter",
+                                  "degree per diameter", 180.0 / math.pi)}
 
 _KIND_TABLES = {"trajectory": ("segment", "trajectory"), "calibration": ("calibration",),
                 "plan": ("plan",)}
@@ -177,7 +184,7 @@ class SceneSpec:
     settings : IntegratorSettings
     slaving : float
     options : dict
-        The kind's own table(s), validated, in SI units (angles in rad).
+        The kind's own table(s), validated, in SI units (angles in degree, as in the spec).
     text : str
         The spec file's text (stored in the result).
     path : str
@@ -226,8 +233,29 @@ def load_scene(path: str | Path) -> SceneSpec:
 
 
 def _pose(value: list[float]) -> tuple[float, float, float]:
-    """``[x (m), y (m), heading (degree)]`` as ``(x, y, heading [rad])``."""
-    return float(value[0]), float(value[1]), math.radians(float(value[2]))
+    """``[x (m), y (m), heading (degree)]`` as floats (degree, as :mod:`study.planner`
+    takes them)."""
+    return float(value[0]), float(value[1]), float(value[2])
+
+
+def _renamed_key_problems(raw: Any, path: str) -> None:
+    """Refuse a key whose unit changed (it was renamed), naming the conversion."""
+    if not isinstance(raw, dict):
+        return
+    for table in ("trajectory", "plan"):
+        entries = raw.get(table)
+        if not isinstance(entries, dict):
+            continue
+        for old, (new, was, unit, factor) in RENAMED_KEYS.items():
+            if old in entries:
+                value = entries[old]
+                shown = (f"{old} = {value!r} {was} is {new} = {value * factor:.4g} {unit}"
+                         if isinstance(value, int | float) and not isinstance(value, bool)
+                         else f"multiply by {factor:.6g}")
+                raise SceneError(
+                    f"{path}: [{table}] {old}: the key was in {was}; it is now {new}, in "
+                    f"{unit} (x {factor:.6g}: the paper's 0.1 rad is 5.73 degree): {shown}"
+                )
 
 
 def parse_scene(text: str, path: str = "<string>") -> SceneSpec:
@@ -241,6 +269,7 @@ def parse_scene(text: str, path: str = "<string>") -> SceneSpec:
     """
     try:
         raw = parse_toml(text, path)
+        _renamed_key_problems(raw, path)
         check_schema(raw, scene_spec_schema(), path, "scene spec")
     except SceneError:
         raise
@@ -353,8 +382,8 @@ def _trajectory_options(raw: dict[str, Any], path: str, disk: Disk) -> dict[str,
     return {
         "segments": rows,
         "sample_interval": interval,
-        "start": _pose(table["start"]) if "start" in table else (0.0, 0.0, math.pi / 2),
-        "heading_drift": float(table.get("heading_drift", 0.0)),
+        "start": _pose(table["start"]) if "start" in table else (0.0, 0.0, 90.0),
+        "heading_drift_deg": float(table.get("heading_drift_deg", 0.0)),
         "seed": int(table.get("seed", 0)),
     }
 
@@ -402,7 +431,8 @@ def _plan_options(raw: dict[str, Any], path: str) -> dict[str, Any]:
         "frequencies": {name: float(table[name]) for name in COMMANDS},
         "waypoints": np.array(table["waypoints"], dtype=float),
         "start": _pose(table["start"]) if "start" in table else (0.0, 0.0, 0.0),
-        "heading_drift": float(table.get("heading_drift", 0.1)),
+        # The paper's measured 0.1 rad per diameter.
+        "heading_drift_deg": float(table.get("heading_drift_deg", 5.73)),
         "realisations": table.get("realisations", 4),
         "seed": int(table.get("seed", 0)),
         "sample_interval": float(table.get("sample_interval", 0.05)),
@@ -437,7 +467,8 @@ MOTION_STATUS = tuple(s.name.lower() for s in Status)[:5]
 
 
 def _heading_noise(drift: float, disk: Disk) -> float:
-    """Diffusion [rad m^-1/2] giving ``drift`` rad of heading spread per diameter slid."""
+    """Diffusion [degree m^-1/2] giving ``drift`` degree of heading spread per diameter
+    slid."""
     return drift / math.sqrt(disk.diameter)
 
 
@@ -452,7 +483,7 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
     run = simulate_planar(
         spec.disk, schedule, initial_state=rest_state(spec.disk, options["start"]),
         output_times=out_t, settings=spec.settings,
-        heading_noise=_heading_noise(options["heading_drift"], spec.disk),
+        heading_noise=_heading_noise(options["heading_drift_deg"], spec.disk),
         rng=options["seed"], slaving=spec.slaving,
     )
     t = run.time
@@ -473,7 +504,8 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
                                              else "step_budget")
             i1 = t.size - 1
         dx, dy = run.x[i1] - run.x[i0], run.y[i1] - run.y[i0]
-        c, s = math.cos(run.heading[i0]), math.sin(run.heading[i0])
+        heading = math.radians(run.heading[i0])
+        c, s = math.cos(heading), math.sin(heading)
         summary["fwd"][j] = c * dx + s * dy
         summary["lat"][j] = -s * dx + c * dy
         summary["turn"][j] = run.heading[i1] - run.heading[i0]
@@ -481,7 +513,7 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
     variables = {
         "x": _variable("t", run.x, "m", "x position of the disk's centre"),
         "y": _variable("t", run.y, "m", "y position of the disk's centre"),
-        "heading": _variable("t", np.degrees(run.heading), "degree",
+        "heading": _variable("t", run.heading, "degree",
                              "heading, counterclockwise from the x axis (unwrapped)"),
         "path_length": _variable("t", run.path, "m", "distance slid since the start"),
         "slipping": _flag("t", run.slipping.astype(np.int8), ("stuck", "slipping"),
@@ -502,7 +534,7 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
         "lateral_displacement": _variable(
             "segment", summary["lat"], "m",
             "displacement to the left of the heading at the segment's start"),
-        "heading_change": _variable("segment", np.degrees(summary["turn"]), "degree",
+        "heading_change": _variable("segment", summary["turn"], "degree",
                                     "heading change over the segment"),
         "segment_path_length": _variable("segment", summary["path"], "m",
                                          "distance slid in the segment"),
@@ -553,7 +585,7 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
                                    "steady mean velocity along the heading"),
         "lateral_speed": _variable(dims, fields["lateral_speed"], "m s-1",
                                    "steady mean velocity to the left of the heading"),
-        "turn_rate": _variable(dims, np.degrees(fields["turn_rate"]), "degree s-1",
+        "turn_rate": _variable(dims, fields["turn_rate"], "degree s-1",
                                "steady mean angular velocity, counterclockwise positive"),
         "slips_per_period": _variable(dims, fields["slips_per_period"], "1",
                                       "slips starting per drive period"),
@@ -619,7 +651,7 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
         }
     except PlanError as err:
         raise SceneError(f"{spec.path}: [plan]: {err}") from None
-    noise = _heading_noise(options["heading_drift"], disk)
+    noise = _heading_noise(options["heading_drift_deg"], disk)
     runs = {}
     for s, strategy in enumerate(strategies):
         for r in range(count):
@@ -664,15 +696,15 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
                                "y where the calibrated plan predicts the leg ends"),
         "x": _variable(dims, paths["x"], "m", "x position of the disk's centre"),
         "y": _variable(dims, paths["y"], "m", "y position of the disk's centre"),
-        "heading": _variable(dims, np.degrees(paths["heading"]), "degree",
+        "heading": _variable(dims, paths["heading"], "degree",
                              "heading, counterclockwise from the x axis (unwrapped)"),
         "miss_distance": _variable(("strategy", "realisation", "waypoint"), miss, "m",
                                    "distance from the waypoint at the end of its leg"),
         "run_status": _flag(("strategy", "realisation"), outcome, SEGMENT_STATUS,
                             "how the run ended"),
         "realisation_heading_drift": _variable(
-            "realisation", np.where(np.arange(count) > 0, options["heading_drift"], 0.0),
-            "rad", "heading spread per disk diameter slid"),
+            "realisation", np.where(np.arange(count) > 0, options["heading_drift_deg"], 0.0),
+            "degree", "heading spread per disk diameter slid"),
         "segment_label": _variable("segment", np.array(plan_run.labels, dtype=str), None,
                                    "command of the segment (the open-loop plan)"),
         "frequency": _variable("segment", plan_run.schedule.frequency, "Hz", "drive frequency"),
@@ -684,10 +716,10 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
         variables[f"command_{name}"] = xr.Variable((), command.frequency, {
             "units": "Hz", "long_name": f"{name} command frequency",
             "forward_speed": command.forward_speed, "lateral_speed": command.lateral_speed,
-            "turn_rate": math.degrees(command.turn_rate), "turn_rate_units": "degree s-1",
+            "turn_rate": command.turn_rate, "turn_rate_units": "degree s-1",
         })
     attrs = {"start_x": options["start"][0], "start_y": options["start"][1],
-             "start_heading": math.degrees(options["start"][2])}
+             "start_heading": options["start"][2]}
     return variables, attrs
 
 
@@ -719,9 +751,9 @@ def scene_dataset(spec: SceneSpec) -> xr.Dataset:
         "source": "study.planar: Dormand-Prince 5(4) time integration with events of the "
                   "planar disk with resonant plates",
         "comment": "SI units, except angles: degree (heading, heading changes, tilts, "
-                   "directions; turn rates in degree s-1), counterclockwise positive; the "
-                   "heading drift of the noise model is in rad per diameter, as in its spec. "
-                   "The body frame's x axis is the heading.",
+                   "directions; turn rates in degree s-1; the noise model's heading drift "
+                   "in degree per disk diameter slid), counterclockwise positive. The body "
+                   "frame's x axis is the heading.",
         "study_scene_format": SCENE_FORMAT,
         "study_scene_kind": spec.kind,
         "study_name": spec.name,

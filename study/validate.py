@@ -41,7 +41,7 @@ from study.observables import variables_of
 from study.provenance import fingerprint
 from study.spec import SPEC_SCHEMA_PATH, SpecError, parse_spec
 from study.status import INVALID_STATUSES, Status
-from study.variables import VARIABLES
+from study.variables import RESULT_FORMAT, STALE_RESULT_FORMATS, VARIABLES
 
 __all__ = [
     "CONTENT_ATTRIBUTE",
@@ -658,8 +658,37 @@ def _identity_problems(attrs: dict[str, Any], spec: Any) -> list[str]:
 # Parameter studies
 
 
+def _shown_format(value: Any) -> str:
+    """A format attribute as a person reads it (2, not np.int64(2))."""
+    if _is_number(value) and math.isfinite(float(value)) and float(value).is_integer():
+        return str(int(value))
+    return repr(value)
+
+
+def _stale_format_problems(meta: _File) -> list[str]:
+    """A study file of an older ``study_result_format`` that holds a variable whose units
+    changed since: its numbers would be misread, so it is refused whole as stale."""
+    written = meta.attrs.get("study_result_format", 1)
+    if _is_number(written) and written == RESULT_FORMAT:
+        return []
+    changed = STALE_RESULT_FORMATS.get(written if _is_number(written) else None)
+    if changed is None:
+        return [f"study_result_format {_shown_format(written)} is unknown: this study reads format "
+                f"{RESULT_FORMAT}; rerun its spec"]
+    held = [f"{name} in {units}" for name, units in changed.items() if name in meta.variables]
+    if not held:
+        return []  # nothing in it changed units
+    now = ", ".join(f"{name} in {VARIABLES[name].units}" for name in changed
+                    if name in meta.variables)
+    return [f"study result format {_shown_format(written)} ({', '.join(held)}) is stale: "
+            f"this study reads format {RESULT_FORMAT} ({now}); rerun its spec"]
+
+
 def _study_problems(nc: Any, meta: _File, source: str) -> list[str]:
     attrs = meta.attrs
+    stale = _stale_format_problems(meta)
+    if stale:
+        return stale
     problems = [p for p in _schema_problems(RESULT_SCHEMA_PATH, _file_header(meta))
                 if _not_required_checksum(p)]
     problems += _fingerprint_problems(attrs)
@@ -759,6 +788,13 @@ def _study_content_problems(check: _Checker, meta: _File, spec: Any) -> list[str
 # Steering scenes
 
 
+#: What the stale scene formats held, for the message refusing them.
+_STALE_SCENE_FORMATS = {
+    1: "angles in rad",
+    2: "heading drift in rad per diameter, spec key heading_drift",
+}
+
+
 def _scene_attribute_values(spec: Any) -> dict[str, float]:
     """Global attributes a scene file repeats from its spec (what figures read)."""
     disk = spec.disk
@@ -767,8 +803,8 @@ def _scene_attribute_values(spec: Any) -> dict[str, float]:
     expected["integrator_tolerance"] = spec.settings.tolerance
     expected["integrator_slaving"] = spec.slaving
     if spec.kind == "plan":
-        x, y, heading = spec.options["start"]
-        expected.update(start_x=x, start_y=y, start_heading=math.degrees(heading))
+        x, y, heading = spec.options["start"]  # heading in degree, as in the spec
+        expected.update(start_x=x, start_y=y, start_heading=heading)
     return expected
 
 
@@ -778,9 +814,13 @@ def _scene_problems(nc: Any, meta: _File, source: str) -> list[str]:
     attrs = meta.attrs
     written = attrs.get("study_scene_format", 1)
     if not (_is_number(written) and written == SCENE_FORMAT):
-        # Its numbers would be misread (format 1 stored angles in rad): refuse it whole.
-        return [f"scene format {written!r} (angles in rad) is stale: this study reads "
-                f"format {SCENE_FORMAT} (angles in degree); rerun its spec"]
+        # Its numbers would be misread (format 1 stored angles in rad, format 2 the heading
+        # drift in rad per diameter): refuse it whole.
+        held = _STALE_SCENE_FORMATS.get(written if _is_number(written) else None,
+                                        "an unknown layout")
+        return [f"scene format {_shown_format(written)} ({held}) is stale: this study reads format "
+                f"{SCENE_FORMAT} (every angle in degree, the heading drift in degree per "
+                "diameter, spec key heading_drift_deg); rerun its spec"]
     problems = [p for p in _schema_problems(SCENE_SCHEMA_PATH, _file_header(meta))
                 if _not_required_checksum(p)]
     problems += _fingerprint_problems(attrs)

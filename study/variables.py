@@ -14,7 +14,18 @@ import numpy as np
 
 from study.status import NonConvergence, Status
 
-__all__ = ["FRONTIER_KINDS", "GRIDS", "VARIABLES", "Variable"]
+__all__ = ["FRONTIER_KINDS", "GRIDS", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "VARIABLES",
+           "Variable"]
+
+#: Layout of a study result's values (global attribute ``study_result_format``): 2 stores
+#: every angle in degree (``mode_phase`` too). Files without the attribute are format 1,
+#: whose ``mode_phase`` was in rad: one that holds ``mode_phase`` is refused as stale by
+#: validation (and so by ``info``, ``figure`` and ``export``) and rerun by ``study run``;
+#: its other variables never changed units.
+RESULT_FORMAT = 2
+
+#: Variables whose values a stale format stored in other units: format -> {name: units}.
+STALE_RESULT_FORMATS: dict[int, dict[str, str]] = {1: {"mode_phase": "rad"}}
 
 #: Where a variable lives: over (structure..., f), (structure..., f, a), or the
 #: frontier's (structure..., a, branch).
@@ -99,7 +110,7 @@ _STATUS_VALUES = tuple(int(s) for s in Status)
 _DECLARED = (
     Variable("mode_gain", "row", "float64", "1",
              "amplification |w0^2 G| of the plate's first mode (1 at low frequency)"),
-    Variable("mode_phase", "row", "float64", "rad",
+    Variable("mode_phase", "row", "float64", "degree",
              "phase lag of the plate's deflection behind the drive"),
     Variable("a_star_plus", "row", "float64", "m s-2",
              "drive acceleration at which forward slips start (paper eq. 5)"),

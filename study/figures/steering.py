@@ -136,7 +136,8 @@ def angle_values(dataset: xr.Dataset, name: str, figure: str,
     Raises
     ------
     FigureError
-        When the variable states other units (an older file stored radians).
+        When the variable states other units (an older file stored radians; validation
+        refuses such a file as stale first).
     """
     found = dataset[name].attrs.get("units")
     if found != units:

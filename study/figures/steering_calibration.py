@@ -2,8 +2,8 @@
 
 Drawn from a ``steering-calibration`` result file alone (``study figure
 steering-calibration FILE``), a calibration scene over drive frequency ``f`` and
-acceleration ``a``. Top: the forward speed; bottom: the turn rate (rad/s, deg/s on
-the right), one line per acceleration. Points where the disk lifts off or the motion
+acceleration ``a``. Top: the forward speed; bottom: the turn rate (degree s^-1, as
+the file stores it), one line per acceleration. Points where the disk lifts off or the motion
 did not converge have no speed and are marked on the zero line. Dotted lines mark
 the paper's command frequencies: forward 14.2 Hz, backward 15.2 Hz, turns 7.2 and
 8.2 Hz.

@@ -204,8 +204,9 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
 
     noise = f"{len(noisy)} realisation{'s' if len(noisy) != 1 else ''} with heading noise"
     if "realisation_heading_drift" in dataset and noisy:
-        drift = dataset["realisation_heading_drift"].values[noisy]
-        noise += f" (drift rms {float(np.sqrt(np.nanmean(drift ** 2))):.3g} rad)"
+        drift = angle_values(dataset, "realisation_heading_drift", "steering-plan")[noisy]
+        noise += (f" (drift rms {float(np.sqrt(np.nanmean(drift ** 2))):.3g} degree per "
+                  "diameter)")
     title = (f"Steering through {n_way} waypoint{'s' if n_way != 1 else ''}: "
              f"{' vs '.join(s.replace('_', ' ') for s in strategies)}, noise-free and {noise}")
     plan = _plan_text(dataset)

@@ -51,7 +51,7 @@ def test_forward_and_backward_move_along_the_heading_with_opposite_signs(disk, m
     # component along that heading has the command's sign.
     heading = math.radians(40.0)
     for f, sign in ((FORWARD, 1.0), (BACKWARD, -1.0)):
-        run = _run(disk, f, A_OPERATING, 30, heading)
+        run = _run(disk, f, A_OPERATING, 30, 40.0)  # the API's heading is in degree
         dx, dy = run.x[-1] - run.x[0], run.y[-1] - run.y[0]
         along = math.cos(heading) * dx + math.sin(heading) * dy
         assert sign * along > 0.0
@@ -61,13 +61,16 @@ def test_forward_and_backward_move_along_the_heading_with_opposite_signs(disk, m
 def test_the_two_turn_frequencies_turn_opposite_ways(disk, motions):
     left, right = motions[LEFT], motions[RIGHT]
     assert left.turn_rate > 0.0 > right.turn_rate  # counterclockwise, clockwise
-    # Turning, not sliding: over one radian of turn the centre moves less than a radius.
+    # Turning, not sliding: over one radian of turn the centre moves less than a radius
+    # (turn rates in degree s^-1).
     for motion in (left, right):
         assert math.hypot(motion.forward_speed, motion.lateral_speed) / abs(
-            motion.turn_rate) < disk.radius
+            math.radians(motion.turn_rate)) < disk.radius
     run_left = _run(disk, LEFT, A_OPERATING, 20)
     run_right = _run(disk, RIGHT, A_OPERATING, 20)
-    assert run_left.heading[-1] > 0.05 and run_right.heading[-1] < -0.05
+    # More than 0.05 rad each way, in degree.
+    assert run_left.heading[-1] > math.degrees(0.05) and run_right.heading[-1] < -math.degrees(
+        0.05)
 
 
 def test_the_straight_commands_turn_much_slower_than_the_turn_commands(motions):
@@ -78,9 +81,9 @@ def test_the_straight_commands_turn_much_slower_than_the_turn_commands(motions):
 
 @pytest.mark.parametrize("f", [FORWARD, BACKWARD, LEFT, RIGHT])
 def test_below_threshold_nothing_moves(disk, f):
-    run = _run(disk, f, 2.0, 20, heading=0.3)
+    run = _run(disk, f, 2.0, 20, heading=17.0)  # degree (it converts to rad and back exactly)
     assert run.slips == 0
-    assert_allclose([run.x[-1], run.y[-1], run.heading[-1]], [0.0, 0.0, 0.3], rtol=0, atol=0)
+    assert_allclose([run.x[-1], run.y[-1], run.heading[-1]], [0.0, 0.0, 17.0], rtol=0, atol=0)
     assert periodic_motion(disk, f, 2.0).status == Status.STATIC
 
 
@@ -94,9 +97,10 @@ def test_with_the_papers_tail_resonance_the_turns_go_the_same_way(disk):
 
 
 def test_heading_noise_reproduces_the_measured_drift(disk):
-    """0.1 rad of heading spread per diameter slid (paper, Fig. 4 text)."""
-    drift = 0.1
-    noise = drift / math.sqrt(disk.diameter)
+    """0.1 rad (5.73 degree) of heading spread per diameter slid (paper, Fig. 4 text);
+    the API's drift, noise and kicks are in degree."""
+    drift = math.degrees(0.1)
+    noise = drift / math.sqrt(disk.diameter)  # degree m^-1/2
     state = rest_state(disk, drive=(FORWARD, A_OPERATING))
     periods = 600
     run = simulate_planar(disk, Schedule.constant(FORWARD, A_OPERATING, periods / FORWARD),

@@ -186,7 +186,8 @@ def plan_dataset(realisations: int = 5, samples: int = 300) -> xr.Dataset:
             "y": _var(dims, y, "m", "y"),
             "heading": _var(dims, np.degrees(heading), "degree", "heading"),
             "miss_distance": _var(("strategy", "realisation", "waypoint"), miss, "m", "miss"),
-            "realisation_heading_drift": _var("realisation", drift, "rad", "heading drift"),
+            "realisation_heading_drift": _var("realisation", np.degrees(drift), "degree",
+                                               "heading drift"),
             "segment_label": _var("segment", np.array(labels), None, "command"),
             "frequency": _var("segment", frequency, "Hz", "drive frequency"),
             "acceleration": _var("segment", np.full(5, 8.0), "m s-2", "drive acceleration"),
@@ -358,6 +359,14 @@ def test_the_plan_draws_every_run_and_every_miss_distance():
     assert {"1", "2", "3"} <= set(texts)
     assert f"disk diameter {2e3 * DISK_RADIUS:g} mm" in texts
     assert "forward x3 at 14.2 Hz (9 s)" in fig.get_suptitle()
+    drift = dataset["realisation_heading_drift"].values[1:]  # the noisy ones [degree]
+    rms = float(np.sqrt(np.mean(drift**2)))
+    assert f"(drift rms {rms:.3g} degree per diameter)" in fig.get_suptitle()
+    # A file stating the drift in rad (before scene format 3) is refused, never misread.
+    stale = dataset.copy()
+    stale["realisation_heading_drift"].attrs["units"] = "rad"
+    with pytest.raises(FigureError, match="'realisation_heading_drift' in 'degree'"):
+        steering_plan._plot(stale)
 
 
 @pytest.mark.parametrize("figure", sorted(MAKERS))

@@ -77,6 +77,12 @@ def mirrored(plates):
     )
 
 
+def deg(value):
+    """An angle (or angular rate, or its tolerance) of the reference [rad] in the
+    package's unit [degree]."""
+    return np.degrees(value)
+
+
 def ref(plates, freq, acc, dur, **kw):
     kw.setdefault("cs", CS)
     return reference_planar([RefPlate(**p) for p in plates], freq, acc, dur, g=G, radius=R, **kw)
@@ -482,8 +488,13 @@ def pkg_disk(planar, plates, **kw):
 
 
 def pkg_run(planar, disk, freq, acc, dur, init, times, tol=PKG_TOL):
+    """The package's run from the reference's state ``init`` (heading [rad], spin
+    [rad s^-1]), given to the package in its units (degree, degree s^-1); the
+    trajectory's heading and spin come back in degree (compare with ``deg``)."""
     from study.transient import IntegratorSettings, Schedule
 
+    init = np.array(init, dtype=float)
+    init[[2, 5]] = np.degrees(init[[2, 5]])
     schedule = Schedule(np.asarray(freq, float), np.asarray(acc, float), np.asarray(dur, float))
     return planar.simulate_planar(disk, schedule, initial_state=init, output_times=times,
                                   settings=IntegratorSettings(tolerance=tol))
@@ -526,16 +537,16 @@ def test_package_steering_disk(planar, name):
     assert_allclose(traj.time, tr.time, rtol=0, atol=0)
     length = max(np.abs(tr.x).max(), np.abs(tr.y).max())
     speed = max(np.abs(tr.vx).max(), np.abs(tr.vy).max(), 1e-3)
-    angle = max(np.abs(tr.heading).max(), 1e-3)
-    rate = max(np.abs(tr.spin).max(), 1e-2)
+    angle = deg(max(np.abs(tr.heading).max(), 1e-3))
+    rate = deg(max(np.abs(tr.spin).max(), 1e-2))
     assert length > 1e-5
     assert_allclose(traj.x, tr.x, rtol=1e-6, atol=1e-6 * length)
     assert_allclose(traj.y, tr.y, rtol=1e-6, atol=1e-6 * length)
-    assert_allclose(traj.heading, tr.heading, rtol=1e-6, atol=1e-6 * angle)
+    assert_allclose(traj.heading, deg(tr.heading), rtol=1e-6, atol=1e-6 * angle)
     assert_allclose(traj.path, tr.path, rtol=1e-6, atol=1e-6 * length)
     assert_allclose(traj.vx, tr.vx, rtol=1e-6, atol=1e-6 * speed)
     assert_allclose(traj.vy, tr.vy, rtol=1e-6, atol=1e-6 * speed)
-    assert_allclose(traj.spin, tr.spin, rtol=1e-6, atol=1e-6 * rate)
+    assert_allclose(traj.spin, deg(tr.spin), rtol=1e-6, atol=1e-6 * rate)
 
 
 def test_package_mirror_symmetry(planar):
@@ -544,10 +555,10 @@ def test_package_mirror_symmetry(planar):
     base = pkg_run(planar, pkg_disk(planar, STEER), freq, acc, dur, init, times)
     mirror = pkg_run(planar, pkg_disk(planar, mirrored(STEER)), freq, acc, dur, init, times)
     length = np.abs(base.x).max()
-    assert np.abs(base.y).max() > 1e-6 and np.abs(base.heading).max() > 1e-3
+    assert np.abs(base.y).max() > 1e-6 and np.abs(base.heading).max() > deg(1e-3)
     assert_allclose(mirror.x, base.x, rtol=1e-9, atol=1e-9 * length)
     assert_allclose(mirror.y, -base.y, rtol=1e-9, atol=1e-9 * length)
-    assert_allclose(mirror.heading, -base.heading, rtol=1e-9, atol=1e-12)
+    assert_allclose(mirror.heading, -base.heading, rtol=1e-9, atol=deg(1e-12))
     assert_allclose(mirror.path, base.path, rtol=1e-9, atol=1e-9 * length)
 
 
@@ -565,7 +576,7 @@ def test_package_rotation_invariance(planar, theta0):
     length = np.abs(base.x).max()
     assert_allclose(rot.x, c * base.x - s * base.y, rtol=1e-9, atol=1e-9 * length)
     assert_allclose(rot.y, s * base.x + c * base.y, rtol=1e-9, atol=1e-9 * length)
-    assert_allclose(rot.heading, base.heading + theta0, rtol=0, atol=1e-11)
+    assert_allclose(rot.heading, base.heading + deg(theta0), rtol=0, atol=deg(1e-11))
     assert_allclose(rot.vx, c * base.vx - s * base.vy, rtol=1e-9, atol=1e-12)
     assert_allclose(rot.path, base.path, rtol=1e-9, atol=1e-9 * length)
 
@@ -588,10 +599,10 @@ def test_package_free_slide_kappa_one(planar):
     tol = 1e-8
     assert_allclose(traj.vx, u0[0] * decay, rtol=0, atol=tol * r0)
     assert_allclose(traj.vy, u0[1] * decay, rtol=0, atol=tol * r0)
-    assert_allclose(traj.spin, spin * decay, rtol=0, atol=tol * r0 / C)
+    assert_allclose(traj.spin, deg(spin * decay), rtol=0, atol=deg(tol * r0 / C))
     assert_allclose(traj.x, u0[0] * moved, rtol=0, atol=tol * scale)
     assert_allclose(traj.y, u0[1] * moved, rtol=0, atol=tol * scale)
-    assert_allclose(traj.heading, spin * moved, rtol=0, atol=tol * scale / C)
+    assert_allclose(traj.heading, deg(spin * moved), rtol=0, atol=deg(tol * scale / C))
     assert_allclose(traj.path, math.hypot(*v) * moved, rtol=0, atol=tol * scale)
 
 
@@ -626,11 +637,11 @@ def test_package_free_slide_power_law(planar, speed, spin, kappa):
     disk = pkg_disk(planar, [HEAD], gyration_radius=C / math.sqrt(kappa))
     traj = pkg_run(planar, disk, [14.0], [0.0], [times[-1]], free_state(v, spin), times)
     assert traj.outcome in DONE
-    assert np.hypot(traj.vx[0], C * traj.spin[0]) > 0.0
+    assert np.hypot(traj.vx[0], C * np.radians(traj.spin[0])) > 0.0
     assert traj.vx[1] == traj.vy[1] == traj.spin[1] == 0.0
     assert_allclose([traj.x[-1], traj.y[-1], traj.path[-1]],
                     [d * math.cos(angle), d * math.sin(angle), d], rtol=1e-8)
-    assert_allclose(traj.heading[-1], th, rtol=1e-8)
+    assert_allclose(traj.heading[-1], deg(th), rtol=1e-8)
 
 
 def test_package_lift_off(planar):
@@ -650,4 +661,5 @@ def test_package_lift_off(planar):
     length = np.abs(tr.x).max()
     assert_allclose(traj.x, tr.x, rtol=1e-6, atol=1e-6 * length)
     assert_allclose(traj.y, tr.y, rtol=1e-6, atol=1e-6 * length)
-    assert_allclose(traj.heading, tr.heading, rtol=1e-6, atol=1e-6 * np.abs(tr.heading).max())
+    assert_allclose(traj.heading, deg(tr.heading), rtol=1e-6,
+                    atol=1e-6 * deg(np.abs(tr.heading).max()))

@@ -126,15 +126,16 @@ def test_trajectory_scene_end_to_end(tmp_path):
     assert units == {"x": "m", "y": "m", "heading": "degree", "t": "s",
                      "heading_change": "degree", "plate_alpha": "degree",
                      "plate_direction": "degree"}
-    assert data.attrs["study_scene_format"] == 2
+    assert data.attrs["study_scene_format"] == 3
     assert float(data.heading[0]) == 90.0  # the spec's start heading, in degree
     assert list(data.segment_label.values) == ["forward", "left"]
     assert np.all(data.segment_status.values == 0)
     # Segment boundaries are samples, and the summary matches the path there.
     assert 1.0 in data.t.values
     end = data.sel(t=1.0)
-    heading0 = math.pi / 2
-    along = math.cos(heading0) * float(end.x) + math.sin(heading0) * float(end.y)
+    heading0 = 90.0  # degree
+    along = (math.cos(math.radians(heading0)) * float(end.x)
+             + math.sin(math.radians(heading0)) * float(end.y))
     assert_allclose(float(data.forward_displacement[0]), along, rtol=1e-12, atol=1e-15)
     assert float(data.forward_displacement[0]) > 0.0
     assert float(data.heading_change[1]) > 0.0  # left turn
@@ -146,13 +147,20 @@ def test_trajectory_scene_end_to_end(tmp_path):
                              initial_state=state, output_times=[2.0], settings=spec.settings,
                              slaving=spec.slaving)
     assert_allclose(float(data.x[-1]), direct.x[-1], rtol=0, atol=1e-12)
-    assert_allclose(float(data.heading[-1]), math.degrees(direct.heading[-1]), rtol=1e-12)
-    # A file of scene format 1 (angles in rad) is stale, never misread.
+    assert_allclose(float(data.heading[-1]), direct.heading[-1], rtol=1e-12)  # both degree
+    # Files of scene format 1 (angles in rad) and 2 (heading drift in rad per diameter)
+    # are stale, never misread.
     old = Path(shutil.copyfile(output, tmp_path / "old.nc"))
     with netCDF4.Dataset(old, "a") as nc:
         nc.delncattr("study_scene_format")
     with pytest.raises(ResultError, match=r"scene format 1 \(angles in rad\) is stale: this "
-                       r"study reads format 2 \(angles in degree\); rerun its spec"):
+                       r"study reads format 3 \(every angle in degree, the heading drift in "
+                       r"degree per diameter, spec key heading_drift_deg\); rerun its spec"):
+        open_result(old)
+    with netCDF4.Dataset(old, "a") as nc:
+        nc.setncattr("study_scene_format", np.int64(2))
+    with pytest.raises(ResultError, match=r"scene format 2 \(heading drift in rad per "
+                       r"diameter, spec key heading_drift\) is stale"):
         open_result(old)
     # A second run is up to date; editing a comment keeps it so.
     assert run_scene(spec_path, output).up_to_date
@@ -211,18 +219,20 @@ def test_calibration_scene_matches_periodic_motion(tmp_path):
     assert np.all(np.isfinite(data.turn_rate.values[~invalid]))
     assert np.all(data.turn_rate.values[data.status.values == 0] == 0.0)
     assert data.turn_rate.attrs["units"] == "degree s-1"
-    assert_allclose(float(data.turn_rate.sel(f=14.2, a=7.0)), math.degrees(direct.turn_rate),
+    assert_allclose(float(data.turn_rate.sel(f=14.2, a=7.0)), direct.turn_rate,  # degree s-1
                     rtol=1e-12)
 
 
 def test_arc_displacement_is_the_integral_of_the_body_velocity():
-    command = calibrate_commands.__globals__["Command"]("x", 14.2, 7.0, 0.01, 0.002, 0.3)
+    """Turn rate in degree s^-1 (0.3 rad s^-1), turn in degree."""
+    command = calibrate_commands.__globals__["Command"]("x", 14.2, 7.0, 0.01, 0.002,
+                                                        math.degrees(0.3))
     duration = 4.0
     t = np.linspace(0.0, duration, 200_001)
-    heading = command.turn_rate * t
+    heading = 0.3 * t  # rad
     vx = command.forward_speed * np.cos(heading) - command.lateral_speed * np.sin(heading)
     vy = command.forward_speed * np.sin(heading) + command.lateral_speed * np.cos(heading)
-    trapezoid = [np.trapezoid(vx, t), np.trapezoid(vy, t), heading[-1]]
+    trapezoid = [np.trapezoid(vx, t), np.trapezoid(vy, t), math.degrees(heading[-1])]
     assert_allclose(arc_displacement(command, duration), trapezoid, rtol=1e-9, atol=1e-14)
 
 
@@ -231,9 +241,21 @@ def test_a_planned_leg_ends_on_its_target_in_the_calibrated_model():
     commands = calibrate_commands(spec.disk, spec.options["frequencies"],
                                   spec.options["acceleration"],
                                   settings=IntegratorSettings(tolerance=1e-9))
+    assert commands["left"].turn_rate > 10.0  # degree s^-1 (README: 0.542 rad s^-1)
     for target in [(0.05, 0.03), (-0.04, 0.0), (0.0, -0.2)]:
-        legs = plan_leg((0.0, 0.0, 0.3), target, commands)
+        legs = plan_leg((0.0, 0.0, 17.0), target, commands)  # heading in degree
         assert_allclose(legs[-1].predicted_pose[:2], target, rtol=0, atol=1e-9)
+        # Each leg's predicted pose is where its arcs (degree) take the previous one.
+        pose = (0.0, 0.0, 17.0)
+        for leg in legs:
+            for name, span in ((leg.turn, leg.turn_duration),
+                               (leg.straight, leg.straight_duration)):
+                forward, left, turn = arc_displacement(commands[name], span)
+                c, s = math.cos(math.radians(pose[2])), math.sin(math.radians(pose[2]))
+                pose = (pose[0] + c * forward - s * left, pose[1] + s * forward + c * left,
+                        pose[2] + turn)
+            assert_allclose(leg.predicted_pose, pose, rtol=1e-9, atol=1e-12)
+            pose = leg.predicted_pose
 
 
 def test_plan_scene_reaches_its_waypoints_without_noise(tmp_path):
@@ -260,6 +282,11 @@ seed = 3
     assert float(miss.sel(strategy_name="open_loop", realisation=0).max()) < 1e-3
     assert float(miss.sel(strategy_name="closed_loop", realisation=0).max()) < 1e-3
     assert float(miss.sel(strategy_name="calibration", realisation=0).max()) > 1e-3
+    # The noise model's drift: the default, the paper's 0.1 rad, in degree per diameter.
+    drift = data.realisation_heading_drift
+    assert drift.attrs["units"] == "degree" and list(drift.values) == [0.0, 5.73]
+    assert data.attrs["start_heading"] == 90.0 and data.heading.attrs["units"] == "degree"
+    assert_allclose(float(data.heading.isel(strategy=0, realisation=0, t=0)), 90.0)
     # After its schedule a run stays put: the last samples repeat.
     assert isinstance(data, xr.Dataset)
     assert float(data.x.isel(t=-1, strategy=0, realisation=0)) == float(

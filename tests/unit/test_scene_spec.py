@@ -110,6 +110,20 @@ REFUSALS = [
     pytest.param(CALIBRATION, "[calibration]", "[plan]",
                  ["[plan]", "'acceleration' is a required property"], id="wrong-kind-table"),
     pytest.param(PLAN, "[plan]", "[plan_]", ["unknown key 'plan_'"], id="plan-missing"),
+    # a key whose unit changed was renamed: the old one is refused with the conversion
+    pytest.param(PLAN, "heading_drift_deg = 5.73", "heading_drift = 0.1",
+                 ["[plan] heading_drift: the key was in rad per diameter; it is now "
+                  "heading_drift_deg, in degree per diameter",
+                  "heading_drift = 0.1 rad per diameter is heading_drift_deg = 5.73 degree per "
+                  "diameter"], id="heading-drift-old-key"),
+    pytest.param(TRAJECTORY, "start = [0.0, 0.0, 90.0] # x",
+                 "heading_drift = 0.2\nstart = [0.0, 0.0, 90.0] #",
+                 ["[trajectory] heading_drift:", "it is now heading_drift_deg",
+                  "heading_drift_deg = 11.46 degree per diameter"],
+                 id="heading-drift-old-key-trajectory"),
+    pytest.param(PLAN, "heading_drift_deg = 5.73", "heading_drift_deg = 1000",
+                 ["[plan] heading_drift_deg = 1000 is out of range; allowed: >= 0 and <= 573"],
+                 id="heading-drift-huge"),
 ]
 
 

@@ -373,3 +373,50 @@ def test_open_result_loads_a_validated_file(sealed) -> None:
     dataset = open_result(sealed["swept-q"])
     assert dataset["velocity"].dims == ("Q", "f", "a")
     assert dataset.attrs[CONTENT_ATTRIBUTE] == content_sha256(sealed["swept-q"])
+
+
+# ---------------------------------------------------------------------------
+# Result formats: a file whose units changed since is stale, never misread
+
+
+def test_mode_phase_is_in_degree_and_a_file_with_it_in_rad_is_stale(sealed, tmp_path) -> None:
+    """Format 2 stores the mode's phase lag in degree (90 at resonance); a file without
+    ``study_result_format`` (format 1: mode_phase in rad) is refused as stale, while
+    one that holds no changed variable stays valid."""
+    from study.runner import run_study
+    from study.variables import RESULT_FORMAT
+
+    spec = tmp_path / "resonance.toml"
+    spec.write_text("""
+[study]
+name = "resonance"
+observables = ["resonance"]
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+M = 0.08
+cs = 0.25
+[sweep]
+f = { values = [1.0, 14.44, 1000.0] }
+""")
+    output = run_study(spec, tmp_path / "resonance.nc", progress=False, workers=1).output
+    validate_file(output)
+    with xr.open_dataset(output) as data:
+        assert data.attrs["study_result_format"] == RESULT_FORMAT == 2
+        assert data.mode_phase.attrs["units"] == "degree"
+        phase = data.mode_phase.values
+    # Below, at and far above resonance: ~0, 90 and ~180 degree (not 0, pi/2, pi).
+    assert 0.0 < phase[0] < 1.0 and 179.0 < phase[2] < 180.0
+    np.testing.assert_allclose(phase[1], 90.0, rtol=1e-12)
+    with netCDF4.Dataset(output, "a") as nc:
+        nc.delncattr("study_result_format")
+        nc["mode_phase"].setncattr("units", "rad")
+    message = _refusal(output)
+    assert ("study result format 1 (mode_phase in rad) is stale: this study reads format 2 "
+            "(mode_phase in degree); rerun its spec") in message, message
+    # No mode_phase in it: nothing changed units, the file is still valid.
+    other = Path(shutil.copyfile(sealed["thresholds"], tmp_path / "thresholds.nc"))
+    with netCDF4.Dataset(other, "a") as nc:
+        nc.delncattr("study_result_format")
+    validate_file(other)
