@@ -45,8 +45,9 @@ For the disk, ``[free]`` holds ``cs``, ``ck`` and one table per plate name
   (:func:`study.physics.lift_off_acceleration`, :func:`disk_limits`).
 
 The target's margin is the smallest of its margins, each times its weight
-(``[design] weights``, default 1), and a target is met when its margin is > 0: it moves
-the asked way (or stays still), above (below) its threshold and below lift-off.
+(``[design] weights``, default 1), and a target is met when its margin is above
+:data:`MIN_MARGIN` (1e-6): it moves the asked way (or stays still), above (below) its
+threshold and below lift-off.
 
 **Objective**: maximise the smallest target margin over the free parameters within
 their bounds (a max-min design: the worst target is as robust as it can be). Velocities
@@ -56,10 +57,10 @@ disk. **Search**: one free parameter, a scan of ``scan_points`` values across th
 bounds, then a bounded Brent refinement between the best value's neighbours; several,
 :func:`scipy.optimize.differential_evolution` (fixed seed, the start values in the
 first population, no gradient polish), then a bounded Nelder-Mead refinement. Every
-trial point is a valid structure: bounds are checked against each parameter's range
-when the spec is read, ``ck <= cs`` is kept (with both free, the search runs on
-``r = ck / cs`` in ``(0, 1]``) and the plates' mass ratios sum to at most 1 at every
-point of the bounds.
+trial point is a valid structure inside the bounds: bounds are checked against each
+parameter's range when the spec is read, ``ck <= cs`` is kept (with both free, the
+search runs on ``cs >= ck_lo`` and ``u`` in [0, 1], ``ck = ck_lo + u (min(ck_hi, cs) -
+ck_lo)``) and the plates' mass ratios sum to at most 1 at every point of the bounds.
 
 When the best point leaves a target unmet the design is **infeasible**; every target is
 then searched alone, and the report names the targets that no point within the bounds
@@ -102,6 +103,7 @@ __all__ = [
     "DESIGN_RESULT_SCHEMA",
     "DESIGN_SPEC_SCHEMA",
     "FAILED",
+    "MIN_MARGIN",
     "DesignResult",
     "DesignSpec",
     "Evaluation",
@@ -133,6 +135,8 @@ TURNS = ("left", "right")
 FAILED = -1.0
 #: Margins are clipped to [-CLIP, CLIP] (a threshold at infinity is a margin of CLIP).
 CLIP = 10.0
+#: A target is met when its margin exceeds this (a speed of 1e-6 a/w is no motion).
+MIN_MARGIN = 1e-6
 #: Phases per period at which the disk's stuck forces are sampled (disk_limits).
 PHASES = 2048
 
@@ -325,13 +329,6 @@ def _plate_free(table: dict[str, Any], start: dict[str, float | None], path: str
         free[name] = _check_bounds(name, bounds, STRUCTURE_PARAMETERS[name], value, path)
     if "ck" in free and start["ck"] is None:
         start["ck"] = start["cs"]
-    ck, cs = start["ck"], start["cs"]
-    if ck is not None and "cs" in free and "ck" not in free and free["cs"][1] < ck:
-        raise SpecError(f"{path}: [free] cs = [{free['cs'][0]:g}, {free['cs'][1]:g}]: every "
-                        f"cs is below the fixed ck = {ck:g} (ck <= cs); lower ck or free it")
-    if "ck" in free and "cs" not in free and free["ck"][0] > cs:
-        raise SpecError(f"{path}: [free] ck = [{free['ck'][0]:g}, {free['ck'][1]:g}]: every "
-                        f"ck is above the fixed cs = {cs:g} (ck <= cs)")
     return free
 
 
@@ -387,11 +384,6 @@ def _disk_free(table: dict[str, Any], disk: Disk, start: dict[str, float | None]
                             "and [free.PLATE] tables (f0, Q, alpha, M, direction)")
     if "ck" in free and start["ck"] is None:
         start["ck"] = start["cs"]
-    if start["ck"] is not None and "cs" in free and "ck" not in free and (
-            free["cs"][1] < disk.ck):
-        raise SpecError(f"{path}: [free] cs: every cs is below ck = {disk.ck:g} (ck <= cs)")
-    if "ck" in free and "cs" not in free and free["ck"][0] > disk.cs:
-        raise SpecError(f"{path}: [free] ck: every ck is above cs = {disk.cs:g} (ck <= cs)")
     heaviest = sum(free.get(f"{p.name}.M", (p.M, p.M))[1] for p in disk.plates)
     if heaviest > 1.0 + 1e-12:
         raise SpecError(f"{path}: [free]: the plates' mass ratios can sum to {heaviest:g} > 1 "
@@ -484,7 +476,7 @@ class Evaluation:
 
     @property
     def met(self) -> NDArray[np.bool_]:
-        return self.margin > 0.0
+        return self.margin > MIN_MARGIN
 
 
 def evaluate(spec: DesignSpec, params: dict[str, float | None],
@@ -567,9 +559,13 @@ def evaluate(spec: DesignSpec, params: dict[str, float | None],
 
 @dataclass
 class _Space:
+    """Internal coordinates: the free parameters, except that with ``cs`` and ``ck``
+    both free ``ck = ck_lo + u (min(ck_hi, cs) - ck_lo)`` with ``u`` in [0, 1] (and
+    ``cs >= ck_lo``): every point is inside both boxes with ``ck <= cs``."""
+
     spec: DesignSpec
     names: list[str] = field(init=False)
-    ratio: bool = field(init=False)  # ck searched as r = ck / cs
+    ratio: bool = field(init=False)  # ck searched as u (class doc)
     lower: NDArray[np.float64] = field(init=False)
     upper: NDArray[np.float64] = field(init=False)
     evaluations: int = 0
@@ -588,16 +584,21 @@ class _Space:
             j = self.names.index("ck")
             upper[j] = min(upper[j], float(spec.start["cs"]))
         if self.ratio:
-            j = self.names.index("ck")
-            lower[j] = max(spec.free["ck"][0] / spec.free["cs"][1], 1e-12)
-            upper[j] = min(1.0, spec.free["ck"][1] / spec.free["cs"][0])
+            j, k = self.names.index("ck"), self.names.index("cs")
+            lower[k] = max(lower[k], spec.free["ck"][0])
+            lower[j], upper[j] = 0.0, 1.0
         self.lower, self.upper = lower, upper
+
+    def _ck_span(self, cs: float) -> tuple[float, float]:
+        low, high = self.spec.free["ck"]
+        return low, max(min(high, cs) - low, 0.0)
 
     def start(self) -> NDArray[np.float64]:
         p = self.spec.start
         x = np.array([float(p[n] if p[n] is not None else p["cs"]) for n in self.names])
         if self.ratio:
-            x[self.names.index("ck")] = float(p["ck"]) / float(p["cs"])
+            low, span = self._ck_span(float(p["cs"]))
+            x[self.names.index("ck")] = (float(p["ck"]) - low) / span if span > 0 else 0.0
         return np.clip(x, self.lower, self.upper)
 
     def params(self, x: NDArray[np.float64]) -> dict[str, float | None]:
@@ -605,8 +606,8 @@ class _Space:
         for n, value in zip(self.names, x, strict=True):
             p[n] = float(value)
         if self.ratio:
-            p["ck"] = float(p["ck"]) * float(p["cs"])
-            p["ck"] = min(p["ck"], p["cs"])
+            low, span = self._ck_span(float(p["cs"]))
+            p["ck"] = min(low + float(p["ck"]) * span, float(p["cs"]))
         return p
 
     def physical(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -722,7 +723,7 @@ def design(spec: DesignSpec, progress: Callable[[str], None] | None = None) -> D
             if progress is not None:
                 progress(f"searching target '{target.label}' alone")
             alone[i] = _search(space, [i], max(10, spec.max_iterations // 2))[1]
-        hopeless = [i for i in range(alone.size) if not alone[i] > 0.0]
+        hopeless = [i for i in range(alone.size) if not alone[i] > MIN_MARGIN]
         if hopeless:
             failing = [spec.targets[i].label for i in hopeless]
             parts = "; ".join(f"'{spec.targets[i].label}' (best margin alone {alone[i]:.3g}, "
@@ -748,7 +749,7 @@ def design(spec: DesignSpec, progress: Callable[[str], None] | None = None) -> D
 
 def _effective(space: _Space, which: str) -> NDArray[np.float64]:
     values = np.array(getattr(space, which), dtype=float)
-    if space.ratio:  # report ck's bounds as the spec gave them
+    if space.ratio:  # report ck's bounds as the spec gave them, not u's
         j = space.names.index("ck")
         values[j] = space.spec.free["ck"][0 if which == "lower" else 1]
     return values
