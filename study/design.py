@@ -726,9 +726,11 @@ def design(spec: DesignSpec, progress: Callable[[str], None] | None = None) -> D
         hopeless = [i for i in range(alone.size) if not alone[i] > MIN_MARGIN]
         if hopeless:
             failing = [spec.targets[i].label for i in hopeless]
-            parts = "; ".join(f"'{spec.targets[i].label}' (best margin alone {alone[i]:.3g}, "
-                              f"{evaluation.limiting[i]} margin at the best compromise)"
-                              for i in hopeless)
+            parts = "; ".join(
+                f"'{spec.targets[i].label}' (best margin alone "
+                f"{alone[i] if abs(alone[i]) > MIN_MARGIN else 0.0:.3g}; at the best "
+                f"compromise its {evaluation.limiting[i]} margin is "
+                f"{evaluation.margin[i]:.3g})" for i in hopeless)
             message = ("infeasible: no point within the bounds meets every target; "
                        f"not met anywhere within the bounds: {parts}")
         else:
