@@ -861,6 +861,7 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
         "title": spec.title,
         "study_result_schema": DESIGN_RESULT_SCHEMA,
         "study_design_name": spec.name,
+        "study_name": spec.name,
         "study_spec": spec.text,
         "study_spec_sha256": spec.sha256,
         "study_code_sha256": code,
