@@ -11,6 +11,7 @@
 #                   exact two-way solver vs integrator -> results/bench-two-way-agreement.md
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
+#   make designs    run every design spec in designs/: results/design-<name>.nc
 
 PYTHON ?= python3
 VENV   := .venv
@@ -22,7 +23,8 @@ WORKFLOWS := $(wildcard workflows/*.toml)
 RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs test test-slow fuzz lint bench cf-check list clean schemas
+.PHONY: all results figures docs test test-slow fuzz lint bench cf-check list clean schemas \
+        designs
 
 all: results
 
@@ -32,6 +34,14 @@ results: $(RESULTS)
 # when the spec's canonical hash or the computing code really changed.
 results/%.nc: workflows/%.toml $(PACKAGE) | $(STAMP)
 	$(STUDY) run $< -o $@
+
+# Designs (study design): the structure parameters that achieve target behaviours.
+DESIGNS := $(patsubst designs/%.toml,results/design-%.nc,$(wildcard designs/*.toml))
+
+designs: $(DESIGNS)
+
+results/design-%.nc: designs/%.toml $(PACKAGE) | $(STAMP)
+	$(STUDY) design $< -o $@
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)

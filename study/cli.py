@@ -213,6 +213,34 @@ def _fit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _design(args: argparse.Namespace) -> int:
+    from study.design import design, design_dataset, load_design_spec
+    from study.store import write_atomic
+
+    spec = load_design_spec(args.spec)
+    output = args.output or Path("results") / f"{args.spec.stem}.nc"
+    result = design(spec, progress=lambda line: print(f"study: {line}", file=sys.stderr,
+                                                       flush=True))
+    command = "study " + " ".join(shlex.quote(a) for a in args.argv)
+    write_atomic(design_dataset(spec, result, command), output)
+    print(f"{output}: design '{spec.name}' of {len(result.names)} parameters for "
+          f"{len(spec.targets)} targets ({spec.coupling} coupling), {result.evaluations} "
+          f"model evaluations in {result.wall_seconds:.1f} s")
+    for name, value, low, high in zip(result.names, result.best, result.lower, result.upper,
+                                      strict=True):
+        units = spec.parameter(name).units
+        units = "" if units == "1" else f" {units}"
+        print(f"  {name:<12} = {value:.6g}{units}   (bounds {low:g} to {high:g})")
+    ev = result.evaluation
+    for i, target in enumerate(spec.targets):
+        speed = ev.speed_margin[i]
+        print(f"  {'met    ' if ev.met[i] else 'NOT MET'} {target.label}: margin "
+              f"{ev.margin[i]:.4g} ({ev.limiting[i]}); speed {speed:.4g}, threshold "
+              f"{ev.threshold_margin[i]:.4g}, lift-off {ev.lift_margin[i]:.4g}")
+    print(result.message)
+    return 0
+
+
 def _list(args: argparse.Namespace) -> int:
     from study.runner import is_up_to_date, load_any
     from study.spec import SpecError
@@ -341,6 +369,18 @@ def _parser() -> argparse.ArgumentParser:
     fitting.add_argument("--figure", type=Path, metavar="STEM",
                          help="also draw measurements over the fitted model (STEM.png, .pdf)")
     fitting.set_defaults(handler=_fit)
+
+    designing = commands.add_parser(
+        "design", help="search structure parameters that achieve target behaviours",
+        description="Search the free parameters of a design spec (TOML: [design], "
+        "[structure] or [disk] with [[plate]], [free] bounds, [[target]] f, a, behaviour) "
+        "for the largest smallest margin over the targets; writes the design, every "
+        "target's velocities and margins, and whether all are met (README: Design). An "
+        "infeasible design is reported (exit status 0) naming the target that fails.")
+    designing.add_argument("spec", type=Path, help="design spec (TOML)")
+    designing.add_argument("-o", "--output", type=Path,
+                           help="result file (default: results/<spec file stem>.nc)")
+    designing.set_defaults(handler=_design)
 
     listing = commands.add_parser("list", help="the workflows and whether results are current")
     listing.add_argument("--workflows", default="workflows", help="spec folder")

@@ -45,6 +45,8 @@ from study.variables import RESULT_FORMAT, STALE_RESULT_FORMATS, VARIABLES
 
 __all__ = [
     "CONTENT_ATTRIBUTE",
+    "DESIGN_SCHEMA",
+    "DESIGN_SCHEMA_PATH",
     "FIT_SCHEMA",
     "FIT_SCHEMA_PATH",
     "PROVENANCE_SCHEMA_PATH",
@@ -73,6 +75,9 @@ SCENE_SCHEMA_PATH = _SCHEMA_DIR / f"{SCENE_SCHEMA}.schema.json"
 #: Files written by ``study fit`` (:mod:`study.fit`).
 FIT_SCHEMA = "study-fit-v1"
 FIT_SCHEMA_PATH = _SCHEMA_DIR / f"{FIT_SCHEMA}.schema.json"
+#: Files written by ``study design`` (:mod:`study.design`).
+DESIGN_SCHEMA = "study-design-v1"
+DESIGN_SCHEMA_PATH = _SCHEMA_DIR / f"{DESIGN_SCHEMA}.schema.json"
 #: The structure every result's ``provenance`` attribute (a JSON document) has.
 PROVENANCE_SCHEMA_PATH = _SCHEMA_DIR / "study-provenance-v1.schema.json"
 
@@ -865,12 +870,14 @@ def _scene_problems(nc: Any, meta: _File, source: str) -> list[str]:
     return problems
 
 
-def _fit_problems(nc: Any, meta: _File) -> list[str]:
-    """A fit result: its header against ``study-fit-v1``, sizes that agree, the checksum."""
-    problems = [p for p in _schema_problems(FIT_SCHEMA_PATH, _file_header(meta))
+def _fit_problems(nc: Any, meta: _File, schema_path: Path = FIT_SCHEMA_PATH) -> list[str]:
+    """A fit result: its header against ``study-fit-v1``, sizes that agree, the checksum
+    (a design result the same way, against ``study-design-v1``)."""
+    problems = [p for p in _schema_problems(schema_path, _file_header(meta))
                 if _not_required_checksum(p)]
     names = meta.dims.get("parameter")
-    if names is not None and meta.dims.get("parameter_2") != names:
+    if (schema_path == FIT_SCHEMA_PATH and names is not None
+            and meta.dims.get("parameter_2") != names):
         problems.append("dimensions parameter and parameter_2 differ in size")
     try:
         json.loads(meta.attrs.get("provenance", ""))
@@ -927,11 +934,12 @@ def validate_file(path: str | Path) -> str:
             raise ResultError(
                 f"{path}: not a study result file (no 'study_result_schema' attribute; "
                 f"global attributes: {_short(', '.join(sorted(attrs)) or 'none')})")
-        if not any(_same_text(kind, k) for k in (RESULT_SCHEMA, SCENE_SCHEMA, FIT_SCHEMA)):
+        if not any(_same_text(kind, k) for k in (RESULT_SCHEMA, SCENE_SCHEMA, FIT_SCHEMA,
+                                                 DESIGN_SCHEMA)):
             raise ResultError(
                 f"{path}: written with result schema {_short(repr(_jsonable(kind)), 80)}; "
-                f"this version of study reads {RESULT_SCHEMA!r}, {SCENE_SCHEMA!r} and "
-                f"{FIT_SCHEMA!r}. Rerun "
+                f"this version of study reads {RESULT_SCHEMA!r}, {SCENE_SCHEMA!r}, "
+                f"{FIT_SCHEMA!r} and {DESIGN_SCHEMA!r}. Rerun "
                 "its study to rewrite it.")
         if meta.groups:
             problems = [f"groups {', '.join(meta.groups)}: study writes no groups"]
@@ -939,12 +947,14 @@ def validate_file(path: str | Path) -> str:
             problems = _study_problems(nc, meta, str(path))
         elif kind == FIT_SCHEMA:
             problems = _fit_problems(nc, meta)
+        elif kind == DESIGN_SCHEMA:
+            problems = _fit_problems(nc, meta, DESIGN_SCHEMA_PATH)
         else:
             problems = _scene_problems(nc, meta, str(path))
     finally:
         nc.close()
-    what = {RESULT_SCHEMA: "study result", FIT_SCHEMA: "fit result"}.get(
-        kind, "steering scene result")
+    what = {RESULT_SCHEMA: "study result", FIT_SCHEMA: "fit result",
+            DESIGN_SCHEMA: "design result"}.get(kind, "steering scene result")
     if problems:
         problems = list(dict.fromkeys(problems))  # two schema branches may see one fault
         raise ResultError(f"{path}: invalid {what}:\n  " + "\n  ".join(problems))
