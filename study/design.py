@@ -510,8 +510,9 @@ def evaluate(spec: DesignSpec, params: dict[str, float | None],
         for i, t in enumerate(targets):
             threshold[i], lift[i] = disk_limits(disk, t.f)
             motion = periodic_motion(disk, t.f, t.a)
+            # The planar API gives turn rates in degree s^-1; margins use rad s^-1.
             forward[i], lateral[i], turn[i] = (motion.forward_speed, motion.lateral_speed,
-                                               motion.turn_rate)
+                                               math.radians(motion.turn_rate))
             status[i] = motion.status
             rim[i] = contact_margins(disk, t.f, t.a)[0]
     unit = a / (2.0 * np.pi * f)
