@@ -522,7 +522,7 @@ def simulate_planar(
         path_before = y[_kernel.PATH]
         code = _kernel._integrate(
             plates, disk_vector, schedule.starts, omega, schedule.acceleration,
-            schedule.start_phases, schedule.ends, y, mode_box, t_box, float(stop),
+            schedule.start_phases_rad, schedule.ends, y, mode_box, t_box, float(stop),
             settings.tolerance, settings.tolerance, scale, settings.max_step * shortest,
             settings.event_tolerance * shortest, settings.samples_per_step,
             settings.max_steps, out_t, out_y, out_mode, out_box, ev_t, ev_kind, ev_y,

@@ -343,7 +343,7 @@ def _fly(disk: Disk, state: NDArray[np.float64], phase: float, legs: list[Leg],
     after = run.final_state.copy()
     after[len(POSE_STATE) - 1] = 0.0  # the path length counts per flight
     phase = float(schedule.start_phases[-1]
-                  + 2.0 * math.pi * schedule.frequency[-1] * schedule.duration[-1])
+                  + 360.0 * schedule.frequency[-1] * schedule.duration[-1])
     return _Flight(run, after, phase, schedule, labels)
 
 
@@ -352,7 +352,7 @@ def refined_legs(disk: Disk, state: NDArray[np.float64], phase: float,
                  settings: IntegratorSettings | None = None, iterations: int = 5,
                  tolerance: float = 1e-4, slaving: float = SLAVING) -> list[Leg]:
     """Legs to ``target`` corrected by simulating the model itself (``state``: a
-    :mod:`study.planar` state vector, heading in degree; ``phase``: the drive's [rad]).
+    :mod:`study.planar` state vector, heading in degree; ``phase``: the drive's [degree]).
 
     The calibration knows only steady motion; after a command switch the plate modes
     ring (beating at ``|f - f0|``, decaying over ``2 Q / w0``) and the disk moves

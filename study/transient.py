@@ -159,7 +159,8 @@ class Schedule:
 
     The drive acceleration is ``a_j cos(phi(t))`` in segment ``j`` with the phase
     ``phi`` continuous across segment boundaries (a frequency switch does not jump
-    the table's phase) and ``phi(0) = phase`` [rad].
+    the table's phase) and ``phi(0) = phase`` [degree] (angles are in degrees at every
+    public boundary; the kernels take :attr:`start_phases_rad`).
 
     Parameters
     ----------
@@ -170,7 +171,7 @@ class Schedule:
     duration : array_like
         Duration of each segment [s], > 0.
     phase : float
-        Drive phase at ``t = 0`` [rad].
+        Drive phase at ``t = 0`` [degree].
     """
 
     frequency: NDArray[np.float64]
@@ -192,7 +193,7 @@ class Schedule:
         if not np.all(np.isfinite(d)) or np.any(d <= 0.0):
             raise ValueError(f"Schedule: every duration must be finite and > 0 [s], got {d}")
         if not math.isfinite(float(self.phase)):
-            raise ValueError(f"Schedule: phase must be finite [rad], got {self.phase!r}")
+            raise ValueError(f"Schedule: phase must be finite [degree], got {self.phase!r}")
         for name, value in (("frequency", f), ("acceleration", a), ("duration", d)):
             value.setflags(write=False)
             object.__setattr__(self, name, value)
@@ -200,7 +201,8 @@ class Schedule:
 
     @classmethod
     def constant(cls, f: float, a: float, duration: float, phase: float = 0.0) -> Schedule:
-        """A single segment: drive ``a cos(2 pi f t + phase)`` for ``duration`` [s]."""
+        """A single segment: drive ``a cos(2 pi f t + phase)`` for ``duration`` [s]
+        (``phase`` in degree)."""
         return cls(np.array([f]), np.array([a]), np.array([duration]), phase)
 
     @property
@@ -215,9 +217,15 @@ class Schedule:
 
     @property
     def start_phases(self) -> NDArray[np.float64]:
-        """Drive phase at the start of each segment [rad]."""
-        advance = 2.0 * np.pi * self.frequency * self.duration
+        """Drive phase at the start of each segment [degree]."""
+        advance = 360.0 * self.frequency * self.duration
         return self.phase + np.concatenate(([0.0], np.cumsum(advance)[:-1]))
+
+    @property
+    def start_phases_rad(self) -> NDArray[np.float64]:
+        """Drive phase at the start of each segment [rad], the kernels' unit."""
+        advance = 2.0 * np.pi * self.frequency * self.duration
+        return math.radians(self.phase) + np.concatenate(([0.0], np.cumsum(advance)[:-1]))
 
 
 @dataclass(frozen=True)
@@ -374,7 +382,7 @@ def simulate(
     ev_box = np.zeros(1, dtype=np.int64)
     stats = np.zeros(6)
     code = _kernel._integrate(
-        p, schedule.starts, omega, schedule.acceleration, schedule.start_phases,
+        p, schedule.starts, omega, schedule.acceleration, schedule.start_phases_rad,
         schedule.ends, y, mode_box, t_box, end,
         settings.tolerance, settings.tolerance, scale, fixed, settings.max_step * shortest,
         settings.event_tolerance * shortest, settings.samples_per_step, settings.max_steps,

@@ -240,7 +240,8 @@ def test_schedule_phase_is_continuous_and_restart_agrees():
                       initial_state=state, output_times=[0.3],
                       settings=IntegratorSettings(tolerance=1e-12))
     assert_allclose(second.x[0], whole.x[1], rtol=1e-9, atol=1e-12)
-    assert_allclose(schedule.start_phases[1], 2 * math.pi * 14.0 * 0.3, rtol=1e-15)
+    assert_allclose(schedule.start_phases[1], 360.0 * 14.0 * 0.3, rtol=1e-15)
+    assert_allclose(schedule.start_phases_rad[1], 2 * math.pi * 14.0 * 0.3, rtol=1e-15)
 
 
 def test_canonical_start_is_the_steady_mode_response():
