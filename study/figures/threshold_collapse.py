@@ -117,7 +117,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                   "$x_\\pm = Q M \\cos\\alpha(\\cos\\alpha \\pm \\sin\\alpha / c_s)$ [1]",
            ylabel="minimum threshold over f, $a^*_{min}/g$ [1]",
            title="Minimum thresholds collapse on the resonance closed form")
-    ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
+    ax.legend(loc="best", fontsize=8, framealpha=0.9)
 
     # Side panel: the same minima against M alone (or Q, when only Q is swept).
     along = "M" if "M" in dims else ("Q" if "Q" in dims else "M")
