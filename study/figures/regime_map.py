@@ -143,6 +143,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
              f"{coupling_label(dataset)}")
     ax.set_title(title.replace(", ", "\n", 1) + f"\n{parameter_text(dataset)}",
                  fontsize=11)
-    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,
-               frameon=False)
+    # Three columns fit the figure's width up to six entries; more take two.
+    fig.legend(handles=handles, loc="outside lower center",
+               ncol=3 if len(handles) <= 6 else 2, fontsize=8.5, frameon=False)
     return common.save(fig, output, dataset, title)
