@@ -80,7 +80,8 @@ def test_starting_exactly_on_the_switching_surface_with_ck_below_cs():
         duration = 3 / f
         times = np.array([duration - (phase - late) / w]) if phase != late else np.array(
             [duration])
-        runs.append(simulate(structure, Schedule.constant(f, a, duration + 1e-3 / w, phase),
+        runs.append(simulate(structure, Schedule.constant(f, a, duration + 1e-3 / w,
+                                                          math.degrees(phase)),
                              initial_state=state, output_times=times,
                              settings=IntegratorSettings(tolerance=1e-12)))
     late_run, early_run = runs
