@@ -99,7 +99,6 @@ from study.structure import Structure
 
 __all__ = [
     "BEHAVIOURS",
-    "COUPLINGS",
     "DESIGN_RESULT_SCHEMA",
     "DESIGN_SPEC_SCHEMA",
     "FAILED",
@@ -118,7 +117,6 @@ __all__ = [
 
 DESIGN_SPEC_SCHEMA = "study-design-spec-v1"
 DESIGN_RESULT_SCHEMA = "study-design-v1"
-COUPLINGS = ("one-way", "two-way")
 
 #: Target behaviours, and which models know them.
 BEHAVIOURS = {

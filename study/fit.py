@@ -62,7 +62,6 @@ from study.specfile import (
 from study.structure import Structure
 
 __all__ = [
-    "COUPLINGS",
     "FIT_RESULT_SCHEMA",
     "FIT_SPEC_SCHEMA",
     "PARAMETERS",
@@ -80,7 +79,6 @@ __all__ = [
 
 FIT_SPEC_SCHEMA = "study-fit-spec-v1"
 FIT_RESULT_SCHEMA = "study-fit-v1"
-COUPLINGS = ("one-way", "two-way")
 
 #: A standard error above this fraction of the bounds' width flags a parameter.
 UNIDENTIFIABLE_FRACTION = 0.25

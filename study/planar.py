@@ -31,8 +31,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import planar as _kernel
 from study.physics import mode_response
+from study.solver import COUPLINGS
 from study.structure import require_finite
-from study.transient import COUPLINGS, IntegratorSettings, Schedule
+from study.transient import IntegratorSettings, Schedule
 
 __all__ = [
     "EVENT_KINDS",

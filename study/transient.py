@@ -27,11 +27,15 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
-from study.solver import PARALLEL_THRESHOLD, SteadyState, check_structure
+from study.solver import (
+    PARALLEL_THRESHOLD,
+    SteadyState,
+    check_coupling,
+    check_structure,
+)
 from study.structure import Structure
 
 __all__ = [
-    "COUPLINGS",
     "EVENT_KINDS",
     "INTEGRATOR_VERSION",
     "OUTCOMES",
@@ -47,8 +51,6 @@ __all__ = [
 #: Version of the integrator's algorithm; changes whenever its results may change.
 INTEGRATOR_VERSION = "1"
 
-#: Coupling between the sliding base and the mode.
-COUPLINGS = ("one-way", "two-way")
 
 #: Contact event kinds in a :class:`Trajectory`, by code.
 EVENT_KINDS = {
@@ -274,16 +276,10 @@ class Trajectory:
     events_dropped: int = field(default=0)
 
 
-def _check_coupling(coupling: str) -> bool:
-    if coupling not in COUPLINGS:
-        raise ValueError(f"coupling must be one of {COUPLINGS}, got {coupling!r}")
-    return coupling == "two-way"
-
-
 def model_parameters(structure: Structure, coupling: str = "one-way") -> NDArray[np.float64]:
     """Parameter vector of the integrator kernel for ``structure`` and ``coupling``."""
     structure = check_structure(structure)
-    two_way = _check_coupling(coupling)
+    two_way = check_coupling(coupling) == "two-way"
     p = np.empty(_kernel.N_PARAMETERS)
     w0 = structure.omega0
     p[_kernel.P_DAMPING] = w0 / structure.Q
