@@ -340,14 +340,9 @@ def attractors(
         parallel = f_flat.size >= 16
     vector = structure_vector(structure, coupling)
     omega = 2.0 * np.pi * f_flat
-    if parallel:
-        _orbit._attractors_points(vector, omega, a_flat, lifted, int(settings.max_events),
-                                  int(settings.max_map_iterations), out)
-    else:
-        for i in range(f_flat.size):
-            _orbit.attractors_point(vector, omega[i], a_flat[i], lifted[i],
-                                    int(settings.max_events),
-                                    int(settings.max_map_iterations), out[i])
+    kernel = _orbit._attractors_points if parallel else _orbit._attractors_points_serial
+    kernel(vector, omega, a_flat, lifted, int(settings.max_events),
+           int(settings.max_map_iterations), out)
     return Attractors(
         count=out[:, 0].astype(np.int32).reshape(shape),
         velocity_spread=out[:, 1].reshape(shape),

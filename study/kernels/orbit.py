@@ -52,6 +52,7 @@ from study.kernels.codes import (
     STATIC,
     STICK_SLIP,
 )
+from study.kernels.steady import sin_minus_x
 
 TWO_PI = 2.0 * math.pi
 EPS = 2.220446049250313e-16
@@ -309,22 +310,6 @@ def _particular(row, omega, cw, sw):
     im = pr * sw + pi * cw
     w2 = omega * omega
     return re + row[M_OFFSET], -omega * im, -w2 * re, w2 * omega * im
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _sin_minus_x(d):
-    """``sin(d) - d`` without cancellation for small ``d``."""
-    if abs(d) >= 0.5:
-        return math.sin(d) - d
-    x2 = d * d
-    series = 1.0 - x2 / 272.0
-    series = 1.0 - x2 / 210.0 * series
-    series = 1.0 - x2 / 156.0 * series
-    series = 1.0 - x2 / 110.0 * series
-    series = 1.0 - x2 / 72.0 * series
-    series = 1.0 - x2 / 42.0 * series
-    series = 1.0 - x2 / 20.0 * series
-    return -d * x2 / 6.0 * series
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -785,7 +770,7 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_marg
             dsin = (cw * math.sin(tw) - sw * _one_minus_cos(tw)) / omega
             v_end = v0 - kk * (dld - dd0) - s * ck * g * tau + s * ck * a * dsin
             # integral of (sin wt - sin wt0) / w dt = [cw0 (1 - cos) + sw0 (sin - tw)] / w^2
-            iint = (cw * _one_minus_cos(tw) + sw * _sin_minus_x(tw)) / (omega * omega)
+            iint = (cw * _one_minus_cos(tw) + sw * sin_minus_x(tw, math.sin(tw))) / (omega * omega)
             dp_full = (dpe - dp) - dpd * tau  # particular: delta1 - delta0 - delta0' tau
             dh_full = (h - h0) - hd0 * tau
             displacement = (v0 * tau - kk * (dp_full + dh_full) - 0.5 * s * ck * g * tau * tau
@@ -1354,3 +1339,11 @@ def _attractors_points(structure, omega, a, lifted, max_events, max_iterations, 
         for i in range(lane, n, lanes):
             attractors_point(structure, omega[i], a[i], lifted[i], max_events,
                              max_iterations, out[i])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _attractors_points_serial(structure, omega, a, lifted, max_events, max_iterations, out):
+    """Same as :func:`_attractors_points` on one thread."""
+    for i in range(omega.shape[0]):
+        attractors_point(structure, omega[i], a[i], lifted[i], max_events, max_iterations,
+                         out[i])

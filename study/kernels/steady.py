@@ -12,8 +12,8 @@ maximum, so it is bracketed on an interval where ``U`` is monotone and found by
 safeguarded Newton iteration. Stick releases are closed form (an arc of phase on
 which ``s tau - cs n > 0``).
 
-Everything here is private: :mod:`study.solver` validates, allocates and calls
-:func:`_steady_state`. Results are written to ``out`` arrays; nothing is allocated
+Everything here is private but :func:`sin_minus_x`, which the orbit kernel shares:
+:mod:`study.solver` validates, allocates and calls :func:`_steady_state`. Results are written to ``out`` arrays; nothing is allocated
 per point on the common (stick-slip) path.
 """
 
@@ -76,7 +76,7 @@ def _mod_two_pi(x):
 
 
 @njit(cache=True, nogil=True)
-def _sin_minus_x(d, sin_d):
+def sin_minus_x(d, sin_d):
     """``sin(d) - d`` without cancellation for small ``d``."""
     if abs(d) >= 1.0:
         return sin_d - d
@@ -115,7 +115,7 @@ def _slip_speed(d, slope0, h, cos0, sin0):
     sin_d = math.sin(d)
     half = math.sin(0.5 * d)
     one_minus_cos = 2.0 * half * half
-    speed = slope0 * d + h * (cos0 * _sin_minus_x(d, sin_d) - sin0 * one_minus_cos)
+    speed = slope0 * d + h * (cos0 * sin_minus_x(d, sin_d) - sin0 * one_minus_cos)
     accel = slope0 - h * (cos0 * one_minus_cos + sin0 * sin_d)
     return speed, accel
 
@@ -157,7 +157,7 @@ def _slip(psi0, c, h, gamma):
         sin_d = math.sin(d)
         half = math.sin(0.5 * d)
         one_minus_cos = 2.0 * half * half
-        sin_minus_d = _sin_minus_x(d, sin_d)
+        sin_minus_d = sin_minus_x(d, sin_d)
         speed = slope0 * d + h * (cos0 * sin_minus_d - sin0 * one_minus_cos)
         accel = slope0 - h * (cos0 * one_minus_cos + sin0 * sin_d)
         # The root is as accurate as the evaluation of U allows once |U(d)| is below
