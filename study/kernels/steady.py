@@ -13,8 +13,9 @@ safeguarded Newton iteration. Stick releases are closed form (an arc of phase on
 which ``s tau - cs n > 0``).
 
 Everything here is private but :func:`sin_minus_x`, which the orbit kernel shares:
-:mod:`study.solver` validates, allocates and calls :func:`_steady_state`. Results are written to ``out`` arrays; nothing is allocated
-per point on the common (stick-slip) path.
+:mod:`study.solver` validates, allocates and calls :func:`_steady_state`. Results are
+written to ``out`` arrays; nothing is allocated per point on the common (stick-slip)
+path.
 """
 
 from __future__ import annotations
