@@ -253,38 +253,59 @@ def test_a_second_writer_of_the_same_result_is_refused(tmp_path):
 
 
 def test_ctrl_c_keeps_finished_chunks_and_the_next_run_resumes(tmp_path):
-    """A real SIGINT to `study run`, then a second `study run` that finishes the job."""
+    """A real SIGINT to `study run`, then a second `study run` that finishes the job.
+
+    The work must outlast the interrupt by far on a busy machine: each chunk runs the
+    multistability check (twelve two-way orbit solves per point, about 0.3 s a chunk on
+    one thread), and the signal is sent after 2 of 20 chunks, leaving seconds of work.
+    With the one-way velocity alone a whole run took well under a second, and the
+    signal could land while the finished process was already shutting down.
+    """
     import signal
     import time
 
     spec_path = tmp_path / "slow.toml"
     spec_path.write_text(
-        SPEC.format(name="slow", Q=17.5, extra="M = 1.0", sweeps="",
-                    observables='"velocity"')
-        .replace("num = 23", "num = 400").replace("num = 17", "num = 400")
-        .replace("chunk_points = 51", "chunk_points = 2000")
+        SPEC.format(name="slow", Q=17.5, extra="M = 0.3", sweeps="",
+                    observables='"velocity", "attractors"')
+        .replace("num = 23", "num = 100").replace("num = 17", "num = 200")
+        .replace("chunk_points = 51", 'chunk_points = 1000\ncoupling = "two-way"')
     )
     output = tmp_path / "slow.nc"
+
+    def kept_chunks() -> int:
+        """Chunks whose values are kept for both observables (one folder each)."""
+        folders = sorted((tmp_path / ".study-cache").glob("??/*"))
+        counts = [len(list(folder.glob("block-*.npz"))) for folder in folders]
+        return min(counts) if len(counts) == 2 else 0
+
     command = [str(Path(sys.executable).with_name("study")), "run", str(spec_path),
                "-o", str(output), "--no-progress", "--workers", "1"]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                text=True)
-    deadline = time.monotonic() + 120
+    deadline = time.monotonic() + 300
     while time.monotonic() < deadline and process.poll() is None:
-        if len(kept_blocks(tmp_path)) >= 2:
+        if kept_chunks() >= 2:
             break
-        time.sleep(0.05)
+        time.sleep(0.02)
     assert process.poll() is None, "the run ended before it could be interrupted"
     process.send_signal(signal.SIGINT)
-    _, stderr = process.communicate(timeout=120)
+    _, stderr = process.communicate(timeout=300)
     assert process.returncode == 130, stderr
     assert "computed values are kept" in stderr
     assert not output.exists()
-    kept = len(kept_blocks(tmp_path))
-    assert kept >= 2
+    kept = kept_chunks()
+    assert 2 <= kept < 20
     report = run_study(spec_path, output, progress=False)
+    assert report.chunks == 20
     assert report.reused == kept and report.computed == report.chunks - kept
-    s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=1.0, cs=0.25)
+    s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.3, cs=0.25)
     ds = open_result(output)
-    v, _ = study.steady_velocity(s, ds["f"].values[:, None], ds["a"].values[None, :])
+    f, a = ds["f"].values, ds["a"].values
+    v, status = study.steady_velocity(s, f[:, None], a[None, :], coupling="two-way")
     np.testing.assert_array_equal(ds["velocity"].values, v)
+    np.testing.assert_array_equal(ds["status"].values, status)
+    # the attractor counts of a row from the kept chunks and one computed on resume
+    for row in (0, f.size - 1):
+        found = study.solver.attractors(s, f[row], a)
+        np.testing.assert_array_equal(ds["attractor_count"].values[row], found.count)
