@@ -563,6 +563,11 @@ def _solve_into(
     period[i] = n_period
 
 
+#: Points a thread takes at a time in the parallel kernels: whole cache lines of every
+#: output array (8 doubles a line).
+POINT_BLOCK = 64
+
+
 @njit(cache=True, nogil=True, parallel=True)
 def _steady_state(
     a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
@@ -571,18 +576,24 @@ def _steady_state(
 ):
     """Fill the output arrays, in parallel over points (threads, GIL released).
 
-    Points are dealt to threads interleaved: the cost of a point depends on its
-    regime, and neighbouring points share a regime, so contiguous blocks would
-    leave one thread with all the slipping points of a map.
+    Points are dealt to threads in blocks of :data:`POINT_BLOCK` consecutive points,
+    the blocks interleaved over the lanes: the cost of a point depends on its regime,
+    and neighbouring points share a regime, so one contiguous half each would leave
+    one thread with all the slipping points of a map; single points interleaved
+    would make every write miss the cache (a lane touches one value of each cache
+    line, which is evicted before the next lane comes to it).
     """
     n = a_plus.shape[0]
-    lanes = min(n, 256)
+    blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
+    lanes = min(blocks, 256)
     for lane in prange(lanes):
-        for i in range(lane, n, lanes):
-            _solve_into(
-                i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g, max_events,
-                max_rounds, velocity, status, reason, slips, forward, backward, period,
-            )
+        for block in range(lane, blocks, lanes):
+            for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
+                _solve_into(
+                    i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+                    max_events, max_rounds, velocity, status, reason, slips, forward,
+                    backward, period,
+                )
 
 
 @njit(cache=True, nogil=True)
@@ -599,10 +610,8 @@ def _steady_state_serial(
         )
 
 
-# Velocity only (``study.solver.steady_velocity``): the same orbits, nothing else.
-# Points are dealt to threads in blocks of this many consecutive points (whole cache
-# lines of every array), blocks interleaved over the lanes as in _steady_state.
-VELOCITY_BLOCK = 64
+# Velocity only (``study.solver.steady_velocity``): the same orbits, nothing else,
+# dealt to threads in blocks as in _steady_state.
 # Squares of the normal doubles in (1e-140, 1e140): products of three of them are
 # still normal, so their rounding error is a few ulps.
 SQUARES_LOW = 1e-280
@@ -727,11 +736,11 @@ def _steady_velocity(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
                      max_events, max_rounds, velocity, status):
     """Velocity and status of every point of the flat ``f``, ``a``, in parallel."""
     n = f.shape[0]
-    blocks = (n + VELOCITY_BLOCK - 1) // VELOCITY_BLOCK
+    blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
     lanes = min(blocks, 256)
     for lane in prange(lanes):
         for block in range(lane, blocks, lanes):
-            for i in range(block * VELOCITY_BLOCK, min(n, (block + 1) * VELOCITY_BLOCK)):
+            for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
                 _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
                                max_events, max_rounds, velocity, status, LIFT_UNDECIDED)
 
