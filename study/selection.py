@@ -254,7 +254,8 @@ def select(dataset: xr.Dataset, selections: Iterable[Selection | str],
                 f" (asked {sel.value})"
             chosen.append(f"{sel.key}={_fmt(got)}{note}")
         else:
-            chosen.append(f"{sel} ({np.size(index)} values)")
+            count = int(np.size(index))
+            chosen.append(f"{sel} ({count} value{'' if count == 1 else 's'})")
     if chosen:
         earlier = dataset.attrs.get("study_selection")
         dataset = dataset.copy()

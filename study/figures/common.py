@@ -4,6 +4,7 @@ a figure needs selected, colours for many curves, and a few checks."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
 
 import matplotlib
@@ -27,8 +28,11 @@ __all__ = [
     "one_way_velocity",
     "parameter_text",
     "provenance_line",
+    "require_axis",
     "require_dims",
+    "restore_dim",
     "save",
+    "selected_keys",
     "selection_text",
     "single_structure",
     "structure_from_dataset",
@@ -124,6 +128,12 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
 VALID = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
 
 
+def selected_keys(dataset: xr.Dataset) -> set[str]:
+    """The keys of the ``--sel`` selections a dataset was cut by (``{"Q", "a"}``)."""
+    chosen = str(dataset.attrs.get("study_selection", ""))
+    return {part.split("=", 1)[0].strip() for part in chosen.split(", ") if "=" in part}
+
+
 def selection_text(dataset: xr.Dataset) -> str:
     """``"selected: Q=30, M=0.1"`` for a dataset cut by ``--sel``, else ``""``."""
     chosen = dataset.attrs.get("study_selection")
@@ -131,8 +141,12 @@ def selection_text(dataset: xr.Dataset) -> str:
 
 
 def require_dims(dataset: xr.Dataset, figure: str, keep: tuple[str, ...],
-                 what: str, variable: str | None = None) -> None:
+                 what: str, variable: str | None = None) -> xr.Dataset:
     """Refuse a file with more dimensions than a figure draws, saying what to select.
+
+    A dimension the figure does not draw but that holds a single value (a selection
+    ``--sel Q=30:30``, or a sweep of one value) is not refused: it is squeezed to a
+    scalar coordinate, as ``--sel Q=30`` leaves it.
 
     Parameters
     ----------
@@ -147,6 +161,11 @@ def require_dims(dataset: xr.Dataset, figure: str, keep: tuple[str, ...],
     variable : str, optional
         Only this variable's dimensions count (else every dimension of the file).
 
+    Returns
+    -------
+    xarray.Dataset
+        ``dataset``, its other dimensions of one value squeezed to scalar coordinates.
+
     Raises
     ------
     FigureError
@@ -155,9 +174,13 @@ def require_dims(dataset: xr.Dataset, figure: str, keep: tuple[str, ...],
     from study.figures import FigureError
 
     dims = dataset[variable].dims if variable is not None else tuple(dataset.dims)
+    single = [str(d) for d in dims if d not in keep and dataset.sizes[d] == 1]
+    if single:
+        dataset = dataset.squeeze(single)
+        dims = dataset[variable].dims if variable is not None else tuple(dataset.dims)
     extra = [str(d) for d in dims if d not in keep]
     if not extra:
-        return
+        return dataset
     along = {str(c): dataset[c].variable for c in dataset.coords
              if dataset[c].ndim == 1 and dataset[c].dims[0] in extra}
     values = available(xr.Dataset(coords=along))
@@ -169,6 +192,89 @@ def require_dims(dataset: xr.Dataset, figure: str, keep: tuple[str, ...],
     )
 
 
+def require_axis(dataset: xr.Dataset, figure: str, dim: str, what: str,
+                 instead: str = "") -> None:
+    """Refuse a file (as selected) with fewer than two values of ``dim``, an axis the
+    figure draws along (a curve or a map needs several points).
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The (possibly already selected) result.
+    figure : str
+        The figure's name, for the message.
+    dim : str
+        The axis (``"f"``, ``"a"``, ``"t"``).
+    what : str
+        What the figure draws along it, for the message (``"the thresholds against f"``).
+    instead : str, optional
+        What to draw instead, appended to the message (``"'velocity-curves' draws ..."``).
+
+    Raises
+    ------
+    FigureError
+        Naming the figure, the axis, the single value left and the ``--sel`` to give.
+    """
+    from study.figures import FigureError
+
+    if dim in dataset.dims and dataset.sizes[dim] >= 2:
+        return
+    selected = dataset.attrs.get("study_selection")
+    if dim in dataset.dims or dim in dataset.coords:
+        values = np.atleast_1d(dataset[dim].values) if dim in dataset.coords else None
+        left = (f"{dim}={_text(values[0])}" if values is not None and values.size == 1
+                else f"{dataset.sizes.get(dim, 1)} value of {dim}")
+        found = f"the selection leaves only {left}" if selected else f"this file holds only {left}"
+        advice = (f"select a range (--sel {dim}=START:STOP) or no value of {dim}"
+                  if selected else f"compute several values of {dim}")
+    else:
+        found = f"this file has no axis {dim!r}"
+        advice = f"draw it from {_source(figure)}"
+    raise FigureError(
+        f"figure {figure!r} draws {what}, which needs several values of {dim}; {found}: "
+        f"{advice}" + (f"; {instead}" if instead else "")
+    )
+
+
+def _text(value: object) -> str:
+    return f"{float(value):g}" if np.asarray(value).dtype.kind in "iuf" else str(value)
+
+
+def _source(figure: str) -> str:
+    from study.figures import FIGURES
+
+    return FIGURES[figure].source if figure in FIGURES else "another file"
+
+
+def restore_dim(dataset: xr.Dataset, dim: str, names: Iterable[str]) -> xr.Dataset:
+    """Give back a dimension that a selection of one value dropped (``--sel a=7``): the
+    variables and coordinates ``names`` that lack it get it, with length 1 (in front),
+    and a scalar coordinate ``dim`` becomes its one-value coordinate again, so that a
+    figure of a family of curves draws one curve.
+
+    A dataset that has ``dim`` is returned as it is.
+    """
+    if dim in dataset.dims:
+        return dataset
+    value = None
+    if dim in dataset.coords and dataset[dim].ndim == 0:
+        value = dataset[dim].variable
+        dataset = dataset.drop_vars(dim)
+    restored = {}
+    for name in names:
+        if name in dataset.variables and dim not in dataset[name].dims:
+            variable = dataset.variables[name]
+            restored[name] = variable.set_dims((dim, *variable.dims),
+                                               (1, *variable.shape))
+    coords = {n: v for n, v in restored.items() if n in dataset.coords}
+    data = {n: v for n, v in restored.items() if n not in dataset.coords}
+    dataset = dataset.assign(data).assign_coords(coords)
+    if value is not None:
+        dataset = dataset.assign_coords(
+            {dim: xr.Variable((dim,), np.atleast_1d(value.values), value.attrs)})
+    return dataset
+
+
 def _first(dataset: xr.Dataset, dim: str) -> str:
     if dim in dataset.coords and dataset[dim].ndim == 1 and dataset[dim].size:
         value = dataset[dim].values[0]
@@ -176,16 +282,17 @@ def _first(dataset: xr.Dataset, dim: str) -> str:
     return "0"
 
 
-def single_structure(dataset: xr.Dataset, figure: str) -> None:
+def single_structure(dataset: xr.Dataset, figure: str) -> xr.Dataset:
     """Refuse a file that sweeps structure parameters (the figure draws one structure),
-    naming the ``--sel`` keys to give and their values.
+    naming the ``--sel`` keys to give and their values; returns the dataset with any
+    structure axis of one value squeezed to a scalar coordinate (:func:`require_dims`).
 
     Raises
     ------
     FigureError
         Naming the swept parameters and their values.
     """
-    require_dims(dataset, figure, ("f", "a", "branch"), "a single structure")
+    return require_dims(dataset, figure, ("f", "a", "branch"), "a single structure")
 
 
 def is_paper_file(dataset: xr.Dataset, ignore: tuple[str, ...] = ()) -> bool:

@@ -10,12 +10,25 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from study.figures.common import plt, save
+from study.figures import FigureError
+from study.figures.common import plt, restore_dim, save, selection_text
 from study.fit import fitted_structure, structure_groups
 from study.physics import thresholds
 from study.solver import steady_velocity
 
 __all__ = ["draw"]
+
+
+#: A fit's variables over its measurements and over its parameters: a selection of
+#: one (``--sel measurement=0``, ``parameter=cs``) keeps the dimension with length 1.
+ALONG = {
+    "measurement": ("quantity", "f", "a", "value", "sigma", "value_units", "direction",
+                    "m_add", "M", "source", "line", "model", "residual",
+                    "normalized_residual", "solver_status"),
+    "parameter": ("estimate", "standard_error", "lower_bound", "upper_bound", "start",
+                  "identifiable", "parameter_units", "parameter_long_name", "correlation",
+                  "covariance", "profile_value", "profile_chi2"),
+}
 
 
 def _groups(dataset: xr.Dataset) -> list[tuple[str, float | None, float | None, np.ndarray]]:
@@ -29,12 +42,22 @@ def _groups(dataset: xr.Dataset) -> list[tuple[str, float | None, float | None, 
 
 def draw(dataset: xr.Dataset, output: str | Path) -> list[Path]:
     """Thresholds against f and velocities against a, measured and fitted."""
+    for dim, names in ALONG.items():
+        dataset = restore_dim(dataset, dim, names)
     params = json.loads(dataset.attrs["study_fitted_structure"])
     coupling = str(dataset.attrs.get("study_coupling", "two-way"))
     quantity = dataset["quantity"].values.astype(str)
     f, a = dataset["f"].values, dataset["a"].values
     value, sigma = dataset["value"].values, dataset["sigma"].values
     panels = [q for q in ("threshold", "velocity") if (quantity == q).any()]
+    selected = selection_text(dataset)
+    if not panels and selected:
+        held = ", ".join(sorted(set(quantity))) or "none"
+        raise FigureError(
+            "figure 'fit' draws the measured thresholds and velocities over the fitted "
+            f"model, but the selection ({dataset.attrs['study_selection']}) leaves no "
+            f"threshold or velocity row (measurement quantities left: {held}): select "
+            "measurements of those")
     fig, axes = plt.subplots(1, max(len(panels), 1), figsize=(5.2 * max(len(panels), 1), 4.2),
                              squeeze=False)
     colours = plt.get_cmap("viridis")
@@ -81,6 +104,6 @@ def draw(dataset: xr.Dataset, output: str | Path) -> list[Path]:
                                dataset["parameter_units"].values, strict=True))
     chi = float(dataset["chi2_per_dof"].values)
     fig.suptitle(f"fit '{dataset.attrs.get('study_fit_name')}': {text}; "
-                 f"chi²/dof = {chi:.3g}", fontsize=8)
+                 f"chi²/dof = {chi:.3g}" + (f"\n{selected}" if selected else ""), fontsize=8)
     fig.tight_layout()
     return save(fig, output, dataset, f"fit {dataset.attrs.get('study_fit_name')}")

@@ -136,7 +136,7 @@ def draw(dataset: xr.Dataset, output: Path,
     list of pathlib.Path
         The PNG and the PDF.
     """
-    single_structure(dataset, "force-traces")
+    dataset = single_structure(dataset, "force-traces")
     structure = common.structure_from_dataset(dataset)
     g, cs = structure.g, structure.cs
     phase = np.linspace(0.0, PERIODS, 1601)  # time in drive periods
@@ -152,8 +152,13 @@ def draw(dataset: xr.Dataset, output: Path,
         chosen = regime_points(dataset)
         which = "at a point of each region " + ", ".join(chosen) + " of the file's grid"
         if not chosen:
-            raise FigureError("figure 'force-traces': the file's grid holds no point "
-                              "below lift-off; name points with --point F,A")
+            selected = dataset.attrs.get("study_selection")
+            grid = f"the grid as selected ({selected})" if selected else "the grid"
+            raise FigureError(
+                "figure 'force-traces' draws the forces at a point of each region of the "
+                f"file's grid of (f, a), but {grid} holds no point with 0 < a below "
+                "lift-off; name points with --point F,A"
+                + (" or select other values of f and a" if selected else ""))
     ncols = 1 if len(chosen) == 1 else 2
     nrows = -(-len(chosen) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(5.0 * ncols, 3.3 * nrows + 0.6),

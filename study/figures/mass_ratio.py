@@ -31,6 +31,7 @@ from study.figures.common import (
     coupling_label,
     grid_minimum,
     is_paper_file,
+    require_axis,
     require_dims,
     save,
     selection_text,
@@ -46,18 +47,21 @@ PAPER_M = 0.066
 _BOX = {"facecolor": "white", "edgecolor": "none", "alpha": 0.9, "pad": 1.5}
 
 
-def _loads(dataset: xr.Dataset) -> tuple[str | None, np.ndarray, np.ndarray | None]:
-    """The load axis: its name, the mass ratios along it and the added masses [kg]."""
+def _loads(dataset: xr.Dataset
+           ) -> tuple[xr.Dataset, str | None, np.ndarray, np.ndarray | None]:
+    """The dataset (other axes of one value squeezed), the load axis: its name, the
+    mass ratios along it and the added masses [kg]."""
     ratio = dataset["M"]
     if ratio.ndim > 1:
         raise FigureError(f"figure 'mass-ratio' needs M along one axis, got dims {ratio.dims}")
     dim = ratio.dims[0] if ratio.ndim == 1 else None
-    require_dims(dataset, "mass-ratio", ("f", dim), "thresholds over (load, f)",
-                 variable="a_star_plus")
+    dataset = require_dims(dataset, "mass-ratio", ("f", dim), "thresholds over (load, f)",
+                           variable="a_star_plus")
+    require_axis(dataset, "mass-ratio", "f", "the thresholds against f")
     m_add = None
     if "m_add" in dataset.coords:
         m_add = np.atleast_1d(dataset["m_add"].values).astype(float)
-    return dim, np.atleast_1d(ratio.values).astype(float), m_add
+    return dataset, dim, np.atleast_1d(dataset["M"].values).astype(float), m_add
 
 
 def _label(ratio: float, m_add: float | None) -> str:
@@ -114,7 +118,7 @@ def draw(dataset: xr.Dataset, output: Path,
 
     ``measurements``: measurement files whose ``threshold`` rows with ``m_add`` or
     ``M`` are drawn beside the model."""
-    dim, ratios, m_add = _loads(dataset)
+    dataset, dim, ratios, m_add = _loads(dataset)
     f = dataset["f"].values
     paper = is_paper_file(dataset, ignore=("M",))
     colors, bar = value_colours(100 * ratios)
@@ -127,7 +131,13 @@ def draw(dataset: xr.Dataset, output: Path,
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12.5, 5.2), layout="constrained",
                                  gridspec_kw={"width_ratios": [1.25, 1.0]})
-    a_top = float(dataset["a"].values.max()) if "a" in dataset.coords else None
+    # The file's accelerations bound the thresholds drawn; one selected (--sel a=7) is
+    # drawn as a line: below it, the structure moves at that acceleration.
+    a_top = a_line = None
+    if "a" in dataset.coords and dataset["a"].size > 1:
+        a_top = float(dataset["a"].values.max())
+    elif "a" in dataset.coords:
+        a_line = float(np.ravel(dataset["a"].values)[0])
     minima, structures = [], []
     beyond_drawn = False
     for i in range(ratios.size):
@@ -167,6 +177,10 @@ def draw(dataset: xr.Dataset, output: Path,
     ax.axhline(g, color="0.5", lw=0.8)
     ax.text(f[0], g, "  g", va="bottom", ha="left", fontsize=8, color="0.35")
     top = a_top if a_top is not None else 1.25 * g
+    if a_line is not None:
+        top = max(top, 1.15 * a_line)
+        ax.axhline(a_line, color="tab:purple", lw=1.0, ls="-.",
+                   label=f"selected a = {a_line:g} m s$^{{-2}}$: moves where $a^* < a$")
     ax.set(xlim=(f[0], f[-1]), ylim=(0.0, top), xlabel="drive frequency f [Hz]",
            ylabel="motion threshold $a^* = \\min(a^*_+, a^*_-)$ [m s$^{-2}$]",
            title="Threshold against frequency for each on-board load")

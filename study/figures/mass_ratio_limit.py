@@ -26,7 +26,9 @@ import study
 from study.figures.common import (
     VALID,
     coupling_label,
+    require_axis,
     require_dims,
+    restore_dim,
     save,
     selection_text,
     structure_from_dataset,
@@ -137,8 +139,12 @@ def _panel(fig, ax, dataset: xr.Dataset, at: dict) -> None:
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     """Draw the regime maps of a ``mass-ratio-limit`` result; returns the PNG and the PDF."""
-    require_dims(dataset, "mass-ratio-limit", ("M", "f", "a"), "one regime map per M",
-                 variable="velocity")
+    dataset = require_dims(dataset, "mass-ratio-limit", ("M", "f", "a"),
+                           "one regime map per M", variable="velocity")
+    for axis in ("f", "a"):
+        require_axis(dataset, "mass-ratio-limit", axis, "a regime map over (f, a) per M")
+    # One frontier branch selected (--sel branch=0): that branch alone.
+    dataset = restore_dim(dataset, "branch", ("frontier_frequency",))
     swept = "M" in dataset["velocity"].dims
     ats = [{"M": i} for i in panel_indices(dataset.sizes["M"])] if swept else [{}]
     ncols = min(len(ats), 3)

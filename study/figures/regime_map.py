@@ -15,7 +15,7 @@ from matplotlib.colors import ListedColormap, TwoSlopeNorm
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from study.figures import FigureError, common
+from study.figures import common
 from study.figures.common import (
     PAPER_POINTS,
     VALID,
@@ -23,6 +23,8 @@ from study.figures.common import (
     is_paper_file,
     one_way_velocity,
     parameter_text,
+    require_axis,
+    restore_dim,
     single_structure,
 )
 from study.status import Status
@@ -61,13 +63,12 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     list of pathlib.Path
         The PNG and the PDF.
     """
-    single_structure(dataset, "regime-map")
-    for axis in ("f", "a"):
-        if axis not in dataset.dims or dataset.sizes[axis] < 2:
-            raise FigureError(f"figure 'regime-map' draws a map over (f, a); this file "
-                              f"(as selected) has {dataset.sizes.get(axis, 1)} value of "
-                              f"{axis}: select a range (--sel {axis}=START:STOP), not one "
-                              "value")
+    dataset = single_structure(dataset, "regime-map")
+    require_axis(dataset, "regime-map", "f", "a map over (f, a)",
+                 "figure 'velocity-curves' draws the velocity against a at one frequency")
+    require_axis(dataset, "regime-map", "a", "a map over (f, a)")
+    # One frontier branch selected (--sel branch=0): that branch alone.
+    dataset = restore_dim(dataset, "branch", ("frontier_frequency",))
     f = dataset["f"].values
     a = dataset["a"].values
     velocity = 1e3 * dataset["velocity"].transpose("a", "f").values  # mm/s over (a, f)

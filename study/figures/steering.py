@@ -23,7 +23,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
 
 from study.figures import FigureError
-from study.figures.common import save
+from study.figures.common import restore_dim, save, selected_keys, selection_text
 
 __all__ = [
     "LABEL_COLORS",
@@ -156,6 +156,58 @@ def heading_arrow(ax: plt.Axes, x: float, y: float, heading: float, length: floa
                             "shrinkA": 0, "shrinkB": 0, "mutation_scale": 8, **style})
 
 
+#: A trajectory's variables over time ``t`` and over ``segment``: a selection of one
+#: time or one segment keeps them as a dimension of length 1.
+ALONG_T = ("x", "y", "heading", "path_length", "slipping", "segment_index")
+ALONG_SEGMENT = ("segment_label", "frequency", "acceleration", "duration", "start_time",
+                 "end_time", "forward_displacement", "lateral_displacement",
+                 "heading_change", "segment_path_length", "segment_status",
+                 "edge_contact_margin")
+
+
+def _selected(dataset: xr.Dataset) -> xr.Dataset:
+    """The trajectory as selected: one time or one segment kept as a dimension, the
+    samples cut to the segments selected (``--sel segment=2``) and the segments to
+    those of the times selected (``--sel t=0:5``)."""
+    dataset = restore_dim(dataset, "t", ALONG_T)
+    dataset = restore_dim(dataset, "segment", ALONG_SEGMENT)
+    if "segment" not in dataset.coords or "segment_index" not in dataset:
+        return dataset
+    index = dataset["segment_index"].values
+    kept = np.isin(index, dataset["segment"].values)
+    if kept.all():
+        if "t" in selected_keys(dataset):
+            ran = np.isin(dataset["segment"].values, index)
+            if not ran.all():
+                dataset = dataset.isel(segment=np.flatnonzero(ran))
+        return dataset
+    if kept.any():
+        return dataset.isel(t=np.flatnonzero(kept))
+    segments = ", ".join(str(v) for v in dataset["segment"].values)
+    why = ""
+    if "segment_status" in dataset:
+        names = flag_names(dataset["segment_status"], SEGMENT_STATUS)
+        codes = flag_codes(dataset["segment_status"], missing=0)
+        why = " (" + ", ".join(names.get(int(c), f"status {c}") for c in codes) + ")"
+    selected = dataset.attrs.get("study_selection")
+    left = f"the selection ({selected}) leaves" if selected else "this file holds"
+    plural = "s" if dataset.sizes["segment"] != 1 else ""
+    raise FigureError(
+        f"figure 'steering' draws the trajectory over time in the segments it holds, but "
+        f"{left} no sample of segment{plural} {segments}{why}: select segments the disk "
+        "ran, and times within them")
+
+
+def _ends_within(dataset: xr.Dataset, k: int, time: np.ndarray) -> bool:
+    """Whether segment ``k`` ends within the times drawn (one without an end time, never
+    reached, is marked where the trajectory stops)."""
+    if "end_time" not in dataset:
+        return True
+    end = float(dataset["end_time"].values[k])
+    step = float(np.min(np.diff(time))) if time.size > 1 else 0.0
+    return not np.isfinite(end) or end <= float(time[-1]) + 0.5 * step
+
+
 def _segments(dataset: xr.Dataset) -> list[np.ndarray]:
     """Sample indices of each segment (in the order of the ``segment`` dimension)."""
     index = dataset["segment_index"].values
@@ -165,6 +217,7 @@ def _segments(dataset: xr.Dataset) -> list[np.ndarray]:
 def _plot(dataset: xr.Dataset) -> plt.Figure:
     """The steering figure (not saved): path lines carry gid ``segment-K``."""
     check_scene_kind(dataset, "steering", "trajectory")
+    dataset = _selected(dataset)
     for name in ("x", "y", "heading", "segment_index"):
         if dataset[name].dims != ("t",):
             raise FigureError(
@@ -189,6 +242,9 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         status = np.zeros(n_segments, dtype=int)
         names = dict(enumerate(SEGMENT_STATUS))
     radius = 1e3 * float(dataset.attrs.get("disk_radius", np.nan))
+    numbers = (dataset["segment"].values if "segment" in dataset.coords
+               else np.arange(n_segments))
+    cut = "t" in selected_keys(dataset)
 
     fig, (left, right) = plt.subplots(
         1, 2, figsize=(12.0, 5.6), layout="constrained", width_ratios=(1.15, 1.0))
@@ -201,7 +257,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         span = slice(max(first - 1, 0), last + 1)  # joined to the previous segment's end
         (line,) = left.plot(x[span], y[span], color=colors[label], lw=1.8,
                             solid_capstyle="round", zorder=4)
-        line.set_gid(f"segment-{k}")
+        line.set_gid(f"segment-{numbers[k]}")
     if x.size == 1 or not any(p.size for p in samples):
         left.plot(x, y, ".", color="0.3")
     extent = max(float(np.nanmax(x) - np.nanmin(x)), float(np.nanmax(y) - np.nanmin(y)), 1e-3)
@@ -233,6 +289,8 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     # for those never reached).
     failed: dict[str, list[int]] = {}
     for k in np.flatnonzero(status != 0):
+        if cut and not _ends_within(dataset, k, time):
+            continue  # the times selected stop before this segment's end
         failed.setdefault(names.get(int(status[k]), f"status {status[k]}"), []).append(int(k))
     for name, segments in failed.items():
         marker = STATUS_MARKERS.get(name, "x")
@@ -243,7 +301,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         handles.append(Line2D([], [], marker=marker, ls="none", color="tab:red", mfc=face,
                               ms=8, mew=1.8,
                               label=f"{name}: segment{'s' if len(segments) > 1 else ''} "
-                                    f"{', '.join(str(k) for k in segments)}"))
+                                    f"{', '.join(str(numbers[k]) for k in segments)}"))
     left.set_aspect("equal", adjustable="datalim")
     left.set_xlabel("x [mm]")
     left.set_ylabel("y [mm]")
@@ -265,7 +323,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         if np.isfinite(t0) and np.isfinite(t1) and t1 > t0:
             right.axvspan(t0, t1, color=colors[label], alpha=0.18, lw=0)
     degrees = heading
-    right.plot(time, degrees, color="black", lw=1.2)
+    right.plot(time, degrees, color="black", lw=1.2, marker="." if time.size == 1 else None)
     for name, segments in failed.items():
         marker = STATUS_MARKERS.get(name, "x")
         ends = [int(samples[k][-1]) if samples[k].size else x.size - 1 for k in segments]
@@ -274,17 +332,25 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     right.set_xlabel("time t [s]")
     right.set_ylabel("heading [deg] (counterclockwise from +x, unwrapped)")
     right.grid(color="0.92", lw=0.6)
-    right.set_xlim(float(time[0]), float(time[-1]) if time[-1] > time[0] else None)
+    if time.size > 1:
+        right.set_xlim(float(time[0]), float(time[-1]) if time[-1] > time[0] else None)
     right.set_title("heading; segments shaded by label", fontsize=10)
 
     parts = [f"{n_segments} segment{'s' if n_segments != 1 else ''}"]
+    if time.size == 1:  # one time selected (--sel t=10): the pose then
+        parts = [f"the pose at t = {float(time[0]):g} s, in segment "
+                 + ", ".join(f"{numbers[k]} ({labels[k]})" for k in range(n_segments)
+                             if samples[k].size)]
     if "acceleration" in dataset:
         parts.append(f"a = {value_range_text(dataset['acceleration'].values)} m s$^{{-2}}$")
-    if "path_length" in dataset:
-        parts.append(f"path length {1e3 * float(dataset['path_length'].values[-1]):.1f} mm")
-    parts.append(f"{float(time[-1] - time[0]):g} s")
+    if "path_length" in dataset and time.size > 1:
+        path = dataset["path_length"].values  # from the start of the file's trajectory
+        parts.append(f"path length {1e3 * float(path[-1] - path[0]):.1f} mm")
+    if time.size > 1:
+        parts.append(f"{float(time[-1] - time[0]):g} s")
+    selected = selection_text(dataset)
     fig.suptitle("Steering the disk by the drive frequency (paper Fig. 4A): "
-                 + ", ".join(parts), fontsize=10)
+                 + ", ".join(parts) + (f"\n{selected}" if selected else ""), fontsize=10)
     return fig
 
 

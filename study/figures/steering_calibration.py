@@ -22,7 +22,7 @@ from matplotlib.colors import ListedColormap, Normalize
 from matplotlib.lines import Line2D
 
 from study.figures import FigureError
-from study.figures.common import save
+from study.figures.common import require_axis, restore_dim, save, selection_text
 from study.figures.steering import angle_values, check_scene_kind, flag_codes, flag_names
 from study.status import Status
 
@@ -47,6 +47,10 @@ LEGEND_MAX = 6
 #: Statuses without a speed, and how they are marked on the zero line.
 UNMARKED = {Status.LIFT_OFF: ("x", "0.45"), Status.NOT_CONVERGED: ("+", "black")}
 
+#: A calibration's variables over (f, a).
+ALONG_F_A = ("forward_speed", "lateral_speed", "turn_rate", "slips_per_period",
+             "stuck_fraction", "status", "periods", "orbit_period", "edge_contact_margin")
+
 STATUS_NAMES = ("static", "stick_slip", "continuous_sliding", "lift_off", "not_converged")
 
 
@@ -55,6 +59,10 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     ``turn-I`` for acceleration index ``I``; the status marks ``lift_off-forward``,
     ``not_converged-turn`` etc."""
     check_scene_kind(dataset, "steering-calibration", "calibration")
+    require_axis(dataset, "steering-calibration", "f",
+                 "the steady motion against f, one line per acceleration")
+    # One acceleration selected (--sel a=7): its line alone.
+    dataset = restore_dim(dataset, "a", ALONG_F_A)
     for name in ("forward_speed", "turn_rate", "status"):
         if set(dataset[name].dims) != {"f", "a"}:
             raise FigureError(
@@ -117,8 +125,10 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
                      label="drive acceleration a [m s$^{-2}$]", shrink=0.8)
     fig.legend(handles=marks, fontsize=8, loc="outside lower center", frameon=False,
                ncol=min(len(marks), 4))
+    at = (f"a = {a[0]:g} m s$^{{-2}}$" if a.size == 1 else f"{a.size} accelerations")
+    selected = selection_text(dataset)
     fig.suptitle(f"Steering commands: steady motion of the disk over f = {low:g}-{high:g} Hz "
-                 f"at {a.size} acceleration{'s' if a.size != 1 else ''}", fontsize=10)
+                 f"at {at}" + (f"\n{selected}" if selected else ""), fontsize=10)
     return fig
 
 

@@ -21,7 +21,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
 
 from study.figures import FigureError
-from study.figures.common import save
+from study.figures.common import restore_dim, save, selected_keys, selection_text
 from study.figures.steering import angle_values, check_scene_kind, heading_arrow, labels_of
 
 __all__ = ["STRATEGY_STYLES", "draw"]
@@ -45,11 +45,26 @@ def _styles(strategies: list[str]) -> dict[str, tuple[str, str]]:
     return styles
 
 
-def _noise_free(dataset: xr.Dataset) -> int:
-    """Index of the noise-free realisation (coordinate value 0, else the first)."""
-    values = dataset["realisation"].values
-    zero = np.flatnonzero(values == 0)
-    return int(zero[0]) if zero.size else 0
+#: A plan's variables along each of its dimensions: a selection of one value
+#: (``--sel strategy_name=open_loop``, ``realisation=0``, ``waypoint=1``, ``t=10``)
+#: keeps the dimension with length 1 and the figure draws what is left.
+ALONG = {
+    "strategy": ("x", "y", "heading", "miss_distance", "run_status", "strategy_name"),
+    "realisation": ("x", "y", "heading", "miss_distance", "run_status",
+                    "realisation_heading_drift"),
+    "t": ("x", "y", "heading"),
+    "waypoint": ("waypoint_x", "waypoint_y", "planned_x", "planned_y", "miss_distance"),
+    "segment": ("segment_label", "frequency", "acceleration", "duration"),
+}
+
+
+def _noise_free(dataset: xr.Dataset) -> int | None:
+    """Index of the noise-free realisation (coordinate value 0; without a coordinate,
+    the first), None when the selection left it out."""
+    if "realisation" not in dataset.coords:
+        return 0
+    zero = np.flatnonzero(dataset["realisation"].values == 0)
+    return int(zero[0]) if zero.size else None
 
 
 def _plan_text(dataset: xr.Dataset) -> str:
@@ -78,6 +93,8 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     """The plan figure (not saved): paths carry gid ``path-STRATEGY-I`` for realisation
     index ``I``, the miss-distance points ``miss-STRATEGY``."""
     check_scene_kind(dataset, "steering-plan", "plan")
+    for dim, names in ALONG.items():
+        dataset = restore_dim(dataset, dim, names)
     for name in ("x", "y"):
         if set(dataset[name].dims) != {"strategy", "realisation", "t"}:
             raise FigureError(
@@ -95,16 +112,18 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     strategies = labels_of(names.values)
     styles = _styles(strategies)
     clean = _noise_free(dataset)
+    first = 0 if clean is None else clean
     n_real = x.shape[1]
+    single = x.shape[2] == 1  # one time selected (--sel t=10): the poses at that time
     radius = 1e3 * float(dataset.attrs.get("disk_radius", np.nan))
     start = [1e3 * float(dataset.attrs[k]) if k in dataset.attrs else np.nan
              for k in ("start_x", "start_y")]
     if not np.all(np.isfinite(start)):
-        start = [x[0, clean, 0], y[0, clean, 0]]
+        start = [x[0, first, 0], y[0, first, 0]]
     start_heading = float(dataset.attrs.get("start_heading", np.nan))  # degree
     if not np.isfinite(start_heading) and "heading" in dataset:
         angle_values(dataset, "heading", "steering-plan")
-        start_heading = float(dataset["heading"].transpose(*order).values[0, clean, 0])
+        start_heading = float(dataset["heading"].transpose(*order).values[0, first, 0])
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(12.5, 5.8), layout="constrained",
                                       width_ratios=(1.2, 1.0))
@@ -115,6 +134,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         for r in range(n_real):
             thick = r == clean
             (line,) = left.plot(x[s, r], y[s, r], ls=style, color=color,
+                                marker="o" if single else None, ms=6 if thick else 3.5,
                                 lw=2.0 if thick else 0.7, alpha=1.0 if thick else 0.45,
                                 zorder=(3.5 if style != "-" else 3) if thick else 2)
             line.set_gid(f"path-{strategy}-{r}")
@@ -125,8 +145,10 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
                                   ls=":"))
         left.add_patch(Circle(start, radius, fill=False, color="0.2", lw=1.0))
     left.plot(wx, wy, "*", color="black", ms=11, zorder=5)
-    for i, (px, py) in enumerate(zip(wx, wy, strict=True)):
-        left.annotate(str(i + 1), (px, py), xytext=(6, 5), textcoords="offset points",
+    numbers = (dataset["waypoint"].values + 1 if "waypoint" in dataset.coords
+               else np.arange(1, wx.size + 1))
+    for number, px, py in zip(numbers, wx, wy, strict=True):
+        left.annotate(str(number), (px, py), xytext=(6, 5), textcoords="offset points",
                       fontsize=10, fontweight="bold")
     if "planned_x" in dataset and "planned_y" in dataset:
         left.plot(1e3 * dataset["planned_x"].values, 1e3 * dataset["planned_y"].values, "s",
@@ -142,13 +164,16 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     left.set_xlabel("x [mm]")
     left.set_ylabel("y [mm]")
     left.grid(color="0.92", lw=0.6)
-    left.set_title("waypoints and paths", fontsize=10)
+    left.set_title(f"waypoints and the positions at t = {float(dataset['t'].values[0]):g} s"
+                   if single else "waypoints and paths", fontsize=10)
 
     handles = [Line2D([], [], color=styles[s][0], ls=styles[s][1], lw=1.5,
                       label=s.replace("_", " ")) for s in strategies]
     handles += [
-        Line2D([], [], color="0.3", lw=2.0, label="noise-free (thick)"),
-        Line2D([], [], color="0.3", lw=0.7, alpha=0.6, label="heading noise (thin)"),
+        *([Line2D([], [], color="0.3", lw=2.0, label="noise-free (thick)")]
+          if clean is not None else []),
+        *([Line2D([], [], color="0.3", lw=0.7, alpha=0.6, label="heading noise (thin)")]
+          if n_real > (clean is not None) else []),
         Line2D([], [], marker="*", color="black", ls="none", ms=10, label="waypoint"),
     ]
     if "planned_x" in dataset:
@@ -179,24 +204,32 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
                 median = np.nanmedian(miss[s, noisy], axis=0)
             right.hlines(median, centre - 0.45 * width, centre + 0.45 * width, color=color,
                          lw=1.5)
-        right.plot(centre, miss[s, clean], "D", color=color, mec="black", ms=7, mew=1.0,
-                   zorder=4, gid=f"miss-{strategy}-noise-free", clip_on=False)
+        if clean is not None:
+            right.plot(centre, miss[s, clean], "D", color=color, mec="black", ms=7,
+                       mew=1.0, zorder=4, gid=f"miss-{strategy}-noise-free", clip_on=False)
     if np.isfinite(diameter):
         right.axhline(diameter, color="0.3", ls="--", lw=1.0)
         right.annotate(f"disk diameter {diameter:g} mm", (0.01, diameter),
                        xycoords=("axes fraction", "data"), xytext=(0, 3),
                        textcoords="offset points", fontsize=8, color="0.3")
-    right.set_xticks(positions)
+    if np.array_equal(numbers, positions):
+        right.set_xticks(positions)
+    else:  # the waypoints selected, by their number
+        right.set_xticks(positions, [str(n) for n in numbers])
     right.set_xlim(0.5, n_way + 0.5)
     right.set_ylim(bottom=0.0)
     right.set_xlabel("waypoint")
     right.set_ylabel("miss distance [mm]")
     right.grid(axis="y", color="0.92", lw=0.6)
-    right.set_title("distance from each waypoint", fontsize=10)
+    right.set_title("distance from each waypoint"
+                    + (" (whole runs, not only the times selected)"
+                       if "t" in selected_keys(dataset) else ""), fontsize=10)
     miss_handles = [Line2D([], [], marker="o", color=styles[s][0], ls="none", ms=4, alpha=0.7,
-                           label=f"{s.replace('_', ' ')}, noisy") for s in strategies]
-    miss_handles += [Line2D([], [], marker="D", color="0.6", mec="black", ls="none", ms=6,
-                            label="noise-free")]
+                           label=f"{s.replace('_', ' ')}, noisy")
+                    for s in strategies if noisy]
+    if clean is not None:
+        miss_handles += [Line2D([], [], marker="D", color="0.6", mec="black", ls="none",
+                                ms=6, label="noise-free")]
     if noisy:
         miss_handles.append(Line2D([], [], color="0.3", lw=1.5, label="median of the noisy"))
     right.legend(handles=miss_handles, fontsize=8, loc="upper center",
@@ -207,10 +240,13 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         drift = angle_values(dataset, "realisation_heading_drift", "steering-plan")[noisy]
         noise += (f" (drift rms {float(np.sqrt(np.nanmean(drift ** 2))):.3g} degree per "
                   "diameter)")
+    runs = " and ".join(([] if clean is None else ["noise-free"]) + ([noise] if noisy else []))
     title = (f"Steering through {n_way} waypoint{'s' if n_way != 1 else ''}: "
-             f"{' vs '.join(s.replace('_', ' ') for s in strategies)}, noise-free and {noise}")
+             f"{' vs '.join(s.replace('_', ' ') for s in strategies)}, {runs}")
     plan = _plan_text(dataset)
-    fig.suptitle(title + ("\n" + textwrap.fill(plan, 170) if plan else ""), fontsize=9)
+    selected = selection_text(dataset)
+    fig.suptitle(title + ("\n" + textwrap.fill(plan, 170) if plan else "")
+                 + (f"\n{selected}" if selected else ""), fontsize=9)
     return fig
 
 

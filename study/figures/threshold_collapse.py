@@ -28,6 +28,7 @@ from matplotlib.ticker import NullFormatter
 from study.analysis import collapse_variable
 from study.figures.common import (
     grid_minimum,
+    require_axis,
     require_dims,
     save,
     selection_text,
@@ -43,8 +44,6 @@ def _minima(dataset: xr.Dataset):
     """Per structure: its index, x, the minimum over f and whether it is at a range edge."""
     lower = np.minimum(dataset["a_star_plus"], dataset["a_star_minus"])
     dims = [d for d in lower.dims if d != "f"]
-    require_dims(dataset, "threshold-collapse", ("f", *_AXES),
-                 "minimum thresholds over the Q and M axes", variable="a_star_plus")
     lower = lower.transpose(*dims, "f").values
     f = dataset["f"].values
     rows = []
@@ -60,6 +59,10 @@ def _minima(dataset: xr.Dataset):
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     """Draw the collapse from a ``threshold-collapse`` result; returns the PNG and the PDF."""
+    dataset = require_dims(dataset, "threshold-collapse", ("f", *_AXES),
+                           "minimum thresholds over the Q and M axes", variable="a_star_plus")
+    require_axis(dataset, "threshold-collapse", "f",
+                 "the minimum of the thresholds over f for each structure")
     dims, rows = _minima(dataset)
     f = dataset["f"].values
     # Colour by Q when it is swept, else by M: one legend entry each, or a colour bar.

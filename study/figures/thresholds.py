@@ -17,7 +17,7 @@ import xarray as xr
 from matplotlib.patches import Patch
 
 from study.figures import common, measured
-from study.figures.common import parameter_text, single_structure
+from study.figures.common import parameter_text, require_axis, single_structure
 from study.physics.forces import lift_off_acceleration
 
 __all__ = ["draw"]
@@ -44,7 +44,8 @@ def draw(dataset: xr.Dataset, output: Path,
     list of pathlib.Path
         The PNG and the PDF.
     """
-    single_structure(dataset, "thresholds")
+    dataset = single_structure(dataset, "thresholds")
+    require_axis(dataset, "thresholds", "f", "the thresholds against f")
     structure = common.structure_from_dataset(dataset)
     f = dataset["f"].values
     a_plus = dataset["a_star_plus"].values

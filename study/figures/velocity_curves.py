@@ -28,6 +28,8 @@ from study.figures.common import (
     coupling_label,
     one_way_velocity,
     parameter_text,
+    require_axis,
+    restore_dim,
     single_structure,
 )
 from study.status import Status
@@ -44,6 +46,11 @@ FREQUENCY_COLORS = ListedColormap(
     ]),
     name="below-above-f0",
 )
+
+
+#: The variables drawn over (f, a) and those over f, which keep one frequency selected.
+_ALONG_F = ("velocity", "status", "velocity_one_way", "status_one_way", "a_star_plus",
+            "a_star_minus", "lift_off_acceleration")
 
 
 def frequency_position(f: np.ndarray, f0: float) -> np.ndarray:
@@ -99,13 +106,10 @@ def draw(dataset: xr.Dataset, output: Path,
     list of pathlib.Path
         The PNG and the PDF.
     """
-    single_structure(dataset, "velocity-curves")
-    if "f" not in dataset.dims:
-        dataset = dataset.expand_dims("f")
-    if "a" not in dataset.dims or dataset.sizes["a"] < 2:
-        raise FigureError("figure 'velocity-curves' draws velocity against a: the file "
-                          "(as selected) needs several values of a; select a range "
-                          "(--sel a=START:STOP), not one value")
+    dataset = single_structure(dataset, "velocity-curves")
+    require_axis(dataset, "velocity-curves", "a", "velocity against a, one curve per f")
+    # One frequency selected (--sel f=14.5): its curve alone.
+    dataset = restore_dim(dataset, "f", _ALONG_F)
     structure = common.structure_from_dataset(dataset)
     f = dataset["f"].values
     a = dataset["a"].values
