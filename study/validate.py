@@ -1028,7 +1028,11 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
     package = _section(provenance, "package")
     lines = [f"{path or attrs.get('study_name')}: {attrs.get('title')}"]
     kind = attrs.get("study_scene_kind") if isinstance(attrs.get("study_scene_kind"), str) else ""
-    lines.append(f"  {'scene' if kind else 'study'} {attrs.get('study_name')!r}"
+    # A fit or a design result is named by its own spec, not by a study's.
+    what, name = next(((label, attrs[key]) for label, key in
+                       (("fit", "study_fit_name"), ("design", "study_design_name"))
+                       if key in attrs), ("scene" if kind else "study", attrs.get("study_name")))
+    lines.append(f"  {what} {name!r}"
                  f"{f' ({kind})' if kind else ''}, spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
@@ -1054,7 +1058,11 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
     if fixed:
         lines.append("  fixed: " + ", ".join(fixed))
     for name, var in dataset.data_vars.items():
-        lines.append(f"  {name} {var.dims} [{var.attrs.get('units', '')}]: "
+        # Values in each parameter's own units name the variable that holds them.
+        units = var.attrs.get("units", "")
+        if "units" not in var.attrs and "units_variable" in var.attrs:
+            units = f"in {var.attrs['units_variable']}"
+        lines.append(f"  {name} {var.dims} [{units}]: "
                      f"{var.attrs.get('long_name', '')}")
     for name, var in dataset.variables.items():
         if "flag_meanings" in var.attrs and var.dtype.kind in "iu" and var.size:

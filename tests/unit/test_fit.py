@@ -247,6 +247,11 @@ def test_the_issues_minimal_spec_runs_through_the_cli(tmp_path: Path, monkeypatc
     params.setdefault("ck", None)
     model, _ = model_values(params, ds, "two-way")
     np.testing.assert_allclose(model, ds["model"].values, rtol=1e-12)
+    # `study info` names the fit (not "study None") and where the estimates' units are
+    assert main(["info", str(out)]) == 0
+    summary = capsys.readouterr().out
+    assert "  fit 'my-structure', spec sha256" in summary
+    assert "estimate ('parameter',) [in parameter_units]" in summary
 
 
 def test_an_edited_fit_file_is_refused(tmp_path: Path) -> None:
