@@ -411,6 +411,12 @@ def main(argv: list[str] | None = None) -> int:
             SelectionError, ExportError) as err:
         print(f"study: {err}", file=sys.stderr)
         return 1
+    except BrokenPipeError:
+        # The reader went away (`study info FILE | head`): not an error of ours, and
+        # Python must not complain again when it flushes stdout at exit.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
 
 
 if __name__ == "__main__":
