@@ -141,6 +141,9 @@ CYCLE_DETECTION = 1e-3
 BURN_IN = 8
 # Longest orbit searched for, in drive periods.
 MAX_PERIOD = 16
+# Where the second Poincare section lies, in drive periods after phase 0 (1 - 1/golden
+# ratio: no simple fraction, so an orbit's events do not sit on both sections).
+SECTION_SHIFT = 0.3819660112501051
 # An orbit is stable when its largest Floquet multiplier is below 1 + this.
 STABILITY_MARGIN = 1e-6
 # A slip starting with s v' below this fraction of its acceleration scale has no
@@ -937,8 +940,9 @@ def spectral_radius(jac):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc, work,
-            grad):
-    """Newton's method on ``P^periods(z) - z`` from ``z`` (updated in place).
+            grad, section):
+    """Newton's method on ``P^periods(z) - z`` from ``z`` (updated in place), ``P`` the
+    period map of the Poincare section at time ``section`` [s] (``z`` is the state there).
 
     Iterates within ~1e-6 of the orbit (their previous Newton step and residual were
     below ``LIFT_WATCH`` with an unchanged sequence of events; Newton converges
@@ -972,8 +976,8 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
                 grad[i, jj] = 0.0
         acc[:] = 0.0
         margin = 0.0 if watch else -1.0
-        flag = run(structure, table, omega, a, work, 0.0, span, jac, True, margin,
-                   max_events, acc, grad)
+        flag = run(structure, table, omega, a, work, section, section + span, jac, True,
+                   margin, max_events, acc, grad)
         if flag == RUN_LIFT_OFF:
             return RUN_LIFT_OFF, False
         if flag != RUN_OK:
@@ -1076,6 +1080,52 @@ def _is_static(structure, table, omega, a):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _cycle(structure, table, omega, a, z, periods, section, scales, max_events, jac, acc,
+           work, grad):
+    """Newton's method for a stable cycle of ``periods`` drive periods from ``z``, the state
+    at time ``section`` [s], with the cycle's own (minimal) period.
+
+    Returns
+    -------
+    status, found
+        ``LIFT_OFF`` when an iterate near it leaves the table; ``found`` > 0, the cycle's
+        minimal period, when it is found (``z`` its state at ``section``, ``jac`` and
+        ``acc`` of one pass around it), else 0.
+    """
+    flag, converged = _newton(structure, table, omega, a, z, periods, scales, max_events,
+                              jac, acc, work, grad, section)
+    if flag == RUN_LIFT_OFF:
+        return LIFT_OFF, 0
+    if not converged or spectral_radius(jac) >= 1.0 + STABILITY_MARGIN:
+        return STICK_SLIP, 0
+    period = TWO_PI / omega
+    # Report the orbit's own period, not a multiple that closed first.
+    for shorter in range(1, periods):
+        if periods % shorter:
+            continue
+        for i in range(3):
+            work[i] = z[i]
+        flag = run(structure, table, omega, a, work, section, section + shorter * period,
+                   jac, False, -1.0, max_events, acc, grad)
+        gap = 0.0
+        for i in range(3):
+            gap = max(gap, abs(work[i] - z[i]) / scales[i])
+        if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
+            flag, converged = _newton(structure, table, omega, a, z, shorter, scales,
+                                      max_events, jac, acc, work, grad, section)
+            if flag == RUN_LIFT_OFF:
+                return LIFT_OFF, 0
+            if converged:
+                return STICK_SLIP, shorter
+    # Statistics of the full cycle (the checks above overwrote them).
+    flag, converged = _newton(structure, table, omega, a, z, periods, scales, max_events,
+                              jac, acc, work, grad, section)
+    if flag == RUN_LIFT_OFF:
+        return LIFT_OFF, 0
+    return STICK_SLIP, periods
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, scales,
            jac, acc, work, history, grad):
     """Periodic orbit reached from state ``z`` at ``t_start`` (in the first period).
@@ -1098,7 +1148,7 @@ def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, s
         return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
     guess = z.copy()
     flag, converged = _newton(structure, table, omega, a, z, 1, scales, max_events, jac,
-                              acc, work, grad)
+                              acc, work, grad, 0.0)
     if flag == RUN_LIFT_OFF:
         return LIFT_OFF, REASON_NONE, 0
     if converged and spectral_radius(jac) < 1.0 + STABILITY_MARGIN:
@@ -1132,40 +1182,35 @@ def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, s
                 gap = max(gap, abs(z[i] - history[back, i]) / scales[i])
             if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
                 tried[periods] = gap
-                for i in range(3):
-                    candidate[i] = history[back, i]
-                flag, converged = _newton(structure, table, omega, a, candidate, periods,
-                                          scales, max_events, jac, acc, work, grad)
-                if flag == RUN_LIFT_OFF:
-                    return LIFT_OFF, REASON_NONE, 0
-                if converged and spectral_radius(jac) < 1.0 + STABILITY_MARGIN:
+                for shifted in range(2):
                     for i in range(3):
-                        z[i] = candidate[i]
-                    # Report the orbit's own period, not a multiple that closed first.
-                    for shorter in range(1, periods):
-                        if periods % shorter:
-                            continue
-                        for i in range(3):
-                            work[i] = z[i]
-                        flag = run(structure, table, omega, a, work, 0.0, shorter * period,
-                                   jac, False, -1.0, max_events, acc, grad)
-                        gap = 0.0
-                        for i in range(3):
-                            gap = max(gap, abs(work[i] - z[i]) / scales[i])
-                        if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
-                            flag, converged = _newton(structure, table, omega, a, z,
-                                                      shorter, scales, max_events, jac,
-                                                      acc, work, grad)
-                            if flag == RUN_LIFT_OFF:
-                                return LIFT_OFF, REASON_NONE, 0
-                            if converged:
-                                return STICK_SLIP, REASON_NONE, shorter
-                    # Statistics of the full cycle (the checks above overwrote them).
-                    flag, converged = _newton(structure, table, omega, a, z, periods,
-                                              scales, max_events, jac, acc, work, grad)
-                    if flag == RUN_LIFT_OFF:
+                        candidate[i] = history[back, i]
+                    section = 0.0
+                    if shifted:
+                        # An orbit can cross phase 0 in a sliver of slip: the phase-0 map
+                        # then has a kink at the fixed point, which Newton cannot cross (it
+                        # takes the sliver for an approach to a stick). Another section of
+                        # the same orbit has no such kink.
+                        section = SECTION_SHIFT * period
+                        flag = run(structure, table, omega, a, candidate, 0.0, section, jac,
+                                   False, -1.0, max_events, acc, grad)
+                        if flag != RUN_OK:
+                            break
+                    status, found = _cycle(structure, table, omega, a, candidate, periods,
+                                           section, scales, max_events, jac, acc, work,
+                                           grad)
+                    if status == LIFT_OFF:
                         return LIFT_OFF, REASON_NONE, 0
-                    return STICK_SLIP, REASON_NONE, periods
+                    if found > 0:
+                        if section != 0.0:
+                            # The orbit's state at phase 0, what is reported (the statistics
+                            # of a whole number of periods do not depend on the section).
+                            spare = np.zeros(N_ACC)
+                            run(structure, table, omega, a, candidate, section, period, jac,
+                                False, -1.0, max_events, spare, grad)
+                        for i in range(3):
+                            z[i] = candidate[i]
+                        return STICK_SLIP, REASON_NONE, found
                 break
     return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0
 

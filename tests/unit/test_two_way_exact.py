@@ -346,3 +346,38 @@ def test_every_start_reaches_the_same_orbit_near_a_kink_of_the_period_map():
             # bad start was 3.3e-9 a/w off).
             assert abs(out[2] - canonical[2]) <= 1e-13 * _scale(f, a), (phase, factor)
     assert int(attractors(s, f, a, coupling="two-way").count) == 1
+
+
+def test_an_orbit_crossing_phase_zero_in_a_sliver_of_slip_is_found():
+    """(13.9 Hz, 4.4 m s^-2) at M = 1: the orbit is still sliding backward at phase 0 and
+    stops 2.6e-7 periods later. Newton on the phase-0 map took that sliver for an
+    approach to a stick, and the iterated map, which converges there, never had a
+    Newton step accepted: NOT_CONVERGED (no periodic orbit) between neighbours that all
+    have a stable orbit (multiplier 0.37). The cycle is now also sought on a section
+    elsewhere in the period. The 30-digit reference's period map (independent code)
+    confirms the fixed point and the velocity."""
+    from mpmath import mp, mpf
+    from reference_two_way_exact import TwoWayModel, period_map
+
+    s = Structure(f0=14.44, Q=17.5, alpha=64.0, M=1.0, cs=0.25)
+    f, a = 13.9, 4.4
+    out = _kernel_point(s, f, a, "two-way")
+    assert Status(int(out[0])) == Status.STICK_SLIP and out[6] == 1
+    assert out[10] < 0.0  # the state reported at phase 0 is in a backward slip
+    assert out[7] < 0.5  # strongly attracting, as its neighbours
+    with mp.workdps(30):
+        model = TwoWayModel(s, f, a)
+        z = tuple(mpf(float(x)) for x in out[8:11])
+        image = period_map(model, z)
+        residual = [float((image.state[i] - z[i]) / model.scale[i]) for i in range(3)]
+        velocity = float(image.dx * f)
+        forward = float(image.forward_time * f)
+        backward = float(image.backward_time * f)
+    assert_allclose(residual, 0.0, atol=1e-12)
+    assert_allclose(out[2], velocity, rtol=1e-12, atol=0.0)
+    assert_allclose(out[4:6], [forward, backward], rtol=1e-10, atol=0.0)
+    found = attractors(s, f, a, coupling="two-way")
+    assert int(found.count) == 1
+    state = steady_state(s, f, a, coupling="two-way")
+    assert Status(int(state.status)) == Status.STICK_SLIP
+    assert float(state.velocity) == out[2]
