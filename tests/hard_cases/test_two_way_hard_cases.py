@@ -357,3 +357,54 @@ def test_status_velocity_invariant_over_random_points():
         a = float(min(thresholds(s, f))) * rng.uniform(0.5, 3.0)
         seen.add(Status(int(_solve(s, f, a).status)))
     assert {Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING, Status.LIFT_OFF} <= seen
+
+
+# A scan of 24 maps (Q 5-1000, M 0.08-1, two tilts) for points whose velocity stands
+# out of both neighbours along a (a V shape) found 139; these three, at regime edges
+# where a slip appears or changes, stand for them. Each point and its neighbours:
+# the solver's orbit state is a fixed point of the 30-digit reference's period map
+# (independent code) with its velocity, and the slip structure changes across the kink.
+REGIME_EDGES = [
+    # (structure, f [Hz], a of the V's tip [m s^-2], step in a, what changes)
+    ({"f0": 14.44, "Q": 5.0, "alpha": 30.0, "M": 0.5, "cs": 0.5, "ck": 0.3}, 16.6, 8.6, 0.1,
+     "backward"),
+    ({**PAPER, "M": 0.5}, 15.9, 2.7, 0.1, "forward"),
+    ({"f0": 14.44, "Q": 5.0, "alpha": 30.0, "M": 1.0, "cs": 0.5, "ck": 0.3}, 36.0, 12.0, 0.1,
+     "forward"),
+]
+
+
+@pytest.mark.parametrize("params,f,a,step,changes", REGIME_EDGES)
+def test_velocity_kinks_at_regime_edges_are_orbits_of_the_reference(params, f, a, step,
+                                                                    changes):
+    from mpmath import mp, mpf
+    from reference_two_way_exact import TwoWayModel, period_map
+
+    from study.kernels import orbit as _orbit
+    from study.solver import structure_vector
+
+    s = Structure(**params)
+    rows = []
+    for ai in (a - step, a, a + step):
+        out = np.empty(_orbit.N_OUT)
+        _orbit.solve_point(structure_vector(s, "two-way"), 2.0 * math.pi * f, ai,
+                           bool(ai > lift_off_acceleration(s, f)), 10_000, 5_000, 0.0, 1.0,
+                           out)
+        assert Status(int(out[0])) == Status.STICK_SLIP and out[6] == 1
+        with mp.workdps(30):
+            model = TwoWayModel(s, f, ai)
+            z = tuple(mpf(float(x)) for x in out[8:11])
+            image = period_map(model, z)
+            residual = [float((image.state[i] - z[i]) / model.scale[i]) for i in range(3)]
+            velocity = float(image.dx * f)
+        np.testing.assert_allclose(residual, 0.0, atol=1e-13)
+        np.testing.assert_allclose(out[2], velocity, rtol=0.0, atol=1e-13 * _scale(f, ai))
+        assert float(_solve(s, f, ai).velocity) == out[2]
+        rows.append(out)
+    below, tip, above = rows
+    # a V: the tip stands out of both neighbours, on the same side
+    assert (tip[2] - below[2]) * (tip[2] - above[2]) > 0.0
+    column = 4 if changes == "forward" else 5
+    fractions = [below[column], tip[column], above[column]]
+    # the slip fraction that changes is not linear across the kink (a regime edge)
+    assert abs(fractions[2] - 2.0 * fractions[1] + fractions[0]) > 1e-3, fractions
