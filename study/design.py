@@ -84,7 +84,8 @@ from numpy.typing import NDArray
 from study.fit import PARAMETERS as FIT_PARAMETERS
 from study.fit import Parameter
 from study.physics import lift_off_acceleration, mode_response, thresholds
-from study.planar import Disk, Plate, contact_margins, periodic_motion
+from study.planar import Disk, contact_margins, periodic_motion
+from study.scene import disk_from_spec
 from study.solver import steady_velocity
 from study.specfile import (
     SpecError,
@@ -331,25 +332,13 @@ def _plate_free(table: dict[str, Any], start: dict[str, float | None], path: str
 
 
 def _disk(raw: dict[str, Any], path: str) -> Disk:
-    plates = []
-    for i, entry in enumerate(raw["plate"]):
-        try:
-            plates.append(Plate(
-                f0=entry["f0"], Q=entry["Q"], alpha=entry["alpha"], M=entry["M"],
-                direction=entry.get("direction", 0.0),
-                attachment=tuple(entry.get("attachment", (0.0, 0.0))),
-                name=entry.get("name", f"plate{i + 1}"),
-            ))
-        except ValueError as err:
-            raise SpecError(f"{path}: [[plate]] #{i + 1}: {err}") from None
-    names = [p.name for p in plates]
+    """The scene's disk, with plate names that can name free parameters."""
+    disk = disk_from_spec(raw, path)
+    names = [p.name for p in disk.plates]
     if len(set(names)) != len(names):
         raise SpecError(f"{path}: [[plate]] names must differ (they name free parameters: "
                         f"[free.NAME]); got {', '.join(names)}")
-    try:
-        return Disk(plates=tuple(plates), **raw["disk"])
-    except ValueError as err:
-        raise SpecError(f"{path}: [disk]: {err}") from None
+    return disk
 
 
 def _disk_start(disk: Disk, ck: float | None) -> dict[str, float | None]:

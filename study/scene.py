@@ -97,6 +97,7 @@ __all__ = [
     "SCENE_SPEC_SCHEMA",
     "SceneError",
     "SceneSpec",
+    "disk_from_spec",
     "is_scene_file",
     "load_scene",
     "parse_scene",
@@ -281,7 +282,7 @@ def parse_scene(text: str, path: str = "<string>") -> SceneSpec:
         if table in raw and table not in _KIND_TABLES[kind]:
             raise SceneError(f"{path}: [{table}] does not belong to a {kind!r} scene; "
                              f"a {kind!r} scene takes {', '.join(_KIND_TABLES[kind])}")
-    disk = _disk(raw, path)
+    disk = disk_from_spec(raw, path)
     integrator = raw.get("integrator", {})
     tolerance = float(integrator.get("tolerance", 1e-9))
     slaving = float(integrator.get("slaving", 1e-4))
@@ -294,7 +295,22 @@ def parse_scene(text: str, path: str = "<string>") -> SceneSpec:
     )
 
 
-def _disk(raw: dict[str, Any], path: str) -> Disk:
+def disk_from_spec(raw: dict[str, Any], path: str) -> Disk:
+    """The disk of a spec's ``[disk]`` and ``[[plate]]`` tables (already checked against
+    the schema), with the checks the schema cannot make.
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed spec.
+    path : str
+        The spec file, for messages.
+
+    Raises
+    ------
+    SceneError
+        Naming the file, the table and what is allowed.
+    """
     table = raw["disk"]
     plates = []
     for i, entry in enumerate(raw["plate"]):
