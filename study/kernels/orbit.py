@@ -1087,17 +1087,17 @@ def _cycle(structure, table, omega, a, z, periods, section, scales, max_events, 
 
     Returns
     -------
-    status, found
-        ``LIFT_OFF`` when an iterate near it leaves the table; ``found`` > 0, the cycle's
-        minimal period, when it is found (``z`` its state at ``section``, ``jac`` and
-        ``acc`` of one pass around it), else 0.
+    int
+        The cycle's minimal period when it is found (``z`` its state at ``section``,
+        ``jac`` and ``acc`` of one pass around it); 0 when not; -1 when an iterate near
+        it leaves the table (lift-off).
     """
     flag, converged = _newton(structure, table, omega, a, z, periods, scales, max_events,
                               jac, acc, work, grad, section)
     if flag == RUN_LIFT_OFF:
-        return LIFT_OFF, 0
+        return -1
     if not converged or spectral_radius(jac) >= 1.0 + STABILITY_MARGIN:
-        return STICK_SLIP, 0
+        return 0
     period = TWO_PI / omega
     # Report the orbit's own period, not a multiple that closed first.
     for shorter in range(1, periods):
@@ -1114,15 +1114,15 @@ def _cycle(structure, table, omega, a, z, periods, section, scales, max_events, 
             flag, converged = _newton(structure, table, omega, a, z, shorter, scales,
                                       max_events, jac, acc, work, grad, section)
             if flag == RUN_LIFT_OFF:
-                return LIFT_OFF, 0
+                return -1
             if converged:
-                return STICK_SLIP, shorter
+                return shorter
     # Statistics of the full cycle (the checks above overwrote them).
     flag, converged = _newton(structure, table, omega, a, z, periods, scales, max_events,
                               jac, acc, work, grad, section)
     if flag == RUN_LIFT_OFF:
-        return LIFT_OFF, 0
-    return STICK_SLIP, periods
+        return -1
+    return periods
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -1196,10 +1196,9 @@ def _orbit(structure, table, omega, a, z, t_start, max_events, max_iterations, s
                                    False, -1.0, max_events, acc, grad)
                         if flag != RUN_OK:
                             break
-                    status, found = _cycle(structure, table, omega, a, candidate, periods,
-                                           section, scales, max_events, jac, acc, work,
-                                           grad)
-                    if status == LIFT_OFF:
+                    found = _cycle(structure, table, omega, a, candidate, periods, section,
+                                   scales, max_events, jac, acc, work, grad)
+                    if found < 0:
                         return LIFT_OFF, REASON_NONE, 0
                     if found > 0:
                         if section != 0.0:
