@@ -47,6 +47,7 @@ from study.store import (
     SCENE_SCHEMA,
     GridWriter,
     StoreBusy,
+    StoreError,
     clean_temporaries,
     commit,
     exclusive,
@@ -361,9 +362,16 @@ def run_study(
             _update_metadata(spec, output, command, started_utc)
             return RunReport(output, True, n_chunks, 0, n_chunks,
                              time.perf_counter() - started, metadata_updated=True)
-        return _Run(spec, output, started, started_utc, command,
-                    ResultCache(Path(cache) if cache is not None else default_cache(output)),
-                    on_chunk).execute(scheduler, workers, progress, stop_after, on_start)
+        computing = _Run(spec, output, started, started_utc, command,
+                         ResultCache(Path(cache) if cache is not None
+                                     else default_cache(output)), on_chunk)
+        try:
+            return computing.execute(scheduler, workers, progress, stop_after, on_start)
+        except StoreError as err:
+            if not computing.points_computed:
+                raise
+            raise StoreError(f"{err}; the {computing.points_computed} points computed are "
+                             f"kept in {computing.cache.root} for the next run") from None
 
 
 def _plan(spec: StudySpec) -> list[Chunk]:

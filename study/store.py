@@ -115,8 +115,9 @@ class StoreError(RuntimeError):
 
 def _store_error(target: Path, err: OSError) -> StoreError:
     reason = err.strerror or str(err)
+    # Whether computed values survive is the runner's to say: it knows whether any were.
     return StoreError(f"{target}: cannot write the result ({reason}); any previous result "
-                      "is unchanged and computed values are kept for the next run")
+                      "is unchanged")
 
 
 @contextmanager
@@ -132,6 +133,8 @@ def exclusive(output: Path) -> Iterator[None]:
 
     lock_path = output.with_name(f".{output.name}.lock")
     try:
+        # The lock lives beside the result, so the result's folder must exist first.
+        output.parent.mkdir(parents=True, exist_ok=True)
         lock = open(lock_path, "a+")
     except OSError as err:
         raise _store_error(output, err) from None
