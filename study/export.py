@@ -159,6 +159,7 @@ def _write_table_atomic(path: Path, columns: list[tuple[str, xr.DataArray, np.nd
     folder = path.parent if str(path.parent) else Path(".")
     count = columns[0][2].size if columns else 0
     try:
+        folder.mkdir(parents=True, exist_ok=True)
         fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     except OSError as err:
         raise ExportError(f"{path}: cannot write ({err.strerror or err})") from None
