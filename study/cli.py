@@ -12,7 +12,7 @@ import shlex
 import sys
 from pathlib import Path
 
-__all__ = ["main"]
+__all__ = ["default_figure_output", "main"]
 
 
 def _show_cluster(pool) -> None:
@@ -139,16 +139,33 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _figure(args: argparse.Namespace) -> int:
-    from study.figures import draw_figure
+    from study.figures import draw_figure, figure_request, is_current
     from study.validate import open_result
 
     dataset = open_result(args.file)
-    output = args.output or Path("figures") / args.name
+    output = args.output or default_figure_output(args.name, args.file)
+    if args.if_changed:
+        request = figure_request(args.name, dataset, sel=args.sel, points=args.point,
+                                 measurements=args.measurements)
+        if is_current(output, request):
+            print(f"{Path(output).with_suffix('.png')}: up to date (drawn from this file "
+                  "with these options by this code)")
+            return 0
     written = draw_figure(args.name, dataset, output, sel=args.sel, source=str(args.file),
                           points=args.point, measurements=args.measurements)
     for path in written:
         print(f"wrote {path}")
     return 0
+
+
+def default_figure_output(name: str, result: Path) -> Path:
+    """Where ``study figure NAME FILE`` writes without ``-o``: ``figures/STEM-NAME``.
+
+    Named after the result file as well as the figure, so that a figure of one's own
+    file never takes the name of a figure ``make figures`` draws from the workflows
+    (``figures/NAME.png``).
+    """
+    return Path("figures") / f"{Path(result).stem}-{name}"
 
 
 def _point(text: str) -> tuple[float, float]:
@@ -324,7 +341,11 @@ def _parser() -> argparse.ArgumentParser:
                         help="one of: " + ", ".join(FIGURES))
     figure.add_argument("file", type=Path, metavar="FILE", help="result file (netCDF)")
     figure.add_argument("-o", "--output", type=Path,
-                        help="output stem (default: figures/NAME -> .png and .pdf)")
+                        help="output stem, its folders created (default: "
+                        "figures/STEM-NAME -> .png and .pdf, STEM the result file's)")
+    figure.add_argument("--if-changed", action="store_true",
+                        help="draw only if the output is missing or was drawn from other "
+                        "data, options or figure code (as make figures does)")
     figure.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
                         help="draw part of the file: KEY=VALUE nearest, KEY==VALUE exact, "
                         "KEY=START:STOP a range (repeatable); a figure of fewer axes than "
