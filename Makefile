@@ -24,7 +24,7 @@ RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
 .PHONY: all results figures docs test test-slow fuzz lint bench cf-check list clean schemas \
-        designs
+        designs FORCE
 
 all: results
 
@@ -88,11 +88,17 @@ figures/regime-map-two-way.png: results/regime-map-two-way.nc
 figures/force-traces-two-way.png: results/regime-map-two-way.nc
 figures/velocity-curves-two-way.png: results/velocity-curves-two-way.nc
 figures/mass-ratio-limit-two-way.png: results/mass-ratio-limit-two-way.nc
-figures/%.png: $(PACKAGE) | $(STAMP)
-	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*
+# A figure's date says nothing of what it was drawn from (a figure of another file drawn
+# to the same name is newer than its result): `study figure --if-changed` is asked every
+# time and redraws unless the PNG records this result's checksum, these options and
+# this figure code.
+figures/%.png: $(PACKAGE) FORCE | $(STAMP)
+	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$* --if-changed
 # The shorter stem wins: NAME-two-way.png is figure NAME.
-figures/%-two-way.png: $(PACKAGE) | $(STAMP)
-	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-two-way
+figures/%-two-way.png: $(PACKAGE) FORCE | $(STAMP)
+	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-two-way --if-changed
+
+FORCE:
 
 # The README's pictures are the figures of a full run.
 docs: figures
