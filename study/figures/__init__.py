@@ -18,7 +18,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from study.figures.common import DRAWN_FROM, drawn_from
+from study.figures.record import DRAWN_FROM, drawn_from
 from study.selection import select
 
 __all__ = ["FIGURES", "FigureError", "draw_figure", "figure_request", "is_current"]

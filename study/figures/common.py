@@ -14,17 +14,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from study.figures.record import DRAWN_FROM
 from study.paper import PAPER_POINTS, is_paper_structure
 from study.selection import available
 from study.status import Status
 
 __all__ = [
-    "DRAWN_FROM",
     "MAX_LEGEND_ENTRIES",
     "PAPER_POINTS",
     "VALID",
     "coupling_label",
-    "drawn_from",
     "grid_minimum",
     "is_paper_file",
     "one_way_velocity",
@@ -98,23 +97,6 @@ def save(fig: plt.Figure, output: str | Path, dataset: xr.Dataset, title: str) -
     finally:
         plt.close(fig)
     return written
-
-
-#: PNG text key recording what a figure was drawn from (figure, data, options, code), so
-#: that ``study figure --if-changed`` redraws a figure drawn from anything else.
-DRAWN_FROM = "study_figure"
-
-
-def drawn_from(png: str | Path) -> str | None:
-    """The :data:`DRAWN_FROM` record of a PNG written by :func:`save`, or None (no such
-    file, not a PNG, or drawn without a record)."""
-    from PIL import Image, UnidentifiedImageError
-
-    try:
-        with Image.open(png) as image:
-            return image.text.get(DRAWN_FROM)
-    except (OSError, UnidentifiedImageError, AttributeError):
-        return None
 
 
 def _save_atomic(fig: plt.Figure, path: Path, **options) -> Path:
