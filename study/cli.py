@@ -39,6 +39,7 @@ def _run(args: argparse.Namespace) -> int:
             command=command,
             cache=args.cache,
             on_start=_show_cluster if args.scheduler else None,
+            overwrite=args.overwrite,
         )
     except StudyInterrupted as err:
         print(f"study: {err}", file=sys.stderr)
@@ -140,10 +141,17 @@ def _info(args: argparse.Namespace) -> int:
 
 def _figure(args: argparse.Namespace) -> int:
     from study.figures import draw_figure, figure_request, is_current
+    from study.outputs import check_output
     from study.validate import open_result
 
     dataset = open_result(args.file)
     output = args.output or default_figure_output(args.name, args.file)
+    stem = Path(output)
+    if stem.suffix in (".png", ".pdf"):
+        stem = stem.with_suffix("")
+    for suffix in (".png", ".pdf"):
+        check_output(stem.with_suffix(suffix), "figure", overwrite=args.overwrite,
+                     inputs=[args.file, *(args.measurements or ())])
     if args.if_changed:
         request = figure_request(args.name, dataset, sel=args.sel, points=args.point,
                                  measurements=args.measurements)
@@ -166,6 +174,13 @@ def default_figure_output(name: str, result: Path) -> Path:
     (``figures/NAME.png``).
     """
     return Path("figures") / f"{Path(result).stem}-{name}"
+
+
+def _output_path(text: str) -> Path:
+    """An output name as typed (``Path('')`` would silently mean the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty output name; give a file name")
+    return Path(text)
 
 
 def _point(text: str) -> tuple[float, float]:
@@ -193,17 +208,25 @@ def _export(args: argparse.Namespace) -> int:
     if args.sel:
         dataset = select(dataset, args.sel, source=str(args.file))
         print(f"selected {dataset.attrs['study_selection']}")
-    for path, rows, columns in export_csv(dataset, args.csv, args.var, source=str(args.file)):
+    for path, rows, columns in export_csv(dataset, args.csv, args.var, source=str(args.file),
+                                          inputs=[args.file], overwrite=args.overwrite):
         print(f"wrote {path} ({rows} rows, {columns} columns)")
     return 0
 
 
 def _fit(args: argparse.Namespace) -> int:
-    from study.fit import PARAMETERS, fit, fit_dataset, load_fit_spec
+    from study.fit import FIT_RESULT_SCHEMA, PARAMETERS, fit, fit_dataset, load_fit_spec
+    from study.outputs import check_output
     from study.store import write_atomic
 
     spec = load_fit_spec(args.spec)
     output = args.output or Path("results") / f"{args.spec.stem}.nc"
+    inputs = [args.spec, *sorted({str(p) for p in spec.measurements["source"].values})]
+    check_output(output, FIT_RESULT_SCHEMA, inputs=inputs, overwrite=args.overwrite)
+    if args.figure is not None:
+        for suffix in (".png", ".pdf"):
+            check_output(Path(args.figure).with_suffix(suffix), "figure", inputs=inputs,
+                         overwrite=args.overwrite, option="--figure")
     result = fit(spec, progress=lambda line: print(f"study: {line}", file=sys.stderr,
                                                     flush=True))
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
@@ -231,11 +254,18 @@ def _fit(args: argparse.Namespace) -> int:
 
 
 def _design(args: argparse.Namespace) -> int:
-    from study.design import design, design_dataset, load_design_spec
+    from study.design import (
+        DESIGN_RESULT_SCHEMA,
+        design,
+        design_dataset,
+        load_design_spec,
+    )
+    from study.outputs import check_output
     from study.store import write_atomic
 
     spec = load_design_spec(args.spec)
     output = args.output or Path("results") / f"{args.spec.stem}.nc"
+    check_output(output, DESIGN_RESULT_SCHEMA, inputs=[args.spec], overwrite=args.overwrite)
     result = design(spec, progress=lambda line: print(f"study: {line}", file=sys.stderr,
                                                        flush=True))
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
@@ -292,7 +322,7 @@ def _parser() -> argparse.ArgumentParser:
 
     run = commands.add_parser("run", help="run a study spec and write its netCDF result")
     run.add_argument("spec", type=Path, help="study spec (TOML), e.g. workflows/regime-map.toml")
-    run.add_argument("-o", "--output", type=Path,
+    run.add_argument("-o", "--output", type=_output_path,
                      help="result file (default: results/<spec file stem>.nc)")
     run.add_argument("--scheduler", metavar="ADDR",
                      help="dask.distributed scheduler address, e.g. tcp://host:8786 "
@@ -307,6 +337,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--cache", type=Path, metavar="DIR",
                      help="kept values to reuse and extend (default: $STUDY_CACHE, else "
                      "RESULT_FOLDER/.study-cache)")
+    _overwrite_option(run, "result")
     run.set_defaults(handler=_run)
 
     cache = commands.add_parser("cache", help="show or prune the kept computed values")
@@ -340,7 +371,7 @@ def _parser() -> argparse.ArgumentParser:
     figure.add_argument("name", choices=sorted(FIGURES), metavar="NAME",
                         help="one of: " + ", ".join(FIGURES))
     figure.add_argument("file", type=Path, metavar="FILE", help="result file (netCDF)")
-    figure.add_argument("-o", "--output", type=Path,
+    figure.add_argument("-o", "--output", type=_output_path,
                         help="output stem, its folders created (default: "
                         "figures/STEM-NAME -> .png and .pdf, STEM the result file's)")
     figure.add_argument("--if-changed", action="store_true",
@@ -360,6 +391,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="thresholds, velocity-curves, mass-ratio: measurement file "
                         "drawn with error bars over the model (repeatable; README: "
                         "Measurements and fits)")
+    _overwrite_option(figure, "figure")
     figure.set_defaults(handler=_figure)
 
     export = commands.add_parser(
@@ -369,13 +401,14 @@ def _parser() -> argparse.ArgumentParser:
         "Variables over other dimensions than the main table's (the frontier, a scene's "
         "segments or plates) go to OUT_STEM.DIMS.csv beside OUT.")
     export.add_argument("file", type=Path, metavar="FILE", help="result file (netCDF)")
-    export.add_argument("--csv", type=Path, required=True, metavar="OUT",
+    export.add_argument("--csv", type=_output_path, required=True, metavar="OUT",
                         help="CSV file of the main table")
     export.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
                         help="select by coordinate: KEY=VALUE nearest, KEY==VALUE exact, "
                         "KEY=START:STOP a range (repeatable)")
     export.add_argument("--var", action="append", default=None, metavar="NAME",
                         help="export only this variable (repeatable; default: all)")
+    _overwrite_option(export, "table")
     export.set_defaults(handler=_export)
 
     fitting = commands.add_parser(
@@ -385,10 +418,11 @@ def _parser() -> argparse.ArgumentParser:
         "measurement CSV files; writes estimates, standard errors, correlations, residuals "
         "and chi^2 to a netCDF file (README: Measurements and fits).")
     fitting.add_argument("spec", type=Path, help="fit spec (TOML)")
-    fitting.add_argument("-o", "--output", type=Path,
+    fitting.add_argument("-o", "--output", type=_output_path,
                          help="result file (default: results/<spec file stem>.nc)")
-    fitting.add_argument("--figure", type=Path, metavar="STEM",
+    fitting.add_argument("--figure", type=_output_path, metavar="STEM",
                          help="also draw measurements over the fitted model (STEM.png, .pdf)")
+    _overwrite_option(fitting, "result")
     fitting.set_defaults(handler=_fit)
 
     designing = commands.add_parser(
@@ -399,8 +433,9 @@ def _parser() -> argparse.ArgumentParser:
         "target's velocities and margins, and whether all are met (README: Design). An "
         "infeasible design is reported (exit status 0) naming the target that fails.")
     designing.add_argument("spec", type=Path, help="design spec (TOML)")
-    designing.add_argument("-o", "--output", type=Path,
+    designing.add_argument("-o", "--output", type=_output_path,
                            help="result file (default: results/<spec file stem>.nc)")
+    _overwrite_option(designing, "result")
     designing.set_defaults(handler=_design)
 
     listing = commands.add_parser("list", help="the workflows and whether results are current")
@@ -410,11 +445,19 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _overwrite_option(command: argparse.ArgumentParser, what: str) -> None:
+    command.add_argument(
+        "--overwrite", action="store_true",
+        help=f"replace an existing file that is not a {what} written by study (a file "
+        "the command reads is never replaced)")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``study`` console script."""
     from study.cluster import ClusterError
     from study.export import ExportError
     from study.figures import FigureError
+    from study.outputs import OutputError
     from study.selection import SelectionError
     from study.spec import SpecError
     from study.store import StoreBusy, StoreError
@@ -429,7 +472,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.handler(args)
     except (SpecError, ResultError, FigureError, StoreError, StoreBusy, ClusterError,
-            SelectionError, ExportError) as err:
+            SelectionError, ExportError, OutputError) as err:
         print(f"study: {err}", file=sys.stderr)
         return 1
     except BrokenPipeError:

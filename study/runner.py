@@ -28,6 +28,7 @@ import numpy as np
 from study.cache import ResultCache, encode_block, entry_key
 from study.cluster import Executor, executor
 from study.observables import Method, Observable, resolve
+from study.outputs import check_output
 from study.progress import Progress
 from study.provenance import (
     code_sha256,
@@ -207,13 +208,15 @@ def run(spec: StudySpec | SceneSpec | str | Path, output: str | Path | None = No
     if not isinstance(spec, StudySpec | SceneSpec):
         spec = load_any(spec)
     if isinstance(spec, SceneSpec):
-        scene_options = {k: options[k] for k in ("force", "command") if k in options}
+        scene_options = {k: options[k] for k in ("force", "command", "overwrite")
+                         if k in options}
         return run_scene(spec, output, **scene_options)
     return run_study(spec, output, **options)
 
 
 def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
-              force: bool = False, command: str | None = None) -> RunReport:
+              force: bool = False, command: str | None = None,
+              overwrite: bool = False) -> RunReport:
     """Compute a steering scene and write its result (one task; same lock, atomic
     write, seal, up-to-date and metadata rules as a study).
 
@@ -226,12 +229,16 @@ def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
         Recompute even if the result is up to date.
     command : str, optional
         The command line recorded in the file's history.
+    overwrite : bool
+        Replace an existing file at ``output`` that is not a scene result
+        (:func:`study.outputs.check_output`; the spec itself is never replaced).
     """
     started = time.perf_counter()
     started_utc = utc_now()
     if not isinstance(spec, SceneSpec):
         spec = load_scene(spec)
     output = Path(output) if output is not None else default_output(spec)
+    check_output(output, SCENE_SCHEMA, inputs=[spec.path], overwrite=overwrite)
     command = command or "study.run_scene(" + shlex.quote(spec.path) + ")"
     if not force and _state(spec, output) == "current":
         output.touch()
@@ -303,6 +310,7 @@ def run_study(
     on_chunk: Callable[[int], None] | None = None,
     cache: str | Path | None = None,
     on_start: Callable[[Executor], None] | None = None,
+    overwrite: bool = False,
 ) -> RunReport:
     """Run a study and write its result file.
 
@@ -333,6 +341,9 @@ def run_study(
     on_start : callable, optional
         Called with the :class:`study.cluster.Executor` once it is ready, before any
         chunk is computed (to show where the run goes, e.g. the dashboard).
+    overwrite : bool
+        Replace an existing file at ``output`` that is not a study result
+        (:func:`study.outputs.check_output`; the spec itself is never replaced).
 
     Returns
     -------
@@ -351,6 +362,7 @@ def run_study(
     if not isinstance(spec, StudySpec):
         spec = load_spec(spec)
     output = Path(output) if output is not None else default_output(spec)
+    check_output(output, RESULT_SCHEMA, inputs=[spec.path], overwrite=overwrite)
     n_chunks = len(_plan(spec))
     if not force and _state(spec, output) == "current":
         output.touch()  # tell make the target is current
