@@ -183,6 +183,13 @@ def _output_path(text: str) -> Path:
     return Path(text)
 
 
+def _folder_path(text: str) -> Path:
+    """A folder name as typed (``Path('')`` would silently mean the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty folder name; give a folder")
+    return Path(text)
+
+
 def _point(text: str) -> tuple[float, float]:
     """``F,A`` of ``--point``: a drive frequency [Hz] and acceleration [m s^-2]."""
     import math
@@ -334,7 +341,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                      help="progress with rate and time left (default: a bar on a terminal, "
                      "a line every 10%% or 30 s otherwise)")
-    run.add_argument("--cache", type=Path, metavar="DIR",
+    run.add_argument("--cache", type=_folder_path, metavar="DIR",
                      help="kept values to reuse and extend (default: $STUDY_CACHE, else "
                      "RESULT_FOLDER/.study-cache)")
     _overwrite_option(run, "result")
@@ -342,7 +349,7 @@ def _parser() -> argparse.ArgumentParser:
 
     cache = commands.add_parser("cache", help="show or prune the kept computed values")
     cache.add_argument("action", choices=("list", "prune"))
-    cache.add_argument("--cache", type=Path, metavar="DIR",
+    cache.add_argument("--cache", type=_folder_path, metavar="DIR",
                        default=Path(os.environ.get("STUDY_CACHE") or "results/.study-cache"),
                        help="cache folder (default: $STUDY_CACHE, else results/.study-cache)")
     cache.add_argument("--stale", action="store_true",

@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["ClusterError", "Executor", "executor"]
+__all__ = ["ClusterError", "Executor", "check_address", "executor"]
 
 #: Marks the end of the items (items themselves may be None).
 _END = object()
@@ -97,7 +97,7 @@ class Executor(ABC):
 
 @contextmanager
 def executor(scheduler: str | None, threads: int | None, code_sha256: str, *,
-             timeout: float = 30.0) -> Iterator[Executor]:
+             timeout: float = 30.0, connect_timeout: float = 10.0) -> Iterator[Executor]:
     """An executor for one run: local threads, or the workers of a dask scheduler.
 
     Parameters
@@ -111,8 +111,10 @@ def executor(scheduler: str | None, threads: int | None, code_sha256: str, *,
     code_sha256 : str
         The code hash of this process: every worker must report the same.
     timeout : float
-        Seconds to wait for the scheduler to answer, for a first worker, and
-        without any worker during the run.
+        Seconds to wait for a first worker, and without any worker during the run.
+    connect_timeout : float
+        Seconds to wait for the scheduler to answer (short: an address that does not
+        answer is most often a typo, and the message names it).
 
     Yields
     ------
@@ -128,8 +130,32 @@ def executor(scheduler: str | None, threads: int | None, code_sha256: str, *,
         with _LocalExecutor(threads or os.cpu_count() or 1) as local:
             yield local
     else:
-        with _DaskExecutor(scheduler, code_sha256, timeout) as remote:
+        check_address(scheduler)
+        with _DaskExecutor(scheduler, code_sha256, timeout, connect_timeout) as remote:
             yield remote
+
+
+def check_address(address: str) -> str:
+    """Refuse, before any connection is tried, a scheduler address that is none.
+
+    Raises
+    ------
+    ClusterError
+        Naming the address and the form expected (``tcp://HOST:PORT``).
+    """
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(str(address), strict=False)
+        if scheme in ("tcp", "tls"):
+            host, _ = parse_host_port(location)
+            if not host:
+                raise ValueError("no host")
+    except (ValueError, TypeError) as err:
+        raise ClusterError(
+            f"--scheduler {address!r} is not a dask scheduler address ({err}); expected "
+            "tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786") from None
+    return address
 
 
 class _LocalExecutor(Executor):
@@ -235,10 +261,12 @@ def _install_hint() -> str:
 class _DaskExecutor(Executor):
     """The workers of a running dask.distributed scheduler."""
 
-    def __init__(self, address: str, code_sha256: str, timeout: float) -> None:
+    def __init__(self, address: str, code_sha256: str, timeout: float,
+                 connect_timeout: float) -> None:
         self.name = address
         self.code_sha256 = code_sha256
         self.timeout = timeout
+        self.connect_timeout = connect_timeout
         self.client: Any = None
         self.threads = 0
         self.dashboard = None
@@ -247,10 +275,12 @@ class _DaskExecutor(Executor):
         from distributed import Client
 
         try:
-            self.client = Client(self.name, timeout=self.timeout, set_as_default=False)
+            self.client = Client(self.name, timeout=self.connect_timeout,
+                                 set_as_default=False)
         except Exception as err:  # OSError, TimeoutError, ValueError for a bad address
             raise ClusterError(
-                f"cannot reach the dask scheduler at {self.name} within {self.timeout:g} s "
+                f"cannot reach the dask scheduler at {self.name} within "
+                f"{self.connect_timeout:g} s "
                 f"({type(err).__name__}: {err}); is it running, and is the address right?"
             ) from None
         try:
