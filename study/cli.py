@@ -40,6 +40,7 @@ def _run(args: argparse.Namespace) -> int:
             cache=args.cache,
             on_start=_show_cluster if args.scheduler else None,
             overwrite=args.overwrite,
+            task_timeout=args.task_timeout,
         )
     except StudyInterrupted as err:
         print(f"study: {err}", file=sys.stderr)
@@ -190,6 +191,19 @@ def _folder_path(text: str) -> Path:
     return Path(text)
 
 
+def _seconds(text: str) -> float:
+    """A positive, finite number of seconds."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: need a number of seconds > 0")
+    return value
+
+
 def _point(text: str) -> tuple[float, float]:
     """``F,A`` of ``--point``: a drive frequency [Hz] and acceleration [m s^-2]."""
     import math
@@ -321,6 +335,8 @@ def _list(args: argparse.Namespace) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
+    from study.cluster import TASK_TIMEOUT
+
     parser = argparse.ArgumentParser(
         prog="study",
         description="Parameter studies of vibration-driven stick-slip locomotion.",
@@ -334,6 +350,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--scheduler", metavar="ADDR",
                      help="dask.distributed scheduler address, e.g. tcp://host:8786 "
                           "(default: threads in this process)")
+    run.add_argument("--task-timeout", type=_seconds, default=TASK_TIMEOUT, metavar="S",
+                     help="with --scheduler: end the run when no task has finished for S "
+                     f"seconds (a frozen worker; default {TASK_TIMEOUT:g}); finished work "
+                     "is kept")
     run.add_argument("--workers", type=int, metavar="N",
                      help="threads of a local run (default: one per core)")
     run.add_argument("--force", action="store_true",

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from study.cache import ResultCache, encode_block, entry_key
-from study.cluster import Executor, executor
+from study.cluster import TASK_TIMEOUT, Executor, executor
 from study.observables import Method, Observable, resolve
 from study.outputs import check_output
 from study.progress import Progress
@@ -311,6 +311,7 @@ def run_study(
     cache: str | Path | None = None,
     on_start: Callable[[Executor], None] | None = None,
     overwrite: bool = False,
+    task_timeout: float = TASK_TIMEOUT,
 ) -> RunReport:
     """Run a study and write its result file.
 
@@ -344,6 +345,10 @@ def run_study(
     overwrite : bool
         Replace an existing file at ``output`` that is not a study result
         (:func:`study.outputs.check_output`; the spec itself is never replaced).
+    task_timeout : float
+        With ``scheduler``: seconds the workers may go without finishing a task
+        before the run ends, naming the workers that hold the tasks (a frozen
+        worker); finished work is kept.
 
     Returns
     -------
@@ -378,7 +383,8 @@ def run_study(
                          ResultCache(Path(cache) if cache is not None
                                      else default_cache(output)), on_chunk)
         try:
-            return computing.execute(scheduler, workers, progress, stop_after, on_start)
+            return computing.execute(scheduler, workers, progress, stop_after, on_start,
+                                     task_timeout)
         except StoreError as err:
             if not computing.points_computed:
                 raise
@@ -650,8 +656,8 @@ class _Run:
         self.progress.update(size)
 
     def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
-                stop_after: int | None, on_start: Callable[[Executor], None] | None
-                ) -> RunReport:
+                stop_after: int | None, on_start: Callable[[Executor], None] | None,
+                task_timeout: float = TASK_TIMEOUT) -> RunReport:
         self.cache.clean_temporaries()
         # What the provenance records of the checkout and the machine (a git
         # subprocess, package metadata) does not depend on the run: gathered while the
@@ -669,7 +675,8 @@ class _Run:
             pending: dict[int, Any] = {}
             computed_chunks = 0
             try:
-                with executor(scheduler, workers, self.code) as pool:
+                with executor(scheduler, workers, self.code,
+                              task_timeout=task_timeout) as pool:
                     self.scheduler_name, self.threads = pool.name, pool.threads
                     if on_start is not None:
                         on_start(pool)

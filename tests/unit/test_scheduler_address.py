@@ -64,3 +64,13 @@ def test_an_empty_cache_folder_is_a_usage_error(tmp_path: Path) -> None:
     assert done.returncode == 2
     assert "an empty folder name" in done.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["spec.toml"]
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "inf", "soon"])
+def test_a_task_timeout_is_a_positive_number_of_seconds(tmp_path: Path, value: str) -> None:
+    (tmp_path / "spec.toml").write_text(SPEC)
+    done = subprocess.run(
+        [sys.executable, "-m", "study.cli", "run", "spec.toml", "--task-timeout", value],
+        cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert f"{value!r}: need a number of seconds > 0" in done.stderr
