@@ -11,9 +11,11 @@ a killed writer are removed by the next writer of the same file.
 
 from __future__ import annotations
 
+import errno
 import os
+import re
 import shutil
-import tempfile
+import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -42,6 +44,7 @@ __all__ = [
     "ResultError",
     "StoreBusy",
     "StoreError",
+    "advice",
     "clean_temporaries",
     "commit",
     "describe",
@@ -50,6 +53,8 @@ __all__ = [
     "new_temporary",
     "open_result",
     "rewrite_attributes",
+    "temporary_path",
+    "temporary_target",
     "write_atomic",
 ]
 
@@ -113,11 +118,29 @@ class StoreError(RuntimeError):
     """A result cannot be written (disk full, no permission...); one line, file named."""
 
 
+#: What a user can do about an OSError, by errno.
+_ADVICE = {
+    errno.ENOSPC: "free space on that disk or write elsewhere (-o)",
+    errno.EDQUOT: "free space within your quota or write elsewhere (-o)",
+    errno.EROFS: "the file system is read-only: write elsewhere (-o)",
+    errno.EACCES: "make the folder writable for you or write elsewhere (-o)",
+    errno.EPERM: "make the folder writable for you or write elsewhere (-o)",
+    errno.ENOTDIR: "a file stands where a folder is needed: write elsewhere (-o)",
+    errno.EISDIR: "a folder stands where the result goes: write elsewhere (-o)",
+}
+
+
+def advice(err: OSError) -> str:
+    """What to do about ``err``, for a one-line message ('' if nothing specific)."""
+    return _ADVICE.get(err.errno or 0, "")
+
+
 def _store_error(target: Path, err: OSError) -> StoreError:
     reason = err.strerror or str(err)
+    what_to_do = advice(err)
     # Whether computed values survive is the runner's to say: it knows whether any were.
     return StoreError(f"{target}: cannot write the result ({reason}); any previous result "
-                      "is unchanged")
+                      "is unchanged" + (f"; {what_to_do}" if what_to_do else ""))
 
 
 @contextmanager
@@ -162,26 +185,57 @@ class StoreBusy(RuntimeError):
     """Another process is writing the same result file."""
 
 
+#: A temporary's name: ``.<output name>.study-<run id>.tmp``; the run id (32 hex
+#: digits, unique per temporary) makes the name of one output's temporary never match
+#: another output's, whatever the names (``test`` and ``test.nc`` in one folder).
+_TEMPORARY = re.compile(r"^\.(?P<name>.+)\.study-(?P<run>[0-9a-f]{32})\.tmp$")
+#: Temporaries of releases before the run id (``tempfile.mkstemp``: 8 characters).
+_OLD_TEMPORARY = re.compile(r"^\.(?P<name>.+)\.(?P<run>[a-z0-9_]{8})\.tmp$")
+
+
+def temporary_path(target: Path) -> Path:
+    """A new, unique temporary name beside ``target`` (see :data:`_TEMPORARY`)."""
+    return target.with_name(f".{target.name}.study-{uuid.uuid4().hex}.tmp")
+
+
+def temporary_target(path: Path) -> str | None:
+    """The name of the file the temporary ``path`` was to become, or None if ``path``
+    is not a temporary of this package."""
+    found = _TEMPORARY.match(path.name) or _OLD_TEMPORARY.match(path.name)
+    return found["name"] if found else None
+
+
 def new_temporary(output: Path) -> Path:
     """A fresh temporary file next to ``output`` (same file system: rename is atomic),
     readable as the umask allows (a result is for sharing)."""
+    umask = os.umask(0)
+    os.umask(umask)
     try:
         output.parent.mkdir(parents=True, exist_ok=True)
-        handle, name = tempfile.mkstemp(prefix=f".{output.name}.", suffix=".tmp",
-                                        dir=output.parent)
+        path = temporary_path(output)
+        handle = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW,
+                         0o666 & ~umask)
     except OSError as err:
         raise _store_error(output, err) from None
     os.close(handle)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(name, 0o666 & ~umask)
-    return Path(name)
+    return path
 
 
 def clean_temporaries(output: Path) -> int:
-    """Remove temporaries of ``output`` left by killed runs (call under :func:`exclusive`)."""
+    """Remove temporaries of ``output`` left by killed runs (call under :func:`exclusive`).
+
+    Only temporaries of exactly ``output`` go: every writer of ``output`` holds its
+    lock, and the caller holds it now, so their writers are gone. Temporaries of
+    other outputs in the folder (``test`` and ``test.nc``) are never touched.
+    """
     removed = 0
-    for path in output.parent.glob(f".{output.name}.*.tmp"):
+    try:
+        candidates = list(output.parent.iterdir())
+    except OSError:
+        return 0
+    for path in candidates:
+        if temporary_target(path) != output.name:
+            continue
         try:
             path.unlink()
             removed += 1
