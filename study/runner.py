@@ -48,6 +48,7 @@ from study.store import (
     GridWriter,
     StoreBusy,
     StoreError,
+    advice,
     clean_temporaries,
     commit,
     exclusive,
@@ -362,15 +363,16 @@ def run_study(
             _update_metadata(spec, output, command, started_utc)
             return RunReport(output, True, n_chunks, 0, n_chunks,
                              time.perf_counter() - started, metadata_updated=True)
-        computing = _Run(spec, output, started, started_utc, command,
-                         ResultCache(Path(cache) if cache is not None
-                                     else default_cache(output)), on_chunk)
+        kept = ResultCache(Path(cache) if cache is not None else default_cache(output))
+        computing = _Run(spec, output, started, started_utc, command, kept, on_chunk)
         try:
-            return computing.execute(scheduler, workers, progress, stop_after, on_start)
+            # Shared with other runs; cache maintenance (prune, verify) waits for it.
+            with kept.session(f"study run -> {output}", on_wait=kept.warn):
+                return computing.execute(scheduler, workers, progress, stop_after, on_start)
         except StoreError as err:
-            if not computing.points_computed:
+            if not computing.points_kept:
                 raise
-            raise StoreError(f"{err}; the {computing.points_computed} points computed are "
+            raise StoreError(f"{err}; the {computing.points_kept} points computed are "
                              f"kept in {computing.cache.root} for the next run") from None
 
 
@@ -510,6 +512,9 @@ class _Run:
         self.code = code_sha256()
         self.points_computed = 0
         self.points_reused = 0
+        #: Computed points kept in the cache (all of them unless it cannot be written).
+        self.points_kept = 0
+        self.keeping = True
         self.chunks_computed = 0
         self.chunks_reused = 0
         self._keys: dict[tuple[tuple[int, ...], str], tuple[str, dict[str, Any]]] = {}
@@ -626,16 +631,33 @@ class _Run:
         for rectangle, datas in zip(task.rectangles, encoded, strict=True):
             for observable, data in zip(stored, datas, strict=True):
                 key, content = self.key(chunk.structure_index, observable)
-                self.cache.store_encoded(key, content, task.a[rectangle.columns], data)
+                self._keep(key, content, task.a[rectangle.columns], data)
         size = chunk.size * max(self.a.size, 1)
         computed_points = task.point_count if self.points else size
         self.points_computed += computed_points
+        if self.keeping and self.points:
+            self.points_kept += computed_points
         self.points_reused += size - computed_points
         if computed_points:
             self.chunks_computed += 1
         else:
             self.chunks_reused += 1
         self.progress.update(size)
+
+    def _keep(self, key: str, content: dict[str, Any], a: np.ndarray, block: bytes) -> None:
+        """Keep a computed block; a cache that cannot be written (disk full, read-only)
+        is said once and the run goes on without keeping values: the result matters
+        more than its reuse."""
+        if not self.keeping:
+            return
+        try:
+            self.cache.store_encoded(key, content, a, block)
+        except OSError as err:
+            self.keeping = False
+            what_to_do = advice(err) or "see the reason"
+            self.cache.warn(
+                f"{self.cache.root}: cannot keep computed values ({err.strerror or err}); "
+                f"the run goes on without keeping them ({what_to_do.replace('(-o)', '(--cache)')})")
 
     def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
                 stop_after: int | None, on_start: Callable[[Executor], None] | None
@@ -671,9 +693,11 @@ class _Run:
                             if self.on_chunk is not None:
                                 self.on_chunk(task.chunk.number)
                         if stop_after is not None and computed_chunks >= stop_after:
+                            kept = (f"their values are kept in {self.cache.root}"
+                                    if self.keeping else "the cache could not keep them")
                             raise StudyInterrupted(
                                 f"stopped after {computed_chunks} computed chunks on request; "
-                                f"their values are kept in {self.cache.root}")
+                                f"{kept}")
             finally:
                 self.progress.close()
             if self.frontier is not None:
