@@ -654,10 +654,11 @@ class _Run:
             self.cache.store_encoded(key, content, a, block)
         except OSError as err:
             self.keeping = False
-            what_to_do = advice(err) or "see the reason"
+            what_to_do = advice(err).replace("(-o)", "(--cache)")
             self.cache.warn(
                 f"{self.cache.root}: cannot keep computed values ({err.strerror or err}); "
-                f"the run goes on without keeping them ({what_to_do.replace('(-o)', '(--cache)')})")
+                "the run goes on without keeping them" + (f": {what_to_do}" if what_to_do
+                                                          else ""))
 
     def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
                 stop_after: int | None, on_start: Callable[[Executor], None] | None
@@ -707,7 +708,7 @@ class _Run:
             self.writer.close()
         except BaseException:
             if hasattr(self, "writer"):
-                self.writer.close()
+                self.writer.discard()  # never raises: the first failure is reported
             temporary.unlink(missing_ok=True)
             raise
         commit(temporary, self.output)

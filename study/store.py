@@ -100,7 +100,7 @@ def write_atomic(dataset: xr.Dataset, path: str | Path) -> Path:
     try:
         dataset.to_netcdf(temporary, engine="netcdf4", format="NETCDF4",
                           encoding=_encoding(dataset))
-    except OSError as err:
+    except (OSError, RuntimeError) as err:
         temporary.unlink(missing_ok=True)
         raise _store_error(path, err) from None
     except BaseException:
@@ -135,7 +135,25 @@ def advice(err: OSError) -> str:
     return _ADVICE.get(err.errno or 0, "")
 
 
-def _store_error(target: Path, err: OSError) -> StoreError:
+def _diagnose(folder: Path) -> OSError | None:
+    """The likely cause of a write that failed without one (the netCDF library says
+    only "HDF error"): a full disk or a folder not writable, or None."""
+    try:
+        space = os.statvfs(folder)
+        if space.f_bavail * space.f_frsize < 2**20:
+            return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        if space.f_flag & os.ST_RDONLY:
+            return OSError(errno.EROFS, os.strerror(errno.EROFS))
+    except OSError:
+        return None
+    if not os.access(folder, os.W_OK):
+        return OSError(errno.EACCES, os.strerror(errno.EACCES))
+    return None
+
+
+def _store_error(target: Path, err: OSError | RuntimeError) -> StoreError:
+    if not isinstance(err, OSError):  # netCDF4: RuntimeError("NetCDF: HDF error")
+        err = _diagnose(target.parent) or OSError(0, str(err))
     reason = err.strerror or str(err)
     what_to_do = advice(err)
     # Whether computed values survive is the runner's to say: it knows whether any were.
@@ -252,7 +270,7 @@ def commit(temporary: Path, output: Path) -> Path:
     try:
         seal(temporary)  # the content checksum, then streaming validation
         os.replace(temporary, output)
-    except OSError as err:
+    except (OSError, RuntimeError) as err:
         raise _store_error(output, err) from None
     finally:
         temporary.unlink(missing_ok=True)
@@ -282,7 +300,7 @@ def rewrite_attributes(output: Path, attrs: dict[str, Any]) -> Path:
         with netCDF4.Dataset(temporary, "a") as dataset:
             for name, value in attrs.items():
                 dataset.setncattr(name, value)
-    except OSError as err:
+    except (OSError, RuntimeError) as err:
         temporary.unlink(missing_ok=True)
         raise _store_error(output, err) from None
     return commit(temporary, output)
@@ -306,26 +324,35 @@ class GridWriter:
 
         self.path = path
         self.target = path if target is None else target
-        try:
+        with self._writing():
             self.dataset = netCDF4.Dataset(path, "w", format="NETCDF4")
-        except OSError as err:
+            self.dataset.set_auto_mask(False)
+            self.dataset.setncatts(attrs)
+
+    @contextmanager
+    def _writing(self) -> Iterator[None]:
+        """Turn a failed write (OSError, or netCDF's RuntimeError "HDF error": a full
+        disk) into one :class:`StoreError` naming the result file."""
+        try:
+            yield
+        except (OSError, RuntimeError) as err:
             raise _store_error(self.target, err) from None
-        self.dataset.set_auto_mask(False)
-        self.dataset.setncatts(attrs)
 
     def coordinate(self, name: str, dims: tuple[str, ...], values: Any,
                    attrs: dict[str, Any]) -> None:
         """A coordinate variable (a dimension of its own if ``dims == (name,)``)."""
         values = np.asarray(values)
-        if dims == (name,):
-            self.dataset.createDimension(name, values.size)
-        var = self.dataset.createVariable(name, values.dtype, dims)
-        var.setncatts(attrs)
-        var[...] = values
+        with self._writing():
+            if dims == (name,):
+                self.dataset.createDimension(name, values.size)
+            var = self.dataset.createVariable(name, values.dtype, dims)
+            var.setncatts(attrs)
+            var[...] = values
 
     def dimension(self, name: str, size: int) -> None:
         """A dimension without a coordinate variable."""
-        self.dataset.createDimension(name, size)
+        with self._writing():
+            self.dataset.createDimension(name, size)
 
     def variable(self, name: str, dims: tuple[str, ...], dtype: str, attrs: dict[str, Any],
                  chunks: tuple[int, ...]) -> None:
@@ -333,8 +360,10 @@ class GridWriter:
         dtype_ = np.dtype(dtype)
         # CF: NaN marks the points without a value; integer flags have no fill value.
         fill = np.nan if dtype_.kind == "f" else False
-        var = self.dataset.createVariable(name, dtype_, dims, zlib=True, complevel=1,
-                                          shuffle=True, chunksizes=chunks, fill_value=fill)
+        with self._writing():
+            var = self.dataset.createVariable(name, dtype_, dims, zlib=True, complevel=1,
+                                              shuffle=True, chunksizes=chunks,
+                                              fill_value=fill)
         # Every write covers whole chunks, written once: with a cache too small for any
         # chunk, HDF5 compresses and writes each chunk during ``write`` (while the
         # workers compute the next ones) instead of holding up to the default 64 MiB
@@ -346,10 +375,8 @@ class GridWriter:
     def write(self, name: str, index: tuple[Any, ...], values: np.ndarray) -> None:
         """Write ``values`` at ``index`` of variable ``name`` (whole chunks of a data
         variable, each once: partial chunks are read, changed and compressed again)."""
-        try:
+        with self._writing():
             self._put(name, index, values)
-        except OSError as err:
-            raise _store_error(self.target, err) from None
 
     def _put(self, name: str, index: tuple[Any, ...], values: np.ndarray) -> None:
         self.dataset.variables[name][index] = values
@@ -360,12 +387,20 @@ class GridWriter:
 
     def set_attributes(self, attrs: dict[str, Any]) -> None:
         """Add or replace global attributes."""
-        self.dataset.setncatts(attrs)
+        with self._writing():
+            self.dataset.setncatts(attrs)
 
     def close(self) -> None:
         """Close the file (idempotent)."""
-        if self.dataset.isopen():
-            try:
+        if hasattr(self, "dataset") and self.dataset.isopen():
+            with self._writing():
                 self.dataset.close()
-            except OSError as err:
-                raise _store_error(self.target, err) from None
+
+    def discard(self) -> None:
+        """Close and delete the temporary after a failure (never raises)."""
+        try:
+            self.close()
+        except Exception:  # the first failure is the one reported
+            pass
+        finally:
+            self.path.unlink(missing_ok=True)
