@@ -172,7 +172,7 @@ def test_a_read_only_cache_is_one_warning_and_the_result_is_written(tmp_path, ca
 
 def test_a_full_cache_disk_is_one_warning_and_the_result_is_written(previous, capsys,
                                                                     monkeypatch):
-    folder, before = previous
+    folder, _ = previous
     reference = open_result(folder / "inc.nc")["velocity"].values
     for block in (folder / ".study-cache").glob("??/*/block-*.npz"):
         block.unlink()  # everything must be computed again, and kept
