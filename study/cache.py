@@ -16,13 +16,24 @@ computed value is kept. The acceleration axis of a block, the same for every blo
 of a grid, is kept once per entry in ``axis-<sha256>.bin`` (named by the sha256 of
 its values) instead of in each block: at 1e8 points it was a third of the cache.
 A block is verified against its key, layout and the checksum of every array read
-(and of its axis file) before its values are used; one that fails is removed,
-never reused.
+(and of its axis file) before its values are used. A file that fails (truncated,
+garbled, a wrong checksum, not a regular file, a link, larger than any block) is
+moved into ``<root>/quarantine/`` with one warning naming it, and its values are
+recomputed: never reused, never fatal. Files are opened without following links and
+without blocking (``O_NOFOLLOW | O_NONBLOCK``, then ``fstat``: a FIFO or
+``/dev/zero`` in place of a block is refused before a byte is read), and never read
+beyond :data:`MAX_BLOCK_BYTES`.
 
 Blocks are encoded by :func:`encode_block`, a pure function that a worker can run
 beside the solver, and written by :meth:`ResultCache.store_encoded` to a temporary
 name and renamed, so a reader never sees half a block and several writers
-(processes) can share a cache.
+(processes) can share a cache. Runs hold the cache's lock (``<root>/.lock``)
+shared, for as long as they run (:meth:`ResultCache.session`); maintenance
+(``study cache prune``, ``verify``) holds it exclusively
+(:meth:`ResultCache.maintenance`), so it never removes a block a run reads or has
+just written. Each process using the cache keeps a locked record in ``<root>/runs/``
+naming it; a temporary carries its run's id and is removed only when it is old and
+its run's record is no longer locked (the run is gone).
 """
 
 from __future__ import annotations
