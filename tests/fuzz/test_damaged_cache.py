@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import random
 import shutil
+import zipfile
 from collections import Counter
 from pathlib import Path
 
@@ -32,7 +33,12 @@ CASES = 60
 
 
 def damage_other(cache: Path, how: str, rng: random.Random, outside: Path) -> None:
-    entry = rng.choice(sorted(cache.glob("??/*")))
+    # Entries whole and not damaged yet (an earlier case may have linked or emptied one).
+    entries = sorted(e for e in cache.glob("??/*") if e.is_dir() and not e.is_symlink()
+                     and (e / "entry.json").is_file() and any(e.glob("axis-*.bin")))
+    if not entries:
+        return
+    entry = rng.choice(entries)
     if how == "axis":
         axis = next(entry.glob("axis-*.bin"))
         axis.write_bytes(garble(axis.read_bytes(), rng) if rng.random() < 0.5
@@ -66,7 +72,11 @@ def test_a_damaged_cache_never_changes_a_result(tmp_path_factory, capsys):
         for _ in range(rng.randint(1, 3)):
             how = rng.choice([*KINDS, "axis", "entry-record", "entry-folder-link"])
             tried[how] += 1
-            blocks = sorted(cache.glob("??/*/block-*.npz"))
+            # Blocks not damaged yet: damage() reads its target, and a FIFO, a link to
+            # /dev/zero or a sparse gigabyte left by an earlier damage must not be read.
+            blocks = sorted(b for b in cache.glob("??/*/block-*.npz")
+                            if b.is_file() and not b.is_symlink()
+                            and b.stat().st_size < 1 << 24 and zipfile.is_zipfile(b))
             if how in KINDS and blocks:
                 damage(rng.choice(blocks), how, rng, outside)
             elif how not in KINDS:
