@@ -73,46 +73,94 @@ def _cache(args: argparse.Namespace) -> int:
     from study.provenance import code_sha256
 
     cache = ResultCache(args.cache)
-    entries = list(cache.entries())
-    current = code_sha256()
-    now = time.time()
     if args.action == "list":
+        # Read-only: no lock, no file moved; damaged blocks are counted, not fatal.
+        entries = list(cache.entries())
+        current = code_sha256()
+        now = time.time()
+        quarantined = len(cache.quarantine_files())
         if not entries:
-            print(f"{cache.root}: no kept values")
+            print(f"{cache.root}: no kept values"
+                  + (f"; {quarantined} files in quarantine" if quarantined else ""))
             return 0
-        total = 0
+        total, unreadable = 0, 0
         for entry in entries:
             content = entry.content
             code = str(content.get("code_sha256", "?"))
             structure = ", ".join(f"{k}={v:.6g}" for k, v in
-                                  sorted(content.get("structure", {}).items()))
+                                  sorted(content.get("structure", {}).items())
+                                  if isinstance(v, int | float))
             method = content.get("method", {})
+            method = method if isinstance(method, dict) else {}
             print(
                 f"{entry.key[:12]}  {content.get('observable', '?'):<12} "
                 f"{method.get('method', '?')}/{method.get('coupling', '?')}  "
                 f"{entry.points:>10d} pts {entry.blocks:>5d} blocks {entry.size / 1e6:9.2f} MB "
                 f"{(now - entry.modified) / 86400:7.1f} d  code {code[:12]}"
                 f"{'' if code == current else ' (stale code)'}  {structure}"
+                + (f"  ({entry.unreadable} unreadable)" if entry.unreadable else "")
             )
             total += entry.size
-        print(f"{len(entries)} entries, {total / 1e6:.2f} MB in {cache.root}")
+            unreadable += entry.unreadable
+        print(f"{len(entries)} entries, {total / 1e6:.2f} MB in {cache.root}"
+              + (f"; {unreadable} unreadable blocks (study cache verify moves them aside)"
+                 if unreadable else "")
+              + (f"; {quarantined} files in quarantine" if quarantined else ""))
         return 0
+    if args.action == "prune" and not (args.all or args.stale or args.older_than is not None):
+        print("study: cache prune needs --stale, --older-than DAYS or --all", file=sys.stderr)
+        return 2
+    if args.wait < 0 or args.wait != args.wait:
+        print(f"study: --wait must be a number of seconds >= 0, got {args.wait}",
+              file=sys.stderr)
+        return 2
+    if not cache.root.is_dir():
+        print(f"{cache.root}: no kept values")
+        return 0
+
+    def waiting(message: str) -> None:
+        print(f"study: {message}", file=sys.stderr, flush=True)
+
+    # Maintenance holds the cache alone: no run reads a block it removes.
+    with cache.maintenance(f"study cache {args.action}", wait=args.wait, on_wait=waiting):
+        if args.action == "verify":
+            return _cache_verify(cache)
+        return _cache_prune(cache, args, code_sha256(), time.time())
+
+
+def _cache_verify(cache) -> int:
+    report = cache.verify()
+    for item in report.bad:
+        print(item.message())
+    other = (f"; {report.other_layout} entries of an older layout not checked "
+             "(study cache prune --stale removes them)" if report.other_layout else "")
+    print(f"checked {report.blocks} blocks and {report.axes} axis files in {report.entries} "
+          f"entries ({report.size / 1e6:.2f} MB) in {cache.root}: {len(report.bad)} bad"
+          + (f", moved to {cache.root / 'quarantine'}" if report.bad else "") + other)
+    return 1 if report.bad else 0
+
+
+def _cache_prune(cache, args: argparse.Namespace, current: str, now: float) -> int:
+    cache.clean_temporaries()
+    entries = list(cache.entries())
     doomed = [
         e for e in entries
         if args.all
         or (args.stale and (e.content.get("code_sha256") != current or not e.current_format))
         or (args.older_than is not None and now - e.modified > args.older_than * 86400)
     ]
-    if not (args.all or args.stale or args.older_than is not None):
-        print("study: cache prune needs --stale, --older-than DAYS or --all", file=sys.stderr)
-        return 2
     freed = sum(e.size for e in doomed)
-    for entry in doomed:
-        if not args.dry_run:
+    # Files moved aside are never read again: --all and --stale remove them too.
+    quarantined = len(cache.quarantine_files()) if (args.all or args.stale) else 0
+    if not args.dry_run:
+        for entry in doomed:
             cache.remove(entry.key)
+        if args.all or args.stale:
+            cache.remove_quarantine()
     verb = "would remove" if args.dry_run else "removed"
     print(f"{verb} {len(doomed)} of {len(entries)} entries ({freed / 1e6:.2f} MB) "
-          f"from {cache.root}")
+          + (f"and {quarantined} quarantined files " if quarantined else "")
+          + f"from {cache.root}")
     return 0
 
 
@@ -367,8 +415,13 @@ def _parser() -> argparse.ArgumentParser:
     _overwrite_option(run, "result")
     run.set_defaults(handler=_run)
 
-    cache = commands.add_parser("cache", help="show or prune the kept computed values")
-    cache.add_argument("action", choices=("list", "prune"))
+    cache = commands.add_parser(
+        "cache", help="show, prune or verify the kept computed values",
+        description="list: what is kept (read-only). prune: remove entries (--stale, "
+        "--older-than DAYS or --all). verify: read and check every block; bad ones are "
+        "moved to DIR/quarantine (exit status 1 if any). prune and verify wait for runs "
+        "using the cache (--wait), and runs wait for them.")
+    cache.add_argument("action", choices=("list", "prune", "verify"))
     cache.add_argument("--cache", type=_folder_path, metavar="DIR",
                        default=Path(os.environ.get("STUDY_CACHE") or "results/.study-cache"),
                        help="cache folder (default: $STUDY_CACHE, else results/.study-cache)")
@@ -379,6 +432,9 @@ def _parser() -> argparse.ArgumentParser:
                        help="prune: entries not written for DAYS days")
     cache.add_argument("--all", action="store_true", help="prune: everything")
     cache.add_argument("--dry-run", action="store_true", help="prune: only say what would go")
+    cache.add_argument("--wait", type=float, metavar="SECONDS", default=60.0,
+                       help="prune, verify: wait this long for runs using the cache to "
+                       "finish, then give up (default: 60)")
     cache.set_defaults(handler=_cache)
 
     validate = commands.add_parser("validate", help="check result files against the schema")

@@ -49,6 +49,7 @@ from study.store import (
     GridWriter,
     StoreBusy,
     StoreError,
+    advice,
     clean_temporaries,
     commit,
     exclusive,
@@ -379,16 +380,17 @@ def run_study(
             _update_metadata(spec, output, command, started_utc)
             return RunReport(output, True, n_chunks, 0, n_chunks,
                              time.perf_counter() - started, metadata_updated=True)
-        computing = _Run(spec, output, started, started_utc, command,
-                         ResultCache(Path(cache) if cache is not None
-                                     else default_cache(output)), on_chunk)
+        kept = ResultCache(Path(cache) if cache is not None else default_cache(output))
+        computing = _Run(spec, output, started, started_utc, command, kept, on_chunk)
         try:
-            return computing.execute(scheduler, workers, progress, stop_after, on_start,
-                                     task_timeout)
+            # Shared with other runs; cache maintenance (prune, verify) waits for it.
+            with kept.session(f"study run -> {output}", on_wait=kept.warn):
+                return computing.execute(scheduler, workers, progress, stop_after, on_start,
+                                         task_timeout)
         except StoreError as err:
-            if not computing.points_computed:
+            if not computing.points_kept:
                 raise
-            raise StoreError(f"{err}; the {computing.points_computed} points computed are "
+            raise StoreError(f"{err}; the {computing.points_kept} points computed are "
                              f"kept in {computing.cache.root} for the next run") from None
 
 
@@ -528,6 +530,9 @@ class _Run:
         self.code = code_sha256()
         self.points_computed = 0
         self.points_reused = 0
+        #: Computed points kept in the cache (all of them unless it cannot be written).
+        self.points_kept = 0
+        self.keeping = True
         self.chunks_computed = 0
         self.chunks_reused = 0
         self._keys: dict[tuple[tuple[int, ...], str], tuple[str, dict[str, Any]]] = {}
@@ -644,16 +649,34 @@ class _Run:
         for rectangle, datas in zip(task.rectangles, encoded, strict=True):
             for observable, data in zip(stored, datas, strict=True):
                 key, content = self.key(chunk.structure_index, observable)
-                self.cache.store_encoded(key, content, task.a[rectangle.columns], data)
+                self._keep(key, content, task.a[rectangle.columns], data)
         size = chunk.size * max(self.a.size, 1)
         computed_points = task.point_count if self.points else size
         self.points_computed += computed_points
+        if self.keeping and self.points:
+            self.points_kept += computed_points
         self.points_reused += size - computed_points
         if computed_points:
             self.chunks_computed += 1
         else:
             self.chunks_reused += 1
         self.progress.update(size)
+
+    def _keep(self, key: str, content: dict[str, Any], a: np.ndarray, block: bytes) -> None:
+        """Keep a computed block; a cache that cannot be written (disk full, read-only)
+        is said once and the run goes on without keeping values: the result matters
+        more than its reuse."""
+        if not self.keeping:
+            return
+        try:
+            self.cache.store_encoded(key, content, a, block)
+        except OSError as err:
+            self.keeping = False
+            what_to_do = advice(err).replace("(-o)", "(--cache)")
+            self.cache.warn(
+                f"{self.cache.root}: cannot keep computed values ({err.strerror or err}); "
+                "the run goes on without keeping them" + (f": {what_to_do}" if what_to_do
+                                                          else ""))
 
     def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
                 stop_after: int | None, on_start: Callable[[Executor], None] | None,
@@ -690,9 +713,11 @@ class _Run:
                             if self.on_chunk is not None:
                                 self.on_chunk(task.chunk.number)
                         if stop_after is not None and computed_chunks >= stop_after:
+                            kept = (f"their values are kept in {self.cache.root}"
+                                    if self.keeping else "the cache could not keep them")
                             raise StudyInterrupted(
                                 f"stopped after {computed_chunks} computed chunks on request; "
-                                f"their values are kept in {self.cache.root}")
+                                f"{kept}")
             finally:
                 self.progress.close()
             if self.frontier is not None:
@@ -702,7 +727,7 @@ class _Run:
             self.writer.close()
         except BaseException:
             if hasattr(self, "writer"):
-                self.writer.close()
+                self.writer.discard()  # never raises: the first failure is reported
             temporary.unlink(missing_ok=True)
             raise
         commit(temporary, self.output)
