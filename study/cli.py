@@ -12,6 +12,8 @@ import shlex
 import sys
 from pathlib import Path
 
+from study.version import DISTRIBUTION, VERSION
+
 __all__ = ["main"]
 
 
@@ -271,6 +273,8 @@ def _parser() -> argparse.ArgumentParser:
         prog="study",
         description="Parameter studies of vibration-driven stick-slip locomotion.",
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {VERSION}",
+                        help=f"print the version of {DISTRIBUTION} and exit")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     run = commands.add_parser("run", help="run a study spec and write its netCDF result")
