@@ -84,9 +84,9 @@ def frontier_from_grid(
     f : array_like
         ``(n_f,)`` ascending drive frequencies [Hz] of the grid.
     a : array_like
-        ``(n_a,)`` drive accelerations [m s^-2].
+        ``(n_a,)`` drive accelerations [m s-2].
     velocity, status : array_like
-        ``(n_f, n_a)`` steady velocity [m s^-1] and status on the grid.
+        ``(n_f, n_a)`` steady velocity [m s-1] and status on the grid.
     tolerance : float
         Bracket width at which bisection stops [Hz].
     settings : SolverSettings, optional
@@ -181,7 +181,7 @@ def frontier(
     structure : Structure
         The structure.
     a : array_like
-        Drive accelerations [m s^-2], 1-D.
+        Drive accelerations [m s-2], 1-D.
     f_range : (float, float)
         Frequency interval searched [Hz].
     num : int
@@ -241,7 +241,7 @@ def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tol
 
 
 def resonance_threshold(structure: Structure) -> tuple[float, float]:
-    """Thresholds ``(a*_+, a*_-)`` at ``f = f0`` in closed form [m s^-2].
+    """Thresholds ``(a*_+, a*_-)`` at ``f = f0`` in closed form [m s-2].
 
     At resonance ``w^2 G = -i Q``, so
     ``a*_pm = g / |1 - i Q M cos(alpha) (cos(alpha) +- sin(alpha)/cs)|``
@@ -274,7 +274,7 @@ def minimum_threshold(structure: Structure, f_range: tuple[float, float] | None 
     Returns
     -------
     a_min, f_min : float
-        The minimum threshold [m s^-2] and its frequency [Hz].
+        The minimum threshold [m s-2] and its frequency [Hz].
     """
     lo, hi = f_range if f_range is not None else (0.5 * structure.f0, 2.0 * structure.f0)
 

@@ -154,7 +154,7 @@ def _figure(args: argparse.Namespace) -> int:
 
 
 def _point(text: str) -> tuple[float, float]:
-    """``F,A`` of ``--point``: a drive frequency [Hz] and acceleration [m s^-2]."""
+    """``F,A`` of ``--point``: a drive frequency [Hz] and acceleration [m s-2]."""
     import math
 
     parts = text.split(",")

@@ -162,7 +162,7 @@ class Target:
     f : float
         Drive frequency [Hz].
     a : float
-        Drive acceleration amplitude [m s^-2].
+        Drive acceleration amplitude [m s-2].
     behaviour : str
         One of :data:`BEHAVIOURS`.
     label : str
@@ -395,7 +395,7 @@ def _disk_of(spec: DesignSpec, p: dict[str, float | None]) -> Disk:
 
 
 def disk_limits(disk: Disk, f: float, samples: int = PHASES) -> tuple[float, float]:
-    """The disk's motion threshold and lift-off acceleration at ``f`` [m s^-2].
+    """The disk's motion threshold and lift-off acceleration at ``f`` [m s-2].
 
     Stuck on the table, each plate's mode is on its steady response, proportional to
     ``a``: the friction load ``|(f, T / c)|`` (force and torque over the limit
@@ -433,10 +433,10 @@ class Evaluation:
 
     Attributes (arrays over targets)
     ----------
-    forward_speed : mean velocity [m s^-1] (the single plate's ``v``; the disk's along
-        its heading); lateral_speed [m s^-1] and turn_rate [rad s^-1] (NaN for a plate);
+    forward_speed : mean velocity [m s-1] (the single plate's ``v``; the disk's along
+        its heading); lateral_speed [m s-1] and turn_rate [rad s-1] (NaN for a plate);
     status : :class:`~study.status.Status` codes;
-    threshold, lift : the motion threshold and lift-off acceleration at ``f`` [m s^-2];
+    threshold, lift : the motion threshold and lift-off acceleration at ``f`` [m s-2];
     rim : the disk's rim contact margin (:func:`study.planar.contact_margins`; NaN for a
         plate);
     speed_margin (NaN for static), threshold_margin, lift_margin, margin : [1];
@@ -497,7 +497,7 @@ def evaluate(spec: DesignSpec, params: dict[str, float | None],
         for i, t in enumerate(targets):
             threshold[i], lift[i] = disk_limits(disk, t.f)
             motion = periodic_motion(disk, t.f, t.a)
-            # The planar API gives turn rates in degree s^-1; margins use rad s^-1.
+            # The planar API gives turn rates in degree s-1; margins use rad s-1.
             forward[i], lateral[i], turn[i] = (motion.forward_speed, motion.lateral_speed,
                                                math.radians(motion.turn_rate))
             status[i] = motion.status

@@ -370,7 +370,7 @@ def model_values(params: dict[str, float | None], data: xr.Dataset, coupling: st
 
 def _threshold_gradient(s: Structure, f: NDArray[np.float64], sign: float
                         ) -> tuple[NDArray[np.float64], dict[str, NDArray[np.float64]]]:
-    """a*_s and its derivatives with respect to f0, Q, alpha (deg), M, cs (paper eq. 5)."""
+    """a*_s and its derivatives with respect to f0, Q, alpha (degree), M, cs (paper eq. 5)."""
     w = 2.0 * np.pi * f
     w0 = s.omega0
     G = 1.0 / (w0 * w0 - w * w + 1j * w0 * w / s.Q)

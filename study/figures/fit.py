@@ -93,7 +93,7 @@ def draw(dataset: xr.Dataset, output: str | Path) -> list[Path]:
                     ax.annotate(f"{fi:g} Hz", (grid[-1], v[-1] * 1e3), fontsize=7,
                                 color=colour)
                 ax.set_xlabel("drive acceleration a [m s$^{-2}$]")
-                ax.set_ylabel(f"steady velocity [mm/s] ({coupling})")
+                ax.set_ylabel(f"steady velocity [mm s$^{{-1}}$] ({coupling})")
                 ax.axhline(0.0, color="0.7", lw=0.6)
         if name == "threshold":
             ax.legend(fontsize=7)

@@ -2,7 +2,7 @@
 
 Drawn from a ``steering-calibration`` result file alone (``study figure
 steering-calibration FILE``), a calibration scene over drive frequency ``f`` and
-acceleration ``a``. Top: the forward speed; bottom: the turn rate (degree s^-1, as
+acceleration ``a``. Top: the forward speed; bottom: the turn rate (degree s-1, as
 the file stores it), one line per acceleration. Points where the disk lifts off or the motion
 did not converge have no speed and are marked on the zero line. Dotted lines mark
 the paper's command frequencies: forward 14.2 Hz, backward 15.2 Hz, turns 7.2 and
@@ -71,7 +71,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
             )
     f = dataset["f"].values
     a = dataset["a"].values
-    forward = 1e3 * dataset["forward_speed"].transpose("a", "f").values  # mm/s over (a, f)
+    forward = 1e3 * dataset["forward_speed"].transpose("a", "f").values  # mm s-1 over (a, f)
     angle_values(dataset, "turn_rate", "steering-calibration", "degree s-1")
     turn = dataset["turn_rate"].transpose("a", "f").values  # degree/s
     status = flag_codes(dataset["status"].transpose("a", "f"), missing=Status.NOT_CONVERGED)

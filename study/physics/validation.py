@@ -38,11 +38,11 @@ def as_frequency(f: ArrayLike) -> NDArray[np.float64]:
 
 
 def as_acceleration(a: ArrayLike) -> NDArray[np.float64]:
-    """Validate drive acceleration amplitudes: finite and >= 0 [m s^-2].
+    """Validate drive acceleration amplitudes: finite and >= 0 [m s-2].
 
     Raises
     ------
     ValueError
         Naming the first offending value, its index and the allowed range.
     """
-    return _checked("drive acceleration a", a, "m s^-2", 0.0, inclusive=True)
+    return _checked("drive acceleration a", a, "m s-2", 0.0, inclusive=True)
