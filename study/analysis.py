@@ -18,6 +18,7 @@ from study.physics import as_acceleration, as_frequency, thresholds
 from study.solver import SolverSettings, SteadyState, steady_state
 from study.status import Status
 from study.structure import Structure
+from study.units import DIMENSIONLESS, METRE_PER_SECOND_SQUARED
 from study.variables import VARIABLES
 
 __all__ = [
@@ -225,7 +226,8 @@ def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tol
     dataset = xr.Dataset(
         {name: (dims, values[name], VARIABLES[name].attrs()) for name in values},
         coords={"a": ("a", np.asarray(a, dtype=np.float64),
-                      {"units": "m s-2", "long_name": "drive acceleration amplitude"})},
+                      {"units": METRE_PER_SECOND_SQUARED,
+                       "long_name": "drive acceleration amplitude"})},
     )
     dataset.attrs.update({
         "title": "Zero-velocity frontier f*(a)",
@@ -349,7 +351,7 @@ def coupling_effect(dataset: xr.Dataset, threshold: float = 0.1) -> xr.Dataset:
         }
     )
     for name in ("changed", "reversed", "lifted", "paradox", "median_change"):
-        out[name].attrs["units"] = "1"
-    out["moving_points"].attrs["units"] = "1"
+        out[name].attrs["units"] = DIMENSIONLESS
+    out["moving_points"].attrs["units"] = DIMENSIONLESS
     out.attrs["threshold"] = threshold
     return out

@@ -12,6 +12,7 @@ import shlex
 import sys
 from pathlib import Path
 
+from study.units import spoken
 from study.version import DISTRIBUTION, VERSION
 
 __all__ = ["main"]
@@ -201,10 +202,8 @@ def _fit(args: argparse.Namespace) -> int:
           f"evaluations in {result.wall_seconds:.1f} s")
     for name, value, error, ok in zip(result.names, result.estimate, result.standard_error,
                                       result.identifiable, strict=True):
-        units = PARAMETERS[name].units
-        units = "" if units == "1" else f" {units}"
         flag = "" if ok else "   NOT IDENTIFIABLE"
-        print(f"  {name:<12} = {value:.6g} +- {error:.3g}{units}{flag}")
+        print(f"  {name:<12} = {value:.6g} +- {error:.3g}{spoken(PARAMETERS[name].units)}{flag}")
     for warning in result.warnings:
         print(f"study: warning: {warning}", file=sys.stderr)
     if args.figure is not None:
@@ -230,8 +229,7 @@ def _design(args: argparse.Namespace) -> int:
           f"model evaluations in {result.wall_seconds:.1f} s")
     for name, value, low, high in zip(result.names, result.best, result.lower, result.upper,
                                       strict=True):
-        units = spec.parameter(name).units
-        units = "" if units == "1" else f" {units}"
+        units = spoken(spec.parameter(name).units)
         print(f"  {name:<12} = {value:.6g}{units}   (bounds {low:g} to {high:g})")
     ev = result.evaluation
     for i, target in enumerate(spec.targets):

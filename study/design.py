@@ -97,9 +97,19 @@ from study.specfile import (
 )
 from study.status import Status
 from study.structure import Structure
+from study.units import (
+    DEGREE,
+    DEGREE_PER_SECOND,
+    DIMENSIONLESS,
+    HERTZ,
+    METRE_PER_SECOND,
+    METRE_PER_SECOND_SQUARED,
+    spoken,
+)
 
 __all__ = [
     "BEHAVIOURS",
+    "DESIGN_FORMAT",
     "DESIGN_RESULT_SCHEMA",
     "DESIGN_SPEC_SCHEMA",
     "FAILED",
@@ -118,6 +128,10 @@ __all__ = [
 
 DESIGN_SPEC_SCHEMA = "study-design-spec-v1"
 DESIGN_RESULT_SCHEMA = "study-design-v1"
+#: Layout of a design result (global attribute ``study_design_format``): 2 spells every
+#: unit in CF/UDUNITS (``parameter_units`` of alpha and direction: ``degree``). Files
+#: without it are format 1 (``deg``), refused as stale by validation.
+DESIGN_FORMAT = 2
 
 #: Target behaviours, and which models know them.
 BEHAVIOURS = {
@@ -141,12 +155,12 @@ PHASES = 2048
 
 #: Parameters of one plate of the disk ("<plate>.<name>" in [free]).
 PLATE_PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
-    Parameter("f0", "Hz", "resonance frequency of the plate's first mode", 0.0, math.inf),
-    Parameter("Q", "1", "quality factor of the plate's mode", 0.0, math.inf),
-    Parameter("alpha", "deg", "tilt of the plate's mode from the horizontal", 0.0, 90.0,
+    Parameter("f0", HERTZ, "resonance frequency of the plate's first mode", 0.0, math.inf),
+    Parameter("Q", DIMENSIONLESS, "quality factor of the plate's mode", 0.0, math.inf),
+    Parameter("alpha", DEGREE, "tilt of the plate's mode from the horizontal", 0.0, 90.0,
               lower_open=False, upper_open=False),
-    Parameter("M", "1", "mass ratio of the plate's mode", 0.0, 1.0, upper_open=False),
-    Parameter("direction", "deg", "direction of the plate's mode in the body frame",
+    Parameter("M", DIMENSIONLESS, "mass ratio of the plate's mode", 0.0, 1.0, upper_open=False),
+    Parameter("direction", DEGREE, "direction of the plate's mode in the body frame",
               -360.0, 360.0, lower_open=False, upper_open=False),
 )}
 #: Parameters of the single-plate structure (as a fit's).
@@ -296,7 +310,7 @@ def _check_bounds(name: str, bounds: list[float], parameter: Parameter, start: f
     for bound in (lower, upper):
         if not parameter.inside(bound):
             raise SpecError(f"{where}: bound {bound:g} is out of range; allowed: "
-                            f"{parameter.allowed()} [{parameter.units}]")
+                            f"{parameter.allowed()}{spoken(parameter.units)}")
     if start is not None and not lower <= start <= upper:
         raise SpecError(f"{where}: the start value {start:g} is outside the bounds")
     return lower, upper
@@ -778,7 +792,7 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
         "target": (t, np.array([x.label for x in spec.targets], dtype=object),
                    {"long_name": "target behaviour at a drive command"}),
     }
-    one = {"units": "1"}
+    one = {"units": DIMENSIONLESS}
     variables: dict[str, tuple[Any, ...]] = {
         "best": (p, result.best, {"long_name": "designed value", **per_unit}),
         "lower_bound": (p, result.lower, {"long_name": "lower bound of the search",
@@ -787,28 +801,28 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
                                           **per_unit}),
         "start": (p, result.start, {"long_name": "start value", **per_unit}),
         "f": (t, np.array([x.f for x in spec.targets]), {
-            "long_name": "drive frequency", "units": "Hz"}),
+            "long_name": "drive frequency", "units": HERTZ}),
         "a": (t, np.array([x.a for x in spec.targets]), {
-            "long_name": "drive acceleration amplitude", "units": "m s-2"}),
+            "long_name": "drive acceleration amplitude", "units": METRE_PER_SECOND_SQUARED}),
         "behaviour": (t, np.array([x.behaviour for x in spec.targets], dtype=object), {
             "long_name": "behaviour asked for (" + ", ".join(BEHAVIOURS) + ")"}),
         "forward_speed": (t, ev.forward_speed, {
             "long_name": "steady mean velocity (the disk's along its heading)",
-            "units": "m s-1"}),
+            "units": METRE_PER_SECOND}),
         "lateral_speed": (t, ev.lateral_speed, {
             "long_name": "steady mean velocity to the left of the heading (disk)",
-            "units": "m s-1"}),
+            "units": METRE_PER_SECOND}),
         "turn_rate": (t, np.degrees(ev.turn_rate), {
             "long_name": "steady mean angular velocity, counterclockwise positive (disk)",
-            "units": "degree s-1"}),
+            "units": DEGREE_PER_SECOND}),
         "solver_status": (t, np.array([Status(int(s)).name for s in ev.status],
                                       dtype=object), {"long_name": "solver status"}),
         "motion_threshold": (t, ev.threshold, {
             "long_name": "lowest drive at which the structure slips at f",
-            "units": "m s-2"}),
+            "units": METRE_PER_SECOND_SQUARED}),
         "lift_off_acceleration": (t, ev.lift, {
             "long_name": "drive above which the normal force vanishes in the cycle",
-            "units": "m s-2"}),
+            "units": METRE_PER_SECOND_SQUARED}),
         "edge_contact_margin": (t, ev.rim, {
             "long_name": "rim contact margin of the disk (NaN: single plate)", **one}),
         "speed_margin": (t, ev.speed_margin, {
@@ -848,6 +862,7 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
         "Conventions": "CF-1.11",
         "title": spec.title,
         "study_result_schema": DESIGN_RESULT_SCHEMA,
+        "study_design_format": DESIGN_FORMAT,
         "study_design_name": spec.name,
         "study_name": spec.name,
         "study_spec": spec.text,

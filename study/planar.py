@@ -34,6 +34,15 @@ from study.physics import mode_response
 from study.solver import COUPLINGS
 from study.structure import require_finite
 from study.transient import IntegratorSettings, Schedule
+from study.units import (
+    DEGREE,
+    DEGREE_PER_SECOND,
+    DIMENSIONLESS,
+    HERTZ,
+    METRE,
+    METRE_PER_SECOND,
+    spoken,
+)
 
 __all__ = [
     "EVENT_KINDS",
@@ -82,7 +91,7 @@ POSE_STATE = ("x", "y", "heading", "vx", "vy", "spin", "path")
 
 #: Units of the state components a caller sees (the kernel's heading and spin are in
 #: rad and rad s-1).
-POSE_UNITS = ("m", "m", "degree", "m s-1", "m s-1", "degree s-1", "m")
+POSE_UNITS = (METRE, METRE, DEGREE, METRE_PER_SECOND, METRE_PER_SECOND, DEGREE_PER_SECOND, METRE)
 
 
 def _to_kernel(state: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -135,17 +144,17 @@ class Plate:
 
     def __post_init__(self) -> None:
         checks = (
-            ("f0", "Hz", lambda v: v > 0.0, "> 0"),
-            ("Q", "1", lambda v: v > 0.0, "> 0"),
-            ("alpha", "degree", lambda v: 0.0 <= v <= 90.0, "in [0, 90]"),
-            ("M", "1", lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
-            ("direction", "degree", lambda v: True, "finite"),
+            ("f0", HERTZ, lambda v: v > 0.0, "> 0"),
+            ("Q", DIMENSIONLESS, lambda v: v > 0.0, "> 0"),
+            ("alpha", DEGREE, lambda v: 0.0 <= v <= 90.0, "in [0, 90]"),
+            ("M", DIMENSIONLESS, lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+            ("direction", DEGREE, lambda v: True, "finite"),
         )
         for name, units, ok, allowed in checks:
             value = require_finite(f"Plate.{name}", getattr(self, name))
             if not ok(value):
                 raise ValueError(
-                    f"Plate {self.name!r}: {name} = {value!r} [{units}] is out of range; "
+                    f"Plate {self.name!r}: {name} = {value!r}{spoken(units)} is out of range; "
                     f"allowed: {allowed}"
                 )
             object.__setattr__(self, name, value)

@@ -15,6 +15,7 @@ from study.figures.common import plt, restore_dim, save, selection_text
 from study.fit import fitted_structure, structure_groups
 from study.physics import thresholds
 from study.solver import steady_velocity
+from study.units import spoken
 
 __all__ = ["draw"]
 
@@ -98,7 +99,7 @@ def draw(dataset: xr.Dataset, output: str | Path) -> list[Path]:
         if name == "threshold":
             ax.legend(fontsize=7)
     text = ", ".join(
-        f"{p} = {e:.4g} ± {se:.2g}" + ("" if u == "1" else f" {u}")
+        f"{p} = {e:.4g} ± {se:.2g}{spoken(str(u))}"
         for p, e, se, u in zip(dataset["parameter"].values, dataset["estimate"].values,
                                dataset["standard_error"].values,
                                dataset["parameter_units"].values, strict=True))

@@ -24,6 +24,7 @@ from matplotlib.patches import Circle, Patch
 
 from study.figures import FigureError
 from study.figures.common import restore_dim, save, selected_keys, selection_text
+from study.units import DEGREE
 
 __all__ = [
     "LABEL_COLORS",
@@ -130,7 +131,7 @@ def value_range_text(values: np.ndarray) -> str:
 
 
 def angle_values(dataset: xr.Dataset, name: str, figure: str,
-                 units: str = "degree") -> np.ndarray:
+                 units: str = DEGREE) -> np.ndarray:
     """The values of an angle (or angular rate) variable, which must be in ``units``.
 
     Raises
