@@ -45,6 +45,10 @@ results/design-%.nc: designs/%.toml $(PACKAGE) | $(STAMP)
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
+	@# Before 0.1.0 the distribution was called `study` (another project's name on the
+	@# package index); a venv made then still holds it. Removed before the install: its
+	@# record owns the `study` command, which the install writes again.
+	$(PY) -m pip uninstall --quiet --yes study 2>/dev/null || true
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)

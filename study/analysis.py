@@ -18,6 +18,7 @@ from study.physics import as_acceleration, as_frequency, thresholds
 from study.solver import SolverSettings, SteadyState, steady_state
 from study.status import Status
 from study.structure import Structure
+from study.units import DIMENSIONLESS, METRE_PER_SECOND_SQUARED
 from study.variables import VARIABLES
 
 __all__ = [
@@ -84,9 +85,9 @@ def frontier_from_grid(
     f : array_like
         ``(n_f,)`` ascending drive frequencies [Hz] of the grid.
     a : array_like
-        ``(n_a,)`` drive accelerations [m s^-2].
+        ``(n_a,)`` drive accelerations [m s-2].
     velocity, status : array_like
-        ``(n_f, n_a)`` steady velocity [m s^-1] and status on the grid.
+        ``(n_f, n_a)`` steady velocity [m s-1] and status on the grid.
     tolerance : float
         Bracket width at which bisection stops [Hz].
     settings : SolverSettings, optional
@@ -181,7 +182,7 @@ def frontier(
     structure : Structure
         The structure.
     a : array_like
-        Drive accelerations [m s^-2], 1-D.
+        Drive accelerations [m s-2], 1-D.
     f_range : (float, float)
         Frequency interval searched [Hz].
     num : int
@@ -225,7 +226,8 @@ def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tol
     dataset = xr.Dataset(
         {name: (dims, values[name], VARIABLES[name].attrs()) for name in values},
         coords={"a": ("a", np.asarray(a, dtype=np.float64),
-                      {"units": "m s-2", "long_name": "drive acceleration amplitude"})},
+                      {"units": METRE_PER_SECOND_SQUARED,
+                       "long_name": "drive acceleration amplitude"})},
     )
     dataset.attrs.update({
         "title": "Zero-velocity frontier f*(a)",
@@ -241,7 +243,7 @@ def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tol
 
 
 def resonance_threshold(structure: Structure) -> tuple[float, float]:
-    """Thresholds ``(a*_+, a*_-)`` at ``f = f0`` in closed form [m s^-2].
+    """Thresholds ``(a*_+, a*_-)`` at ``f = f0`` in closed form [m s-2].
 
     At resonance ``w^2 G = -i Q``, so
     ``a*_pm = g / |1 - i Q M cos(alpha) (cos(alpha) +- sin(alpha)/cs)|``
@@ -274,7 +276,7 @@ def minimum_threshold(structure: Structure, f_range: tuple[float, float] | None 
     Returns
     -------
     a_min, f_min : float
-        The minimum threshold [m s^-2] and its frequency [Hz].
+        The minimum threshold [m s-2] and its frequency [Hz].
     """
     lo, hi = f_range if f_range is not None else (0.5 * structure.f0, 2.0 * structure.f0)
 
@@ -349,7 +351,7 @@ def coupling_effect(dataset: xr.Dataset, threshold: float = 0.1) -> xr.Dataset:
         }
     )
     for name in ("changed", "reversed", "lifted", "paradox", "median_change"):
-        out[name].attrs["units"] = "1"
-    out["moving_points"].attrs["units"] = "1"
+        out[name].attrs["units"] = DIMENSIONLESS
+    out["moving_points"].attrs["units"] = DIMENSIONLESS
     out.attrs["threshold"] = threshold
     return out

@@ -246,7 +246,7 @@ def encode_block(key: str, f: NDArray[np.float64], a: NDArray[np.float64],
     key : str
         Entry key (:func:`entry_key`).
     f, a : numpy.ndarray
-        ``(n_f,)`` drive frequencies [Hz] and ``(n_a,)`` accelerations [m s^-2].
+        ``(n_f,)`` drive frequencies [Hz] and ``(n_a,)`` accelerations [m s-2].
     arrays : dict
         Variable name -> ``(n_f, n_a)`` array.
     """
@@ -601,7 +601,7 @@ class ResultCache:
         key : str
             Entry key (:func:`entry_key`).
         f, a : numpy.ndarray
-            ``(n_f,)`` drive frequencies [Hz] and ``(n_a,)`` accelerations [m s^-2].
+            ``(n_f,)`` drive frequencies [Hz] and ``(n_a,)`` accelerations [m s-2].
             Values match only if bitwise equal.
         variables : dict
             Variable name -> dtype of the arrays returned.

@@ -12,6 +12,9 @@ import shlex
 import sys
 from pathlib import Path
 
+from study.units import spoken
+from study.version import DISTRIBUTION, VERSION
+
 __all__ = ["default_figure_output", "main"]
 
 
@@ -253,7 +256,7 @@ def _seconds(text: str) -> float:
 
 
 def _point(text: str) -> tuple[float, float]:
-    """``F,A`` of ``--point``: a drive frequency [Hz] and acceleration [m s^-2]."""
+    """``F,A`` of ``--point``: a drive frequency [Hz] and acceleration [m s-2]."""
     import math
 
     parts = text.split(",")
@@ -308,10 +311,8 @@ def _fit(args: argparse.Namespace) -> int:
           f"evaluations in {result.wall_seconds:.1f} s")
     for name, value, error, ok in zip(result.names, result.estimate, result.standard_error,
                                       result.identifiable, strict=True):
-        units = PARAMETERS[name].units
-        units = "" if units == "1" else f" {units}"
         flag = "" if ok else "   NOT IDENTIFIABLE"
-        print(f"  {name:<12} = {value:.6g} +- {error:.3g}{units}{flag}")
+        print(f"  {name:<12} = {value:.6g} +- {error:.3g}{spoken(PARAMETERS[name].units)}{flag}")
     for warning in result.warnings:
         print(f"study: warning: {warning}", file=sys.stderr)
     if args.figure is not None:
@@ -344,8 +345,7 @@ def _design(args: argparse.Namespace) -> int:
           f"model evaluations in {result.wall_seconds:.1f} s")
     for name, value, low, high in zip(result.names, result.best, result.lower, result.upper,
                                       strict=True):
-        units = spec.parameter(name).units
-        units = "" if units == "1" else f" {units}"
+        units = spoken(spec.parameter(name).units)
         print(f"  {name:<12} = {value:.6g}{units}   (bounds {low:g} to {high:g})")
     ev = result.evaluation
     for i, target in enumerate(spec.targets):
@@ -389,6 +389,8 @@ def _parser() -> argparse.ArgumentParser:
         prog="study",
         description="Parameter studies of vibration-driven stick-slip locomotion.",
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {VERSION}",
+                        help=f"print the version of {DISTRIBUTION} and exit")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     run = commands.add_parser("run", help="run a study spec and write its netCDF result")

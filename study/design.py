@@ -97,9 +97,19 @@ from study.specfile import (
 )
 from study.status import Status
 from study.structure import Structure
+from study.units import (
+    DEGREE,
+    DEGREE_PER_SECOND,
+    DIMENSIONLESS,
+    HERTZ,
+    METRE_PER_SECOND,
+    METRE_PER_SECOND_SQUARED,
+    spoken,
+)
 
 __all__ = [
     "BEHAVIOURS",
+    "DESIGN_FORMAT",
     "DESIGN_RESULT_SCHEMA",
     "DESIGN_SPEC_SCHEMA",
     "FAILED",
@@ -118,6 +128,10 @@ __all__ = [
 
 DESIGN_SPEC_SCHEMA = "study-design-spec-v1"
 DESIGN_RESULT_SCHEMA = "study-design-v1"
+#: Layout of a design result (global attribute ``study_design_format``): 2 spells every
+#: unit in CF/UDUNITS (``parameter_units`` of alpha and direction: ``degree``). Files
+#: without it are format 1 (``deg``), refused as stale by validation.
+DESIGN_FORMAT = 2
 
 #: Target behaviours, and which models know them.
 BEHAVIOURS = {
@@ -141,12 +155,12 @@ PHASES = 2048
 
 #: Parameters of one plate of the disk ("<plate>.<name>" in [free]).
 PLATE_PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
-    Parameter("f0", "Hz", "resonance frequency of the plate's first mode", 0.0, math.inf),
-    Parameter("Q", "1", "quality factor of the plate's mode", 0.0, math.inf),
-    Parameter("alpha", "deg", "tilt of the plate's mode from the horizontal", 0.0, 90.0,
+    Parameter("f0", HERTZ, "resonance frequency of the plate's first mode", 0.0, math.inf),
+    Parameter("Q", DIMENSIONLESS, "quality factor of the plate's mode", 0.0, math.inf),
+    Parameter("alpha", DEGREE, "tilt of the plate's mode from the horizontal", 0.0, 90.0,
               lower_open=False, upper_open=False),
-    Parameter("M", "1", "mass ratio of the plate's mode", 0.0, 1.0, upper_open=False),
-    Parameter("direction", "deg", "direction of the plate's mode in the body frame",
+    Parameter("M", DIMENSIONLESS, "mass ratio of the plate's mode", 0.0, 1.0, upper_open=False),
+    Parameter("direction", DEGREE, "direction of the plate's mode in the body frame",
               -360.0, 360.0, lower_open=False, upper_open=False),
 )}
 #: Parameters of the single-plate structure (as a fit's).
@@ -162,7 +176,7 @@ class Target:
     f : float
         Drive frequency [Hz].
     a : float
-        Drive acceleration amplitude [m s^-2].
+        Drive acceleration amplitude [m s-2].
     behaviour : str
         One of :data:`BEHAVIOURS`.
     label : str
@@ -296,7 +310,7 @@ def _check_bounds(name: str, bounds: list[float], parameter: Parameter, start: f
     for bound in (lower, upper):
         if not parameter.inside(bound):
             raise SpecError(f"{where}: bound {bound:g} is out of range; allowed: "
-                            f"{parameter.allowed()} [{parameter.units}]")
+                            f"{parameter.allowed()}{spoken(parameter.units)}")
     if start is not None and not lower <= start <= upper:
         raise SpecError(f"{where}: the start value {start:g} is outside the bounds")
     return lower, upper
@@ -395,7 +409,7 @@ def _disk_of(spec: DesignSpec, p: dict[str, float | None]) -> Disk:
 
 
 def disk_limits(disk: Disk, f: float, samples: int = PHASES) -> tuple[float, float]:
-    """The disk's motion threshold and lift-off acceleration at ``f`` [m s^-2].
+    """The disk's motion threshold and lift-off acceleration at ``f`` [m s-2].
 
     Stuck on the table, each plate's mode is on its steady response, proportional to
     ``a``: the friction load ``|(f, T / c)|`` (force and torque over the limit
@@ -433,10 +447,10 @@ class Evaluation:
 
     Attributes (arrays over targets)
     ----------
-    forward_speed : mean velocity [m s^-1] (the single plate's ``v``; the disk's along
-        its heading); lateral_speed [m s^-1] and turn_rate [rad s^-1] (NaN for a plate);
+    forward_speed : mean velocity [m s-1] (the single plate's ``v``; the disk's along
+        its heading); lateral_speed [m s-1] and turn_rate [rad s-1] (NaN for a plate);
     status : :class:`~study.status.Status` codes;
-    threshold, lift : the motion threshold and lift-off acceleration at ``f`` [m s^-2];
+    threshold, lift : the motion threshold and lift-off acceleration at ``f`` [m s-2];
     rim : the disk's rim contact margin (:func:`study.planar.contact_margins`; NaN for a
         plate);
     speed_margin (NaN for static), threshold_margin, lift_margin, margin : [1];
@@ -497,7 +511,7 @@ def evaluate(spec: DesignSpec, params: dict[str, float | None],
         for i, t in enumerate(targets):
             threshold[i], lift[i] = disk_limits(disk, t.f)
             motion = periodic_motion(disk, t.f, t.a)
-            # The planar API gives turn rates in degree s^-1; margins use rad s^-1.
+            # The planar API gives turn rates in degree s-1; margins use rad s-1.
             forward[i], lateral[i], turn[i] = (motion.forward_speed, motion.lateral_speed,
                                                math.radians(motion.turn_rate))
             status[i] = motion.status
@@ -778,7 +792,7 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
         "target": (t, np.array([x.label for x in spec.targets], dtype=object),
                    {"long_name": "target behaviour at a drive command"}),
     }
-    one = {"units": "1"}
+    one = {"units": DIMENSIONLESS}
     variables: dict[str, tuple[Any, ...]] = {
         "best": (p, result.best, {"long_name": "designed value", **per_unit}),
         "lower_bound": (p, result.lower, {"long_name": "lower bound of the search",
@@ -787,28 +801,28 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
                                           **per_unit}),
         "start": (p, result.start, {"long_name": "start value", **per_unit}),
         "f": (t, np.array([x.f for x in spec.targets]), {
-            "long_name": "drive frequency", "units": "Hz"}),
+            "long_name": "drive frequency", "units": HERTZ}),
         "a": (t, np.array([x.a for x in spec.targets]), {
-            "long_name": "drive acceleration amplitude", "units": "m s-2"}),
+            "long_name": "drive acceleration amplitude", "units": METRE_PER_SECOND_SQUARED}),
         "behaviour": (t, np.array([x.behaviour for x in spec.targets], dtype=object), {
             "long_name": "behaviour asked for (" + ", ".join(BEHAVIOURS) + ")"}),
         "forward_speed": (t, ev.forward_speed, {
             "long_name": "steady mean velocity (the disk's along its heading)",
-            "units": "m s-1"}),
+            "units": METRE_PER_SECOND}),
         "lateral_speed": (t, ev.lateral_speed, {
             "long_name": "steady mean velocity to the left of the heading (disk)",
-            "units": "m s-1"}),
+            "units": METRE_PER_SECOND}),
         "turn_rate": (t, np.degrees(ev.turn_rate), {
             "long_name": "steady mean angular velocity, counterclockwise positive (disk)",
-            "units": "degree s-1"}),
+            "units": DEGREE_PER_SECOND}),
         "solver_status": (t, np.array([Status(int(s)).name for s in ev.status],
                                       dtype=object), {"long_name": "solver status"}),
         "motion_threshold": (t, ev.threshold, {
             "long_name": "lowest drive at which the structure slips at f",
-            "units": "m s-2"}),
+            "units": METRE_PER_SECOND_SQUARED}),
         "lift_off_acceleration": (t, ev.lift, {
             "long_name": "drive above which the normal force vanishes in the cycle",
-            "units": "m s-2"}),
+            "units": METRE_PER_SECOND_SQUARED}),
         "edge_contact_margin": (t, ev.rim, {
             "long_name": "rim contact margin of the disk (NaN: single plate)", **one}),
         "speed_margin": (t, ev.speed_margin, {
@@ -848,6 +862,7 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
         "Conventions": "CF-1.11",
         "title": spec.title,
         "study_result_schema": DESIGN_RESULT_SCHEMA,
+        "study_design_format": DESIGN_FORMAT,
         "study_design_name": spec.name,
         "study_name": spec.name,
         "study_spec": spec.text,

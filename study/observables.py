@@ -79,7 +79,7 @@ class Method:
 
     def solve(self, structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
               parallel: bool = False) -> SteadyState:
-        """Steady state at ``(f, a)`` (broadcast) [Hz, m s^-2] by this method."""
+        """Steady state at ``(f, a)`` (broadcast) [Hz, m s-2] by this method."""
         if self.name == "integrator":
             return integrated_steady_state(structure, f, a, coupling=self.coupling,
                                            settings=self.integrator, parallel=parallel)
@@ -119,7 +119,7 @@ class PointWork:
     ----------
     structure : Structure
     f, a : numpy.ndarray
-        Drive frequencies [Hz] and accelerations [m s^-2], broadcast together
+        Drive frequencies [Hz] and accelerations [m s-2], broadcast together
         (``f[:, None]`` and ``a[None, :]`` for a block of the grid).
     method : Method
     """

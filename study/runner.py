@@ -60,6 +60,7 @@ from study.store import (
 )
 from study.structure import Structure
 from study.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
+from study.units import KILOGRAM
 from study.variables import RESULT_FORMAT, VARIABLES
 
 __all__ = [
@@ -569,9 +570,9 @@ class _Run:
             scalars.append(name)
         if spec.mass is not None:
             writer.coordinate("m0", (), np.float64(spec.mass.m0),
-                              _coordinate_attrs("kg", "mass of the structure"))
+                              _coordinate_attrs(KILOGRAM, "mass of the structure"))
             writer.coordinate("m1", (), np.float64(spec.mass.m1),
-                              _coordinate_attrs("kg", "resonant (modal) mass"))
+                              _coordinate_attrs(KILOGRAM, "resonant (modal) mass"))
             scalars += ["m0", "m1"]
             m_add_axis = spec.axis("m_add")
             units, long_name = STRUCTURE_PARAMETERS["M"]

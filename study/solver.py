@@ -74,7 +74,7 @@ class SteadyState:
     Attributes
     ----------
     velocity : numpy.ndarray
-        Mean velocity over the periodic orbit [m s^-1]; exactly 0 for ``STATIC``,
+        Mean velocity over the periodic orbit [m s-1]; exactly 0 for ``STATIC``,
         NaN for ``LIFT_OFF`` and ``NOT_CONVERGED``.
     status : numpy.ndarray of int8
         :class:`~study.status.Status` codes.
@@ -184,7 +184,7 @@ def steady_state(
     f : array_like
         Drive frequency [Hz], > 0. Broadcast against ``a``.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
     settings : SolverSettings, optional
         Solver budgets; defaults to ``SolverSettings()``.
     coupling : {"one-way", "two-way"}
@@ -275,7 +275,7 @@ class Attractors:
         velocity, plus one for lift-off and one for the friction paradox when some
         start ends there. 1 for ``STATIC`` points; > 1 flags multistability.
     velocity_spread : numpy.ndarray
-        Largest minus smallest mean velocity among the orbits found [m s^-1].
+        Largest minus smallest mean velocity among the orbits found [m s-1].
     starts_converged : numpy.ndarray of int32
         Starting states (of :data:`ATTRACTOR_STARTS`) that reached an outcome [1].
     """
@@ -314,7 +314,7 @@ def attractors(
     f : array_like
         Drive frequency [Hz], > 0.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
     settings : SolverSettings, optional
         Solver budgets.
     coupling : {"one-way", "two-way"}
@@ -367,7 +367,7 @@ def steady_velocity(
     f : array_like
         Drive frequency [Hz], > 0.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
     settings : SolverSettings, optional
         Solver budgets.
     coupling : {"one-way", "two-way"}
@@ -376,7 +376,7 @@ def steady_velocity(
     Returns
     -------
     velocity : numpy.ndarray
-        Mean velocity [m s^-1], positive forward; NaN exactly where the status is
+        Mean velocity [m s-1], positive forward; NaN exactly where the status is
         ``LIFT_OFF`` or ``NOT_CONVERGED``.
     status : numpy.ndarray of int8
         :class:`~study.status.Status` codes.

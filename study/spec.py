@@ -52,6 +52,7 @@ from study.specfile import (
 )
 from study.structure import Structure
 from study.transient import IntegratorSettings
+from study.units import DEGREE, DIMENSIONLESS, HERTZ, KILOGRAM, METRE_PER_SECOND_SQUARED
 
 __all__ = [
     "METHODS",
@@ -86,20 +87,20 @@ INTEGRATOR_KEYS = (
 
 #: Structure parameters: units and long names (SI inside).
 STRUCTURE_PARAMETERS = {
-    "f0": ("Hz", "resonance frequency of the plate's first mode"),
-    "Q": ("1", "quality factor of the plate's first mode"),
-    "alpha": ("degree", "tilt of the plate from the horizontal"),
-    "M": ("1", "mass ratio m1/m of the resonant mass to the total mass"),
-    "cs": ("1", "static friction coefficient"),
-    "ck": ("1", "kinetic friction coefficient"),
-    "g": ("m s-2", "gravitational acceleration"),
+    "f0": (HERTZ, "resonance frequency of the plate's first mode"),
+    "Q": (DIMENSIONLESS, "quality factor of the plate's first mode"),
+    "alpha": (DEGREE, "tilt of the plate from the horizontal"),
+    "M": (DIMENSIONLESS, "mass ratio m1/m of the resonant mass to the total mass"),
+    "cs": (DIMENSIONLESS, "static friction coefficient"),
+    "ck": (DIMENSIONLESS, "kinetic friction coefficient"),
+    "g": (METRE_PER_SECOND_SQUARED, "gravitational acceleration"),
 }
 DRIVE_PARAMETERS = {
-    "f": ("Hz", "drive frequency"),
-    "a": ("m s-2", "drive acceleration amplitude"),
+    "f": (HERTZ, "drive frequency"),
+    "a": (METRE_PER_SECOND_SQUARED, "drive acceleration amplitude"),
 }
 MASS_PARAMETERS = {
-    "m_add": ("kg", "added non-resonant mass"),
+    "m_add": (KILOGRAM, "added non-resonant mass"),
 }
 SWEEPABLE = {**STRUCTURE_PARAMETERS, **MASS_PARAMETERS, **DRIVE_PARAMETERS}
 

@@ -36,7 +36,7 @@ class Structure:
     Q : float
         Quality factor of the mode [1], ``Q > 0``.
     alpha : float
-        Tilt of the plate from the horizontal [deg], ``-90 < alpha < 90``.
+        Tilt of the plate from the horizontal [degree], ``-90 < alpha < 90``.
         ``alpha -> -alpha`` mirrors the motion.
     M : float
         Mass ratio ``m1 / m`` of the resonant mass to the total mass [1],
@@ -47,7 +47,7 @@ class Structure:
         Kinetic friction coefficient [1], ``0 < ck <= cs``; defaults to ``cs``
         (the paper's single coefficient ``c_f``).
     g : float, optional
-        Gravitational acceleration [m s^-2], ``g > 0``; default 9.8 as in the paper.
+        Gravitational acceleration [m s-2], ``g > 0``; default 9.8 as in the paper.
 
     Raises
     ------
@@ -82,7 +82,7 @@ class Structure:
         if values["Q"] <= 0:
             refuse("Q", "Q > 0")
         if not -90.0 < values["alpha"] < 90.0:
-            refuse("alpha", "-90 < alpha < 90 [deg]")
+            refuse("alpha", "-90 < alpha < 90 [degree]")
         if not 0.0 < values["M"] <= 1.0:
             refuse("M", "0 < M <= 1")
         if values["cs"] <= 0:
@@ -90,13 +90,13 @@ class Structure:
         if not 0.0 < ck <= values["cs"]:
             refuse("ck", f"0 < ck <= cs (cs = {values['cs']!r})")
         if values["g"] <= 0:
-            refuse("g", "g > 0 [m s^-2]")
+            refuse("g", "g > 0 [m s-2]")
         for name, value in values.items():
             object.__setattr__(self, name, value)
 
     @property
     def omega0(self) -> float:
-        """Angular resonance frequency ``2 pi f0`` [rad s^-1]."""
+        """Angular resonance frequency ``2 pi f0`` [rad s-1]."""
         return 2.0 * math.pi * self.f0
 
     @property

@@ -169,7 +169,7 @@ class Schedule:
     frequency : array_like
         Drive frequency of each segment [Hz], > 0.
     acceleration : array_like
-        Drive acceleration amplitude of each segment [m s^-2], >= 0.
+        Drive acceleration amplitude of each segment [m s-2], >= 0.
     duration : array_like
         Duration of each segment [s], > 0.
     phase : float
@@ -239,8 +239,8 @@ class Trajectory:
     time : numpy.ndarray
         Sample times [s] (those reached before the run ended).
     delta, delta_rate, x, v : numpy.ndarray
-        Plate deflection [m], its rate [m s^-1], base position [m] and velocity
-        [m s^-1] at the sample times.
+        Plate deflection [m], its rate [m s-1], base position [m] and velocity
+        [m s-1] at the sample times.
     mode : numpy.ndarray of int8
         Contact mode at the sample times: 0 stick, +1 forward slip, -1 backward slip.
     event_time : numpy.ndarray
@@ -325,7 +325,7 @@ def simulate(
         ``"one-way"`` is the paper's model (the mode does not feel the sliding);
         ``"two-way"`` adds the base's acceleration to the mode's forcing.
     initial_state : array_like, optional
-        ``(delta [m], delta' [m s^-1], x [m], v [m s^-1])`` at ``t = 0``; default all
+        ``(delta [m], delta' [m s-1], x [m], v [m s-1])`` at ``t = 0``; default all
         zero (at rest on the table, the mode at rest). With ``v != 0`` the run starts
         sliding that way; with ``v = 0`` it sticks unless the forces already exceed the
         static friction.
@@ -350,8 +350,8 @@ def simulate(
     y = np.zeros(4) if initial_state is None else np.array(initial_state, dtype=float)
     if y.shape != (4,) or not np.all(np.isfinite(y)):
         raise ValueError(
-            "initial_state must be 4 finite numbers (delta [m], delta' [m s^-1], x [m], "
-            f"v [m s^-1]), got {initial_state!r}"
+            "initial_state must be 4 finite numbers (delta [m], delta' [m s-1], x [m], "
+            f"v [m s-1]), got {initial_state!r}"
         )
     end = float(schedule.ends[-1])
     shortest = float(1.0 / np.max(schedule.frequency))
@@ -410,7 +410,7 @@ def steady_mode_state(structure: Structure, f: ArrayLike, a: ArrayLike) -> NDArr
     Returns
     -------
     numpy.ndarray
-        ``(..., 4)`` states ``(delta [m], delta' [m s^-1], 0, 0)``; the exact solver's
+        ``(..., 4)`` states ``(delta [m], delta' [m s-1], 0, 0)``; the exact solver's
         orbit starts from the same state.
     """
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
@@ -446,7 +446,7 @@ def integrated_steady_state(
     f : array_like
         Drive frequency [Hz], > 0. Broadcast against ``a``.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
     coupling : {"one-way", "two-way"}
         See :func:`simulate`.
     settings : IntegratorSettings, optional

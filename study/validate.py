@@ -870,9 +870,32 @@ def _scene_problems(nc: Any, meta: _File, source: str) -> list[str]:
     return problems
 
 
+#: What the stale fit and design formats held, for the message refusing them.
+_STALE_FIT_FORMATS = {1: "units spelled deg, not degree"}
+
+
+def _stale_fit_problems(meta: _File, design: bool) -> list[str]:
+    """A fit or design file of an older format: refused whole, as scenes are."""
+    if design:
+        from study.design import DESIGN_FORMAT as current
+    else:
+        from study.fit import FIT_FORMAT as current
+    what = "design" if design else "fit"
+    written = meta.attrs.get(f"study_{what}_format", 1)
+    if _is_number(written) and written == current:
+        return []
+    held = _STALE_FIT_FORMATS.get(written if _is_number(written) else None, "an unknown layout")
+    return [f"{what} format {_shown_format(written)} ({held}) is stale: this study reads "
+            f"format {current} (every unit in CF/UDUNITS spelling, angles in degree); "
+            f"rerun its spec with `study {what}`"]
+
+
 def _fit_problems(nc: Any, meta: _File, schema_path: Path = FIT_SCHEMA_PATH) -> list[str]:
     """A fit result: its header against ``study-fit-v1``, sizes that agree, the checksum
     (a design result the same way, against ``study-design-v1``)."""
+    stale = _stale_fit_problems(meta, design=schema_path != FIT_SCHEMA_PATH)
+    if stale:
+        return stale
     problems = [p for p in _schema_problems(schema_path, _file_header(meta))
                 if _not_required_checksum(p)]
     names = meta.dims.get("parameter")

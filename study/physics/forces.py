@@ -2,7 +2,7 @@
 
 Every function is plain numpy and broadcasts over the drive frequency ``f`` and
 acceleration amplitude ``a`` (and time ``t`` where it appears). Forces are per
-unit total mass [m s^-2], in the table frame, with the mode on its steady
+unit total mass [m s-2], in the table frame, with the mode on its steady
 harmonic response::
 
     n(t)   = g + Re[N e^{i w t}]      N = -a (1 + w^2 M cos^2(alpha) G)
@@ -76,12 +76,12 @@ def force_amplitudes(
     f : array_like
         Drive frequency [Hz], > 0.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
 
     Returns
     -------
     N, T : numpy.ndarray of complex
-        ``n(t) = g + Re[N e^{i w t}]`` and ``tau(t) = Re[T e^{i w t}]`` [m s^-2].
+        ``n(t) = g + Re[N e^{i w t}]`` and ``tau(t) = Re[T e^{i w t}]`` [m s-2].
     """
     a = as_acceleration(a)
     k = _coupling(structure, f)
@@ -94,7 +94,7 @@ def force_amplitudes(
 def normal_force(
     structure: Structure, f: ArrayLike, a: ArrayLike, t: ArrayLike
 ) -> NDArray[np.float64]:
-    """Normal contact force per unit mass ``n(t)`` [m s^-2] (paper eq. 2).
+    """Normal contact force per unit mass ``n(t)`` [m s-2] (paper eq. 2).
 
     Parameters
     ----------
@@ -103,14 +103,14 @@ def normal_force(
     f : array_like
         Drive frequency [Hz].
     a : array_like
-        Drive acceleration amplitude [m s^-2].
+        Drive acceleration amplitude [m s-2].
     t : array_like
         Time [s], phase origin at a maximum of the table's upward acceleration.
 
     Returns
     -------
     numpy.ndarray
-        ``n(t)`` [m s^-2]; the model holds only where it is positive.
+        ``n(t)`` [m s-2]; the model holds only where it is positive.
     """
     normal, _ = force_amplitudes(structure, f, a)
     phase = np.exp(1j * _omega(f) * np.asarray(t, dtype=np.float64))
@@ -120,14 +120,14 @@ def normal_force(
 def tangential_force(
     structure: Structure, f: ArrayLike, a: ArrayLike, t: ArrayLike
 ) -> NDArray[np.float64]:
-    """Tangential contact force per unit mass ``tau(t)`` [m s^-2] (paper eq. 3).
+    """Tangential contact force per unit mass ``tau(t)`` [m s-2] (paper eq. 3).
 
     Parameters are those of :func:`normal_force`.
 
     Returns
     -------
     numpy.ndarray
-        ``tau(t)`` [m s^-2], positive forward.
+        ``tau(t)`` [m s-2], positive forward.
     """
     _, tangential = force_amplitudes(structure, f, a)
     phase = np.exp(1j * _omega(f) * np.asarray(t, dtype=np.float64))
@@ -159,7 +159,7 @@ def thresholds(
     Returns
     -------
     a_plus, a_minus : numpy.ndarray
-        Thresholds [m s^-2] for ``tau = +cs n`` (forward) and ``tau = -cs n``
+        Thresholds [m s-2] for ``tau = +cs n`` (forward) and ``tau = -cs n``
         (backward) slips.
     """
     g = structure.g
@@ -179,7 +179,7 @@ def lift_off_acceleration(structure: Structure, f: ArrayLike) -> NDArray[np.floa
     Returns
     -------
     numpy.ndarray
-        ``a_lift = g / |1 + w^2 M cos^2(alpha) G|`` [m s^-2]. Above it the
+        ``a_lift = g / |1 + w^2 M cos^2(alpha) G|`` [m s-2]. Above it the
         structure leaves the table and the model does not apply.
     """
     k = _coupling(structure, f)
@@ -197,7 +197,7 @@ def release_amplitudes(
     Returns
     -------
     A_plus, A_minus : numpy.ndarray of complex
-        [m s^-2].
+        [m s-2].
     """
     normal, tangential = force_amplitudes(structure, f, a)
     return tangential - structure.cs * normal, -tangential - structure.cs * normal
@@ -213,7 +213,7 @@ def slip_amplitudes(
     Returns
     -------
     B_plus, B_minus : numpy.ndarray of complex
-        [m s^-2].
+        [m s-2].
     """
     normal, tangential = force_amplitudes(structure, f, a)
     return tangential - structure.ck * normal, -tangential - structure.ck * normal

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from study.units import HERTZ, METRE_PER_SECOND_SQUARED
+
 
 def _checked(
     name: str, values: ArrayLike, units: str, lower: float, inclusive: bool
@@ -34,15 +36,15 @@ def as_frequency(f: ArrayLike) -> NDArray[np.float64]:
     ValueError
         Naming the first offending value, its index and the allowed range.
     """
-    return _checked("drive frequency f", f, "Hz", 0.0, inclusive=False)
+    return _checked("drive frequency f", f, HERTZ, 0.0, inclusive=False)
 
 
 def as_acceleration(a: ArrayLike) -> NDArray[np.float64]:
-    """Validate drive acceleration amplitudes: finite and >= 0 [m s^-2].
+    """Validate drive acceleration amplitudes: finite and >= 0 [m s-2].
 
     Raises
     ------
     ValueError
         Naming the first offending value, its index and the allowed range.
     """
-    return _checked("drive acceleration a", a, "m s^-2", 0.0, inclusive=True)
+    return _checked("drive acceleration a", a, METRE_PER_SECOND_SQUARED, 0.0, inclusive=True)

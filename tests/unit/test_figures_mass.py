@@ -158,8 +158,8 @@ def test_paper_threshold_at_6_6_percent_is_about_half_g():
     """Paper: "for a mass ratio of 6.6 %, the acceleration is typically half the
     gravity acceleration at the resonance".
 
-    Found: min over f = 4.032 m s^-2 = 0.411 g at 14.28 Hz; the closed form at f0,
-    g/sqrt(1 + x^2) with x = 2.042, is 4.310 m s^-2 = 0.440 g. The minimum lies 6.4 %
+    Found: min over f = 4.032 m s-2 = 0.411 g at 14.28 Hz; the closed form at f0,
+    g/sqrt(1 + x^2) with x = 2.042, is 4.310 m s-2 = 0.440 g. The minimum lies 6.4 %
     below the resonance value (it sits slightly below f0), 12 % (resonance value)
     and 18 % (minimum) below g/2: the paper's "typically half" holds at that level
     only, hence the two looser tolerances against g/2.
