@@ -112,6 +112,6 @@ def test_open_result_names_the_file(tmp_path: Path) -> None:
 def test_a_bad_spec_is_refused_naming_the_file(tmp_path: Path) -> None:
     bad = tmp_path / "bad.toml"
     bad.write_text(SPEC.replace("Q = 17.5", "Q = -1.0"))
-    with pytest.raises(study.SpecError, match="bad.toml"):
+    with pytest.raises(study.SpecError, match=r"bad\.toml"):
         study.run(bad, tmp_path / "out.nc")
     assert not (tmp_path / "out.nc").exists()
