@@ -10,6 +10,8 @@ computing modules only, see :mod:`study.fingerprint`).
 """
 
 from study.analysis import frontier, minimum_threshold
+from study.inputs import StudyWarning, SuspectInputWarning
+from study.maps import compute_map
 from study.physics import (
     force_amplitudes,
     lift_off_acceleration,
@@ -32,7 +34,10 @@ __all__ = [
     "Status",
     "SteadyState",
     "Structure",
+    "StudyWarning",
+    "SuspectInputWarning",
     "__version__",
+    "compute_map",
     "force_amplitudes",
     "frontier",
     "lift_off_acceleration",

@@ -20,6 +20,7 @@ from study.structure import Structure
 
 __all__ = [
     "COUPLINGS",
+    "DEFAULT_COUPLING",
     "Attractors",
     "SolverSettings",
     "SteadyState",
@@ -35,6 +36,11 @@ SOLVER_VERSION = "4"
 #: How the sliding base and the mode interact: the paper's model, or the physical one
 #: in which the base's sliding acceleration also forces the mode.
 COUPLINGS = ("one-way", "two-way")
+
+#: The coupling of every function, spec, fit and design that does not name one: the
+#: paper's model, the one every workflow uses. Declared here only; everything else
+#: (signatures, spec readers, schemas' descriptions) derives from it.
+DEFAULT_COUPLING = "one-way"
 
 #: Inputs with at least this many points are solved by the parallel kernel.
 PARALLEL_THRESHOLD = 2048
@@ -163,7 +169,7 @@ def steady_state(
     a: ArrayLike,
     settings: SolverSettings | None = None,
     *,
-    coupling: str = "one-way",
+    coupling: str = DEFAULT_COUPLING,
     parallel: bool | None = None,
 ) -> SteadyState:
     """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
@@ -296,7 +302,7 @@ def attractors(
     a: ArrayLike,
     settings: SolverSettings | None = None,
     *,
-    coupling: str = "two-way",
+    coupling: str = DEFAULT_COUPLING,
     parallel: bool | None = None,
 ) -> Attractors:
     """Multistability check: the distinct stable orbits reached from several starts.
@@ -356,7 +362,7 @@ def steady_velocity(
     a: ArrayLike,
     settings: SolverSettings | None = None,
     *,
-    coupling: str = "one-way",
+    coupling: str = DEFAULT_COUPLING,
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
     """Mean steady velocity and status at each ``(f, a)``.
 
