@@ -4,19 +4,41 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 from study.inputs import RADIAN_LIKE_TILT, SuspectInputWarning, real_number, tilt_looks_like_radians
 
-__all__ = ["Structure"]
+__all__ = ["Structure", "tilt_warnings"]
 
 
 def require_finite(name: str, value: object) -> float:
     """A structure parameter as a finite float, else an error naming it."""
-    number = real_number(f"Structure parameter {name!r}", value, UNITS[name])
+    number = real_number(f"Structure parameter {name!r}", value, UNITS.get(name, ""))
     if not math.isfinite(number):
         raise ValueError(f"Structure parameter {name!r} must be finite, got {value!r}")
     return number
+
+
+#: Whether a Structure built in this context warns of a tilt that looks like radians.
+_WARN_OF_RADIANS: ContextVar[bool] = ContextVar("study_warn_of_radians", default=True)
+
+
+@contextmanager
+def tilt_warnings(enabled: bool) -> Iterator[None]:
+    """Turn the radians warning of :class:`Structure` on or off within a ``with`` block.
+
+    The readers of spec, fit and design files build the structures a file declares with
+    the warning off: a file's tilts are in degree by its schema, and an optimiser
+    exploring small tilts is not a mistake. Per thread (a context variable).
+    """
+    token = _WARN_OF_RADIANS.set(bool(enabled))
+    try:
+        yield
+    finally:
+        _WARN_OF_RADIANS.reset(token)
 
 
 #: CF units of the parameters, for messages.
@@ -106,7 +128,7 @@ class Structure:
             refuse("g", "g > 0 [m s-2]")
         for name, value in values.items():
             object.__setattr__(self, name, value)
-        if tilt_looks_like_radians(values["alpha"]):
+        if tilt_looks_like_radians(values["alpha"]) and _WARN_OF_RADIANS.get():
             low, high = RADIAN_LIKE_TILT
             warnings.warn(
                 f"Structure parameter 'alpha' = {values['alpha']!r} degree: a tilt between "
