@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
 from study.solver import (
+    DEFAULT_COUPLING,
     PARALLEL_THRESHOLD,
     SteadyState,
     check_coupling,
@@ -276,7 +276,8 @@ class Trajectory:
     events_dropped: int = field(default=0)
 
 
-def model_parameters(structure: Structure, coupling: str = "one-way") -> NDArray[np.float64]:
+def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING
+                     ) -> NDArray[np.float64]:
     """Parameter vector of the integrator kernel for ``structure`` and ``coupling``."""
     structure = check_structure(structure)
     two_way = check_coupling(coupling) == "two-way"
@@ -307,7 +308,7 @@ def simulate(
     structure: Structure,
     schedule: Schedule,
     *,
-    coupling: Literal["one-way", "two-way"] = "one-way",
+    coupling: str = DEFAULT_COUPLING,
     initial_state: ArrayLike | None = None,
     output_times: ArrayLike | None = None,
     settings: IntegratorSettings | None = None,
@@ -427,7 +428,7 @@ def integrated_steady_state(
     f: ArrayLike,
     a: ArrayLike,
     *,
-    coupling: Literal["one-way", "two-way"] = "one-way",
+    coupling: str = DEFAULT_COUPLING,
     settings: IntegratorSettings | None = None,
     parallel: bool | None = None,
 ) -> SteadyState:
