@@ -119,8 +119,13 @@ def as_real_array(name: str, values: Any, units: str = "") -> NDArray[np.float64
         raise InputTypeError(f"{name} must be real numbers{where}: {err}") from None
     kind = array.dtype.kind
     if kind == "O":
-        for item in array.ravel():
-            real_number(name, item, units)
+        for index, item in np.ndenumerate(array):
+            try:
+                real_number(name, item, units)
+            except InputTypeError:
+                raise InputTypeError(
+                    f"{name} must be real numbers{where}, got {_kind_name(item)} at index "
+                    f"{index}: {_short(item)}") from None
     elif kind not in "iuf":
         described = {"b": "booleans", "c": "complex numbers", "U": "strings", "S": "strings",
                      "M": "dates", "m": "time spans"}.get(kind, f"{array.dtype} values")
