@@ -32,6 +32,7 @@ from study.solver import (
     SteadyState,
     check_coupling,
     check_structure,
+    scalar_if_0d,
 )
 from study.structure import Structure
 
@@ -491,11 +492,11 @@ def integrated_steady_state(
         results,
     )
     return SteadyState(
-        velocity=results[:, 2].reshape(shape),
-        status=results[:, 0].astype(np.int8).reshape(shape),
-        reason=results[:, 1].astype(np.int8).reshape(shape),
-        slips_per_period=results[:, 3].reshape(shape),
-        forward_fraction=results[:, 4].reshape(shape),
-        backward_fraction=results[:, 5].reshape(shape),
-        orbit_period=results[:, 6].astype(np.int32).reshape(shape),
+        velocity=scalar_if_0d(results[:, 2].reshape(shape)),
+        status=scalar_if_0d(results[:, 0].astype(np.int8).reshape(shape)),
+        reason=scalar_if_0d(results[:, 1].astype(np.int8).reshape(shape)),
+        slips_per_period=scalar_if_0d(results[:, 3].reshape(shape)),
+        forward_fraction=scalar_if_0d(results[:, 4].reshape(shape)),
+        backward_fraction=scalar_if_0d(results[:, 5].reshape(shape)),
+        orbit_period=scalar_if_0d(results[:, 6].astype(np.int32).reshape(shape)),
     )
