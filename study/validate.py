@@ -1076,8 +1076,10 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
     what, name = next(((label, attrs[key]) for label, key in
                        (("fit", "study_fit_name"), ("design", "study_design_name"))
                        if key in attrs), ("scene" if kind else "study", attrs.get("study_name")))
+    coupling = attrs.get("study_coupling")
     lines.append(f"  {what} {name!r}"
-                 f"{f' ({kind})' if kind else ''}, spec sha256 "
+                 f"{f' ({kind})' if kind else ''}"
+                 f"{f', {coupling} coupling' if isinstance(coupling, str) else ''}, spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
     for name, size in dataset.sizes.items():

@@ -115,3 +115,10 @@ def test_a_bad_spec_is_refused_naming_the_file(tmp_path: Path) -> None:
     with pytest.raises(study.SpecError, match=r"bad\.toml"):
         study.run(bad, tmp_path / "out.nc")
     assert not (tmp_path / "out.nc").exists()
+
+
+def test_study_info_names_the_coupling(spec_file: Path, tmp_path: Path, capsys) -> None:
+    output = tmp_path / "out.nc"
+    study.run(spec_file, output, workers=1)
+    assert main(["info", str(output)]) == 0
+    assert "  study 'api-small', one-way coupling, spec sha256" in capsys.readouterr().out

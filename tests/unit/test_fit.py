@@ -254,7 +254,7 @@ def test_the_issues_minimal_spec_runs_through_the_cli(tmp_path: Path, monkeypatc
     # `study info` names the fit (not "study None") and where the estimates' units are
     assert main(["info", str(out)]) == 0
     summary = capsys.readouterr().out
-    assert "  fit 'my-structure', spec sha256" in summary
+    assert "  fit 'my-structure', two-way coupling, spec sha256" in summary
     assert "estimate ('parameter',) [in parameter_units]" in summary
 
 
