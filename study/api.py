@@ -25,6 +25,7 @@ def run(
     scheduler: str | None = None,
     workers: int | None = None,
     progress: bool = False,
+    overwrite: bool = False,
 ) -> xr.Dataset:
     """Run a study or scene spec file, as ``study run`` does, and open its result.
 
@@ -39,7 +40,8 @@ def run(
         A study or scene spec file (TOML), e.g. ``"workflows/regime-map.toml"``.
     output : str or pathlib.Path, optional
         The result file (netCDF). Default, as for ``study run``:
-        ``results/<spec file stem>.nc``, relative to the current working directory.
+        ``results/<spec file stem>.nc``, relative to the current working directory;
+        missing folders are created.
     force : bool, default False
         Recompute and rewrite the result even if it is up to date (kept values are
         still reused).
@@ -53,6 +55,9 @@ def run(
         Threads of a local run [1]; default one per core. Studies only.
     progress : bool, default False
         Print progress lines (on stderr) while the study runs.
+    overwrite : bool, default False
+        Replace an existing file at ``output`` that is not a result of this kind (as
+        ``study run --overwrite``); the spec itself is never replaced.
 
     Returns
     -------
@@ -71,6 +76,9 @@ def run(
         The written file fails validation (names the file).
     study.runner.StudyBusy
         Another process is writing the same result.
+    study.outputs.OutputError
+        ``output`` is the spec, a folder, or (without ``overwrite``) a file of another
+        kind; nothing is computed.
     study.cluster.ClusterError
         ``scheduler`` cannot be reached or has no worker.
 
@@ -98,6 +106,7 @@ def run(
         scheduler=scheduler,
         workers=workers,
         progress=progress,
+        overwrite=overwrite,
         command=f"study.run({shlex.quote(str(spec))})",
     )
     dataset = open_result(report.output)

@@ -68,8 +68,7 @@ def test_run_is_the_command_line_run(spec_file: Path, tmp_path: Path) -> None:
 def test_default_output_is_the_command_lines(spec_file: Path, tmp_path: Path,
                                               monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "results").mkdir()
-    ds = study.run(spec_file)
+    ds = study.run(spec_file)  # results/ is created
     assert Path(ds.encoding["source"]) == Path("results") / "api-small.nc"
     assert (tmp_path / "results" / "api-small.nc").exists()
 
@@ -122,3 +121,16 @@ def test_study_info_names_the_coupling(spec_file: Path, tmp_path: Path, capsys) 
     study.run(spec_file, output, workers=1)
     assert main(["info", str(output)]) == 0
     assert "  study 'api-small', one-way coupling, spec sha256" in capsys.readouterr().out
+
+
+def test_another_kind_of_file_is_not_overwritten_unless_asked(spec_file: Path,
+                                                              tmp_path: Path) -> None:
+    from study.outputs import OutputError
+
+    notes = tmp_path / "notes.nc"
+    notes.write_text("my notes")
+    with pytest.raises(OutputError, match=r"notes\.nc"):
+        study.run(spec_file, notes, workers=1)
+    assert notes.read_text() == "my notes"
+    ds = study.run(spec_file, notes, workers=1, overwrite=True)
+    assert ds.attrs["study_name"] == "api-small"
