@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numbers
 import os
+import warnings
 from collections.abc import Iterable, Mapping
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
@@ -20,7 +21,12 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
-from study.inputs import as_real_array
+from study.inputs import (
+    RADIAN_LIKE_TILT,
+    SuspectInputWarning,
+    as_real_array,
+    tilt_looks_like_radians,
+)
 from study.layout import (
     coordinates,
     data_variables,
@@ -147,6 +153,12 @@ def compute_map(
         equivalent spec file (``study_spec``): ``study run`` on it writes this
         dataset's variables to a file.
 
+    Warns
+    -----
+    study.SuspectInputWarning
+        A swept ``alpha`` holds tilts that look like radians (as
+        :class:`study.Structure` warns).
+
     Raises
     ------
     TypeError
@@ -183,6 +195,13 @@ def compute_map(
             raise ValueError(f"sweep: {name!r} is not a structure parameter; allowed: "
                              f"{', '.join(STRUCTURE_PARAMETERS)}")
         swept[name] = _axis(f"sweep[{name!r}]", values)
+    radian_like = [v for v in swept.get("alpha", ()) if tilt_looks_like_radians(v)]
+    if radian_like:
+        low, high = RADIAN_LIKE_TILT
+        warnings.warn(
+            f"sweep['alpha'] holds {len(radian_like)} tilts between {low:g} and {high:.4g} "
+            f"degree (first {radian_like[0]!r}): they look like angles in radians; alpha "
+            "is in degree", SuspectInputWarning, stacklevel=2)
     f_values = _axis("f", f)
     a_values = _axis("a", a)
     text = map_spec_text(structure, f_values, a_values, names, coupling, swept, settings)

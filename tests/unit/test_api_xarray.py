@@ -143,3 +143,10 @@ def test_bad_arguments_are_refused_by_name(kwargs, error, match) -> None:
 def test_drive_arrays_of_other_types_are_refused(f, a, name) -> None:
     with pytest.raises(TypeError, match=f"^{name} must be real numbers"):
         study.compute_map(STRUCTURE, f, a)
+
+
+def test_a_swept_tilt_in_radians_warns() -> None:
+    with pytest.warns(study.SuspectInputWarning, match=r"sweep\['alpha'\] holds 2 tilts"):
+        ds = study.compute_map(STRUCTURE, F, A, observables=["thresholds"],
+                               sweep={"alpha": [0.5, 1.1, 64.0]})
+    assert ds["alpha"].values.tolist() == [0.5, 1.1, 64.0]  # computed as given, in degree
