@@ -16,6 +16,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from study.units import DIMENSIONLESS
+
 __all__ = [
     "RADIAN_LIKE_TILT",
     "InputTypeError",
@@ -88,7 +90,7 @@ def real_number(name: str, value: Any, units: str = "") -> float:
     if not is_real and isinstance(value, np.ndarray) and value.ndim == 0:
         is_real = value.dtype.kind in "iuf"
     if not is_real:
-        where = f" [{units}]" if units else ""
+        where = f" [{units}]" if units not in ("", DIMENSIONLESS) else ""
         raise InputTypeError(
             f"{name} must be a real number{where}, got {_kind_name(value)}: {value!r}")
     return float(value)
@@ -112,7 +114,7 @@ def as_real_array(name: str, values: Any, units: str = "") -> NDArray[np.float64
         For strings, booleans, complex numbers, dates or times, ``None`` or other
         objects, alone or inside a sequence.
     """
-    where = f" [{units}]" if units else ""
+    where = f" [{units}]" if units not in ("", DIMENSIONLESS) else ""
     try:
         array = np.asarray(values)
     except (TypeError, ValueError) as err:  # ragged sequences

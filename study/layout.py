@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from study.observables import Method, Observable, resolve
 from study.spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec
+from study.units import KILOGRAM
 from study.variables import VARIABLES
 
 __all__ = [
@@ -84,9 +85,9 @@ def coordinates(spec: StudySpec) -> tuple[Coordinate, ...]:
         found.append(Coordinate(name, (), np.float64(value), coordinate_attrs(units, long_name)))
     if spec.mass is not None:
         found.append(Coordinate("m0", (), np.float64(spec.mass.m0),
-                                coordinate_attrs("kg", "mass of the structure")))
+                                coordinate_attrs(KILOGRAM, "mass of the structure")))
         found.append(Coordinate("m1", (), np.float64(spec.mass.m1),
-                                coordinate_attrs("kg", "resonant (modal) mass")))
+                                coordinate_attrs(KILOGRAM, "resonant (modal) mass")))
         m_add_axis = spec.axis("m_add")
         units, long_name = STRUCTURE_PARAMETERS["M"]
         if m_add_axis is not None:

@@ -10,6 +10,7 @@ from contextvars import ContextVar
 from dataclasses import dataclass
 
 from study.inputs import RADIAN_LIKE_TILT, SuspectInputWarning, real_number, tilt_looks_like_radians
+from study.units import DEGREE, DIMENSIONLESS, HERTZ, METRE_PER_SECOND_SQUARED
 
 __all__ = ["Structure", "tilt_warnings"]
 
@@ -42,8 +43,8 @@ def tilt_warnings(enabled: bool) -> Iterator[None]:
 
 
 #: CF units of the parameters, for messages.
-UNITS = {"f0": "Hz", "Q": "1", "alpha": "degree", "M": "1", "cs": "1", "ck": "1",
-         "g": "m s-2"}
+UNITS = {"f0": HERTZ, "Q": DIMENSIONLESS, "alpha": DEGREE, "M": DIMENSIONLESS,
+         "cs": DIMENSIONLESS, "ck": DIMENSIONLESS, "g": METRE_PER_SECOND_SQUARED}
 
 
 @dataclass(frozen=True)
