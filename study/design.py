@@ -7,7 +7,7 @@ spec) with start and fixed values, and the free parameters with their bounds::
 
     [design]
     name = "forward-backward"
-    coupling = "two-way"            # or "one-way"
+    coupling = "two-way"            # or "one-way", the default
     [structure]                     # start values / fixed values
     f0 = 14.44
     Q = 17.5
@@ -52,7 +52,8 @@ threshold and below lift-off.
 **Objective**: maximise the smallest target margin over the free parameters within
 their bounds (a max-min design: the worst target is as robust as it can be). Velocities
 are :func:`study.solver.steady_velocity` with the spec's coupling (default
-``"two-way"``, the physical model), or :func:`study.planar.periodic_motion` for the
+:data:`study.solver.DEFAULT_COUPLING`, ``"one-way"``, the paper's model, as everywhere),
+or :func:`study.planar.periodic_motion` for the
 disk. **Search**: one free parameter, a scan of ``scan_points`` values across the
 bounds, then a bounded Brent refinement between the best value's neighbours; several,
 :func:`scipy.optimize.differential_evolution` (fixed seed, the start values in the
@@ -86,7 +87,7 @@ from study.fit import Parameter
 from study.physics import lift_off_acceleration, mode_response, thresholds
 from study.planar import Disk, contact_margins, periodic_motion
 from study.scene import disk_from_spec
-from study.solver import steady_velocity
+from study.solver import DEFAULT_COUPLING, steady_velocity
 from study.specfile import (
     SpecError,
     canonical_sha256,
@@ -96,7 +97,7 @@ from study.specfile import (
     read_spec_text,
 )
 from study.status import Status
-from study.structure import Structure
+from study.structure import Structure, tilt_warnings
 from study.units import (
     DEGREE,
     DEGREE_PER_SECOND,
@@ -197,7 +198,8 @@ class DesignSpec:
     name, title, text, path : str
     model : str
         ``"plate"`` (``[structure]``) or ``"disk"`` (``[disk]`` and ``[[plate]]``).
-    coupling : str
+    coupling : {"one-way", "two-way"}
+        Model of the velocities (default :data:`study.solver.DEFAULT_COUPLING`).
     start : dict
         Every parameter's start (or fixed) value by name: ``f0``, ``Q``, ``alpha``,
         ``M``, ``cs``, ``ck`` (None: tied to ``cs``), ``g`` for the plate model;
@@ -293,7 +295,7 @@ def parse_design_spec(text: str, path: str = "<string>") -> DesignSpec:
     weights = {"speed": 1.0, "threshold": 1.0, "lift": 1.0, **table.get("weights", {})}
     return DesignSpec(
         name=table["name"], title=table.get("title", table["name"]), text=text, path=path,
-        model=model, coupling=table.get("coupling", "two-way"), start=start, disk=disk,
+        model=model, coupling=table.get("coupling", DEFAULT_COUPLING), start=start, disk=disk,
         free=free, targets=targets, weights={k: float(v) for k, v in weights.items()},
         seed=int(table.get("seed", 1)), scan_points=int(table.get("scan_points", 41)),
         max_iterations=int(table.get("max_iterations", 60)),
@@ -397,8 +399,9 @@ def _disk_free(table: dict[str, Any], disk: Disk, start: dict[str, float | None]
 
 
 def _structure(p: dict[str, float | None]) -> Structure:
-    return Structure(f0=p["f0"], Q=p["Q"], alpha=p["alpha"], M=p["M"], cs=p["cs"],
-                     ck=p["ck"], g=p["g"])
+    with tilt_warnings(False):  # the spec's tilts are in degree; the search may go near 0
+        return Structure(f0=p["f0"], Q=p["Q"], alpha=p["alpha"], M=p["M"], cs=p["cs"],
+                         ck=p["ck"], g=p["g"])
 
 
 def _disk_of(spec: DesignSpec, p: dict[str, float | None]) -> Disk:

@@ -20,7 +20,8 @@ The model of each measurement row:
   (:func:`study.physics.thresholds`, closed form); ``direction = forward`` or
   ``backward`` compares with ``a*_+`` or ``a*_-`` alone;
 * ``velocity``: :func:`study.solver.steady_velocity` at ``(f, a)`` with the spec's
-  coupling (default ``"two-way"``, the physical model);
+  ``coupling`` (default :data:`study.solver.DEFAULT_COUPLING`, ``"one-way"``, the
+  paper's model, as everywhere; ``"two-way"`` for the physical one);
 * ``ringdown_f0``, ``ringdown_Q``: ``f0`` and ``Q`` themselves.
 
 ``chi^2 = sum ((model - value) / sigma)^2`` is minimised by
@@ -50,7 +51,7 @@ from numpy.typing import NDArray
 
 from study.measurements import QUANTITIES, read_measurements
 from study.physics import thresholds
-from study.solver import steady_velocity
+from study.solver import DEFAULT_COUPLING, steady_velocity
 from study.specfile import (
     SpecError,
     canonical_sha256,
@@ -59,7 +60,7 @@ from study.specfile import (
     parse_toml,
     read_spec_text,
 )
-from study.structure import Structure
+from study.structure import Structure, tilt_warnings
 from study.units import DEGREE, DIMENSIONLESS, HERTZ, KILOGRAM, spoken
 
 __all__ = [
@@ -160,7 +161,8 @@ class FitSpec:
         ``cs``); with ``[structure.mass]``: ``m0``, ``m1_fraction`` instead of ``M``.
     free : dict
         Free parameter -> (lower, upper) bounds as the spec gives them.
-    coupling : str
+    coupling : {"one-way", "two-way"}
+        Model of velocity rows (default :data:`study.solver.DEFAULT_COUPLING`).
     profile : str
         ``"unidentifiable"``, ``"all"`` or ``"none"``: which parameters get a chi^2 profile.
     profile_points : int
@@ -174,7 +176,7 @@ class FitSpec:
     measurements: xr.Dataset = field(repr=False)
     start: dict[str, float | None]
     free: dict[str, tuple[float, float]]
-    coupling: str = "two-way"
+    coupling: str = DEFAULT_COUPLING
     profile: str = "unidentifiable"
     profile_points: int = 21
     max_evaluations: int = 200
@@ -277,7 +279,7 @@ def parse_fit_spec(text: str, path: str = "<string>", base: str | Path = ".") ->
     return FitSpec(
         name=table["name"], title=table.get("title", table["name"]), text=text, path=path,
         measurements=measurements, start=start, free=free,
-        coupling=table.get("coupling", "two-way"),
+        coupling=table.get("coupling", DEFAULT_COUPLING),
         profile=table.get("profile", "unidentifiable"),
         profile_points=int(table.get("profile_points", 21)),
         max_evaluations=int(table.get("max_evaluations", 200)),
@@ -311,8 +313,9 @@ def _structure(params: dict[str, float | None], m_add: float, M: float | None = 
             M = params["m1_fraction"] * params["m0"] / (params["m0"] + m_add)
         else:
             M = params["M"]
-    return Structure(f0=params["f0"], Q=params["Q"], alpha=params["alpha"], M=M,
-                     cs=params["cs"], ck=params["ck"], g=params["g"])
+    with tilt_warnings(False):  # the spec's tilts are in degree; the search may go near 0
+        return Structure(f0=params["f0"], Q=params["Q"], alpha=params["alpha"], M=M,
+                         cs=params["cs"], ck=params["ck"], g=params["g"])
 
 
 def structure_groups(data: xr.Dataset) -> dict[tuple[float | None, float | None],

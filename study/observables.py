@@ -22,7 +22,13 @@ from numpy.typing import NDArray
 
 from study.analysis import frontier_from_grid
 from study.physics import lift_off_acceleration, mode_response, thresholds
-from study.solver import SolverSettings, SteadyState, attractors, steady_state
+from study.solver import (
+    DEFAULT_COUPLING,
+    SolverSettings,
+    SteadyState,
+    attractors,
+    steady_state,
+)
 from study.structure import Structure
 from study.transient import IntegratorSettings, integrated_steady_state
 from study.variables import VARIABLES, Variable
@@ -58,7 +64,7 @@ class Method:
     """
 
     name: str = "exact"
-    coupling: str = "one-way"
+    coupling: str = DEFAULT_COUPLING
     solver: SolverSettings = field(default_factory=SolverSettings)
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
 

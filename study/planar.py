@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import planar as _kernel
 from study.physics import mode_response
-from study.solver import COUPLINGS
+from study.solver import COUPLINGS, DEFAULT_COUPLING
 from study.structure import require_finite
 from study.transient import IntegratorSettings, Schedule
 from study.units import (
@@ -210,7 +210,8 @@ class Disk:
         over the maximum friction force [m]; default ``2 radius / 3`` (uniform
         pressure on the full disk).
     coupling : {"one-way", "two-way"}
-        ``"one-way"`` (default): each plate's mode is forced by the table only.
+        ``"one-way"`` (default, :data:`study.solver.DEFAULT_COUPLING`): each plate's mode
+        is forced by the table only.
         ``"two-way"``: while the disk slides, the acceleration of each plate's
         attachment point projected on its direction, ``b_i``, forces it too,
         ``delta_i'' = F_i - sin(alpha_i) b_i`` (as :func:`study.transient.simulate`'s
@@ -225,7 +226,7 @@ class Disk:
     g: float = 9.8
     gyration_radius: float | None = None
     friction_length: float | None = None
-    coupling: str = "one-way"
+    coupling: str = DEFAULT_COUPLING
     _names: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:

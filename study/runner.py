@@ -27,7 +27,15 @@ import numpy as np
 
 from study.cache import ResultCache, encode_block, entry_key
 from study.cluster import TASK_TIMEOUT, Executor, executor
-from study.observables import Method, Observable, resolve
+from study.layout import (
+    coordinates,
+    data_variables,
+    method_description,
+    method_of,
+    observables_by_grid,
+    pad_branches,
+)
+from study.observables import Observable
 from study.outputs import check_output
 from study.progress import Progress
 from study.provenance import (
@@ -40,7 +48,7 @@ from study.provenance import (
     utc_now,
 )
 from study.scene import SceneSpec, load_scene, scene_dataset
-from study.spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec, load_spec
+from study.spec import StudySpec, load_spec
 from study.specfile import detect_kind
 from study.store import (
     PAPER_REFERENCE,
@@ -60,7 +68,6 @@ from study.store import (
 )
 from study.structure import Structure
 from study.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
-from study.units import KILOGRAM
 from study.variables import RESULT_FORMAT, VARIABLES
 
 __all__ = [
@@ -144,7 +151,7 @@ def _metadata_attrs(spec: StudySpec) -> dict[str, Any]:
         "summary": spec.description or (
             f"Parameter study '{spec.name}' of vibration-driven stick-slip locomotion: "
             f"{', '.join(spec.observables)} of a soft structure with a resonant plate on a "
-            f"vertically shaken table, computed by {_method_text(spec)}."
+            f"vertically shaken table, computed by {method_description(spec)}."
         ),
         "id": f"{spec.name}-{spec.sha256[:16]}",
         "study_name": spec.name,
@@ -406,30 +413,6 @@ def _structure_content(structure: Structure) -> dict[str, float]:
     return {name: float(getattr(structure, name)) for name in Structure.__dataclass_fields__}
 
 
-def _method(spec: StudySpec) -> Method:
-    return Method(spec.method, spec.coupling, spec.solver, spec.integrator)
-
-
-def _method_text(spec: StudySpec) -> str:
-    """How the velocities were computed, for the file's own description."""
-    if spec.method == "exact" and spec.coupling == "two-way":
-        return (
-            "the exact event-driven steady-state solver (closed form between events; "
-            "two-way coupling: the sliding base also forces the mode, the orbit is the "
-            "fixed point of the period map found by Newton's method)"
-        )
-    if spec.method == "exact":
-        return (
-            "the exact event-driven steady-state solver (closed form between events; "
-            "one-way coupling, the paper's model)"
-        )
-    return (
-        "Dormand-Prince 5(4) time integration with events located on the dense output, "
-        f"until the orbit repeats ({spec.coupling} coupling"
-        + ("; the sliding base also forces the mode)" if spec.coupling == "two-way" else ")")
-    )
-
-
 def _creator() -> str:
     """Who ran the study: $STUDY_CREATOR, else the login name."""
     import getpass
@@ -446,7 +429,7 @@ def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
         **_metadata_attrs(spec),
         "keywords": "stick-slip, friction, locomotion, resonance, vibration, parameter study",
         "naming_authority": "study",
-        "source": f"study: {_method_text(spec)}",
+        "source": f"study: {method_description(spec)}",
         "study_solver_method": spec.method,
         "study_coupling": spec.coupling,
         "processing_level": "model output",
@@ -503,10 +486,6 @@ def _gather_provenance(found: dict[str, Any]) -> None:
     found["version"] = package_version()
 
 
-def _coordinate_attrs(units: str, long_name: str) -> dict[str, Any]:
-    return {"units": units, "long_name": long_name, "coverage_content_type": "coordinate"}
-
-
 class _Run:
     """One computing run of a study into a temporary file, committed at the end."""
 
@@ -519,11 +498,8 @@ class _Run:
         self.command = command
         self.cache = cache
         self.on_chunk = on_chunk
-        self.method = _method(spec)
-        observables = resolve(spec.observables)
-        self.rows = tuple(o for o in observables if o.grid == "row")
-        self.points = tuple(o for o in observables if o.grid == "point")
-        self.frontier = next((o for o in observables if o.grid == "frontier"), None)
+        self.method = method_of(spec)
+        self.rows, self.points, self.frontier = observables_by_grid(spec)
         self.f = spec.axis("f").values
         a_axis = spec.axis("a")
         self.a = a_axis.values if (a_axis is not None and spec.needs_solver) else np.empty(0)
@@ -560,41 +536,20 @@ class _Run:
     def _open(self, path: Path) -> GridWriter:
         spec = self.spec
         writer = GridWriter(path, _standard_attrs(spec), self.output)
-        for axis in spec.axes:
-            writer.coordinate(axis.name, (axis.name,), axis.values,
-                              _coordinate_attrs(axis.units, axis.long_name))
         scalars = []
-        for name, value in spec.canonical["structure"].items():
-            units, long_name = SWEEPABLE[name]
-            writer.coordinate(name, (), np.float64(value), _coordinate_attrs(units, long_name))
-            scalars.append(name)
-        if spec.mass is not None:
-            writer.coordinate("m0", (), np.float64(spec.mass.m0),
-                              _coordinate_attrs(KILOGRAM, "mass of the structure"))
-            writer.coordinate("m1", (), np.float64(spec.mass.m1),
-                              _coordinate_attrs(KILOGRAM, "resonant (modal) mass"))
-            scalars += ["m0", "m1"]
-            m_add_axis = spec.axis("m_add")
-            units, long_name = STRUCTURE_PARAMETERS["M"]
-            if m_add_axis is not None:
-                ratios = np.array([spec.mass.mass_ratio(m) for m in m_add_axis.values])
-                writer.coordinate("M", ("m_add",), ratios, _coordinate_attrs(units, long_name))
-            else:
-                writer.coordinate("M", (), np.float64(spec.mass.mass_ratio(
-                    spec.fixed.get("m_add", 0.0))), _coordinate_attrs(units, long_name))
-            scalars.append("M")
+        for coordinate in coordinates(spec):
+            writer.coordinate(coordinate.name, coordinate.dims, coordinate.values,
+                              coordinate.attrs)
+            if coordinate.auxiliary:
+                scalars.append(coordinate.name)
         self.auxiliary = " ".join(scalars)
-        structure_dims = tuple(axis.name for axis in spec.structure_axes)
         block = max(chunk.size for chunk in self.chunks)
-        ones = (1,) * len(structure_dims)
-        for observable in (*self.rows, *self.points):
-            for name in observable.variables:
-                variable = VARIABLES[name]
-                dims = variable.dims(structure_dims)
-                chunks = (*ones, block) if variable.grid == "row" else (
-                    *ones, block, max(self.a.size, 1))
-                attrs = {**variable.attrs(), "coordinates": self.auxiliary}
-                writer.variable(name, dims, variable.dtype, attrs, chunks)
+        ones = (1,) * len(spec.structure_axes)
+        for variable in data_variables(spec, (*self.rows, *self.points)):
+            chunks = (*ones, block) if variable.grid == "row" else (
+                *ones, block, max(self.a.size, 1))
+            writer.variable(variable.name, variable.dims, variable.dtype,
+                            {**variable.attrs, "coordinates": self.auxiliary}, chunks)
         return writer
 
     # -- the work --------------------------------------------------------------------
@@ -750,21 +705,16 @@ class _Run:
                                                  self.method, spec.frontier_tolerance)
         branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
         self.writer.dimension("branch", branches)
-        structure_dims = tuple(axis.name for axis in spec.structure_axes)
-        ones = (1,) * len(structure_dims)
-        for name in self.frontier.variables:
-            variable = VARIABLES[name]
-            self.writer.variable(name, variable.dims(structure_dims), variable.dtype,
-                                 {**variable.attrs(), "coordinates": self.auxiliary},
+        ones = (1,) * len(spec.structure_axes)
+        variables = data_variables(spec, (self.frontier,))
+        for variable in variables:
+            self.writer.variable(variable.name, variable.dims, variable.dtype,
+                                 {**variable.attrs, "coordinates": self.auxiliary},
                                  (*ones, self.a.size, branches))
         for index, item in found.items():
-            for name in self.frontier.variables:
-                values = item[name]
-                dtype = np.dtype(VARIABLES[name].dtype)
-                padded = np.full((self.a.size, branches),
-                                 np.nan if dtype.kind == "f" else 0, dtype=dtype)
-                padded[:, :values.shape[1]] = values
-                self.writer.write(name, (*index, slice(None), slice(None)), padded)
+            for variable in variables:
+                self.writer.write(variable.name, (*index, slice(None), slice(None)),
+                                  pad_branches(item[variable.name], branches, variable.dtype))
 
     def _provenance_attrs(self) -> dict[str, Any]:
         spec = self.spec

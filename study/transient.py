@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,10 +27,12 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
 from study.solver import (
+    DEFAULT_COUPLING,
     PARALLEL_THRESHOLD,
     SteadyState,
     check_coupling,
     check_structure,
+    scalar_if_0d,
 )
 from study.structure import Structure
 
@@ -276,7 +277,8 @@ class Trajectory:
     events_dropped: int = field(default=0)
 
 
-def model_parameters(structure: Structure, coupling: str = "one-way") -> NDArray[np.float64]:
+def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING
+                     ) -> NDArray[np.float64]:
     """Parameter vector of the integrator kernel for ``structure`` and ``coupling``."""
     structure = check_structure(structure)
     two_way = check_coupling(coupling) == "two-way"
@@ -307,7 +309,7 @@ def simulate(
     structure: Structure,
     schedule: Schedule,
     *,
-    coupling: Literal["one-way", "two-way"] = "one-way",
+    coupling: str = DEFAULT_COUPLING,
     initial_state: ArrayLike | None = None,
     output_times: ArrayLike | None = None,
     settings: IntegratorSettings | None = None,
@@ -427,7 +429,7 @@ def integrated_steady_state(
     f: ArrayLike,
     a: ArrayLike,
     *,
-    coupling: Literal["one-way", "two-way"] = "one-way",
+    coupling: str = DEFAULT_COUPLING,
     settings: IntegratorSettings | None = None,
     parallel: bool | None = None,
 ) -> SteadyState:
@@ -490,11 +492,11 @@ def integrated_steady_state(
         results,
     )
     return SteadyState(
-        velocity=results[:, 2].reshape(shape),
-        status=results[:, 0].astype(np.int8).reshape(shape),
-        reason=results[:, 1].astype(np.int8).reshape(shape),
-        slips_per_period=results[:, 3].reshape(shape),
-        forward_fraction=results[:, 4].reshape(shape),
-        backward_fraction=results[:, 5].reshape(shape),
-        orbit_period=results[:, 6].astype(np.int32).reshape(shape),
+        velocity=scalar_if_0d(results[:, 2].reshape(shape)),
+        status=scalar_if_0d(results[:, 0].astype(np.int8).reshape(shape)),
+        reason=scalar_if_0d(results[:, 1].astype(np.int8).reshape(shape)),
+        slips_per_period=scalar_if_0d(results[:, 3].reshape(shape)),
+        forward_fraction=scalar_if_0d(results[:, 4].reshape(shape)),
+        backward_fraction=scalar_if_0d(results[:, 5].reshape(shape)),
+        orbit_period=scalar_if_0d(results[:, 6].astype(np.int32).reshape(shape)),
     )

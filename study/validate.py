@@ -987,10 +987,31 @@ def validate_file(path: str | Path) -> str:
 def open_result(path: str | Path) -> xr.Dataset:
     """Validate a result file, then return it loaded into memory (the file is closed).
 
+    Every kind of result opens here: a study, a scene, a fit or a design file.
+    Validation checks the file against its schema, its checksum and its spec before a
+    value is read, as ``study validate`` does.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A result file (netCDF) written by ``study run``, ``study fit``, ``study design``
+        or :func:`study.run`.
+
+    Returns
+    -------
+    xarray.Dataset
+        The file's variables with their ``units``, ``long_name`` and CF flag attributes
+        (``status`` holds :class:`study.Status` codes, named by ``flag_meanings``), its
+        coordinates and global attributes (``study_coupling`` names the coupling),
+        loaded into memory: no file handle stays open, nothing needs closing. For a
+        file larger than memory use ``xarray.open_dataset(path, chunks={})`` in a
+        ``with`` block instead.
+
     Raises
     ------
     ResultError
-        For a missing, truncated, foreign, outdated or inconsistent file.
+        For a missing, truncated, foreign, outdated or inconsistent file; the message
+        starts with the file's path.
     """
     path = Path(path)
     validate_file(path)
@@ -1055,8 +1076,10 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
     what, name = next(((label, attrs[key]) for label, key in
                        (("fit", "study_fit_name"), ("design", "study_design_name"))
                        if key in attrs), ("scene" if kind else "study", attrs.get("study_name")))
+    coupling = attrs.get("study_coupling")
     lines.append(f"  {what} {name!r}"
-                 f"{f' ({kind})' if kind else ''}, spec sha256 "
+                 f"{f' ({kind})' if kind else ''}"
+                 f"{f', {coupling} coupling' if isinstance(coupling, str) else ''}, spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
     for name, size in dataset.sizes.items():

@@ -147,7 +147,10 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
             del params["m_add"]
     if "ck" not in params and "cs" in params:
         params["ck"] = params["cs"]
-    return study.Structure(**params)
+    from study.structure import tilt_warnings
+
+    with tilt_warnings(False):  # a result file's tilts are in degree by its schema
+        return study.Structure(**params)
 
 
 #: Statuses with a valid velocity (0 when static).

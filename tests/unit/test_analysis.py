@@ -127,7 +127,8 @@ def test_resonance_threshold_is_eq5_at_f0(paper_structure, M, Q):
 
 
 def test_minimum_threshold_is_the_grid_minimum(paper_structure):
-    a_min, f_min = minimum_threshold(paper_structure)
+    found = minimum_threshold(paper_structure)
+    a_min, f_min = float(found["a_min"]), float(found["f_min"])
     f = np.linspace(13.5, 15.5, 200_001)
     grid = np.minimum(*study.thresholds(paper_structure, f))
     assert_allclose(a_min, grid.min(), rtol=1e-9)
