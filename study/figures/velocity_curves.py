@@ -32,6 +32,7 @@ from study.figures.common import (
     restore_dim,
     single_structure,
 )
+from study.measurements import check_velocity_units
 from study.status import Status
 
 __all__ = ["FREQUENCY_COLORS", "draw", "frequency_position"]
@@ -131,8 +132,7 @@ def draw(dataset: xr.Dataset, output: Path,
                                                            "velocity-curves"),
                                        dataset, "velocity-curves")
         valid_speed = np.where(np.isin(status, VALID), np.abs(velocity), 0.0)
-        measured.check_velocity_units(data, rows, 1e-3 * float(np.nanmax(valid_speed,
-                                                                          initial=0.0)))
+        check_velocity_units(data, rows, 1e-3 * float(np.nanmax(valid_speed, initial=0.0)))
         rows, curve = _matched(data, rows, f)
 
     fig, ax = plt.subplots(figsize=(8.0, 5.2), layout="constrained")
