@@ -195,7 +195,8 @@ def _fit(args: argparse.Namespace) -> int:
     rows = spec.measurements.sizes["measurement"]
     print(f"{output}: fit '{spec.name}' of {len(result.names)} parameters to {rows} "
           f"measurements ({spec.coupling} coupling), chi^2/dof = {result.chi2_per_dof:.4g} "
-          f"(chi^2 = {result.chi2:.4g}, {result.dof} dof), {result.evaluations} model "
+          f"(chi^2 = {result.chi2:.4g}, {result.dof} dof, p = {result.p_value:.3g}), "
+          f"{result.evaluations} model "
           f"evaluations in {result.wall_seconds:.1f} s")
     for name, value, error, ok in zip(result.names, result.estimate, result.standard_error,
                                       result.identifiable, strict=True):
