@@ -328,8 +328,9 @@ def _parser() -> argparse.ArgumentParser:
                         help="output stem (default: figures/NAME -> .png and .pdf)")
     figure.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
                         help="draw part of the file: KEY=VALUE nearest, KEY==VALUE exact, "
-                        "KEY=START:STOP a range (repeatable); a figure of fewer axes than "
-                        "the file says which keys to select")
+                        "KEY=V1,V2,... a list (each nearest; == exact), KEY=START:STOP a "
+                        "range (repeatable); a figure of fewer axes than the file says "
+                        "which keys to select")
     figure.add_argument("--point", action="append", type=_point, default=None,
                         metavar="F,A",
                         help="force-traces: a drive point, frequency [Hz] and acceleration "
@@ -353,7 +354,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="CSV file of the main table")
     export.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
                         help="select by coordinate: KEY=VALUE nearest, KEY==VALUE exact, "
-                        "KEY=START:STOP a range (repeatable)")
+                        "KEY=V1,V2,... a list (each nearest; == exact), KEY=START:STOP a "
+                        "range (repeatable)")
     export.add_argument("--var", action="append", default=None, metavar="NAME",
                         help="export only this variable (repeatable; default: all)")
     export.set_defaults(handler=_export)

@@ -126,7 +126,7 @@ def test_selection_then_export(swept: Path, tmp_path: Path, capsys) -> None:
     out = tmp_path / "slice.csv"
     assert main(["export", str(swept), "--csv", str(out), "--sel", "Q=29", "--sel", "M==0.15",
                  "--sel", "a=6", "--var", "velocity", "--var", "status"]) == 0
-    assert "selected Q=30 (asked 29), M=0.15, a=6" in capsys.readouterr().out
+    assert "selected Q=30 (asked 29), M=0.15, a=6 m s-2" in capsys.readouterr().out
     header, rows = read(out)
     assert header[:2] == ["f [Hz]", "Q [1]"] and header[-2:] == ["velocity [m s-1]", "status"]
     assert [r["Q [1]"] for r in rows] == ["30.0"] * 7 and len(rows) == 7

@@ -270,6 +270,14 @@ def test_velocity_curves_of_one_frequency_draw_one_curve(files, tmp_path, drawn)
             if line.get_label().endswith(" Hz")] == ["14.5 Hz"]
 
 
+def test_velocity_curves_of_a_list_of_frequencies_draw_just_those(files, tmp_path, drawn):
+    fig = _draw("velocity-curves", files, "paper", ["f=13,14.5,16"], tmp_path, drawn)
+    labels = [line.get_label() for line in fig.axes[0].lines
+              if line.get_label().endswith(" Hz")]
+    assert labels == ["13 Hz", "14.5 Hz", "16 Hz"]
+    assert "selected: f=13,14.5,16 Hz" in _texts(fig)
+
+
 def test_regime_map_of_one_frontier_branch(files, tmp_path, drawn):
     fig = _draw("regime-map", files, "paper", ["branch=0"], tmp_path, drawn)
     frontier = [line for line in fig.axes[0].lines if line.get_marker() == "o"
@@ -389,7 +397,7 @@ def test_the_calibration_of_the_issue_draws_at_one_acceleration(files, tmp_path,
     stem = tmp_path / "calibration"
     assert main(["figure", "steering-calibration", str(files["scene"]), "-o", str(stem),
                  "--sel", "a=7"]) == 0
-    assert "selected: a=7" in _title(stem.with_suffix(".png"))
+    assert "selected: a=7 m s-2" in _title(stem.with_suffix(".png"))
     assert main(["figure", "steering-calibration", str(files["scene"]), "-o",
                  str(tmp_path / "f"), "--sel", "f=14.2"]) == 1
     message = capsys.readouterr().err
