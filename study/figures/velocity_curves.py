@@ -195,4 +195,5 @@ def draw(dataset: xr.Dataset, output: Path,
                   borderaxespad=0.5 if colour_bar else 0.0, fontsize=8.5,
                   title=None if colour_bar else "drive frequency f\n(blue < $f_0$ < red)",
                   title_fontsize=9, frameon=colour_bar)
-    return common.save(fig, output, dataset, title)
+    return common.save(fig, output, dataset,
+                       f"{title} ({common.structure_text(dataset, tex=False)})")

@@ -522,3 +522,13 @@ def test_one_value_of_any_dimension_draws_or_says_why_not(figure, source, base, 
             assert all(p.exists() for p in written)
         finally:
             common.plt.close("all")
+
+
+def test_a_steering_title_names_the_disk_and_its_plates(files, tmp_path, drawn):
+    """The calibration scene's disk (radius 20 mm, cs = ck = 0.25) and both plates with
+    the values of CALIBRATION."""
+    fig = _draw("steering-calibration", files, "scene", [], tmp_path, drawn)
+    title = fig.get_suptitle()
+    assert "disk: radius 20 mm" in title and "$c_s$ = 0.25, $c_k$ = 0.25" in title
+    assert "head: $f_0$ = 14.44 Hz, Q = 17.5, $\\alpha$ = 64°, M = 0.08" in title
+    assert "tail: $f_0$ = 7.7 Hz, Q = 10" in title and "towards -90° at (-20, 0) mm" in title
