@@ -38,7 +38,7 @@ from study.provenance import (
     scene_code_sha256,
     utc_now,
 )
-from study.scene import SceneSpec, load_scene, scene_dataset
+from study.scene import SceneSpec, load_scene, scene_dataset, scene_work
 from study.spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec, load_spec
 from study.specfile import detect_kind
 from study.store import (
@@ -206,13 +206,15 @@ def run(spec: StudySpec | SceneSpec | str | Path, output: str | Path | None = No
     if not isinstance(spec, StudySpec | SceneSpec):
         spec = load_any(spec)
     if isinstance(spec, SceneSpec):
-        scene_options = {k: options[k] for k in ("force", "command") if k in options}
+        scene_options = {k: options[k] for k in ("force", "command", "progress")
+                         if k in options}
         return run_scene(spec, output, **scene_options)
     return run_study(spec, output, **options)
 
 
 def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
-              force: bool = False, command: str | None = None) -> RunReport:
+              force: bool = False, command: str | None = None,
+              progress: bool | None = None) -> RunReport:
     """Compute a steering scene and write its result (one task; same lock, atomic
     write, seal, up-to-date and metadata rules as a study).
 
@@ -225,6 +227,9 @@ def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
         Recompute even if the result is up to date.
     command : str, optional
         The command line recorded in the file's history.
+    progress : bool, optional
+        Force progress output on or off; default: a bar on a terminal, log lines
+        otherwise (work in the units of :func:`study.scene.scene_work`).
     """
     started = time.perf_counter()
     started_utc = utc_now()
@@ -242,7 +247,13 @@ def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
             _update_metadata(spec, output, command, started_utc)
             return RunReport(output, True, 1, 0, 1, time.perf_counter() - started,
                              metadata_updated=True, kind=f"scene:{spec.kind}")
-        dataset = scene_dataset(spec)
+        work, unit = scene_work(spec)
+        shown = Progress(work, spec.name, progress, unit=unit)
+        try:
+            with shown.running():
+                dataset = scene_dataset(spec, shown.update)
+        finally:
+            shown.close()
         finished_utc = utc_now()
         provenance = _scene_provenance(spec, started_utc, finished_utc,
                                        time.perf_counter() - started, command)
@@ -627,7 +638,7 @@ class _Run:
             self.chunks_computed += 1
         else:
             self.chunks_reused += 1
-        self.progress.update(size)
+        self.progress.update(size, computed_points)
 
     def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
                 stop_after: int | None, on_start: Callable[[Executor], None] | None
@@ -649,7 +660,7 @@ class _Run:
             pending: dict[int, Any] = {}
             computed_chunks = 0
             try:
-                with executor(scheduler, workers, self.code) as pool:
+                with executor(scheduler, workers, self.code) as pool, self.progress.running():
                     self.scheduler_name, self.threads = pool.name, pool.threads
                     if on_start is not None:
                         on_start(pool)
