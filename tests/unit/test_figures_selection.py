@@ -532,3 +532,13 @@ def test_a_steering_title_names_the_disk_and_its_plates(files, tmp_path, drawn):
     assert "disk: radius 20 mm" in title and "$c_s$ = 0.25, $c_k$ = 0.25" in title
     assert "head: $f_0$ = 14.44 Hz, Q = 17.5, $\\alpha$ = 64°, M = 0.08" in title
     assert "tail: $f_0$ = 7.7 Hz, Q = 10" in title and "towards -90° at (-20, 0) mm" in title
+
+
+def test_the_fit_figure_names_the_fixed_parameters_and_p(files, tmp_path, drawn):
+    """FIT frees cs (ck follows it); the rest of its [structure] is fixed."""
+    fig = _draw("fit", files, "fit", [], tmp_path, drawn)
+    title = fig.get_suptitle()
+    assert ("fixed: $f_0$ = 14.44 Hz, Q = 17.5, $\\alpha$ = 64°, M = 0.08, "
+            "g = 9.8 m s$^{-2}$") in title
+    p = float(open_result(files["fit"])["chi2_p_value"])
+    assert f"(p = {p:.2g})" in title
