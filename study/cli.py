@@ -198,11 +198,13 @@ def _fit(args: argparse.Namespace) -> int:
           f"(chi^2 = {result.chi2:.4g}, {result.dof} dof, p = {result.p_value:.3g}), "
           f"{result.evaluations} model "
           f"evaluations in {result.wall_seconds:.1f} s")
-    for name, value, error, ok in zip(result.names, result.estimate, result.standard_error,
-                                      result.identifiable, strict=True):
+    for name, value, error, ok, side in zip(result.names, result.estimate,
+                                            result.standard_error, result.identifiable,
+                                            result.on_bound, strict=True):
         units = PARAMETERS[name].units
         units = "" if units == "1" else f" {units}"
         flag = "" if ok else "   NOT IDENTIFIABLE"
+        flag += f"   ON ITS {side.upper()} BOUND" if side else ""
         print(f"  {name:<12} = {value:.6g} +- {error:.3g}{units}{flag}")
     for warning in result.warnings:
         print(f"study: warning: {warning}", file=sys.stderr)

@@ -78,6 +78,7 @@ __all__ = [
     "FitResult",
     "FitSpec",
     "Parameter",
+    "bound_side",
     "chi2_p_value",
     "fit",
     "fit_dataset",
@@ -626,9 +627,27 @@ class FitResult:
         return self.chi2 / self.dof if self.dof > 0 else math.nan
 
     @property
+    def on_bound(self) -> list[str]:
+        """Per parameter: ``"lower"`` or ``"upper"`` when the estimate is on that bound
+        (within :data:`BOUND_MARGIN` of the bounds' width), else ``""``."""
+        return [bound_side(e, lo, hi) for e, lo, hi in
+                zip(self.estimate, self.lower, self.upper, strict=True)]
+
+    @property
     def p_value(self) -> float:
         """Probability of a chi^2 at least this large if the model held (NaN: no dof)."""
         return chi2_p_value(self.chi2, self.dof)
+
+
+def bound_side(estimate: float, lower: float, upper: float) -> str:
+    """``"lower"``/``"upper"`` when ``estimate`` is within :data:`BOUND_MARGIN` of the
+    width ``upper - lower`` of that bound, else ``""`` (all in the parameter's units)."""
+    margin = BOUND_MARGIN * (upper - lower)
+    if abs(estimate - lower) <= margin:
+        return "lower"
+    if abs(estimate - upper) <= margin:
+        return "upper"
+    return ""
 
 
 def chi2_p_value(chi2: float, dof: int) -> float:
@@ -773,13 +792,12 @@ def _bound_warnings(spec: FitSpec, names: list[str], estimate: NDArray[np.float6
     for j, name in enumerate(names):
         units = PARAMETERS[name].units
         units = "" if units == "1" else f" {units}"
-        margin = BOUND_MARGIN * (upper[j] - lower[j])
-        for side, bound in (("lower", lower[j]), ("upper", upper[j])):
-            if abs(estimate[j] - bound) <= margin:
-                out.append(f"{name} = {estimate[j]:.6g}{units} is on its {side} bound "
-                           f"(free.{name} = [{lower[j]:g}, {upper[j]:g}]): the best fit may "
-                           f"lie beyond it and its standard error means little; widen the "
-                           f"bound if {name} can be outside it, else {check}")
+        side = bound_side(estimate[j], lower[j], upper[j])
+        if side:
+            out.append(f"{name} = {estimate[j]:.6g}{units} is on its {side} bound "
+                       f"(free.{name} = [{lower[j]:g}, {upper[j]:g}]): the best fit may "
+                       f"lie beyond it and its standard error means little; widen the "
+                       f"bound if {name} can be outside it, else {check}")
     ck, cs = params.get("ck"), params.get("cs")
     constrained = "ck" in names or ("cs" in names and spec.start.get("ck") is not None)
     if constrained and ck is not None and cs is not None and cs - ck <= BOUND_MARGIN * cs:

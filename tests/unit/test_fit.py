@@ -360,6 +360,17 @@ def test_an_estimate_pushed_onto_a_bound_warns_naming_it(tmp_path: Path) -> None
     assert len(bound) == 1 and bound[0].startswith("cs = 0.3")
     assert "free.cs = [0.3, 1]" in bound[0] and "units of the measurements" in bound[0]
     assert not any("M = " in w and "bound" in w for w in result.warnings)
+    assert result.on_bound == ["", "lower"]
+
+
+def test_the_command_flags_an_estimate_on_its_bound(tmp_path: Path, capsys) -> None:
+    (tmp_path / "m.csv").write_text(threshold_csv(true_thresholds(), 0.05))
+    (tmp_path / "fit.toml").write_text(spec_text("M = [0.01, 0.5], cs = [0.3, 1.0]"))
+    assert main(["fit", str(tmp_path / "fit.toml"), "-o", str(tmp_path / "out.nc")]) == 0
+    captured = capsys.readouterr()
+    [line] = [x for x in captured.out.splitlines() if x.lstrip().startswith("cs ")]
+    assert line.endswith("ON ITS LOWER BOUND")
+    assert "study: warning: cs = 0.3 is on its lower bound" in captured.err
 
 
 def test_an_edited_warning_list_is_refused(tmp_path: Path) -> None:
