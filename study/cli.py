@@ -366,8 +366,11 @@ def _parser() -> argparse.ArgumentParser:
         "fit", help="fit free structure parameters to measurements (weighted least squares)",
         description="Estimate the free parameters of a fit spec (TOML: [fit] measurements, "
         "free = { NAME = [lower, upper] }, coupling; [structure] start values) from "
-        "measurement CSV files; writes estimates, standard errors, correlations, residuals "
-        "and chi^2 to a netCDF file (README: Measurements and fits).")
+        "measurement CSV files; writes estimates, standard errors, correlations, residuals, "
+        "chi^2 and its p-value to a netCDF file (README: Measurements and fits). Warns, and "
+        "stores the warnings in the file, when an estimate is on a bound, a parameter is "
+        "not identifiable or chi^2 is improbable (p < 0.001); refuses velocities plainly "
+        "in mm/s.")
     fitting.add_argument("spec", type=Path, help="fit spec (TOML)")
     fitting.add_argument("-o", "--output", type=Path,
                          help="result file (default: results/<spec file stem>.nc)")
