@@ -307,11 +307,14 @@ def _fit(args: argparse.Namespace) -> int:
     rows = spec.measurements.sizes["measurement"]
     print(f"{output}: fit '{spec.name}' of {len(result.names)} parameters to {rows} "
           f"measurements ({spec.coupling} coupling), chi^2/dof = {result.chi2_per_dof:.4g} "
-          f"(chi^2 = {result.chi2:.4g}, {result.dof} dof), {result.evaluations} model "
+          f"(chi^2 = {result.chi2:.4g}, {result.dof} dof, p = {result.p_value:.3g}), "
+          f"{result.evaluations} model "
           f"evaluations in {result.wall_seconds:.1f} s")
-    for name, value, error, ok in zip(result.names, result.estimate, result.standard_error,
-                                      result.identifiable, strict=True):
+    for name, value, error, ok, side in zip(result.names, result.estimate,
+                                            result.standard_error, result.identifiable,
+                                            result.on_bound, strict=True):
         flag = "" if ok else "   NOT IDENTIFIABLE"
+        flag += f"   ON ITS {side.upper()} BOUND" if side else ""
         print(f"  {name:<12} = {value:.6g} +- {error:.3g}{spoken(PARAMETERS[name].units)}{flag}")
     for warning in result.warnings:
         print(f"study: warning: {warning}", file=sys.stderr)
@@ -464,8 +467,9 @@ def _parser() -> argparse.ArgumentParser:
                         "data, options or figure code (as make figures does)")
     figure.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
                         help="draw part of the file: KEY=VALUE nearest, KEY==VALUE exact, "
-                        "KEY=START:STOP a range (repeatable); a figure of fewer axes than "
-                        "the file says which keys to select")
+                        "KEY=V1,V2,... a list (each nearest; == exact), KEY=START:STOP a "
+                        "range (repeatable); a figure of fewer axes than the file says "
+                        "which keys to select")
     figure.add_argument("--point", action="append", type=_point, default=None,
                         metavar="F,A",
                         help="force-traces: a drive point, frequency [Hz] and acceleration "
@@ -490,7 +494,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="CSV file of the main table")
     export.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
                         help="select by coordinate: KEY=VALUE nearest, KEY==VALUE exact, "
-                        "KEY=START:STOP a range (repeatable)")
+                        "KEY=V1,V2,... a list (each nearest; == exact), KEY=START:STOP a "
+                        "range (repeatable)")
     export.add_argument("--var", action="append", default=None, metavar="NAME",
                         help="export only this variable (repeatable; default: all)")
     _overwrite_option(export, "table")
@@ -500,8 +505,11 @@ def _parser() -> argparse.ArgumentParser:
         "fit", help="fit free structure parameters to measurements (weighted least squares)",
         description="Estimate the free parameters of a fit spec (TOML: [fit] measurements, "
         "free = { NAME = [lower, upper] }, coupling; [structure] start values) from "
-        "measurement CSV files; writes estimates, standard errors, correlations, residuals "
-        "and chi^2 to a netCDF file (README: Measurements and fits).")
+        "measurement CSV files; writes estimates, standard errors, correlations, residuals, "
+        "chi^2 and its p-value to a netCDF file (README: Measurements and fits). Warns, and "
+        "stores the warnings in the file, when an estimate is on a bound, a parameter is "
+        "not identifiable or chi^2 is improbable (p < 0.001); refuses velocities plainly "
+        "in mm/s.")
     fitting.add_argument("spec", type=Path, help="fit spec (TOML)")
     fitting.add_argument("-o", "--output", type=_output_path,
                          help="result file (default: results/<spec file stem>.nc)")

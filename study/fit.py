@@ -33,6 +33,16 @@ no derivative with respect to the structure. Every trial point is a valid
 ranges, and when both ``cs`` and ``ck`` are free the search runs on ``cs`` and
 ``r = ck / cs`` in ``(0, 1]``. Standard errors come from the covariance
 ``(J^T W J)^-1`` at the optimum, taking the stated ``sigma`` as absolute.
+
+A fit never stays silent about a doubtful answer. Velocities plainly in mm/s written
+as m/s are refused before the search (:func:`study.measurements.check_velocity_units`,
+the check of ``study figure --measurements``). After it, :attr:`FitResult.warnings`
+(printed by ``study fit``, stored as ``study_warnings``) names what to check for an
+estimate on a bound (within :data:`BOUND_MARGIN` of its width) or on ``ck <= cs``, a
+parameter the data cannot fix, and a chi^2 whose p-value
+(``scipy.stats.chi2.sf(chi2, dof)``, stored as ``chi2_p_value``) is below
+:data:`CHI2_P_LIMIT`: the units of the measurements, sigma, the bounds, the fixed
+parameters and the coupling.
 """
 
 from __future__ import annotations
@@ -49,7 +59,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
-from study.measurements import QUANTITIES, read_measurements
+from study.measurements import QUANTITIES, check_velocity_units, read_measurements
 from study.physics import thresholds
 from study.solver import DEFAULT_COUPLING, steady_velocity
 from study.specfile import (
@@ -71,6 +81,8 @@ __all__ = [
     "FitResult",
     "FitSpec",
     "Parameter",
+    "bound_side",
+    "chi2_p_value",
     "fit",
     "fit_dataset",
     "fitted_structure",
@@ -93,6 +105,11 @@ UNIDENTIFIABLE_FRACTION = 0.25
 SINGULAR_RCOND = 1e-12
 #: Whitened residual of a row whose model has no value (lift-off, not converged).
 NO_VALUE_RESIDUAL = 1e3
+#: An estimate within this fraction of its bounds' width of a bound is on the bound.
+BOUND_MARGIN = 1e-3
+#: A chi^2 whose probability (chi^2 distribution, dof degrees of freedom) of being
+#: exceeded is below this says the model does not describe the data.
+CHI2_P_LIMIT = 1e-3
 
 
 @dataclass(frozen=True)
@@ -589,6 +606,8 @@ class FitResult:
     message : str
     evaluations : int
     wall_seconds : float
+    warnings : list of str
+        What makes the estimate doubtful, each naming what to check (module doc).
     """
 
     names: list[str]
@@ -615,6 +634,39 @@ class FitResult:
     @property
     def chi2_per_dof(self) -> float:
         return self.chi2 / self.dof if self.dof > 0 else math.nan
+
+    @property
+    def on_bound(self) -> list[str]:
+        """Per parameter: ``"lower"`` or ``"upper"`` when the estimate is on that bound
+        (within :data:`BOUND_MARGIN` of the bounds' width), else ``""``."""
+        return [bound_side(e, lo, hi) for e, lo, hi in
+                zip(self.estimate, self.lower, self.upper, strict=True)]
+
+    @property
+    def p_value(self) -> float:
+        """Probability of a chi^2 at least this large if the model held (NaN: no dof)."""
+        return chi2_p_value(self.chi2, self.dof)
+
+
+def bound_side(estimate: float, lower: float, upper: float) -> str:
+    """``"lower"``/``"upper"`` when ``estimate`` is within :data:`BOUND_MARGIN` of the
+    width ``upper - lower`` of that bound, else ``""`` (all in the parameter's units)."""
+    margin = BOUND_MARGIN * (upper - lower)
+    if abs(estimate - lower) <= margin:
+        return "lower"
+    if abs(estimate - upper) <= margin:
+        return "upper"
+    return ""
+
+
+def chi2_p_value(chi2: float, dof: int) -> float:
+    """``scipy.stats.chi2.sf(chi2, dof)``: how often a chi^2 this large arises by chance
+    when the model holds and the sigma are right (NaN without a degree of freedom)."""
+    if dof <= 0:
+        return math.nan
+    from scipy.stats import chi2 as distribution
+
+    return float(distribution.sf(chi2, dof))
 
 
 def _minimise(problem: _Problem, max_evaluations: int) -> Any:
@@ -666,6 +718,8 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
                          for i in bad[:5])
         raise SpecError(f"{spec.path}: the model has no value at the start values for "
                         f"{rows} (lift-off or no steady orbit); change the start values")
+    velocity = np.flatnonzero(data["quantity"].values == "velocity")
+    check_velocity_units(data, velocity, float(np.max(np.abs(model0[velocity]), initial=0.0)))
     solution = _minimise(problem, spec.max_evaluations)
     x = solution.x
     names = problem.names
@@ -686,14 +740,19 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
     np.fill_diagonal(corr, np.where(np.isfinite(se) & (se > 0), 1.0, np.nan))
     identifiable = ~degenerate & np.isfinite(se) & (se <= UNIDENTIFIABLE_FRACTION
                                                       * (upper - lower))
-    warnings = []
+    warnings = _bound_warnings(spec, names, estimate, p, lower, upper)
     for j in np.flatnonzero(~identifiable):
         why = ("the data do not depend on it (or only through a combination with other "
                "parameters)" if degenerate[j] else
                f"its standard error {se[j]:.3g}{spoken(PARAMETERS[names[j]].units)} is more than "
                f"{UNIDENTIFIABLE_FRACTION:g} of its bounds' width")
         warnings.append(f"parameter {names[j]} is not identifiable from these data: {why}; "
-                        "see its chi^2 profile")
+                        f"see its chi^2 profile (profile_chi2 in the file); fix {names[j]} "
+                        "in [structure] (drop it from [fit] free) or add measurements that "
+                        "depend on it")
+    p_value = chi2_p_value(chi2, dof)
+    if p_value < CHI2_P_LIMIT:
+        warnings.append(_misfit_warning(spec, chi2, dof, p_value, resid))
     if dof <= 0:
         warnings.append(f"{data.sizes['measurement']} measurements for {len(names)} free "
                         "parameters: no degree of freedom left, chi^2 per dof undefined")
@@ -726,6 +785,51 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
         evaluations=problem.evaluations, wall_seconds=time.perf_counter() - started,
         warnings=warnings,
     )
+
+
+def _bound_warnings(spec: FitSpec, names: list[str], estimate: NDArray[np.float64],
+                    params: dict[str, float | None], lower: NDArray[np.float64],
+                    upper: NDArray[np.float64]) -> list[str]:
+    """A warning for every estimate on (within :data:`BOUND_MARGIN` of) a bound of
+    ``[fit] free`` or on the constraint ``ck <= cs``."""
+    check = ("check the units of the measurements (SI: "
+             + ", ".join(f"{q.name} in {q.units}" for q in QUANTITIES.values()
+                         if q.name in set(spec.measurements["quantity"].values))
+             + f"), the fixed parameters in [structure] and the model (coupling = "
+             f"'{spec.coupling}')")
+    out = []
+    for j, name in enumerate(names):
+        units = PARAMETERS[name].units
+        units = "" if units == "1" else f" {units}"
+        side = bound_side(estimate[j], lower[j], upper[j])
+        if side:
+            out.append(f"{name} = {estimate[j]:.6g}{units} is on its {side} bound "
+                       f"(free.{name} = [{lower[j]:g}, {upper[j]:g}]): the best fit may "
+                       f"lie beyond it and its standard error means little; widen the "
+                       f"bound if {name} can be outside it, else {check}")
+    ck, cs = params.get("ck"), params.get("cs")
+    constrained = "ck" in names or ("cs" in names and spec.start.get("ck") is not None)
+    if constrained and ck is not None and cs is not None and cs - ck <= BOUND_MARGIN * cs:
+        out.append(f"ck = {ck:.6g} is on the constraint ck <= cs (cs = {cs:.6g}): the data "
+                   f"pull the friction coefficients past it; {check}")
+    return out
+
+
+def _misfit_warning(spec: FitSpec, chi2: float, dof: int, p_value: float,
+                    resid: NDArray[np.float64]) -> str:
+    """chi^2 too large for the model to describe the data: where and what to check."""
+    data = spec.measurements
+    worst = int(np.nanargmax(np.abs(resid))) if np.isfinite(resid).any() else 0
+    other = "one-way" if spec.coupling == "two-way" else "two-way"
+    units = ", ".join(f"{q.name} in {q.units}" for q in QUANTITIES.values()
+                      if q.name in set(data["quantity"].values))
+    return (f"chi^2/dof = {chi2 / dof:.3g} on {dof} dof (p = {p_value:.2g} < "
+            f"{CHI2_P_LIMIT:g}): the model does not describe these data within their sigma "
+            f"(largest: {data['source'].values[worst]} line "
+            f"{int(data['line'].values[worst])}, {resid[worst]:+.3g} sigma); check the "
+            f"units of the measurements (SI: {units}), that sigma is one standard "
+            f"deviation, the fixed parameters in [structure] and the model (coupling = "
+            f"'{spec.coupling}'; the other is '{other}')")
 
 
 def _profile(spec: FitSpec, best: dict[str, float | None], name: str,
@@ -838,6 +942,12 @@ def fit_dataset(spec: FitSpec, result: FitResult, command: str = "") -> xr.Datas
             "long_name": "measurements minus free parameters"}),
         "chi2_per_dof": ((), result.chi2_per_dof, {
             "long_name": "chi^2 per degree of freedom", "units": DIMENSIONLESS}),
+        "chi2_p_value": ((), result.p_value, {
+            "long_name": "probability of a chi^2 at least this large if the model holds",
+            "units": DIMENSIONLESS,
+            "comment": (f"scipy.stats.chi2.sf(chi2, degrees_of_freedom); below "
+                        f"{CHI2_P_LIMIT:g} the fit warns (study_warnings); NaN: no degree "
+                        "of freedom")}),
     }
     mdim = ("measurement",)
     rows = {

@@ -42,6 +42,7 @@ __all__ = [
     "Column",
     "MeasurementError",
     "Quantity",
+    "check_velocity_units",
     "export_measurement_schema",
     "measurement_schema",
     "parse_measurements",
@@ -379,6 +380,47 @@ def _dataset(records: Sequence[tuple[int, dict[str, Any]]], path: str) -> xr.Dat
                     long_name="line in the measurement file (1 = first line)"),
     }
     return xr.Dataset(data, attrs={"study_measurement_schema": MEASUREMENT_SCHEMA})
+
+
+#: A measured velocity above this [m s-1] and above :data:`VELOCITY_UNITS_FACTOR` times
+#: the model's fastest is taken for mm/s written as m/s (the structures move mm/s).
+VELOCITY_UNITS_LIMIT = 0.05
+#: How many times the model's fastest velocity a measured one may be.
+VELOCITY_UNITS_FACTOR = 50.0
+
+
+def check_velocity_units(data: xr.Dataset, rows: np.ndarray, model_speed: float) -> None:
+    """Refuse velocities that are plainly not in m s-1 (mm/s written as m/s).
+
+    The one check of ``study figure --measurements`` and ``study fit``.
+
+    Parameters
+    ----------
+    data : xarray.Dataset
+        Measurements (:func:`read_measurements`).
+    rows : numpy.ndarray of int
+        The ``velocity`` rows to check.
+    model_speed : float
+        The fastest steady velocity of the model beside them [m s-1].
+
+    Raises
+    ------
+    MeasurementError
+        When a velocity is larger than :data:`VELOCITY_UNITS_LIMIT` and than
+        :data:`VELOCITY_UNITS_FACTOR` times ``model_speed``; names the file and line.
+    """
+    if not len(rows):
+        return
+    values = np.abs(data["value"].values[rows])
+    limit = max(VELOCITY_UNITS_LIMIT, VELOCITY_UNITS_FACTOR * model_speed)
+    worst = int(np.argmax(values))
+    if values[worst] > limit:
+        i = rows[worst]
+        raise MeasurementError(
+            f"{data['source'].values[i]}, line {int(data['line'][i])}: velocity "
+            f"{data['value'].values[i]:g} m s-1 is {values[worst] / max(model_speed, 1e-12):.3g} "
+            "times the fastest velocity of the model; measurement files are in SI units "
+            "(m s-1, not mm/s)")
 
 
 def read_measurements(paths: str | Path | Iterable[str | Path]) -> xr.Dataset:

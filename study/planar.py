@@ -23,6 +23,7 @@ radians; the conversion is made here, at the boundary (:func:`_to_kernel`,
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -439,6 +440,7 @@ def simulate_planar(
     rng: np.random.Generator | int | None = None,
     max_events: int = 0,
     slaving: float = SLAVING,
+    on_progress: Callable[[float], None] | None = None,
 ) -> PlanarTrajectory:
     """Integrate the planar model through a drive schedule.
 
@@ -474,6 +476,10 @@ def simulate_planar(
         the direction's relaxation (rate ``ck n / |u|``) at the cost of an error of
         order ``slaving^2`` relative (measured; see README, Steering). Exact for motion along
         one axis.
+    on_progress : callable, optional
+        Called with the drive time reached [s] each time the integration stops (at every
+        heading kick with noise, else at the end); the integration is the same with or
+        without it.
 
     Returns
     -------
@@ -539,6 +545,8 @@ def simulate_planar(
             settings.max_steps, out_t, out_y, out_mode, out_box, ev_t, ev_kind, ev_y,
             ev_box, stats,
         )
+        if on_progress is not None:
+            on_progress(float(t_box[0]))
         if code != _kernel.RUN_DONE:
             break
         if generator is not None:

@@ -47,7 +47,7 @@ from study.provenance import (
     scene_code_sha256,
     utc_now,
 )
-from study.scene import SceneSpec, load_scene, scene_dataset
+from study.scene import SceneSpec, load_scene, scene_dataset, scene_work
 from study.spec import StudySpec, load_spec
 from study.specfile import detect_kind
 from study.store import (
@@ -217,7 +217,7 @@ def run(spec: StudySpec | SceneSpec | str | Path, output: str | Path | None = No
     if not isinstance(spec, StudySpec | SceneSpec):
         spec = load_any(spec)
     if isinstance(spec, SceneSpec):
-        scene_options = {k: options[k] for k in ("force", "command", "overwrite")
+        scene_options = {k: options[k] for k in ("force", "command", "overwrite", "progress")
                          if k in options}
         return run_scene(spec, output, **scene_options)
     return run_study(spec, output, **options)
@@ -225,7 +225,7 @@ def run(spec: StudySpec | SceneSpec | str | Path, output: str | Path | None = No
 
 def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
               force: bool = False, command: str | None = None,
-              overwrite: bool = False) -> RunReport:
+              overwrite: bool = False, progress: bool | None = None) -> RunReport:
     """Compute a steering scene and write its result (one task; same lock, atomic
     write, seal, up-to-date and metadata rules as a study).
 
@@ -241,6 +241,9 @@ def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
     overwrite : bool
         Replace an existing file at ``output`` that is not a scene result
         (:func:`study.outputs.check_output`; the spec itself is never replaced).
+    progress : bool, optional
+        Force progress output on or off; default: a bar on a terminal, log lines
+        otherwise (work in the units of :func:`study.scene.scene_work`).
     """
     started = time.perf_counter()
     started_utc = utc_now()
@@ -259,7 +262,13 @@ def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
             _update_metadata(spec, output, command, started_utc)
             return RunReport(output, True, 1, 0, 1, time.perf_counter() - started,
                              metadata_updated=True, kind=f"scene:{spec.kind}")
-        dataset = scene_dataset(spec)
+        work, unit = scene_work(spec)
+        shown = Progress(work, spec.name, progress, unit=unit)
+        try:
+            with shown.running():
+                dataset = scene_dataset(spec, shown.update)
+        finally:
+            shown.close()
         finished_utc = utc_now()
         provenance = _scene_provenance(spec, started_utc, finished_utc,
                                        time.perf_counter() - started, command)
@@ -616,7 +625,7 @@ class _Run:
             self.chunks_computed += 1
         else:
             self.chunks_reused += 1
-        self.progress.update(size)
+        self.progress.update(size, computed_points)
 
     def _keep(self, key: str, content: dict[str, Any], a: np.ndarray, block: bytes) -> None:
         """Keep a computed block; a cache that cannot be written (disk full, read-only)
@@ -655,7 +664,7 @@ class _Run:
             computed_chunks = 0
             try:
                 with executor(scheduler, workers, self.code,
-                              task_timeout=task_timeout) as pool:
+                              task_timeout=task_timeout) as pool, self.progress.running():
                     self.scheduler_name, self.threads = pool.name, pool.threads
                     if on_start is not None:
                         on_start(pool)

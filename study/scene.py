@@ -44,7 +44,8 @@ their provenance is :mod:`study.scene_run`'s.
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -113,6 +114,7 @@ __all__ = [
     "parse_scene",
     "period_weight",
     "scene_dataset",
+    "scene_work",
 ]
 
 SCENE_KINDS = ("trajectory", "calibration", "plan")
@@ -498,7 +500,30 @@ def _heading_noise(drift: float, disk: Disk) -> float:
     return drift / math.sqrt(disk.diameter)
 
 
-def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+#: Reports work done (in the units of :func:`scene_work`) as a scene runs.
+Report = Callable[[float], None]
+
+
+def _ignore(work: float) -> None:
+    """A report that shows nothing."""
+
+
+def scene_work(spec: SceneSpec) -> tuple[float, str]:
+    """How much work computing a scene is, and its unit, for progress: the drive time of
+    a trajectory [s], the points of a calibration, the flights of a plan (calibrating
+    the commands counts as one, correcting the open-loop route and each closed-loop run
+    as :data:`_CORRECTIONS` more, as in :func:`_check_plan_size`)."""
+    options = spec.options
+    if spec.kind == "trajectory":
+        return math.fsum(row["duration"] for row in options["segments"]), "s"
+    if spec.kind == "calibration":
+        return float(options["f"].size * options["a"].size), "pt"
+    count = options["realisations"] + 1
+    return float(1 + _CORRECTIONS + (len(STRATEGIES) + _CORRECTIONS) * count), "flight"
+
+
+def _run_trajectory(spec: SceneSpec, report: Report = _ignore
+                    ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     options = spec.options
     rows = options["segments"]
     schedule = Schedule(np.array([r["f"] for r in rows]), np.array([r["a"] for r in rows]),
@@ -506,11 +531,17 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
     end = float(schedule.ends[-1])
     grid = np.arange(0.0, end, options["sample_interval"])
     out_t = np.unique(np.concatenate([grid, schedule.starts, [end]]))
+    reached = [0.0]
+
+    def advanced(t: float) -> None:
+        report(t - reached[0])
+        reached[0] = t
+
     run = simulate_planar(
         spec.disk, schedule, initial_state=rest_state(spec.disk, options["start"]),
         output_times=out_t, settings=spec.settings,
         heading_noise=_heading_noise(options["heading_drift_deg"], spec.disk),
-        rng=options["seed"], slaving=spec.slaving,
+        rng=options["seed"], slaving=spec.slaving, on_progress=advanced,
     )
     t = run.time
     index = np.clip(np.searchsorted(schedule.ends, t, side="right"), 0, len(rows) - 1)
@@ -577,7 +608,8 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
     return {**coords, **variables}, attrs
 
 
-def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+def _run_calibration(spec: SceneSpec, report: Report = _ignore
+                     ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     f = spec.options["f"]
     a = spec.options["a"]
     points = [(i, j) for i in range(f.size) for j in range(a.size)]
@@ -588,8 +620,12 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
                                max_periods=spec.options["max_periods"], slaving=spec.slaving)
 
     # The kernel releases the GIL: threads use every core without copying the disk.
+    motions: list[Any] = [None] * len(points)
     with ThreadPoolExecutor() as pool:
-        motions = list(pool.map(one, points))
+        futures = {pool.submit(one, point): k for k, point in enumerate(points)}
+        for future in as_completed(futures):
+            motions[futures[future]] = future.result()
+            report(1.0)
     shape = (f.size, a.size)
     fields = {k: np.full(shape, math.nan) for k in
               ("forward_speed", "lateral_speed", "turn_rate", "slips_per_period",
@@ -657,7 +693,8 @@ def _check_plan_size(spec: SceneSpec, route: list, count: int) -> None:
         )
 
 
-def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+def _run_plan(spec: SceneSpec, report: Report = _ignore
+              ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     options = spec.options
     disk = spec.disk
     strategies = STRATEGIES
@@ -666,6 +703,7 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     try:
         commands = calibrate_commands(disk, options["frequencies"], options["acceleration"],
                                       settings=spec.settings, slaving=spec.slaving)
+        report(1.0)
         # The blind strategies' legs do not depend on the noise: plan them once.
         calibrated = plan_route(options["start"], waypoints, commands)
         # Before the first simulated flight (the open-loop corrections fly the route).
@@ -676,6 +714,7 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
                                        spec.settings, slaving=spec.slaving),
             "closed_loop": None,
         }
+        report(float(_CORRECTIONS))
     except PlanError as err:
         raise SceneError(f"{spec.path}: [plan]: {err}") from None
     noise = _heading_noise(options["heading_drift_deg"], disk)
@@ -688,6 +727,8 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
                 settings=spec.settings, sample_interval=options["sample_interval"],
                 slaving=spec.slaving, route=routes[strategy],
             )
+            # A closed-loop run corrects each leg as the open-loop route was corrected.
+            report(1.0 + (_CORRECTIONS if strategy == "closed_loop" else 0))
     end = max(float(run.time[-1]) for run in runs.values())
     t = np.arange(0.0, end + options["sample_interval"], options["sample_interval"])
     shape = (len(strategies), count, t.size)
@@ -753,8 +794,11 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
 _RUNNERS = {"trajectory": _run_trajectory, "calibration": _run_calibration, "plan": _run_plan}
 
 
-def scene_dataset(spec: SceneSpec) -> xr.Dataset:
+def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
     """Compute a scene: its labelled dataset with the scene's own attributes.
+
+    ``report``, if given, is called with the work done (in the units of
+    :func:`scene_work`) as the scene runs: what ``study run`` shows as progress.
 
     The attributes describe the scene (title, summary, the disk, the integrator and
     how the run ended); provenance (spec text and hash, code, environment, history)
@@ -766,7 +810,7 @@ def scene_dataset(spec: SceneSpec) -> xr.Dataset:
         For a plan whose commands cannot steer the disk, or whose flights would be
         absurdly long (checked before any flight is simulated).
     """
-    variables, extra = _RUNNERS[spec.kind](spec)
+    variables, extra = _RUNNERS[spec.kind](spec, report or _ignore)
     disk = spec.disk
     attrs = {
         "title": spec.title,

@@ -15,6 +15,10 @@ The grammar of one selection (the command line repeats ``--sel``; every key once
 ``KEY=START:STOP``
     every value from ``START`` to ``STOP`` inclusive (either may be empty: ``a=6:``);
     the dimension is kept.
+``KEY=V1,V2,...`` and ``KEY==V1,V2,...``
+    a list: each value as a single one would be (nearest, or exact), under the same
+    rules; the dimension is kept, in the file's order (``f=13,14.5,16``: three curves).
+    Two values that find the same one are refused.
 
 ``KEY`` is any coordinate of the file: a dimension coordinate (``f``, ``a``, ``Q``, ``M``,
 ``alpha``, ``cs``, ``m_add``, ``t``, ``segment`` ...), a one-dimensional auxiliary
@@ -23,7 +27,9 @@ scene: its dimension is selected where it takes that value), a scalar coordinate
 fixed parameter: checked, nothing to select), or a dimension without a coordinate
 (``plate``: ``VALUE`` is the position, 0-based). Text coordinates (labels) match
 exactly. Errors (:class:`SelectionError`, a ``ValueError``) name the file, the
-selection and what is available.
+selection and what is available. What was selected is recorded in the attribute
+``study_selection`` with the coordinates' units (``f=14.5 Hz``; none for units ``1``),
+which figure titles repeat.
 """
 
 from __future__ import annotations
@@ -43,7 +49,8 @@ EXACT_RTOL = 1e-12
 #: Relative tolerance of a match against a coordinate with a single value.
 SINGLE_RTOL = 1e-9
 
-_GRAMMAR = "KEY=VALUE (nearest), KEY==VALUE (exact) or KEY=START:STOP (a range)"
+_GRAMMAR = ("KEY=VALUE (nearest), KEY==VALUE (exact), KEY=V1,V2,... (a list, each nearest; "
+            "== for exact) or KEY=START:STOP (a range)")
 _KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
@@ -61,12 +68,22 @@ class Selection:
         Coordinate (or dimension) name.
     mode : {"nearest", "exact", "range"}
     value : str
-        The value as written (``START:STOP`` for a range).
+        The value as written (``START:STOP`` for a range, ``V1,V2`` for a list).
     """
 
     key: str
     mode: str
     value: str
+
+    @property
+    def values(self) -> tuple[str, ...]:
+        """The values of a list (one value: a tuple of one)."""
+        return tuple(v.strip() for v in self.value.split(","))
+
+    @property
+    def is_list(self) -> bool:
+        """Whether several values are selected (the dimension is kept)."""
+        return self.mode != "range" and "," in self.value
 
     def __str__(self) -> str:
         return f"{self.key}{'==' if self.mode == 'exact' else '='}{self.value}"
@@ -91,9 +108,21 @@ def parse_selection(texts: Iterable[str]) -> list[Selection]:
         if not sep or not _KEY.match(key) or not value:
             raise SelectionError(f"--sel {text!r}: expected {_GRAMMAR}")
         if ":" in value:
+            if "," in value:
+                raise SelectionError(f"--sel {text!r}: a list takes values, not ranges "
+                                     f"({_GRAMMAR})")
             if mode == "exact":
                 raise SelectionError(f"--sel {text!r}: a range takes one '=' ({_GRAMMAR})")
             mode = "range"
+        if "," in value:
+            items = [v.strip() for v in value.split(",")]
+            if not all(items):
+                raise SelectionError(f"--sel {text!r}: an empty value in the list "
+                                     f"({_GRAMMAR})")
+            twice = sorted({v for v in items if items.count(v) > 1})
+            if twice:
+                raise SelectionError(f"--sel {text!r}: {', '.join(twice)} listed twice")
+            value = ",".join(items)
         if any(s.key == key for s in selections):
             raise SelectionError(f"--sel {text!r}: {key} is selected twice")
         selections.append(Selection(key, mode, value))
@@ -147,7 +176,27 @@ def _number(text: str, where: str) -> float:
 
 
 def _positions(values: np.ndarray, sel: Selection, where: str, dataset: xr.Dataset) -> object:
-    """Index (int) or index array of ``values`` (a 1-D coordinate) for ``sel``."""
+    """Index (int) or index array of ``values`` (a 1-D coordinate) for ``sel``; a list
+    gives the positions of its values, each found as a single one, in the file's order."""
+    if not sel.is_list:
+        return _positions_of_one(values, sel, where, dataset)
+    found: dict[int, str] = {}
+    for item in sel.values:
+        hits = np.atleast_1d(_positions_of_one(values, Selection(sel.key, sel.mode, item),
+                                               where, dataset))
+        for hit in map(int, hits):
+            if hit in found:
+                raise SelectionError(
+                    f"{where}: {found[hit]} and {item} both select {sel.key}="
+                    f"{_fmt(values[hit])}; give values of {sel.key} that differ by more "
+                    f"than its spacing (available: {_values_text(values)})")
+            found[hit] = item
+    return np.array(sorted(found), dtype=np.intp)
+
+
+def _positions_of_one(values: np.ndarray, sel: Selection, where: str,
+                      dataset: xr.Dataset) -> object:
+    """Index (int) or index array of ``values`` for a selection of one value or a range."""
     shown = _values_text(values)
     if values.dtype.kind not in "iuf":
         # Labels: exact, one or several positions (a range makes no sense).
@@ -192,6 +241,12 @@ def _positions(values: np.ndarray, sel: Selection, where: str, dataset: xr.Datas
     return best
 
 
+def _units(coord: xr.DataArray | None) -> str:
+    """`` UNITS`` of a coordinate for the record of a selection (none for ``1``)."""
+    units = "" if coord is None else str(coord.attrs.get("units", ""))
+    return "" if units in ("", "1") else f" {units}"
+
+
 def select(dataset: xr.Dataset, selections: Iterable[Selection | str],
            source: str = "") -> xr.Dataset:
     """Apply selections to a result dataset.
@@ -208,10 +263,11 @@ def select(dataset: xr.Dataset, selections: Iterable[Selection | str],
     Returns
     -------
     xarray.Dataset
-        The selected part. A nearest or exact selection drops the dimension and keeps
-        the chosen value as a scalar coordinate; a range keeps the dimension. The
-        attribute ``study_selection`` lists what was selected (``"Q=30 (asked Q=29)"``),
-        appended to any earlier selection.
+        The selected part. A nearest or exact selection of one value drops the
+        dimension and keeps the chosen value as a scalar coordinate; a list or a range
+        keeps the dimension. The attribute ``study_selection`` lists what was selected,
+        with units (``"Q=30 (asked 29), f=13,14.5,16 Hz"``), appended to any earlier
+        selection.
 
     Raises
     ------
@@ -239,7 +295,7 @@ def select(dataset: xr.Dataset, selections: Iterable[Selection | str],
             dim = sel.key
         elif coord.ndim == 0:
             _positions(np.atleast_1d(coord.values), sel, where, dataset)
-            chosen.append(f"{sel.key}={_fmt(coord.values.item())}")
+            chosen.append(f"{sel.key}={_fmt(coord.values.item())}{_units(coord)}")
             continue
         elif coord.ndim == 1:
             dim = coord.dims[0]
@@ -248,14 +304,21 @@ def select(dataset: xr.Dataset, selections: Iterable[Selection | str],
             raise SelectionError(f"{where}: {sel.key} is {coord.ndim}-dimensional; "
                                  f"available: {available(dataset)}")
         dataset = dataset.isel({dim: index})
-        if isinstance(index, int):
-            got = dataset[sel.key].values.item() if sel.key in dataset.coords else index
-            note = "" if sel.mode != "nearest" or _fmt(got) == sel.value else \
-                f" (asked {sel.value})"
-            chosen.append(f"{sel.key}={_fmt(got)}{note}")
+        units = _units(coord)
+        if isinstance(index, int) or sel.is_list:
+            got = (np.atleast_1d(dataset[sel.key].values) if sel.key in dataset.coords
+                   else np.atleast_1d(index))
+            text = ",".join(_fmt(v) for v in got)
+            asked = ",".join(sel.values)
+            note = "" if sel.mode != "nearest" or text == asked else f" (asked {sel.value})"
+            chosen.append(f"{sel.key}={text}{units}{note}")
         else:
             count = int(np.size(index))
-            chosen.append(f"{sel} ({count} value{'' if count == 1 else 's'})")
+            span = str(sel)
+            if sel.key in dataset.coords and dataset[sel.key].dtype.kind in "iuf":
+                held = dataset[sel.key].values
+                span = f"{sel.key}={_fmt(held.min())} to {_fmt(held.max())}"
+            chosen.append(f"{span}{units} ({count} value{'' if count == 1 else 's'})")
     if chosen:
         earlier = dataset.attrs.get("study_selection")
         dataset = dataset.copy()

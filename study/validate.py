@@ -906,6 +906,13 @@ def _fit_problems(nc: Any, meta: _File, schema_path: Path = FIT_SCHEMA_PATH) -> 
         json.loads(meta.attrs.get("provenance", ""))
     except (TypeError, ValueError):
         problems.append("provenance is not JSON")
+    if schema_path == FIT_SCHEMA_PATH and "study_warnings" in meta.attrs:
+        try:
+            warnings = json.loads(meta.attrs["study_warnings"])
+        except (TypeError, ValueError):
+            warnings = None
+        if not (isinstance(warnings, list) and all(isinstance(w, str) for w in warnings)):
+            problems.append("study_warnings is not a JSON list of strings")
     for name, var in meta.variables.items():
         if var.type_name.startswith("unsupported"):
             problems.append(f"{name} has a type study never writes ({var.type_name})")
@@ -1082,6 +1089,11 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
                  f"{f', {coupling} coupling' if isinstance(coupling, str) else ''}, spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
+    try:
+        warnings = json.loads(str(attrs.get("study_warnings", "[]")))
+    except ValueError:
+        warnings = []
+    lines += [f"  warning: {w}" for w in (warnings if isinstance(warnings, list) else [])]
     for name, size in dataset.sizes.items():
         if name not in dataset.coords:
             lines.append(f"  dim {name!s:>7}: {size:6d}")

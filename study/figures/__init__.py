@@ -119,6 +119,27 @@ FIGURES: dict[str, Figure] = {
 _OPTION_FLAGS = {"points": "--point", "measurements": "--measurements"}
 
 
+def _missing_message(name: str, dataset: xr.Dataset, missing: Sequence[str]) -> str:
+    """Why figure ``name`` cannot be drawn from ``dataset``, and the observables to add
+    to the study's spec (from the registry's declared variables) when a spec can."""
+    from study.observables import OBSERVABLES
+    from study.validate import RESULT_SCHEMA
+
+    figure = FIGURES[name]
+    message = (f"figure {name!r} needs {', '.join(missing)}, which this file does not hold "
+               f"(study {dataset.attrs.get('study_name')!r})")
+    writers = [o.name for o in OBSERVABLES.values() if set(o.variables) & set(missing)]
+    if writers and dataset.attrs.get("study_result_schema") == RESULT_SCHEMA:
+        held = {o.name for o in OBSERVABLES.values()
+                if all(v in dataset.variables for v in o.variables)}
+        listed = ", ".join(f'"{n}"' for n in OBSERVABLES if n in held or n in writers)
+        message += (f"; add {', '.join(map(repr, writers))} to the spec's observables "
+                    f"(observables = [{listed}]) and run it again, or draw it from "
+                    f"{figure.source}")
+        return message
+    return f"{message}; it is drawn from {figure.source}"
+
+
 def draw_figure(name: str, dataset: xr.Dataset, output: str | Path, *,
                 sel: Iterable[str] = (), source: str = "",
                 points: Sequence[tuple[float, float]] | None = None,
@@ -167,11 +188,7 @@ def draw_figure(name: str, dataset: xr.Dataset, output: str | Path, *,
                               f"an option of {', '.join(takers)}")
     missing = [v for v in figure.requires if v not in dataset.variables]
     if missing:
-        raise FigureError(
-            f"figure {name!r} needs {', '.join(missing)}, which this file does not hold "
-            f"(study {dataset.attrs.get('study_name')!r}); it is drawn from "
-            f"{figure.source}"
-        )
+        raise FigureError(_missing_message(name, dataset, missing))
     sel = list(sel)
     request = figure_request(name, dataset, sel=sel, points=points,
                              measurements=measurements)

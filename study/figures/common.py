@@ -4,6 +4,7 @@ a figure needs selected, colours for many curves, and a few checks."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -24,8 +25,10 @@ __all__ = [
     "PAPER_POINTS",
     "VALID",
     "coupling_label",
+    "disk_text",
     "grid_minimum",
     "is_paper_file",
+    "lift_off_label",
     "one_way_velocity",
     "parameter_text",
     "provenance_line",
@@ -37,6 +40,7 @@ __all__ = [
     "selection_text",
     "single_structure",
     "structure_from_dataset",
+    "structure_text",
     "value_colours",
 ]
 
@@ -400,20 +404,123 @@ def one_way_velocity(dataset: xr.Dataset, *order: str) -> np.ndarray | None:
     return np.where(moving & (velocity != 0), velocity, np.nan)
 
 
-def parameter_text(dataset: xr.Dataset) -> str:
-    """The structure's parameters, compactly, from the file's scalar coordinates, and on
-    a second line what ``--sel`` selected, if anything."""
-    s = structure_from_dataset(dataset)
-    text = (
-        f"$f_0$ = {s.f0:g} Hz, Q = {s.Q:g}, $\\alpha$ = {s.alpha:g}°, M = {s.M:g}, "
-        f"$c_s$ = {s.cs:g}"
-    )
-    if s.ck != s.cs:
-        text += f", $c_k$ = {s.ck:g}"
-    if s.g != 9.8:
-        text += f", g = {s.g:g} m s$^{{-2}}$"
+#: The structure parameters every figure of a study names, in order: (TeX, plain) names.
+STRUCTURE_SYMBOLS = {"f0": ("$f_0$", "f0"), "Q": ("Q", "Q"), "alpha": ("$\\alpha$", "alpha"),
+                     "M": ("M", "M"), "cs": ("$c_s$", "cs"), "ck": ("$c_k$", "ck"),
+                     "g": ("g", "g")}
+
+#: Units as titles write them, TeX and plain, from the file's CF spelling.
+_UNIT_TEXT = {"degree": ("°", " degree"),
+              "m s-2": (" m s$^{-2}$", " m s-2"), "m s-1": (" m s$^{-1}$", " m s-1")}
+
+
+def _unit_text(units: str, tex: bool) -> str:
+    if units in ("", "1"):
+        return ""
+    return _UNIT_TEXT.get(units, (f" {units}", f" {units}"))[0 if tex else 1]
+
+
+def structure_text(dataset: xr.Dataset, omit: Iterable[str] = (), tex: bool = True) -> str:
+    """Every structure parameter of :data:`STRUCTURE_SYMBOLS` the file holds, with units:
+    a fixed one as ``f0 = 14.44 Hz``, a swept one (or several selected) as
+    ``M = 0.08 .. 1 (6 values)``; ``cs = ck = 0.25`` when the two are equal.
+
+    The one title builder of the figures: a figure's title names every parameter its
+    data depend on (``omit`` those they do not, ``ck`` for thresholds).
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The (selected) result.
+    omit : iterable of str
+        Parameters the drawn data do not depend on.
+    tex : bool
+        Matplotlib mathtext symbols (``$c_s$``) for a drawn title, else plain text
+        (``cs``) for the files' metadata.
+    """
+    omit = set(omit)
+    shown: dict[str, tuple[str, bool]] = {}
+    for name in STRUCTURE_SYMBOLS:
+        if name in omit or name not in dataset.coords:
+            continue
+        coord = dataset[name]
+        values = np.atleast_1d(coord.values).astype(float)
+        units = _unit_text(str(coord.attrs.get("units", "")), tex)
+        if np.unique(values).size == 1:
+            shown[name] = (f"{values[0]:g}{units}", True)
+        else:
+            shown[name] = (f"{values.min():.4g} .. {values.max():.4g}{units} "
+                           f"({values.size} values)", False)
+    merged = ("cs" in shown and "ck" in shown and shown["cs"][1] and shown["ck"][1]
+              and shown["cs"][0] == shown["ck"][0])
+    parts = []
+    for name, (text, _) in shown.items():
+        symbol = STRUCTURE_SYMBOLS[name][0 if tex else 1]
+        if merged and name == "ck":
+            continue
+        if merged and name == "cs":
+            symbol += " = " + STRUCTURE_SYMBOLS["ck"][0 if tex else 1]
+        parts.append(f"{symbol} = {text}")
+    return ", ".join(parts)
+
+
+def disk_text(dataset: xr.Dataset, tex: bool = True) -> str:
+    """The steered disk's parameters a scene's motion depends on, from the file: the
+    disk's (radius, gyration radius, friction length, friction coefficients, g) on one
+    line, each plate's (f0, Q, alpha, M, direction, attachment) on the next; ``""``
+    for a file that does not hold them."""
+    attrs = dataset.attrs
+    if "disk_radius" not in attrs or "plate_f0" not in dataset:
+        return ""
+    symbols = {name: STRUCTURE_SYMBOLS[name][0 if tex else 1]
+               for name in ("f0", "Q", "alpha", "M", "cs", "ck", "g")}
+    mm = 1e3
+    disk = (f"disk: radius {mm * float(attrs['disk_radius']):.3g} mm, gyration radius "
+            f"{mm * float(attrs.get('disk_gyration_radius', math.nan)):.3g} mm, friction "
+            f"length {mm * float(attrs.get('disk_friction_length', math.nan)):.3g} mm, "
+            f"{symbols['cs']} = {float(attrs['disk_cs']):g}, {symbols['ck']} = "
+            f"{float(attrs['disk_ck']):g}, g = {float(attrs['disk_g']):g}"
+            f"{_unit_text('m s-2', tex)}")
+    degree = _unit_text("degree", tex)
+    plates = []
+    names = (dataset["plate_name"].values.astype(str) if "plate_name" in dataset
+             else [str(i) for i in range(dataset.sizes["plate"])])
+    def plate(variable: str) -> np.ndarray:
+        return (dataset[variable].values.astype(float) if variable in dataset
+                else np.full(len(names), math.nan))
+
+    for i, name in enumerate(names):
+        def value(variable: str, i: int = i) -> float:
+            return float(plate(variable)[i])
+        plates.append(
+            f"{name}: {symbols['f0']} = {value('plate_f0'):g} Hz, Q = {value('plate_Q'):g}, "
+            f"{symbols['alpha']} = {value('plate_alpha'):g}{degree}, M = {value('plate_M'):g}, "
+            f"towards {value('plate_direction'):g}{degree} at "
+            f"({mm * value('plate_attachment_forward'):.3g}, "
+            f"{mm * value('plate_attachment_left'):.3g}) mm")
+    return f"{disk}\nplates: " + "; ".join(plates)
+
+
+def parameter_text(dataset: xr.Dataset, omit: Iterable[str] = ()) -> str:
+    """The structure's parameters (:func:`structure_text`) and on a second line what
+    ``--sel`` selected, if anything."""
+    text = structure_text(dataset, omit)
     selected = selection_text(dataset)
     return f"{text}\n{selected}" if selected else text
+
+
+def lift_off_label(dataset: xr.Dataset) -> str:
+    """What the closed-form lift-off curve is on a map of this file's velocities.
+
+    It is the acceleration above which the normal force of the structure on a base at
+    rest turns negative. In the one-way model the base's sliding never acts back on
+    the mode, so that is where the model's lift-off is. With two-way coupling a
+    sliding base changes the forces: moving points lie above it and lift-off points
+    below, so it is only the estimate for a base at rest.
+    """
+    if str(dataset.attrs.get("study_coupling", "one-way")) == "two-way":
+        return "lift-off of the base at rest (one-way estimate)"
+    return "lift-off acceleration: n < 0 above"
 
 
 #: The f grid resolves a threshold minimum when its step is below f0 / (RESOLUTION Q):

@@ -23,6 +23,7 @@ from study.figures.common import (
     restore_dim,
     save,
     selection_text,
+    structure_text,
 )
 
 __all__ = ["draw"]
@@ -122,16 +123,13 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     left.set_title(f"two-way vs one-way {over}", fontsize=10)
 
     _curves(right, dataset, m)
-    fixed = ", ".join(
-        f"{name} = {float(dataset[name]):g}" for name in ("f0", "Q", "alpha", "cs", "ck")
-        if name in dataset.coords and dataset[name].ndim == 0
-    )
-    swept = "M swept" if m.size > 1 else f"M = {m[0]:g}"
+    parameters = structure_text(dataset, tex=False)
     solver = ("exact solver" if dataset.attrs.get("study_solver_method") == "exact"
               else "time integration")
     fig.suptitle(f"Sliding feeding back on the mode: {coupling_label(dataset)}, {solver},\n"
-                 f"against the paper's one-way model; {swept}, {fixed}"
+                 f"against the paper's one-way model; {parameters}"
                  + (f"\n{selection_text(dataset)}" if "study_selection" in dataset.attrs
                     else ""), fontsize=9.5)
     return save(fig, output, dataset,
-                f"Two-way against one-way coupling over M; velocities: {coupling_label(dataset)}")
+                f"Two-way against one-way coupling over M; velocities: "
+                f"{coupling_label(dataset)} ({parameters})")

@@ -11,8 +11,8 @@ import numpy as np
 import xarray as xr
 
 from study.figures import FigureError
-from study.figures.common import plt, restore_dim, save, selection_text
-from study.fit import fitted_structure, structure_groups
+from study.figures.common import plt, restore_dim, save, selection_text, structure_text
+from study.fit import PARAMETERS, fitted_structure, structure_groups
 from study.physics import thresholds
 from study.solver import steady_velocity
 from study.units import spoken
@@ -39,6 +39,16 @@ def _groups(dataset: xr.Dataset) -> list[tuple[str, float | None, float | None, 
                  f"m_add = {ma * 1e3:g} g" if ma is not None else "")
         out.append((label, ma, m, rows))
     return out
+
+
+def _fixed_text(params: dict[str, float], free: set[str]) -> str:
+    """The structure parameters the fit held fixed, with units (the shared builder)."""
+    if "ck" not in params and "cs" not in free:  # ck tied to cs
+        params = {**params, "ck": params.get("cs")}
+    coords = {name: xr.Variable((), float(value), {
+        "units": PARAMETERS[name].units if name in PARAMETERS else "m s-2"})
+        for name, value in params.items() if name not in free and value is not None}
+    return structure_text(xr.Dataset(coords=coords))
 
 
 def draw(dataset: xr.Dataset, output: str | Path) -> list[Path]:
@@ -104,7 +114,16 @@ def draw(dataset: xr.Dataset, output: str | Path) -> list[Path]:
                                dataset["standard_error"].values,
                                dataset["parameter_units"].values, strict=True))
     chi = float(dataset["chi2_per_dof"].values)
-    fig.suptitle(f"fit '{dataset.attrs.get('study_fit_name')}': {text}; "
-                 f"chi²/dof = {chi:.3g}" + (f"\n{selected}" if selected else ""), fontsize=8)
+    if "chi2_p_value" in dataset:
+        chi_text = f"chi²/dof = {chi:.3g} (p = {float(dataset['chi2_p_value']):.2g})"
+    else:
+        chi_text = f"chi²/dof = {chi:.3g}"
+    warnings = json.loads(dataset.attrs.get("study_warnings", "[]"))
+    if warnings:
+        chi_text += f"; {len(warnings)} warning{'s' if len(warnings) != 1 else ''} (study info)"
+    fixed = _fixed_text(params, set(dataset["parameter"].values.astype(str)))
+    fig.suptitle(f"fit '{dataset.attrs.get('study_fit_name')}': {text}; {chi_text}"
+                 + (f"\nfixed: {fixed}" if fixed else "")
+                 + (f"\n{selected}" if selected else ""), fontsize=8)
     fig.tight_layout()
     return save(fig, output, dataset, f"fit {dataset.attrs.get('study_fit_name')}")

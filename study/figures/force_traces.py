@@ -232,4 +232,5 @@ def draw(dataset: xr.Dataset, output: Path,
                  fontsize=10.5)
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,
                frameon=False)
-    return common.save(fig, output, dataset, title)
+    return common.save(fig, output, dataset,
+                       f"{title} ({common.structure_text(dataset, tex=False)})")

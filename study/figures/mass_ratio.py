@@ -36,6 +36,7 @@ from study.figures.common import (
     save,
     selection_text,
     structure_from_dataset,
+    structure_text,
     value_colours,
 )
 
@@ -253,8 +254,7 @@ def draw(dataset: xr.Dataset, output: Path,
 
     title = (
         f"{'Fig. 3: ' if paper else ''}motion threshold with on-board loads "
-        f"(f0 = {base.f0:g} Hz, Q = {base.Q:g}, alpha = {base.alpha:g} deg, "
-        f"cs = {base.cs:g}{'' if base.ck == base.cs else f', ck = {base.ck:g}'})"
+        f"({structure_text(dataset, omit=('ck',), tex=False)})"
     )
     if rows is not None:
         title += f", with {rows.size} measured"

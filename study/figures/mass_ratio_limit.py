@@ -1,7 +1,8 @@
 """The limit ``M -> 1``: regime maps for a growing resonant share of the mass.
 
 One small regime map per mass ratio (up to six, 2 x 3): the steady mean velocity
-over ``(f, a)`` in mm s-1 on its own diverging scale, the thresholds ``a*_pm``, the
+over ``(f, a)`` in mm s-1 on one diverging scale shared by every panel (one colour
+bar, so that colours compare across M), the thresholds ``a*_pm``, the
 lift-off region (grey, no velocity: outside the model), continuous sliding
 (status ``continuous_sliding``, hatched and outlined), points without a periodic
 orbit (black) and the zero-velocity frontier ``f*(a)`` as black dots. The paper: as
@@ -26,12 +27,14 @@ import study
 from study.figures.common import (
     VALID,
     coupling_label,
+    lift_off_label,
     require_axis,
     require_dims,
     restore_dim,
     save,
     selection_text,
     structure_from_dataset,
+    structure_text,
 )
 from study.status import Status
 
@@ -62,10 +65,13 @@ def panel_indices(n: int, limit: int = MAX_PANELS) -> list[int]:
     return sorted(set(np.rint(np.linspace(0, n - 1, limit)).astype(int).tolist()))
 
 
-def _norm(v: np.ma.MaskedArray) -> TwoSlopeNorm:
-    """A diverging norm centred on 0 with each side scaled to its own extreme."""
-    if v.count():
-        low, high = float(v.min()), float(v.max())
+def _norm(panels: list[np.ma.MaskedArray]) -> TwoSlopeNorm:
+    """One diverging norm for every panel, centred on 0, each side scaled to its own
+    extreme over all panels."""
+    counted = [v for v in panels if v.count()]
+    if counted:
+        low = min(float(v.min()) for v in counted)
+        high = max(float(v.max()) for v in counted)
     else:
         low = high = 0.0
     scale = max(abs(low), abs(high), 1e-9)
@@ -83,15 +89,20 @@ def _closed(dataset: xr.Dataset, name: str, at: dict, structure, f) -> np.ndarra
     return a_plus if name == "a_star_plus" else a_minus
 
 
-def _panel(fig, ax, dataset: xr.Dataset, at: dict) -> None:
+def _velocity(dataset: xr.Dataset, at: dict) -> np.ma.MaskedArray:
+    status = dataset["status"].isel(at).transpose("f", "a").values
+    return valid_velocity_mm_s(dataset["velocity"].isel(at).transpose("f", "a").values, status)
+
+
+def _panel(ax, dataset: xr.Dataset, at: dict, norm: TwoSlopeNorm):
+    """One map; returns its velocity mesh (for the figure's one colour bar)."""
     f = dataset["f"].values
     a = dataset["a"].values
     structure = structure_from_dataset(dataset, **at)
     status = dataset["status"].isel(at).transpose("f", "a").values
-    v = valid_velocity_mm_s(dataset["velocity"].isel(at).transpose("f", "a").values, status)
-    mesh = ax.pcolormesh(f, a, v.T, cmap="RdBu", norm=_norm(v), shading="nearest",
+    v = _velocity(dataset, at)
+    mesh = ax.pcolormesh(f, a, v.T, cmap="RdBu", norm=norm, shading="nearest",
                          rasterized=True)
-    fig.colorbar(mesh, ax=ax, label="mean velocity v [mm s$^{-1}$]", pad=0.01)
     for flag, color in ((Status.LIFT_OFF, _LIFT_OFF_GREY), (Status.NOT_CONVERGED, "k")):
         region = np.ma.masked_where(status != flag, np.ones(status.shape))
         if region.count():
@@ -135,6 +146,7 @@ def _panel(fig, ax, dataset: xr.Dataset, at: dict) -> None:
             fontsize=8, va="top", bbox={"facecolor": "white", "edgecolor": "none",
                                         "alpha": 0.85, "pad": 1.5})
     ax.set(xlim=(f[0], f[-1]), ylim=(a[0], a[-1]))
+    return mesh
 
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
@@ -151,11 +163,13 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     nrows = -(-len(ats) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(5.2 * ncols, 4.0 * nrows + 0.9),
                              layout="constrained", sharex=True, sharey=True, squeeze=False)
+    norm = _norm([_velocity(dataset, at) for at in ats])
+    mesh = None
     for k, ax in enumerate(axes.flat):
         if k >= len(ats):
             ax.set_visible(False)
             continue
-        _panel(fig, ax, dataset, ats[k])
+        mesh = _panel(ax, dataset, ats[k], norm)
         if k % ncols == 0:
             ax.set_ylabel("drive acceleration a [m s$^{-2}$]")
         if k // ncols == nrows - 1 or k + ncols >= len(ats):
@@ -168,20 +182,21 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         Line2D([], [], color="tab:red", lw=1.4, path_effects=_STROKE,
                label="$a^*_-$ (backward slips start)"),
         Line2D([], [], color="0.3", lw=0.8, ls=":", label="$a^*_\\pm$ above lift-off (invalid)"),
-        Line2D([], [], color="k", lw=0.9, ls="--", label="lift-off $a_{lift}$"),
+        Line2D([], [], color="k", lw=0.9, ls="--", label=lift_off_label(dataset)),
         Patch(facecolor=_LIFT_OFF_GREY, label="lift-off: outside the model, no velocity"),
         Patch(facecolor="none", edgecolor="k", hatch="////", label="continuous sliding (CS)"),
         Patch(facecolor="k", label="not converged"),
         Line2D([], [], ls="none", marker="o", color="k", ms=3, label="frontier $f^*(a)$"),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=9)
-    s = structure_from_dataset(dataset, **ats[0])
+    fig.colorbar(mesh, ax=[ax for ax in axes.flat if ax.get_visible()], pad=0.01, shrink=0.9,
+                 label="mean velocity v [mm s$^{-1}$] (one scale, all panels)")
+    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
     title = (
         "The limit M -> 1: steady velocity over (f, a) as the resonant share of the mass "
-        f"grows, {coupling_label(dataset)} (f0 = {s.f0:g} Hz, Q = {s.Q:g}, "
-        f"alpha = {s.alpha:g} deg, cs = {s.cs:g})"
+        f"grows, {coupling_label(dataset)} ({structure_text(dataset, tex=False)})"
     )
     selected = selection_text(dataset)
-    fig.suptitle(title.replace(" (f0", "\n(f0", 1) + "; PN: above both thresholds"
+    fig.suptitle(title.replace(" (f0", "\n(f0", 1).replace("grows, ", "grows,\n", 1)
+                 + "; PN: above both thresholds"
                  + (f"\n{selected}" if selected else ""), fontsize=11)
     return save(fig, output, dataset, title)

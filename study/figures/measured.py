@@ -15,8 +15,9 @@ A row that names its structure (``m_add`` or ``M``) is drawn on a figure of one
 structure only when it is that structure (``M`` to 1 %, ``m_add`` to 1 % or 1 mg).
 Every refusal is a :class:`study.figures.FigureError` naming the file(s): no row of
 the quantity the figure compares (and what the files hold instead), rows all of
-another structure, or values in other units than the format's (a velocity in mm/s
-where m/s is expected).
+another structure, or values in other units than the format's; velocities plainly
+in mm s-1 where m s-1 is expected are refused by
+:func:`study.measurements.check_velocity_units`, the check ``study fit`` makes too.
 """
 
 from __future__ import annotations
@@ -149,21 +150,6 @@ def same_structure(data: xr.Dataset, rows: np.ndarray, dataset: xr.Dataset,
         f"figure {figure!r} are of other structures ({', '.join(named)}) than this "
         f"file's ({own}); select the structure with --sel (M=... or m_add=...) or give "
         "rows without M and m_add")
-
-
-def check_velocity_units(data: xr.Dataset, rows: np.ndarray, model_speed: float) -> None:
-    """Refuse velocities that are plainly not in m s^-1 (mm/s written as m/s): larger
-    than 0.05 m/s and than 50 times the fastest model velocity of the file."""
-    values = np.abs(data["value"].values[rows])
-    limit = max(0.05, 50.0 * model_speed)
-    worst = int(np.argmax(values))
-    if values[worst] > limit:
-        i = rows[worst]
-        raise FigureError(
-            f"{data['source'].values[i]}, line {int(data['line'][i])}: velocity "
-            f"{data['value'].values[i]:g} m s-1 is {values[worst] / max(model_speed, 1e-12):.3g} "
-            "times the fastest velocity of the model in this file; measurement files are "
-            "in SI units (m s-1, not mm/s)")
 
 
 def draw_rows(ax, data: xr.Dataset, rows: np.ndarray, x: str, scale: float = 1.0,

@@ -97,7 +97,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         ("a_star_plus", dict(color="tab:blue", lw=1.8), "$a^*_+$: forward slips start"),
         ("a_star_minus", dict(color="tab:red", lw=1.8), "$a^*_-$: backward slips start"),
         ("lift_off_acceleration", dict(color="black", lw=1.4, ls="--"),
-         "lift-off acceleration: n < 0 above"),
+         common.lift_off_label(dataset)),
     ]
     for name, style, label in lines:
         (line,) = ax.plot(f, dataset[name].values, label=label, path_effects=OUTLINE, **style)
@@ -147,4 +147,5 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     # Three columns fit the figure's width up to six entries; more take two.
     fig.legend(handles=handles, loc="outside lower center",
                ncol=3 if len(handles) <= 6 else 2, fontsize=8.5, frameon=False)
-    return common.save(fig, output, dataset, title)
+    return common.save(fig, output, dataset,
+                       f"{title} ({common.structure_text(dataset, tex=False)})")

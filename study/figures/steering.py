@@ -23,7 +23,13 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
 
 from study.figures import FigureError
-from study.figures.common import restore_dim, save, selected_keys, selection_text
+from study.figures.common import (
+    disk_text,
+    restore_dim,
+    save,
+    selected_keys,
+    selection_text,
+)
 from study.units import DEGREE
 
 __all__ = [
@@ -350,8 +356,10 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     if time.size > 1:
         parts.append(f"{float(time[-1] - time[0]):g} s")
     selected = selection_text(dataset)
+    disk = disk_text(dataset)
     fig.suptitle("Steering the disk by the drive frequency (paper Fig. 4A): "
-                 + ", ".join(parts) + (f"\n{selected}" if selected else ""), fontsize=10)
+                 + ", ".join(parts) + (f"\n{disk}" if disk else "")
+                 + (f"\n{selected}" if selected else ""), fontsize=10)
     return fig
 
 

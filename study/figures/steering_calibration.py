@@ -22,7 +22,13 @@ from matplotlib.colors import ListedColormap, Normalize
 from matplotlib.lines import Line2D
 
 from study.figures import FigureError
-from study.figures.common import require_axis, restore_dim, save, selection_text
+from study.figures.common import (
+    disk_text,
+    require_axis,
+    restore_dim,
+    save,
+    selection_text,
+)
 from study.figures.steering import angle_values, check_scene_kind, flag_codes, flag_names
 from study.status import Status
 from study.units import DEGREE_PER_SECOND
@@ -128,8 +134,10 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
                ncol=min(len(marks), 4))
     at = (f"a = {a[0]:g} m s$^{{-2}}$" if a.size == 1 else f"{a.size} accelerations")
     selected = selection_text(dataset)
+    disk = disk_text(dataset)
     fig.suptitle(f"Steering commands: steady motion of the disk over f = {low:g}-{high:g} Hz "
-                 f"at {at}" + (f"\n{selected}" if selected else ""), fontsize=10)
+                 f"at {at}" + (f"\n{disk}" if disk else "")
+                 + (f"\n{selected}" if selected else ""), fontsize=10)
     return fig
 
 

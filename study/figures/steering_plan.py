@@ -21,7 +21,13 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
 
 from study.figures import FigureError
-from study.figures.common import restore_dim, save, selected_keys, selection_text
+from study.figures.common import (
+    disk_text,
+    restore_dim,
+    save,
+    selected_keys,
+    selection_text,
+)
 from study.figures.steering import angle_values, check_scene_kind, heading_arrow, labels_of
 
 __all__ = ["STRATEGY_STYLES", "draw"]
@@ -245,7 +251,9 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
              f"{' vs '.join(s.replace('_', ' ') for s in strategies)}, {runs}")
     plan = _plan_text(dataset)
     selected = selection_text(dataset)
+    disk = disk_text(dataset)
     fig.suptitle(title + ("\n" + textwrap.fill(plan, 170) if plan else "")
+                 + (f"\n{disk}" if disk else "")
                  + (f"\n{selected}" if selected else ""), fontsize=9)
     return fig
 

@@ -33,6 +33,7 @@ from study.figures.common import (
     save,
     selection_text,
     structure_from_dataset,
+    structure_text,
     value_colours,
 )
 
@@ -149,10 +150,10 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     if bar is not None:
         fig.colorbar(bar, ax=bx, pad=0.01, label=f"{by} ({c_values.size} values)")
 
-    s = rows[0][1]
+    # Thresholds do not depend on ck.
     title = (
         f"Q m1 ~ m: minimum motion threshold over f in [{f[0]:g}, {f[-1]:g}] Hz for "
-        f"{len(rows)} structures (f0 = {s.f0:g} Hz, alpha = {s.alpha:g} deg, cs = {s.cs:g})"
+        f"{len(rows)} structures ({structure_text(dataset, omit=('ck',), tex=False)})"
     )
     selected = selection_text(dataset)
     fig.suptitle(title + (f"\n{selected}" if selected else ""), fontsize=11)

@@ -17,7 +17,12 @@ import xarray as xr
 from matplotlib.patches import Patch
 
 from study.figures import common, measured
-from study.figures.common import parameter_text, require_axis, single_structure
+from study.figures.common import (
+    parameter_text,
+    require_axis,
+    single_structure,
+    structure_text,
+)
 from study.physics.forces import lift_off_acceleration
 
 __all__ = ["draw"]
@@ -118,7 +123,9 @@ def draw(dataset: xr.Dataset, output: Path,
     title = "Motion thresholds against drive frequency"
     if rows is not None:
         title += f", with {rows.size} measured"
-    ax.set_title(f"{title}\n{parameter_text(dataset)}", fontsize=11)
+    # Thresholds, lift-off and the mode's gain do not depend on ck.
+    ax.set_title(f"{title}\n{parameter_text(dataset, omit=('ck',))}", fontsize=11)
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,
                frameon=False)
-    return common.save(fig, output, dataset, title)
+    return common.save(fig, output, dataset,
+                       f"{title} ({structure_text(dataset, omit=('ck',), tex=False)})")

@@ -32,6 +32,7 @@ from study.figures.common import (
     restore_dim,
     single_structure,
 )
+from study.measurements import check_velocity_units
 from study.status import Status
 
 __all__ = ["FREQUENCY_COLORS", "draw", "frequency_position"]
@@ -113,7 +114,7 @@ def draw(dataset: xr.Dataset, output: Path,
     structure = common.structure_from_dataset(dataset)
     f = dataset["f"].values
     a = dataset["a"].values
-    velocity = 1e3 * dataset["velocity"].transpose("f", "a").values  # mm/s
+    velocity = 1e3 * dataset["velocity"].transpose("f", "a").values  # mm s-1
     status = dataset["status"].transpose("f", "a").values
     paper = one_way_velocity(dataset, "f", "a")  # beside a two-way study
     # The colours run over the frequency, centred on f0 (blue below, red above); many
@@ -131,8 +132,7 @@ def draw(dataset: xr.Dataset, output: Path,
                                                            "velocity-curves"),
                                        dataset, "velocity-curves")
         valid_speed = np.where(np.isin(status, VALID), np.abs(velocity), 0.0)
-        measured.check_velocity_units(data, rows, 1e-3 * float(np.nanmax(valid_speed,
-                                                                          initial=0.0)))
+        check_velocity_units(data, rows, 1e-3 * float(np.nanmax(valid_speed, initial=0.0)))
         rows, curve = _matched(data, rows, f)
 
     fig, ax = plt.subplots(figsize=(8.0, 5.2), layout="constrained")
@@ -195,4 +195,5 @@ def draw(dataset: xr.Dataset, output: Path,
                   borderaxespad=0.5 if colour_bar else 0.0, fontsize=8.5,
                   title=None if colour_bar else "drive frequency f\n(blue < $f_0$ < red)",
                   title_fontsize=9, frameon=colour_bar)
-    return common.save(fig, output, dataset, title)
+    return common.save(fig, output, dataset,
+                       f"{title} ({common.structure_text(dataset, tex=False)})")

@@ -126,12 +126,26 @@ def test_selection_then_export(swept: Path, tmp_path: Path, capsys) -> None:
     out = tmp_path / "slice.csv"
     assert main(["export", str(swept), "--csv", str(out), "--sel", "Q=29", "--sel", "M==0.15",
                  "--sel", "a=6", "--var", "velocity", "--var", "status"]) == 0
-    assert "selected Q=30 (asked 29), M=0.15, a=6" in capsys.readouterr().out
+    assert "selected Q=30 (asked 29), M=0.15, a=6 m s-2" in capsys.readouterr().out
     header, rows = read(out)
     assert header[:2] == ["f [Hz]", "Q [1]"] and header[-2:] == ["velocity [m s-1]", "status"]
     assert [r["Q [1]"] for r in rows] == ["30.0"] * 7 and len(rows) == 7
     dataset = open_result(swept).sel(Q=30.0, M=0.15, a=6.0)
     check_table(dataset, out, ("f",), ["velocity", "status"])
+
+
+def test_a_list_selection_exports_just_those_values(swept: Path, tmp_path: Path,
+                                                    capsys) -> None:
+    out = tmp_path / "list.csv"
+    assert main(["export", str(swept), "--csv", str(out), "--sel", "Q=30", "--sel", "M=0.15",
+                 "--sel", "f=13,14.6", "--sel", "a==0,12", "--var", "velocity"]) == 0
+    assert "selected Q=30, M=0.15, f=13,14.5 Hz (asked 13,14.6), a=0,12 m s-2" in \
+        capsys.readouterr().out
+    _, rows = read(out)
+    assert sorted({(r["f [Hz]"], r["a [m s-2]"]) for r in rows}) == [
+        ("13.0", "0.0"), ("13.0", "12.0"), ("14.5", "0.0"), ("14.5", "12.0")]
+    dataset = open_result(swept).sel(Q=30.0, M=0.15, f=[13.0, 14.5], a=[0.0, 12.0])
+    check_table(dataset, out, ("f", "a"), ["velocity"])
 
 
 def test_errors_are_one_line(swept: Path, tmp_path: Path, capsys) -> None:

@@ -163,3 +163,36 @@ def test_frequency_colours_diverge_from_the_resonance():
     assert np.all(np.diff(position) > 0)
     assert position[0] < 0.5 < position[-1]
     assert 0.0 <= position.min() and position.max() <= 1.0
+
+
+README_SPEC = """\
+[study]
+name = "own"
+observables = ["thresholds", "velocity"]
+{structure}
+[sweep]
+f = {{ start = 10.0, stop = 20.0, num = 5 }}
+a = {{ start = 0.0, stop = 12.0, num = 4 }}
+"""
+
+
+def test_a_refusal_names_the_observables_to_add(tmp_path, capsys):
+    """The README's example spec (thresholds, velocity) drawn as regime-map: the message
+    names lift_off and frontier, the observables the registry says write the missing
+    variables, and the spec so extended holds everything the figure needs."""
+    from study.observables import variables_of
+
+    spec = tmp_path / "own.toml"
+    spec.write_text(README_SPEC.format(structure=STRUCTURE))
+    run_study(spec, tmp_path / "own.nc", progress=False, workers=1)
+    assert main(["figure", "regime-map", str(tmp_path / "own.nc"), "-o",
+                 str(tmp_path / "x")]) == 1
+    message = capsys.readouterr().err
+    assert "needs lift_off_acceleration, frontier_frequency" in message
+    assert ("add 'lift_off', 'frontier' to the spec's observables (observables = "
+            '["thresholds", "lift_off", "velocity", "frontier"])') in message
+    suggested = ["thresholds", "lift_off", "velocity", "frontier"]
+    written = {v.name for v in variables_of(suggested)}
+    assert set(FIGURES["regime-map"].requires) <= written
+    assert not set(FIGURES["regime-map"].requires) <= {v.name for v in variables_of(
+        ["thresholds", "velocity"])}

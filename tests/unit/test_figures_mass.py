@@ -215,3 +215,62 @@ def test_minimum_threshold_equals_a_fine_grid_minimum(Q, M):
     assert_allclose(a_min, lower.min(), rtol=1e-9)
     assert a_min <= lower.min() * (1.0 + 1e-14)
     assert abs(f[np.argmin(lower)] - f_min) <= f[1] - f[0]
+
+
+def _plain_title(png) -> str:
+    with Image.open(png) as image:
+        return dict(image.text)["Title"]
+
+
+@pytest.mark.parametrize("name", sorted(SPECS))
+def test_titles_name_every_parameter_the_data_depend_on(results, tmp_path, name):
+    """Each parameter the file holds appears with its value (a swept one with its range),
+    read back from the file itself; ck where velocities are drawn (thresholds do not
+    depend on it)."""
+    stem = tmp_path / name
+    assert main(["figure", name, str(results[name]), "-o", str(stem)]) == 0
+    title = _plain_title(stem.with_suffix(".png"))
+    dataset = open_result(results[name])
+    needed = ["f0", "Q", "alpha", "M", "cs", "g"] + (["ck"] if name == "mass-ratio-limit"
+                                                      else [])
+    for parameter in needed:
+        values = np.atleast_1d(dataset[parameter].values)
+        if np.unique(values).size == 1:
+            value = f"= {values[0]:g}"
+            assert (f"{parameter} {value}" in title
+                    or (parameter in ("cs", "ck") and f"cs = ck {value}" in title)), title
+        else:
+            assert (f"{parameter} = {values.min():.4g} .. {values.max():.4g}"
+                    in title), (parameter, title)
+    assert "alpha = 64 degree" in title and "f0 = 14.44 Hz" in title
+
+
+def test_mass_ratio_limit_panels_share_one_colour_scale(results, tmp_path, monkeypatch):
+    """One norm for every panel's velocity mesh, spanning the valid velocities of all
+    panels (read from the file), and one colour bar."""
+    from matplotlib.collections import QuadMesh
+
+    from study.figures import common
+    from study.figures.mass_ratio_limit import valid_velocity_mm_s
+
+    kept = []
+    close = common.plt.close
+    monkeypatch.setattr(common.plt, "close", lambda fig=None: kept.append(fig))
+    main(["figure", "mass-ratio-limit", str(results["mass-ratio-limit"]), "-o",
+          str(tmp_path / "m")])
+    (fig,) = kept
+    try:
+        panels = [ax for ax in fig.axes if ax.get_visible() and ax.get_title()]
+        assert len(panels) == 2
+        meshes = [next(c for c in ax.collections if isinstance(c, QuadMesh)
+                       and c.get_cmap().name == "RdBu") for ax in panels]
+        norms = {id(m.norm) for m in meshes}
+        assert len(norms) == 1
+        bars = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+        assert len(bars) == 1
+        dataset = open_result(results["mass-ratio-limit"])
+        v = valid_velocity_mm_s(dataset["velocity"].values, dataset["status"].values)
+        norm = meshes[0].norm
+        np.testing.assert_allclose([norm.vmin, norm.vmax], [v.min(), v.max()], rtol=1e-12)
+    finally:
+        close(fig)

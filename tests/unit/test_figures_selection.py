@@ -271,6 +271,14 @@ def test_velocity_curves_of_one_frequency_draw_one_curve(files, tmp_path, drawn)
             if line.get_label().endswith(" Hz")] == ["14.5 Hz"]
 
 
+def test_velocity_curves_of_a_list_of_frequencies_draw_just_those(files, tmp_path, drawn):
+    fig = _draw("velocity-curves", files, "paper", ["f=13,14.5,16"], tmp_path, drawn)
+    labels = [line.get_label() for line in fig.axes[0].lines
+              if line.get_label().endswith(" Hz")]
+    assert labels == ["13 Hz", "14.5 Hz", "16 Hz"]
+    assert "selected: f=13,14.5,16 Hz" in _texts(fig)
+
+
 def test_regime_map_of_one_frontier_branch(files, tmp_path, drawn):
     fig = _draw("regime-map", files, "paper", ["branch=0"], tmp_path, drawn)
     frontier = [line for line in fig.axes[0].lines if line.get_marker() == "o"
@@ -390,7 +398,7 @@ def test_the_calibration_of_the_issue_draws_at_one_acceleration(files, tmp_path,
     stem = tmp_path / "calibration"
     assert main(["figure", "steering-calibration", str(files["scene"]), "-o", str(stem),
                  "--sel", "a=7"]) == 0
-    assert "selected: a=7" in _title(stem.with_suffix(".png"))
+    assert "selected: a=7 m s-2" in _title(stem.with_suffix(".png"))
     assert main(["figure", "steering-calibration", str(files["scene"]), "-o",
                  str(tmp_path / "f"), "--sel", "f=14.2"]) == 1
     message = capsys.readouterr().err
@@ -515,3 +523,23 @@ def test_one_value_of_any_dimension_draws_or_says_why_not(figure, source, base, 
             assert all(p.exists() for p in written)
         finally:
             common.plt.close("all")
+
+
+def test_a_steering_title_names_the_disk_and_its_plates(files, tmp_path, drawn):
+    """The calibration scene's disk (radius 20 mm, cs = ck = 0.25) and both plates with
+    the values of CALIBRATION."""
+    fig = _draw("steering-calibration", files, "scene", [], tmp_path, drawn)
+    title = fig.get_suptitle()
+    assert "disk: radius 20 mm" in title and "$c_s$ = 0.25, $c_k$ = 0.25" in title
+    assert "head: $f_0$ = 14.44 Hz, Q = 17.5, $\\alpha$ = 64°, M = 0.08" in title
+    assert "tail: $f_0$ = 7.7 Hz, Q = 10" in title and "towards -90° at (-20, 0) mm" in title
+
+
+def test_the_fit_figure_names_the_fixed_parameters_and_p(files, tmp_path, drawn):
+    """FIT frees cs (ck follows it); the rest of its [structure] is fixed."""
+    fig = _draw("fit", files, "fit", [], tmp_path, drawn)
+    title = fig.get_suptitle()
+    assert ("fixed: $f_0$ = 14.44 Hz, Q = 17.5, $\\alpha$ = 64°, M = 0.08, "
+            "g = 9.8 m s$^{-2}$") in title
+    p = float(open_result(files["fit"])["chi2_p_value"])
+    assert f"(p = {p:.2g})" in title

@@ -143,3 +143,28 @@ def test_figure_of_a_one_way_file_says_one_way(figure, tmp_path):
     with Image.open(png) as image:
         title = dict(image.text)["Title"]
     assert "one-way coupling (the paper's model)" in title, title
+
+
+def _legend_labels(source, figure, tmp_path, monkeypatch) -> list[str]:
+    from study.figures import common
+
+    kept = []
+    close = common.plt.close
+    monkeypatch.setattr(common.plt, "close", lambda fig=None: kept.append(fig))
+    draw_figure(figure, open_result(source), tmp_path / figure)
+    (fig,) = kept
+    labels = [t.get_text() for legend in fig.legends + [ax.get_legend() for ax in fig.axes]
+              if legend is not None for t in legend.get_texts()]
+    close(fig)
+    return labels
+
+
+@pytest.mark.parametrize("figure", ["regime-map", "mass-ratio-limit"])
+def test_a_two_way_map_calls_the_lift_off_curve_a_base_at_rest_estimate(figure, results,
+                                                                       tmp_path, monkeypatch):
+    """The closed-form lift-off is that of a base at rest: with two-way coupling moving
+    points lie above it, so the legend must not say 'n < 0 above'."""
+    labels = _legend_labels(results[SOURCES[figure]], figure, tmp_path, monkeypatch)
+    assert any(label.startswith("lift-off of the base at rest (one-way estimate")
+               for label in labels), labels
+    assert not any("n < 0 above" in label for label in labels), labels

@@ -279,3 +279,109 @@ def test_the_readme_fit_snippet_runs_verbatim() -> None:
     exec(compile(code, "README.md (Measurements and fits)", "exec"), namespace)
     assert dict(zip(namespace["result"].names, namespace["result"].estimate.round(4),
                     strict=True)) == {"cs": 0.2453, "M": 0.0811}
+
+
+# ---------------------------------------------------------------------------
+# A fit says when its answer is doubtful
+
+
+def test_velocities_in_mm_per_s_are_refused_as_the_figures_refuse_them(tmp_path: Path,
+                                                                        capsys) -> None:
+    """The issue's case: 2.2 (mm/s) written where 0.0022 m/s belongs. study fit refuses
+    it before the search, with the message of study figure --measurements."""
+    folder = tmp_path / "lab"
+    folder.mkdir()
+    (folder / "measured.csv").write_text(MINIMAL_CSV.replace("0.0022,0.0001", "2.2,0.1"))
+    (folder / "fit.toml").write_text(MINIMAL_SPEC)
+    assert main(["fit", str(folder / "fit.toml"), "-o", str(tmp_path / "out.nc")]) == 1
+    message = capsys.readouterr().err
+    assert "measured.csv, line 4: velocity 2.2 m s-1" in message
+    assert "(m s-1, not mm/s)" in message
+    assert not (tmp_path / "out.nc").exists()
+    # the same check, and the same words, as a figure with these measurements
+    from study.measurements import MeasurementError, check_velocity_units, read_measurements
+
+    data = read_measurements(folder / "measured.csv")
+    with pytest.raises(MeasurementError) as err:
+        check_velocity_units(data, np.array([2]), 0.002)
+    assert str(err.value).split(" is ")[0] in message
+    assert str(err.value).split("times")[1] in message
+
+
+def test_a_clean_fit_gives_no_warning(tmp_path: Path) -> None:
+    """Thresholds of a known structure, exact: chi^2 ~ 0, p ~ 1, no bound touched."""
+    spec = make_spec(tmp_path, threshold_csv(true_thresholds(), 0.05),
+                     "M = [0.01, 0.5], cs = [0.05, 1.0]")
+    result = fit(spec)
+    np.testing.assert_allclose(result.estimate, [TRUE["M"], TRUE["cs"]], rtol=1e-5)
+    assert result.warnings == []
+    assert result.p_value > 0.999
+    assert json.loads(fit_dataset(spec, result).attrs["study_warnings"]) == []
+
+
+def test_data_the_model_cannot_describe_warn_with_chi2_per_dof_and_p(tmp_path: Path,
+                                                                    capsys) -> None:
+    """13 thresholds, 2 free parameters (11 dof), every other one 0.3 m s-2 off with
+    sigma 0.05: chi^2/dof ~ 11, far beyond chance."""
+    f = np.linspace(11.0, 18.0, 13)
+    values = true_thresholds(f) + 0.3 * (np.arange(f.size) % 2)
+    (tmp_path / "m.csv").write_text(threshold_csv(values, 0.05, f))
+    (tmp_path / "fit.toml").write_text(spec_text("M = [0.01, 0.5], cs = [0.05, 1.0]"))
+    spec = parse_fit_spec((tmp_path / "fit.toml").read_text(), str(tmp_path / "fit.toml"),
+                          base=tmp_path)
+    result = fit(spec)
+    from scipy.stats import chi2
+
+    assert result.dof == 11
+    np.testing.assert_allclose(result.p_value, chi2.sf(result.chi2, 11), rtol=1e-12)
+    assert result.chi2_per_dof > 3 and result.p_value < 1e-3
+    [warning] = [w for w in result.warnings if w.startswith("chi^2/dof")]
+    assert f"chi^2/dof = {result.chi2_per_dof:.3g} on 11 dof (p = {result.p_value:.2g}" \
+        in warning
+    assert "units of the measurements" in warning and "coupling = 'two-way'" in warning
+    # printed by the command, stored in the file, the file still valid
+    out = tmp_path / "out.nc"
+    assert main(["fit", str(tmp_path / "fit.toml"), "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "study: warning: chi^2/dof" in captured.err
+    assert f"p = {result.p_value:.3g}" in captured.out
+    validate_file(out)
+    ds = open_result(out)
+    assert warning in json.loads(ds.attrs["study_warnings"])
+    np.testing.assert_allclose(float(ds["chi2_p_value"]), result.p_value, rtol=1e-12)
+    assert main(["info", str(out)]) == 0
+    assert "  warning: chi^2/dof" in capsys.readouterr().out
+
+
+def test_an_estimate_pushed_onto_a_bound_warns_naming_it(tmp_path: Path) -> None:
+    """The data's cs is 0.25; the bounds allow no less than 0.3."""
+    spec = make_spec(tmp_path, threshold_csv(true_thresholds(), 0.05),
+                     "M = [0.01, 0.5], cs = [0.3, 1.0]")
+    result = fit(spec)
+    j = result.names.index("cs")
+    assert abs(result.estimate[j] - 0.3) <= 1e-3 * 0.7
+    bound = [w for w in result.warnings if "on its lower bound" in w]
+    assert len(bound) == 1 and bound[0].startswith("cs = 0.3")
+    assert "free.cs = [0.3, 1]" in bound[0] and "units of the measurements" in bound[0]
+    assert not any("M = " in w and "bound" in w for w in result.warnings)
+    assert result.on_bound == ["", "lower"]
+
+
+def test_the_command_flags_an_estimate_on_its_bound(tmp_path: Path, capsys) -> None:
+    (tmp_path / "m.csv").write_text(threshold_csv(true_thresholds(), 0.05))
+    (tmp_path / "fit.toml").write_text(spec_text("M = [0.01, 0.5], cs = [0.3, 1.0]"))
+    assert main(["fit", str(tmp_path / "fit.toml"), "-o", str(tmp_path / "out.nc")]) == 0
+    captured = capsys.readouterr()
+    [line] = [x for x in captured.out.splitlines() if x.lstrip().startswith("cs ")]
+    assert line.endswith("ON ITS LOWER BOUND")
+    assert "study: warning: cs = 0.3 is on its lower bound" in captured.err
+
+
+def test_an_edited_warning_list_is_refused(tmp_path: Path) -> None:
+    spec = make_spec(tmp_path, threshold_csv(true_thresholds(), 0.05), "M = [0.01, 0.5]")
+    dataset = fit_dataset(spec, fit(spec))
+    dataset.attrs["study_warnings"] = "none"
+    from study.store import write_atomic
+
+    with pytest.raises(ResultError, match="study_warnings is not a JSON list"):
+        write_atomic(dataset, tmp_path / "f.nc")

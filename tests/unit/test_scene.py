@@ -258,8 +258,7 @@ def test_a_planned_leg_ends_on_its_target_in_the_calibrated_model():
             pose = leg.predicted_pose
 
 
-def test_plan_scene_reaches_its_waypoints_without_noise(tmp_path):
-    text = "[scene]\nname = \"plan\"\nkind = \"plan\"\n" + DISK + """
+PLAN = "[scene]\nname = \"plan\"\nkind = \"plan\"\n" + DISK + """
 [plan]
 acceleration = 7.0
 forward = 14.2
@@ -271,7 +270,10 @@ waypoints = [[0.0, 0.03], [0.02, 0.04]]
 realisations = 1
 seed = 3
 """
-    spec = parse_scene(text, "plan.toml")
+
+
+def test_plan_scene_reaches_its_waypoints_without_noise(tmp_path):
+    spec = parse_scene(PLAN, "plan.toml")
     data = open_result(run_scene(spec, tmp_path / "plan.nc").output)
     miss = data.miss_distance
     assert list(data.strategy_name.values) == ["calibration", "open_loop", "closed_loop"]
@@ -302,3 +304,44 @@ def test_a_second_writer_is_refused_while_one_runs(tmp_path):
     with exclusive(output), pytest.raises(StudyBusy, match="another run"):
         run_scene(spec, output)
     assert not output.exists()
+
+
+CALIBRATION = ("[scene]\nname = \"cal\"\nkind = \"calibration\"\n" + DISK
+               + "\n[calibration]\nf = { values = [7.2, 14.2] }\na = { values = [7.0] }\n")
+
+
+@pytest.mark.parametrize(("text", "unit"), [
+    (TRAJECTORY, "s"),
+    (TRAJECTORY.replace("[trajectory]", "[trajectory]\nheading_drift_deg = 5.73"), "s"),
+    (CALIBRATION, "pt"),
+    (PLAN, "flight"),
+])
+def test_a_scene_reports_all_its_work_as_it_runs(text, unit):
+    """What the scene reports adds up to the work its progress bar counts, in order, and
+    the result is the same with or without a report."""
+    from study.scene import scene_dataset, scene_work
+
+    spec = parse_scene(text, "scene.toml")
+    work, named = scene_work(spec)
+    reports: list[float] = []
+    data = scene_dataset(spec, reports.append)
+    assert named == unit
+    assert all(r > 0 for r in reports)
+    assert_allclose(math.fsum(reports), work, rtol=1e-12)
+    if "heading_drift_deg" in text:  # a kick every drive period: progress all along
+        assert len(reports) > 10
+    if unit != "flight":  # the plan is checked by its own test; once is enough
+        quiet = scene_dataset(spec)
+        for name in data.data_vars:
+            assert data[name].equals(quiet[name]), name
+
+
+def test_study_run_shows_a_scene_s_progress_on_request(tmp_path, capsys):
+    path = tmp_path / "cal.toml"
+    path.write_text(CALIBRATION)
+    assert main(["run", str(path), "-o", str(tmp_path / "cal.nc"), "--progress"]) == 0
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0].startswith("cal:  50% 1/2 pt") and lines[-1].startswith("cal: 100% 2/2 pt")
+    assert lines[-1].endswith("done")
+    assert main(["run", str(path), "-o", str(tmp_path / "cal2.nc"), "--no-progress"]) == 0
+    assert capsys.readouterr().err == ""

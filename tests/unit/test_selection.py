@@ -53,7 +53,7 @@ def test_nearest_drops_the_dimension_and_keeps_the_value(result: xr.Dataset) -> 
     assert float(chosen["Q"]) == 30.0 and float(chosen["f"]) == 14.25
     np.testing.assert_array_equal(chosen["velocity"],
                                   result["velocity"].sel(Q=30.0, f=14.25))
-    assert chosen.attrs["study_selection"] == "Q=30 (asked 29), f=14.25 (asked 14.3)"
+    assert chosen.attrs["study_selection"] == "Q=30 (asked 29), f=14.25 Hz (asked 14.3)"
 
 
 def test_exact_finds_linspace_values_and_refuses_absent_ones(result: xr.Dataset) -> None:
@@ -88,7 +88,7 @@ def test_unknown_key_lists_every_coordinate(result: xr.Dataset) -> None:
 
 def test_fixed_parameters_are_checked_not_selected(result: xr.Dataset) -> None:
     same = select(result, ["alpha=64"])
-    assert same.sizes == result.sizes and same.attrs["study_selection"] == "alpha=64"
+    assert same.sizes == result.sizes and same.attrs["study_selection"] == "alpha=64 degree"
     with pytest.raises(SelectionError, match="alpha has the single value 64 in this file"):
         select(result, ["alpha=45"], source="map.nc")
 
@@ -121,3 +121,60 @@ def test_labels_and_dimensions_without_coordinates() -> None:
         select(scene, ["strategy_name=blind"], source="plan.nc")
     with pytest.raises(SelectionError, match="plate=5: 5 is outside the values of plate"):
         select(scene, ["plate=5"])
+
+
+def test_a_list_selects_each_nearest_and_keeps_the_dimension(result: xr.Dataset) -> None:
+    chosen = select(result, ["f=13,14.5,16.1"], source="map.nc")
+    assert chosen["velocity"].dims == result["velocity"].dims
+    assert chosen["f"].values.tolist() == [13.0, 14.5, 16.0]
+    # each value is the one a single selection finds
+    for asked, got in zip((13, 14.5, 16.1), chosen["f"].values, strict=True):
+        assert float(select(result, [f"f={asked}"])["f"]) == got
+    np.testing.assert_array_equal(chosen["velocity"],
+                                  result["velocity"].sel(f=[13.0, 14.5, 16.0]))
+    assert chosen.attrs["study_selection"] == "f=13,14.5,16 Hz (asked 13,14.5,16.1)"
+    # in the file's order, whatever the order asked
+    assert select(result, ["f=16,13"])["f"].values.tolist() == [13.0, 16.0]
+    assert parse_selection(["f=13, 14.5"]) == [Selection("f", "nearest", "13,14.5")]
+
+
+def test_an_exact_list_refuses_a_value_the_file_lacks(result: xr.Dataset) -> None:
+    chosen = select(result, ["f==13,14.25"])
+    assert chosen["f"].values.tolist() == [13.0, 14.25]
+    assert chosen.attrs["study_selection"] == "f=13,14.25 Hz"
+    with pytest.raises(SelectionError, match=r"map.nc: --sel f==13,14.3: f has no value "
+                       r"14.3 exactly; available: 41 values"):
+        select(result, ["f==13,14.3"], source="map.nc")
+
+
+def test_a_list_follows_the_single_value_rules(result: xr.Dataset) -> None:
+    with pytest.raises(SelectionError, match=r"--sel Q=15,38: 38 is outside the values "
+                       r"of Q \(15, 30\)"):
+        select(result, ["Q=15,38"], source="map.nc")
+    with pytest.raises(SelectionError, match=r"--sel f=14.3,14.35: 14.3 and 14.35 both "
+                       r"select f=14.25"):
+        select(result, ["f=14.3,14.35"])
+    chosen = select(result, ["M=0.08,0.066"])  # an auxiliary coordinate
+    assert chosen["m_add"].values.tolist() == [0.0, 1.7e-3]
+    scene = xr.Dataset(coords={"strategy_name": ("strategy", ["calibration", "open_loop",
+                                                               "closed_loop"])})
+    assert select(scene, ["strategy_name=closed_loop,calibration"])[
+        "strategy_name"].values.tolist() == ["calibration", "closed_loop"]
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("f=13,,14", "an empty value in the list"),
+    ("f=13,", "an empty value in the list"),
+    ("f=13,13", "13 listed twice"),
+    ("f=10:12,14", "a list takes values, not ranges"),
+    ("f=13,x", "'x' is not a number"),
+])
+def test_malformed_lists_are_refused(result: xr.Dataset, text: str, message: str) -> None:
+    with pytest.raises(SelectionError, match=message):
+        select(result, [text])
+
+
+def test_the_record_carries_units(result: xr.Dataset) -> None:
+    assert select(result, ["a=6:"]).attrs["study_selection"] == "a=6 to 12 m s-2 (3 values)"
+    assert select(result, ["m_add=0.0017"]).attrs["study_selection"] == "m_add=0.0017 kg"
+    assert select(result, ["Q=30"]).attrs["study_selection"] == "Q=30"  # units 1
