@@ -47,6 +47,7 @@ from study.units import (
 
 __all__ = [
     "EVENT_KINDS",
+    "FRICTION_LENGTH_RATIO",
     "OUTCOMES",
     "PLANAR_VERSION",
     "SLAVING",
@@ -187,6 +188,16 @@ class Plate:
         return self.attachment[0] * ey - self.attachment[1] * ex
 
 
+#: Friction length over the disk's radius [1]. At most 1: the friction torque's lever
+#: cannot exceed the contact's radius (uniform pressure gives 2/3). At least 1e-3: the
+#: kernel divides the friction torque by the length, and a shorter one makes the spin
+#: a stiff, nearly frictionless mode (a 1 s two-plate schedule: 3.5e3 steps at 2/3,
+#: 1e5 at 1e-3, 9.4e4 and 17 times the time at 1e-9, over 5 minutes at 1e-12, a
+#: ZeroDivisionError at 1e-300). Declared here only; the scene and design specs refuse
+#: a [disk] friction_length outside it through :class:`Disk`.
+FRICTION_LENGTH_RATIO = (1e-3, 1.0)
+
+
 @dataclass(frozen=True)
 class Disk:
     """The rigid disk, its contact with the table and its plates.
@@ -209,7 +220,8 @@ class Disk:
     friction_length : float, optional
         Length ``c`` of the ellipsoidal limit surface, the maximum friction torque
         over the maximum friction force [m]; default ``2 radius / 3`` (uniform
-        pressure on the full disk).
+        pressure on the full disk); ``radius / 1000 <= c <= radius``
+        (:data:`FRICTION_LENGTH_RATIO`).
     coupling : {"one-way", "two-way"}
         ``"one-way"`` (default, :data:`study.solver.DEFAULT_COUPLING`): each plate's mode
         is forced by the table only.
@@ -261,6 +273,12 @@ class Disk:
         for name, value in (("gyration_radius", gyration), ("friction_length", length)):
             if value <= 0.0:
                 raise ValueError(f"Disk: {name} = {value!r} [m] must be > 0")
+        low, high = FRICTION_LENGTH_RATIO
+        if not low * radius <= length <= high * radius:
+            raise ValueError(
+                f"Disk: friction_length = {length!r} m is out of range; allowed: radius/{1 / low:g} "
+                f"to radius ({low * radius:g} to {high * radius:g} m; uniform pressure gives "
+                "2 radius/3)")
         for name, value in (("radius", radius), ("plates", plates), ("cs", cs), ("ck", ck),
                             ("g", g), ("gyration_radius", gyration),
                             ("friction_length", length)):

@@ -17,7 +17,7 @@ from study.physics import (
     release_amplitudes,
     slip_amplitudes,
 )
-from study.structure import Structure
+from study.structure import Structure, check_structure
 
 __all__ = [
     "COUPLINGS",
@@ -118,14 +118,6 @@ def scalar_if_0d(values: NDArray[Any]) -> Any:
     """``values`` as is, or its numpy scalar when it is 0-d: the array functions return
     numpy scalars for scalar inputs, as numpy's ufuncs and scipy's functions do."""
     return values[()]
-
-
-def check_structure(structure: object) -> Structure:
-    if not isinstance(structure, Structure):
-        raise TypeError(
-            f"structure must be a study.Structure, got {type(structure).__name__}"
-        )
-    return structure
 
 
 def check_coupling(coupling: object) -> str:

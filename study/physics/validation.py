@@ -6,7 +6,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from study.inputs import as_real_array
-from study.units import HERTZ, METRE_PER_SECOND_SQUARED
+from study.units import HERTZ, METRE_PER_SECOND_SQUARED, SECOND
 
 
 def _checked(
@@ -21,7 +21,8 @@ def _checked(
         bad = ~np.isfinite(array) | ((array < lower) if inclusive else (array <= lower))
     if bad.any():
         index = tuple(int(i) for i in np.argwhere(bad)[0])
-        allowed = f"finite and {'>=' if inclusive else '>'} {lower:g} {units}"
+        allowed = (f"finite [{units}]" if lower == -np.inf
+                   else f"finite and {'>=' if inclusive else '>'} {lower:g} {units}")
         raise ValueError(
             f"{name} must be {allowed}; got {float(array[bad].ravel()[0])!r} at index {index}"
         )
@@ -54,3 +55,17 @@ def as_acceleration(a: ArrayLike) -> NDArray[np.float64]:
         (:class:`study.inputs.InputTypeError`).
     """
     return _checked("drive acceleration a", a, METRE_PER_SECOND_SQUARED, 0.0, inclusive=True)
+
+
+def as_time(t: ArrayLike) -> NDArray[np.float64]:
+    """Validate times: finite [s] (any sign).
+
+    Raises
+    ------
+    ValueError
+        Naming the first value that is not finite and its index.
+    TypeError
+        For strings, booleans, complex numbers or dates
+        (:class:`study.inputs.InputTypeError`).
+    """
+    return _checked("time t", t, SECOND, -np.inf, inclusive=True)
