@@ -276,9 +276,9 @@ class Disk:
         low, high = FRICTION_LENGTH_RATIO
         if not low * radius <= length <= high * radius:
             raise ValueError(
-                f"Disk: friction_length = {length!r} m is out of range; allowed: radius/{1 / low:g} "
-                f"to radius ({low * radius:g} to {high * radius:g} m; uniform pressure gives "
-                "2 radius/3)")
+                f"Disk: friction_length = {length!r} m is out of range; allowed: "
+                f"radius/{1 / low:g} to radius ({low * radius:g} to {high * radius:g} m; "
+                "uniform pressure gives 2 radius/3)")
         for name, value in (("radius", radius), ("plates", plates), ("cs", cs), ("ck", ck),
                             ("g", g), ("gyration_radius", gyration),
                             ("friction_length", length)):
