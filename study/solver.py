@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from study.inputs import InputTypeError, instance_of
 from study.kernels import orbit as _orbit
 from study.kernels import steady as _kernel
 from study.physics import (
@@ -17,7 +18,6 @@ from study.physics import (
     release_amplitudes,
     slip_amplitudes,
 )
-from study.inputs import InputTypeError, instance_of
 from study.structure import Structure, check_structure
 
 __all__ = [

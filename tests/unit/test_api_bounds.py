@@ -146,7 +146,7 @@ def test_settings_of_another_type_name_settings(bad) -> None:
     for call in (lambda: study.steady_state(S, 14.0, 8.0, bad),
                  lambda: study.steady_velocity(S, 14.0, 8.0, bad),
                  lambda: study.frontier(S, [8.0], (12.0, 16.0), num=5, settings=bad)):
-        with pytest.raises(TypeError, match="settings must be a study.SolverSettings"):
+        with pytest.raises(TypeError, match=r"settings must be a study\.SolverSettings"):
             call()
 
 
@@ -187,7 +187,7 @@ def test_a_time_that_is_not_a_finite_number_names_t(t) -> None:
 @pytest.mark.parametrize("bad", [None, "S", {"f0": 14.0}, 14.44])
 def test_a_structure_of_another_type_names_structure(function, bad) -> None:
     """An AttributeError ('NoneType' object has no attribute 'g') before."""
-    with pytest.raises(TypeError, match="structure must be a study.Structure"):
+    with pytest.raises(TypeError, match=r"structure must be a study\.Structure"):
         function(bad, 14.0)
 
 
@@ -196,5 +196,5 @@ def test_the_force_functions_name_structure(bad) -> None:
     for call in (lambda: study.force_amplitudes(bad, 14.0, 8.0),
                  lambda: study.normal_force(bad, 14.0, 8.0, 0.0),
                  lambda: study.tangential_force(bad, 14.0, 8.0, 0.0)):
-        with pytest.raises(TypeError, match="structure must be a study.Structure"):
+        with pytest.raises(TypeError, match=r"structure must be a study\.Structure"):
             call()
