@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
-from study.inputs import InputTypeError, bounded_number, count, real_number
+from study.inputs import InputTypeError, bounded_integer, bounded_number, real_number
 from study.physics import as_acceleration, as_frequency, thresholds
 from study.solver import (
     DEFAULT_COUPLING,
@@ -290,7 +290,7 @@ def frontier(
     coupling = check_coupling(coupling)
     settings = check_settings(settings)
     f_min, f_max = check_f_range(f_range)
-    num = count("num", num, 2, MAX_SCAN_POINTS)
+    num = bounded_integer("num", num, 2, MAX_SCAN_POINTS)
     tolerance = check_tolerance(tolerance, f_max)
     a = np.atleast_1d(as_acceleration(a))
     if a.ndim != 1:

@@ -24,8 +24,8 @@ __all__ = [
     "StudyWarning",
     "SuspectInputWarning",
     "as_real_array",
+    "bounded_integer",
     "bounded_number",
-    "count",
     "instance_of",
     "real_number",
     "tilt_looks_like_radians",
@@ -68,6 +68,10 @@ def _kind_name(value: Any) -> str:
         return "a complex number"
     if value is None:
         return "nothing (None)"
+    if isinstance(value, np.datetime64):
+        return "a date"
+    if isinstance(value, np.timedelta64):
+        return "a time span"
     return f"a {type(value).__name__}"
 
 
@@ -89,7 +93,9 @@ def real_number(name: str, value: Any, units: str = "") -> float:
         For anything but a real number: strings (even ``'30'``), booleans, complex
         numbers, ``None``, arrays of more than one value.
     """
-    is_real = isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+    # numpy registers its time spans as numbers: a time span is not a physical quantity.
+    is_real = isinstance(value, numbers.Real) and not isinstance(
+        value, bool | np.bool_ | np.timedelta64 | np.datetime64)
     if not is_real and isinstance(value, np.ndarray) and value.ndim == 0:
         is_real = value.dtype.kind in "iuf"
     if not is_real:
@@ -167,7 +173,8 @@ def bounded_number(name: str, value: Any, units: str = "", *, lower: float = -ma
     return number
 
 
-def count(name: str, value: Any, lower: int = 1, upper: int = np.iinfo(np.int64).max) -> int:
+def bounded_integer(name: str, value: Any, lower: int = 1,
+                    upper: int = np.iinfo(np.int64).max) -> int:
     """``value`` as an int within ``[lower, upper]`` (an int or numpy integer, not a bool).
 
     The default ``upper`` is the largest count the numba kernels take (int64).
@@ -179,7 +186,8 @@ def count(name: str, value: Any, lower: int = 1, upper: int = np.iinfo(np.int64)
     ValueError
         For a value outside the range, naming the argument and the range.
     """
-    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Integral):
+    if isinstance(value, bool | np.bool_ | np.timedelta64) or not isinstance(
+            value, numbers.Integral):
         raise InputTypeError(f"{name} must be an integer, got {_kind_name(value)}: "
                              f"{_short(value)}")
     number = int(value)

@@ -30,11 +30,24 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from study.inputs import (
+    as_real_array,
+    bounded_integer,
+    bounded_number,
+    instance_of,
+    real_number,
+)
 from study.kernels import planar as _kernel
 from study.physics import mode_response
 from study.solver import COUPLINGS, DEFAULT_COUPLING
+from study.specfile import load_schema
 from study.structure import require_finite
-from study.transient import IntegratorSettings, Schedule
+from study.transient import (
+    MAX_RECORDED_EVENTS,
+    IntegratorSettings,
+    Schedule,
+    check_integrator_settings,
+)
 from study.units import (
     DEGREE,
     DEGREE_PER_SECOND,
@@ -42,12 +55,15 @@ from study.units import (
     HERTZ,
     METRE,
     METRE_PER_SECOND,
+    METRE_PER_SECOND_SQUARED,
     spoken,
 )
 
 __all__ = [
+    "DRIVE_SCHEMA",
     "EVENT_KINDS",
     "FRICTION_LENGTH_RATIO",
+    "MAX_MARGIN_SAMPLES",
     "OUTCOMES",
     "PLANAR_VERSION",
     "SLAVING",
@@ -55,9 +71,12 @@ __all__ = [
     "PeriodicMotion",
     "PlanarTrajectory",
     "Plate",
+    "check_disk",
+    "check_drive",
     "contact_margins",
     "describe_disk",
     "disk_parameters",
+    "max_steady_periods",
     "periodic_motion",
     "rest_state",
     "simulate_planar",
@@ -290,10 +309,48 @@ class Disk:
         return 2.0 * self.radius
 
 
+#: Phases :func:`contact_margins` samples at most (one array of them per plate).
+MAX_MARGIN_SAMPLES = 1_000_000
+
+
+def check_disk(disk: object) -> Disk:
+    """``disk`` if it is a :class:`Disk`, else a TypeError
+    (:class:`study.inputs.InputTypeError`) naming the argument."""
+    return instance_of("disk", disk, Disk, "a study.planar.Disk")
+
+
+#: The spec schema whose ``$defs/parameter`` ranges of ``f`` and ``a`` bound a disk's
+#: drive (study.scene reads its specs against it): the API takes the same drives.
+DRIVE_SCHEMA = "study-scene-spec-v1"
+
+
+def max_steady_periods() -> int:
+    """Drive periods :func:`periodic_motion` integrates at most: the scene schema's
+    ``[calibration] max_periods`` maximum (1e5, about 100 s of one core)."""
+    schema = load_schema(DRIVE_SCHEMA)
+    return int(schema["properties"]["calibration"]["properties"]["max_periods"]["maximum"])
+
+
+def check_drive(f: object, a: object) -> tuple[float, float]:
+    """A disk's drive ``(f [Hz], a [m s-2])`` as floats, within the ranges the scene
+    spec schema declares for ``f`` and ``a`` (finite, ``0 < f <= 1e4``,
+    ``0 <= a <= 1e4``: beyond them the period or the forces overflow); else an error
+    naming the argument and the range."""
+    limits = load_schema(DRIVE_SCHEMA)["$defs"]["parameter"]
+    checked = []
+    for name, value, units in (("f", f, HERTZ), ("a", a, METRE_PER_SECOND_SQUARED)):
+        bounds = limits[name]
+        lower_open = "exclusiveMinimum" in bounds
+        checked.append(bounded_number(
+            name, value, units,
+            lower=bounds.get("exclusiveMinimum", bounds.get("minimum", -math.inf)),
+            lower_open=lower_open, upper=bounds.get("maximum", math.inf)))
+    return checked[0], checked[1]
+
+
 def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The kernel's plate table ``(P, 9)`` and disk vector ``(7,)``."""
-    if not isinstance(disk, Disk):
-        raise TypeError(f"disk must be a study.planar.Disk, got {type(disk).__name__}")
+    check_disk(disk)
     plates = np.empty((len(disk.plates), _kernel.N_PLATE_PARAMETERS))
     for i, plate in enumerate(disk.plates):
         w0 = plate.omega0
@@ -344,6 +401,9 @@ def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
     """Plate states ``(delta_1, delta_1', ...)`` on their steady response to
     ``a cos(2 pi f t + phase)`` at ``t = 0`` [m, m s-1]: a run started there has no
     mode transient."""
+    check_disk(disk)
+    f, a = check_drive(f, a)
+    phase = real_number("phase", phase)
     omega = 2.0 * math.pi * float(f)
     out = np.empty(2 * len(disk.plates))
     for i, plate in enumerate(disk.plates):
@@ -360,8 +420,9 @@ def rest_state(disk: Disk, pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
     with the disk at rest at ``pose`` ``(x [m], y [m], heading [degree])``: the plates at
     rest, or, with ``drive = (f [Hz], a [m s-2])``, on their steady response to it at
     drive phase 0."""
+    check_disk(disk)
     state = np.zeros(len(POSE_STATE) + 2 * len(disk.plates))
-    state[:3] = pose
+    state[:3] = as_real_array("pose", pose)
     if drive is not None:
         state[_kernel.MODES:] = steady_plate_states(disk, *drive)
     return state
@@ -506,7 +567,7 @@ def simulate_planar(
     plates, disk_vector = disk_parameters(disk)
     if not isinstance(schedule, Schedule):
         raise TypeError(f"schedule must be a study.transient.Schedule, got {type(schedule)}")
-    settings = IntegratorSettings() if settings is None else settings
+    settings = check_integrator_settings(settings)
     if settings.steps_per_period is not None:
         raise ValueError("simulate_planar: fixed steps (steps_per_period) are not offered; "
                          "set tolerance instead")
@@ -543,7 +604,7 @@ def simulate_planar(
     out_y = np.empty((out_t.size, size))
     out_mode = np.empty(out_t.size, dtype=np.int64)
     out_box = np.zeros(1, dtype=np.int64)
-    capacity = max(int(max_events), 0)
+    capacity = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
     ev_t = np.empty(capacity)
     ev_kind = np.empty(capacity, dtype=np.int64)
     ev_y = np.empty((capacity, size))
@@ -602,6 +663,7 @@ def simulate_planar(
 def state_names(disk: Disk) -> tuple[str, ...]:
     """Names of the components of a planar state vector (units: :data:`POSE_UNITS`,
     then each plate's ``delta`` [m] and ``delta'`` [m s-1])."""
+    check_disk(disk)
     names: list[str] = list(POSE_STATE)
     for plate in disk.plates:
         names += [f"delta_{plate.name}", f"delta_rate_{plate.name}"]
@@ -610,6 +672,7 @@ def state_names(disk: Disk) -> tuple[str, ...]:
 
 def describe_disk(disk: Disk) -> dict[str, Any]:
     """The disk's parameters as plain numbers (for provenance)."""
+    check_disk(disk)
     return {
         "radius": disk.radius, "cs": disk.cs, "ck": disk.ck, "g": disk.g,
         "gyration_radius": disk.gyration_radius, "friction_length": disk.friction_length,
@@ -710,11 +773,13 @@ def periodic_motion(
     from study.status import Status
 
     plates, disk_vector = disk_parameters(disk)
-    settings = IntegratorSettings() if settings is None else settings
-    f = require_finite("f", f)
-    a = require_finite("a", a)
-    if f <= 0.0 or a < 0.0:
-        raise ValueError(f"periodic_motion: need f > 0 [Hz] and a >= 0 [m s-2], got {f}, {a}")
+    settings = check_integrator_settings(settings)
+    f, a = check_drive(f, a)
+    max_periods = bounded_integer("max_periods", max_periods, 1, max_steady_periods())
+    max_orbit_period = bounded_integer("max_orbit_period", max_orbit_period, 1, max_periods)
+    if repeat_tolerance is not None:
+        repeat_tolerance = bounded_number("repeat_tolerance", repeat_tolerance, lower=0.0,
+                                          lower_open=True)
     omega = 2.0 * math.pi * f
     period = 1.0 / f
     disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / omega
@@ -836,6 +901,9 @@ def contact_margins(disk: Disk, f: float, a: float, samples: int = 512
         of the steady plate response [1]; negative means the rim (or the whole disk)
         leaves the table.
     """
+    check_disk(disk)
+    f, a = check_drive(f, a)
+    samples = bounded_integer("samples", samples, 1, MAX_MARGIN_SAMPLES)
     omega = 2.0 * math.pi * float(f)
     phase = np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False)
     normal = disk.g - float(a) * np.cos(phase)

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from study.inputs import bounded_integer, instance_of
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
 from study.solver import (
@@ -39,10 +40,12 @@ from study.structure import Structure
 __all__ = [
     "EVENT_KINDS",
     "INTEGRATOR_VERSION",
+    "MAX_RECORDED_EVENTS",
     "OUTCOMES",
     "IntegratorSettings",
     "Schedule",
     "Trajectory",
+    "check_integrator_settings",
     "integrated_steady_state",
     "model_parameters",
     "simulate",
@@ -69,6 +72,20 @@ OUTCOMES = {
     _kernel.RUN_BUDGET: "step_budget",
     _kernel.RUN_PARADOX: "friction_paradox",
 }
+
+
+#: Events :func:`simulate` (and :func:`study.planar.simulate_planar`) record at most:
+#: the arrays are allocated up front (about 50 bytes an event for the single plate).
+MAX_RECORDED_EVENTS = 10_000_000
+
+
+def check_integrator_settings(settings: object) -> IntegratorSettings:
+    """``settings``, or the defaults for None; a TypeError naming the argument for
+    anything but an :class:`IntegratorSettings`."""
+    if settings is None:
+        return IntegratorSettings()
+    return instance_of("settings", settings, IntegratorSettings,
+                       "a study.transient.IntegratorSettings")
 
 
 def _positive_int(name: str, value: object) -> int:
@@ -338,7 +355,8 @@ def simulate(
         Accuracy and budgets. ``steps_per_period`` and the step limits refer to the
         shortest drive period of the schedule.
     max_events : int
-        Events recorded (later ones are counted in ``events_dropped``).
+        Events recorded (later ones are counted in ``events_dropped``), 0 to
+        :data:`MAX_RECORDED_EVENTS`.
 
     Returns
     -------
@@ -347,7 +365,8 @@ def simulate(
     structure = check_structure(structure)
     if not isinstance(schedule, Schedule):
         raise TypeError(f"schedule must be a study.transient.Schedule, got {type(schedule)}")
-    settings = IntegratorSettings() if settings is None else settings
+    settings = check_integrator_settings(settings)
+    max_events = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
     p = model_parameters(structure, coupling)
     y = np.zeros(4) if initial_state is None else np.array(initial_state, dtype=float)
     if y.shape != (4,) or not np.all(np.isfinite(y)):
@@ -415,6 +434,7 @@ def steady_mode_state(structure: Structure, f: ArrayLike, a: ArrayLike) -> NDArr
         ``(..., 4)`` states ``(delta [m], delta' [m s-1], 0, 0)``; the exact solver's
         orbit starts from the same state.
     """
+    structure = check_structure(structure)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     amplitude = a_arr * math.cos(structure.alpha_rad) * mode_response(structure, f_arr)
     omega = 2.0 * np.pi * f_arr
@@ -465,7 +485,7 @@ def integrated_steady_state(
         ``FRICTION_PARADOX`` when a two-way slip has no unique solution.
     """
     structure = check_structure(structure)
-    settings = IntegratorSettings() if settings is None else settings
+    settings = check_integrator_settings(settings)
     p = model_parameters(structure, coupling)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape
