@@ -74,6 +74,9 @@ def tables(dataset: xr.Dataset, variables: list[str] | None = None,
     """
     instance_of("dataset", dataset, xr.Dataset, "an xarray.Dataset")
     names = list(dataset.data_vars)
+    if variables is not None and (isinstance(variables, str) or not isinstance(
+            variables, list | tuple) or not all(isinstance(v, str) for v in variables)):
+        raise ExportError(f"variables must be a list of variable names, got {variables!r}")
     if variables:
         unknown = [v for v in variables if v not in dataset.data_vars]
         if unknown:

@@ -59,7 +59,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
-from study.inputs import instance_of, real_number
+from study.inputs import bounded_integer, instance_of, real_number
 from study.measurements import QUANTITIES, check_velocity_units, read_measurements
 from study.physics import thresholds
 from study.solver import DEFAULT_COUPLING, steady_velocity
@@ -652,6 +652,8 @@ class FitResult:
 def bound_side(estimate: float, lower: float, upper: float) -> str:
     """``"lower"``/``"upper"`` when ``estimate`` is within :data:`BOUND_MARGIN` of the
     width ``upper - lower`` of that bound, else ``""`` (all in the parameter's units)."""
+    estimate, lower, upper = (real_number(name, value) for name, value in
+                              (("estimate", estimate), ("lower", lower), ("upper", upper)))
     margin = BOUND_MARGIN * (upper - lower)
     if abs(estimate - lower) <= margin:
         return "lower"
@@ -663,6 +665,8 @@ def bound_side(estimate: float, lower: float, upper: float) -> str:
 def chi2_p_value(chi2: float, dof: int) -> float:
     """``scipy.stats.chi2.sf(chi2, dof)``: how often a chi^2 this large arises by chance
     when the model holds and the sigma are right (NaN without a degree of freedom)."""
+    chi2 = real_number("chi2", chi2)
+    dof = bounded_integer("dof", dof, lower=-(2**63))
     if dof <= 0:
         return math.nan
     from scipy.stats import chi2 as distribution

@@ -23,7 +23,7 @@ radians; the conversion is made here, at the boundary (:func:`_to_kernel`,
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,11 +31,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from study.inputs import (
+    InputTypeError,
     as_real_array,
     bounded_integer,
     bounded_number,
     instance_of,
-    real_number,
 )
 from study.kernels import planar as _kernel
 from study.physics import mode_response
@@ -64,6 +64,7 @@ __all__ = [
     "EVENT_KINDS",
     "FRICTION_LENGTH_RATIO",
     "MAX_MARGIN_SAMPLES",
+    "MIN_DISK_FREQUENCY",
     "OUTCOMES",
     "PLANAR_VERSION",
     "SLAVING",
@@ -179,7 +180,8 @@ class Plate:
                     f"allowed: {allowed}"
                 )
             object.__setattr__(self, name, value)
-        point = tuple(self.attachment)
+        point = (tuple(self.attachment) if isinstance(self.attachment, Iterable)
+                 and not isinstance(self.attachment, str) else ())
         if len(point) != 2:
             raise ValueError(
                 f"Plate {self.name!r}: attachment must be (forward, left) [m], got "
@@ -265,6 +267,9 @@ class Disk:
         radius = require_finite("Disk.radius", self.radius)
         if radius <= 0.0:
             raise ValueError(f"Disk: radius = {radius!r} [m] must be > 0")
+        if isinstance(self.plates, Plate | str) or not isinstance(self.plates, Iterable):
+            raise InputTypeError("Disk: plates must be a non-empty sequence of "
+                                 f"study.planar.Plate, got {self.plates!r}")
         plates = tuple(self.plates)
         if not plates or not all(isinstance(p, Plate) for p in plates):
             raise ValueError("Disk: plates must be a non-empty sequence of study.planar.Plate")
@@ -331,21 +336,24 @@ def max_steady_periods() -> int:
     return int(schema["properties"]["calibration"]["properties"]["max_periods"]["maximum"])
 
 
+#: Lowest drive frequency of a disk [Hz] (a period of 11.6 days): the integrator's scales
+#: go as ``g / (2 pi f)^2``, which overflows (a ZeroDivisionError) near 1e-150 Hz, and
+#: a slower drive holds ``f0 / f`` plate oscillations a period (1e7 at 1e-6 Hz, the
+#: step budget of one call).
+MIN_DISK_FREQUENCY = 1e-6
+
+
 def check_drive(f: object, a: object) -> tuple[float, float]:
     """A disk's drive ``(f [Hz], a [m s-2])`` as floats, within the ranges the scene
-    spec schema declares for ``f`` and ``a`` (finite, ``0 < f <= 1e4``,
+    spec schema declares for ``f`` and ``a`` (finite, ``1e-6 <= f <= 1e4``,
     ``0 <= a <= 1e4``: beyond them the period or the forces overflow); else an error
     naming the argument and the range."""
     limits = load_schema(DRIVE_SCHEMA)["$defs"]["parameter"]
-    checked = []
-    for name, value, units in (("f", f, HERTZ), ("a", a, METRE_PER_SECOND_SQUARED)):
-        bounds = limits[name]
-        lower_open = "exclusiveMinimum" in bounds
-        checked.append(bounded_number(
-            name, value, units,
-            lower=bounds.get("exclusiveMinimum", bounds.get("minimum", -math.inf)),
-            lower_open=lower_open, upper=bounds.get("maximum", math.inf)))
-    return checked[0], checked[1]
+    f_value = bounded_number("f", f, HERTZ, lower=MIN_DISK_FREQUENCY,
+                             upper=limits["f"]["maximum"])
+    a_value = bounded_number("a", a, METRE_PER_SECOND_SQUARED, lower=limits["a"]["minimum"],
+                             upper=limits["a"]["maximum"])
+    return f_value, a_value
 
 
 def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -403,7 +411,7 @@ def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
     mode transient."""
     check_disk(disk)
     f, a = check_drive(f, a)
-    phase = real_number("phase", phase)
+    phase = bounded_number("phase", phase)
     omega = 2.0 * math.pi * float(f)
     out = np.empty(2 * len(disk.plates))
     for i, plate in enumerate(disk.plates):
@@ -422,7 +430,13 @@ def rest_state(disk: Disk, pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
     drive phase 0."""
     check_disk(disk)
     state = np.zeros(len(POSE_STATE) + 2 * len(disk.plates))
-    state[:3] = as_real_array("pose", pose)
+    where = as_real_array("pose", pose)
+    if where.shape != (3,):
+        raise ValueError(f"pose must be (x [m], y [m], heading [degree]), got {pose!r}")
+    state[:3] = where
+    if drive is not None and (isinstance(drive, str) or not isinstance(drive, Iterable)
+                              or len(tuple(drive)) != 2):
+        raise InputTypeError(f"drive must be (f [Hz], a [m s-2]), got {drive!r}")
     if drive is not None:
         state[_kernel.MODES:] = steady_plate_states(disk, *drive)
     return state

@@ -99,6 +99,10 @@ def parse_selection(texts: Iterable[str]) -> list[Selection]:
     SelectionError
         For a malformed option or a key given twice.
     """
+    if isinstance(texts, str):
+        texts = [texts]
+    if not isinstance(texts, Iterable):
+        raise SelectionError(f"selections must be a list of KEY=VALUE texts, got {texts!r}")
     selections: list[Selection] = []
     for text in texts:
         key, sep, value = str(text).partition("=")
@@ -282,6 +286,9 @@ def select(dataset: xr.Dataset, selections: Iterable[Selection | str],
     instance_of("dataset", dataset, xr.Dataset, "an xarray.Dataset")
     if isinstance(selections, str | Selection):
         selections = [selections]
+    if not isinstance(selections, Iterable):
+        raise SelectionError(f"selections must be a list of KEY=VALUE texts, got "
+                             f"{selections!r}")
     parsed = [s if isinstance(s, Selection) else None for s in selections]
     texts = [s for s in selections if not isinstance(s, Selection)]
     items = [s for s in parsed if s is not None] + parse_selection(texts)

@@ -85,7 +85,8 @@ class SolverSettings:
     def __post_init__(self) -> None:
         for name, largest in MAX_SOLVER_BUDGET.items():
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | np.integer):
+            if isinstance(value, bool | np.timedelta64) or not isinstance(
+                    value, int | np.integer):
                 raise InputTypeError(
                     f"solver setting {name!r} must be an integer >= 1 and <= {largest}, got "
                     f"{value!r}")
@@ -151,7 +152,7 @@ def check_settings(settings: object) -> SolverSettings:
 
 def check_coupling(coupling: object) -> str:
     """``coupling`` if it is one of :data:`COUPLINGS`, else a ValueError naming them."""
-    if coupling not in COUPLINGS:
+    if not isinstance(coupling, str) or coupling not in COUPLINGS:
         raise ValueError(f"coupling must be one of {', '.join(map(repr, COUPLINGS))}; "
                          f"got {coupling!r}")
     return str(coupling)
@@ -465,6 +466,8 @@ def steady_velocity(
     structure = check_structure(structure)
     settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    if f_arr.size == 0:  # nothing to solve (numba would be handed a broadcast view)
+        return np.empty(f_arr.shape), np.empty(f_arr.shape, dtype=np.int8)
     velocity, status = _velocity_only(
         structure, np.ascontiguousarray(f_arr).ravel(), np.ascontiguousarray(a_arr).ravel(),
         settings,

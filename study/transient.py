@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from study.inputs import bounded_integer, instance_of
+from study.inputs import as_real_array, bounded_integer, instance_of, real_number
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
 from study.solver import (
@@ -36,6 +36,7 @@ from study.solver import (
     scalar_if_0d,
 )
 from study.structure import Structure
+from study.units import DEGREE, SECOND
 
 __all__ = [
     "EVENT_KINDS",
@@ -89,13 +90,15 @@ def check_integrator_settings(settings: object) -> IntegratorSettings:
 
 
 def _positive_int(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+    if (isinstance(value, bool | np.timedelta64) or not isinstance(value, int | np.integer)
+            or value < 1):
         raise ValueError(f"integrator setting {name!r} must be an integer >= 1, got {value!r}")
     return int(value)
 
 
 def _positive_float(name: str, value: object, upper: float = math.inf) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+    if isinstance(value, bool | np.timedelta64) or not isinstance(
+            value, int | float | np.floating | np.integer):
         raise ValueError(f"integrator setting {name!r} must be a number, got {value!r}")
     number = float(value)
     if not (0.0 < number < upper):
@@ -202,7 +205,7 @@ class Schedule:
     def __post_init__(self) -> None:
         f = np.atleast_1d(as_frequency(self.frequency)).astype(float)
         a = np.atleast_1d(as_acceleration(self.acceleration)).astype(float)
-        d = np.atleast_1d(np.asarray(self.duration, dtype=float))
+        d = np.atleast_1d(as_real_array("Schedule: duration", self.duration, SECOND))
         if f.ndim != 1 or a.shape != f.shape or d.shape != f.shape:
             raise ValueError(
                 "Schedule: frequency, acceleration and duration must be 1-D of one length, "
@@ -212,7 +215,7 @@ class Schedule:
             raise ValueError("Schedule: at least one segment is needed")
         if not np.all(np.isfinite(d)) or np.any(d <= 0.0):
             raise ValueError(f"Schedule: every duration must be finite and > 0 [s], got {d}")
-        if not math.isfinite(float(self.phase)):
+        if not math.isfinite(real_number("Schedule: phase", self.phase, DEGREE)):
             raise ValueError(f"Schedule: phase must be finite [degree], got {self.phase!r}")
         for name, value in (("frequency", f), ("acceleration", a), ("duration", d)):
             value.setflags(write=False)
@@ -489,8 +492,9 @@ def integrated_steady_state(
     p = model_parameters(structure, coupling)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape
-    f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
-    a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
+    # Copies: numba is never handed a broadcast view (numpy warns of its write flag).
+    f_flat = np.array(f_arr, dtype=float).ravel()
+    a_flat = np.array(a_arr, dtype=float).ravel()
     n = f_flat.size
     omega = 2.0 * np.pi * f_flat
     period = 1.0 / f_flat  # f > 0, checked by as_frequency
