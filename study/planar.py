@@ -47,6 +47,7 @@ from study.transient import (
     IntegratorSettings,
     Schedule,
     check_integrator_settings,
+    integrator_budget_maxima,
 )
 from study.units import (
     DEGREE,
@@ -336,16 +337,16 @@ def max_steady_periods() -> int:
     return int(schema["properties"]["calibration"]["properties"]["max_periods"]["maximum"])
 
 
-#: Lowest drive frequency of a disk [Hz] (a period of 11.6 days): the integrator's scales
-#: go as ``g / (2 pi f)^2``, which overflows (a ZeroDivisionError) near 1e-150 Hz, and
-#: a slower drive holds ``f0 / f`` plate oscillations a period (1e7 at 1e-6 Hz, the
-#: step budget of one call).
-MIN_DISK_FREQUENCY = 1e-6
+#: Lowest drive frequency of a disk [Hz]: the integrator's scales go as
+#: ``g / (2 pi f)^2``, which overflows near 1e-154 Hz (1e-300 Hz ended in a
+#: ZeroDivisionError); 1e-100 Hz keeps them finite with a wide margin. Far below any
+#: drive: a scene's work budget refuses frequencies long before (1e-30 Hz).
+MIN_DISK_FREQUENCY = 1e-100
 
 
 def check_drive(f: object, a: object) -> tuple[float, float]:
     """A disk's drive ``(f [Hz], a [m s-2])`` as floats, within the ranges the scene
-    spec schema declares for ``f`` and ``a`` (finite, ``1e-6 <= f <= 1e4``,
+    spec schema declares for ``f`` and ``a`` (finite, ``1e-100 <= f <= 1e4``,
     ``0 <= a <= 1e4``: beyond them the period or the forces overflow); else an error
     naming the argument and the range."""
     limits = load_schema(DRIVE_SCHEMA)["$defs"]["parameter"]
@@ -790,7 +791,8 @@ def periodic_motion(
     settings = check_integrator_settings(settings)
     f, a = check_drive(f, a)
     max_periods = bounded_integer("max_periods", max_periods, 1, max_steady_periods())
-    max_orbit_period = bounded_integer("max_orbit_period", max_orbit_period, 1, max_periods)
+    max_orbit_period = bounded_integer("max_orbit_period", max_orbit_period, 1,
+                                       integrator_budget_maxima()["max_orbit_period"])
     if repeat_tolerance is not None:
         repeat_tolerance = bounded_number("repeat_tolerance", repeat_tolerance, lower=0.0,
                                           lower_open=True)

@@ -414,6 +414,8 @@ def refined_legs(disk: Disk, state: NDArray[np.float64], phase: float,
     """
     pose = (float(state[0]), float(state[1]), float(state[2]))
     aim = np.array(target, dtype=float)
+    iterations = bounded_integer("iterations", iterations, 1, MAX_PLAN_ITERATIONS)
+    tolerance = bounded_number("tolerance", tolerance, METRE, lower=0.0)
     legs = plan_leg(pose, (aim[0], aim[1]), commands)
     for _ in range(iterations):
         flight = _fly(disk, state, phase, legs, commands, settings, slaving)

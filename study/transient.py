@@ -35,12 +35,14 @@ from study.solver import (
     check_structure,
     scalar_if_0d,
 )
+from study.specfile import load_schema
 from study.structure import Structure
 from study.units import DEGREE, SECOND
 
 __all__ = [
     "EVENT_KINDS",
     "INTEGRATOR_VERSION",
+    "MAX_INTEGRATOR_STEPS",
     "MAX_RECORDED_EVENTS",
     "OUTCOMES",
     "IntegratorSettings",
@@ -48,6 +50,7 @@ __all__ = [
     "Trajectory",
     "check_integrator_settings",
     "integrated_steady_state",
+    "integrator_budget_maxima",
     "model_parameters",
     "simulate",
     "steady_mode_state",
@@ -73,6 +76,25 @@ OUTCOMES = {
     _kernel.RUN_BUDGET: "step_budget",
     _kernel.RUN_PARADOX: "friction_paradox",
 }
+
+
+#: Steps of one integrator call at most (``IntegratorSettings.max_steps``, default
+#: 1e7): about 1 us each, so a call that never ends a period stops within about 20
+#: minutes of one core.
+MAX_INTEGRATOR_STEPS = 1_000_000_000
+
+#: The spec schema whose ``[solver]`` maxima bound the integrator's budgets (a study
+#: spec's [solver] table is held to them): ``steps_per_period`` 1e4, ``max_periods``
+#: 1e5, ``max_orbit_period`` 1e3.
+BUDGET_SCHEMA = "study-spec-v1"
+
+
+def integrator_budget_maxima() -> dict[str, int]:
+    """The largest value of each integer budget of :class:`IntegratorSettings`."""
+    solver = load_schema(BUDGET_SCHEMA)["properties"]["solver"]["properties"]
+    maxima = {name: int(solver[name]["maximum"])
+              for name in ("steps_per_period", "max_periods", "max_orbit_period")}
+    return {**maxima, "max_steps": MAX_INTEGRATOR_STEPS}
 
 
 #: Events :func:`simulate` (and :func:`study.planar.simulate_planar`) record at most:
@@ -165,6 +187,11 @@ class IntegratorSettings:
         _positive_int("max_orbit_period", self.max_orbit_period)
         if self.period_tolerance is not None:
             _positive_float("period_tolerance", self.period_tolerance, 1.0)
+        for name, largest in integrator_budget_maxima().items():
+            value = getattr(self, name)
+            if value is not None and value > largest:
+                raise ValueError(f"integrator setting {name!r} = {value!r} is out of range; "
+                                 f"allowed: an integer >= 1 and <= {largest}")
 
     @property
     def resolved_period_tolerance(self) -> float:

@@ -269,6 +269,7 @@ NOT_FUZZED = {
     "design_dataset": "takes a DesignSpec and a DesignResult",
     "evaluate": "takes a DesignSpec",
     "max_steady_periods": "takes no argument",
+    "integrator_budget_maxima": "takes no argument",
     **{name: "a validator, run by every call above" for name in (
         "check_commands", "check_disk", "check_drive", "check_integrator_settings")},
 }

@@ -198,3 +198,109 @@ def test_the_force_functions_name_structure(bad) -> None:
                  lambda: study.tangential_force(bad, 14.0, 8.0, 0.0)):
         with pytest.raises(TypeError, match=r"structure must be a study\.Structure"):
             call()
+
+
+# -- the disk, the integrator and the planner ---------------------------------------------
+
+def _disk():
+    from study.planar import Disk, Plate
+
+    return Disk(radius=0.02, plates=(Plate(14.44, 17.5, 64.0, 0.08, 0.0, (0.005, 0.0)),),
+                cs=0.25)
+
+
+@pytest.mark.parametrize("f", [1e-300, 5e-324, 1e-101, 1e300, 1e4 * (1 + 1e-15)])
+def test_a_disk_drive_outside_the_finite_physics_names_f(f) -> None:
+    """periodic_motion(f=1e-300) ended in a ZeroDivisionError, f=1e300 in an
+    OverflowError; contact_margins and disk_limits in an OverflowError."""
+    from study.design import disk_limits
+    from study.planar import contact_margins, periodic_motion
+
+    for call in (lambda: periodic_motion(_disk(), f, 7.0, max_periods=2),
+                 lambda: contact_margins(_disk(), f, 7.0, samples=8),
+                 lambda: disk_limits(_disk(), f, samples=8)):
+        with pytest.raises(ValueError, match=r"^f = .* is out of range; allowed: finite and "
+                                             r">= 1e-100 Hz and <= 10000 Hz"):
+            call()
+
+
+def test_the_lowest_disk_drive_is_computed() -> None:
+    from study.planar import MIN_DISK_FREQUENCY, contact_margins
+
+    rim, normal = contact_margins(_disk(), MIN_DISK_FREQUENCY, 7.0, samples=8)
+    assert math.isfinite(rim) and math.isfinite(normal)
+
+
+def test_a_short_calibration_keeps_its_default_orbit_length() -> None:
+    """max_periods = 2 is schema-valid for a calibration: the default max_orbit_period
+    (8) is bounded by its own maximum, not by max_periods."""
+    from study.planar import periodic_motion
+
+    motion = periodic_motion(_disk(), 14.2, 7.0, max_periods=2)
+    assert motion.periods <= 2
+
+
+@pytest.mark.parametrize(("name", "value", "largest"), [
+    ("max_steps", 2**62, 1_000_000_000), ("max_periods", 10**9, 100_000),
+    ("steps_per_period", 10**6, 10_000), ("max_orbit_period", 10**4, 1000)])
+def test_integrator_budgets_are_bounded_as_in_a_spec(name, value, largest) -> None:
+    from study.transient import IntegratorSettings, integrator_budget_maxima
+
+    assert integrator_budget_maxima()[name] == largest
+    IntegratorSettings(**{name: largest})
+    with pytest.raises(ValueError, match=f"'{name}' = {value} is out of range; allowed: an "
+                                         f"integer >= 1 and <= {largest}"):
+        IntegratorSettings(**{name: value})
+
+
+@pytest.mark.parametrize("max_events", [2**40, -1, 1.5, math.inf, "10"])
+def test_recorded_events_are_bounded(max_events) -> None:
+    """2**40 allocated terabytes; inf ended in an OverflowError."""
+    from study.planar import simulate_planar
+    from study.transient import Schedule, simulate
+
+    schedule = Schedule(np.array([14.2]), np.array([7.0]), np.array([0.1]))
+    with pytest.raises(ValueError, match="max_events"):
+        simulate_planar(_disk(), schedule, max_events=max_events)
+    with pytest.raises(ValueError, match="max_events"):
+        simulate(S, schedule, max_events=max_events)
+
+
+def test_the_planner_bounds_its_loops_and_names_its_arguments() -> None:
+    from study.planner import MAX_PLAN_ITERATIONS, Command, plan_leg, refined_legs
+
+    commands = {name: Command(name, 14.0, 7.0, 0.01, 0.0, 0.1) for name in
+                ("forward", "backward", "left", "right")}
+    with pytest.raises(ValueError, match="iterations = 100001 is out of range"):
+        plan_leg((0.0, 0.0, 0.0), (0.01, 0.0), commands, MAX_PLAN_ITERATIONS + 1)
+    with pytest.raises(ValueError, match="commands must hold forward, backward, left, right; "
+                                         "missing: backward, left, right"):
+        plan_leg((0.0, 0.0, 0.0), (0.01, 0.0), {"forward": commands["forward"]})
+    with pytest.raises(ValueError, match="pose must be 3 finite numbers"):
+        plan_leg([], (0.01, 0.0), commands)  # an IndexError before
+    state = np.zeros(8)
+    with pytest.raises(ValueError, match="iterations = 4611686018427387904 is out of range"):
+        refined_legs(_disk(), state, 0.0, (0.01, 0.0), commands, iterations=2**62)
+
+
+@pytest.mark.parametrize("call", [
+    lambda: __import__("study.selection", fromlist=["x"]).select(None, ["f=1"]),
+    lambda: __import__("study.selection", fromlist=["x"]).available(None),
+    lambda: __import__("study.export", fromlist=["x"]).tables(None),
+    lambda: __import__("study.planar", fromlist=["x"]).state_names(None),
+    lambda: __import__("study.planar", fromlist=["x"]).describe_disk(None),
+    lambda: __import__("study.transient", fromlist=["x"]).steady_mode_state(None, 14.0, 8.0),
+], ids=["select", "available", "tables", "state_names", "describe_disk", "steady_mode_state"])
+def test_none_for_the_main_argument_names_it(call) -> None:
+    """Each ended in "AttributeError: 'NoneType' object has no attribute ..."."""
+    with pytest.raises(TypeError, match=r"^(dataset|disk|structure) must be "):
+        call()
+
+
+@pytest.mark.parametrize("parse", ["study.fit.parse_fit_spec", "study.design.parse_design_spec"])
+def test_a_spec_text_that_is_not_text_is_refused(parse) -> None:
+    import importlib
+
+    module, name = parse.rsplit(".", 1)
+    with pytest.raises(TypeError, match="the spec text must be a string"):
+        getattr(importlib.import_module(module), name)(None)
