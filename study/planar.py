@@ -47,6 +47,7 @@ from study.transient import (
     IntegratorSettings,
     Schedule,
     check_integrator_settings,
+    check_samples,
     integrator_budget_maxima,
 )
 from study.units import (
@@ -57,6 +58,7 @@ from study.units import (
     METRE,
     METRE_PER_SECOND,
     METRE_PER_SECOND_SQUARED,
+    SECOND,
     spoken,
 )
 
@@ -602,9 +604,12 @@ def simulate_planar(
     end = float(schedule.ends[-1])
     shortest = float(1.0 / np.max(schedule.frequency))
     if output_times is None:
-        out_t = np.linspace(0.0, end, max(2, math.ceil(end / shortest * 16) + 1))
+        count = max(2, math.ceil(end / shortest * 16) + 1)
+        check_samples(count, "the default output_times (16 a period of the schedule)")
+        out_t = np.linspace(0.0, end, count)
     else:
-        out_t = np.array(output_times, dtype=float).ravel()
+        out_t = as_real_array("output_times", output_times, SECOND).ravel()
+        check_samples(out_t.size, "output_times")
         if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
             raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
         if np.any(np.diff(out_t) < 0):

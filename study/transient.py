@@ -43,12 +43,14 @@ __all__ = [
     "EVENT_KINDS",
     "INTEGRATOR_VERSION",
     "MAX_INTEGRATOR_STEPS",
+    "MAX_OUTPUT_SAMPLES",
     "MAX_RECORDED_EVENTS",
     "OUTCOMES",
     "IntegratorSettings",
     "Schedule",
     "Trajectory",
     "check_integrator_settings",
+    "check_samples",
     "integrated_steady_state",
     "integrator_budget_maxima",
     "model_parameters",
@@ -100,6 +102,19 @@ def integrator_budget_maxima() -> dict[str, int]:
 #: Events :func:`simulate` (and :func:`study.planar.simulate_planar`) record at most:
 #: the arrays are allocated up front (about 50 bytes an event for the single plate).
 MAX_RECORDED_EVENTS = 10_000_000
+
+
+#: Samples a run returns at most (the trajectory arrays are allocated up front, about 60
+#: bytes a sample): a 1e12 s schedule's default grid asked for 6 PiB.
+MAX_OUTPUT_SAMPLES = 10_000_000
+
+
+def check_samples(count: int, what: str) -> None:
+    """Refuse a run of more than :data:`MAX_OUTPUT_SAMPLES` samples, naming ``what``."""
+    if count > MAX_OUTPUT_SAMPLES:
+        raise ValueError(f"{what}: {count:.3g} samples; allowed at most "
+                         f"{MAX_OUTPUT_SAMPLES:.3g} (give fewer output_times or a shorter "
+                         "schedule duration)")
 
 
 def check_integrator_settings(settings: object) -> IntegratorSettings:
@@ -408,9 +423,11 @@ def simulate(
     shortest = float(1.0 / np.max(schedule.frequency))
     if output_times is None:
         count = max(2, math.ceil(end / shortest * 64) + 1)
+        check_samples(count, "the default output_times (64 a period of the schedule)")
         out_t = np.linspace(0.0, end, count)
     else:
-        out_t = np.array(output_times, dtype=float).ravel()
+        out_t = as_real_array("output_times", output_times, SECOND).ravel()
+        check_samples(out_t.size, "output_times")
         if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
             raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
         if np.any(np.diff(out_t) < 0):

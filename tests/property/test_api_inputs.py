@@ -271,7 +271,8 @@ NOT_FUZZED = {
     "max_steady_periods": "takes no argument",
     "integrator_budget_maxima": "takes no argument",
     **{name: "a validator, run by every call above" for name in (
-        "check_commands", "check_disk", "check_drive", "check_integrator_settings")},
+        "check_commands", "check_disk", "check_drive", "check_integrator_settings",
+        "check_samples")},
 }
 
 

@@ -7,6 +7,7 @@ it (the spacing of doubles, int64, the declared maxima)."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -304,3 +305,19 @@ def test_a_spec_text_that_is_not_text_is_refused(parse) -> None:
     module, name = parse.rsplit(".", 1)
     with pytest.raises(TypeError, match="the spec text must be a string"):
         getattr(importlib.import_module(module), name)(None)
+
+
+@pytest.mark.parametrize("duration", [1e12, 1e300])
+def test_a_default_output_grid_too_large_to_hold_is_refused(duration) -> None:
+    """A 1e12 s schedule asked simulate for 6.4 PiB (MemoryError); 1e300 s ended in
+    numpy's "Maximum allowed size exceeded"."""
+    from study.planar import simulate_planar
+    from study.transient import MAX_OUTPUT_SAMPLES, Schedule, simulate
+
+    schedule = Schedule(np.array([14.0]), np.array([8.0]), np.array([duration]))
+    for run in (lambda: simulate(S, schedule), lambda: simulate_planar(_disk(), schedule)):
+        with pytest.raises(ValueError, match=r"the default output_times .* samples; allowed "
+                                             rf"at most {re.escape(f'{MAX_OUTPUT_SAMPLES:.3g}')}"):
+            run()
+    with pytest.raises(TypeError, match=r"output_times must be real numbers \[s\]"):
+        simulate(S, schedule, output_times=["0.1"])
