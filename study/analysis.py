@@ -14,12 +14,14 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
+from study.inputs import InputTypeError, bounded_integer, bounded_number, real_number
 from study.physics import as_acceleration, as_frequency, thresholds
 from study.solver import (
     DEFAULT_COUPLING,
     SolverSettings,
     SteadyState,
     check_coupling,
+    check_settings,
     check_structure,
     steady_state,
 )
@@ -31,8 +33,12 @@ from study.variables import VARIABLES
 __all__ = [
     "FRONTIER_CROSSING",
     "FRONTIER_JUMP",
+    "MAX_SCAN_POINTS",
+    "TOLERANCE_SPACINGS",
     "Frontier",
+    "check_f_range",
     "collapse_variable",
+    "finest_tolerance",
     "frontier",
     "frontier_from_grid",
     "lowest_threshold",
@@ -46,6 +52,54 @@ FRONTIER_CROSSING = 1
 FRONTIER_JUMP = 2
 
 _MOVING = (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
+
+#: The bisection of :func:`frontier` and the golden-section search of
+#: :func:`minimum_threshold` shrink a bracket of frequencies until it is narrower than
+#: their tolerance. Near a frequency ``f`` doubles are ``numpy.spacing(f)`` apart: a
+#: bracket a few spacings wide stops shrinking (its midpoint rounds to an end), so a
+#: tolerance below that is never reached and the loop never ends (1e-15 Hz near 14 Hz
+#: hung). The finest tolerance allowed is this many spacings at the bracket's upper end.
+TOLERANCE_SPACINGS = 4
+
+#: Points of the scanning grid of :func:`frontier` at most (``num`` times the
+#: accelerations): solved in one call, about 60 bytes each (6e8 bytes at most).
+MAX_SCAN_POINTS = 10_000_000
+
+
+def finest_tolerance(f_max: float) -> float:
+    """The finest tolerance [Hz] a search for frequencies up to ``f_max`` [Hz] can reach:
+    :data:`TOLERANCE_SPACINGS` spacings of doubles near ``f_max``."""
+    return TOLERANCE_SPACINGS * float(np.spacing(abs(float(f_max))))
+
+
+def check_tolerance(tolerance: object, f_max: float) -> float:
+    """``tolerance`` [Hz] as a float if it is finite and at least
+    :func:`finest_tolerance` of ``f_max``; else an error naming it and the smallest
+    value allowed."""
+    value = real_number("tolerance", tolerance, HERTZ)
+    finest = finest_tolerance(f_max)
+    if not (np.isfinite(value) and value >= finest):
+        raise ValueError(
+            f"tolerance = {tolerance!r} Hz is out of range; allowed: finite and >= {finest:.3g} "
+            f"Hz ({TOLERANCE_SPACINGS} spacings of doubles near the highest frequency "
+            f"searched, {float(f_max):g} Hz: a narrower bracket can never be reached)")
+    return value
+
+
+def check_f_range(f_range: object, name: str = "f_range") -> tuple[float, float]:
+    """``f_range`` as ``(f_min, f_max)`` [Hz] if it is two real numbers with
+    ``0 < f_min < f_max``, both finite; else an error naming the argument."""
+    try:
+        pair = tuple(f_range)  # type: ignore[arg-type]
+    except TypeError:
+        raise InputTypeError(f"{name} must be (f_min, f_max) [Hz], got {f_range!r}") from None
+    if len(pair) != 2:
+        raise ValueError(f"{name} must be (f_min, f_max) [Hz], two numbers; got {f_range!r}")
+    f_min, f_max = (bounded_number(f"{name}[{i}]", x, HERTZ, lower=0.0, lower_open=True)
+                    for i, x in enumerate(pair))
+    if not f_min < f_max:
+        raise ValueError(f"{name} must be (f_min, f_max) with f_min < f_max, got {f_range!r}")
+    return f_min, f_max
 
 
 @dataclass(frozen=True)
@@ -97,7 +151,8 @@ def frontier_from_grid(
     velocity, status : array_like
         ``(n_f, n_a)`` steady velocity [m s-1] and status on the grid.
     tolerance : float
-        Bracket width at which bisection stops [Hz].
+        Bracket width at which bisection stops [Hz], finite and at least
+        :func:`finest_tolerance` of the largest ``f``.
     settings : SolverSettings, optional
         Solver budgets for the refinement.
     solve : callable, optional
@@ -121,8 +176,8 @@ def frontier_from_grid(
             f"velocity and status must have shape (n_f, n_a) = {(f.size, a.size)}, got "
             f"{velocity.shape} and {status.shape}"
         )
-    if not tolerance > 0:
-        raise ValueError(f"tolerance must be > 0 Hz, got {tolerance!r}")
+    settings = check_settings(settings)
+    tolerance = check_tolerance(tolerance, float(np.max(f, initial=0.0)))
     moving = np.isin(status, _MOVING) & (velocity != 0)
     sign = np.sign(velocity)
     change = moving[:-1] & moving[1:] & (sign[:-1] * sign[1:] < 0)
@@ -198,9 +253,12 @@ def frontier(
     f_range : (float, float)
         Frequency interval searched [Hz], ``0 < f_min < f_max``.
     num : int, default 2001
-        Frequencies of the scanning grid [1], >= 2 (``numpy.linspace(*f_range, num)``).
+        Frequencies of the scanning grid [1], >= 2 (``numpy.linspace(*f_range, num)``);
+        ``num`` times the accelerations at most :data:`MAX_SCAN_POINTS`.
     tolerance : float, default 1e-9
-        Location accuracy of every root [Hz], > 0.
+        Location accuracy of every root [Hz], finite and at least
+        :func:`finest_tolerance` of ``f_max`` (4 spacings of doubles: 1.4e-14 Hz near
+        14 Hz), the finest a bisection can reach.
     settings : SolverSettings, optional
         Solver budgets.
     coupling : {"one-way", "two-way"}, default "one-way"
@@ -220,19 +278,26 @@ def frontier(
     Raises
     ------
     ValueError
-        For an empty or reversed ``f_range``, ``num < 2``, a bad ``coupling``.
+        For an empty, reversed or non-positive ``f_range``, ``num`` out of range, a
+        ``tolerance`` finer than doubles resolve, a bad ``coupling``; each names the
+        argument and what is allowed.
     TypeError
-        For a structure that is not a :class:`study.Structure`, or ``a`` not real
-        numbers.
+        For a structure that is not a :class:`study.Structure`, settings that are not
+        :class:`study.SolverSettings`, or ``a``, ``f_range``, ``num``, ``tolerance``
+        not real numbers (:class:`study.inputs.InputTypeError`, also a ValueError).
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
-    f_min, f_max = (float(x) for x in f_range)
-    if not f_min < f_max:
-        raise ValueError(f"f_range must be (f_min, f_max) with f_min < f_max, got {f_range!r}")
-    if num < 2:
-        raise ValueError(f"num must be >= 2, got {num!r}")
+    settings = check_settings(settings)
+    f_min, f_max = check_f_range(f_range)
+    num = bounded_integer("num", num, 2, MAX_SCAN_POINTS)
+    tolerance = check_tolerance(tolerance, f_max)
     a = np.atleast_1d(as_acceleration(a))
+    if a.ndim != 1:
+        raise ValueError(f"a must be a scalar or 1-D, got shape {a.shape}")
+    if num * a.size > MAX_SCAN_POINTS:
+        raise ValueError(f"num x a = {num} x {a.size} scanning points is too many; allowed: "
+                         f"at most {MAX_SCAN_POINTS:.3g}")
     f = np.linspace(f_min, f_max, num)
 
     def two_way(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64]
@@ -312,7 +377,10 @@ def lowest_threshold(structure: Structure, f_range: tuple[float, float] | None =
     on a 4001-point scanning grid of ``f_range`` (default ``0.5 f0 .. 2 f0``), to a
     bracket of ``tolerance`` [Hz].
     """
-    lo, hi = f_range if f_range is not None else (0.5 * structure.f0, 2.0 * structure.f0)
+    structure = check_structure(structure)
+    lo, hi = check_f_range(
+        f_range if f_range is not None else (0.5 * structure.f0, 2.0 * structure.f0))
+    tolerance = check_tolerance(tolerance, hi)
 
     def lower(f):
         a_plus, a_minus = thresholds(structure, f)
@@ -350,7 +418,8 @@ def minimum_threshold(structure: Structure, f_range: tuple[float, float] | None 
         Frequencies searched [Hz]; default ``(0.5 f0, 2 f0)``.
     tolerance : float, default 1e-10
         Bracket of the minimum's frequency at which the golden-section search stops
-        [Hz].
+        [Hz], finite and at least :func:`finest_tolerance` of the upper end of
+        ``f_range`` (the finest the search can reach).
     coupling : {"one-way", "two-way"}, default "one-way"
         The model named in the result (:data:`study.solver.DEFAULT_COUPLING`).
 
@@ -367,10 +436,21 @@ def minimum_threshold(structure: Structure, f_range: tuple[float, float] | None 
     --------
     lowest_threshold : the same two numbers as a tuple of floats.
     thresholds : ``a*_+`` and ``a*_-`` at any frequency.
+
+    Raises
+    ------
+    ValueError
+        For an empty, reversed or non-positive ``f_range``, a ``tolerance`` finer than
+        doubles resolve (or not finite), a bad ``coupling``, naming the argument.
+    TypeError
+        For a structure that is not a :class:`study.Structure`, or ``f_range`` or
+        ``tolerance`` not real numbers.
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
-    lo, hi = f_range if f_range is not None else (0.5 * structure.f0, 2.0 * structure.f0)
+    lo, hi = check_f_range(
+        f_range if f_range is not None else (0.5 * structure.f0, 2.0 * structure.f0))
+    tolerance = check_tolerance(tolerance, hi)
     a_min, f_min = lowest_threshold(structure, (lo, hi), tolerance=tolerance)
     plus, minus = thresholds(structure, f_min)
     return xr.Dataset(

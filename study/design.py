@@ -84,8 +84,16 @@ from numpy.typing import NDArray
 
 from study.fit import PARAMETERS as FIT_PARAMETERS
 from study.fit import Parameter
+from study.inputs import bounded_integer
 from study.physics import lift_off_acceleration, mode_response, thresholds
-from study.planar import Disk, contact_margins, periodic_motion
+from study.planar import (
+    MAX_MARGIN_SAMPLES,
+    Disk,
+    check_disk,
+    check_drive,
+    contact_margins,
+    periodic_motion,
+)
 from study.scene import disk_from_spec
 from study.solver import DEFAULT_COUPLING, steady_velocity
 from study.specfile import (
@@ -422,6 +430,9 @@ def disk_limits(disk: Disk, f: float, samples: int = PHASES) -> tuple[float, flo
     (maxima over ``samples`` phases; ``inf`` where never). With one plate along the
     heading ``a*`` is ``min(a*_+, a*_-)`` of the single-plate model (paper eq. 5).
     """
+    check_disk(disk)
+    f, _ = check_drive(f, 0.0)
+    samples = bounded_integer("samples", samples, 1, MAX_MARGIN_SAMPLES)
     omega = 2.0 * math.pi * float(f)
     phase = np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False)
     rotor = np.exp(1j * phase)

@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from study.inputs import instance_of
 from study.outputs import check_output
 
 __all__ = ["ExportError", "Table", "export_csv", "tables"]
@@ -68,8 +69,14 @@ def tables(dataset: xr.Dataset, variables: list[str] | None = None,
     ------
     ExportError
         For a variable that is not in the file (naming those that are).
+    TypeError
+        For a ``dataset`` that is not an :class:`xarray.Dataset`.
     """
+    instance_of("dataset", dataset, xr.Dataset, "an xarray.Dataset")
     names = list(dataset.data_vars)
+    if variables is not None and (isinstance(variables, str) or not isinstance(
+            variables, list | tuple) or not all(isinstance(v, str) for v in variables)):
+        raise ExportError(f"variables must be a list of variable names, got {variables!r}")
     if variables:
         unknown = [v for v in variables if v not in dataset.data_vars]
         if unknown:
@@ -220,6 +227,7 @@ def export_csv(dataset: xr.Dataset, output: str | Path, variables: list[str] | N
         ``overwrite``) another kind of file; checked for every table before any is
         written.
     """
+    instance_of("dataset", dataset, xr.Dataset, "an xarray.Dataset")
     output = check_output(output, "csv", inputs=inputs, overwrite=overwrite,
                           option="--csv")
     found = tables(dataset, variables, source)

@@ -50,7 +50,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -59,6 +59,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
+from study.inputs import bounded_integer, instance_of, real_number
 from study.measurements import QUANTITIES, check_velocity_units, read_measurements
 from study.physics import thresholds
 from study.solver import DEFAULT_COUPLING, steady_velocity
@@ -651,6 +652,8 @@ class FitResult:
 def bound_side(estimate: float, lower: float, upper: float) -> str:
     """``"lower"``/``"upper"`` when ``estimate`` is within :data:`BOUND_MARGIN` of the
     width ``upper - lower`` of that bound, else ``""`` (all in the parameter's units)."""
+    estimate, lower, upper = (real_number(name, value) for name, value in
+                              (("estimate", estimate), ("lower", lower), ("upper", upper)))
     margin = BOUND_MARGIN * (upper - lower)
     if abs(estimate - lower) <= margin:
         return "lower"
@@ -662,6 +665,8 @@ def bound_side(estimate: float, lower: float, upper: float) -> str:
 def chi2_p_value(chi2: float, dof: int) -> float:
     """``scipy.stats.chi2.sf(chi2, dof)``: how often a chi^2 this large arises by chance
     when the model holds and the sigma are right (NaN without a degree of freedom)."""
+    chi2 = real_number("chi2", chi2)
+    dof = bounded_integer("dof", dof, lower=-(2**63))
     if dof <= 0:
         return math.nan
     from scipy.stats import chi2 as distribution
@@ -1005,8 +1010,14 @@ def fitted_structure(params: dict[str, float | None], m_add: float = 0.0,
                      M: float | None = None) -> Structure:
     """The structure of a parameter set (``study_fitted_structure``) for one measured
     structure (``m_add`` with ``[structure.mass]``, or a given ``M``)."""
+    params = instance_of("params", params, Mapping, "a dict of parameter values")
+    needed = ("f0", "Q", "alpha", "cs", *(("m0", "m1_fraction") if "m0" in params else
+                                         () if M is not None else ("M",)))
+    missing = [name for name in needed if name not in params]
+    if missing:
+        raise ValueError(f"params must give {', '.join(needed)}; missing: {', '.join(missing)}")
     full = {"ck": None, "g": 9.8, **params}
-    return _structure(full, m_add, M)
+    return _structure(full, real_number("m_add", m_add, KILOGRAM), M)
 
 
 def quantity_units() -> dict[str, str]:

@@ -24,6 +24,9 @@ __all__ = [
     "StudyWarning",
     "SuspectInputWarning",
     "as_real_array",
+    "bounded_integer",
+    "bounded_number",
+    "instance_of",
     "real_number",
     "tilt_looks_like_radians",
 ]
@@ -65,6 +68,10 @@ def _kind_name(value: Any) -> str:
         return "a complex number"
     if value is None:
         return "nothing (None)"
+    if isinstance(value, np.datetime64):
+        return "a date"
+    if isinstance(value, np.timedelta64):
+        return "a time span"
     return f"a {type(value).__name__}"
 
 
@@ -86,7 +93,9 @@ def real_number(name: str, value: Any, units: str = "") -> float:
         For anything but a real number: strings (even ``'30'``), booleans, complex
         numbers, ``None``, arrays of more than one value.
     """
-    is_real = isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+    # numpy registers its time spans as numbers: a time span is not a physical quantity.
+    is_real = isinstance(value, numbers.Real) and not isinstance(
+        value, bool | np.bool_ | np.timedelta64 | np.datetime64)
     if not is_real and isinstance(value, np.ndarray) and value.ndim == 0:
         is_real = value.dtype.kind in "iuf"
     if not is_real:
@@ -134,6 +143,67 @@ def as_real_array(name: str, values: Any, units: str = "") -> NDArray[np.float64
         raise InputTypeError(
             f"{name} must be real numbers{where}, got {described}: {_short(values)}")
     return np.asarray(array, dtype=np.float64)
+
+
+def bounded_number(name: str, value: Any, units: str = "", *, lower: float = -math.inf,
+                   upper: float = math.inf, lower_open: bool = False,
+                   upper_open: bool = False) -> float:
+    """``value`` as a finite float within ``[lower, upper]`` (ends open as asked).
+
+    Raises
+    ------
+    InputTypeError
+        For anything but a real number (see :func:`real_number`).
+    ValueError
+        For NaN, an infinity or a value outside the range; the message names the
+        argument, its value and the allowed range.
+    """
+    number = real_number(name, value, units)
+    below = number <= lower if lower_open else number < lower
+    above = number >= upper if upper_open else number > upper
+    if not math.isfinite(number) or below or above:
+        where = f" {units}" if units not in ("", DIMENSIONLESS) else ""
+        ends = []
+        if lower > -math.inf:
+            ends.append(f"{'>' if lower_open else '>='} {lower:g}{where}")
+        if upper < math.inf:
+            ends.append(f"{'<' if upper_open else '<='} {upper:g}{where}")
+        allowed = " and ".join(["finite", *ends])
+        raise ValueError(f"{name} = {value!r} is out of range; allowed: {allowed}")
+    return number
+
+
+def bounded_integer(name: str, value: Any, lower: int = 1,
+                    upper: int = np.iinfo(np.int64).max) -> int:
+    """``value`` as an int within ``[lower, upper]`` (an int or numpy integer, not a bool).
+
+    The default ``upper`` is the largest count the numba kernels take (int64).
+
+    Raises
+    ------
+    InputTypeError
+        For anything but an integer (a float, even ``5.0``, a string, a boolean).
+    ValueError
+        For a value outside the range, naming the argument and the range.
+    """
+    if isinstance(value, bool | np.bool_ | np.timedelta64) or not isinstance(
+            value, numbers.Integral):
+        raise InputTypeError(f"{name} must be an integer, got {_kind_name(value)}: "
+                             f"{_short(value)}")
+    number = int(value)
+    if not lower <= number <= upper:
+        raise ValueError(f"{name} = {number!r} is out of range; allowed: >= {lower} and "
+                         f"<= {upper}")
+    return number
+
+
+def instance_of(name: str, value: Any, kind: type, described: str) -> Any:
+    """``value`` if it is a ``kind``, else an :class:`InputTypeError` naming the argument
+    and what it must be (``described``, e.g. ``"a study.Structure"``)."""
+    if not isinstance(value, kind):
+        raise InputTypeError(f"{name} must be {described}, got {_kind_name(value)}: "
+                             f"{_short(value)}")
+    return value
 
 
 def _short(values: Any) -> str:

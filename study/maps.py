@@ -10,7 +10,6 @@ dims, units, long names, flag attributes and status names are those of the file.
 
 from __future__ import annotations
 
-import numbers
 import os
 import warnings
 from collections.abc import Iterable, Mapping
@@ -25,6 +24,7 @@ from study.inputs import (
     RADIAN_LIKE_TILT,
     SuspectInputWarning,
     as_real_array,
+    bounded_integer,
     tilt_looks_like_radians,
 )
 from study.layout import (
@@ -35,6 +35,7 @@ from study.layout import (
     observables_by_grid,
     pad_branches,
 )
+from study.observables import OBSERVABLES
 from study.solver import DEFAULT_COUPLING, SolverSettings, check_coupling, check_structure
 from study.spec import STRUCTURE_PARAMETERS, StudySpec, parse_spec
 from study.structure import Structure
@@ -94,6 +95,10 @@ def _observables(observables: object) -> tuple[str, ...]:
     names = tuple(observables)
     if not all(isinstance(name, str) for name in names):
         raise TypeError(f"observables must be a list of names, got {observables!r}")
+    unknown = [name for name in names if name not in OBSERVABLES]
+    if unknown:
+        raise ValueError(f"observables: {', '.join(map(repr, unknown))} unknown; allowed: "
+                         f"{', '.join(OBSERVABLES)}")
     return names
 
 
@@ -233,8 +238,7 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
                           tuple(o.name for o in rows), tuple(o.name for o in points),
                           rectangles, method))
     threads = workers if workers is not None else (os.cpu_count() or 1)
-    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    threads = bounded_integer("workers", threads, 1)
     with ThreadPoolExecutor(max_workers=min(int(threads), len(tasks))) as pool:
         for task, (row_values, blocks) in zip(tasks, pool.map(compute_task, tasks),
                                               strict=True):

@@ -23,18 +23,33 @@ radians; the conversion is made here, at the boundary (:func:`_to_kernel`,
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from study.inputs import (
+    InputTypeError,
+    as_real_array,
+    bounded_integer,
+    bounded_number,
+    instance_of,
+)
 from study.kernels import planar as _kernel
 from study.physics import mode_response
 from study.solver import COUPLINGS, DEFAULT_COUPLING
+from study.specfile import load_schema
 from study.structure import require_finite
-from study.transient import IntegratorSettings, Schedule
+from study.transient import (
+    MAX_RECORDED_EVENTS,
+    IntegratorSettings,
+    Schedule,
+    check_integrator_settings,
+    check_samples,
+    integrator_budget_maxima,
+)
 from study.units import (
     DEGREE,
     DEGREE_PER_SECOND,
@@ -42,11 +57,17 @@ from study.units import (
     HERTZ,
     METRE,
     METRE_PER_SECOND,
+    METRE_PER_SECOND_SQUARED,
+    SECOND,
     spoken,
 )
 
 __all__ = [
+    "DRIVE_SCHEMA",
     "EVENT_KINDS",
+    "FRICTION_LENGTH_RATIO",
+    "MAX_MARGIN_SAMPLES",
+    "MIN_DISK_FREQUENCY",
     "OUTCOMES",
     "PLANAR_VERSION",
     "SLAVING",
@@ -54,9 +75,12 @@ __all__ = [
     "PeriodicMotion",
     "PlanarTrajectory",
     "Plate",
+    "check_disk",
+    "check_drive",
     "contact_margins",
     "describe_disk",
     "disk_parameters",
+    "max_steady_periods",
     "periodic_motion",
     "rest_state",
     "simulate_planar",
@@ -159,7 +183,8 @@ class Plate:
                     f"allowed: {allowed}"
                 )
             object.__setattr__(self, name, value)
-        point = tuple(self.attachment)
+        point = (tuple(self.attachment) if isinstance(self.attachment, Iterable)
+                 and not isinstance(self.attachment, str) else ())
         if len(point) != 2:
             raise ValueError(
                 f"Plate {self.name!r}: attachment must be (forward, left) [m], got "
@@ -187,6 +212,16 @@ class Plate:
         return self.attachment[0] * ey - self.attachment[1] * ex
 
 
+#: Friction length over the disk's radius [1]. At most 1: the friction torque's lever
+#: cannot exceed the contact's radius (uniform pressure gives 2/3). At least 1e-3: the
+#: kernel divides the friction torque by the length, and a shorter one makes the spin
+#: a stiff, nearly frictionless mode (a 1 s two-plate schedule: 3.5e3 steps at 2/3,
+#: 1e5 at 1e-3, 9.4e4 and 17 times the time at 1e-9, over 5 minutes at 1e-12, a
+#: ZeroDivisionError at 1e-300). Declared here only; the scene and design specs refuse
+#: a [disk] friction_length outside it through :class:`Disk`.
+FRICTION_LENGTH_RATIO = (1e-3, 1.0)
+
+
 @dataclass(frozen=True)
 class Disk:
     """The rigid disk, its contact with the table and its plates.
@@ -209,7 +244,8 @@ class Disk:
     friction_length : float, optional
         Length ``c`` of the ellipsoidal limit surface, the maximum friction torque
         over the maximum friction force [m]; default ``2 radius / 3`` (uniform
-        pressure on the full disk).
+        pressure on the full disk); ``radius / 1000 <= c <= radius``
+        (:data:`FRICTION_LENGTH_RATIO`).
     coupling : {"one-way", "two-way"}
         ``"one-way"`` (default, :data:`study.solver.DEFAULT_COUPLING`): each plate's mode
         is forced by the table only.
@@ -234,6 +270,9 @@ class Disk:
         radius = require_finite("Disk.radius", self.radius)
         if radius <= 0.0:
             raise ValueError(f"Disk: radius = {radius!r} [m] must be > 0")
+        if isinstance(self.plates, Plate | str) or not isinstance(self.plates, Iterable):
+            raise InputTypeError("Disk: plates must be a non-empty sequence of "
+                                 f"study.planar.Plate, got {self.plates!r}")
         plates = tuple(self.plates)
         if not plates or not all(isinstance(p, Plate) for p in plates):
             raise ValueError("Disk: plates must be a non-empty sequence of study.planar.Plate")
@@ -261,6 +300,12 @@ class Disk:
         for name, value in (("gyration_radius", gyration), ("friction_length", length)):
             if value <= 0.0:
                 raise ValueError(f"Disk: {name} = {value!r} [m] must be > 0")
+        low, high = FRICTION_LENGTH_RATIO
+        if not low * radius <= length <= high * radius:
+            raise ValueError(
+                f"Disk: friction_length = {length!r} m is out of range; allowed: "
+                f"radius/{1 / low:g} to radius ({low * radius:g} to {high * radius:g} m; "
+                "uniform pressure gives 2 radius/3)")
         for name, value in (("radius", radius), ("plates", plates), ("cs", cs), ("ck", ck),
                             ("g", g), ("gyration_radius", gyration),
                             ("friction_length", length)):
@@ -272,10 +317,51 @@ class Disk:
         return 2.0 * self.radius
 
 
+#: Phases :func:`contact_margins` samples at most (one array of them per plate).
+MAX_MARGIN_SAMPLES = 1_000_000
+
+
+def check_disk(disk: object) -> Disk:
+    """``disk`` if it is a :class:`Disk`, else a TypeError
+    (:class:`study.inputs.InputTypeError`) naming the argument."""
+    return instance_of("disk", disk, Disk, "a study.planar.Disk")
+
+
+#: The spec schema whose ``$defs/parameter`` ranges of ``f`` and ``a`` bound a disk's
+#: drive (study.scene reads its specs against it): the API takes the same drives.
+DRIVE_SCHEMA = "study-scene-spec-v1"
+
+
+def max_steady_periods() -> int:
+    """Drive periods :func:`periodic_motion` integrates at most: the scene schema's
+    ``[calibration] max_periods`` maximum (1e5, about 100 s of one core)."""
+    schema = load_schema(DRIVE_SCHEMA)
+    return int(schema["properties"]["calibration"]["properties"]["max_periods"]["maximum"])
+
+
+#: Lowest drive frequency of a disk [Hz]: the integrator's scales go as
+#: ``g / (2 pi f)^2``, which overflows near 1e-154 Hz (1e-300 Hz ended in a
+#: ZeroDivisionError); 1e-100 Hz keeps them finite with a wide margin. Far below any
+#: drive: a scene's work budget refuses frequencies long before (1e-30 Hz).
+MIN_DISK_FREQUENCY = 1e-100
+
+
+def check_drive(f: object, a: object) -> tuple[float, float]:
+    """A disk's drive ``(f [Hz], a [m s-2])`` as floats, within the ranges the scene
+    spec schema declares for ``f`` and ``a`` (finite, ``1e-100 <= f <= 1e4``,
+    ``0 <= a <= 1e4``: beyond them the period or the forces overflow); else an error
+    naming the argument and the range."""
+    limits = load_schema(DRIVE_SCHEMA)["$defs"]["parameter"]
+    f_value = bounded_number("f", f, HERTZ, lower=MIN_DISK_FREQUENCY,
+                             upper=limits["f"]["maximum"])
+    a_value = bounded_number("a", a, METRE_PER_SECOND_SQUARED, lower=limits["a"]["minimum"],
+                             upper=limits["a"]["maximum"])
+    return f_value, a_value
+
+
 def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The kernel's plate table ``(P, 9)`` and disk vector ``(7,)``."""
-    if not isinstance(disk, Disk):
-        raise TypeError(f"disk must be a study.planar.Disk, got {type(disk).__name__}")
+    check_disk(disk)
     plates = np.empty((len(disk.plates), _kernel.N_PLATE_PARAMETERS))
     for i, plate in enumerate(disk.plates):
         w0 = plate.omega0
@@ -326,6 +412,9 @@ def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
     """Plate states ``(delta_1, delta_1', ...)`` on their steady response to
     ``a cos(2 pi f t + phase)`` at ``t = 0`` [m, m s-1]: a run started there has no
     mode transient."""
+    check_disk(disk)
+    f, a = check_drive(f, a)
+    phase = bounded_number("phase", phase)
     omega = 2.0 * math.pi * float(f)
     out = np.empty(2 * len(disk.plates))
     for i, plate in enumerate(disk.plates):
@@ -342,8 +431,15 @@ def rest_state(disk: Disk, pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
     with the disk at rest at ``pose`` ``(x [m], y [m], heading [degree])``: the plates at
     rest, or, with ``drive = (f [Hz], a [m s-2])``, on their steady response to it at
     drive phase 0."""
+    check_disk(disk)
     state = np.zeros(len(POSE_STATE) + 2 * len(disk.plates))
-    state[:3] = pose
+    where = as_real_array("pose", pose)
+    if where.shape != (3,):
+        raise ValueError(f"pose must be (x [m], y [m], heading [degree]), got {pose!r}")
+    state[:3] = where
+    if drive is not None and (isinstance(drive, str) or not isinstance(drive, Iterable)
+                              or len(tuple(drive)) != 2):
+        raise InputTypeError(f"drive must be (f [Hz], a [m s-2]), got {drive!r}")
     if drive is not None:
         state[_kernel.MODES:] = steady_plate_states(disk, *drive)
     return state
@@ -488,7 +584,7 @@ def simulate_planar(
     plates, disk_vector = disk_parameters(disk)
     if not isinstance(schedule, Schedule):
         raise TypeError(f"schedule must be a study.transient.Schedule, got {type(schedule)}")
-    settings = IntegratorSettings() if settings is None else settings
+    settings = check_integrator_settings(settings)
     if settings.steps_per_period is not None:
         raise ValueError("simulate_planar: fixed steps (steps_per_period) are not offered; "
                          "set tolerance instead")
@@ -508,9 +604,12 @@ def simulate_planar(
     end = float(schedule.ends[-1])
     shortest = float(1.0 / np.max(schedule.frequency))
     if output_times is None:
-        out_t = np.linspace(0.0, end, max(2, math.ceil(end / shortest * 16) + 1))
+        count = max(2, math.ceil(end / shortest * 16) + 1)
+        check_samples(count, "the default output_times (16 a period of the schedule)")
+        out_t = np.linspace(0.0, end, count)
     else:
-        out_t = np.array(output_times, dtype=float).ravel()
+        out_t = as_real_array("output_times", output_times, SECOND).ravel()
+        check_samples(out_t.size, "output_times")
         if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
             raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
         if np.any(np.diff(out_t) < 0):
@@ -525,7 +624,7 @@ def simulate_planar(
     out_y = np.empty((out_t.size, size))
     out_mode = np.empty(out_t.size, dtype=np.int64)
     out_box = np.zeros(1, dtype=np.int64)
-    capacity = max(int(max_events), 0)
+    capacity = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
     ev_t = np.empty(capacity)
     ev_kind = np.empty(capacity, dtype=np.int64)
     ev_y = np.empty((capacity, size))
@@ -584,6 +683,7 @@ def simulate_planar(
 def state_names(disk: Disk) -> tuple[str, ...]:
     """Names of the components of a planar state vector (units: :data:`POSE_UNITS`,
     then each plate's ``delta`` [m] and ``delta'`` [m s-1])."""
+    check_disk(disk)
     names: list[str] = list(POSE_STATE)
     for plate in disk.plates:
         names += [f"delta_{plate.name}", f"delta_rate_{plate.name}"]
@@ -592,6 +692,7 @@ def state_names(disk: Disk) -> tuple[str, ...]:
 
 def describe_disk(disk: Disk) -> dict[str, Any]:
     """The disk's parameters as plain numbers (for provenance)."""
+    check_disk(disk)
     return {
         "radius": disk.radius, "cs": disk.cs, "ck": disk.ck, "g": disk.g,
         "gyration_radius": disk.gyration_radius, "friction_length": disk.friction_length,
@@ -692,11 +793,14 @@ def periodic_motion(
     from study.status import Status
 
     plates, disk_vector = disk_parameters(disk)
-    settings = IntegratorSettings() if settings is None else settings
-    f = require_finite("f", f)
-    a = require_finite("a", a)
-    if f <= 0.0 or a < 0.0:
-        raise ValueError(f"periodic_motion: need f > 0 [Hz] and a >= 0 [m s-2], got {f}, {a}")
+    settings = check_integrator_settings(settings)
+    f, a = check_drive(f, a)
+    max_periods = bounded_integer("max_periods", max_periods, 1, max_steady_periods())
+    max_orbit_period = bounded_integer("max_orbit_period", max_orbit_period, 1,
+                                       integrator_budget_maxima()["max_orbit_period"])
+    if repeat_tolerance is not None:
+        repeat_tolerance = bounded_number("repeat_tolerance", repeat_tolerance, lower=0.0,
+                                          lower_open=True)
     omega = 2.0 * math.pi * f
     period = 1.0 / f
     disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / omega
@@ -818,6 +922,9 @@ def contact_margins(disk: Disk, f: float, a: float, samples: int = 512
         of the steady plate response [1]; negative means the rim (or the whole disk)
         leaves the table.
     """
+    check_disk(disk)
+    f, a = check_drive(f, a)
+    samples = bounded_integer("samples", samples, 1, MAX_MARGIN_SAMPLES)
     omega = 2.0 * math.pi * float(f)
     phase = np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False)
     normal = disk.g - float(a) * np.cos(phase)

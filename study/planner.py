@@ -20,11 +20,13 @@ Angles: every heading, turn and turn rate a caller passes or gets back is in deg
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from study.inputs import as_real_array, bounded_integer, bounded_number, instance_of
 from study.planar import (
     POSE_STATE,
     SLAVING,
@@ -37,9 +39,11 @@ from study.planar import (
 )
 from study.status import Status
 from study.transient import IntegratorSettings, Schedule
+from study.units import METRE, SECOND
 
 __all__ = [
     "COMMANDS",
+    "MAX_PLAN_ITERATIONS",
     "STRATEGIES",
     "Command",
     "Leg",
@@ -47,6 +51,7 @@ __all__ = [
     "PlanRun",
     "arc_displacement",
     "calibrate_commands",
+    "check_commands",
     "plan_leg",
     "plan_route",
     "refined_legs",
@@ -99,6 +104,37 @@ class PlanError(ValueError):
     """The commands cannot reach a waypoint (e.g. a command does not move the disk)."""
 
 
+#: Iterations of :func:`plan_leg`'s search of one turn at most (its default is 100).
+MAX_PLAN_ITERATIONS = 100_000
+
+
+def _point(name: str, values: object, size: int) -> tuple[float, ...]:
+    """``values`` as ``size`` finite floats, else an error naming ``name``."""
+    array = as_real_array(name, values)
+    if array.shape != (size,) or not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be {size} finite numbers, got {_shown(values)}")
+    return tuple(float(v) for v in array)
+
+
+def _shown(values: object) -> str:
+    text = repr(values)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def check_commands(commands: object) -> dict[str, Command]:
+    """``commands`` if it maps every name of :data:`COMMANDS` to a :class:`Command`,
+    else an error naming the argument and what is missing."""
+    instance_of("commands", commands, Mapping, "a dict of study.planner.Command")
+    missing = [name for name in COMMANDS if name not in commands]  # type: ignore[operator]
+    if missing:
+        raise ValueError(f"commands must hold {', '.join(COMMANDS)}; missing: "
+                         f"{', '.join(missing)}")
+    for name in COMMANDS:
+        instance_of(f"commands[{name!r}]", commands[name],  # type: ignore[index]
+                    Command, "a study.planner.Command")
+    return dict(commands)  # type: ignore[call-overload]
+
+
 def calibrate_commands(disk: Disk, frequencies: dict[str, float], acceleration: float,
                        settings: IntegratorSettings | None = None,
                        slaving: float = SLAVING) -> dict[str, Command]:
@@ -147,6 +183,8 @@ def _rate(command: Command) -> float:
 def arc_displacement(command: Command, duration: float) -> tuple[float, float, float]:
     """Body-frame displacement ``(forward [m], left [m], turn [degree])`` after holding a
     command for ``duration`` [s] (a circular arc at constant body-frame velocity)."""
+    instance_of("command", command, Command, "a study.planner.Command")
+    duration = bounded_number("duration", duration, SECOND, lower=0.0)
     forward, left, turn = _arc(command, duration)
     return forward, left, math.degrees(turn)
 
@@ -237,7 +275,17 @@ def plan_leg(pose: tuple[float, float, float], target: tuple[float, float],
     its path is an arc of a circle, so a target farther than a third of that circle's
     diameter is approached through intermediate points on the line to it, each
     reached by its own fastest pair.
+    Raises
+    ------
+    ValueError, TypeError
+        For a ``pose`` or ``target`` that is not finite numbers, ``commands`` without
+        every command of :data:`COMMANDS`, ``iterations`` not an integer >= 1;
+        :class:`PlanError` when no command reaches a point.
     """
+    pose = _point("pose", pose, 3)
+    target = _point("target", target, 2)
+    commands = check_commands(commands)
+    iterations = bounded_integer("iterations", iterations, 1, MAX_PLAN_ITERATIONS)
     forward = commands["forward"]
     diameter = 2.0 * math.hypot(forward.forward_speed, forward.lateral_speed) / max(
         abs(_rate(forward)), 1e-300)
@@ -263,9 +311,14 @@ def plan_route(start: tuple[float, float, float], waypoints: NDArray[np.float64]
                commands: dict[str, Command]) -> list[list[Leg]]:
     """Legs to every waypoint in turn, each planned from the previous prediction
     (``start`` and the predicted poses: ``(x [m], y [m], heading [degree])``)."""
+    pose = _point("start", start, 3)
+    commands = check_commands(commands)
+    targets = as_real_array("waypoints", waypoints, METRE)
+    if targets.ndim != 2 or targets.shape[1] != 2:
+        raise ValueError(f"waypoints must be an (n, 2) array of (x, y) [m], got shape "
+                         f"{targets.shape}")
     route = []
-    pose = start
-    for target in np.asarray(waypoints, dtype=float):
+    for target in targets:
         legs = plan_leg(pose, (float(target[0]), float(target[1])), commands)
         route.append(legs)
         pose = legs[-1].predicted_pose
@@ -361,6 +414,8 @@ def refined_legs(disk: Disk, state: NDArray[np.float64], phase: float,
     """
     pose = (float(state[0]), float(state[1]), float(state[2]))
     aim = np.array(target, dtype=float)
+    iterations = bounded_integer("iterations", iterations, 1, MAX_PLAN_ITERATIONS)
+    tolerance = bounded_number("tolerance", tolerance, METRE, lower=0.0)
     legs = plan_leg(pose, (aim[0], aim[1]), commands)
     for _ in range(iterations):
         flight = _fly(disk, state, phase, legs, commands, settings, slaving)

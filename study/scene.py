@@ -347,12 +347,6 @@ def disk_from_spec(raw: dict[str, Any], path: str) -> Disk:
             f"allowed: radius/4 to radius ({low * radius:g} to {high * radius:g} m; a "
             "uniform disk has radius/sqrt(2))"
         )
-    if not disk.friction_length <= radius:
-        raise SceneError(
-            f"{path}: [disk] friction_length = {disk.friction_length!r} m is out of range; "
-            f"allowed: > 0 and <= radius ({radius:g} m): the friction torque's lever cannot "
-            "exceed the contact's radius (uniform pressure gives 2 radius/3)"
-        )
     return disk
 
 

@@ -42,6 +42,8 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from study.inputs import instance_of
+
 __all__ = ["Selection", "SelectionError", "available", "parse_selection", "select"]
 
 #: Relative tolerance of an exact match (values written by linspace, printed to 15 digits).
@@ -97,6 +99,10 @@ def parse_selection(texts: Iterable[str]) -> list[Selection]:
     SelectionError
         For a malformed option or a key given twice.
     """
+    if isinstance(texts, str):
+        texts = [texts]
+    if not isinstance(texts, Iterable):
+        raise SelectionError(f"selections must be a list of KEY=VALUE texts, got {texts!r}")
     selections: list[Selection] = []
     for text in texts:
         key, sep, value = str(text).partition("=")
@@ -146,6 +152,7 @@ def _values_text(values: np.ndarray) -> str:
 
 def available(dataset: xr.Dataset) -> str:
     """What a selection can name in ``dataset``: every coordinate and its values."""
+    instance_of("dataset", dataset, xr.Dataset, "an xarray.Dataset")
     lines = []
     for name in dataset.dims:
         if name in dataset.coords:
@@ -273,7 +280,15 @@ def select(dataset: xr.Dataset, selections: Iterable[Selection | str],
     ------
     SelectionError
         Naming ``source``, the selection, and the available keys or values.
+    TypeError
+        For a ``dataset`` that is not an :class:`xarray.Dataset`.
     """
+    instance_of("dataset", dataset, xr.Dataset, "an xarray.Dataset")
+    if isinstance(selections, str | Selection):
+        selections = [selections]
+    if not isinstance(selections, Iterable):
+        raise SelectionError(f"selections must be a list of KEY=VALUE texts, got "
+                             f"{selections!r}")
     parsed = [s if isinstance(s, Selection) else None for s in selections]
     texts = [s for s in selections if not isinstance(s, Selection)]
     items = [s for s in parsed if s is not None] + parse_selection(texts)

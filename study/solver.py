@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from study.inputs import InputTypeError, instance_of
 from study.kernels import orbit as _orbit
 from study.kernels import steady as _kernel
 from study.physics import (
@@ -17,16 +18,18 @@ from study.physics import (
     release_amplitudes,
     slip_amplitudes,
 )
-from study.structure import Structure
+from study.structure import Structure, check_structure
 
 __all__ = [
     "COUPLINGS",
     "DEFAULT_COUPLING",
+    "MAX_SOLVER_BUDGET",
     "Attractors",
     "SolverSettings",
     "SteadyState",
     "attractors",
     "check_coupling",
+    "check_settings",
     "steady_state",
     "steady_velocity",
 ]
@@ -43,6 +46,13 @@ COUPLINGS = ("one-way", "two-way")
 #: (signatures, spec readers, schemas' descriptions) derives from it.
 DEFAULT_COUPLING = "one-way"
 
+#: Largest budget of each :class:`SolverSettings` field: 100 times the default slip
+#: events (a budget only bounds pathological points; at about 1 us an event, 1e6 events
+#: and 1e6 circle-map iterations of 1e6 events each bound a point's work), and far
+#: below the int64 the kernels take (2**63 wrapped to a negative budget and answered
+#: NOT_CONVERGED). The spec schema's ``[solver]`` maxima are exported from it.
+MAX_SOLVER_BUDGET = {"max_events": 1_000_000, "max_map_iterations": 1_000_000}
+
 #: Inputs with at least this many points are solved by the parallel kernel.
 PARALLEL_THRESHOLD = 2048
 
@@ -55,23 +65,35 @@ class SolverSettings:
     ----------
     max_events : int
         Slip events followed from rest before a point is declared not converged
-        (``NonConvergence.EVENT_BUDGET``). An orbit with a stick closes after a few
-        events; the budget only bounds pathological points.
+        (``NonConvergence.EVENT_BUDGET``), 1 to 1e6 (:data:`MAX_SOLVER_BUDGET`). An
+        orbit with a stick closes after a few events; the budget only bounds
+        pathological points.
     max_map_iterations : int
         Iterations of the continuous-sliding circle map searched for an attracting
-        cycle before ``NonConvergence.NO_PERIODIC_ORBIT``.
+        cycle before ``NonConvergence.NO_PERIODIC_ORBIT``, 1 to 1e6.
+
+    Raises
+    ------
+    ValueError
+        A budget that is not an integer (:class:`study.inputs.InputTypeError`, also
+        a TypeError) or is outside its range, naming the field.
     """
 
     max_events: int = 10_000
     max_map_iterations: int = 5_000
 
     def __post_init__(self) -> None:
-        for name in ("max_events", "max_map_iterations"):
+        for name, largest in MAX_SOLVER_BUDGET.items():
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+            if isinstance(value, bool | np.timedelta64) or not isinstance(
+                    value, int | np.integer):
+                raise InputTypeError(
+                    f"solver setting {name!r} must be an integer >= 1 and <= {largest}, got "
+                    f"{value!r}")
+            if not 1 <= value <= largest:
                 raise ValueError(
-                    f"solver setting {name!r} must be an integer >= 1, got {value!r}"
-                )
+                    f"solver setting {name!r} must be an integer >= 1 and <= {largest}, got "
+                    f"{value!r}")
 
 
 @dataclass(frozen=True)
@@ -120,17 +142,17 @@ def scalar_if_0d(values: NDArray[Any]) -> Any:
     return values[()]
 
 
-def check_structure(structure: object) -> Structure:
-    if not isinstance(structure, Structure):
-        raise TypeError(
-            f"structure must be a study.Structure, got {type(structure).__name__}"
-        )
-    return structure
+def check_settings(settings: object) -> SolverSettings:
+    """``settings``, or the defaults for None; a TypeError naming the argument for
+    anything but a :class:`SolverSettings`."""
+    if settings is None:
+        return SolverSettings()
+    return instance_of("settings", settings, SolverSettings, "a study.SolverSettings")
 
 
 def check_coupling(coupling: object) -> str:
     """``coupling`` if it is one of :data:`COUPLINGS`, else a ValueError naming them."""
-    if coupling not in COUPLINGS:
+    if not isinstance(coupling, str) or coupling not in COUPLINGS:
         raise ValueError(f"coupling must be one of {', '.join(map(repr, COUPLINGS))}; "
                          f"got {coupling!r}")
     return str(coupling)
@@ -232,7 +254,7 @@ def steady_state(
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
-    settings = SolverSettings() if settings is None else settings
+    settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape
     f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
@@ -361,7 +383,7 @@ def attractors(
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
-    settings = SolverSettings() if settings is None else settings
+    settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape
     f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
@@ -442,8 +464,10 @@ def steady_velocity(
         result = steady_state(structure, f, a, settings, coupling=coupling)
         return result.velocity, result.status
     structure = check_structure(structure)
-    settings = SolverSettings() if settings is None else settings
+    settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    if f_arr.size == 0:  # nothing to solve (numba would be handed a broadcast view)
+        return np.empty(f_arr.shape), np.empty(f_arr.shape, dtype=np.int8)
     velocity, status = _velocity_only(
         structure, np.ascontiguousarray(f_arr).ravel(), np.ascontiguousarray(a_arr).ravel(),
         settings,

@@ -36,9 +36,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from study.analysis import finest_tolerance
 from study.observables import METHODS, variables_of
 from study.observables import OBSERVABLES as OBSERVABLE_REGISTRY
-from study.solver import DEFAULT_COUPLING, SolverSettings
+from study.solver import DEFAULT_COUPLING, MAX_SOLVER_BUDGET, SolverSettings
 from study.specfile import (
     SCHEMA_DIR,
     SpecError,
@@ -240,8 +241,9 @@ def _build_structure(params: dict[str, float], mass: MassModel | None) -> Struct
 def spec_schema() -> dict[str, Any]:
     """The JSON schema of study specs (``study/schemas/study-spec-v1.schema.json``).
 
-    The observables allowed and their descriptions come from :mod:`study.observables`
-    (the file on disk is their export, see :func:`export_spec_schema`).
+    The observables allowed and their descriptions come from :mod:`study.observables`,
+    the solver's budgets' maxima from :data:`study.solver.MAX_SOLVER_BUDGET` (the file
+    on disk is their export, see :func:`export_spec_schema`).
     """
     schema = load_schema(SPEC_SCHEMA)
     listed = schema["properties"]["study"]["properties"]["observables"]
@@ -251,6 +253,9 @@ def spec_schema() -> dict[str, Any]:
     items["enum"] = list(OBSERVABLES)
     items["description"] = "; ".join(
         f"{name}: {o.summary}" for name, o in OBSERVABLE_REGISTRY.items())
+    solver = schema["properties"]["solver"]["properties"]
+    for name, largest in MAX_SOLVER_BUDGET.items():
+        solver[name]["maximum"] = largest
     return schema
 
 
@@ -539,7 +544,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     # Bisection halves a bracket until it is narrower than the tolerance: below the
     # spacing of doubles near the largest f the midpoint stops moving and it never is.
     f_values = next(axis for axis in axes if axis.name == "f").values
-    finest = 4.0 * float(np.spacing(np.max(f_values)))
+    finest = finest_tolerance(np.max(f_values))
     if frontier_tolerance < finest:
         raise SpecError(
             f"{path}: [solver] frontier_tolerance = {frontier_tolerance!r} Hz is finer than "

@@ -31,6 +31,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from study.inputs import InputTypeError
+
 __all__ = [
     "AXIS_FORMS",
     "KINDS",
@@ -229,6 +231,9 @@ def parse_toml(text: str, path: str = "<string>") -> dict[str, Any]:
         For text larger than :data:`MAX_SPEC_BYTES`, TOML syntax errors, nesting
         deeper than :data:`MAX_NESTING` and ``inf`` or ``nan`` values.
     """
+    if not isinstance(text, str):
+        raise InputTypeError(f"{path}: the spec text must be a string (TOML), got "
+                             f"{type(text).__name__}")
     size = len(text.encode("utf-8", errors="surrogatepass"))
     if size > MAX_SPEC_BYTES:
         raise SpecError(f"{path}: spec is {size} bytes; allowed at most {MAX_SPEC_BYTES} bytes")

@@ -9,10 +9,16 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
 
-from study.inputs import RADIAN_LIKE_TILT, SuspectInputWarning, real_number, tilt_looks_like_radians
+from study.inputs import (
+    RADIAN_LIKE_TILT,
+    SuspectInputWarning,
+    instance_of,
+    real_number,
+    tilt_looks_like_radians,
+)
 from study.units import DEGREE, DIMENSIONLESS, HERTZ, METRE_PER_SECOND_SQUARED
 
-__all__ = ["Structure", "tilt_warnings"]
+__all__ = ["Structure", "check_structure", "tilt_warnings"]
 
 
 def require_finite(name: str, value: object) -> float:
@@ -169,3 +175,9 @@ class Structure:
             "ck": self.ck,
             "g": self.g,
         }
+
+
+def check_structure(structure: object, name: str = "structure") -> Structure:
+    """``structure`` if it is a :class:`Structure`, else a TypeError
+    (:class:`study.inputs.InputTypeError`) naming the argument."""
+    return instance_of(name, structure, Structure, "a study.Structure")

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from study.inputs import as_real_array, bounded_integer, instance_of, real_number
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
 from study.solver import (
@@ -34,16 +35,24 @@ from study.solver import (
     check_structure,
     scalar_if_0d,
 )
+from study.specfile import load_schema
 from study.structure import Structure
+from study.units import DEGREE, SECOND
 
 __all__ = [
     "EVENT_KINDS",
     "INTEGRATOR_VERSION",
+    "MAX_INTEGRATOR_STEPS",
+    "MAX_OUTPUT_SAMPLES",
+    "MAX_RECORDED_EVENTS",
     "OUTCOMES",
     "IntegratorSettings",
     "Schedule",
     "Trajectory",
+    "check_integrator_settings",
+    "check_samples",
     "integrated_steady_state",
+    "integrator_budget_maxima",
     "model_parameters",
     "simulate",
     "steady_mode_state",
@@ -71,14 +80,62 @@ OUTCOMES = {
 }
 
 
+#: Steps of one integrator call at most (``IntegratorSettings.max_steps``, default
+#: 1e7): about 1 us each, so a call that never ends a period stops within about 20
+#: minutes of one core.
+MAX_INTEGRATOR_STEPS = 1_000_000_000
+
+#: The spec schema whose ``[solver]`` maxima bound the integrator's budgets (a study
+#: spec's [solver] table is held to them): ``steps_per_period`` 1e4, ``max_periods``
+#: 1e5, ``max_orbit_period`` 1e3.
+BUDGET_SCHEMA = "study-spec-v1"
+
+
+def integrator_budget_maxima() -> dict[str, int]:
+    """The largest value of each integer budget of :class:`IntegratorSettings`."""
+    solver = load_schema(BUDGET_SCHEMA)["properties"]["solver"]["properties"]
+    maxima = {name: int(solver[name]["maximum"])
+              for name in ("steps_per_period", "max_periods", "max_orbit_period")}
+    return {**maxima, "max_steps": MAX_INTEGRATOR_STEPS}
+
+
+#: Events :func:`simulate` (and :func:`study.planar.simulate_planar`) record at most:
+#: the arrays are allocated up front (about 50 bytes an event for the single plate).
+MAX_RECORDED_EVENTS = 10_000_000
+
+
+#: Samples a run returns at most (the trajectory arrays are allocated up front, about 60
+#: bytes a sample): a 1e12 s schedule's default grid asked for 6 PiB.
+MAX_OUTPUT_SAMPLES = 10_000_000
+
+
+def check_samples(count: int, what: str) -> None:
+    """Refuse a run of more than :data:`MAX_OUTPUT_SAMPLES` samples, naming ``what``."""
+    if count > MAX_OUTPUT_SAMPLES:
+        raise ValueError(f"{what}: {count:.3g} samples; allowed at most "
+                         f"{MAX_OUTPUT_SAMPLES:.3g} (give fewer output_times or a shorter "
+                         "schedule duration)")
+
+
+def check_integrator_settings(settings: object) -> IntegratorSettings:
+    """``settings``, or the defaults for None; a TypeError naming the argument for
+    anything but an :class:`IntegratorSettings`."""
+    if settings is None:
+        return IntegratorSettings()
+    return instance_of("settings", settings, IntegratorSettings,
+                       "a study.transient.IntegratorSettings")
+
+
 def _positive_int(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+    if (isinstance(value, bool | np.timedelta64) or not isinstance(value, int | np.integer)
+            or value < 1):
         raise ValueError(f"integrator setting {name!r} must be an integer >= 1, got {value!r}")
     return int(value)
 
 
 def _positive_float(name: str, value: object, upper: float = math.inf) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+    if isinstance(value, bool | np.timedelta64) or not isinstance(
+            value, int | float | np.floating | np.integer):
         raise ValueError(f"integrator setting {name!r} must be a number, got {value!r}")
     number = float(value)
     if not (0.0 < number < upper):
@@ -145,6 +202,11 @@ class IntegratorSettings:
         _positive_int("max_orbit_period", self.max_orbit_period)
         if self.period_tolerance is not None:
             _positive_float("period_tolerance", self.period_tolerance, 1.0)
+        for name, largest in integrator_budget_maxima().items():
+            value = getattr(self, name)
+            if value is not None and value > largest:
+                raise ValueError(f"integrator setting {name!r} = {value!r} is out of range; "
+                                 f"allowed: an integer >= 1 and <= {largest}")
 
     @property
     def resolved_period_tolerance(self) -> float:
@@ -185,7 +247,7 @@ class Schedule:
     def __post_init__(self) -> None:
         f = np.atleast_1d(as_frequency(self.frequency)).astype(float)
         a = np.atleast_1d(as_acceleration(self.acceleration)).astype(float)
-        d = np.atleast_1d(np.asarray(self.duration, dtype=float))
+        d = np.atleast_1d(as_real_array("Schedule: duration", self.duration, SECOND))
         if f.ndim != 1 or a.shape != f.shape or d.shape != f.shape:
             raise ValueError(
                 "Schedule: frequency, acceleration and duration must be 1-D of one length, "
@@ -195,7 +257,7 @@ class Schedule:
             raise ValueError("Schedule: at least one segment is needed")
         if not np.all(np.isfinite(d)) or np.any(d <= 0.0):
             raise ValueError(f"Schedule: every duration must be finite and > 0 [s], got {d}")
-        if not math.isfinite(float(self.phase)):
+        if not math.isfinite(real_number("Schedule: phase", self.phase, DEGREE)):
             raise ValueError(f"Schedule: phase must be finite [degree], got {self.phase!r}")
         for name, value in (("frequency", f), ("acceleration", a), ("duration", d)):
             value.setflags(write=False)
@@ -338,7 +400,8 @@ def simulate(
         Accuracy and budgets. ``steps_per_period`` and the step limits refer to the
         shortest drive period of the schedule.
     max_events : int
-        Events recorded (later ones are counted in ``events_dropped``).
+        Events recorded (later ones are counted in ``events_dropped``), 0 to
+        :data:`MAX_RECORDED_EVENTS`.
 
     Returns
     -------
@@ -347,7 +410,8 @@ def simulate(
     structure = check_structure(structure)
     if not isinstance(schedule, Schedule):
         raise TypeError(f"schedule must be a study.transient.Schedule, got {type(schedule)}")
-    settings = IntegratorSettings() if settings is None else settings
+    settings = check_integrator_settings(settings)
+    max_events = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
     p = model_parameters(structure, coupling)
     y = np.zeros(4) if initial_state is None else np.array(initial_state, dtype=float)
     if y.shape != (4,) or not np.all(np.isfinite(y)):
@@ -359,9 +423,11 @@ def simulate(
     shortest = float(1.0 / np.max(schedule.frequency))
     if output_times is None:
         count = max(2, math.ceil(end / shortest * 64) + 1)
+        check_samples(count, "the default output_times (64 a period of the schedule)")
         out_t = np.linspace(0.0, end, count)
     else:
-        out_t = np.array(output_times, dtype=float).ravel()
+        out_t = as_real_array("output_times", output_times, SECOND).ravel()
+        check_samples(out_t.size, "output_times")
         if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
             raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
         if np.any(np.diff(out_t) < 0):
@@ -415,6 +481,7 @@ def steady_mode_state(structure: Structure, f: ArrayLike, a: ArrayLike) -> NDArr
         ``(..., 4)`` states ``(delta [m], delta' [m s-1], 0, 0)``; the exact solver's
         orbit starts from the same state.
     """
+    structure = check_structure(structure)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     amplitude = a_arr * math.cos(structure.alpha_rad) * mode_response(structure, f_arr)
     omega = 2.0 * np.pi * f_arr
@@ -465,12 +532,13 @@ def integrated_steady_state(
         ``FRICTION_PARADOX`` when a two-way slip has no unique solution.
     """
     structure = check_structure(structure)
-    settings = IntegratorSettings() if settings is None else settings
+    settings = check_integrator_settings(settings)
     p = model_parameters(structure, coupling)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape
-    f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
-    a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
+    # Copies: numba is never handed a broadcast view (numpy warns of its write flag).
+    f_flat = np.array(f_arr, dtype=float).ravel()
+    a_flat = np.array(a_arr, dtype=float).ravel()
     n = f_flat.size
     omega = 2.0 * np.pi * f_flat
     period = 1.0 / f_flat  # f > 0, checked by as_frequency

@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from study.physics.validation import as_acceleration, as_frequency
-from study.structure import Structure
+from study.physics.validation import as_acceleration, as_frequency, as_time
+from study.structure import Structure, check_structure
 
 __all__ = [
     "force_amplitudes",
@@ -56,6 +56,8 @@ def mode_response(structure: Structure, f: ArrayLike) -> NDArray[np.complex128]:
         ``G = 1 / (w0^2 - w^2 + i w0 w / Q)`` [s2], the shape of ``f`` (a
         ``numpy.complex128`` for a scalar ``f``).
     """
+    if not all(hasattr(structure, name) for name in ("omega0", "Q")):
+        check_structure(structure)  # study.planar's plates have a mode too: duck-typed
     w = _omega(f)
     w0 = structure.omega0
     return 1.0 / (w0 * w0 - w * w + 1j * w0 * w / structure.Q)
@@ -87,6 +89,7 @@ def force_amplitudes(
         ``n(t) = g + Re[N e^{i w t}]`` and ``tau(t) = Re[T e^{i w t}]`` [m s-2], the
         broadcast shape of ``f`` and ``a`` (numpy scalars for scalars).
     """
+    check_structure(structure)
     a = as_acceleration(a)
     k = _coupling(structure, f)
     alpha = structure.alpha_rad
@@ -109,7 +112,7 @@ def normal_force(
     a : array_like
         Drive acceleration amplitude [m s-2].
     t : array_like
-        Time [s], phase origin at a maximum of the table's upward acceleration.
+        Time [s], finite, phase origin at a maximum of the table's upward acceleration.
 
     Returns
     -------
@@ -118,7 +121,7 @@ def normal_force(
         ``numpy.float64`` for scalars); the model holds only where it is positive.
     """
     normal, _ = force_amplitudes(structure, f, a)
-    phase = np.exp(1j * _omega(f) * np.asarray(t, dtype=np.float64))
+    phase = np.exp(1j * _omega(f) * as_time(t))
     return structure.g + (normal * phase).real
 
 
@@ -136,7 +139,7 @@ def tangential_force(
         ``t`` (a ``numpy.float64`` for scalars).
     """
     _, tangential = force_amplitudes(structure, f, a)
-    phase = np.exp(1j * _omega(f) * np.asarray(t, dtype=np.float64))
+    phase = np.exp(1j * _omega(f) * as_time(t))
     return (tangential * phase).real
 
 
@@ -170,7 +173,7 @@ def thresholds(
         The same with either coupling: below them the structure sticks and the
         sliding base forces nothing.
     """
-    g = structure.g
+    g = check_structure(structure).g
     return g / _threshold_factor(structure, f, +1.0), g / _threshold_factor(structure, f, -1.0)
 
 
@@ -191,7 +194,7 @@ def lift_off_acceleration(structure: Structure, f: ArrayLike) -> NDArray[np.floa
         (``numpy.float64`` for a scalar ``f``). Above it the structure leaves the
         table and the model does not apply.
     """
-    k = _coupling(structure, f)
+    k = _coupling(check_structure(structure), f)
     return structure.g / np.abs(1.0 + k * np.cos(structure.alpha_rad))
 
 

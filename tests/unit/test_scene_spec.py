@@ -91,8 +91,19 @@ REFUSALS = [
     pytest.param(TRAJECTORY, "cs = 0.25 ", "cs = 0.25\ngyration_radius = 0.002\n#",
                  ["[disk] gyration_radius = 0.002 m is out of range"], id="gyration-light"),
     pytest.param(TRAJECTORY, "cs = 0.25 ", "cs = 0.25\nfriction_length = 0.03\n#",
-                 ["[disk] friction_length = 0.03 m is out of range; allowed: > 0 and <= radius"],
+                 ["[disk]: Disk: friction_length = 0.03 m is out of range; allowed: radius/1000 "
+                  "to radius (2e-05 to 0.02 m"],
                  id="friction-length-above-radius"),
+    # a length a double divides by (ZeroDivisionError before), or one too short to run
+    pytest.param(TRAJECTORY, "cs = 0.25 ", "cs = 0.25\nfriction_length = 1e-300\n#",
+                 ["[disk]: Disk: friction_length = 1e-300 m is out of range; allowed: "
+                  "radius/1000 to radius (2e-05 to 0.02 m"], id="friction-length-1e-300"),
+    pytest.param(TRAJECTORY, "cs = 0.25 ", "cs = 0.25\nfriction_length = 1.9e-5\n#",
+                 ["[disk]: Disk: friction_length = 1.9e-05 m is out of range"],
+                 id="friction-length-below-radius-over-1000"),
+    pytest.param(CALIBRATION, "[disk]", "[disk]\nfriction_length = 1e-300",
+                 ["[disk]: Disk: friction_length = 1e-300 m is out of range"],
+                 id="calibration-friction-length-1e-300"),
     pytest.param(TRAJECTORY, "M = 0.08", "M = 0.98",
                  ["[disk]", "mass ratios sum to 1.06 > 1"], id="plates-heavier-than-disk"),
     # sizes
