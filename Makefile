@@ -2,6 +2,8 @@
 #   make            run every workflow whose spec or package changed: results/<name>.nc
 #                   (parameter studies and the steering scenes alike)
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
+#   make docs       the documentation site, build/html/index.html (Sphinx, warnings are
+#                   errors; runs the example gallery); needs the figures, so `make` first
 #   make test       set up .venv on a fresh machine, lint, run the test suite
 #   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc,
@@ -23,7 +25,7 @@ WORKFLOWS := $(wildcard workflows/*.toml)
 RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs test test-slow fuzz lint bench cf-check list clean schemas \
+.PHONY: all results figures docs docs-html test test-slow fuzz lint bench cf-check list clean schemas \
         designs
 
 all: results
@@ -46,7 +48,7 @@ results/design-%.nc: designs/%.toml $(PACKAGE) | $(STAMP)
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[test,docs]'
 	touch $(STAMP)
 
 # The package reads study/schemas/ (package data, shipped in the wheel); results_schema/
@@ -94,9 +96,18 @@ figures/%.png: $(PACKAGE) | $(STAMP)
 figures/%-two-way.png: $(PACKAGE) | $(STAMP)
 	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-two-way
 
-# The README's pictures are the figures of a full run.
+# The documentation site. Its pictures (docs/images/) are the figures of a full run,
+# copied in by `make docs`; `make docs-html` builds the pages from the pictures as they
+# are (no results needed). Warnings are errors; the example gallery (docs/examples/)
+# runs at every build.
+DOC_FIGURES := $(FIGURES)
+
 docs: figures
-	mkdir -p docs && cp $(addprefix figures/,$(addsuffix .png,$(FIGURES))) docs/
+	mkdir -p docs/images && cp $(addprefix figures/,$(addsuffix .png,$(DOC_FIGURES))) docs/images/
+	$(MAKE) docs-html
+
+docs-html: | $(STAMP)
+	$(PY) -m sphinx -W --keep-going -b html docs build/html
 
 list: $(STAMP)
 	$(STUDY) list
@@ -123,10 +134,11 @@ bench: $(STAMP)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_two_way_map.py
 	$(PY) benchmarks/bench_planar.py
 	$(PY) benchmarks/two_way_agreement.py
-	mkdir -p docs && cp figures/work-precision.png figures/work-precision-two-way.png docs/
+	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
+	    docs/images/
 
 cf-check: $(RESULTS)
 	$(VENV)/bin/compliance-checker --test cf:1.11 --criteria strict $(RESULTS)
 
 clean:
-	rm -rf $(VENV) results figures .pytest_cache .ruff_cache .hypothesis
+	rm -rf $(VENV) results figures build .pytest_cache .ruff_cache .hypothesis
