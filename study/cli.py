@@ -12,7 +12,7 @@ import shlex
 import sys
 from pathlib import Path
 
-__all__ = ["main"]
+__all__ = ["build_parser", "main"]
 
 
 def _show_cluster(pool) -> None:
@@ -387,6 +387,11 @@ def _parser() -> argparse.ArgumentParser:
     listing.add_argument("--results", default="results", help="result folder")
     listing.set_defaults(handler=_list)
     return parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``study`` command's argument parser (the CLI reference page is generated from it)."""
+    return _parser()
 
 
 def main(argv: list[str] | None = None) -> int:
