@@ -11,7 +11,9 @@ into one netCDF file and ``study figure`` draws it.
 
 # %%
 # A folder to work in, and a way to run the ``study`` command as in a terminal.
+import atexit
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -20,12 +22,15 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 
 work = Path(tempfile.mkdtemp(prefix="study-example-"))
+atexit.register(shutil.rmtree, work, ignore_errors=True)
 
 
-def study(*args):
-    """Run ``study ARGS`` in the work folder, print the command and what it printed."""
-    print("$ study", shlex.join(map(str, args)))
-    done = subprocess.run([sys.executable, "-m", "study.cli", *map(str, args)],
+def shell(command):
+    """Run a ``study`` command line in the work folder, as in a terminal; print its output."""
+    print("$", command)
+    program, *args = shlex.split(command)
+    assert program == "study"
+    done = subprocess.run([sys.executable, "-m", "study.cli", *args],
                           cwd=work, capture_output=True, text=True, check=False)
     print(done.stdout + done.stderr)
     done.check_returncode()
@@ -70,18 +75,18 @@ a = { start = 0.0, stop = 12.0, num = 49 }    # m s-2
 # writes ``results/own.nc``, sealed and validated. Run again, it says the result is up to
 # date and computes nothing.
 (work / "results").mkdir()
-study("run", "own.toml", "-o", "results/own.nc", "--no-progress")
-study("run", "own.toml", "-o", "results/own.nc", "--no-progress")
+shell("study run own.toml -o results/own.nc --no-progress")
+shell("study run own.toml -o results/own.nc --no-progress")
 
 # %%
 # What the file holds
 # -------------------
-study("info", "results/own.nc")
+shell("study info results/own.nc")
 
 # %%
 # Draw it
 # -------
 # ``study figure regime-map`` draws the velocity over the map, the thresholds, lift-off
 # and the frontier from the file alone; the title names the structure and the model.
-study("figure", "regime-map", "results/own.nc", "-o", "own-map")
+shell("study figure regime-map results/own.nc -o own-map")
 show("own-map.png")
