@@ -16,6 +16,7 @@ DOCS = Path(__file__).resolve().parent
 sys.path.insert(0, str(DOCS / "_ext"))
 
 from offline_inventories import write_inventories  # noqa: E402
+from sphinx.ext import autosummary  # noqa: E402
 
 import study  # noqa: E402
 
@@ -59,6 +60,11 @@ html_show_sourcelink = True
 
 # --- API reference (autosummary + numpydoc) --------------------------------------------
 autosummary_generate = True
+# A summary line is the docstring's first sentence; "(paper eq. 5)" and "(paper Fig. 4)"
+# do not end one.
+if hasattr(autosummary, "WELL_KNOWN_ABBREVIATIONS"):
+    autosummary.WELL_KNOWN_ABBREVIATIONS = (*autosummary.WELL_KNOWN_ABBREVIATIONS,
+                                            " eq.", " Eq.", " Fig.", " Figs.", " cf.")
 autosummary_ignore_module_all = False  # a module's reference lists its __all__, no more
 autodoc_default_options = {"members": False}
 autodoc_typehints = "none"  # types are in the numpydoc sections, with units

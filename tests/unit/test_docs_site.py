@@ -34,10 +34,12 @@ API_PAGE = DOCS / "api" / "index.md"
 
 _CURRENT = re.compile(r"^\.\. (?:py:)?currentmodule:: (\S+)\s*$")
 _AUTOSUMMARY = re.compile(r"^\.\. autosummary::\s*$")
+_DATA = re.compile(r"^\.\. (?:py:)?data:: ([\w.]+)\.(\w+)\s*$")
 
 
 def documented_names(text: str) -> dict[str, list[str]]:
-    """module -> names listed in the page's autosummary tables under that current module.
+    """module -> names listed in the page's autosummary tables under that current module,
+    and described by a ``.. py:data:: MODULE.NAME`` directive.
 
     ``None`` (no current module) collects full names, such as the modules.
     """
@@ -46,7 +48,11 @@ def documented_names(text: str) -> dict[str, list[str]]:
     in_table = False
     for row in text.splitlines():
         current = _CURRENT.match(row)
-        if current:
+        data = _DATA.match(row)
+        if data:
+            found.setdefault(data.group(1), []).append(data.group(2))
+            in_table = False
+        elif current:
             module, in_table = current.group(1), False
         elif _AUTOSUMMARY.match(row):
             in_table = True
@@ -63,8 +69,9 @@ def test_documented_names_are_read_from_autosummary_tables() -> None:
     text = ("```{eval-rst}\n.. currentmodule:: study\n\n.. autosummary::\n   :toctree: g\n\n"
             "   Structure\n   thresholds\n```\n\nprose Structure\n\n```{eval-rst}\n"
             ".. py:currentmodule:: None\n\n.. autosummary::\n   :toctree: g\n\n   study.fit\n"
-            "```\n")
-    assert documented_names(text) == {"study": ["Structure", "thresholds"],
+            "```\n\n```{eval-rst}\n.. py:data:: study.__version__\n   :type: str\n\n"
+            "   The version.\n```\n")
+    assert documented_names(text) == {"study": ["Structure", "thresholds", "__version__"],
                                       "None": ["study.fit"]}
 
 
