@@ -25,8 +25,8 @@ WORKFLOWS := $(wildcard workflows/*.toml)
 RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs docs-html test test-slow fuzz lint bench cf-check list clean schemas \
-        designs
+.PHONY: all results figures docs docs-html test test-slow fuzz lint bench cf-check list clean \
+        schemas designs
 
 all: results
 
@@ -100,7 +100,10 @@ figures/%-two-way.png: $(PACKAGE) | $(STAMP)
 # copied in by `make docs`; `make docs-html` builds the pages from the pictures as they
 # are (no results needed). Warnings are errors; the example gallery (docs/examples/)
 # runs at every build.
-DOC_FIGURES := $(FIGURES)
+# The figures the pages show: every images/NAME.png a page names that `make figures` draws
+# (the benchmark figures are copied by `make bench`).
+DOC_FIGURES := $(filter $(FIGURES),$(sort $(patsubst images/%.png,%,$(shell \
+    grep -rhoE 'images/[a-z0-9-]+[.]png' README.md docs --include='*.md'))))
 
 docs: figures
 	mkdir -p docs/images && cp $(addprefix figures/,$(addsuffix .png,$(DOC_FIGURES))) docs/images/

@@ -57,6 +57,8 @@ html_theme_options = {
     "secondary_sidebar_items": ["page-toc", "sourcelink"],
 }
 html_show_sourcelink = True
+html_static_path = ["_static"]
+html_css_files = ["study.css"]
 
 # --- API reference (autosummary + numpydoc) --------------------------------------------
 autosummary_generate = True

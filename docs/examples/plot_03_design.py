@@ -29,7 +29,7 @@ atexit.register(shutil.rmtree, work, ignore_errors=True)
 
 
 def shell(command):
-    """Run a ``study`` command line in the work folder, as in a terminal; print its output."""
+    """Run a ``study`` command line in the work folder; print its output."""
     print("$", command)
     program, *args = shlex.split(command)
     assert program == "study"
@@ -90,15 +90,17 @@ shell("study design forward-backward.toml -o results/forward-backward.nc")
 # now sit well inside the forward and backward bands.
 result = xr.open_dataset(work / "results" / "forward-backward.nc")
 print(result[["best", "lower_bound", "upper_bound"]].to_dataframe())
-print(result[["f", "a", "behaviour", "forward_speed", "margin", "met"]].to_dataframe())
+targets = result[["f", "a", "behaviour", "forward_speed", "margin", "met"]]
+print(targets.to_dataframe())
 
 start = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 best = dict(zip(result["parameter"].values, result["best"].values, strict=True))
-designed = study.Structure(f0=best["f0"], Q=17.5, alpha=best["alpha"], M=0.08, cs=0.25)
+designed = study.Structure(f0=best["f0"], Q=17.5, alpha=best["alpha"], M=0.08,
+                           cs=0.25)
 
 f = np.linspace(13.0, 16.5, 141)  # Hz
 fig, ax = plt.subplots(figsize=(7, 4))
-for structure, label in ((start, "start (the paper's plate)"), (designed, "designed")):
+for structure, label in ((start, "start"), (designed, "designed")):
     velocity, _ = study.steady_velocity(structure, f, 7.0, coupling="two-way")
     ax.plot(f, velocity * 1e3, label=f"{label}: f0 = {structure.f0:.2f} Hz, "
             f"alpha = {structure.alpha:.1f} degree")
@@ -106,8 +108,8 @@ ax.plot(result["f"], result["forward_speed"] * 1e3, "ko", label="targets, design
 ax.axhline(0.0, color="0.6", lw=0.8)
 ax.set_xlabel("drive frequency f [Hz]")
 ax.set_ylabel("mean velocity at a = 7 m s-2 [mm s-1]")
-ax.set_title("Mean velocity at a = 7 m s-2, two-way coupling (Q = 17.5, M = 0.08, cs = 0.25)",
-             fontsize=10)
+ax.set_title("Mean velocity at a = 7 m s-2, two-way coupling "
+             "(Q = 17.5, M = 0.08, cs = 0.25)", fontsize=10)
 ax.legend(fontsize=8, loc="lower left")
 fig.tight_layout()
 result.close()

@@ -27,7 +27,7 @@ atexit.register(shutil.rmtree, work, ignore_errors=True)
 
 
 def shell(command):
-    """Run a ``study`` command line in the work folder, as in a terminal; print its output."""
+    """Run a ``study`` command line in the work folder; print its output."""
     print("$", command)
     program, *args = shlex.split(command)
     assert program == "study"
@@ -40,8 +40,8 @@ def shell(command):
 def show(png):
     """Show a PNG file as it is, pixel for pixel."""
     image = plt.imread(work / png)
-    figure = plt.figure(figsize=(image.shape[1] / 100, image.shape[0] / 100), dpi=100)
-    figure.figimage(image)
+    height, width = image.shape[:2]
+    plt.figure(figsize=(width / 100, height / 100), dpi=100).figimage(image)
 
 
 # %%

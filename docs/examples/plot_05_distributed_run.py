@@ -29,7 +29,7 @@ atexit.register(shutil.rmtree, work, ignore_errors=True)
 
 
 def shell(command):
-    """Run a ``study`` command line in the work folder, as in a terminal; print its output."""
+    """Run a ``study`` command line in the work folder; print its output."""
     print("$", command)
     program, *args = shlex.split(command)
     assert program == "study"
@@ -47,8 +47,8 @@ def shell(command):
 # a free port, for the scheduler and for its HTTP server (which serves the dashboard where
 # bokeh is installed; ``dashboard_address=None`` would still open it, on port 8787).
 cluster = LocalCluster(host="127.0.0.1", scheduler_port=0, protocol="tcp",
-                       dashboard_address="127.0.0.1:0", n_workers=1, threads_per_worker=2,
-                       processes=False)
+                       dashboard_address="127.0.0.1:0", n_workers=1,
+                       threads_per_worker=2, processes=False)
 address = cluster.scheduler_address
 print(address)
 
@@ -95,7 +95,8 @@ result.close()
 # The same command without ``--scheduler`` runs on threads of its own process (here with
 # a cache of its own, so that it computes every point again rather than reusing the
 # values the first run kept); the numbers are the same, bit for bit.
-shell("study run map.toml -o results/map-local.nc --cache local-cache --no-progress")
+shell("study run map.toml -o results/map-local.nc --cache local-cache "
+      "--no-progress")
 distributed = xr.open_dataset(work / "results" / "map.nc")
 local = xr.open_dataset(work / "results" / "map-local.nc")
 xr.testing.assert_identical(distributed["velocity"], local["velocity"])

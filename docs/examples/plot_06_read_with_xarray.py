@@ -41,8 +41,9 @@ cs = 0.25
 f = { start = 12.0, stop = 17.0, num = 51 }   # Hz
 a = { start = 0.0, stop = 12.0, num = 49 }    # m s-2
 """)
-subprocess.run([sys.executable, "-m", "study.cli", "run", "map.toml", "-o", "map.nc",
-                "--no-progress"], cwd=work, check=True, capture_output=True)
+subprocess.run([sys.executable, "-m", "study.cli", "run", "map.toml",
+                "-o", "map.nc", "--no-progress"],
+               cwd=work, check=True, capture_output=True)
 
 # %%
 # Open it
@@ -85,20 +86,22 @@ fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4))
 line = ds["velocity"].sel(f=14.2, method="nearest") * 1e3
 line.attrs.update(units="mm s-1", long_name="mean velocity")
 line.plot(ax=left, marker=".")
-left.set_title(f"f = {float(line.f):.1f} Hz (Q = 17.5, M = 0.08, cs = 0.25)", fontsize=10)
+left.set_title(f"f = {float(line.f):.1f} Hz (Q = 17.5, M = 0.08, cs = 0.25)",
+               fontsize=10)
 ds["velocity"].T.plot(ax=right, cmap="RdBu", center=0.0)
 ds["a_star_plus"].plot(ax=right, color="k", label="a*+: forward slips start")
 right.set_ylim(0, 12)
 right.set_ylabel("drive acceleration a [m s-2]")
 right.legend(loc="upper left", fontsize=8)
-right.set_title("velocity over (f, a) (f0 = 14.44 Hz, alpha = 64 degree)", fontsize=10)
+right.set_title("velocity over (f, a) (f0 = 14.44 Hz, alpha = 64 degree)",
+                fontsize=10)
 fig.tight_layout()
 
 # %%
 # To pandas, for a table
 # ----------------------
-table = ds[["velocity", "status"]].sel(f=14.2, method="nearest").reset_coords(drop=True)
-table = table.to_dataframe()
+at_14 = ds[["velocity", "status"]].sel(f=14.2, method="nearest")
+table = at_14.reset_coords(drop=True).to_dataframe()
 table["status"] = table["status"].map(meanings)
 print(table.iloc[::8])
 ds.close()
