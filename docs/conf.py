@@ -112,7 +112,6 @@ sphinx_gallery_conf = {
     "remove_config_comments": True,
     "download_all_examples": False,
     "within_subsection_order": "FileNameSortKey",
-    "reference_url": {"study": None},
     "doc_module": ("study",),
     "backreferences_dir": "api/generated/backreferences",
     "show_memory": False,
