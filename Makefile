@@ -116,7 +116,7 @@ list: $(STAMP)
 	$(STUDY) list
 
 lint: $(STAMP)
-	$(PY) -m ruff check study tests benchmarks
+	$(PY) -m ruff check study tests benchmarks docs
 
 test: $(STAMP) lint
 	$(PY) -m pytest -m "not slow and not fuzz"

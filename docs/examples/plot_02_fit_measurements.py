@@ -70,13 +70,15 @@ velocity,16.0,9.0,-0.0027,0.0002,backward
 # ------------
 # ``free`` names the parameters to estimate with their bounds; ``[structure]`` gives
 # their start values and the parameters known from elsewhere (the plate's ring-down gave
-# ``f0`` and ``Q``, its tilt was measured). Velocity rows are modelled with the spec's
-# coupling: two-way, the physical model, unless ``coupling = "one-way"`` is asked for.
+# ``f0`` and ``Q``, its tilt was measured). ``coupling`` names the model of the velocity
+# rows: ``"two-way"`` (the sliding base also forces the plate's mode, the physical model)
+# or ``"one-way"`` (the paper's).
 (work / "fit.toml").write_text("""\
 [fit]
 name = "plate-b"
 measurements = ["lab.csv"]
 free = { cs = [0.05, 1.0], M = [0.01, 0.5] }
+coupling = "two-way"
 
 [structure]
 f0 = 14.44
