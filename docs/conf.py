@@ -68,6 +68,25 @@ if hasattr(autosummary, "WELL_KNOWN_ABBREVIATIONS"):
     autosummary.WELL_KNOWN_ABBREVIATIONS = (*autosummary.WELL_KNOWN_ABBREVIATIONS,
                                             " eq.", " Eq.", " Fig.", " Figs.", " cf.")
 autosummary_ignore_module_all = False  # a module's reference lists its __all__, no more
+
+
+def _documented_at_top() -> list[str]:
+    """``study.MODULE.NAME`` of every object a module re-exports that ``study`` itself
+    exports: the reference documents it once, as ``study.NAME`` (two pages of one object
+    would be a duplicate description)."""
+    import importlib
+    import pkgutil
+
+    found = []
+    for info in pkgutil.iter_modules(study.__path__):
+        module = importlib.import_module(f"study.{info.name}")
+        for name in getattr(module, "__all__", ()):
+            if name in study.__all__ and getattr(study, name) is getattr(module, name):
+                found.append(f"study.{info.name}.{name}")
+    return found
+
+
+autosummary_context = {"documented_at_top": _documented_at_top()}
 autodoc_default_options = {"members": False}
 autodoc_typehints = "none"  # types are in the numpydoc sections, with units
 numpydoc_show_class_members = False  # the class template lists members itself
