@@ -26,7 +26,7 @@ RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
 .PHONY: all results figures docs docs-html test test-slow fuzz lint bench cf-check list clean \
-        schemas designs
+        schemas designs FORCE
 
 all: results
 
@@ -47,6 +47,10 @@ results/design-%.nc: designs/%.toml $(PACKAGE) | $(STAMP)
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
+	@# Before 0.1.0 the distribution was called `study` (another project's name on the
+	@# package index); a venv made then still holds it. Removed before the install: its
+	@# record owns the `study` command, which the install writes again.
+	$(PY) -m pip uninstall --quiet --yes study 2>/dev/null || true
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test,docs]'
 	touch $(STAMP)
@@ -90,11 +94,17 @@ figures/regime-map-two-way.png: results/regime-map-two-way.nc
 figures/force-traces-two-way.png: results/regime-map-two-way.nc
 figures/velocity-curves-two-way.png: results/velocity-curves-two-way.nc
 figures/mass-ratio-limit-two-way.png: results/mass-ratio-limit-two-way.nc
-figures/%.png: $(PACKAGE) | $(STAMP)
-	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*
+# A figure's date says nothing of what it was drawn from (a figure of another file drawn
+# to the same name is newer than its result): `study figure --if-changed` is asked every
+# time and redraws unless the PNG records this result's checksum, these options and
+# this figure code.
+figures/%.png: $(PACKAGE) FORCE | $(STAMP)
+	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$* --if-changed
 # The shorter stem wins: NAME-two-way.png is figure NAME.
-figures/%-two-way.png: $(PACKAGE) | $(STAMP)
-	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-two-way
+figures/%-two-way.png: $(PACKAGE) FORCE | $(STAMP)
+	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-two-way --if-changed
+
+FORCE:
 
 # The documentation site. Its pictures (docs/images/) are the figures of a full run,
 # copied in by `make docs`; `make docs-html` builds the pages from the pictures as they

@@ -46,7 +46,7 @@ import numpy as np
 from study.physics import thresholds
 from study.solver import steady_state
 from study.status import Status
-from study.structure import Structure
+from study.structure import Structure, tilt_warnings
 from study.transient import IntegratorSettings, integrated_steady_state
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -59,14 +59,15 @@ CONVERGED = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
 def sample(rng: np.random.Generator) -> tuple[Structure, float, float]:
     """One point of the whole parameter space (see the module docstring)."""
     cs = rng.uniform(0.05, 1.0)
-    s = Structure(
-        f0=14.44,
-        Q=10.0 ** rng.uniform(math.log10(0.5), 4.0),
-        alpha=rng.uniform(-85.0, 85.0),
-        M=rng.uniform(0.01, 1.0),
-        cs=cs,
-        ck=cs * rng.uniform(0.01, 1.0),
-    )
+    with tilt_warnings(False):  # small tilts are part of the space, in degree
+        s = Structure(
+            f0=14.44,
+            Q=10.0 ** rng.uniform(math.log10(0.5), 4.0),
+            alpha=rng.uniform(-85.0, 85.0),
+            M=rng.uniform(0.01, 1.0),
+            cs=cs,
+            ck=cs * rng.uniform(0.01, 1.0),
+        )
     f = s.f0 * 10.0 ** rng.uniform(-2.0, 2.0)
     a = float(min(thresholds(s, f))) * rng.uniform(1.0, 3.0)
     return s, f, a

@@ -2,9 +2,16 @@
 
 A soft structure with a resonant plate, on a vertically shaken table, walks forward
 or backward by stick-slip (Barois, Boucherie, Tadrist & Kellay). See README.md.
+
+The computing functions are imported with the package; :func:`run`, :func:`open_result`
+and :class:`ResultError`, which read and write result files, are imported on first use
+(so that ``import study`` stays light and the code fingerprint of results covers the
+computing modules only, see :mod:`study.fingerprint`).
 """
 
 from study.analysis import frontier, minimum_threshold
+from study.inputs import StudyWarning, SuspectInputWarning
+from study.maps import compute_map
 from study.physics import (
     force_amplitudes,
     lift_off_acceleration,
@@ -14,25 +21,54 @@ from study.physics import (
     thresholds,
 )
 from study.solver import SolverSettings, SteadyState, steady_state, steady_velocity
+from study.specfile import SpecError
 from study.status import NonConvergence, Status
 from study.structure import Structure
 from study.version import VERSION as __version__
 
 __all__ = [
     "NonConvergence",
+    "ResultError",
     "SolverSettings",
+    "SpecError",
     "Status",
     "SteadyState",
     "Structure",
+    "StudyWarning",
+    "SuspectInputWarning",
     "__version__",
+    "compute_map",
     "force_amplitudes",
     "frontier",
     "lift_off_acceleration",
     "minimum_threshold",
     "mode_response",
     "normal_force",
+    "open_result",
+    "run",
     "steady_state",
     "steady_velocity",
     "tangential_force",
     "thresholds",
 ]
+
+
+#: Public names defined by the modules that keep and read result files, imported on
+#: first use: name -> module.
+_ON_FIRST_USE = {"run": "study.api", "open_result": "study.validate",
+                 "ResultError": "study.validate"}
+
+
+def __getattr__(name: str):
+    module = _ON_FIRST_USE.get(name)
+    if module is None:
+        raise AttributeError(f"module 'study' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

@@ -15,9 +15,17 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from study.physics import as_acceleration, as_frequency, thresholds
-from study.solver import SolverSettings, SteadyState, steady_state
+from study.solver import (
+    DEFAULT_COUPLING,
+    SolverSettings,
+    SteadyState,
+    check_coupling,
+    check_structure,
+    steady_state,
+)
 from study.status import Status
 from study.structure import Structure
+from study.units import DIMENSIONLESS, HERTZ, METRE_PER_SECOND_SQUARED
 from study.variables import VARIABLES
 
 __all__ = [
@@ -27,6 +35,7 @@ __all__ = [
     "collapse_variable",
     "frontier",
     "frontier_from_grid",
+    "lowest_threshold",
     "minimum_threshold",
     "resonance_threshold",
 ]
@@ -84,9 +93,9 @@ def frontier_from_grid(
     f : array_like
         ``(n_f,)`` ascending drive frequencies [Hz] of the grid.
     a : array_like
-        ``(n_a,)`` drive accelerations [m s^-2].
+        ``(n_a,)`` drive accelerations [m s-2].
     velocity, status : array_like
-        ``(n_f, n_a)`` steady velocity [m s^-1] and status on the grid.
+        ``(n_f, n_a)`` steady velocity [m s-1] and status on the grid.
     tolerance : float
         Bracket width at which bisection stops [Hz].
     settings : SolverSettings, optional
@@ -169,35 +178,55 @@ def frontier(
     num: int = 2001,
     tolerance: float = 1e-9,
     settings: SolverSettings | None = None,
+    coupling: str = DEFAULT_COUPLING,
 ) -> xr.Dataset:
     """Zero-velocity frontier f*(a): every frequency where the velocity changes sign.
 
     The velocity is solved on ``num`` frequencies spanning ``f_range``; each sign
     change between neighbouring moving points is refined by bisection on the exact
-    solver until its bracket is narrower than ``tolerance``.
+    solver of the same coupling until its bracket is narrower than ``tolerance``. The
+    refinement is the one a study's ``frontier`` observable makes (the
+    ``frontier`` and ``frontier-two-way`` workflows): on the same scan grid the
+    frontier frequencies are the same, bit for bit.
 
     Parameters
     ----------
     structure : Structure
         The structure.
     a : array_like
-        Drive accelerations [m s^-2], 1-D.
+        Drive accelerations [m s-2], a scalar or 1-D, finite, >= 0.
     f_range : (float, float)
-        Frequency interval searched [Hz].
-    num : int
-        Frequencies of the scanning grid.
-    tolerance : float
-        Location accuracy of every root [Hz]; default 1e-9.
+        Frequency interval searched [Hz], ``0 < f_min < f_max``.
+    num : int, default 2001
+        Frequencies of the scanning grid [1], >= 2 (``numpy.linspace(*f_range, num)``).
+    tolerance : float, default 1e-9
+        Location accuracy of every root [Hz], > 0.
     settings : SolverSettings, optional
         Solver budgets.
+    coupling : {"one-way", "two-way"}, default "one-way"
+        The paper's model or the mode also forced by the sliding base
+        (:data:`study.solver.DEFAULT_COUPLING`).
 
     Returns
     -------
     xarray.Dataset
-        ``frontier_frequency``, ``frontier_kind``, ``frontier_direction`` and
-        ``frontier_bracket`` over dims ``(a, branch)``, with units, long names and the
-        structure, range and tolerance as attributes.
+        ``frontier_frequency`` [Hz], ``frontier_kind`` (flags ``none``, ``crossing``,
+        ``jump``), ``frontier_direction`` [1] and ``frontier_bracket`` [Hz] over dims
+        ``(a, branch)``, NaN-padded (kind 0) where an acceleration has fewer branches;
+        attributes and variables as in a study file. Global attributes:
+        ``study_coupling``, ``structure``, ``f_range`` [Hz], ``scan_points``,
+        ``tolerance_Hz``.
+
+    Raises
+    ------
+    ValueError
+        For an empty or reversed ``f_range``, ``num < 2``, a bad ``coupling``.
+    TypeError
+        For a structure that is not a :class:`study.Structure`, or ``a`` not real
+        numbers.
     """
+    structure = check_structure(structure)
+    coupling = check_coupling(coupling)
     f_min, f_max = (float(x) for x in f_range)
     if not f_min < f_max:
         raise ValueError(f"f_range must be (f_min, f_max) with f_min < f_max, got {f_range!r}")
@@ -205,13 +234,21 @@ def frontier(
         raise ValueError(f"num must be >= 2, got {num!r}")
     a = np.atleast_1d(as_acceleration(a))
     f = np.linspace(f_min, f_max, num)
-    result = steady_state(structure, f[:, None], a[None, :], settings)
+
+    def two_way(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64]
+                ) -> SteadyState:
+        # As the study's frontier observable solves (Method.solve).
+        return steady_state(structure, f, a, settings, coupling=coupling, parallel=False)
+
+    result = steady_state(structure, f[:, None], a[None, :], settings, coupling=coupling)
     found = frontier_from_grid(structure, f, a, result.velocity, result.status,
-                               tolerance=tolerance, settings=settings)
-    return frontier_dataset(found, a, structure, (f_min, f_max), num, tolerance)
+                               tolerance=tolerance, settings=settings,
+                               solve=two_way if coupling == "two-way" else None)
+    return frontier_dataset(found, a, structure, (f_min, f_max), num, tolerance, coupling)
 
 
-def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tolerance):
+def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tolerance,
+                     coupling: str = DEFAULT_COUPLING) -> xr.Dataset:
     """Frontier points as a labelled dataset (dims ``a``, ``branch``)."""
     from study.provenance import code_sha256, package_version, utc_now
 
@@ -225,10 +262,12 @@ def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tol
     dataset = xr.Dataset(
         {name: (dims, values[name], VARIABLES[name].attrs()) for name in values},
         coords={"a": ("a", np.asarray(a, dtype=np.float64),
-                      {"units": "m s-2", "long_name": "drive acceleration amplitude"})},
+                      {"units": METRE_PER_SECOND_SQUARED,
+                       "long_name": "drive acceleration amplitude"})},
     )
     dataset.attrs.update({
-        "title": "Zero-velocity frontier f*(a)",
+        "title": f"Zero-velocity frontier f*(a), {coupling} coupling",
+        "study_coupling": coupling,
         "structure": repr(structure),
         "f_range": np.asarray(f_range, dtype=np.float64),
         "scan_points": int(num),
@@ -241,7 +280,7 @@ def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tol
 
 
 def resonance_threshold(structure: Structure) -> tuple[float, float]:
-    """Thresholds ``(a*_+, a*_-)`` at ``f = f0`` in closed form [m s^-2].
+    """Thresholds ``(a*_+, a*_-)`` at ``f = f0`` in closed form [m s-2].
 
     At resonance ``w^2 G = -i Q``, so
     ``a*_pm = g / |1 - i Q M cos(alpha) (cos(alpha) +- sin(alpha)/cs)|``
@@ -264,17 +303,14 @@ def collapse_variable(structure: Structure) -> tuple[float, float]:
             base * (np.cos(alpha) - np.sin(alpha) / structure.cs))
 
 
-def minimum_threshold(structure: Structure, f_range: tuple[float, float] | None = None,
-                      *, tolerance: float = 1e-10) -> tuple[float, float]:
-    """Lowest motion threshold ``min_f min(a*_+, a*_-)`` and where it is.
+def lowest_threshold(structure: Structure, f_range: tuple[float, float] | None = None,
+                     *, tolerance: float = 1e-10) -> tuple[float, float]:
+    """Lowest motion threshold ``min_f min(a*_+, a*_-)`` [m s-2] and its frequency [Hz].
 
-    Golden-section search on the closed-form thresholds around their minimum on a
-    scanning grid (default range 0.5 f0 .. 2 f0).
-
-    Returns
-    -------
-    a_min, f_min : float
-        The minimum threshold [m s^-2] and its frequency [Hz].
+    The numbers of :func:`minimum_threshold`, as a plain ``(a_min, f_min)`` pair of
+    floats: golden-section search on the closed-form thresholds around their minimum
+    on a 4001-point scanning grid of ``f_range`` (default ``0.5 f0 .. 2 f0``), to a
+    bracket of ``tolerance`` [Hz].
     """
     lo, hi = f_range if f_range is not None else (0.5 * structure.f0, 2.0 * structure.f0)
 
@@ -295,6 +331,66 @@ def minimum_threshold(structure: Structure, f_range: tuple[float, float] | None 
             left = x1
     f_best = 0.5 * (left + right)
     return float(lower(f_best)), float(f_best)
+
+
+def minimum_threshold(structure: Structure, f_range: tuple[float, float] | None = None,
+                      *, tolerance: float = 1e-10, coupling: str = DEFAULT_COUPLING
+                      ) -> xr.Dataset:
+    """Lowest motion threshold ``min_f min(a*_+, a*_-)`` and the frequency where it is.
+
+    Below its motion thresholds the structure sticks to the table, so the sliding base
+    forces nothing: the thresholds (paper eq. 5, closed form) are the same with either
+    coupling, and so is this minimum. ``coupling`` only names the model in the result.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    f_range : (float, float), optional
+        Frequencies searched [Hz]; default ``(0.5 f0, 2 f0)``.
+    tolerance : float, default 1e-10
+        Bracket of the minimum's frequency at which the golden-section search stops
+        [Hz].
+    coupling : {"one-way", "two-way"}, default "one-way"
+        The model named in the result (:data:`study.solver.DEFAULT_COUPLING`).
+
+    Returns
+    -------
+    xarray.Dataset
+        Scalars ``a_min`` (the lowest threshold [m s-2]), ``f_min`` (its frequency
+        [Hz]), ``a_star_plus`` and ``a_star_minus`` (both thresholds at ``f_min``
+        [m s-2]), with ``units`` and ``long_name``; global attributes
+        ``study_coupling``, ``structure``, ``f_range`` [Hz], ``tolerance_Hz``.
+        ``float(ds["a_min"])`` is the number.
+
+    See Also
+    --------
+    lowest_threshold : the same two numbers as a tuple of floats.
+    thresholds : ``a*_+`` and ``a*_-`` at any frequency.
+    """
+    structure = check_structure(structure)
+    coupling = check_coupling(coupling)
+    lo, hi = f_range if f_range is not None else (0.5 * structure.f0, 2.0 * structure.f0)
+    a_min, f_min = lowest_threshold(structure, (lo, hi), tolerance=tolerance)
+    plus, minus = thresholds(structure, f_min)
+    return xr.Dataset(
+        {
+            "a_min": ((), a_min, {"units": METRE_PER_SECOND_SQUARED,
+                                  "long_name": "lowest motion threshold "
+                                  "min over f of min(a*_+, a*_-) (paper eq. 5)"}),
+            "f_min": ((), f_min, {"units": HERTZ, "long_name": "drive frequency of the "
+                                  "lowest motion threshold"}),
+            "a_star_plus": ((), float(plus), VARIABLES["a_star_plus"].attrs()),
+            "a_star_minus": ((), float(minus), VARIABLES["a_star_minus"].attrs()),
+        },
+        attrs={
+            "title": f"Lowest motion threshold, {coupling} coupling",
+            "study_coupling": coupling,
+            "structure": repr(structure),
+            "f_range": np.asarray((lo, hi), dtype=np.float64),
+            "tolerance_Hz": float(tolerance),
+        },
+    )
 
 
 def coupling_effect(dataset: xr.Dataset, threshold: float = 0.1) -> xr.Dataset:
@@ -349,7 +445,7 @@ def coupling_effect(dataset: xr.Dataset, threshold: float = 0.1) -> xr.Dataset:
         }
     )
     for name in ("changed", "reversed", "lifted", "paradox", "median_change"):
-        out[name].attrs["units"] = "1"
-    out["moving_points"].attrs["units"] = "1"
+        out[name].attrs["units"] = DIMENSIONLESS
+    out["moving_points"].attrs["units"] = DIMENSIONLESS
     out.attrs["threshold"] = threshold
     return out

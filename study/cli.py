@@ -12,7 +12,10 @@ import shlex
 import sys
 from pathlib import Path
 
-__all__ = ["build_parser", "main"]
+from study.units import spoken
+from study.version import DISTRIBUTION, VERSION
+
+__all__ = ["build_parser", "default_figure_output", "main"]
 
 
 def _show_cluster(pool) -> None:
@@ -39,6 +42,8 @@ def _run(args: argparse.Namespace) -> int:
             command=command,
             cache=args.cache,
             on_start=_show_cluster if args.scheduler else None,
+            overwrite=args.overwrite,
+            task_timeout=args.task_timeout,
         )
     except StudyInterrupted as err:
         print(f"study: {err}", file=sys.stderr)
@@ -71,46 +76,94 @@ def _cache(args: argparse.Namespace) -> int:
     from study.provenance import code_sha256
 
     cache = ResultCache(args.cache)
-    entries = list(cache.entries())
-    current = code_sha256()
-    now = time.time()
     if args.action == "list":
+        # Read-only: no lock, no file moved; damaged blocks are counted, not fatal.
+        entries = list(cache.entries())
+        current = code_sha256()
+        now = time.time()
+        quarantined = len(cache.quarantine_files())
         if not entries:
-            print(f"{cache.root}: no kept values")
+            print(f"{cache.root}: no kept values"
+                  + (f"; {quarantined} files in quarantine" if quarantined else ""))
             return 0
-        total = 0
+        total, unreadable = 0, 0
         for entry in entries:
             content = entry.content
             code = str(content.get("code_sha256", "?"))
             structure = ", ".join(f"{k}={v:.6g}" for k, v in
-                                  sorted(content.get("structure", {}).items()))
+                                  sorted(content.get("structure", {}).items())
+                                  if isinstance(v, int | float))
             method = content.get("method", {})
+            method = method if isinstance(method, dict) else {}
             print(
                 f"{entry.key[:12]}  {content.get('observable', '?'):<12} "
                 f"{method.get('method', '?')}/{method.get('coupling', '?')}  "
                 f"{entry.points:>10d} pts {entry.blocks:>5d} blocks {entry.size / 1e6:9.2f} MB "
                 f"{(now - entry.modified) / 86400:7.1f} d  code {code[:12]}"
                 f"{'' if code == current else ' (stale code)'}  {structure}"
+                + (f"  ({entry.unreadable} unreadable)" if entry.unreadable else "")
             )
             total += entry.size
-        print(f"{len(entries)} entries, {total / 1e6:.2f} MB in {cache.root}")
+            unreadable += entry.unreadable
+        print(f"{len(entries)} entries, {total / 1e6:.2f} MB in {cache.root}"
+              + (f"; {unreadable} unreadable blocks (study cache verify moves them aside)"
+                 if unreadable else "")
+              + (f"; {quarantined} files in quarantine" if quarantined else ""))
         return 0
+    if args.action == "prune" and not (args.all or args.stale or args.older_than is not None):
+        print("study: cache prune needs --stale, --older-than DAYS or --all", file=sys.stderr)
+        return 2
+    if args.wait < 0 or args.wait != args.wait:
+        print(f"study: --wait must be a number of seconds >= 0, got {args.wait}",
+              file=sys.stderr)
+        return 2
+    if not cache.root.is_dir():
+        print(f"{cache.root}: no kept values")
+        return 0
+
+    def waiting(message: str) -> None:
+        print(f"study: {message}", file=sys.stderr, flush=True)
+
+    # Maintenance holds the cache alone: no run reads a block it removes.
+    with cache.maintenance(f"study cache {args.action}", wait=args.wait, on_wait=waiting):
+        if args.action == "verify":
+            return _cache_verify(cache)
+        return _cache_prune(cache, args, code_sha256(), time.time())
+
+
+def _cache_verify(cache) -> int:
+    report = cache.verify()
+    for item in report.bad:
+        print(item.message())
+    other = (f"; {report.other_layout} entries of an older layout not checked "
+             "(study cache prune --stale removes them)" if report.other_layout else "")
+    print(f"checked {report.blocks} blocks and {report.axes} axis files in {report.entries} "
+          f"entries ({report.size / 1e6:.2f} MB) in {cache.root}: {len(report.bad)} bad"
+          + (f", moved to {cache.root / 'quarantine'}" if report.bad else "") + other)
+    return 1 if report.bad else 0
+
+
+def _cache_prune(cache, args: argparse.Namespace, current: str, now: float) -> int:
+    cache.clean_temporaries()
+    entries = list(cache.entries())
     doomed = [
         e for e in entries
         if args.all
         or (args.stale and (e.content.get("code_sha256") != current or not e.current_format))
         or (args.older_than is not None and now - e.modified > args.older_than * 86400)
     ]
-    if not (args.all or args.stale or args.older_than is not None):
-        print("study: cache prune needs --stale, --older-than DAYS or --all", file=sys.stderr)
-        return 2
     freed = sum(e.size for e in doomed)
-    for entry in doomed:
-        if not args.dry_run:
+    # Files moved aside are never read again: --all and --stale remove them too.
+    quarantined = len(cache.quarantine_files()) if (args.all or args.stale) else 0
+    if not args.dry_run:
+        for entry in doomed:
             cache.remove(entry.key)
+        if args.all or args.stale:
+            cache.remove_quarantine()
     verb = "would remove" if args.dry_run else "removed"
     print(f"{verb} {len(doomed)} of {len(entries)} entries ({freed / 1e6:.2f} MB) "
-          f"from {cache.root}")
+          + (f"and {quarantined} quarantined files " if quarantined else "")
+          + f"from {cache.root}")
     return 0
 
 
@@ -139,11 +192,25 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _figure(args: argparse.Namespace) -> int:
-    from study.figures import draw_figure
+    from study.figures import draw_figure, figure_request, is_current
+    from study.outputs import check_output
     from study.validate import open_result
 
     dataset = open_result(args.file)
-    output = args.output or Path("figures") / args.name
+    output = args.output or default_figure_output(args.name, args.file)
+    stem = Path(output)
+    if stem.suffix in (".png", ".pdf"):
+        stem = stem.with_suffix("")
+    for suffix in (".png", ".pdf"):
+        check_output(stem.with_suffix(suffix), "figure", overwrite=args.overwrite,
+                     inputs=[args.file, *(args.measurements or ())])
+    if args.if_changed:
+        request = figure_request(args.name, dataset, sel=args.sel, points=args.point,
+                                 measurements=args.measurements)
+        if is_current(output, request):
+            print(f"{Path(output).with_suffix('.png')}: up to date (drawn from this file "
+                  "with these options by this code)")
+            return 0
     written = draw_figure(args.name, dataset, output, sel=args.sel, source=str(args.file),
                           points=args.point, measurements=args.measurements)
     for path in written:
@@ -151,8 +218,45 @@ def _figure(args: argparse.Namespace) -> int:
     return 0
 
 
+def default_figure_output(name: str, result: Path) -> Path:
+    """Where ``study figure NAME FILE`` writes without ``-o``: ``figures/STEM-NAME``.
+
+    Named after the result file as well as the figure, so that a figure of one's own
+    file never takes the name of a figure ``make figures`` draws from the workflows
+    (``figures/NAME.png``).
+    """
+    return Path("figures") / f"{Path(result).stem}-{name}"
+
+
+def _output_path(text: str) -> Path:
+    """An output name as typed (``Path('')`` would silently mean the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty output name; give a file name")
+    return Path(text)
+
+
+def _folder_path(text: str) -> Path:
+    """A folder name as typed (``Path('')`` would silently mean the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty folder name; give a folder")
+    return Path(text)
+
+
+def _seconds(text: str) -> float:
+    """A positive, finite number of seconds."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: need a number of seconds > 0")
+    return value
+
+
 def _point(text: str) -> tuple[float, float]:
-    """``F,A`` of ``--point``: a drive frequency [Hz] and acceleration [m s^-2]."""
+    """``F,A`` of ``--point``: a drive frequency [Hz] and acceleration [m s-2]."""
     import math
 
     parts = text.split(",")
@@ -176,17 +280,25 @@ def _export(args: argparse.Namespace) -> int:
     if args.sel:
         dataset = select(dataset, args.sel, source=str(args.file))
         print(f"selected {dataset.attrs['study_selection']}")
-    for path, rows, columns in export_csv(dataset, args.csv, args.var, source=str(args.file)):
+    for path, rows, columns in export_csv(dataset, args.csv, args.var, source=str(args.file),
+                                          inputs=[args.file], overwrite=args.overwrite):
         print(f"wrote {path} ({rows} rows, {columns} columns)")
     return 0
 
 
 def _fit(args: argparse.Namespace) -> int:
-    from study.fit import PARAMETERS, fit, fit_dataset, load_fit_spec
+    from study.fit import FIT_RESULT_SCHEMA, PARAMETERS, fit, fit_dataset, load_fit_spec
+    from study.outputs import check_output
     from study.store import write_atomic
 
     spec = load_fit_spec(args.spec)
     output = args.output or Path("results") / f"{args.spec.stem}.nc"
+    inputs = [args.spec, *sorted({str(p) for p in spec.measurements["source"].values})]
+    check_output(output, FIT_RESULT_SCHEMA, inputs=inputs, overwrite=args.overwrite)
+    if args.figure is not None:
+        for suffix in (".png", ".pdf"):
+            check_output(Path(args.figure).with_suffix(suffix), "figure", inputs=inputs,
+                         overwrite=args.overwrite, option="--figure")
     result = fit(spec, progress=lambda line: print(f"study: {line}", file=sys.stderr,
                                                     flush=True))
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
@@ -199,10 +311,8 @@ def _fit(args: argparse.Namespace) -> int:
           f"evaluations in {result.wall_seconds:.1f} s")
     for name, value, error, ok in zip(result.names, result.estimate, result.standard_error,
                                       result.identifiable, strict=True):
-        units = PARAMETERS[name].units
-        units = "" if units == "1" else f" {units}"
         flag = "" if ok else "   NOT IDENTIFIABLE"
-        print(f"  {name:<12} = {value:.6g} +- {error:.3g}{units}{flag}")
+        print(f"  {name:<12} = {value:.6g} +- {error:.3g}{spoken(PARAMETERS[name].units)}{flag}")
     for warning in result.warnings:
         print(f"study: warning: {warning}", file=sys.stderr)
     if args.figure is not None:
@@ -214,11 +324,18 @@ def _fit(args: argparse.Namespace) -> int:
 
 
 def _design(args: argparse.Namespace) -> int:
-    from study.design import design, design_dataset, load_design_spec
+    from study.design import (
+        DESIGN_RESULT_SCHEMA,
+        design,
+        design_dataset,
+        load_design_spec,
+    )
+    from study.outputs import check_output
     from study.store import write_atomic
 
     spec = load_design_spec(args.spec)
     output = args.output or Path("results") / f"{args.spec.stem}.nc"
+    check_output(output, DESIGN_RESULT_SCHEMA, inputs=[args.spec], overwrite=args.overwrite)
     result = design(spec, progress=lambda line: print(f"study: {line}", file=sys.stderr,
                                                        flush=True))
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
@@ -228,8 +345,7 @@ def _design(args: argparse.Namespace) -> int:
           f"model evaluations in {result.wall_seconds:.1f} s")
     for name, value, low, high in zip(result.names, result.best, result.lower, result.upper,
                                       strict=True):
-        units = spec.parameter(name).units
-        units = "" if units == "1" else f" {units}"
+        units = spoken(spec.parameter(name).units)
         print(f"  {name:<12} = {value:.6g}{units}   (bounds {low:g} to {high:g})")
     ev = result.evaluation
     for i, target in enumerate(spec.targets):
@@ -267,19 +383,27 @@ def _list(args: argparse.Namespace) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
+    from study.cluster import TASK_TIMEOUT
+
     parser = argparse.ArgumentParser(
         prog="study",
         description="Parameter studies of vibration-driven stick-slip locomotion.",
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {VERSION}",
+                        help=f"print the version of {DISTRIBUTION} and exit")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     run = commands.add_parser("run", help="run a study spec and write its netCDF result")
     run.add_argument("spec", type=Path, help="study spec (TOML), e.g. workflows/regime-map.toml")
-    run.add_argument("-o", "--output", type=Path,
+    run.add_argument("-o", "--output", type=_output_path,
                      help="result file (default: results/<spec file stem>.nc)")
     run.add_argument("--scheduler", metavar="ADDR",
                      help="dask.distributed scheduler address, e.g. tcp://host:8786 "
                           "(default: threads in this process)")
+    run.add_argument("--task-timeout", type=_seconds, default=TASK_TIMEOUT, metavar="S",
+                     help="with --scheduler: end the run when no task has finished for S "
+                     f"seconds (a frozen worker; default {TASK_TIMEOUT:g}); finished work "
+                     "is kept")
     run.add_argument("--workers", type=int, metavar="N",
                      help="threads of a local run (default: one per core)")
     run.add_argument("--force", action="store_true",
@@ -287,14 +411,20 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                      help="progress with rate and time left (default: a bar on a terminal, "
                      "a line every 10%% or 30 s otherwise)")
-    run.add_argument("--cache", type=Path, metavar="DIR",
+    run.add_argument("--cache", type=_folder_path, metavar="DIR",
                      help="kept values to reuse and extend (default: $STUDY_CACHE, else "
                      "RESULT_FOLDER/.study-cache)")
+    _overwrite_option(run, "result")
     run.set_defaults(handler=_run)
 
-    cache = commands.add_parser("cache", help="show or prune the kept computed values")
-    cache.add_argument("action", choices=("list", "prune"))
-    cache.add_argument("--cache", type=Path, metavar="DIR",
+    cache = commands.add_parser(
+        "cache", help="show, prune or verify the kept computed values",
+        description="list: what is kept (read-only). prune: remove entries (--stale, "
+        "--older-than DAYS or --all). verify: read and check every block; bad ones are "
+        "moved to DIR/quarantine (exit status 1 if any). prune and verify wait for runs "
+        "using the cache (--wait), and runs wait for them.")
+    cache.add_argument("action", choices=("list", "prune", "verify"))
+    cache.add_argument("--cache", type=_folder_path, metavar="DIR",
                        default=Path(os.environ.get("STUDY_CACHE") or "results/.study-cache"),
                        help="cache folder (default: $STUDY_CACHE, else results/.study-cache)")
     cache.add_argument("--stale", action="store_true",
@@ -304,6 +434,9 @@ def _parser() -> argparse.ArgumentParser:
                        help="prune: entries not written for DAYS days")
     cache.add_argument("--all", action="store_true", help="prune: everything")
     cache.add_argument("--dry-run", action="store_true", help="prune: only say what would go")
+    cache.add_argument("--wait", type=float, metavar="SECONDS", default=60.0,
+                       help="prune, verify: wait this long for runs using the cache to "
+                       "finish, then give up (default: 60)")
     cache.set_defaults(handler=_cache)
 
     validate = commands.add_parser("validate", help="check result files against the schema")
@@ -323,8 +456,12 @@ def _parser() -> argparse.ArgumentParser:
     figure.add_argument("name", choices=sorted(FIGURES), metavar="NAME",
                         help="one of: " + ", ".join(FIGURES))
     figure.add_argument("file", type=Path, metavar="FILE", help="result file (netCDF)")
-    figure.add_argument("-o", "--output", type=Path,
-                        help="output stem (default: figures/NAME -> .png and .pdf)")
+    figure.add_argument("-o", "--output", type=_output_path,
+                        help="output stem, its folders created (default: "
+                        "figures/STEM-NAME -> .png and .pdf, STEM the result file's)")
+    figure.add_argument("--if-changed", action="store_true",
+                        help="draw only if the output is missing or was drawn from other "
+                        "data, options or figure code (as make figures does)")
     figure.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
                         help="draw part of the file: KEY=VALUE nearest, KEY==VALUE exact, "
                         "KEY=START:STOP a range (repeatable); a figure of fewer axes than "
@@ -339,6 +476,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="thresholds, velocity-curves, mass-ratio: measurement file "
                         "drawn with error bars over the model (repeatable; README: "
                         "Measurements and fits)")
+    _overwrite_option(figure, "figure")
     figure.set_defaults(handler=_figure)
 
     export = commands.add_parser(
@@ -348,13 +486,14 @@ def _parser() -> argparse.ArgumentParser:
         "Variables over other dimensions than the main table's (the frontier, a scene's "
         "segments or plates) go to OUT_STEM.DIMS.csv beside OUT.")
     export.add_argument("file", type=Path, metavar="FILE", help="result file (netCDF)")
-    export.add_argument("--csv", type=Path, required=True, metavar="OUT",
+    export.add_argument("--csv", type=_output_path, required=True, metavar="OUT",
                         help="CSV file of the main table")
     export.add_argument("--sel", action="append", default=[], metavar="KEY=VALUE",
                         help="select by coordinate: KEY=VALUE nearest, KEY==VALUE exact, "
                         "KEY=START:STOP a range (repeatable)")
     export.add_argument("--var", action="append", default=None, metavar="NAME",
                         help="export only this variable (repeatable; default: all)")
+    _overwrite_option(export, "table")
     export.set_defaults(handler=_export)
 
     fitting = commands.add_parser(
@@ -364,10 +503,11 @@ def _parser() -> argparse.ArgumentParser:
         "measurement CSV files; writes estimates, standard errors, correlations, residuals "
         "and chi^2 to a netCDF file (README: Measurements and fits).")
     fitting.add_argument("spec", type=Path, help="fit spec (TOML)")
-    fitting.add_argument("-o", "--output", type=Path,
+    fitting.add_argument("-o", "--output", type=_output_path,
                          help="result file (default: results/<spec file stem>.nc)")
-    fitting.add_argument("--figure", type=Path, metavar="STEM",
+    fitting.add_argument("--figure", type=_output_path, metavar="STEM",
                          help="also draw measurements over the fitted model (STEM.png, .pdf)")
+    _overwrite_option(fitting, "result")
     fitting.set_defaults(handler=_fit)
 
     designing = commands.add_parser(
@@ -378,8 +518,9 @@ def _parser() -> argparse.ArgumentParser:
         "target's velocities and margins, and whether all are met (README: Design). An "
         "infeasible design is reported (exit status 0) naming the target that fails.")
     designing.add_argument("spec", type=Path, help="design spec (TOML)")
-    designing.add_argument("-o", "--output", type=Path,
+    designing.add_argument("-o", "--output", type=_output_path,
                            help="result file (default: results/<spec file stem>.nc)")
+    _overwrite_option(designing, "result")
     designing.set_defaults(handler=_design)
 
     listing = commands.add_parser("list", help="the workflows and whether results are current")
@@ -394,11 +535,19 @@ def build_parser() -> argparse.ArgumentParser:
     return _parser()
 
 
+def _overwrite_option(command: argparse.ArgumentParser, what: str) -> None:
+    command.add_argument(
+        "--overwrite", action="store_true",
+        help=f"replace an existing file that is not a {what} written by study (a file "
+        "the command reads is never replaced)")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``study`` console script."""
     from study.cluster import ClusterError
     from study.export import ExportError
     from study.figures import FigureError
+    from study.outputs import OutputError
     from study.selection import SelectionError
     from study.spec import SpecError
     from study.store import StoreBusy, StoreError
@@ -413,7 +562,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.handler(args)
     except (SpecError, ResultError, FigureError, StoreError, StoreBusy, ClusterError,
-            SelectionError, ExportError) as err:
+            SelectionError, ExportError, OutputError) as err:
         print(f"study: {err}", file=sys.stderr)
         return 1
     except BrokenPipeError:

@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["ClusterError", "Executor", "executor"]
+__all__ = ["TASK_TIMEOUT", "ClusterError", "Executor", "check_address", "executor"]
 
 #: Marks the end of the items (items themselves may be None).
 _END = object()
@@ -41,6 +41,10 @@ _SHOWN = 12
 
 # Ask again how many threads the cluster has at most this often [s].
 _REFRESH = 1.0
+
+#: Default seconds a scheduler's workers may go without finishing a task while tasks
+#: are in flight before the run ends (a frozen worker; see :func:`executor`).
+TASK_TIMEOUT = 600.0
 
 # Sleep while no task has finished [s]: from the shortest, doubling up to the
 # longest, so that quick tasks are collected at once and an idle wait costs nothing.
@@ -97,7 +101,8 @@ class Executor(ABC):
 
 @contextmanager
 def executor(scheduler: str | None, threads: int | None, code_sha256: str, *,
-             timeout: float = 30.0) -> Iterator[Executor]:
+             timeout: float = 30.0, connect_timeout: float | None = None,
+             task_timeout: float = TASK_TIMEOUT) -> Iterator[Executor]:
     """An executor for one run: local threads, or the workers of a dask scheduler.
 
     Parameters
@@ -111,8 +116,16 @@ def executor(scheduler: str | None, threads: int | None, code_sha256: str, *,
     code_sha256 : str
         The code hash of this process: every worker must report the same.
     timeout : float
-        Seconds to wait for the scheduler to answer, for a first worker, and
-        without any worker during the run.
+        Seconds to wait for a first worker, and without any worker during the run.
+    connect_timeout : float, optional
+        Seconds to wait for the scheduler to answer; default the shorter of ``timeout``
+        and 10 s (an address that does not answer is most often a typo, and the
+        message names it).
+    task_timeout : float
+        Seconds the scheduler's workers may go without finishing any task (or handing
+        back a finished one) while tasks are in flight: then a worker is taken to be
+        frozen and the run ends with a :class:`ClusterError` naming the workers
+        holding the tasks. Finished work is kept; the next run resumes.
 
     Yields
     ------
@@ -128,8 +141,35 @@ def executor(scheduler: str | None, threads: int | None, code_sha256: str, *,
         with _LocalExecutor(threads or os.cpu_count() or 1) as local:
             yield local
     else:
-        with _DaskExecutor(scheduler, code_sha256, timeout) as remote:
+        check_address(scheduler)
+        if connect_timeout is None:
+            connect_timeout = min(timeout, 10.0)
+        with _DaskExecutor(scheduler, code_sha256, timeout, connect_timeout,
+                           task_timeout) as remote:
             yield remote
+
+
+def check_address(address: str) -> str:
+    """Refuse, before any connection is tried, a scheduler address that is none.
+
+    Raises
+    ------
+    ClusterError
+        Naming the address and the form expected (``tcp://HOST:PORT``).
+    """
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(str(address), strict=False)
+        if scheme in ("tcp", "tls"):
+            host, _ = parse_host_port(location)
+            if not host:
+                raise ValueError("no host")
+    except (ValueError, TypeError) as err:
+        raise ClusterError(
+            f"--scheduler {address!r} is not a dask scheduler address ({err}); expected "
+            "tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786") from None
+    return address
 
 
 class _LocalExecutor(Executor):
@@ -235,10 +275,13 @@ def _install_hint() -> str:
 class _DaskExecutor(Executor):
     """The workers of a running dask.distributed scheduler."""
 
-    def __init__(self, address: str, code_sha256: str, timeout: float) -> None:
+    def __init__(self, address: str, code_sha256: str, timeout: float,
+                 connect_timeout: float, task_timeout: float) -> None:
         self.name = address
         self.code_sha256 = code_sha256
         self.timeout = timeout
+        self.connect_timeout = connect_timeout
+        self.task_timeout = task_timeout
         self.client: Any = None
         self.threads = 0
         self.dashboard = None
@@ -247,10 +290,12 @@ class _DaskExecutor(Executor):
         from distributed import Client
 
         try:
-            self.client = Client(self.name, timeout=self.timeout, set_as_default=False)
+            self.client = Client(self.name, timeout=self.connect_timeout,
+                                 set_as_default=False)
         except Exception as err:  # OSError, TimeoutError, ValueError for a bad address
             raise ClusterError(
-                f"cannot reach the dask scheduler at {self.name} within {self.timeout:g} s "
+                f"cannot reach the dask scheduler at {self.name} within "
+                f"{self.connect_timeout:g} s "
                 f"({type(err).__name__}: {err}); is it running, and is the address right?"
             ) from None
         try:
@@ -372,6 +417,7 @@ class _DaskExecutor(Executor):
         from distributed import CancelledError, KilledWorker
 
         alone_since = None
+        waiting_since = time.monotonic()
         while True:
             try:
                 # A finished result may sit on a worker that just died: dask computes
@@ -380,6 +426,8 @@ class _DaskExecutor(Executor):
                 break
             except TimeoutError:
                 _, alone_since = self._watch(alone_since)
+                if time.monotonic() - waiting_since > self.task_timeout:
+                    raise self._stalled([future]) from None
             except KilledWorker as err:
                 raise ClusterError(
                     f"workers of {self.name} died while computing one task again and "
@@ -394,6 +442,23 @@ class _DaskExecutor(Executor):
             raise self._refused(outcome)
         return outcome[1]
 
+    def _stalled(self, futures: list[Any]) -> ClusterError:
+        """The error that ends a run whose tasks stopped finishing: which workers hold
+        them, as far as the scheduler knows."""
+        keys = {future.key for future in futures}
+        try:
+            holders = sorted(worker for worker, held in self.client.processing().items()
+                             if keys & set(held))
+        except Exception:  # the scheduler itself may be the one not answering
+            holders = []
+        where = (f"tasks wait on {', '.join(holders)}" if holders
+                 else "the scheduler does not say where they wait")
+        return ClusterError(
+            f"no task finished on the workers of {self.name} for {self.task_timeout:g} s "
+            f"({len(keys)} in flight; {where}): is a worker frozen or overloaded? The run "
+            "stopped; finished work is kept and the next run resumes (--task-timeout "
+            "sets the wait)")
+
     def run_unordered(self, function, items, *, label):
         import cloudpickle
         from distributed import as_completed
@@ -407,6 +472,7 @@ class _DaskExecutor(Executor):
         following = 0
         window = 2 * max(self.threads, 1)
         checked = time.monotonic()
+        last_finished = checked
         alone_since = None
         pause = _POLL[0]
         try:
@@ -434,10 +500,13 @@ class _DaskExecutor(Executor):
                         checked = now
                         threads, alone_since = self._watch(alone_since)
                         window = 2 * max(threads, 1)
+                        if now - last_finished > self.task_timeout:
+                            raise self._stalled(list(running))
                     time.sleep(pause)
                     pause = min(2 * pause, _POLL[1])
                     continue
                 alone_since, pause = None, _POLL[0]
+                last_finished = time.monotonic()
                 for future in finished:
                     item = running.pop(future)
                     # Dropping the future (here and in finished) lets the worker

@@ -7,7 +7,7 @@ spec) with start and fixed values, and the free parameters with their bounds::
 
     [design]
     name = "forward-backward"
-    coupling = "two-way"            # or "one-way"
+    coupling = "two-way"            # or "one-way", the default
     [structure]                     # start values / fixed values
     f0 = 14.44
     Q = 17.5
@@ -52,7 +52,8 @@ threshold and below lift-off.
 **Objective**: maximise the smallest target margin over the free parameters within
 their bounds (a max-min design: the worst target is as robust as it can be). Velocities
 are :func:`study.solver.steady_velocity` with the spec's coupling (default
-``"two-way"``, the physical model), or :func:`study.planar.periodic_motion` for the
+:data:`study.solver.DEFAULT_COUPLING`, ``"one-way"``, the paper's model, as everywhere),
+or :func:`study.planar.periodic_motion` for the
 disk. **Search**: one free parameter, a scan of ``scan_points`` values across the
 bounds, then a bounded Brent refinement between the best value's neighbours; several,
 :func:`scipy.optimize.differential_evolution` (fixed seed, the start values in the
@@ -86,7 +87,7 @@ from study.fit import Parameter
 from study.physics import lift_off_acceleration, mode_response, thresholds
 from study.planar import Disk, contact_margins, periodic_motion
 from study.scene import disk_from_spec
-from study.solver import steady_velocity
+from study.solver import DEFAULT_COUPLING, steady_velocity
 from study.specfile import (
     SpecError,
     canonical_sha256,
@@ -96,10 +97,20 @@ from study.specfile import (
     read_spec_text,
 )
 from study.status import Status
-from study.structure import Structure
+from study.structure import Structure, tilt_warnings
+from study.units import (
+    DEGREE,
+    DEGREE_PER_SECOND,
+    DIMENSIONLESS,
+    HERTZ,
+    METRE_PER_SECOND,
+    METRE_PER_SECOND_SQUARED,
+    spoken,
+)
 
 __all__ = [
     "BEHAVIOURS",
+    "DESIGN_FORMAT",
     "DESIGN_RESULT_SCHEMA",
     "DESIGN_SPEC_SCHEMA",
     "FAILED",
@@ -118,6 +129,10 @@ __all__ = [
 
 DESIGN_SPEC_SCHEMA = "study-design-spec-v1"
 DESIGN_RESULT_SCHEMA = "study-design-v1"
+#: Layout of a design result (global attribute ``study_design_format``): 2 spells every
+#: unit in CF/UDUNITS (``parameter_units`` of alpha and direction: ``degree``). Files
+#: without it are format 1 (``deg``), refused as stale by validation.
+DESIGN_FORMAT = 2
 
 #: Target behaviours, and which models know them.
 BEHAVIOURS = {
@@ -141,12 +156,12 @@ PHASES = 2048
 
 #: Parameters of one plate of the disk ("<plate>.<name>" in [free]).
 PLATE_PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
-    Parameter("f0", "Hz", "resonance frequency of the plate's first mode", 0.0, math.inf),
-    Parameter("Q", "1", "quality factor of the plate's mode", 0.0, math.inf),
-    Parameter("alpha", "deg", "tilt of the plate's mode from the horizontal", 0.0, 90.0,
+    Parameter("f0", HERTZ, "resonance frequency of the plate's first mode", 0.0, math.inf),
+    Parameter("Q", DIMENSIONLESS, "quality factor of the plate's mode", 0.0, math.inf),
+    Parameter("alpha", DEGREE, "tilt of the plate's mode from the horizontal", 0.0, 90.0,
               lower_open=False, upper_open=False),
-    Parameter("M", "1", "mass ratio of the plate's mode", 0.0, 1.0, upper_open=False),
-    Parameter("direction", "deg", "direction of the plate's mode in the body frame",
+    Parameter("M", DIMENSIONLESS, "mass ratio of the plate's mode", 0.0, 1.0, upper_open=False),
+    Parameter("direction", DEGREE, "direction of the plate's mode in the body frame",
               -360.0, 360.0, lower_open=False, upper_open=False),
 )}
 #: Parameters of the single-plate structure (as a fit's).
@@ -162,7 +177,7 @@ class Target:
     f : float
         Drive frequency [Hz].
     a : float
-        Drive acceleration amplitude [m s^-2].
+        Drive acceleration amplitude [m s-2].
     behaviour : str
         One of :data:`BEHAVIOURS`.
     label : str
@@ -183,7 +198,8 @@ class DesignSpec:
     name, title, text, path : str
     model : str
         ``"plate"`` (``[structure]``) or ``"disk"`` (``[disk]`` and ``[[plate]]``).
-    coupling : str
+    coupling : {"one-way", "two-way"}
+        Model of the velocities (default :data:`study.solver.DEFAULT_COUPLING`).
     start : dict
         Every parameter's start (or fixed) value by name: ``f0``, ``Q``, ``alpha``,
         ``M``, ``cs``, ``ck`` (None: tied to ``cs``), ``g`` for the plate model;
@@ -279,7 +295,7 @@ def parse_design_spec(text: str, path: str = "<string>") -> DesignSpec:
     weights = {"speed": 1.0, "threshold": 1.0, "lift": 1.0, **table.get("weights", {})}
     return DesignSpec(
         name=table["name"], title=table.get("title", table["name"]), text=text, path=path,
-        model=model, coupling=table.get("coupling", "two-way"), start=start, disk=disk,
+        model=model, coupling=table.get("coupling", DEFAULT_COUPLING), start=start, disk=disk,
         free=free, targets=targets, weights={k: float(v) for k, v in weights.items()},
         seed=int(table.get("seed", 1)), scan_points=int(table.get("scan_points", 41)),
         max_iterations=int(table.get("max_iterations", 60)),
@@ -296,7 +312,7 @@ def _check_bounds(name: str, bounds: list[float], parameter: Parameter, start: f
     for bound in (lower, upper):
         if not parameter.inside(bound):
             raise SpecError(f"{where}: bound {bound:g} is out of range; allowed: "
-                            f"{parameter.allowed()} [{parameter.units}]")
+                            f"{parameter.allowed()}{spoken(parameter.units)}")
     if start is not None and not lower <= start <= upper:
         raise SpecError(f"{where}: the start value {start:g} is outside the bounds")
     return lower, upper
@@ -383,8 +399,9 @@ def _disk_free(table: dict[str, Any], disk: Disk, start: dict[str, float | None]
 
 
 def _structure(p: dict[str, float | None]) -> Structure:
-    return Structure(f0=p["f0"], Q=p["Q"], alpha=p["alpha"], M=p["M"], cs=p["cs"],
-                     ck=p["ck"], g=p["g"])
+    with tilt_warnings(False):  # the spec's tilts are in degree; the search may go near 0
+        return Structure(f0=p["f0"], Q=p["Q"], alpha=p["alpha"], M=p["M"], cs=p["cs"],
+                         ck=p["ck"], g=p["g"])
 
 
 def _disk_of(spec: DesignSpec, p: dict[str, float | None]) -> Disk:
@@ -395,7 +412,7 @@ def _disk_of(spec: DesignSpec, p: dict[str, float | None]) -> Disk:
 
 
 def disk_limits(disk: Disk, f: float, samples: int = PHASES) -> tuple[float, float]:
-    """The disk's motion threshold and lift-off acceleration at ``f`` [m s^-2].
+    """The disk's motion threshold and lift-off acceleration at ``f`` [m s-2].
 
     Stuck on the table, each plate's mode is on its steady response, proportional to
     ``a``: the friction load ``|(f, T / c)|`` (force and torque over the limit
@@ -436,13 +453,13 @@ class Evaluation:
     Attributes
     ----------
     forward_speed : numpy.ndarray
-        Mean velocity [m s^-1] (the single plate's ``v``; the disk's along its heading).
+        Mean velocity [m s-1] (the single plate's ``v``; the disk's along its heading).
     lateral_speed, turn_rate : numpy.ndarray
-        The disk's lateral speed [m s^-1] and turn rate [rad s^-1] (NaN for a plate).
+        The disk's lateral speed [m s-1] and turn rate [rad s-1] (NaN for a plate).
     status : numpy.ndarray
         :class:`~study.status.Status` codes.
     threshold, lift : numpy.ndarray
-        The motion threshold and lift-off acceleration at ``f`` [m s^-2].
+        The motion threshold and lift-off acceleration at ``f`` [m s-2].
     rim : numpy.ndarray
         The disk's rim contact margin (:func:`study.planar.contact_margins`; NaN for a
         plate).
@@ -506,7 +523,7 @@ def evaluate(spec: DesignSpec, params: dict[str, float | None],
         for i, t in enumerate(targets):
             threshold[i], lift[i] = disk_limits(disk, t.f)
             motion = periodic_motion(disk, t.f, t.a)
-            # The planar API gives turn rates in degree s^-1; margins use rad s^-1.
+            # The planar API gives turn rates in degree s-1; margins use rad s-1.
             forward[i], lateral[i], turn[i] = (motion.forward_speed, motion.lateral_speed,
                                                math.radians(motion.turn_rate))
             status[i] = motion.status
@@ -787,7 +804,7 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
         "target": (t, np.array([x.label for x in spec.targets], dtype=object),
                    {"long_name": "target behaviour at a drive command"}),
     }
-    one = {"units": "1"}
+    one = {"units": DIMENSIONLESS}
     variables: dict[str, tuple[Any, ...]] = {
         "best": (p, result.best, {"long_name": "designed value", **per_unit}),
         "lower_bound": (p, result.lower, {"long_name": "lower bound of the search",
@@ -796,28 +813,28 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
                                           **per_unit}),
         "start": (p, result.start, {"long_name": "start value", **per_unit}),
         "f": (t, np.array([x.f for x in spec.targets]), {
-            "long_name": "drive frequency", "units": "Hz"}),
+            "long_name": "drive frequency", "units": HERTZ}),
         "a": (t, np.array([x.a for x in spec.targets]), {
-            "long_name": "drive acceleration amplitude", "units": "m s-2"}),
+            "long_name": "drive acceleration amplitude", "units": METRE_PER_SECOND_SQUARED}),
         "behaviour": (t, np.array([x.behaviour for x in spec.targets], dtype=object), {
             "long_name": "behaviour asked for (" + ", ".join(BEHAVIOURS) + ")"}),
         "forward_speed": (t, ev.forward_speed, {
             "long_name": "steady mean velocity (the disk's along its heading)",
-            "units": "m s-1"}),
+            "units": METRE_PER_SECOND}),
         "lateral_speed": (t, ev.lateral_speed, {
             "long_name": "steady mean velocity to the left of the heading (disk)",
-            "units": "m s-1"}),
+            "units": METRE_PER_SECOND}),
         "turn_rate": (t, np.degrees(ev.turn_rate), {
             "long_name": "steady mean angular velocity, counterclockwise positive (disk)",
-            "units": "degree s-1"}),
+            "units": DEGREE_PER_SECOND}),
         "solver_status": (t, np.array([Status(int(s)).name for s in ev.status],
                                       dtype=object), {"long_name": "solver status"}),
         "motion_threshold": (t, ev.threshold, {
             "long_name": "lowest drive at which the structure slips at f",
-            "units": "m s-2"}),
+            "units": METRE_PER_SECOND_SQUARED}),
         "lift_off_acceleration": (t, ev.lift, {
             "long_name": "drive above which the normal force vanishes in the cycle",
-            "units": "m s-2"}),
+            "units": METRE_PER_SECOND_SQUARED}),
         "edge_contact_margin": (t, ev.rim, {
             "long_name": "rim contact margin of the disk (NaN: single plate)", **one}),
         "speed_margin": (t, ev.speed_margin, {
@@ -857,6 +874,7 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
         "Conventions": "CF-1.11",
         "title": spec.title,
         "study_result_schema": DESIGN_RESULT_SCHEMA,
+        "study_design_format": DESIGN_FORMAT,
         "study_design_name": spec.name,
         "study_name": spec.name,
         "study_spec": spec.text,

@@ -28,11 +28,14 @@ import csv
 import math
 import os
 import tempfile
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+
+from study.outputs import check_output
 
 __all__ = ["ExportError", "Table", "export_csv", "tables"]
 
@@ -159,6 +162,7 @@ def _write_table_atomic(path: Path, columns: list[tuple[str, xr.DataArray, np.nd
     folder = path.parent if str(path.parent) else Path(".")
     count = columns[0][2].size if columns else 0
     try:
+        folder.mkdir(parents=True, exist_ok=True)
         fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     except OSError as err:
         raise ExportError(f"{path}: cannot write ({err.strerror or err})") from None
@@ -183,7 +187,8 @@ def _write_table_atomic(path: Path, columns: list[tuple[str, xr.DataArray, np.nd
 
 
 def export_csv(dataset: xr.Dataset, output: str | Path, variables: list[str] | None = None,
-               source: str = "") -> list[tuple[Path, int, int]]:
+               source: str = "", *, inputs: Iterable[str | Path] = (),
+               overwrite: bool = False) -> list[tuple[Path, int, int]]:
     """Write ``dataset`` as tidy CSV tables (see the module's description).
 
     Parameters
@@ -196,6 +201,10 @@ def export_csv(dataset: xr.Dataset, output: str | Path, variables: list[str] | N
         Export only these data variables (``--var``).
     source : str
         The result file's name, for messages.
+    inputs : iterable of path
+        Files this export reads (the result file): no table may be written over one.
+    overwrite : bool
+        Replace existing files that are not tables of ``study export``.
 
     Returns
     -------
@@ -206,13 +215,21 @@ def export_csv(dataset: xr.Dataset, output: str | Path, variables: list[str] | N
     ------
     ExportError
         For an unknown variable or a file that cannot be written.
+    study.outputs.OutputError
+        For a table's path that is an input, a folder, a device or (without
+        ``overwrite``) another kind of file; checked for every table before any is
+        written.
     """
-    output = Path(output)
+    output = check_output(output, "csv", inputs=inputs, overwrite=overwrite,
+                          option="--csv")
     found = tables(dataset, variables, source)
+    paths = [output if i == 0 else output.with_name(
+        f"{output.stem}.{table.suffix}{output.suffix or '.csv'}")
+        for i, table in enumerate(found)]
+    for path in paths[1:]:
+        check_output(path, "csv", inputs=inputs, overwrite=overwrite, option="--csv")
     written = []
-    for i, table in enumerate(found):
-        path = output if i == 0 else output.with_name(
-            f"{output.stem}.{table.suffix}{output.suffix or '.csv'}")
+    for path, table in zip(paths, found, strict=True):
         columns = _columns(dataset, table)
         written.append((path, _write_table_atomic(path, columns), len(columns)))
     return written

@@ -20,7 +20,8 @@ The model of each measurement row:
   (:func:`study.physics.thresholds`, closed form); ``direction = forward`` or
   ``backward`` compares with ``a*_+`` or ``a*_-`` alone;
 * ``velocity``: :func:`study.solver.steady_velocity` at ``(f, a)`` with the spec's
-  coupling (default ``"two-way"``, the physical model);
+  ``coupling`` (default :data:`study.solver.DEFAULT_COUPLING`, ``"one-way"``, the
+  paper's model, as everywhere; ``"two-way"`` for the physical one);
 * ``ringdown_f0``, ``ringdown_Q``: ``f0`` and ``Q`` themselves.
 
 ``chi^2 = sum ((model - value) / sigma)^2`` is minimised by
@@ -50,7 +51,7 @@ from numpy.typing import NDArray
 
 from study.measurements import QUANTITIES, read_measurements
 from study.physics import thresholds
-from study.solver import steady_velocity
+from study.solver import DEFAULT_COUPLING, steady_velocity
 from study.specfile import (
     SpecError,
     canonical_sha256,
@@ -59,9 +60,11 @@ from study.specfile import (
     parse_toml,
     read_spec_text,
 )
-from study.structure import Structure
+from study.structure import Structure, tilt_warnings
+from study.units import DEGREE, DIMENSIONLESS, HERTZ, KILOGRAM, spoken
 
 __all__ = [
+    "FIT_FORMAT",
     "FIT_RESULT_SCHEMA",
     "FIT_SPEC_SCHEMA",
     "PARAMETERS",
@@ -79,6 +82,10 @@ __all__ = [
 
 FIT_SPEC_SCHEMA = "study-fit-spec-v1"
 FIT_RESULT_SCHEMA = "study-fit-v1"
+#: Layout of a fit result (global attribute ``study_fit_format``): 2 spells every unit
+#: in CF/UDUNITS (``parameter_units`` of alpha: ``degree``). Files without it are format
+#: 1 (``deg``), refused as stale by validation.
+FIT_FORMAT = 2
 
 #: A standard error above this fraction of the bounds' width flags a parameter.
 UNIDENTIFIABLE_FRACTION = 0.25
@@ -123,14 +130,14 @@ class Parameter:
 
 #: The parameters a fit can free, declared once (m0 and m1_fraction: [structure.mass]).
 PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
-    Parameter("f0", "Hz", "resonance frequency of the plate's first mode", 0.0, math.inf),
-    Parameter("Q", "1", "quality factor of the mode", 0.0, math.inf),
-    Parameter("alpha", "deg", "tilt of the plate from the horizontal", -90.0, 90.0),
-    Parameter("M", "1", "mass ratio m1/m", 0.0, 1.0, upper_open=False),
-    Parameter("cs", "1", "static friction coefficient", 0.0, math.inf),
-    Parameter("ck", "1", "kinetic friction coefficient (ck <= cs)", 0.0, math.inf),
-    Parameter("m0", "kg", "mass of the bare structure", 0.0, math.inf),
-    Parameter("m1_fraction", "1", "resonant mass over the bare structure's mass, m1/m0",
+    Parameter("f0", HERTZ, "resonance frequency of the plate's first mode", 0.0, math.inf),
+    Parameter("Q", DIMENSIONLESS, "quality factor of the mode", 0.0, math.inf),
+    Parameter("alpha", DEGREE, "tilt of the plate from the horizontal", -90.0, 90.0),
+    Parameter("M", DIMENSIONLESS, "mass ratio m1/m", 0.0, 1.0, upper_open=False),
+    Parameter("cs", DIMENSIONLESS, "static friction coefficient", 0.0, math.inf),
+    Parameter("ck", DIMENSIONLESS, "kinetic friction coefficient (ck <= cs)", 0.0, math.inf),
+    Parameter("m0", KILOGRAM, "mass of the bare structure", 0.0, math.inf),
+    Parameter("m1_fraction", DIMENSIONLESS, "resonant mass over the bare structure's mass, m1/m0",
               0.0, 1.0, upper_open=False),
 )}
 
@@ -154,7 +161,8 @@ class FitSpec:
         ``cs``); with ``[structure.mass]``: ``m0``, ``m1_fraction`` instead of ``M``.
     free : dict
         Free parameter -> (lower, upper) bounds as the spec gives them.
-    coupling : str
+    coupling : {"one-way", "two-way"}
+        Model of velocity rows (default :data:`study.solver.DEFAULT_COUPLING`).
     profile : str
         ``"unidentifiable"``, ``"all"`` or ``"none"``: which parameters get a chi^2 profile.
     profile_points : int
@@ -168,7 +176,7 @@ class FitSpec:
     measurements: xr.Dataset = field(repr=False)
     start: dict[str, float | None]
     free: dict[str, tuple[float, float]]
-    coupling: str = "two-way"
+    coupling: str = DEFAULT_COUPLING
     profile: str = "unidentifiable"
     profile_points: int = 21
     max_evaluations: int = 200
@@ -236,7 +244,7 @@ def parse_fit_spec(text: str, path: str = "<string>", base: str | Path = ".") ->
         for bound in (lower, upper):
             if not parameter.inside(bound):
                 raise SpecError(f"{where}: bound {bound:g} is out of range; allowed: "
-                                f"{parameter.allowed()} [{parameter.units}]")
+                                f"{parameter.allowed()}{spoken(parameter.units)}")
         value = start[name]
         if value is None or not lower <= value <= upper:
             raise SpecError(f"{where}: the start value {name} = {value!r} from [structure] is "
@@ -271,7 +279,7 @@ def parse_fit_spec(text: str, path: str = "<string>", base: str | Path = ".") ->
     return FitSpec(
         name=table["name"], title=table.get("title", table["name"]), text=text, path=path,
         measurements=measurements, start=start, free=free,
-        coupling=table.get("coupling", "two-way"),
+        coupling=table.get("coupling", DEFAULT_COUPLING),
         profile=table.get("profile", "unidentifiable"),
         profile_points=int(table.get("profile_points", 21)),
         max_evaluations=int(table.get("max_evaluations", 200)),
@@ -305,8 +313,9 @@ def _structure(params: dict[str, float | None], m_add: float, M: float | None = 
             M = params["m1_fraction"] * params["m0"] / (params["m0"] + m_add)
         else:
             M = params["M"]
-    return Structure(f0=params["f0"], Q=params["Q"], alpha=params["alpha"], M=M,
-                     cs=params["cs"], ck=params["ck"], g=params["g"])
+    with tilt_warnings(False):  # the spec's tilts are in degree; the search may go near 0
+        return Structure(f0=params["f0"], Q=params["Q"], alpha=params["alpha"], M=M,
+                         cs=params["cs"], ck=params["ck"], g=params["g"])
 
 
 def structure_groups(data: xr.Dataset) -> dict[tuple[float | None, float | None],
@@ -370,7 +379,7 @@ def model_values(params: dict[str, float | None], data: xr.Dataset, coupling: st
 
 def _threshold_gradient(s: Structure, f: NDArray[np.float64], sign: float
                         ) -> tuple[NDArray[np.float64], dict[str, NDArray[np.float64]]]:
-    """a*_s and its derivatives with respect to f0, Q, alpha (deg), M, cs (paper eq. 5)."""
+    """a*_s and its derivatives with respect to f0, Q, alpha (degree), M, cs (paper eq. 5)."""
     w = 2.0 * np.pi * f
     w0 = s.omega0
     G = 1.0 / (w0 * w0 - w * w + 1j * w0 * w / s.Q)
@@ -681,7 +690,7 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
     for j in np.flatnonzero(~identifiable):
         why = ("the data do not depend on it (or only through a combination with other "
                "parameters)" if degenerate[j] else
-               f"its standard error {se[j]:.3g} {PARAMETERS[names[j]].units} is more than "
+               f"its standard error {se[j]:.3g}{spoken(PARAMETERS[names[j]].units)} is more than "
                f"{UNIDENTIFIABLE_FRACTION:g} of its bounds' width")
         warnings.append(f"parameter {names[j]} is not identifiable from these data: {why}; "
                         "see its chi^2 profile")
@@ -815,20 +824,20 @@ def fit_dataset(spec: FitSpec, result: FitResult, command: str = "") -> xr.Datas
             "comment": (f"not identifiable: standard error > {UNIDENTIFIABLE_FRACTION:g} x "
                         "bounds width, or along a null direction of J^T J")}),
         "correlation": (pdim + qdim, result.correlation, {
-            "long_name": "correlation of the estimates", "units": "1"}),
+            "long_name": "correlation of the estimates", "units": DIMENSIONLESS}),
         "covariance": (pdim + qdim, result.covariance, {
             "long_name": "covariance of the estimates",
             "comment": "units: product of the two parameters' units"}),
         "profile_value": (("parameter", "profile_point"), result.profile_values, {
             "long_name": "value at which the parameter is held", **per_unit}),
         "profile_chi2": (("parameter", "profile_point"), result.profile_chi2, {
-            "long_name": "chi^2 minimised over the other free parameters", "units": "1",
+            "long_name": "chi^2 minimised over the other free parameters", "units": DIMENSIONLESS,
             "comment": "NaN: not profiled (only unidentifiable parameters by default)"}),
-        "chi2": ((), result.chi2, {"long_name": "chi^2 at the estimate", "units": "1"}),
+        "chi2": ((), result.chi2, {"long_name": "chi^2 at the estimate", "units": DIMENSIONLESS}),
         "degrees_of_freedom": ((), np.int32(result.dof), {
             "long_name": "measurements minus free parameters"}),
         "chi2_per_dof": ((), result.chi2_per_dof, {
-            "long_name": "chi^2 per degree of freedom", "units": "1"}),
+            "long_name": "chi^2 per degree of freedom", "units": DIMENSIONLESS}),
     }
     mdim = ("measurement",)
     rows = {
@@ -847,13 +856,14 @@ def fit_dataset(spec: FitSpec, result: FitResult, command: str = "") -> xr.Datas
         "long_name": "model minus measured value",
         "comment": "units by quantity, see value_units"})
     variables["normalized_residual"] = (mdim, residual / data["sigma"].values, {
-        "long_name": "residual over sigma", "units": "1"})
+        "long_name": "residual over sigma", "units": DIMENSIONLESS})
     variables["solver_status"] = (mdim, status_names(), {
         "long_name": "solver status of velocity rows at the estimate (empty: closed form)"})
     attrs = {
         "Conventions": "CF-1.11",
         "title": spec.title,
         "study_result_schema": FIT_RESULT_SCHEMA,
+        "study_fit_format": FIT_FORMAT,
         "study_fit_name": spec.name,
         "study_spec": spec.text,
         "study_spec_sha256": spec.sha256,

@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 from study.specfile import SCHEMA_DIR, SpecError
+from study.units import DIMENSIONLESS, HERTZ, KILOGRAM, METRE_PER_SECOND, METRE_PER_SECOND_SQUARED
 
 __all__ = [
     "COLUMNS",
@@ -118,16 +119,16 @@ class Quantity:
 
 #: The quantities, declared once.
 QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
-    Quantity("threshold", "m s-2",
+    Quantity("threshold", METRE_PER_SECOND_SQUARED,
              "measured motion threshold at f: the lowest drive acceleration amplitude at "
              "which the structure moves (direction: forward, backward or unknown = the "
              "lower of the two)", ("f",), ("a",), True),
-    Quantity("velocity", "m s-1",
+    Quantity("velocity", METRE_PER_SECOND,
              "steady mean velocity at the drive (f, a), positive forward", ("f", "a"),
              ("direction",), False),
-    Quantity("ringdown_f0", "Hz", "resonance frequency of the plate's mode from a ring-down",
+    Quantity("ringdown_f0", HERTZ, "resonance frequency of the plate's mode from a ring-down",
              (), ("f", "a", "direction"), True),
-    Quantity("ringdown_Q", "1", "quality factor of the plate's mode from a ring-down",
+    Quantity("ringdown_Q", DIMENSIONLESS, "quality factor of the plate's mode from a ring-down",
              (), ("f", "a", "direction"), True),
 )}
 
@@ -136,15 +137,16 @@ DIRECTIONS = ("forward", "backward", "unknown")
 #: The columns, declared once.
 COLUMNS: dict[str, Column] = {c.name: c for c in (
     Column("quantity", False, "", "measured quantity", allowed=tuple(QUANTITIES)),
-    Column("f", True, "Hz", "drive frequency", exclusive_minimum=0.0),
-    Column("a", True, "m s-2", "drive acceleration amplitude", exclusive_minimum=0.0),
+    Column("f", True, HERTZ, "drive frequency", exclusive_minimum=0.0),
+    Column("a", True, METRE_PER_SECOND_SQUARED, "drive acceleration amplitude",
+           exclusive_minimum=0.0),
     Column("value", True, "value", "measured value"),
     Column("sigma", True, "value", "standard uncertainty of value (one standard deviation)",
            exclusive_minimum=0.0),
     Column("direction", False, "", "direction of a threshold", allowed=DIRECTIONS),
-    Column("m_add", True, "kg", "added non-resonant mass of the structure measured",
+    Column("m_add", True, KILOGRAM, "added non-resonant mass of the structure measured",
            minimum=0.0),
-    Column("M", True, "1", "mass ratio m1/m of the structure measured",
+    Column("M", True, DIMENSIONLESS, "mass ratio m1/m of the structure measured",
            exclusive_minimum=0.0, maximum=1.0),
     Column("note", False, "", "free text, ignored"),
 )}

@@ -22,7 +22,13 @@ from numpy.typing import NDArray
 
 from study.analysis import frontier_from_grid
 from study.physics import lift_off_acceleration, mode_response, thresholds
-from study.solver import SolverSettings, SteadyState, attractors, steady_state
+from study.solver import (
+    DEFAULT_COUPLING,
+    SolverSettings,
+    SteadyState,
+    attractors,
+    steady_state,
+)
 from study.structure import Structure
 from study.transient import IntegratorSettings, integrated_steady_state
 from study.variables import VARIABLES, Variable
@@ -58,7 +64,7 @@ class Method:
     """
 
     name: str = "exact"
-    coupling: str = "one-way"
+    coupling: str = DEFAULT_COUPLING
     solver: SolverSettings = field(default_factory=SolverSettings)
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
 
@@ -79,7 +85,7 @@ class Method:
 
     def solve(self, structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
               parallel: bool = False) -> SteadyState:
-        """Steady state at ``(f, a)`` (broadcast) [Hz, m s^-2] by this method."""
+        """Steady state at ``(f, a)`` (broadcast) [Hz, m s-2] by this method."""
         if self.name == "integrator":
             return integrated_steady_state(structure, f, a, coupling=self.coupling,
                                            settings=self.integrator, parallel=parallel)
@@ -119,7 +125,7 @@ class PointWork:
     ----------
     structure : Structure
     f, a : numpy.ndarray
-        Drive frequencies [Hz] and accelerations [m s^-2], broadcast together
+        Drive frequencies [Hz] and accelerations [m s-2], broadcast together
         (``f[:, None]`` and ``a[None, :]`` for a block of the grid).
     method : Method
     """

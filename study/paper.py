@@ -1,12 +1,12 @@
 """The paper's structure and its named drive points, in one place.
 
 Barois, Boucherie, Tadrist & Kellay give one structure: f0 = 14.44 Hz, Q = 17.5,
-alpha = 64 deg, M = 0.08 (the unloaded structure), a single friction coefficient
-cs = ck = 0.25, g = 9.8 m s^-2; and the drive points of Fig. 2's insets in its regions
+alpha = 64 degree, M = 0.08 (the unloaded structure), a single friction coefficient
+cs = ck = 0.25, g = 9.8 m s-2; and the drive points of Fig. 2's insets in its regions
 S, P, N and PN. Figures draw those points, and the paper's statements, only for a file
 whose structure is the paper's (:func:`is_paper_structure`): each parameter equal to
 the paper's value to the digits the paper states it with (within half a unit of the
-last stated digit: f0 within 0.005 Hz, Q within 0.05, alpha within 0.5 deg, M and
+last stated digit: f0 within 0.005 Hz, Q within 0.05, alpha within 0.5 degree, M and
 cs within 0.005), ``ck = cs`` and ``g = 9.8``. A structure of its own (f0 = 22 Hz,
 Q = 30, say) is not the paper's, and no paper point is drawn on it.
 
@@ -40,7 +40,7 @@ PAPER_TOLERANCE: dict[str, float] = {
 }
 
 #: The paper's points in its regions S, P, N and PN (Fig. 2 insets): name -> (f [Hz],
-#: a [m s^-2]).
+#: a [m s-2]).
 PAPER_POINTS: dict[str, tuple[float, float]] = {
     "S": (13.0, 5.0),
     "P": (13.0, 8.5),

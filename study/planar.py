@@ -13,7 +13,7 @@ is normal to it), with stick and slip for force and torque together. See
 
 Per unit total mass, SI units: lengths in m; every angle a caller passes or gets back
 is in degrees (the plates' tilt and direction, as in :class:`study.structure.Structure`;
-headings, spins and turn rates in degree and degree s^-1; the heading noise in degree
+headings, spins and turn rates in degree and degree s-1; the heading noise in degree
 m^-1/2), including the heading and spin of the state vectors (``initial_state``,
 ``final_state``, :func:`rest_state`). The kernel (:mod:`study.kernels.planar`) works in
 radians; the conversion is made here, at the boundary (:func:`_to_kernel`,
@@ -31,9 +31,18 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import planar as _kernel
 from study.physics import mode_response
-from study.solver import COUPLINGS
+from study.solver import COUPLINGS, DEFAULT_COUPLING
 from study.structure import require_finite
 from study.transient import IntegratorSettings, Schedule
+from study.units import (
+    DEGREE,
+    DEGREE_PER_SECOND,
+    DIMENSIONLESS,
+    HERTZ,
+    METRE,
+    METRE_PER_SECOND,
+    spoken,
+)
 
 __all__ = [
     "EVENT_KINDS",
@@ -81,21 +90,21 @@ SLAVING = 1e-4
 POSE_STATE = ("x", "y", "heading", "vx", "vy", "spin", "path")
 
 #: Units of the state components a caller sees (the kernel's heading and spin are in
-#: rad and rad s^-1).
-POSE_UNITS = ("m", "m", "degree", "m s-1", "m s-1", "degree s-1", "m")
+#: rad and rad s-1).
+POSE_UNITS = (METRE, METRE, DEGREE, METRE_PER_SECOND, METRE_PER_SECOND, DEGREE_PER_SECOND, METRE)
 
 
 def _to_kernel(state: NDArray[np.float64]) -> NDArray[np.float64]:
-    """A state vector in the caller's units (heading [degree], spin [degree s^-1]) as
-    the kernel's (rad, rad s^-1); a copy."""
+    """A state vector in the caller's units (heading [degree], spin [degree s-1]) as
+    the kernel's (rad, rad s-1); a copy."""
     out = np.array(state, dtype=float)
     out[[_kernel.HEADING, _kernel.SPIN]] = np.radians(out[[_kernel.HEADING, _kernel.SPIN]])
     return out
 
 
 def _from_kernel(state: NDArray[np.float64]) -> NDArray[np.float64]:
-    """A kernel state vector (rad, rad s^-1) in the caller's units (degree, degree
-    s^-1); a copy."""
+    """A kernel state vector (rad, rad s-1) in the caller's units (degree, degree
+    s-1); a copy."""
     out = np.array(state, dtype=float)
     out[[_kernel.HEADING, _kernel.SPIN]] = np.degrees(out[[_kernel.HEADING, _kernel.SPIN]])
     return out
@@ -135,17 +144,17 @@ class Plate:
 
     def __post_init__(self) -> None:
         checks = (
-            ("f0", "Hz", lambda v: v > 0.0, "> 0"),
-            ("Q", "1", lambda v: v > 0.0, "> 0"),
-            ("alpha", "degree", lambda v: 0.0 <= v <= 90.0, "in [0, 90]"),
-            ("M", "1", lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
-            ("direction", "degree", lambda v: True, "finite"),
+            ("f0", HERTZ, lambda v: v > 0.0, "> 0"),
+            ("Q", DIMENSIONLESS, lambda v: v > 0.0, "> 0"),
+            ("alpha", DEGREE, lambda v: 0.0 <= v <= 90.0, "in [0, 90]"),
+            ("M", DIMENSIONLESS, lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+            ("direction", DEGREE, lambda v: True, "finite"),
         )
         for name, units, ok, allowed in checks:
             value = require_finite(f"Plate.{name}", getattr(self, name))
             if not ok(value):
                 raise ValueError(
-                    f"Plate {self.name!r}: {name} = {value!r} [{units}] is out of range; "
+                    f"Plate {self.name!r}: {name} = {value!r}{spoken(units)} is out of range; "
                     f"allowed: {allowed}"
                 )
             object.__setattr__(self, name, value)
@@ -167,7 +176,7 @@ class Plate:
 
     @property
     def omega0(self) -> float:
-        """Angular resonance frequency of the plate's mode [rad s^-1]."""
+        """Angular resonance frequency of the plate's mode [rad s-1]."""
         return 2.0 * math.pi * self.f0
 
     @property
@@ -192,7 +201,7 @@ class Disk:
     ck : float, optional
         Kinetic friction coefficient [1], in (0, cs]; default ``cs``.
     g : float
-        Gravitational acceleration [m s^-2].
+        Gravitational acceleration [m s-2].
     gyration_radius : float, optional
         Radius of gyration about the vertical axis [m]; default ``radius / sqrt(2)``
         (a uniform disk).
@@ -201,7 +210,8 @@ class Disk:
         over the maximum friction force [m]; default ``2 radius / 3`` (uniform
         pressure on the full disk).
     coupling : {"one-way", "two-way"}
-        ``"one-way"`` (default): each plate's mode is forced by the table only.
+        ``"one-way"`` (default, :data:`study.solver.DEFAULT_COUPLING`): each plate's mode
+        is forced by the table only.
         ``"two-way"``: while the disk slides, the acceleration of each plate's
         attachment point projected on its direction, ``b_i``, forces it too,
         ``delta_i'' = F_i - sin(alpha_i) b_i`` (as :func:`study.transient.simulate`'s
@@ -216,7 +226,7 @@ class Disk:
     g: float = 9.8
     gyration_radius: float | None = None
     friction_length: float | None = None
-    coupling: str = "one-way"
+    coupling: str = DEFAULT_COUPLING
     _names: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -240,7 +250,7 @@ class Disk:
             raise ValueError(f"Disk: ck = {ck!r} must be in (0, cs = {cs!r}]")
         g = require_finite("Disk.g", self.g)
         if g <= 0.0:
-            raise ValueError(f"Disk: g = {g!r} [m s^-2] must be > 0")
+            raise ValueError(f"Disk: g = {g!r} [m s-2] must be > 0")
         gyration = radius / math.sqrt(2.0) if self.gyration_radius is None else (
             require_finite("Disk.gyration_radius", self.gyration_radius))
         length = 2.0 * radius / 3.0 if self.friction_length is None else (
@@ -313,7 +323,7 @@ def _mode_amplitude(plate: Plate, f: float, a: float) -> complex:
 def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
                         ) -> NDArray[np.float64]:
     """Plate states ``(delta_1, delta_1', ...)`` on their steady response to
-    ``a cos(2 pi f t + phase)`` at ``t = 0`` [m, m s^-1]: a run started there has no
+    ``a cos(2 pi f t + phase)`` at ``t = 0`` [m, m s-1]: a run started there has no
     mode transient."""
     omega = 2.0 * math.pi * float(f)
     out = np.empty(2 * len(disk.plates))
@@ -327,9 +337,9 @@ def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
 
 def rest_state(disk: Disk, pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
                drive: tuple[float, float] | None = None) -> NDArray[np.float64]:
-    """A state vector (see :func:`state_names`; heading [degree], spin [degree s^-1])
+    """A state vector (see :func:`state_names`; heading [degree], spin [degree s-1])
     with the disk at rest at ``pose`` ``(x [m], y [m], heading [degree])``: the plates at
-    rest, or, with ``drive = (f [Hz], a [m s^-2])``, on their steady response to it at
+    rest, or, with ``drive = (f [Hz], a [m s-2])``, on their steady response to it at
     drive phase 0."""
     state = np.zeros(len(POSE_STATE) + 2 * len(disk.plates))
     state[:3] = pose
@@ -351,13 +361,13 @@ class PlanarTrajectory:
     heading : numpy.ndarray
         Heading, counterclockwise from the x axis, unwrapped [degree].
     vx, vy : numpy.ndarray
-        Velocity [m s^-1].
+        Velocity [m s-1].
     spin : numpy.ndarray
-        Angular velocity, counterclockwise positive [degree s^-1].
+        Angular velocity, counterclockwise positive [degree s-1].
     path : numpy.ndarray
         Distance slid since the start [m].
     plate_states : numpy.ndarray
-        ``(time, plate, 2)``: each plate's ``delta`` [m] and ``delta'`` [m s^-1].
+        ``(time, plate, 2)``: each plate's ``delta`` [m] and ``delta'`` [m s-1].
     slipping : numpy.ndarray
         True where the disk slides at the sample.
     event_time, event_kind : numpy.ndarray
@@ -371,7 +381,7 @@ class PlanarTrajectory:
         Work done.
     final_state : numpy.ndarray
         State vector at ``end_time`` (see :func:`state_names`; heading [degree], spin
-        [degree s^-1]), to continue a run from.
+        [degree s-1]), to continue a run from.
     heading_kicks : numpy.ndarray
         Heading noise added at the end of each drive period [degree] (zeros without
         noise).
@@ -439,8 +449,8 @@ def simulate_planar(
     schedule : study.transient.Schedule
         The drive; the run ends at the end of its last segment (or at lift-off).
     initial_state : array_like, optional
-        ``(x [m], y [m], heading [degree], vx [m s^-1], vy [m s^-1], spin [degree s^-1],
-        path [m], delta_1 [m], delta_1' [m s^-1], ...)`` at ``t = 0``; default all
+        ``(x [m], y [m], heading [degree], vx [m s-1], vy [m s-1], spin [degree s-1],
+        path [m], delta_1 [m], delta_1' [m s-1], ...)`` at ``t = 0``; default all
         zero (at rest, plates at rest). With a non-zero twist the run starts sliding.
     output_times : array_like, optional
         Sorted sample times within the schedule [s]; default 16 per shortest drive
@@ -486,7 +496,7 @@ def simulate_planar(
     if y.shape != (size,) or not np.all(np.isfinite(y)):
         raise ValueError(
             f"initial_state must be {size} finite numbers ({', '.join(names)}; heading "
-            f"[degree], spin [degree s^-1]), got {initial_state!r}"
+            f"[degree], spin [degree s-1]), got {initial_state!r}"
         )
     y = _to_kernel(y)
     end = float(schedule.ends[-1])
@@ -565,7 +575,7 @@ def simulate_planar(
 
 def state_names(disk: Disk) -> tuple[str, ...]:
     """Names of the components of a planar state vector (units: :data:`POSE_UNITS`,
-    then each plate's ``delta`` [m] and ``delta'`` [m s^-1])."""
+    then each plate's ``delta`` [m] and ``delta'`` [m s-1])."""
     names: list[str] = list(POSE_STATE)
     for plate in disk.plates:
         names += [f"delta_{plate.name}", f"delta_rate_{plate.name}"]
@@ -600,9 +610,9 @@ class PeriodicMotion:
     ----------
     forward_speed, lateral_speed : float
         Mean velocity along the heading and to its left, in the body frame at the
-        period's start [m s^-1].
+        period's start [m s-1].
     turn_rate : float
-        Mean angular velocity, counterclockwise positive [degree s^-1].
+        Mean angular velocity, counterclockwise positive [degree s-1].
     status : int
         A :class:`study.status.Status` code.
     reason : int
@@ -653,7 +663,7 @@ def periodic_motion(
     f : float
         Drive frequency [Hz].
     a : float
-        Drive acceleration amplitude [m s^-2].
+        Drive acceleration amplitude [m s-2].
     settings : IntegratorSettings, optional
         Integrator accuracy (default tolerance 1e-10).
     max_periods : int
@@ -678,7 +688,7 @@ def periodic_motion(
     f = require_finite("f", f)
     a = require_finite("a", a)
     if f <= 0.0 or a < 0.0:
-        raise ValueError(f"periodic_motion: need f > 0 [Hz] and a >= 0 [m s^-2], got {f}, {a}")
+        raise ValueError(f"periodic_motion: need f > 0 [Hz] and a >= 0 [m s-2], got {f}, {a}")
     omega = 2.0 * math.pi * f
     period = 1.0 / f
     disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / omega
@@ -789,7 +799,7 @@ def contact_margins(disk: Disk, f: float, a: float, samples: int = 512
     f : float
         Drive frequency [Hz].
     a : float
-        Drive acceleration amplitude [m s^-2].
+        Drive acceleration amplitude [m s-2].
     samples : int
         Phases over the period at which the margins are evaluated.
 

@@ -13,7 +13,7 @@ go through transients the calibration does not know, and the measured heading dr
 is random; :func:`run_plan` shows how much both cost by simulating the schedule.
 
 Angles: every heading, turn and turn rate a caller passes or gets back is in degree
-(degree s^-1), as in :mod:`study.planar`; the arc geometry inside works in radians
+(degree s-1), as in :mod:`study.planar`; the arc geometry inside works in radians
 (the private helpers ``_arc``, ``_rate``).
 """
 
@@ -68,11 +68,11 @@ class Command:
     frequency : float
         Drive frequency [Hz].
     acceleration : float
-        Drive acceleration amplitude [m s^-2].
+        Drive acceleration amplitude [m s-2].
     forward_speed, lateral_speed : float
-        Steady body-frame velocity [m s^-1].
+        Steady body-frame velocity [m s-1].
     turn_rate : float
-        Steady angular velocity, counterclockwise positive [degree s^-1].
+        Steady angular velocity, counterclockwise positive [degree s-1].
     """
 
     name: str
@@ -119,7 +119,7 @@ def calibrate_commands(disk: Disk, frequencies: dict[str, float], acceleration: 
                                                  settings=settings, slaving=slaving)
         if motion.status not in (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING):
             raise PlanError(
-                f"command {name!r} ({frequencies[name]} Hz, {acceleration} m s^-2) does not "
+                f"command {name!r} ({frequencies[name]} Hz, {acceleration} m s-2) does not "
                 f"move the disk: status {Status(motion.status).name}"
             )
         commands[name] = Command(name, float(frequencies[name]), float(acceleration),
@@ -128,19 +128,19 @@ def calibrate_commands(disk: Disk, frequencies: dict[str, float], acceleration: 
         raise PlanError(
             "the forward command must move the disk forward and the backward command "
             f"backward; calibrated speeds {commands['forward'].forward_speed:.3g} and "
-            f"{commands['backward'].forward_speed:.3g} m s^-1"
+            f"{commands['backward'].forward_speed:.3g} m s-1"
         )
     if commands["left"].turn_rate <= 0.0 or commands["right"].turn_rate >= 0.0:
         raise PlanError(
             "the left command must turn the disk counterclockwise and the right command "
             f"clockwise; calibrated turn rates {commands['left'].turn_rate:.3g} and "
-            f"{commands['right'].turn_rate:.3g} degree s^-1"
+            f"{commands['right'].turn_rate:.3g} degree s-1"
         )
     return commands
 
 
 def _rate(command: Command) -> float:
-    """The command's turn rate [rad s^-1]."""
+    """The command's turn rate [rad s-1]."""
     return math.radians(command.turn_rate)
 
 

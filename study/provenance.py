@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from study.fingerprint import result_code_sha256
+from study.version import VERSION
 
 __all__ = [
     "code_sha256",
@@ -68,13 +69,8 @@ def fingerprint(spec_sha256: str, code: str | None = None) -> str:
 
 
 def package_version() -> str:
-    """Installed version of ``study``."""
-    try:
-        return metadata.version("study")
-    except metadata.PackageNotFoundError:  # running from a source tree
-        from study.version import VERSION
-
-        return VERSION
+    """Installed version of ``study`` (see :mod:`study.version`)."""
+    return VERSION
 
 
 @cache

@@ -26,8 +26,17 @@ from typing import Any
 import numpy as np
 
 from study.cache import ResultCache, encode_block, entry_key
-from study.cluster import Executor, executor
-from study.observables import Method, Observable, resolve
+from study.cluster import TASK_TIMEOUT, Executor, executor
+from study.layout import (
+    coordinates,
+    data_variables,
+    method_description,
+    method_of,
+    observables_by_grid,
+    pad_branches,
+)
+from study.observables import Observable
+from study.outputs import check_output
 from study.progress import Progress
 from study.provenance import (
     code_sha256,
@@ -39,7 +48,7 @@ from study.provenance import (
     utc_now,
 )
 from study.scene import SceneSpec, load_scene, scene_dataset
-from study.spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec, load_spec
+from study.spec import StudySpec, load_spec
 from study.specfile import detect_kind
 from study.store import (
     PAPER_REFERENCE,
@@ -47,6 +56,8 @@ from study.store import (
     SCENE_SCHEMA,
     GridWriter,
     StoreBusy,
+    StoreError,
+    advice,
     clean_temporaries,
     commit,
     exclusive,
@@ -140,7 +151,7 @@ def _metadata_attrs(spec: StudySpec) -> dict[str, Any]:
         "summary": spec.description or (
             f"Parameter study '{spec.name}' of vibration-driven stick-slip locomotion: "
             f"{', '.join(spec.observables)} of a soft structure with a resonant plate on a "
-            f"vertically shaken table, computed by {_method_text(spec)}."
+            f"vertically shaken table, computed by {method_description(spec)}."
         ),
         "id": f"{spec.name}-{spec.sha256[:16]}",
         "study_name": spec.name,
@@ -206,13 +217,15 @@ def run(spec: StudySpec | SceneSpec | str | Path, output: str | Path | None = No
     if not isinstance(spec, StudySpec | SceneSpec):
         spec = load_any(spec)
     if isinstance(spec, SceneSpec):
-        scene_options = {k: options[k] for k in ("force", "command") if k in options}
+        scene_options = {k: options[k] for k in ("force", "command", "overwrite")
+                         if k in options}
         return run_scene(spec, output, **scene_options)
     return run_study(spec, output, **options)
 
 
 def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
-              force: bool = False, command: str | None = None) -> RunReport:
+              force: bool = False, command: str | None = None,
+              overwrite: bool = False) -> RunReport:
     """Compute a steering scene and write its result (one task; same lock, atomic
     write, seal, up-to-date and metadata rules as a study).
 
@@ -225,12 +238,16 @@ def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
         Recompute even if the result is up to date.
     command : str, optional
         The command line recorded in the file's history.
+    overwrite : bool
+        Replace an existing file at ``output`` that is not a scene result
+        (:func:`study.outputs.check_output`; the spec itself is never replaced).
     """
     started = time.perf_counter()
     started_utc = utc_now()
     if not isinstance(spec, SceneSpec):
         spec = load_scene(spec)
     output = Path(output) if output is not None else default_output(spec)
+    check_output(output, SCENE_SCHEMA, inputs=[spec.path], overwrite=overwrite)
     command = command or "study.run_scene(" + shlex.quote(spec.path) + ")"
     if not force and _state(spec, output) == "current":
         output.touch()
@@ -302,6 +319,8 @@ def run_study(
     on_chunk: Callable[[int], None] | None = None,
     cache: str | Path | None = None,
     on_start: Callable[[Executor], None] | None = None,
+    overwrite: bool = False,
+    task_timeout: float = TASK_TIMEOUT,
 ) -> RunReport:
     """Run a study and write its result file.
 
@@ -332,6 +351,13 @@ def run_study(
     on_start : callable, optional
         Called with the :class:`study.cluster.Executor` once it is ready, before any
         chunk is computed (to show where the run goes, e.g. the dashboard).
+    overwrite : bool
+        Replace an existing file at ``output`` that is not a study result
+        (:func:`study.outputs.check_output`; the spec itself is never replaced).
+    task_timeout : float
+        With ``scheduler``: seconds the workers may go without finishing a task
+        before the run ends, naming the workers that hold the tasks (a frozen
+        worker); finished work is kept.
 
     Returns
     -------
@@ -350,6 +376,7 @@ def run_study(
     if not isinstance(spec, StudySpec):
         spec = load_spec(spec)
     output = Path(output) if output is not None else default_output(spec)
+    check_output(output, RESULT_SCHEMA, inputs=[spec.path], overwrite=overwrite)
     n_chunks = len(_plan(spec))
     if not force and _state(spec, output) == "current":
         output.touch()  # tell make the target is current
@@ -361,9 +388,18 @@ def run_study(
             _update_metadata(spec, output, command, started_utc)
             return RunReport(output, True, n_chunks, 0, n_chunks,
                              time.perf_counter() - started, metadata_updated=True)
-        return _Run(spec, output, started, started_utc, command,
-                    ResultCache(Path(cache) if cache is not None else default_cache(output)),
-                    on_chunk).execute(scheduler, workers, progress, stop_after, on_start)
+        kept = ResultCache(Path(cache) if cache is not None else default_cache(output))
+        computing = _Run(spec, output, started, started_utc, command, kept, on_chunk)
+        try:
+            # Shared with other runs; cache maintenance (prune, verify) waits for it.
+            with kept.session(f"study run -> {output}", on_wait=kept.warn):
+                return computing.execute(scheduler, workers, progress, stop_after, on_start,
+                                         task_timeout)
+        except StoreError as err:
+            if not computing.points_kept:
+                raise
+            raise StoreError(f"{err}; the {computing.points_kept} points computed are "
+                             f"kept in {computing.cache.root} for the next run") from None
 
 
 def _plan(spec: StudySpec) -> list[Chunk]:
@@ -375,30 +411,6 @@ def _plan(spec: StudySpec) -> list[Chunk]:
 
 def _structure_content(structure: Structure) -> dict[str, float]:
     return {name: float(getattr(structure, name)) for name in Structure.__dataclass_fields__}
-
-
-def _method(spec: StudySpec) -> Method:
-    return Method(spec.method, spec.coupling, spec.solver, spec.integrator)
-
-
-def _method_text(spec: StudySpec) -> str:
-    """How the velocities were computed, for the file's own description."""
-    if spec.method == "exact" and spec.coupling == "two-way":
-        return (
-            "the exact event-driven steady-state solver (closed form between events; "
-            "two-way coupling: the sliding base also forces the mode, the orbit is the "
-            "fixed point of the period map found by Newton's method)"
-        )
-    if spec.method == "exact":
-        return (
-            "the exact event-driven steady-state solver (closed form between events; "
-            "one-way coupling, the paper's model)"
-        )
-    return (
-        "Dormand-Prince 5(4) time integration with events located on the dense output, "
-        f"until the orbit repeats ({spec.coupling} coupling"
-        + ("; the sliding base also forces the mode)" if spec.coupling == "two-way" else ")")
-    )
 
 
 def _creator() -> str:
@@ -417,7 +429,7 @@ def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
         **_metadata_attrs(spec),
         "keywords": "stick-slip, friction, locomotion, resonance, vibration, parameter study",
         "naming_authority": "study",
-        "source": f"study: {_method_text(spec)}",
+        "source": f"study: {method_description(spec)}",
         "study_solver_method": spec.method,
         "study_coupling": spec.coupling,
         "processing_level": "model output",
@@ -474,10 +486,6 @@ def _gather_provenance(found: dict[str, Any]) -> None:
     found["version"] = package_version()
 
 
-def _coordinate_attrs(units: str, long_name: str) -> dict[str, Any]:
-    return {"units": units, "long_name": long_name, "coverage_content_type": "coordinate"}
-
-
 class _Run:
     """One computing run of a study into a temporary file, committed at the end."""
 
@@ -490,11 +498,8 @@ class _Run:
         self.command = command
         self.cache = cache
         self.on_chunk = on_chunk
-        self.method = _method(spec)
-        observables = resolve(spec.observables)
-        self.rows = tuple(o for o in observables if o.grid == "row")
-        self.points = tuple(o for o in observables if o.grid == "point")
-        self.frontier = next((o for o in observables if o.grid == "frontier"), None)
+        self.method = method_of(spec)
+        self.rows, self.points, self.frontier = observables_by_grid(spec)
         self.f = spec.axis("f").values
         a_axis = spec.axis("a")
         self.a = a_axis.values if (a_axis is not None and spec.needs_solver) else np.empty(0)
@@ -502,6 +507,9 @@ class _Run:
         self.code = code_sha256()
         self.points_computed = 0
         self.points_reused = 0
+        #: Computed points kept in the cache (all of them unless it cannot be written).
+        self.points_kept = 0
+        self.keeping = True
         self.chunks_computed = 0
         self.chunks_reused = 0
         self._keys: dict[tuple[tuple[int, ...], str], tuple[str, dict[str, Any]]] = {}
@@ -528,41 +536,20 @@ class _Run:
     def _open(self, path: Path) -> GridWriter:
         spec = self.spec
         writer = GridWriter(path, _standard_attrs(spec), self.output)
-        for axis in spec.axes:
-            writer.coordinate(axis.name, (axis.name,), axis.values,
-                              _coordinate_attrs(axis.units, axis.long_name))
         scalars = []
-        for name, value in spec.canonical["structure"].items():
-            units, long_name = SWEEPABLE[name]
-            writer.coordinate(name, (), np.float64(value), _coordinate_attrs(units, long_name))
-            scalars.append(name)
-        if spec.mass is not None:
-            writer.coordinate("m0", (), np.float64(spec.mass.m0),
-                              _coordinate_attrs("kg", "mass of the structure"))
-            writer.coordinate("m1", (), np.float64(spec.mass.m1),
-                              _coordinate_attrs("kg", "resonant (modal) mass"))
-            scalars += ["m0", "m1"]
-            m_add_axis = spec.axis("m_add")
-            units, long_name = STRUCTURE_PARAMETERS["M"]
-            if m_add_axis is not None:
-                ratios = np.array([spec.mass.mass_ratio(m) for m in m_add_axis.values])
-                writer.coordinate("M", ("m_add",), ratios, _coordinate_attrs(units, long_name))
-            else:
-                writer.coordinate("M", (), np.float64(spec.mass.mass_ratio(
-                    spec.fixed.get("m_add", 0.0))), _coordinate_attrs(units, long_name))
-            scalars.append("M")
+        for coordinate in coordinates(spec):
+            writer.coordinate(coordinate.name, coordinate.dims, coordinate.values,
+                              coordinate.attrs)
+            if coordinate.auxiliary:
+                scalars.append(coordinate.name)
         self.auxiliary = " ".join(scalars)
-        structure_dims = tuple(axis.name for axis in spec.structure_axes)
         block = max(chunk.size for chunk in self.chunks)
-        ones = (1,) * len(structure_dims)
-        for observable in (*self.rows, *self.points):
-            for name in observable.variables:
-                variable = VARIABLES[name]
-                dims = variable.dims(structure_dims)
-                chunks = (*ones, block) if variable.grid == "row" else (
-                    *ones, block, max(self.a.size, 1))
-                attrs = {**variable.attrs(), "coordinates": self.auxiliary}
-                writer.variable(name, dims, variable.dtype, attrs, chunks)
+        ones = (1,) * len(spec.structure_axes)
+        for variable in data_variables(spec, (*self.rows, *self.points)):
+            chunks = (*ones, block) if variable.grid == "row" else (
+                *ones, block, max(self.a.size, 1))
+            writer.variable(variable.name, variable.dims, variable.dtype,
+                            {**variable.attrs, "coordinates": self.auxiliary}, chunks)
         return writer
 
     # -- the work --------------------------------------------------------------------
@@ -618,10 +605,12 @@ class _Run:
         for rectangle, datas in zip(task.rectangles, encoded, strict=True):
             for observable, data in zip(stored, datas, strict=True):
                 key, content = self.key(chunk.structure_index, observable)
-                self.cache.store_encoded(key, content, task.a[rectangle.columns], data)
+                self._keep(key, content, task.a[rectangle.columns], data)
         size = chunk.size * max(self.a.size, 1)
         computed_points = task.point_count if self.points else size
         self.points_computed += computed_points
+        if self.keeping and self.points:
+            self.points_kept += computed_points
         self.points_reused += size - computed_points
         if computed_points:
             self.chunks_computed += 1
@@ -629,9 +618,25 @@ class _Run:
             self.chunks_reused += 1
         self.progress.update(size)
 
+    def _keep(self, key: str, content: dict[str, Any], a: np.ndarray, block: bytes) -> None:
+        """Keep a computed block; a cache that cannot be written (disk full, read-only)
+        is said once and the run goes on without keeping values: the result matters
+        more than its reuse."""
+        if not self.keeping:
+            return
+        try:
+            self.cache.store_encoded(key, content, a, block)
+        except OSError as err:
+            self.keeping = False
+            what_to_do = advice(err).replace("(-o)", "(--cache)")
+            self.cache.warn(
+                f"{self.cache.root}: cannot keep computed values ({err.strerror or err}); "
+                "the run goes on without keeping them" + (f": {what_to_do}" if what_to_do
+                                                          else ""))
+
     def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
-                stop_after: int | None, on_start: Callable[[Executor], None] | None
-                ) -> RunReport:
+                stop_after: int | None, on_start: Callable[[Executor], None] | None,
+                task_timeout: float = TASK_TIMEOUT) -> RunReport:
         self.cache.clean_temporaries()
         # What the provenance records of the checkout and the machine (a git
         # subprocess, package metadata) does not depend on the run: gathered while the
@@ -649,7 +654,8 @@ class _Run:
             pending: dict[int, Any] = {}
             computed_chunks = 0
             try:
-                with executor(scheduler, workers, self.code) as pool:
+                with executor(scheduler, workers, self.code,
+                              task_timeout=task_timeout) as pool:
                     self.scheduler_name, self.threads = pool.name, pool.threads
                     if on_start is not None:
                         on_start(pool)
@@ -663,9 +669,11 @@ class _Run:
                             if self.on_chunk is not None:
                                 self.on_chunk(task.chunk.number)
                         if stop_after is not None and computed_chunks >= stop_after:
+                            kept = (f"their values are kept in {self.cache.root}"
+                                    if self.keeping else "the cache could not keep them")
                             raise StudyInterrupted(
                                 f"stopped after {computed_chunks} computed chunks on request; "
-                                f"their values are kept in {self.cache.root}")
+                                f"{kept}")
             finally:
                 self.progress.close()
             if self.frontier is not None:
@@ -675,7 +683,7 @@ class _Run:
             self.writer.close()
         except BaseException:
             if hasattr(self, "writer"):
-                self.writer.close()
+                self.writer.discard()  # never raises: the first failure is reported
             temporary.unlink(missing_ok=True)
             raise
         commit(temporary, self.output)
@@ -697,21 +705,16 @@ class _Run:
                                                  self.method, spec.frontier_tolerance)
         branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
         self.writer.dimension("branch", branches)
-        structure_dims = tuple(axis.name for axis in spec.structure_axes)
-        ones = (1,) * len(structure_dims)
-        for name in self.frontier.variables:
-            variable = VARIABLES[name]
-            self.writer.variable(name, variable.dims(structure_dims), variable.dtype,
-                                 {**variable.attrs(), "coordinates": self.auxiliary},
+        ones = (1,) * len(spec.structure_axes)
+        variables = data_variables(spec, (self.frontier,))
+        for variable in variables:
+            self.writer.variable(variable.name, variable.dims, variable.dtype,
+                                 {**variable.attrs, "coordinates": self.auxiliary},
                                  (*ones, self.a.size, branches))
         for index, item in found.items():
-            for name in self.frontier.variables:
-                values = item[name]
-                dtype = np.dtype(VARIABLES[name].dtype)
-                padded = np.full((self.a.size, branches),
-                                 np.nan if dtype.kind == "f" else 0, dtype=dtype)
-                padded[:, :values.shape[1]] = values
-                self.writer.write(name, (*index, slice(None), slice(None)), padded)
+            for variable in variables:
+                self.writer.write(variable.name, (*index, slice(None), slice(None)),
+                                  pad_branches(item[variable.name], branches, variable.dtype))
 
     def _provenance_attrs(self) -> dict[str, Any]:
         spec = self.spec

@@ -84,6 +84,16 @@ from study.specfile import (
 )
 from study.status import Status
 from study.transient import IntegratorSettings, Schedule
+from study.units import (
+    DEGREE,
+    DEGREE_PER_SECOND,
+    DIMENSIONLESS,
+    HERTZ,
+    METRE,
+    METRE_PER_SECOND,
+    METRE_PER_SECOND_SQUARED,
+    SECOND,
+)
 
 __all__ = [
     "MAX_CALIBRATION_PERIODS",
@@ -527,39 +537,40 @@ def _run_trajectory(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, 
         summary["turn"][j] = run.heading[i1] - run.heading[i0]
         summary["path"][j] = run.path[i1] - run.path[i0]
     variables = {
-        "x": _variable("t", run.x, "m", "x position of the disk's centre"),
-        "y": _variable("t", run.y, "m", "y position of the disk's centre"),
-        "heading": _variable("t", run.heading, "degree",
+        "x": _variable("t", run.x, METRE, "x position of the disk's centre"),
+        "y": _variable("t", run.y, METRE, "y position of the disk's centre"),
+        "heading": _variable("t", run.heading, DEGREE,
                              "heading, counterclockwise from the x axis (unwrapped)"),
-        "path_length": _variable("t", run.path, "m", "distance slid since the start"),
+        "path_length": _variable("t", run.path, METRE, "distance slid since the start"),
         "slipping": _flag("t", run.slipping.astype(np.int8), ("stuck", "slipping"),
                           "contact state at the sample"),
         "segment_index": _variable("t", index.astype(np.int32), None,
                                    "segment of the schedule the sample belongs to"),
         "segment_label": _variable("segment", np.array([r["label"] for r in rows], dtype=str),
                                    None, "command of the segment"),
-        "frequency": _variable("segment", schedule.frequency, "Hz", "drive frequency"),
-        "acceleration": _variable("segment", schedule.acceleration, "m s-2",
+        "frequency": _variable("segment", schedule.frequency, HERTZ, "drive frequency"),
+        "acceleration": _variable("segment", schedule.acceleration, METRE_PER_SECOND_SQUARED,
                                   "drive acceleration amplitude"),
-        "duration": _variable("segment", schedule.duration, "s", "segment duration"),
-        "start_time": _variable("segment", schedule.starts, "s", "segment start"),
-        "end_time": _variable("segment", schedule.ends, "s", "segment end"),
+        "duration": _variable("segment", schedule.duration, SECOND, "segment duration"),
+        "start_time": _variable("segment", schedule.starts, SECOND, "segment start"),
+        "end_time": _variable("segment", schedule.ends, SECOND, "segment end"),
         "forward_displacement": _variable(
-            "segment", summary["fwd"], "m",
+            "segment", summary["fwd"], METRE,
             "displacement along the heading at the segment's start"),
         "lateral_displacement": _variable(
-            "segment", summary["lat"], "m",
+            "segment", summary["lat"], METRE,
             "displacement to the left of the heading at the segment's start"),
-        "heading_change": _variable("segment", summary["turn"], "degree",
+        "heading_change": _variable("segment", summary["turn"], DEGREE,
                                     "heading change over the segment"),
-        "segment_path_length": _variable("segment", summary["path"], "m",
+        "segment_path_length": _variable("segment", summary["path"], METRE,
                                          "distance slid in the segment"),
         "segment_status": _flag("segment", status, SEGMENT_STATUS, "how the segment ended"),
         "edge_contact_margin": _variable(
-            "segment", [contact_margins(spec.disk, r["f"], r["a"])[0] for r in rows], "1",
+            "segment", [contact_margins(spec.disk, r["f"], r["a"])[0] for r in rows],
+            DIMENSIONLESS,
             "rim contact margin of the segment's drive", comment=RIM_NOTE),
     }
-    coords = {"t": _variable("t", t, "s", "time since the drive started"),
+    coords = {"t": _variable("t", t, SECOND, "time since the drive started"),
               "segment": _variable("segment", np.arange(len(rows)), None, "segment number")}
     attrs = {"study_outcome": run.outcome, "study_end_time": run.end_time,
              "study_steps": run.steps, "study_slips": run.slips}
@@ -595,23 +606,23 @@ def _run_calibration(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str,
         orbit[i, j] = motion.orbit_period
     dims = ("f", "a")
     variables = {
-        "f": _variable("f", f, "Hz", "drive frequency"),
-        "a": _variable("a", a, "m s-2", "drive acceleration amplitude"),
-        "forward_speed": _variable(dims, fields["forward_speed"], "m s-1",
+        "f": _variable("f", f, HERTZ, "drive frequency"),
+        "a": _variable("a", a, METRE_PER_SECOND_SQUARED, "drive acceleration amplitude"),
+        "forward_speed": _variable(dims, fields["forward_speed"], METRE_PER_SECOND,
                                    "steady mean velocity along the heading"),
-        "lateral_speed": _variable(dims, fields["lateral_speed"], "m s-1",
+        "lateral_speed": _variable(dims, fields["lateral_speed"], METRE_PER_SECOND,
                                    "steady mean velocity to the left of the heading"),
-        "turn_rate": _variable(dims, fields["turn_rate"], "degree s-1",
+        "turn_rate": _variable(dims, fields["turn_rate"], DEGREE_PER_SECOND,
                                "steady mean angular velocity, counterclockwise positive"),
-        "slips_per_period": _variable(dims, fields["slips_per_period"], "1",
+        "slips_per_period": _variable(dims, fields["slips_per_period"], DIMENSIONLESS,
                                       "slips starting per drive period"),
-        "stuck_fraction": _variable(dims, fields["stuck_fraction"], "1",
+        "stuck_fraction": _variable(dims, fields["stuck_fraction"], DIMENSIONLESS,
                                     "fraction of the period stuck"),
         "status": _flag(dims, status, MOTION_STATUS, "outcome at the point"),
-        "periods": _variable(dims, periods, "1", "drive periods integrated"),
-        "orbit_period": _variable(dims, orbit, "1",
+        "periods": _variable(dims, periods, DIMENSIONLESS, "drive periods integrated"),
+        "orbit_period": _variable(dims, orbit, DIMENSIONLESS,
                                   "drive periods after which the motion repeats (0: none)"),
-        "edge_contact_margin": _variable(dims, rim, "1", "rim contact margin",
+        "edge_contact_margin": _variable(dims, rim, DIMENSIONLESS, "rim contact margin",
                                          comment=RIM_NOTE),
     }
     return variables, {}
@@ -693,7 +704,7 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     planned = np.array([legs[-1].predicted_pose[:2] for legs in routes["calibration"]])
     dims = ("strategy", "realisation", "t")
     variables = {
-        "t": _variable("t", t, "s", "time since the drive started"),
+        "t": _variable("t", t, SECOND, "time since the drive started"),
         # Strings name the strategies in an auxiliary coordinate: a string-valued
         # coordinate variable is not CF (coordinate variables must be monotonic).
         "strategy_name": _variable("strategy", np.array(strategies, dtype=str), None,
@@ -704,17 +715,17 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
         "realisation": _variable("realisation", np.arange(count), None,
                                  "0: without heading noise; others: with"),
         "waypoint": _variable("waypoint", np.arange(len(waypoints)), None, "waypoint number"),
-        "waypoint_x": _variable("waypoint", waypoints[:, 0], "m", "waypoint x"),
-        "waypoint_y": _variable("waypoint", waypoints[:, 1], "m", "waypoint y"),
-        "planned_x": _variable("waypoint", planned[:, 0], "m",
+        "waypoint_x": _variable("waypoint", waypoints[:, 0], METRE, "waypoint x"),
+        "waypoint_y": _variable("waypoint", waypoints[:, 1], METRE, "waypoint y"),
+        "planned_x": _variable("waypoint", planned[:, 0], METRE,
                                "x where the calibrated plan predicts the leg ends"),
-        "planned_y": _variable("waypoint", planned[:, 1], "m",
+        "planned_y": _variable("waypoint", planned[:, 1], METRE,
                                "y where the calibrated plan predicts the leg ends"),
-        "x": _variable(dims, paths["x"], "m", "x position of the disk's centre"),
-        "y": _variable(dims, paths["y"], "m", "y position of the disk's centre"),
-        "heading": _variable(dims, paths["heading"], "degree",
+        "x": _variable(dims, paths["x"], METRE, "x position of the disk's centre"),
+        "y": _variable(dims, paths["y"], METRE, "y position of the disk's centre"),
+        "heading": _variable(dims, paths["heading"], DEGREE,
                              "heading, counterclockwise from the x axis (unwrapped)"),
-        "miss_distance": _variable(("strategy", "realisation", "waypoint"), miss, "m",
+        "miss_distance": _variable(("strategy", "realisation", "waypoint"), miss, METRE,
                                    "distance from the waypoint at the end of its leg"),
         "run_status": _flag(("strategy", "realisation"), outcome, SEGMENT_STATUS,
                             "how the run ended"),
@@ -723,16 +734,16 @@ def _run_plan(spec: SceneSpec) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
             "degree", "heading spread per disk diameter slid"),
         "segment_label": _variable("segment", np.array(plan_run.labels, dtype=str), None,
                                    "command of the segment (the open-loop plan)"),
-        "frequency": _variable("segment", plan_run.schedule.frequency, "Hz", "drive frequency"),
-        "acceleration": _variable("segment", plan_run.schedule.acceleration, "m s-2",
-                                  "drive acceleration amplitude"),
-        "duration": _variable("segment", plan_run.schedule.duration, "s", "segment duration"),
+        "frequency": _variable("segment", plan_run.schedule.frequency, HERTZ, "drive frequency"),
+        "acceleration": _variable("segment", plan_run.schedule.acceleration,
+                                  METRE_PER_SECOND_SQUARED, "drive acceleration amplitude"),
+        "duration": _variable("segment", plan_run.schedule.duration, SECOND, "segment duration"),
     }
     for name, command in commands.items():
         variables[f"command_{name}"] = xr.Variable((), command.frequency, {
-            "units": "Hz", "long_name": f"{name} command frequency",
+            "units": HERTZ, "long_name": f"{name} command frequency",
             "forward_speed": command.forward_speed, "lateral_speed": command.lateral_speed,
-            "turn_rate": command.turn_rate, "turn_rate_units": "degree s-1",
+            "turn_rate": command.turn_rate, "turn_rate_units": DEGREE_PER_SECOND,
         })
     attrs = {"start_x": options["start"][0], "start_y": options["start"][1],
              "start_heading": options["start"][2]}
@@ -786,13 +797,14 @@ def scene_dataset(spec: SceneSpec) -> xr.Dataset:
     plate_vars = {
         "plate_name": _variable("plate", np.array([p.name for p in disk.plates], dtype=str),
                                 None, "plate"),
-        "plate_f0": _variable("plate", [p.f0 for p in disk.plates], "Hz", "plate resonance"),
-        "plate_Q": _variable("plate", [p.Q for p in disk.plates], "1", "plate quality factor"),
-        "plate_alpha": _variable("plate", [p.alpha for p in disk.plates], "degree",
+        "plate_f0": _variable("plate", [p.f0 for p in disk.plates], HERTZ, "plate resonance"),
+        "plate_Q": _variable("plate", [p.Q for p in disk.plates], DIMENSIONLESS,
+                             "plate quality factor"),
+        "plate_alpha": _variable("plate", [p.alpha for p in disk.plates], DEGREE,
                                  "plate tilt from the horizontal"),
-        "plate_M": _variable("plate", [p.M for p in disk.plates], "1",
+        "plate_M": _variable("plate", [p.M for p in disk.plates], DIMENSIONLESS,
                              "plate modal mass over the structure's mass"),
-        "plate_direction": _variable("plate", [p.direction for p in disk.plates], "degree",
+        "plate_direction": _variable("plate", [p.direction for p in disk.plates], DEGREE,
                                      "plate direction, body frame, from the heading"),
         "plate_attachment_forward": _variable("plate", [p.attachment[0] for p in disk.plates],
                                               "m", "plate attachment, forward of the centre"),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,6 +21,7 @@ from study.structure import Structure
 
 __all__ = [
     "COUPLINGS",
+    "DEFAULT_COUPLING",
     "Attractors",
     "SolverSettings",
     "SteadyState",
@@ -35,6 +37,11 @@ SOLVER_VERSION = "4"
 #: How the sliding base and the mode interact: the paper's model, or the physical one
 #: in which the base's sliding acceleration also forces the mode.
 COUPLINGS = ("one-way", "two-way")
+
+#: The coupling of every function, spec, fit and design that does not name one: the
+#: paper's model, the one every workflow uses. Declared here only; everything else
+#: (signatures, spec readers, schemas' descriptions) derives from it.
+DEFAULT_COUPLING = "one-way"
 
 #: Inputs with at least this many points are solved by the parallel kernel.
 PARALLEL_THRESHOLD = 2048
@@ -71,15 +78,18 @@ class SolverSettings:
 class SteadyState:
     """Steady periodic orbit at each drive point, arrays of the broadcast shape.
 
+    Every attribute has the broadcast shape of the ``f`` and ``a`` given, or is a numpy
+    scalar of the same dtype when both were scalars (as numpy's ufuncs return).
+
     Attributes
     ----------
-    velocity : numpy.ndarray
-        Mean velocity over the periodic orbit [m s^-1]; exactly 0 for ``STATIC``,
-        NaN for ``LIFT_OFF`` and ``NOT_CONVERGED``.
+    velocity : numpy.ndarray of float64
+        Mean velocity over the periodic orbit [m s-1]; exactly 0 for ``STATIC``,
+        NaN for ``LIFT_OFF``, ``NOT_CONVERGED`` and ``FRICTION_PARADOX``.
     status : numpy.ndarray of int8
-        :class:`~study.status.Status` codes.
+        :class:`~study.status.Status` codes [1] (``study.Status(code)`` names one).
     reason : numpy.ndarray of int8
-        :class:`~study.status.NonConvergence` codes.
+        :class:`~study.status.NonConvergence` codes [1].
     slips_per_period : numpy.ndarray
         Slip events per drive period [1].
     forward_fraction, backward_fraction : numpy.ndarray
@@ -102,6 +112,12 @@ class SteadyState:
     backward_fraction: NDArray[np.float64]
     orbit_period: NDArray[np.int32]
     floquet_multiplier: NDArray[np.float64] | None = None
+
+
+def scalar_if_0d(values: NDArray[Any]) -> Any:
+    """``values`` as is, or its numpy scalar when it is 0-d: the array functions return
+    numpy scalars for scalar inputs, as numpy's ufuncs and scipy's functions do."""
+    return values[()]
 
 
 def check_structure(structure: object) -> Structure:
@@ -163,7 +179,7 @@ def steady_state(
     a: ArrayLike,
     settings: SolverSettings | None = None,
     *,
-    coupling: str = "one-way",
+    coupling: str = DEFAULT_COUPLING,
     parallel: bool | None = None,
 ) -> SteadyState:
     """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
@@ -184,11 +200,12 @@ def steady_state(
     f : array_like
         Drive frequency [Hz], > 0. Broadcast against ``a``.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
     settings : SolverSettings, optional
         Solver budgets; defaults to ``SolverSettings()``.
-    coupling : {"one-way", "two-way"}
-        The paper's model (mode driven by the table only) or the physical one.
+    coupling : {"one-way", "two-way"}, default "one-way"
+        The paper's model (mode driven by the table only) or the physical one
+        (:data:`DEFAULT_COUPLING` is the default).
     parallel : bool, optional
         Spread points over all cores (numba threads). By default only inputs of
         at least ``PARALLEL_THRESHOLD`` points do; pass ``False`` when the caller
@@ -197,7 +214,21 @@ def steady_state(
     Returns
     -------
     SteadyState
-        Velocity, status and diagnostics, each of the broadcast shape of ``f`` and ``a``.
+        Velocity, status and diagnostics, each a numpy array of the broadcast shape of
+        ``f`` and ``a`` (a numpy scalar when both are scalars).
+
+    Raises
+    ------
+    TypeError
+        ``structure`` is not a :class:`study.Structure`; ``f`` or ``a`` are not real
+        numbers (strings, booleans, complex numbers, dates).
+    ValueError
+        ``f`` or ``a`` out of range or not finite (the message names the first offending
+        value and its index), shapes that do not broadcast, or an unknown coupling.
+
+    See Also
+    --------
+    compute_map : the same over a grid, as a labelled dataset.
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
@@ -209,14 +240,14 @@ def steady_state(
     if coupling == "two-way":
         out = _orbit_state(structure, f_flat, a_flat, coupling, settings, parallel)
         return SteadyState(
-            velocity=out[:, 2].reshape(shape),
-            status=out[:, 0].astype(np.int8).reshape(shape),
-            reason=out[:, 1].astype(np.int8).reshape(shape),
-            slips_per_period=out[:, 3].reshape(shape),
-            forward_fraction=out[:, 4].reshape(shape),
-            backward_fraction=out[:, 5].reshape(shape),
-            orbit_period=out[:, 6].astype(np.int32).reshape(shape),
-            floquet_multiplier=out[:, 7].reshape(shape),
+            velocity=scalar_if_0d(out[:, 2].reshape(shape)),
+            status=scalar_if_0d(out[:, 0].astype(np.int8).reshape(shape)),
+            reason=scalar_if_0d(out[:, 1].astype(np.int8).reshape(shape)),
+            slips_per_period=scalar_if_0d(out[:, 3].reshape(shape)),
+            forward_fraction=scalar_if_0d(out[:, 4].reshape(shape)),
+            backward_fraction=scalar_if_0d(out[:, 5].reshape(shape)),
+            orbit_period=scalar_if_0d(out[:, 6].astype(np.int32).reshape(shape)),
+            floquet_multiplier=scalar_if_0d(out[:, 7].reshape(shape)),
         )
     a_plus, a_minus = release_amplitudes(structure, f_flat, a_flat)
     b_plus, b_minus = slip_amplitudes(structure, f_flat, a_flat)
@@ -254,13 +285,13 @@ def steady_state(
         period,
     )
     return SteadyState(
-        velocity=velocity.reshape(shape),
-        status=status.reshape(shape),
-        reason=reason.reshape(shape),
-        slips_per_period=slips.reshape(shape),
-        forward_fraction=forward.reshape(shape),
-        backward_fraction=backward.reshape(shape),
-        orbit_period=period.reshape(shape),
+        velocity=scalar_if_0d(velocity.reshape(shape)),
+        status=scalar_if_0d(status.reshape(shape)),
+        reason=scalar_if_0d(reason.reshape(shape)),
+        slips_per_period=scalar_if_0d(slips.reshape(shape)),
+        forward_fraction=scalar_if_0d(forward.reshape(shape)),
+        backward_fraction=scalar_if_0d(backward.reshape(shape)),
+        orbit_period=scalar_if_0d(period.reshape(shape)),
     )
 
 
@@ -275,7 +306,7 @@ class Attractors:
         velocity, plus one for lift-off and one for the friction paradox when some
         start ends there. 1 for ``STATIC`` points; > 1 flags multistability.
     velocity_spread : numpy.ndarray
-        Largest minus smallest mean velocity among the orbits found [m s^-1].
+        Largest minus smallest mean velocity among the orbits found [m s-1].
     starts_converged : numpy.ndarray of int32
         Starting states (of :data:`ATTRACTOR_STARTS`) that reached an outcome [1].
     """
@@ -296,7 +327,7 @@ def attractors(
     a: ArrayLike,
     settings: SolverSettings | None = None,
     *,
-    coupling: str = "two-way",
+    coupling: str = DEFAULT_COUPLING,
     parallel: bool | None = None,
 ) -> Attractors:
     """Multistability check: the distinct stable orbits reached from several starts.
@@ -314,10 +345,10 @@ def attractors(
     f : array_like
         Drive frequency [Hz], > 0.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
     settings : SolverSettings, optional
         Solver budgets.
-    coupling : {"one-way", "two-way"}
+    coupling : {"one-way", "two-way"}, default "one-way"
         The model; with ``"one-way"`` the mode's transient decays on its own and the
         starts differ in the phase of the first release.
     parallel : bool, optional
@@ -326,6 +357,7 @@ def attractors(
     Returns
     -------
     Attractors
+        Arrays of the broadcast shape of ``f`` and ``a`` (numpy scalars for scalars).
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
@@ -344,9 +376,9 @@ def attractors(
     kernel(vector, omega, a_flat, lifted, int(settings.max_events),
            int(settings.max_map_iterations), out)
     return Attractors(
-        count=out[:, 0].astype(np.int32).reshape(shape),
-        velocity_spread=out[:, 1].reshape(shape),
-        starts_converged=out[:, 2].astype(np.int32).reshape(shape),
+        count=scalar_if_0d(out[:, 0].astype(np.int32).reshape(shape)),
+        velocity_spread=scalar_if_0d(out[:, 1].reshape(shape)),
+        starts_converged=scalar_if_0d(out[:, 2].astype(np.int32).reshape(shape)),
     )
 
 
@@ -356,7 +388,7 @@ def steady_velocity(
     a: ArrayLike,
     settings: SolverSettings | None = None,
     *,
-    coupling: str = "one-way",
+    coupling: str = DEFAULT_COUPLING,
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
     """Mean steady velocity and status at each ``(f, a)``.
 
@@ -367,23 +399,44 @@ def steady_velocity(
     f : array_like
         Drive frequency [Hz], > 0.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
     settings : SolverSettings, optional
         Solver budgets.
-    coupling : {"one-way", "two-way"}
+    coupling : {"one-way", "two-way"}, default "one-way"
         See :func:`steady_state`.
 
     Returns
     -------
-    velocity : numpy.ndarray
-        Mean velocity [m s^-1], positive forward; NaN exactly where the status is
-        ``LIFT_OFF`` or ``NOT_CONVERGED``.
+    velocity : numpy.ndarray of float64
+        Mean velocity [m s-1], positive forward, of the broadcast shape of ``f`` and
+        ``a``; exactly 0 where static, NaN exactly where the status is ``LIFT_OFF``,
+        ``NOT_CONVERGED`` or ``FRICTION_PARADOX``. A ``numpy.float64`` when ``f`` and
+        ``a`` are both scalars.
     status : numpy.ndarray of int8
-        :class:`~study.status.Status` codes.
+        :class:`~study.status.Status` codes [1], same shape (a ``numpy.int8`` for
+        scalars); ``study.Status(int(code))`` names one, ``status ==
+        study.Status.STICK_SLIP`` compares.
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`steady_state`.
 
     See Also
     --------
     steady_state : the same with diagnostics.
+    compute_map : velocities over a grid, as a labelled dataset.
+
+    Examples
+    --------
+    >>> import numpy as np, study
+    >>> s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
+    >>> v, status = study.steady_velocity(s, 14.0, 8.0)
+    >>> type(v).__name__, study.Status(int(status)).name
+    ('float64', 'STICK_SLIP')
+    >>> v, status = study.steady_velocity(s, np.array([13.0, 14.0, 15.0])[:, None], [6.0, 8.0])
+    >>> v.shape, status.dtype
+    ((3, 2), dtype('int8'))
     """
     if check_coupling(coupling) != "one-way":
         result = steady_state(structure, f, a, settings, coupling=coupling)
@@ -395,7 +448,7 @@ def steady_velocity(
         structure, np.ascontiguousarray(f_arr).ravel(), np.ascontiguousarray(a_arr).ravel(),
         settings,
     )
-    return velocity.reshape(f_arr.shape), status.reshape(f_arr.shape)
+    return scalar_if_0d(velocity.reshape(f_arr.shape)), scalar_if_0d(status.reshape(f_arr.shape))
 
 
 def _velocity_only(

@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 
 from study.observables import METHODS, variables_of
 from study.observables import OBSERVABLES as OBSERVABLE_REGISTRY
-from study.solver import SolverSettings
+from study.solver import DEFAULT_COUPLING, SolverSettings
 from study.specfile import (
     SCHEMA_DIR,
     SpecError,
@@ -50,8 +50,9 @@ from study.specfile import (
     parse_toml,
     read_spec_text,
 )
-from study.structure import Structure
+from study.structure import Structure, tilt_warnings
 from study.transient import IntegratorSettings
+from study.units import DEGREE, DIMENSIONLESS, HERTZ, KILOGRAM, METRE_PER_SECOND_SQUARED
 
 __all__ = [
     "METHODS",
@@ -86,20 +87,20 @@ INTEGRATOR_KEYS = (
 
 #: Structure parameters: units and long names (SI inside).
 STRUCTURE_PARAMETERS = {
-    "f0": ("Hz", "resonance frequency of the plate's first mode"),
-    "Q": ("1", "quality factor of the plate's first mode"),
-    "alpha": ("degree", "tilt of the plate from the horizontal"),
-    "M": ("1", "mass ratio m1/m of the resonant mass to the total mass"),
-    "cs": ("1", "static friction coefficient"),
-    "ck": ("1", "kinetic friction coefficient"),
-    "g": ("m s-2", "gravitational acceleration"),
+    "f0": (HERTZ, "resonance frequency of the plate's first mode"),
+    "Q": (DIMENSIONLESS, "quality factor of the plate's first mode"),
+    "alpha": (DEGREE, "tilt of the plate from the horizontal"),
+    "M": (DIMENSIONLESS, "mass ratio m1/m of the resonant mass to the total mass"),
+    "cs": (DIMENSIONLESS, "static friction coefficient"),
+    "ck": (DIMENSIONLESS, "kinetic friction coefficient"),
+    "g": (METRE_PER_SECOND_SQUARED, "gravitational acceleration"),
 }
 DRIVE_PARAMETERS = {
-    "f": ("Hz", "drive frequency"),
-    "a": ("m s-2", "drive acceleration amplitude"),
+    "f": (HERTZ, "drive frequency"),
+    "a": (METRE_PER_SECOND_SQUARED, "drive acceleration amplitude"),
 }
 MASS_PARAMETERS = {
-    "m_add": ("kg", "added non-resonant mass"),
+    "m_add": (KILOGRAM, "added non-resonant mass"),
 }
 SWEEPABLE = {**STRUCTURE_PARAMETERS, **MASS_PARAMETERS, **DRIVE_PARAMETERS}
 
@@ -162,7 +163,8 @@ class StudySpec:
         Velocity solver: the exact steady-state solver, or time integration until
         the orbit repeats.
     coupling : {"one-way", "two-way"}
-        Whether the sliding base also forces the mode (two-way; either method).
+        Whether the sliding base also forces the mode (two-way; either method); default
+        :data:`study.solver.DEFAULT_COUPLING`.
     integrator : IntegratorSettings
         Accuracy and budgets of the time integrator (used with ``method = "integrator"``).
     chunk_points : int
@@ -190,7 +192,7 @@ class StudySpec:
     path: str
     canonical: dict[str, Any] = field(repr=False)
     method: str = "exact"
-    coupling: str = "one-way"
+    coupling: str = DEFAULT_COUPLING
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
 
     @property
@@ -231,7 +233,8 @@ def _build_structure(params: dict[str, float], mass: MassModel | None) -> Struct
     m_add = params.pop("m_add", None)
     if mass is not None:
         params["M"] = mass.mass_ratio(0.0 if m_add is None else m_add)
-    return Structure(**params)
+    with tilt_warnings(False):  # a spec's tilts are in degree by its schema
+        return Structure(**params)
 
 
 def spec_schema() -> dict[str, Any]:
@@ -494,7 +497,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         if axis.name not in STRUCTURE_PARAMETERS:
             _check_bounds(axis, path)
 
-    coupling = solver_table.get("coupling", "one-way")
+    coupling = solver_table.get("coupling", DEFAULT_COUPLING)
     # The exact solver covers both couplings (closed form between events; with two-way
     # coupling the mode is a state of the orbit, found by Newton on the period map).
     method = solver_table.get("method", "exact")

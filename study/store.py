@@ -11,9 +11,11 @@ a killed writer are removed by the next writer of the same file.
 
 from __future__ import annotations
 
+import errno
 import os
+import re
 import shutil
-import tempfile
+import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -42,6 +44,7 @@ __all__ = [
     "ResultError",
     "StoreBusy",
     "StoreError",
+    "advice",
     "clean_temporaries",
     "commit",
     "describe",
@@ -50,6 +53,8 @@ __all__ = [
     "new_temporary",
     "open_result",
     "rewrite_attributes",
+    "temporary_path",
+    "temporary_target",
     "write_atomic",
 ]
 
@@ -95,7 +100,7 @@ def write_atomic(dataset: xr.Dataset, path: str | Path) -> Path:
     try:
         dataset.to_netcdf(temporary, engine="netcdf4", format="NETCDF4",
                           encoding=_encoding(dataset))
-    except OSError as err:
+    except (OSError, RuntimeError) as err:
         temporary.unlink(missing_ok=True)
         raise _store_error(path, err) from None
     except BaseException:
@@ -113,10 +118,47 @@ class StoreError(RuntimeError):
     """A result cannot be written (disk full, no permission...); one line, file named."""
 
 
-def _store_error(target: Path, err: OSError) -> StoreError:
+#: What a user can do about an OSError, by errno.
+_ADVICE = {
+    errno.ENOSPC: "free space on that disk or write elsewhere (-o)",
+    errno.EDQUOT: "free space within your quota or write elsewhere (-o)",
+    errno.EROFS: "the file system is read-only: write elsewhere (-o)",
+    errno.EACCES: "make the folder writable for you or write elsewhere (-o)",
+    errno.EPERM: "make the folder writable for you or write elsewhere (-o)",
+    errno.ENOTDIR: "a file stands where a folder is needed: write elsewhere (-o)",
+    errno.EISDIR: "a folder stands where the result goes: write elsewhere (-o)",
+}
+
+
+def advice(err: OSError) -> str:
+    """What to do about ``err``, for a one-line message ('' if nothing specific)."""
+    return _ADVICE.get(err.errno or 0, "")
+
+
+def _diagnose(folder: Path) -> OSError | None:
+    """The likely cause of a write that failed without one (the netCDF library says
+    only "HDF error"): a full disk or a folder not writable, or None."""
+    try:
+        space = os.statvfs(folder)
+        if space.f_bavail * space.f_frsize < 2**20:
+            return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        if space.f_flag & os.ST_RDONLY:
+            return OSError(errno.EROFS, os.strerror(errno.EROFS))
+    except OSError:
+        return None
+    if not os.access(folder, os.W_OK):
+        return OSError(errno.EACCES, os.strerror(errno.EACCES))
+    return None
+
+
+def _store_error(target: Path, err: OSError | RuntimeError) -> StoreError:
+    if not isinstance(err, OSError):  # netCDF4: RuntimeError("NetCDF: HDF error")
+        err = _diagnose(target.parent) or OSError(0, str(err))
     reason = err.strerror or str(err)
+    what_to_do = advice(err)
+    # Whether computed values survive is the runner's to say: it knows whether any were.
     return StoreError(f"{target}: cannot write the result ({reason}); any previous result "
-                      "is unchanged and computed values are kept for the next run")
+                      "is unchanged" + (f"; {what_to_do}" if what_to_do else ""))
 
 
 @contextmanager
@@ -132,6 +174,8 @@ def exclusive(output: Path) -> Iterator[None]:
 
     lock_path = output.with_name(f".{output.name}.lock")
     try:
+        # The lock lives beside the result, so the result's folder must exist first.
+        output.parent.mkdir(parents=True, exist_ok=True)
         lock = open(lock_path, "a+")
     except OSError as err:
         raise _store_error(output, err) from None
@@ -159,26 +203,57 @@ class StoreBusy(RuntimeError):
     """Another process is writing the same result file."""
 
 
+#: A temporary's name: ``.<output name>.study-<run id>.tmp``; the run id (32 hex
+#: digits, unique per temporary) makes the name of one output's temporary never match
+#: another output's, whatever the names (``test`` and ``test.nc`` in one folder).
+_TEMPORARY = re.compile(r"^\.(?P<name>.+)\.study-(?P<run>[0-9a-f]{32})\.tmp$")
+#: Temporaries of releases before the run id (``tempfile.mkstemp``: 8 characters).
+_OLD_TEMPORARY = re.compile(r"^\.(?P<name>.+)\.(?P<run>[a-z0-9_]{8})\.tmp$")
+
+
+def temporary_path(target: Path) -> Path:
+    """A new, unique temporary name beside ``target`` (see :data:`_TEMPORARY`)."""
+    return target.with_name(f".{target.name}.study-{uuid.uuid4().hex}.tmp")
+
+
+def temporary_target(path: Path) -> str | None:
+    """The name of the file the temporary ``path`` was to become, or None if ``path``
+    is not a temporary of this package."""
+    found = _TEMPORARY.match(path.name) or _OLD_TEMPORARY.match(path.name)
+    return found["name"] if found else None
+
+
 def new_temporary(output: Path) -> Path:
     """A fresh temporary file next to ``output`` (same file system: rename is atomic),
     readable as the umask allows (a result is for sharing)."""
+    umask = os.umask(0)
+    os.umask(umask)
     try:
         output.parent.mkdir(parents=True, exist_ok=True)
-        handle, name = tempfile.mkstemp(prefix=f".{output.name}.", suffix=".tmp",
-                                        dir=output.parent)
+        path = temporary_path(output)
+        handle = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW,
+                         0o666 & ~umask)
     except OSError as err:
         raise _store_error(output, err) from None
     os.close(handle)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(name, 0o666 & ~umask)
-    return Path(name)
+    return path
 
 
 def clean_temporaries(output: Path) -> int:
-    """Remove temporaries of ``output`` left by killed runs (call under :func:`exclusive`)."""
+    """Remove temporaries of ``output`` left by killed runs (call under :func:`exclusive`).
+
+    Only temporaries of exactly ``output`` go: every writer of ``output`` holds its
+    lock, and the caller holds it now, so their writers are gone. Temporaries of
+    other outputs in the folder (``test`` and ``test.nc``) are never touched.
+    """
     removed = 0
-    for path in output.parent.glob(f".{output.name}.*.tmp"):
+    try:
+        candidates = list(output.parent.iterdir())
+    except OSError:
+        return 0
+    for path in candidates:
+        if temporary_target(path) != output.name:
+            continue
         try:
             path.unlink()
             removed += 1
@@ -195,7 +270,7 @@ def commit(temporary: Path, output: Path) -> Path:
     try:
         seal(temporary)  # the content checksum, then streaming validation
         os.replace(temporary, output)
-    except OSError as err:
+    except (OSError, RuntimeError) as err:
         raise _store_error(output, err) from None
     finally:
         temporary.unlink(missing_ok=True)
@@ -225,7 +300,7 @@ def rewrite_attributes(output: Path, attrs: dict[str, Any]) -> Path:
         with netCDF4.Dataset(temporary, "a") as dataset:
             for name, value in attrs.items():
                 dataset.setncattr(name, value)
-    except OSError as err:
+    except (OSError, RuntimeError) as err:
         temporary.unlink(missing_ok=True)
         raise _store_error(output, err) from None
     return commit(temporary, output)
@@ -249,26 +324,35 @@ class GridWriter:
 
         self.path = path
         self.target = path if target is None else target
-        try:
+        with self._writing():
             self.dataset = netCDF4.Dataset(path, "w", format="NETCDF4")
-        except OSError as err:
+            self.dataset.set_auto_mask(False)
+            self.dataset.setncatts(attrs)
+
+    @contextmanager
+    def _writing(self) -> Iterator[None]:
+        """Turn a failed write (OSError, or netCDF's RuntimeError "HDF error": a full
+        disk) into one :class:`StoreError` naming the result file."""
+        try:
+            yield
+        except (OSError, RuntimeError) as err:
             raise _store_error(self.target, err) from None
-        self.dataset.set_auto_mask(False)
-        self.dataset.setncatts(attrs)
 
     def coordinate(self, name: str, dims: tuple[str, ...], values: Any,
                    attrs: dict[str, Any]) -> None:
         """A coordinate variable (a dimension of its own if ``dims == (name,)``)."""
         values = np.asarray(values)
-        if dims == (name,):
-            self.dataset.createDimension(name, values.size)
-        var = self.dataset.createVariable(name, values.dtype, dims)
-        var.setncatts(attrs)
-        var[...] = values
+        with self._writing():
+            if dims == (name,):
+                self.dataset.createDimension(name, values.size)
+            var = self.dataset.createVariable(name, values.dtype, dims)
+            var.setncatts(attrs)
+            var[...] = values
 
     def dimension(self, name: str, size: int) -> None:
         """A dimension without a coordinate variable."""
-        self.dataset.createDimension(name, size)
+        with self._writing():
+            self.dataset.createDimension(name, size)
 
     def variable(self, name: str, dims: tuple[str, ...], dtype: str, attrs: dict[str, Any],
                  chunks: tuple[int, ...]) -> None:
@@ -276,8 +360,10 @@ class GridWriter:
         dtype_ = np.dtype(dtype)
         # CF: NaN marks the points without a value; integer flags have no fill value.
         fill = np.nan if dtype_.kind == "f" else False
-        var = self.dataset.createVariable(name, dtype_, dims, zlib=True, complevel=1,
-                                          shuffle=True, chunksizes=chunks, fill_value=fill)
+        with self._writing():
+            var = self.dataset.createVariable(name, dtype_, dims, zlib=True, complevel=1,
+                                              shuffle=True, chunksizes=chunks,
+                                              fill_value=fill)
         # Every write covers whole chunks, written once: with a cache too small for any
         # chunk, HDF5 compresses and writes each chunk during ``write`` (while the
         # workers compute the next ones) instead of holding up to the default 64 MiB
@@ -289,10 +375,8 @@ class GridWriter:
     def write(self, name: str, index: tuple[Any, ...], values: np.ndarray) -> None:
         """Write ``values`` at ``index`` of variable ``name`` (whole chunks of a data
         variable, each once: partial chunks are read, changed and compressed again)."""
-        try:
+        with self._writing():
             self._put(name, index, values)
-        except OSError as err:
-            raise _store_error(self.target, err) from None
 
     def _put(self, name: str, index: tuple[Any, ...], values: np.ndarray) -> None:
         self.dataset.variables[name][index] = values
@@ -303,12 +387,20 @@ class GridWriter:
 
     def set_attributes(self, attrs: dict[str, Any]) -> None:
         """Add or replace global attributes."""
-        self.dataset.setncatts(attrs)
+        with self._writing():
+            self.dataset.setncatts(attrs)
 
     def close(self) -> None:
         """Close the file (idempotent)."""
-        if self.dataset.isopen():
-            try:
+        if hasattr(self, "dataset") and self.dataset.isopen():
+            with self._writing():
                 self.dataset.close()
-            except OSError as err:
-                raise _store_error(self.target, err) from None
+
+    def discard(self) -> None:
+        """Close and delete the temporary after a failure (never raises)."""
+        try:
+            self.close()
+        except Exception:  # the first failure is the one reported
+            pass
+        finally:
+            self.path.unlink(missing_ok=True)

@@ -3,23 +3,48 @@
 from __future__ import annotations
 
 import math
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
-__all__ = ["Structure"]
+from study.inputs import RADIAN_LIKE_TILT, SuspectInputWarning, real_number, tilt_looks_like_radians
+from study.units import DEGREE, DIMENSIONLESS, HERTZ, METRE_PER_SECOND_SQUARED
+
+__all__ = ["Structure", "tilt_warnings"]
 
 
-def require_finite(name: str, value: float) -> float:
-    if isinstance(value, bool):
-        raise ValueError(f"Structure parameter {name!r} must be a real number, got {value!r}")
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"Structure parameter {name!r} must be a real number, got {value!r}"
-        ) from None
+def require_finite(name: str, value: object) -> float:
+    """A structure parameter as a finite float, else an error naming it."""
+    number = real_number(f"Structure parameter {name!r}", value, UNITS.get(name, ""))
     if not math.isfinite(number):
         raise ValueError(f"Structure parameter {name!r} must be finite, got {value!r}")
     return number
+
+
+#: Whether a Structure built in this context warns of a tilt that looks like radians.
+_WARN_OF_RADIANS: ContextVar[bool] = ContextVar("study_warn_of_radians", default=True)
+
+
+@contextmanager
+def tilt_warnings(enabled: bool) -> Iterator[None]:
+    """Turn the radians warning of :class:`Structure` on or off within a ``with`` block.
+
+    The readers of spec, fit and design files build the structures a file declares with
+    the warning off: a file's tilts are in degree by its schema, and an optimiser
+    exploring small tilts is not a mistake. Per thread (a context variable).
+    """
+    token = _WARN_OF_RADIANS.set(bool(enabled))
+    try:
+        yield
+    finally:
+        _WARN_OF_RADIANS.reset(token)
+
+
+#: CF units of the parameters, for messages.
+UNITS = {"f0": HERTZ, "Q": DIMENSIONLESS, "alpha": DEGREE, "M": DIMENSIONLESS,
+         "cs": DIMENSIONLESS, "ck": DIMENSIONLESS, "g": METRE_PER_SECOND_SQUARED}
 
 
 @dataclass(frozen=True)
@@ -36,7 +61,7 @@ class Structure:
     Q : float
         Quality factor of the mode [1], ``Q > 0``.
     alpha : float
-        Tilt of the plate from the horizontal [deg], ``-90 < alpha < 90``.
+        Tilt of the plate from the horizontal [degree], ``-90 < alpha < 90``.
         ``alpha -> -alpha`` mirrors the motion.
     M : float
         Mass ratio ``m1 / m`` of the resonant mass to the total mass [1],
@@ -47,13 +72,24 @@ class Structure:
         Kinetic friction coefficient [1], ``0 < ck <= cs``; defaults to ``cs``
         (the paper's single coefficient ``c_f``).
     g : float, optional
-        Gravitational acceleration [m s^-2], ``g > 0``; default 9.8 as in the paper.
+        Gravitational acceleration [m s-2], ``g > 0``; default 9.8 as in the paper.
 
     Raises
     ------
+    TypeError
+        If a parameter is not a real number (a string such as ``'30'``, a boolean, a
+        complex number, ``None``): :class:`study.inputs.InputTypeError`, which is
+        also a ValueError.
     ValueError
-        If a parameter is not a finite number or is outside its allowed range;
-        the message names the parameter, its value and the range.
+        If a parameter is not finite or is outside its allowed range; the message
+        names the parameter, its value and the range.
+
+    Warns
+    -----
+    study.SuspectInputWarning
+        If ``0.05 <= |alpha| < pi/2`` (:data:`study.inputs.RADIAN_LIKE_TILT`): a tilt
+        below 1.6 degree that looks like an angle in radians (``alpha=0.785`` for 45
+        degree). The structure is built as given, in degree.
     """
 
     f0: float
@@ -82,7 +118,7 @@ class Structure:
         if values["Q"] <= 0:
             refuse("Q", "Q > 0")
         if not -90.0 < values["alpha"] < 90.0:
-            refuse("alpha", "-90 < alpha < 90 [deg]")
+            refuse("alpha", "-90 < alpha < 90 [degree]")
         if not 0.0 < values["M"] <= 1.0:
             refuse("M", "0 < M <= 1")
         if values["cs"] <= 0:
@@ -90,13 +126,21 @@ class Structure:
         if not 0.0 < ck <= values["cs"]:
             refuse("ck", f"0 < ck <= cs (cs = {values['cs']!r})")
         if values["g"] <= 0:
-            refuse("g", "g > 0 [m s^-2]")
+            refuse("g", "g > 0 [m s-2]")
         for name, value in values.items():
             object.__setattr__(self, name, value)
+        if tilt_looks_like_radians(values["alpha"]) and _WARN_OF_RADIANS.get():
+            low, high = RADIAN_LIKE_TILT
+            warnings.warn(
+                f"Structure parameter 'alpha' = {values['alpha']!r} degree: a tilt between "
+                f"{low:g} and {high:.4g} degree looks like an angle in radians; alpha is "
+                f"in degree (for {values['alpha']!r} rad give alpha = "
+                f"{math.degrees(values['alpha']):.6g})",
+                SuspectInputWarning, stacklevel=3)
 
     @property
     def omega0(self) -> float:
-        """Angular resonance frequency ``2 pi f0`` [rad s^-1]."""
+        """Angular resonance frequency ``2 pi f0`` [rad s-1]."""
         return 2.0 * math.pi * self.f0
 
     @property

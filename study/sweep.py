@@ -113,7 +113,7 @@ class Task:
     f : numpy.ndarray
         The chunk's drive frequencies [Hz].
     a : numpy.ndarray
-        Drive accelerations [m s^-2] (empty without an ``a`` axis).
+        Drive accelerations [m s-2] (empty without an ``a`` axis).
     rows : tuple of str
         Closed-form (row) observables to compute on ``f``.
     points : tuple of str

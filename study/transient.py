@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,10 +27,12 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels import transient as _kernel
 from study.physics import as_acceleration, as_frequency, mode_response
 from study.solver import (
+    DEFAULT_COUPLING,
     PARALLEL_THRESHOLD,
     SteadyState,
     check_coupling,
     check_structure,
+    scalar_if_0d,
 )
 from study.structure import Structure
 
@@ -169,7 +170,7 @@ class Schedule:
     frequency : array_like
         Drive frequency of each segment [Hz], > 0.
     acceleration : array_like
-        Drive acceleration amplitude of each segment [m s^-2], >= 0.
+        Drive acceleration amplitude of each segment [m s-2], >= 0.
     duration : array_like
         Duration of each segment [s], > 0.
     phase : float
@@ -239,8 +240,8 @@ class Trajectory:
     time : numpy.ndarray
         Sample times [s] (those reached before the run ended).
     delta, delta_rate, x, v : numpy.ndarray
-        Plate deflection [m], its rate [m s^-1], base position [m] and velocity
-        [m s^-1] at the sample times.
+        Plate deflection [m], its rate [m s-1], base position [m] and velocity
+        [m s-1] at the sample times.
     mode : numpy.ndarray of int8
         Contact mode at the sample times: 0 stick, +1 forward slip, -1 backward slip.
     event_time : numpy.ndarray
@@ -276,7 +277,8 @@ class Trajectory:
     events_dropped: int = field(default=0)
 
 
-def model_parameters(structure: Structure, coupling: str = "one-way") -> NDArray[np.float64]:
+def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING
+                     ) -> NDArray[np.float64]:
     """Parameter vector of the integrator kernel for ``structure`` and ``coupling``."""
     structure = check_structure(structure)
     two_way = check_coupling(coupling) == "two-way"
@@ -307,7 +309,7 @@ def simulate(
     structure: Structure,
     schedule: Schedule,
     *,
-    coupling: Literal["one-way", "two-way"] = "one-way",
+    coupling: str = DEFAULT_COUPLING,
     initial_state: ArrayLike | None = None,
     output_times: ArrayLike | None = None,
     settings: IntegratorSettings | None = None,
@@ -325,7 +327,7 @@ def simulate(
         ``"one-way"`` is the paper's model (the mode does not feel the sliding);
         ``"two-way"`` adds the base's acceleration to the mode's forcing.
     initial_state : array_like, optional
-        ``(delta [m], delta' [m s^-1], x [m], v [m s^-1])`` at ``t = 0``; default all
+        ``(delta [m], delta' [m s-1], x [m], v [m s-1])`` at ``t = 0``; default all
         zero (at rest on the table, the mode at rest). With ``v != 0`` the run starts
         sliding that way; with ``v = 0`` it sticks unless the forces already exceed the
         static friction.
@@ -350,8 +352,8 @@ def simulate(
     y = np.zeros(4) if initial_state is None else np.array(initial_state, dtype=float)
     if y.shape != (4,) or not np.all(np.isfinite(y)):
         raise ValueError(
-            "initial_state must be 4 finite numbers (delta [m], delta' [m s^-1], x [m], "
-            f"v [m s^-1]), got {initial_state!r}"
+            "initial_state must be 4 finite numbers (delta [m], delta' [m s-1], x [m], "
+            f"v [m s-1]), got {initial_state!r}"
         )
     end = float(schedule.ends[-1])
     shortest = float(1.0 / np.max(schedule.frequency))
@@ -410,7 +412,7 @@ def steady_mode_state(structure: Structure, f: ArrayLike, a: ArrayLike) -> NDArr
     Returns
     -------
     numpy.ndarray
-        ``(..., 4)`` states ``(delta [m], delta' [m s^-1], 0, 0)``; the exact solver's
+        ``(..., 4)`` states ``(delta [m], delta' [m s-1], 0, 0)``; the exact solver's
         orbit starts from the same state.
     """
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
@@ -427,7 +429,7 @@ def integrated_steady_state(
     f: ArrayLike,
     a: ArrayLike,
     *,
-    coupling: Literal["one-way", "two-way"] = "one-way",
+    coupling: str = DEFAULT_COUPLING,
     settings: IntegratorSettings | None = None,
     parallel: bool | None = None,
 ) -> SteadyState:
@@ -446,7 +448,7 @@ def integrated_steady_state(
     f : array_like
         Drive frequency [Hz], > 0. Broadcast against ``a``.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
     coupling : {"one-way", "two-way"}
         See :func:`simulate`.
     settings : IntegratorSettings, optional
@@ -490,11 +492,11 @@ def integrated_steady_state(
         results,
     )
     return SteadyState(
-        velocity=results[:, 2].reshape(shape),
-        status=results[:, 0].astype(np.int8).reshape(shape),
-        reason=results[:, 1].astype(np.int8).reshape(shape),
-        slips_per_period=results[:, 3].reshape(shape),
-        forward_fraction=results[:, 4].reshape(shape),
-        backward_fraction=results[:, 5].reshape(shape),
-        orbit_period=results[:, 6].astype(np.int32).reshape(shape),
+        velocity=scalar_if_0d(results[:, 2].reshape(shape)),
+        status=scalar_if_0d(results[:, 0].astype(np.int8).reshape(shape)),
+        reason=scalar_if_0d(results[:, 1].astype(np.int8).reshape(shape)),
+        slips_per_period=scalar_if_0d(results[:, 3].reshape(shape)),
+        forward_fraction=scalar_if_0d(results[:, 4].reshape(shape)),
+        backward_fraction=scalar_if_0d(results[:, 5].reshape(shape)),
+        orbit_period=scalar_if_0d(results[:, 6].astype(np.int32).reshape(shape)),
     )

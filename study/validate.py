@@ -870,9 +870,32 @@ def _scene_problems(nc: Any, meta: _File, source: str) -> list[str]:
     return problems
 
 
+#: What the stale fit and design formats held, for the message refusing them.
+_STALE_FIT_FORMATS = {1: "units spelled deg, not degree"}
+
+
+def _stale_fit_problems(meta: _File, design: bool) -> list[str]:
+    """A fit or design file of an older format: refused whole, as scenes are."""
+    if design:
+        from study.design import DESIGN_FORMAT as current
+    else:
+        from study.fit import FIT_FORMAT as current
+    what = "design" if design else "fit"
+    written = meta.attrs.get(f"study_{what}_format", 1)
+    if _is_number(written) and written == current:
+        return []
+    held = _STALE_FIT_FORMATS.get(written if _is_number(written) else None, "an unknown layout")
+    return [f"{what} format {_shown_format(written)} ({held}) is stale: this study reads "
+            f"format {current} (every unit in CF/UDUNITS spelling, angles in degree); "
+            f"rerun its spec with `study {what}`"]
+
+
 def _fit_problems(nc: Any, meta: _File, schema_path: Path = FIT_SCHEMA_PATH) -> list[str]:
     """A fit result: its header against ``study-fit-v1``, sizes that agree, the checksum
     (a design result the same way, against ``study-design-v1``)."""
+    stale = _stale_fit_problems(meta, design=schema_path != FIT_SCHEMA_PATH)
+    if stale:
+        return stale
     problems = [p for p in _schema_problems(schema_path, _file_header(meta))
                 if _not_required_checksum(p)]
     names = meta.dims.get("parameter")
@@ -964,10 +987,31 @@ def validate_file(path: str | Path) -> str:
 def open_result(path: str | Path) -> xr.Dataset:
     """Validate a result file, then return it loaded into memory (the file is closed).
 
+    Every kind of result opens here: a study, a scene, a fit or a design file.
+    Validation checks the file against its schema, its checksum and its spec before a
+    value is read, as ``study validate`` does.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A result file (netCDF) written by ``study run``, ``study fit``, ``study design``
+        or :func:`study.run`.
+
+    Returns
+    -------
+    xarray.Dataset
+        The file's variables with their ``units``, ``long_name`` and CF flag attributes
+        (``status`` holds :class:`study.Status` codes, named by ``flag_meanings``), its
+        coordinates and global attributes (``study_coupling`` names the coupling),
+        loaded into memory: no file handle stays open, nothing needs closing. For a
+        file larger than memory use ``xarray.open_dataset(path, chunks={})`` in a
+        ``with`` block instead.
+
     Raises
     ------
     ResultError
-        For a missing, truncated, foreign, outdated or inconsistent file.
+        For a missing, truncated, foreign, outdated or inconsistent file; the message
+        starts with the file's path.
     """
     path = Path(path)
     validate_file(path)
@@ -1032,8 +1076,10 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
     what, name = next(((label, attrs[key]) for label, key in
                        (("fit", "study_fit_name"), ("design", "study_design_name"))
                        if key in attrs), ("scene" if kind else "study", attrs.get("study_name")))
+    coupling = attrs.get("study_coupling")
     lines.append(f"  {what} {name!r}"
-                 f"{f' ({kind})' if kind else ''}, spec sha256 "
+                 f"{f' ({kind})' if kind else ''}"
+                 f"{f', {coupling} coupling' if isinstance(coupling, str) else ''}, spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
     for name, size in dataset.sizes.items():

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from study.status import NonConvergence, Status
+from study.units import DEGREE, DIMENSIONLESS, HERTZ, METRE_PER_SECOND, METRE_PER_SECOND_SQUARED
 
 __all__ = ["FRONTIER_KINDS", "GRIDS", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "VARIABLES",
            "Variable"]
@@ -108,69 +109,69 @@ _STATUS_FLAGS = tuple(s.name.lower() for s in Status)
 _STATUS_VALUES = tuple(int(s) for s in Status)
 
 _DECLARED = (
-    Variable("mode_gain", "row", "float64", "1",
+    Variable("mode_gain", "row", "float64", DIMENSIONLESS,
              "amplification |w0^2 G| of the plate's first mode (1 at low frequency)"),
-    Variable("mode_phase", "row", "float64", "degree",
+    Variable("mode_phase", "row", "float64", DEGREE,
              "phase lag of the plate's deflection behind the drive"),
-    Variable("a_star_plus", "row", "float64", "m s-2",
+    Variable("a_star_plus", "row", "float64", METRE_PER_SECOND_SQUARED,
              "drive acceleration at which forward slips start (paper eq. 5)"),
-    Variable("a_star_minus", "row", "float64", "m s-2",
+    Variable("a_star_minus", "row", "float64", METRE_PER_SECOND_SQUARED,
              "drive acceleration at which backward slips start (paper eq. 5)"),
-    Variable("lift_off_acceleration", "row", "float64", "m s-2",
+    Variable("lift_off_acceleration", "row", "float64", METRE_PER_SECOND_SQUARED,
              "drive acceleration above which the normal force becomes negative"),
-    Variable("velocity", "point", "float64", "m s-1",
+    Variable("velocity", "point", "float64", METRE_PER_SECOND,
              "mean velocity of the steady periodic orbit, positive forward",
              comment="exactly 0 when static; NaN (missing) where status is lift_off, "
              "not_converged or friction_paradox", invalid_where="status"),
-    Variable("status", "point", "int8", "1", "outcome of the steady-state solver",
+    Variable("status", "point", "int8", DIMENSIONLESS, "outcome of the steady-state solver",
              flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
-    Variable("slips_per_period", "point", "float64", "1",
+    Variable("slips_per_period", "point", "float64", DIMENSIONLESS,
              "slip events per drive period on the periodic orbit"),
-    Variable("forward_slip_fraction", "point", "float64", "1",
+    Variable("forward_slip_fraction", "point", "float64", DIMENSIONLESS,
              "fraction of the drive period spent slipping forward"),
-    Variable("backward_slip_fraction", "point", "float64", "1",
+    Variable("backward_slip_fraction", "point", "float64", DIMENSIONLESS,
              "fraction of the drive period spent slipping backward"),
-    Variable("orbit_period", "point", "int32", "1",
+    Variable("orbit_period", "point", "int32", DIMENSIONLESS,
              "period of the steady orbit in drive periods (0: no orbit)"),
-    Variable("nonconvergence", "point", "int8", "1",
+    Variable("nonconvergence", "point", "int8", DIMENSIONLESS,
              "why the solver found no periodic orbit",
              flags=tuple(r.name.lower() for r in NonConvergence),
              flag_values=tuple(int(r) for r in NonConvergence)),
-    Variable("floquet_multiplier", "point", "float64", "1",
+    Variable("floquet_multiplier", "point", "float64", DIMENSIONLESS,
              "largest modulus of the Floquet multipliers of the steady orbit on the state "
              "(plate deflection, its rate, sliding velocity)",
              comment="below 1: the orbit attracts nearby states; where static, the mode's "
              "free decay over one drive period; NaN (missing) where status is lift_off, "
              "not_converged or friction_paradox", invalid_where="status",
              zero_when_static=False),
-    Variable("attractor_count", "point", "int32", "1",
+    Variable("attractor_count", "point", "int32", DIMENSIONLESS,
              "distinct stable outcomes reached from 12 starting states (rest at four drive "
              "phases, the mode at 0, 1 and 2 times its steady response)",
              comment="stable orbits told apart by period and mean velocity, lift-off and "
              "the friction paradox one outcome each; 1 where static; > 1: multistable; "
              "0: no start converged"),
-    Variable("attractor_velocity_spread", "point", "float64", "m s-1",
+    Variable("attractor_velocity_spread", "point", "float64", METRE_PER_SECOND,
              "largest minus smallest mean velocity among the stable orbits found",
              comment="0 with a single orbit or none"),
-    Variable("attractor_starts_converged", "point", "int32", "1",
+    Variable("attractor_starts_converged", "point", "int32", DIMENSIONLESS,
              "starting states (of 12) that reached a stable orbit, lift-off or the "
              "friction paradox"),
-    Variable("velocity_one_way", "point", "float64", "m s-1",
+    Variable("velocity_one_way", "point", "float64", METRE_PER_SECOND,
              "mean steady velocity of the paper's one-way model at the same point "
              "(exact solver), for comparison with the two-way velocity",
              comment="exactly 0 when static; NaN (missing) where status_one_way is "
              "lift_off or not_converged", invalid_where="status_one_way"),
-    Variable("status_one_way", "point", "int8", "1",
+    Variable("status_one_way", "point", "int8", DIMENSIONLESS,
              "outcome of the exact solver for the paper's one-way model",
              flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
-    Variable("frontier_frequency", "frontier", "float64", "Hz",
+    Variable("frontier_frequency", "frontier", "float64", HERTZ,
              "drive frequency f*(a) where the mean velocity changes sign",
              comment="NaN-padded where an acceleration has fewer branches"),
-    Variable("frontier_kind", "frontier", "int8", "1",
+    Variable("frontier_kind", "frontier", "int8", DIMENSIONLESS,
              "how the velocity changes sign at the frontier", flags=FRONTIER_KINDS),
-    Variable("frontier_direction", "frontier", "int8", "1",
+    Variable("frontier_direction", "frontier", "int8", DIMENSIONLESS,
              "sign of the velocity just above the frontier frequency (0: none)"),
-    Variable("frontier_bracket", "frontier", "float64", "Hz",
+    Variable("frontier_bracket", "frontier", "float64", HERTZ,
              "width of the final bisection bracket of the frontier frequency"),
 )
 

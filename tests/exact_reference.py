@@ -252,7 +252,7 @@ def exact_velocity(
     Q : float
         Quality factor of the plate mode.
     alpha_deg : float
-        Plate tilt from the horizontal [deg].
+        Plate tilt from the horizontal [degree].
     M : float
         Mass ratio ``m1 / m``.
     cs : float
@@ -260,18 +260,18 @@ def exact_velocity(
     f : float
         Drive frequency [Hz].
     a : float
-        Drive acceleration amplitude [m s^-2].
+        Drive acceleration amplitude [m s-2].
     ck : float, optional
         Kinetic friction coefficient (``<= cs``); defaults to ``cs``.
     g : float, optional
-        Gravity [m s^-2], default 9.8.
+        Gravity [m s-2], default 9.8.
     dps : int, optional
         Working precision in decimal digits, default 40.
 
     Returns
     -------
     velocity : mpf
-        Mean velocity [m s^-1], positive forward; ``0`` when static, NaN for
+        Mean velocity [m s-1], positive forward; ``0`` when static, NaN for
         ``"lift_off"`` and for the unsupported / non-converged statuses.
     status : str
         ``"stick_slip"``, ``"static"``, ``"lift_off"``,
@@ -400,7 +400,7 @@ def _demo() -> int:
         (14.0, 7.0, 0.2, "ck = 0.2"),
     ]
     print(
-        f"{'f':>5} {'a':>4} {'ck':>5}  {'velocity [m/s] (dps=40)':>27}  {'status':<11}"
+        f"{'f':>5} {'a':>4} {'ck':>5}  {'velocity [m s-1] (dps=40)':>27}  {'status':<11}"
         f" {'slips':>5}  {'t40 [s]':>7} {'t60 [s]':>7}  {'digits 40v60':>12}  expected"
     )
     for f, a, ck, note in points:

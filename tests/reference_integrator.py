@@ -625,7 +625,7 @@ def reference_velocity(
     Q : float
         Quality factor of the mode.
     alpha_deg : float
-        Tilt of the plate from the horizontal [deg].
+        Tilt of the plate from the horizontal [degree].
     M : float
         Mass ratio ``m1 / m``.
     cs : float
@@ -633,15 +633,15 @@ def reference_velocity(
     f : float
         Drive frequency [Hz].
     a : float
-        Drive (table) acceleration amplitude [m s^-2].
+        Drive (table) acceleration amplitude [m s-2].
     ck : float, optional
         Kinetic friction coefficient, ``ck <= cs``; defaults to ``cs``.
     g : float, optional
-        Gravity [m s^-2].
+        Gravity [m s-2].
     rtol, atol : float, optional
         Tolerances of ``solve_ivp`` (``rtol`` must be >= ``100 * eps``, about
         2.3e-14, or scipy warns). The state components are
-        ``(delta [m], ddelta/dt [m/s], x [m], v [m/s])``.
+        ``(delta [m], ddelta/dt [m s-1], x [m], v [m s-1])``.
     max_periods : int, optional
         Maximum number of drive periods integrated; default 400 (one-way) or
         2000 (two-way: the mode transient decays by a factor e in about
@@ -665,7 +665,7 @@ def reference_velocity(
     Returns
     -------
     velocity : float
-        Mean horizontal velocity [m/s] of the periodic orbit: displacement over
+        Mean horizontal velocity [m s-1] of the periodic orbit: displacement over
         its ``k`` drive periods divided by ``k T``. ``0.0`` when static, ``nan``
         at lift-off. When not converged, the mean velocity over the second half
         of the integrated periods (a best estimate only).
@@ -815,11 +815,11 @@ def reference_slide_to_rest(
         Structure, as in :func:`reference_velocity` (``ck`` defaults to ``cs``
         and must be > 0).
     v0 : float
-        Initial sliding velocity [m/s], nonzero.
+        Initial sliding velocity [m s-1], nonzero.
     coupling : {"one-way", "two-way"}, optional
         As in :func:`reference_velocity`.
     mode0 : (float, float), optional
-        Initial ``(delta [m], ddelta/dt [m/s])``; default at rest.
+        Initial ``(delta [m], ddelta/dt [m s-1])``; default at rest.
     rtol, atol : float, optional
         Tolerances of ``solve_ivp``.
     max_time : float, optional
@@ -999,7 +999,7 @@ def _demo():
     ]
     runs = [(1e-12, _STEPS_PER_PERIOD), (1e-13, _STEPS_PER_PERIOD), (1e-13, 256)]
     print(
-        f"{'M':>5} {'f':>6} {'a':>5} {'rtol':>6} {'T/h':>4} {'v [m/s]':>24}"
+        f"{'M':>5} {'f':>6} {'a':>5} {'rtol':>6} {'T/h':>4} {'v [m s-1]':>24}"
         f" {'status':>19} {'periods':>7} {'time[s]':>7} {'rel.diff':>9}  expected"
     )
     t_all = time.perf_counter()

@@ -12,7 +12,7 @@ mode.
 Model (per unit total mass, SI units, table frame)
 --------------------------------------------------
 A rigid disk, pose ``(x, y, theta)`` in the world frame; body frame: forward =
-heading, left = heading + 90 deg. Drive acceleration ``A(t) = a_k cos(phi(t))`` in
+heading, left = heading + 90 degree. Drive acceleration ``A(t) = a_k cos(phi(t))`` in
 segment ``k`` of the schedule, with the phase ``phi`` continuous, ``phi(0) = phase``
 and ``dphi/dt = 2 pi f_k``. Plate ``i`` (resonance ``f0``, ``w = 2 pi f0``, quality
 factor ``Q``, tilt ``alpha``, mass ratio ``M``, body-frame direction ``beta``, so
@@ -88,7 +88,7 @@ For ``r >> r_switch`` it is the ordinary equation (``sigma ~ t``); as ``r -> 0``
 moves to ``sigma = infinity``, ``r`` decays *exponentially* in ``sigma`` and ``e``
 converges exponentially to the stop direction. The stop event is
 ``rho = ln(r_end)``, ``r_end = stop_tol V`` (default ``stop_tol = 1e-14``, i.e. about
-``1e-15 m/s``), located by Brent's method on the order-7 dense output; reaching it
+``1e-15 m s-1``), located by Brent's method on the order-7 dense output; reaching it
 from ``r_switch`` costs a few steps per e-fold of ``r``. The remaining motion is then
 added to first order (``dt = r_end / |r'|``, pose ``+= u dt / 2``, modes integrated
 over ``dt``). While ``e`` still turns (``e - e_stop ~ r^p``) ``r`` is not exactly linear
@@ -154,11 +154,11 @@ class RefPlate:
     Q : float
         Quality factor.
     alpha : float
-        Tilt from the horizontal [deg].
+        Tilt from the horizontal [degree].
     M : float
         Mass ratio (effective plate mass over total mass).
     direction : float
-        Body-frame direction ``beta`` of the plate's oscillation [deg], counterclockwise
+        Body-frame direction ``beta`` of the plate's oscillation [degree], counterclockwise
         from forward.
     attachment : (float, float)
         Attachment point ``(r_forward, r_left)`` in the body frame [m].
@@ -179,7 +179,7 @@ class RefTrajectory:
     Attributes
     ----------
     time, x, y, heading, vx, vy, spin, path : numpy.ndarray
-        State at the output times reached [s, m, m, rad, m/s, m/s, rad/s, m].
+        State at the output times reached [s, m, m, rad, m s-1, m s-1, rad s-1, m].
     modes : numpy.ndarray
         ``(delta_1, delta_1', ...)`` at the output times, shape ``(len(time), 2 P)``.
     outcome : str
@@ -220,7 +220,7 @@ def onset_direction(W, n, ck, kappa):
     e : numpy.ndarray
         Shape ``(3,)``.
     lam : float
-        ``lambda``, the initial growth rate of ``|u|`` [m s^-2].
+        ``lambda``, the initial growth rate of ``|u|`` [m s-2].
     """
     W = np.asarray(W, dtype=float)
     K = np.array([1.0, 1.0, float(kappa)])
@@ -787,7 +787,7 @@ def reference_planar(
     ----------
     plates : sequence of RefPlate
     frequency, acceleration, duration : array_like
-        Drive schedule: one entry per segment [Hz, m s^-2, s].
+        Drive schedule: one entry per segment [Hz, m s-2, s].
     phase : float
         Drive phase at ``t = 0`` [rad].
     cs, ck, g : float
@@ -808,7 +808,7 @@ def reference_planar(
         ``|u| = stop_tol * g / w`` (``w`` the fastest drive pulsation); the rest of the
         slip is added to first order.
     r_switch : float, optional
-        Scale [m/s] of the blow-up ``dt / dsigma = r / (r + r_switch)`` of phase B;
+        Scale [m s-1] of the blow-up ``dt / dsigma = r / (r + r_switch)`` of phase B;
         default ``0.02 g / w``.
     max_steps : int
         Step budget of each phase call, and budget of phase calls.
@@ -945,7 +945,7 @@ def _pack(rows, outcome, t_end, events, steps, P):
 
 
 def _demo():  # pragma: no cover - manual
-    """Convergence tables on the steering disk (forward drive, 14.2 Hz, 7 m s^-2)."""
+    """Convergence tables on the steering disk (forward drive, 14.2 Hz, 7 m s-2)."""
     R = 0.02
     head = RefPlate(14.44, 17.5, 64.0, 0.08, 0.0, (R, 0.0))
     tail = RefPlate(8.5, 10.0, 64.0, 0.05, 90.0, (-R, 0.0))

@@ -171,9 +171,9 @@ class TwoWayModel:
     Parameters
     ----------
     structure : Structure or mapping
-        ``f0, Q, alpha [deg], M, cs, ck, g``.
+        ``f0, Q, alpha [degree], M, cs, ck, g``.
     f, a : float
-        Drive frequency [Hz] and acceleration amplitude [m s^-2].
+        Drive frequency [Hz] and acceleration amplitude [m s-2].
     coupling : {"two-way", "one-way"}
         ``"one-way"`` switches the coupling off (``D_s = 1``, no ``-x'' sin(alpha)``).
     """
@@ -609,7 +609,7 @@ def period_map(model: TwoWayModel, z: tuple, periods: int = 1, record: bool = Fa
     model : TwoWayModel
         Parameters (at the current precision).
     z : tuple of mpf
-        ``(delta [m], delta' [m s^-1], v [m s^-1])`` at drive phase 0.
+        ``(delta [m], delta' [m s-1], v [m s-1])`` at drive phase 0.
     periods : int
         Drive periods to advance.
     record : bool
@@ -717,7 +717,7 @@ class ReferenceOrbit:
     Attributes
     ----------
     velocity : mpf
-        Mean velocity over the orbit [m s^-1]; exactly 0 when ``STATIC``, NaN when
+        Mean velocity over the orbit [m s-1]; exactly 0 when ``STATIC``, NaN when
         the status is ``LIFT_OFF``, ``FRICTION_PARADOX`` or ``NOT_CONVERGED``.
     status : str
         One of :data:`STATUSES`.
@@ -788,9 +788,9 @@ def reference_orbit(
     Parameters
     ----------
     structure : Structure or mapping
-        ``f0, Q, alpha [deg], M, cs, ck (None: cs), g``.
+        ``f0, Q, alpha [degree], M, cs, ck (None: cs), g``.
     f, a : float
-        Drive frequency [Hz] and acceleration amplitude [m s^-2].
+        Drive frequency [Hz] and acceleration amplitude [m s-2].
     coupling : {"two-way", "one-way"}
         ``"one-way"`` switches the coupling off (the paper's model).
     dps : int
@@ -891,7 +891,7 @@ def _find_orbit(model: TwoWayModel, z: tuple, max_period: int) -> ReferenceOrbit
 
 _PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08, "cs": 0.25, "ck": 0.25, "g": 9.8}
 
-#: ``(name, structure parameters, f [Hz], a [m s^-2], note)`` of the cached points.
+#: ``(name, structure parameters, f [Hz], a [m s-2], note)`` of the cached points.
 POINTS: tuple = (
     ("paper-13-8.5", _PAPER, 13.0, 8.5, "stick-slip, forward (one-way +2.195 mm/s)"),
     ("paper-14.5-9", _PAPER, 14.5, 9.0, "two slips per period; one-way goes backward"),

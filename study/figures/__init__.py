@@ -18,9 +18,10 @@ from pathlib import Path
 
 import xarray as xr
 
+from study.figures.record import DRAWN_FROM, drawn_from
 from study.selection import select
 
-__all__ = ["FIGURES", "FigureError", "draw_figure"]
+__all__ = ["FIGURES", "FigureError", "draw_figure", "figure_request", "is_current"]
 
 
 class FigureError(ValueError):
@@ -172,8 +173,62 @@ def draw_figure(name: str, dataset: xr.Dataset, output: str | Path, *,
             f"{figure.source}"
         )
     sel = list(sel)
+    request = figure_request(name, dataset, sel=sel, points=points,
+                             measurements=measurements)
     if sel:
         dataset = select(dataset, sel, source=source)
+    else:
+        dataset = dataset.copy(deep=False)  # the record below is this drawing's own
+    dataset.attrs[DRAWN_FROM] = request
     module = importlib.import_module(figure.module)
     kwargs = {k: v for k, v in options.items() if v}
     return module.draw(dataset, Path(output), **kwargs)
+
+
+def figure_request(name: str, dataset: xr.Dataset, *, sel: Iterable[str] = (),
+                   points: Sequence[tuple[float, float]] | None = None,
+                   measurements: Sequence[str | Path] | None = None) -> str:
+    """What a drawing of figure ``name`` depends on, as one JSON line: the figure, the
+    result's content checksum, the options, every measurement file's sha256 and the
+    code fingerprint of the figure's modules.
+
+    Two drawings with the same request draw the same picture; :func:`draw_figure`
+    stores it in the PNG, and :func:`is_current` compares against it.
+    """
+    import hashlib
+    import json
+
+    from study.fingerprint import code_fingerprint
+
+    if name not in FIGURES:
+        raise FigureError(f"unknown figure {name!r}; figures: {', '.join(FIGURES)}")
+    files = []
+    for path in measurements or ():
+        try:
+            digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        except OSError:
+            digest = None  # unreadable: draw_figure says why
+        files.append([str(path), digest])
+    code = code_fingerprint(("study.figures", FIGURES[name].module)).sha256
+    return json.dumps({
+        "figure": name,
+        "content_sha256": dataset.attrs.get("study_content_sha256"),
+        "sel": list(sel),
+        "points": [list(map(float, p)) for p in points or ()],
+        "measurements": files,
+        "code_sha256": code,
+    }, sort_keys=True)
+
+
+def is_current(output: str | Path, request: str) -> bool:
+    """Whether ``output.png`` and ``output.pdf`` exist and the PNG was drawn for exactly
+    ``request`` (:func:`figure_request`): same figure, data, options and code."""
+    stem = Path(output)
+    if stem.suffix in (".png", ".pdf"):
+        stem = stem.with_suffix("")
+    import json
+
+    if json.loads(request).get("content_sha256") is None:
+        return False  # data without a checksum: nothing proves it is the same data
+    pdf = stem.with_suffix(".pdf")
+    return pdf.is_file() and drawn_from(stem.with_suffix(".png")) == request

@@ -14,6 +14,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from study.figures.record import DRAWN_FROM
 from study.paper import PAPER_POINTS, is_paper_structure
 from study.selection import available
 from study.status import Status
@@ -76,30 +77,55 @@ def save(fig: plt.Figure, output: str | Path, dataset: xr.Dataset, title: str) -
     stem = Path(output)
     if stem.suffix in (".png", ".pdf"):
         stem = stem.with_suffix("")
-    stem.parent.mkdir(parents=True, exist_ok=True)
     source = provenance_line(dataset)
     selected = selection_text(dataset)
     if selected and selected not in title:
         title = f"{title} ({selected})"
-    written = []
-    png = stem.with_suffix(".png")
-    fig.savefig(png, dpi=150, metadata={
-        "Title": title,
-        "Description": source,
-        "Source": f"study_spec_sha256={dataset.attrs.get('study_spec_sha256', '')}",
-        "Software": f"study {dataset.attrs.get('study_version', '')}",
-    })
-    written.append(png)
-    pdf = stem.with_suffix(".pdf")
-    fig.savefig(pdf, metadata={
-        "Title": title,
-        "Subject": source,
-        "Keywords": f"study_spec_sha256={dataset.attrs.get('study_spec_sha256', '')}",
-        "Creator": f"study {dataset.attrs.get('study_version', '')}",
-    })
-    written.append(pdf)
-    plt.close(fig)
+    spec_hash = f"study_spec_sha256={dataset.attrs.get('study_spec_sha256', '')}"
+    software = f"study {dataset.attrs.get('study_version', '')}"
+    png_metadata = {"Title": title, "Description": source, "Source": spec_hash,
+                    "Software": software}
+    request = dataset.attrs.get(DRAWN_FROM)
+    if request:
+        png_metadata[DRAWN_FROM] = request
+    pdf_metadata = {"Title": title, "Subject": source, "Keywords": spec_hash,
+                    "Creator": software}
+    try:
+        written = [_save_atomic(fig, stem.with_suffix(".png"), dpi=150,
+                                metadata=png_metadata),
+                   _save_atomic(fig, stem.with_suffix(".pdf"), metadata=pdf_metadata)]
+    finally:
+        plt.close(fig)
     return written
+
+
+def _save_atomic(fig: plt.Figure, path: Path, **options) -> Path:
+    """``fig.savefig(path)`` through a temporary in the same folder, renamed over
+    ``path``: a killed run never leaves a half-written figure under its name."""
+    import os
+    import tempfile
+
+    from study.figures import FigureError
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix,
+                                        dir=path.parent)
+    except OSError as err:
+        raise FigureError(f"{path}: cannot write the figure ({err.strerror or err})") from None
+    os.close(handle)
+    temporary = Path(name)
+    try:
+        fig.savefig(temporary, format=path.suffix[1:], **options)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(temporary, 0o666 & ~umask)
+        os.replace(temporary, path)
+    except OSError as err:
+        raise FigureError(f"{path}: cannot write the figure ({err.strerror or err})") from None
+    finally:
+        temporary.unlink(missing_ok=True)
+    return path
 
 
 def structure_from_dataset(dataset: xr.Dataset, **at: int):
@@ -121,7 +147,10 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
             del params["m_add"]
     if "ck" not in params and "cs" in params:
         params["ck"] = params["cs"]
-    return study.Structure(**params)
+    from study.structure import tilt_warnings
+
+    with tilt_warnings(False):  # a result file's tilts are in degree by its schema
+        return study.Structure(**params)
 
 
 #: Statuses with a valid velocity (0 when static).

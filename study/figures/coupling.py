@@ -27,7 +27,7 @@ from study.figures.common import (
 
 __all__ = ["draw"]
 
-#: Drive acceleration of the velocity curves [m s^-2] (nearest grid value is used).
+#: Drive acceleration of the velocity curves [m s-2] (nearest grid value is used).
 CURVE_ACCELERATION = 8.5
 
 #: The variables the figure draws, which keep a selected M, f or a as a dimension.
@@ -37,7 +37,7 @@ _COUPLINGS = (("velocity_one_way", "status_one_way", "--"), ("velocity", "status
 
 
 def _velocity(dataset: xr.Dataset, name: str, status_name: str, at: dict) -> np.ndarray:
-    """Velocity [mm/s] at ``at``, NaN where it is not valid (lift-off)."""
+    """Velocity [mm s-1] at ``at``, NaN where it is not valid (lift-off)."""
     v = dataset[name].isel(at).values
     ok = np.isin(dataset[status_name].isel(at).values, VALID)
     return np.where(ok, 1e3 * v, np.nan)

@@ -15,6 +15,7 @@ from study.figures.common import plt, restore_dim, save, selection_text
 from study.fit import fitted_structure, structure_groups
 from study.physics import thresholds
 from study.solver import steady_velocity
+from study.units import spoken
 
 __all__ = ["draw"]
 
@@ -93,12 +94,12 @@ def draw(dataset: xr.Dataset, output: str | Path) -> list[Path]:
                     ax.annotate(f"{fi:g} Hz", (grid[-1], v[-1] * 1e3), fontsize=7,
                                 color=colour)
                 ax.set_xlabel("drive acceleration a [m s$^{-2}$]")
-                ax.set_ylabel(f"steady velocity [mm/s] ({coupling})")
+                ax.set_ylabel(f"steady velocity [mm s$^{{-1}}$] ({coupling})")
                 ax.axhline(0.0, color="0.7", lw=0.6)
         if name == "threshold":
             ax.legend(fontsize=7)
     text = ", ".join(
-        f"{p} = {e:.4g} ± {se:.2g}" + ("" if u == "1" else f" {u}")
+        f"{p} = {e:.4g} ± {se:.2g}{spoken(str(u))}"
         for p, e, se, u in zip(dataset["parameter"].values, dataset["estimate"].values,
                                dataset["standard_error"].values,
                                dataset["parameter_units"].values, strict=True))

@@ -127,7 +127,7 @@ def draw(dataset: xr.Dataset, output: Path,
         the structure's parameters as scalar coordinates.
     output : pathlib.Path
         File stem.
-    points : sequence of (f [Hz], a [m s^-2]), optional
+    points : sequence of (f [Hz], a [m s-2]), optional
         The points (default: the paper's four for the paper's structure, else
         :func:`regime_points`).
 

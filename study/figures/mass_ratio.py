@@ -5,7 +5,7 @@ lift-off acceleration dashed in the same colour). Right: the lowest threshold ov
 the frequency axis of the file against the mass ratio ``M = m1 / (m0 + m_add)``,
 with the closed form at resonance ``g / sqrt(1 + x^2)``
 (``x = max |x_pm|``, :func:`study.analysis.collapse_variable`) and the exact minimum
-over ``f`` of the closed-form thresholds (:func:`study.analysis.minimum_threshold`)
+over ``f`` of the closed-form thresholds (:func:`study.analysis.lowest_threshold`)
 over a fine range of ``M`` for the same structure. The paper's statement (about g/2 at
 resonance for M = 6.6 %) is drawn only for the paper's structure (:mod:`study.paper`,
 ``M`` aside). More than 8 loads get a colour bar of ``M`` instead of a legend entry
@@ -25,7 +25,7 @@ import numpy as np
 import xarray as xr
 
 import study
-from study.analysis import minimum_threshold, resonance_threshold
+from study.analysis import lowest_threshold, resonance_threshold
 from study.figures import FigureError, measured
 from study.figures.common import (
     coupling_label,
@@ -201,7 +201,7 @@ def draw(dataset: xr.Dataset, output: Path,
     fine = np.linspace(min(1e-3, 0.5 * spanned.min()), min(1.0, 1.25 * spanned.max()), 121)
     at_resonance = np.array([min(resonance_threshold(replace(base, M=m))) for m in fine])
     f_range = (float(f[0]), float(f[-1]))
-    exact_min = np.array([minimum_threshold(replace(base, M=m), f_range)[0] for m in fine])
+    exact_min = np.array([lowest_threshold(replace(base, M=m), f_range)[0] for m in fine])
     bx.plot(100 * fine, at_resonance, color="k", lw=1.6,
             label="closed form at $f_0$: $g/\\sqrt{1+x^2}$, $x = \\max|x_\\pm|$")
     bx.plot(100 * fine, exact_min, color="0.45", lw=1.2, ls="--",
@@ -236,7 +236,7 @@ def draw(dataset: xr.Dataset, output: Path,
                     bbox=_BOX, arrowprops={"arrowstyle": "->", "color": "tab:red", "lw": 0.8})
         at_paper = replace(base, M=PAPER_M)
         paper_res = min(resonance_threshold(at_paper))
-        paper_min = minimum_threshold(at_paper, f_range)[0]
+        paper_min = lowest_threshold(at_paper, f_range)[0]
         bx.text(0.7, 0.83,
                 f"model at M = 6.6 %: {paper_res:.2f} m s$^{{-2}}$ = {paper_res / g:.2f} g "
                 f"at $f_0$,\n{paper_min:.2f} m s$^{{-2}}$ = {paper_min / g:.2f} g at the "

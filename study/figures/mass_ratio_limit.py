@@ -1,7 +1,7 @@
 """The limit ``M -> 1``: regime maps for a growing resonant share of the mass.
 
 One small regime map per mass ratio (up to six, 2 x 3): the steady mean velocity
-over ``(f, a)`` in mm/s on its own diverging scale, the thresholds ``a*_pm``, the
+over ``(f, a)`` in mm s-1 on its own diverging scale, the thresholds ``a*_pm``, the
 lift-off region (grey, no velocity: outside the model), continuous sliding
 (status ``continuous_sliding``, hatched and outlined), points without a periodic
 orbit (black) and the zero-velocity frontier ``f*(a)`` as black dots. The paper: as
@@ -43,7 +43,7 @@ _LIFT_OFF_GREY = "0.72"
 
 
 def valid_velocity_mm_s(velocity: np.ndarray, status: np.ndarray) -> np.ma.MaskedArray:
-    """Velocity [mm/s], masked wherever it is not a valid steady velocity.
+    """Velocity [mm s-1], masked wherever it is not a valid steady velocity.
 
     Lift-off and not-converged points (and any NaN) are masked: they are drawn as
     their own regions, never as a velocity.

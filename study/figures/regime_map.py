@@ -71,7 +71,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     dataset = restore_dim(dataset, "branch", ("frontier_frequency",))
     f = dataset["f"].values
     a = dataset["a"].values
-    velocity = 1e3 * dataset["velocity"].transpose("a", "f").values  # mm/s over (a, f)
+    velocity = 1e3 * dataset["velocity"].transpose("a", "f").values  # mm s-1 over (a, f)
     status = dataset["status"].transpose("a", "f").values
     valid = np.isin(status, VALID)
     lifted = status == Status.LIFT_OFF

@@ -24,6 +24,7 @@ from matplotlib.patches import Circle, Patch
 
 from study.figures import FigureError
 from study.figures.common import restore_dim, save, selected_keys, selection_text
+from study.units import DEGREE
 
 __all__ = [
     "LABEL_COLORS",
@@ -130,7 +131,7 @@ def value_range_text(values: np.ndarray) -> str:
 
 
 def angle_values(dataset: xr.Dataset, name: str, figure: str,
-                 units: str = "degree") -> np.ndarray:
+                 units: str = DEGREE) -> np.ndarray:
     """The values of an angle (or angular rate) variable, which must be in ``units``.
 
     Raises
@@ -330,7 +331,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         right.plot(time[ends], degrees[ends], marker, ls="none", color="tab:red",
                    mfc="none" if marker == "o" else "tab:red", ms=9, mew=1.8, clip_on=False)
     right.set_xlabel("time t [s]")
-    right.set_ylabel("heading [deg] (counterclockwise from +x, unwrapped)")
+    right.set_ylabel("heading [degree] (counterclockwise from +x, unwrapped)")
     right.grid(color="0.92", lw=0.6)
     if time.size > 1:
         right.set_xlim(float(time[0]), float(time[-1]) if time[-1] > time[0] else None)

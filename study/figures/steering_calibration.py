@@ -2,7 +2,7 @@
 
 Drawn from a ``steering-calibration`` result file alone (``study figure
 steering-calibration FILE``), a calibration scene over drive frequency ``f`` and
-acceleration ``a``. Top: the forward speed; bottom: the turn rate (degree s^-1, as
+acceleration ``a``. Top: the forward speed; bottom: the turn rate (degree s-1, as
 the file stores it), one line per acceleration. Points where the disk lifts off or the motion
 did not converge have no speed and are marked on the zero line. Dotted lines mark
 the paper's command frequencies: forward 14.2 Hz, backward 15.2 Hz, turns 7.2 and
@@ -25,6 +25,7 @@ from study.figures import FigureError
 from study.figures.common import require_axis, restore_dim, save, selection_text
 from study.figures.steering import angle_values, check_scene_kind, flag_codes, flag_names
 from study.status import Status
+from study.units import DEGREE_PER_SECOND
 
 __all__ = ["COMMANDS", "draw"]
 
@@ -71,8 +72,8 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
             )
     f = dataset["f"].values
     a = dataset["a"].values
-    forward = 1e3 * dataset["forward_speed"].transpose("a", "f").values  # mm/s over (a, f)
-    angle_values(dataset, "turn_rate", "steering-calibration", "degree s-1")
+    forward = 1e3 * dataset["forward_speed"].transpose("a", "f").values  # mm s-1 over (a, f)
+    angle_values(dataset, "turn_rate", "steering-calibration", DEGREE_PER_SECOND)
     turn = dataset["turn_rate"].transpose("a", "f").values  # degree/s
     status = flag_codes(dataset["status"].transpose("a", "f"), missing=Status.NOT_CONVERGED)
     names = flag_names(dataset["status"], STATUS_NAMES)
@@ -107,7 +108,7 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
 
     top.set_ylabel("forward speed [mm s$^{-1}$]")
     top.set_title("along the head-tail axis (> 0: forward)", fontsize=10)
-    bottom.set_ylabel("turn rate [deg s$^{-1}$]")
+    bottom.set_ylabel("turn rate [degree s$^{-1}$]")
     bottom.set_title("rotation of the heading (> 0: counterclockwise)", fontsize=10)
     bottom.set_xlabel("drive frequency f [Hz]")
 

@@ -8,7 +8,7 @@ dense output. The drive is a schedule of segments with a continuous phase
 
 A model's right-hand side is a numba function ``rhs(model, mode, drive, y, out)``:
 ``model`` is whatever the model needs (an array or a tuple of arrays), ``mode`` its
-contact mode, ``drive`` the table's acceleration [m s^-2] at the stage's time.
+contact mode, ``drive`` the table's acceleration [m s-2] at the stage's time.
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ MAX_FACTOR = 5.0
 
 @njit(cache=True, nogil=True, inline="always")
 def table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0):
-    """Table acceleration ``A = a cos(phi)`` [m s^-2] and ``-dA/dt = a w sin(phi)``
+    """Table acceleration ``A = a cos(phi)`` [m s-2] and ``-dA/dt = a w sin(phi)``
     [m s^-3] at time ``t`` [s] in segment ``seg``."""
     phase = seg_phase0[seg] + seg_omega[seg] * (t - seg_t0[seg])
     return seg_a[seg] * math.cos(phase), seg_a[seg] * seg_omega[seg] * math.sin(phase)

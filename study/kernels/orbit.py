@@ -58,8 +58,8 @@ TWO_PI = 2.0 * math.pi
 EPS = 2.220446049250313e-16
 
 # Indices of the structure vector.
-S_DAMPING = 0  # c = w0 / Q [s^-1]
-S_STIFFNESS = 1  # k = w0^2 [s^-2]
+S_DAMPING = 0  # c = w0 / Q [s-1]
+S_STIFFNESS = 1  # k = w0^2 [s-2]
 S_COS = 2
 S_SIN = 3
 S_MASS = 4
@@ -80,8 +80,8 @@ M_PIM = 6  # particular response Im
 M_OFFSET = 7  # constant part of the particular solution, G / k [m]
 M_K = 8  # K_s = M (sin + s ck cos) (0 for the stick)
 M_SIGN = 9
-M_FORCE = 10  # forcing amplitude F [m s^-2]
-M_GCONST = 11  # constant forcing G [m s^-2]
+M_FORCE = 10  # forcing amplitude F [m s-2]
+M_GCONST = 11  # constant forcing G [m s-2]
 # Bounds of the event functions of this mode (per point constants): the sinusoid's
 # amplitude times w^2, the dual energy norms of the homogeneous functional and of its
 # second and third derivatives, and the sinusoid's amplitude and phase (for the arcs).
@@ -167,7 +167,7 @@ N_ACC = 9
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def mode_table(structure, omega, a, table):
-    """Fill ``table`` (3 x N_MODE) for drive ``omega`` [rad s^-1], ``a`` [m s^-2].
+    """Fill ``table`` (3 x N_MODE) for drive ``omega`` [rad s-1], ``a`` [m s-2].
 
     Returns
     -------
@@ -445,7 +445,7 @@ def _search(structure, table, j, omega, a, t0, sin_w0, h0, hd0, v0, dd0, t_from,
     contact mode ``j`` (row of ``table``) starting at ``t0`` [s] with homogeneous state
     ``(h0, hd0)``, speed ``v0`` and ``delta'(t0) = dd0``, looking from ``t_from``;
     ``sin_w0 = sin(w t0)``.
-    Lift-off is ``n < g - lift_level`` [m s^-2] (``lift_level = g``: ``n < 0``).
+    Lift-off is ``n < g - lift_level`` [m s-2] (``lift_level = g``: ``n < 0``).
 
     Returns
     -------
@@ -691,7 +691,7 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_marg
     Jacobian when ``want_jac``, and the rows of ``grad`` (3x3) receive the gradients
     of the displacement and of the forward and backward slip times with respect to
     the state the Jacobian started from. Lift-off is watched when ``lift_margin >= 0``:
-    ``n < -lift_margin`` [m s^-2] ends the stretch.
+    ``n < -lift_margin`` [m s-2] ends the stretch.
 
     Returns
     -------
@@ -1043,7 +1043,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _scales(structure, table, omega, a):
-    """Natural sizes of ``(delta, delta', v)`` for residuals [m, m s^-1, m s^-1]."""
+    """Natural sizes of ``(delta, delta', v)`` for residuals [m, m s-1, m s-1]."""
     amp = math.hypot(table[0, M_PRE], table[0, M_PIM])
     k = structure[S_STIFFNESS]
     size = max(amp, a / (k + omega * omega), 1e-300)
@@ -1316,7 +1316,7 @@ def attractors_point(structure, omega, a, lifted, max_events, max_iterations, ou
 
     ``out`` receives ``(count, spread, starts_converged)``: the number of distinct
     orbits (LIFT_OFF or FRICTION_PARADOX outcomes count as one outcome each), the
-    spread of their mean velocities [m s^-1], and how many starts reached an outcome.
+    spread of their mean velocities [m s-1], and how many starts reached an outcome.
     Starts off the table (``n < 0``) are skipped.
     """
     row = np.empty(N_OUT)

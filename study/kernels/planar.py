@@ -86,8 +86,8 @@ PATH = 6
 MODES = 7
 
 # Columns of the plate parameter table.
-PL_DAMPING = 0  # w0/Q [s^-1]
-PL_STIFFNESS = 1  # w0^2 [s^-2]
+PL_DAMPING = 0  # w0/Q [s-1]
+PL_STIFFNESS = 1  # w0^2 [s-2]
 PL_COS = 2  # cos(alpha)
 PL_SIN = 3  # sin(alpha)
 PL_MASS = 4  # M
@@ -103,7 +103,7 @@ DK_CK = 1
 DK_G = 2
 DK_LENGTH = 3  # limit-surface length c [m]
 DK_GYRATION2 = 4  # rho^2 [m^2]
-DK_SLAVED = 5  # twist below which its direction is the slaved one [m s^-1]
+DK_SLAVED = 5  # twist below which its direction is the slaved one [m s-1]
 DK_TWO_WAY = 6  # 1.0 for two-way coupling of the plates
 N_DISK_PARAMETERS = 7
 
@@ -288,9 +288,9 @@ def _two_way(plates, disk, y, loads, direction, accel):
     g_i + ck cos(alpha_i) d) g_i^T`` (``d`` the friction direction, unscaled: ``(d_x,
     d_y, c d_3)``). ``loads`` are the one-way loads (:func:`_loads`).
 
-    Fills ``accel = (a_x, a_y, spin')`` in the world frame [m s^-2, rad s^-2] and
+    Fills ``accel = (a_x, a_y, spin')`` in the world frame [m s-2, rad s-2] and
     ``q`` in ``accel[3:6]``; returns ``(n, det A)`` with ``n`` the coupled normal force
-    per unit mass [m s^-2]. ``det A <= 0`` is Painleve's paradox (then ``accel`` is
+    per unit mass [m s-2]. ``det A <= 0`` is Painleve's paradox (then ``accel`` is
     not filled).
     """
     heading = y[HEADING]

@@ -453,7 +453,7 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_r
     Returns
     -------
     status, reason, mean, slips, forward, backward, period
-        ``mean`` is the orbit's mean of ``w v`` [m s^-2] (divide by ``w``),
+        ``mean`` is the orbit's mean of ``w v`` [m s-2] (divide by ``w``),
         ``slips`` the slip events per drive period, ``forward``/``backward`` the
         fractions of the period spent slipping each way, ``period`` the orbit's
         period in drive periods.

@@ -67,8 +67,8 @@ from study.kernels.events import first_event, record
 from study.kernels.events import workspace as event_workspace
 
 # Indices of the model parameter vector ``p``.
-P_DAMPING = 0  # w0 / Q [s^-1]
-P_STIFFNESS = 1  # w0^2 [s^-2]
+P_DAMPING = 0  # w0 / Q [s-1]
+P_STIFFNESS = 1  # w0^2 [s-2]
 P_COS = 2
 P_SIN = 3
 P_MASS = 4  # M

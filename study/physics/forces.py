@@ -1,9 +1,11 @@
 """Mode response, contact forces, motion thresholds and lift-off (paper eqs. 2-5).
 
 Every function is plain numpy and broadcasts over the drive frequency ``f`` and
-acceleration amplitude ``a`` (and time ``t`` where it appears). Forces are per
-unit total mass [m s^-2], in the table frame, with the mode on its steady
-harmonic response::
+acceleration amplitude ``a`` (and time ``t`` where it appears): it returns numpy arrays
+of the broadcast shape of its inputs, or numpy scalars (``numpy.float64``,
+``numpy.complex128``) when they are all scalars, as numpy's ufuncs and scipy's
+functions do. Forces are per unit total mass [m s-2], in the table frame, with the
+mode on its steady harmonic response::
 
     n(t)   = g + Re[N e^{i w t}]      N = -a (1 + w^2 M cos^2(alpha) G)
     tau(t) =     Re[T e^{i w t}]      T =  a w^2 M sin(alpha) cos(alpha) G
@@ -50,8 +52,9 @@ def mode_response(structure: Structure, f: ArrayLike) -> NDArray[np.complex128]:
 
     Returns
     -------
-    numpy.ndarray of complex
-        ``G = 1 / (w0^2 - w^2 + i w0 w / Q)`` [s^2].
+    numpy.ndarray of complex128
+        ``G = 1 / (w0^2 - w^2 + i w0 w / Q)`` [s2], the shape of ``f`` (a
+        ``numpy.complex128`` for a scalar ``f``).
     """
     w = _omega(f)
     w0 = structure.omega0
@@ -76,12 +79,13 @@ def force_amplitudes(
     f : array_like
         Drive frequency [Hz], > 0.
     a : array_like
-        Drive acceleration amplitude [m s^-2], >= 0.
+        Drive acceleration amplitude [m s-2], >= 0.
 
     Returns
     -------
-    N, T : numpy.ndarray of complex
-        ``n(t) = g + Re[N e^{i w t}]`` and ``tau(t) = Re[T e^{i w t}]`` [m s^-2].
+    N, T : numpy.ndarray of complex128
+        ``n(t) = g + Re[N e^{i w t}]`` and ``tau(t) = Re[T e^{i w t}]`` [m s-2], the
+        broadcast shape of ``f`` and ``a`` (numpy scalars for scalars).
     """
     a = as_acceleration(a)
     k = _coupling(structure, f)
@@ -94,7 +98,7 @@ def force_amplitudes(
 def normal_force(
     structure: Structure, f: ArrayLike, a: ArrayLike, t: ArrayLike
 ) -> NDArray[np.float64]:
-    """Normal contact force per unit mass ``n(t)`` [m s^-2] (paper eq. 2).
+    """Normal contact force per unit mass ``n(t)`` [m s-2] (paper eq. 2).
 
     Parameters
     ----------
@@ -103,14 +107,15 @@ def normal_force(
     f : array_like
         Drive frequency [Hz].
     a : array_like
-        Drive acceleration amplitude [m s^-2].
+        Drive acceleration amplitude [m s-2].
     t : array_like
         Time [s], phase origin at a maximum of the table's upward acceleration.
 
     Returns
     -------
-    numpy.ndarray
-        ``n(t)`` [m s^-2]; the model holds only where it is positive.
+    numpy.ndarray of float64
+        ``n(t)`` [m s-2], the broadcast shape of ``f``, ``a`` and ``t`` (a
+        ``numpy.float64`` for scalars); the model holds only where it is positive.
     """
     normal, _ = force_amplitudes(structure, f, a)
     phase = np.exp(1j * _omega(f) * np.asarray(t, dtype=np.float64))
@@ -120,14 +125,15 @@ def normal_force(
 def tangential_force(
     structure: Structure, f: ArrayLike, a: ArrayLike, t: ArrayLike
 ) -> NDArray[np.float64]:
-    """Tangential contact force per unit mass ``tau(t)`` [m s^-2] (paper eq. 3).
+    """Tangential contact force per unit mass ``tau(t)`` [m s-2] (paper eq. 3).
 
     Parameters are those of :func:`normal_force`.
 
     Returns
     -------
-    numpy.ndarray
-        ``tau(t)`` [m s^-2], positive forward.
+    numpy.ndarray of float64
+        ``tau(t)`` [m s-2], positive forward, the broadcast shape of ``f``, ``a`` and
+        ``t`` (a ``numpy.float64`` for scalars).
     """
     _, tangential = force_amplitudes(structure, f, a)
     phase = np.exp(1j * _omega(f) * np.asarray(t, dtype=np.float64))
@@ -158,9 +164,11 @@ def thresholds(
 
     Returns
     -------
-    a_plus, a_minus : numpy.ndarray
-        Thresholds [m s^-2] for ``tau = +cs n`` (forward) and ``tau = -cs n``
-        (backward) slips.
+    a_plus, a_minus : numpy.ndarray of float64
+        Thresholds [m s-2] for ``tau = +cs n`` (forward) and ``tau = -cs n``
+        (backward) slips, the shape of ``f`` (``numpy.float64`` for a scalar ``f``).
+        The same with either coupling: below them the structure sticks and the
+        sliding base forces nothing.
     """
     g = structure.g
     return g / _threshold_factor(structure, f, +1.0), g / _threshold_factor(structure, f, -1.0)
@@ -178,9 +186,10 @@ def lift_off_acceleration(structure: Structure, f: ArrayLike) -> NDArray[np.floa
 
     Returns
     -------
-    numpy.ndarray
-        ``a_lift = g / |1 + w^2 M cos^2(alpha) G|`` [m s^-2]. Above it the
-        structure leaves the table and the model does not apply.
+    numpy.ndarray of float64
+        ``a_lift = g / |1 + w^2 M cos^2(alpha) G|`` [m s-2], the shape of ``f``
+        (``numpy.float64`` for a scalar ``f``). Above it the structure leaves the
+        table and the model does not apply.
     """
     k = _coupling(structure, f)
     return structure.g / np.abs(1.0 + k * np.cos(structure.alpha_rad))
@@ -197,7 +206,7 @@ def release_amplitudes(
     Returns
     -------
     A_plus, A_minus : numpy.ndarray of complex
-        [m s^-2].
+        [m s-2].
     """
     normal, tangential = force_amplitudes(structure, f, a)
     return tangential - structure.cs * normal, -tangential - structure.cs * normal
@@ -213,7 +222,7 @@ def slip_amplitudes(
     Returns
     -------
     B_plus, B_minus : numpy.ndarray of complex
-        [m s^-2].
+        [m s-2].
     """
     normal, tangential = force_amplitudes(structure, f, a)
     return tangential - structure.ck * normal, -tangential - structure.ck * normal

@@ -5,16 +5,18 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from study.inputs import as_real_array
+from study.units import HERTZ, METRE_PER_SECOND_SQUARED
+
 
 def _checked(
     name: str, values: ArrayLike, units: str, lower: float, inclusive: bool
 ) -> NDArray[np.float64]:
     """``values`` as float64, finite and above ``lower``; else a ValueError naming the
-    quantity, the first offending value, its index and the allowed range."""
-    try:
-        array = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be real numbers [{units}], got {values!r}") from None
+    quantity, the first offending value, its index and the allowed range (a TypeError,
+    :class:`study.inputs.InputTypeError`, for strings, booleans, complex numbers or
+    dates)."""
+    array = as_real_array(name, values, units)
     with np.errstate(invalid="ignore"):
         bad = ~np.isfinite(array) | ((array < lower) if inclusive else (array <= lower))
     if bad.any():
@@ -33,16 +35,22 @@ def as_frequency(f: ArrayLike) -> NDArray[np.float64]:
     ------
     ValueError
         Naming the first offending value, its index and the allowed range.
+    TypeError
+        For strings, booleans, complex numbers or dates
+        (:class:`study.inputs.InputTypeError`).
     """
-    return _checked("drive frequency f", f, "Hz", 0.0, inclusive=False)
+    return _checked("drive frequency f", f, HERTZ, 0.0, inclusive=False)
 
 
 def as_acceleration(a: ArrayLike) -> NDArray[np.float64]:
-    """Validate drive acceleration amplitudes: finite and >= 0 [m s^-2].
+    """Validate drive acceleration amplitudes: finite and >= 0 [m s-2].
 
     Raises
     ------
     ValueError
         Naming the first offending value, its index and the allowed range.
+    TypeError
+        For strings, booleans, complex numbers or dates
+        (:class:`study.inputs.InputTypeError`).
     """
-    return _checked("drive acceleration a", a, "m s^-2", 0.0, inclusive=True)
+    return _checked("drive acceleration a", a, METRE_PER_SECOND_SQUARED, 0.0, inclusive=True)

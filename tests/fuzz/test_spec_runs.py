@@ -782,7 +782,7 @@ def estimated_seconds(spec: Any) -> float:
             return options["a"].size * options["max_periods"] * sum(
                 period(f) for f in options["f"])
         legs = np.diff(np.vstack([options["start"][:2], options["waypoints"]]), axis=0)
-        # At 5 mm/s, every turn 1 s, flown by 3 strategies and corrected 5 times.
+        # At 5 mm s-1, every turn 1 s, flown by 3 strategies and corrected 5 times.
         drive = float(np.hypot(legs[:, 0], legs[:, 1]).sum()) / 5e-3 + 1.0 * len(legs)
         flights = 3 * (options["realisations"] + 1) + 5 * (options["realisations"] + 2)
         frequencies = options["frequencies"].values()

@@ -62,6 +62,7 @@ from study import NonConvergence, Status
 from study.analysis import FRONTIER_CROSSING
 from study.kernels.steady import CYCLE_TOLERANCE
 from study.physics import release_amplitudes, slip_amplitudes
+from study.structure import tilt_warnings
 from tests.conftest import PAPER
 
 EPS = float(np.finfo(float).eps)
@@ -1000,14 +1001,15 @@ def _random_points(seed: int):
     points = []
     for i in range(RANDOM_POINTS):
         cs = float(np.exp(rng.uniform(np.log(0.1), 0.0)))
-        s = study.Structure(
-            f0=14.44,
-            Q=float(np.exp(rng.uniform(np.log(0.5), np.log(1e4)))),
-            alpha=float(rng.uniform(-89.99, 89.99)),
-            M=float(np.exp(rng.uniform(np.log(1e-6), 0.0))),
-            cs=cs,
-            ck=cs * float(np.exp(rng.uniform(np.log(1e-3), 0.0))),
-        )
+        with tilt_warnings(False):  # small tilts are part of the space, in degree
+            s = study.Structure(
+                f0=14.44,
+                Q=float(np.exp(rng.uniform(np.log(0.5), np.log(1e4)))),
+                alpha=float(rng.uniform(-89.99, 89.99)),
+                M=float(np.exp(rng.uniform(np.log(1e-6), 0.0))),
+                cs=cs,
+                ck=cs * float(np.exp(rng.uniform(np.log(1e-3), 0.0))),
+            )
         f = s.f0 * float(np.exp(rng.uniform(np.log(0.01), np.log(100.0))))
         a_lift = float(study.lift_off_acceleration(s, f))
         a_min = float(min(study.thresholds(s, f)))

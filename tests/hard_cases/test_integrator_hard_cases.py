@@ -4,6 +4,7 @@ independent references in test_exact_solver_hard_cases.py) is the reference here
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -12,6 +13,7 @@ from numpy.testing import assert_allclose
 
 from study import Structure
 from study.analysis import frontier
+from study.inputs import SuspectInputWarning, tilt_looks_like_radians
 from study.physics import lift_off_acceleration, release_amplitudes, thresholds
 from study.solver import steady_state
 from study.status import Status
@@ -173,14 +175,23 @@ def test_near_zero_velocity_on_the_frontier():
         assert abs(float(run.velocity)) < 1e-10
 
 
+def _warns_of_radians(alpha: float):
+    if tilt_looks_like_radians(alpha):
+        return pytest.warns(SuspectInputWarning, match="looks like an angle in radians")
+    return contextlib.nullcontext()
+
+
 @pytest.mark.parametrize("alpha", [1e-3, 1.0, 89.0, 89.99])
 def test_tilt_near_flat_and_near_vertical(alpha):
-    structure = PAPER.replace(alpha=alpha)
+    # 1 degree looks like radians: the structure warns (and is built in degree).
+    with _warns_of_radians(alpha):
+        structure = PAPER.replace(alpha=alpha)
     for f in (12.0, 14.44, 16.0):
         a = _inside_window(structure, f)
         if a is not None:
             _compare(structure, f, a)
-    mirrored = PAPER.replace(alpha=-alpha)
+    with _warns_of_radians(alpha):
+        mirrored = PAPER.replace(alpha=-alpha)
     a = _inside_window(structure, 14.44)
     if a is not None:
         plus = integrated_steady_state(structure, 14.44, a, settings=SETTINGS)

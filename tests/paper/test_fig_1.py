@@ -2,7 +2,7 @@
 
 Statements checked (README, "How the solver works"): forward motion below the resonance
 (10-14.5 Hz), backward above (15-20 Hz); the minimum threshold lies near the
-resonance, a few m s^-2, well below g.
+resonance, a few m s-2, well below g.
 """
 
 from __future__ import annotations
@@ -60,5 +60,5 @@ def test_minimum_threshold_near_resonance_and_well_below_g(paper_structure):
     a_star = np.minimum(*study.thresholds(paper_structure, f))
     i = np.argmin(a_star)
     assert abs(f[i] - paper_structure.f0) < 0.5
-    assert 2.0 < a_star[i] < 6.0  # "a few m s^-2"; Fig. 1C: lowest at about 4 near 14.5 Hz
+    assert 2.0 < a_star[i] < 6.0  # "a few m s-2"; Fig. 1C: lowest at about 4 near 14.5 Hz
     assert a_star[i] < 0.5 * paper_structure.g

@@ -62,7 +62,7 @@ def test_the_two_turn_frequencies_turn_opposite_ways(disk, motions):
     left, right = motions[LEFT], motions[RIGHT]
     assert left.turn_rate > 0.0 > right.turn_rate  # counterclockwise, clockwise
     # Turning, not sliding: over one radian of turn the centre moves less than a radius
-    # (turn rates in degree s^-1).
+    # (turn rates in degree s-1).
     for motion in (left, right):
         assert math.hypot(motion.forward_speed, motion.lateral_speed) / abs(
             math.radians(motion.turn_rate)) < disk.radius

@@ -57,8 +57,8 @@ def test_the_four_points(paper_structure, f, a, regime, one_way_mm_s, two_way_mm
 
 
 def test_at_the_pn_point_the_direction_reverses(paper_structure):
-    """Fails: the paper's PN point (14.6 Hz, 7 m s^-2) goes backward at -3.38 mm/s in the
-    one-way model, barely forward (+0.12 mm/s) with two-way coupling, where the
+    """Fails: the paper's PN point (14.6 Hz, 7 m s-2) goes backward at -3.38 mm s-1 in the
+    one-way model, barely forward (+0.12 mm s-1) with two-way coupling, where the
     frontier lies at 14.605 Hz."""
     v1, _ = velocity(paper_structure, 14.6, 7.0, "one-way")
     v2, _ = velocity(paper_structure, 14.6, 7.0, "two-way")
@@ -76,7 +76,7 @@ def test_at_14_5_hz_the_velocity_no_longer_reverses(paper_structure):
     v2, s2 = velocity(paper_structure, 14.5, [6.0, 9.0], "two-way")
     assert np.all(s1 == Status.STICK_SLIP) and np.all(s2 == Status.STICK_SLIP)
     assert v1[0] > 0 > v1[1]  # the paper: positive at 6, negative at 9
-    assert v2[0] > 0 and v2[1] > 0  # two-way: still forward at 9 (+2.75 mm/s)
+    assert v2[0] > 0 and v2[1] > 0  # two-way: still forward at 9 (+2.75 mm s-1)
     assert v2[1] * 1e3 == pytest.approx(2.746, abs=1e-3)
     # Forward from the threshold to lift-off, which comes earlier (9.30 against 9.83).
     a = np.linspace(3.8, 9.8, 601)
@@ -158,7 +158,7 @@ def test_at_m_0_08_the_frontier_bends_the_other_way(paper_structure):
 
 @pytest.mark.parametrize("M", [0.8, 1.0])
 def test_as_m_grows_the_frontier_keeps_one_branch(paper_structure, M):
-    """One-way: three sign changes at a = 2.7 m s^-2 (M = 0.8 and 1), none from a = 4;
+    """One-way: three sign changes at a = 2.7 m s-2 (M = 0.8 and 1), none from a = 4;
     two-way: a single branch at every a, moving up in frequency with a."""
     structure = replace(paper_structure, M=M)
     f = np.linspace(5.0, 30.0, 5001)

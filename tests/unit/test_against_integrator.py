@@ -32,7 +32,7 @@ def _regime(structure, f, a, margin=0.02):
 
     Within ``delta`` of a threshold the velocity's relative condition number is about
     ``1/delta``, so the integrator's 1e-12 tolerance only buys ~1e-12/delta (at
-    a = a*(1 + 3.6e-5) it agrees to 8e-9 on v = -2.2e-11 m/s). Those points are
+    a = a*(1 + 3.6e-5) it agrees to 8e-9 on v = -2.2e-11 m s-1). Those points are
     checked against the 40-digit mpmath reference instead (test_solver_cases.py).
     """
     a_plus, a_minus = study.thresholds(structure, f)

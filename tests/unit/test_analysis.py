@@ -29,7 +29,7 @@ def _assert_sign_changes_across(structure, a, points, delta=1e-8):
 
 
 def test_every_frontier_root_has_the_velocity_changing_sign_across_it(paper_structure):
-    a = np.linspace(4.5, 9.0, 10)  # PN up to lift-off near 9.4 m s^-2
+    a = np.linspace(4.5, 9.0, 10)  # PN up to lift-off near 9.4 m s-2
     ds = frontier(paper_structure, a, (13.0, 17.0), num=401)
     points = ds["frontier_frequency"].values
     assert np.all(np.isfinite(points[:, 0]))  # one branch at every a in PN for M = 0.08
@@ -127,7 +127,8 @@ def test_resonance_threshold_is_eq5_at_f0(paper_structure, M, Q):
 
 
 def test_minimum_threshold_is_the_grid_minimum(paper_structure):
-    a_min, f_min = minimum_threshold(paper_structure)
+    found = minimum_threshold(paper_structure)
+    a_min, f_min = float(found["a_min"]), float(found["f_min"])
     f = np.linspace(13.5, 15.5, 200_001)
     grid = np.minimum(*study.thresholds(paper_structure, f))
     assert_allclose(a_min, grid.min(), rtol=1e-9)

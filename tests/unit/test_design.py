@@ -96,7 +96,7 @@ def test_a_feasible_design_meets_its_targets_when_solved_at_the_result(forward_b
     assert_allclose(ev.threshold_margin, (a - np.minimum(plus, minus)) / a, rtol=1e-12)
     assert_allclose(ev.lift_margin, (lift_off_acceleration(s, f) - a) / a, rtol=1e-12)
     assert result.score == pytest.approx(min(ev.margin)) and result.score > 0.05
-    # README "Design": f0 = 14.66 Hz, alpha = 56.2 deg, margins 0.0821 and 0.0637.
+    # README "Design": f0 = 14.66 Hz, alpha = 56.2 degree, margins 0.0821 and 0.0637.
     assert abs(result.best[0] - 14.66) < 0.05 and abs(result.best[1] - 56.2) < 1.0
     assert_allclose(ev.margin, [0.0821, 0.0637], atol=5e-4)
 

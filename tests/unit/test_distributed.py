@@ -338,6 +338,44 @@ def test_a_worker_killed_mid_run_loses_nothing(healthy, tmp_path):
     assert_same_values(report.output, local.output)
 
 
+def test_a_frozen_worker_ends_the_run_in_bounded_time_and_loses_nothing(healthy,
+                                                                        tmp_path):
+    """SIGSTOP on a worker mid-run: its task never finishes. The run ends after the task
+    timeout with one message naming the worker; the chunks the other worker finished
+    are kept, and the next run resumes to the local values."""
+    spec = write_spec(tmp_path, "frozen", n_f=16, n_a=15000, chunk_points=30000,
+                      observables='"velocity"')
+    local = run_study(spec, tmp_path / "local.nc", workers=2, progress=False)
+    (victim, _) = sorted(healthy.workers)
+    process = healthy.workers[victim]
+    seen = []
+
+    def freeze_after_the_first_chunk(number: int) -> None:
+        seen.append(number)
+        if len(seen) == 1:
+            os.killpg(process.pid, signal.SIGSTOP)
+
+    output = tmp_path / "remote.nc"
+    try:
+        with pytest.raises(ClusterError, match="no task finished") as stopped:
+            within(RUN, run_study, spec, output, scheduler=healthy.address,
+                   progress=False, on_chunk=freeze_after_the_first_chunk,
+                   cache=tmp_path / "remote-cache", task_timeout=3.0)
+    finally:
+        os.killpg(process.pid, signal.SIGCONT)
+        healthy.kill(victim)
+    message = str(stopped.value)
+    assert victim in message and "finished work is kept" in message
+    assert "--task-timeout" in message
+    assert not output.exists() and not list(tmp_path.glob(".remote.nc.*.tmp"))
+    kept = len(seen)
+    assert 1 <= kept < 8
+    resumed = within(RUN, run_study, spec, output, progress=False,
+                     cache=tmp_path / "remote-cache")
+    assert resumed.reused == kept and resumed.computed == 8 - kept
+    assert_same_values(output, local.output)
+
+
 def test_a_scheduler_nobody_listens_at_is_a_cluster_error():
     with socket.socket() as reserved:  # bound, never listening: connections are refused
         reserved.bind(("127.0.0.1", 0))

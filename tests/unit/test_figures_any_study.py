@@ -257,6 +257,7 @@ def test_the_fit_figure_is_registered(tmp_path):
                                     "threshold,13.0,,6.25,0.05\nthreshold,16.5,,6.6,0.05\n")
     (tmp_path / "fit.toml").write_text(
         '[fit]\nname = "t"\nmeasurements = ["m.csv"]\nfree = { cs = [0.05, 1.0] }\n'
+        'coupling = "two-way"\n'
         "[structure]\nf0 = 14.44\nQ = 17.5\nalpha = 64.0\nM = 0.08\ncs = 0.3\n")
     assert main(["fit", str(tmp_path / "fit.toml"), "-o", str(tmp_path / "fit.nc")]) == 0
     assert main(["figure", "fit", str(tmp_path / "fit.nc"), "-o", str(tmp_path / "f")]) == 0

@@ -9,7 +9,7 @@ from numpy.testing import assert_allclose
 from PIL import Image
 
 import study
-from study.analysis import collapse_variable, minimum_threshold, resonance_threshold
+from study.analysis import collapse_variable, lowest_threshold, resonance_threshold
 from study.cli import main
 from study.figures import mass_ratio_limit
 from study.figures.common import grid_minimum, structure_from_dataset
@@ -124,7 +124,7 @@ def test_grid_minima_too_coarse_for_the_resonance_are_flagged():
         f = np.linspace(7.0, 29.0, num)
         j, ok = grid_minimum(f, _lower_threshold(s, f), s.f0, s.Q)
         assert ok is resolved
-    assert_allclose(_lower_threshold(s, f)[j], minimum_threshold(s)[0], rtol=2e-3)
+    assert_allclose(_lower_threshold(s, f)[j], lowest_threshold(s)[0], rtol=2e-3)
     f = np.linspace(14.5, 20.0, 101)  # the minimum lies below the range: an edge, a bound
     assert grid_minimum(f, _lower_threshold(s, f), s.f0, s.Q) == (0, False)
 
@@ -158,8 +158,8 @@ def test_paper_threshold_at_6_6_percent_is_about_half_g():
     """Paper: "for a mass ratio of 6.6 %, the acceleration is typically half the
     gravity acceleration at the resonance".
 
-    Found: min over f = 4.032 m s^-2 = 0.411 g at 14.28 Hz; the closed form at f0,
-    g/sqrt(1 + x^2) with x = 2.042, is 4.310 m s^-2 = 0.440 g. The minimum lies 6.4 %
+    Found: min over f = 4.032 m s-2 = 0.411 g at 14.28 Hz; the closed form at f0,
+    g/sqrt(1 + x^2) with x = 2.042, is 4.310 m s-2 = 0.440 g. The minimum lies 6.4 %
     below the resonance value (it sits slightly below f0), 12 % (resonance value)
     and 18 % (minimum) below g/2: the paper's "typically half" holds at that level
     only, hence the two looser tolerances against g/2.
@@ -189,7 +189,7 @@ def test_large_x_minimum_equals_the_resonance_closed_form(M):
     s = study.Structure(**{**PAPER, "Q": 150.0}, M=M)
     x = _x(s)
     assert x >= 26.5
-    a_min, f_min = minimum_threshold(s)
+    a_min, f_min = lowest_threshold(s)
     at_resonance = G / np.hypot(1.0, x)
     assert_allclose(a_min, at_resonance, rtol=1e-3)
     assert a_min <= at_resonance
@@ -208,7 +208,7 @@ def test_minimum_threshold_equals_a_fine_grid_minimum(Q, M):
     same number of points has a 7x coarser step and errs by up to 4e-9 (M = 0.066).
     """
     s = study.Structure(**{**PAPER, "Q": Q}, M=M)
-    a_min, f_min = minimum_threshold(s)
+    a_min, f_min = lowest_threshold(s)
     f = np.linspace(s.f0 - 1.3, s.f0 + 1.7, 200_001)
     lower = _lower_threshold(s, f)
     assert f[0] < f_min < f[-1]

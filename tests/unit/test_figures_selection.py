@@ -156,6 +156,7 @@ FIT = """\
 name = "sel"
 measurements = ["lab.csv"]
 free = { cs = [0.05, 1.0] }
+coupling = "two-way"
 [structure]
 f0 = 14.44
 Q = 17.5

@@ -37,8 +37,8 @@ SEGMENTS = (
     ("right", 7.2, 1.0),
     ("wiggle", 11.0, 0.5),
 )
-SPEED = {"forward": 5e-3, "backward": -4e-3, "left": 2e-3, "right": 2e-3}  # m/s
-TURN = {"left": 0.8, "right": -0.8}  # rad/s
+SPEED = {"forward": 5e-3, "backward": -4e-3, "left": 2e-3, "right": 2e-3}  # m s-1
+TURN = {"left": 0.8, "right": -0.8}  # rad s-1
 SEGMENT_STATUS = {"flag_values": np.array([0, 1, 2, 3], dtype=np.int8),
                   "flag_meanings": "completed lift_off not_reached step_budget"}
 STATUS = {"flag_values": np.array([0, 1, 2, 3, 4], dtype=np.int8),

@@ -173,7 +173,7 @@ observables = ["thresholds"]
 [structure]
 f0 = 14.44   # Hz
 Q = 17.5
-alpha = 64.0 # deg
+alpha = 64.0 # degree
 M = 0.08
 cs = 0.25
 
@@ -210,3 +210,32 @@ def test_study_list_follows_computing_edits_only(tmp_path: Path):
     (root / "figures" / "common.py").write_bytes(
         (root / "figures" / "common.py").read_bytes() + b"\n# edited\n")
     assert ": up to date" in state()
+
+
+def test_the_package_version_is_not_in_the_fingerprint(copy: Path,
+                                                       monkeypatch: pytest.MonkeyPatch):
+    """A release tag changes the installed version, never a result's code hash: the
+    fingerprint reads no metadata of study's own distribution, and setuptools-scm writes
+    no version file into the package (whose sources the fingerprint hashes)."""
+    import importlib.metadata
+    import tomllib
+
+    from study.version import DISTRIBUTION
+
+    config = tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text())
+    assert not {"write_to", "version_file"} & set(config["tool"]["setuptools_scm"])
+    before = {kind: code_fingerprint(entries, copy).sha256
+              for kind, entries in RESULT_KIND_ENTRIES.items()}
+    real = importlib.metadata.version
+    asked: list[str] = []
+
+    def tagged(name: str) -> str:
+        asked.append(name)
+        return "99.0.0" if name == DISTRIBUTION else real(name)
+
+    monkeypatch.setattr(importlib.metadata, "version", tagged)
+    after = {kind: code_fingerprint(entries, copy).sha256
+             for kind, entries in RESULT_KIND_ENTRIES.items()}
+    assert asked, "the fingerprint no longer reads library versions: the check is void"
+    assert DISTRIBUTION not in asked
+    assert after == before

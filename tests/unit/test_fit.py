@@ -32,8 +32,11 @@ DEFAULT_STRUCTURE = "f0 = 14.44\nQ = 17.5\nalpha = 64.0\nM = 0.1\ncs = 0.3"
 
 
 def spec_text(free: str, structure: str = "", extra: str = "") -> str:
-    return (f'[fit]\nname = "t"\nmeasurements = ["m.csv"]\nfree = {{ {free} }}\n{extra}\n'
-            f"[structure]\n{structure or DEFAULT_STRUCTURE}\n")
+    # These fits were written for the two-way model (once the default): named, so their
+    # numbers stay those the tests check.
+    coupling = "" if "coupling" in extra else 'coupling = "two-way"\n'
+    return (f'[fit]\nname = "t"\nmeasurements = ["m.csv"]\nfree = {{ {free} }}\n{coupling}'
+            f"{extra}\n[structure]\n{structure or DEFAULT_STRUCTURE}\n")
 
 
 def make_spec(tmp_path: Path, csv: str, free: str, structure: str = "", extra: str = ""):
@@ -206,6 +209,7 @@ MINIMAL_SPEC = """[fit]
 name = "my-structure"
 measurements = ["measured.csv"]      # relative to the spec's folder
 free = { cs = [0.05, 1.0], M = [0.01, 0.5] }   # bounds; start values from [structure]
+coupling = "two-way"
 [structure]
 f0 = 14.44
 Q = 17.5
@@ -250,7 +254,7 @@ def test_the_issues_minimal_spec_runs_through_the_cli(tmp_path: Path, monkeypatc
     # `study info` names the fit (not "study None") and where the estimates' units are
     assert main(["info", str(out)]) == 0
     summary = capsys.readouterr().out
-    assert "  fit 'my-structure', spec sha256" in summary
+    assert "  fit 'my-structure', two-way coupling, spec sha256" in summary
     assert "estimate ('parameter',) [in parameter_units]" in summary
 
 

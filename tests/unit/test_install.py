@@ -32,16 +32,20 @@ copy either way); the runs that compile are ``slow``.
 from __future__ import annotations
 
 import importlib.metadata
+import importlib.util
 import json
 import os
 import shutil
 import subprocess
 import sys
 import sysconfig
+import tomllib
 import zipfile
 from pathlib import Path
 
 import pytest
+
+from study.version import DISTRIBUTION, UNKNOWN_VERSION
 
 REPO = Path(__file__).resolve().parents[2]
 SCHEMAS = sorted(p.name for p in (REPO / "study" / "schemas").glob("*.json"))
@@ -50,7 +54,7 @@ STRUCTURE = """
 [structure]
 f0 = 14.44   # Hz
 Q = 17.5
-alpha = 64.0 # deg
+alpha = 64.0 # degree
 M = 0.08
 cs = 0.25
 """
@@ -168,19 +172,21 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     source = root / "source"
     source.mkdir()
     # What the wheel is built from: the top-level files (pyproject.toml, README.md,
-    # licence files) and the package; not results, caches or the venv.
+    # licence files, .git_archival.txt unprocessed) and the package; not results, caches
+    # or the venv, nor git's data (in a worktree ``.git`` is a file): a tree without git
+    # information, which setuptools-scm builds as its fallback version.
     for item in REPO.iterdir():
-        if item.is_file():
+        if item.is_file() and item.name != ".git":
             shutil.copy2(item, source / item.name)
     shutil.copytree(REPO / "study", source / "study",
                     ignore=shutil.ignore_patterns("__pycache__", "*.py[co]", "*.nbi", "*.nbc"))
     dist = root / "dist"
     command = [sys.executable, "-m", "pip", "wheel", "--no-deps", "--disable-pip-version-check",
                "--quiet", "--wheel-dir", dist]
-    if _setuptools_major() >= 77:
+    if _setuptools_major() >= 77 and importlib.util.find_spec("setuptools_scm") is not None:
         command += ["--no-build-isolation", "--no-index"]
     _run([*command, source], cwd=root)
-    (built,) = dist.glob("study-*.whl")
+    (built,) = dist.glob(f"{DISTRIBUTION.replace('-', '_')}-*.whl")
     return built
 
 
@@ -235,6 +241,34 @@ def test_the_venv_imports_the_installed_copy_not_the_repo(venv):
     serving = [p for p in probe["path"]
                if (Path(p or venv["elsewhere"]) / "study").resolve() == (REPO / "study").resolve()]
     assert serving == [], probe["path"]
+
+
+VERSION_PROBE = f"""\
+import importlib.metadata, json, study, study.provenance
+print(json.dumps({{
+    "metadata": importlib.metadata.version({DISTRIBUTION!r}),
+    "study": study.__version__,
+    "provenance": study.provenance.package_version(),
+}}))
+"""
+
+
+def test_a_tree_without_git_information_installs_as_the_fallback_version(venv):
+    """The wheel was built from a copy without ``.git``: setuptools-scm gives it
+    ``fallback_version`` (pyproject.toml), which study reports as its own version, from
+    the metadata of the distribution named in pyproject.toml."""
+    declared = tomllib.loads((REPO / "pyproject.toml").read_text())
+    assert declared["project"]["name"] == DISTRIBUTION
+    assert "version" in declared["project"]["dynamic"]
+    fallback = declared["tool"]["setuptools_scm"]["fallback_version"]
+    assert fallback == UNKNOWN_VERSION
+    found = json.loads(_run([venv["python"], "-c", VERSION_PROBE], cwd=venv["elsewhere"]).stdout)
+    assert found == {"metadata": fallback, "study": fallback, "provenance": fallback}
+
+
+def test_the_installed_command_reports_the_version(venv):
+    done = _run([venv["scripts"] / "study", "--version"], cwd=venv["elsewhere"])
+    assert UNKNOWN_VERSION in done.stdout
 
 
 def _run_spec(venv: dict[str, Path], name: str, text: str) -> Path:

@@ -81,7 +81,7 @@ def test_a_plate_pointing_anywhere_moves_the_disk_along_its_direction():
         [straight.forward_speed * math.cos(angle), straight.forward_speed * math.sin(angle)],
         rtol=1e-7, atol=1e-12,
     )
-    assert abs(turned.turn_rate) < math.degrees(1e-12)  # degree s^-1
+    assert abs(turned.turn_rate) < math.degrees(1e-12)  # degree s-1
 
 
 def test_mirrored_disk_mirrors_the_motion():
@@ -112,21 +112,21 @@ def test_the_path_rotates_with_the_initial_heading():
 
 
 def test_angles_are_in_degrees_at_the_boundary():
-    """A run started spinning at 90 degree s^-1 reports its heading, spin, final state
-    and the steady turn rate in degree (s^-1); the kernel's rad never leak out."""
+    """A run started spinning at 90 degree s-1 reports its heading, spin, final state
+    and the steady turn rate in degree (s-1); the kernel's rad never leak out."""
     disk = _two_plate_disk()
     state = rest_state(disk)
-    state[5] = 90.0  # spin [degree s^-1]: a slide from a pure spin, no drive
+    state[5] = 90.0  # spin [degree s-1]: a slide from a pure spin, no drive
     run = simulate_planar(disk, Schedule.constant(14.2, 0.0, 1e-4), initial_state=state,
                           output_times=[0.0, 1e-4], settings=IntegratorSettings(tolerance=1e-12))
     assert run.spin[0] == 90.0
-    # It slows at most by ck g / c per second [rad s^-2]: after 1e-4 s still ~90 degree s^-1.
+    # It slows at most by ck g / c per second [rad s-2]: after 1e-4 s still ~90 degree s-1.
     assert 89.0 < run.spin[1] < 90.0
     assert_allclose(run.heading[1], 0.5 * (run.spin[0] + run.spin[1]) * 1e-4, rtol=1e-3)
     assert run.final_state[5] == run.spin[-1] and run.final_state[2] == run.heading[-1]
     motion = periodic_motion(disk, 8.2, 7.0)
     rad_per_s = motion.turn_rate * math.pi / 180
-    # The README's right turn, -0.512 rad s^-1 = -29.3 degree s^-1.
+    # The README's right turn, -0.512 rad s-1 = -29.3 degree s-1.
     assert_allclose(motion.turn_rate, -29.3, rtol=0.01)
     assert_allclose(rad_per_s, -0.512, rtol=0.01)
 

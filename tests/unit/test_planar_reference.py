@@ -23,8 +23,8 @@ reduction, the paper's two-plate steering disk (forward, backward, turning, and 
 frequency switch mid-run), symmetries, and the free-slide closed forms.
 
 The steering disk (README, "Steering"): radius R = 0.02 m, cs = ck = 0.25; head plate
-f0 = 14.44 Hz, Q = 17.5, alpha = 64 deg, M = 0.08, along the heading at (R, 0); tail
-plate f0 = 8.5 Hz, Q = 10, alpha = 64 deg, M = 0.05, across the heading at (-R, 0).
+f0 = 14.44 Hz, Q = 17.5, alpha = 64 degree, M = 0.08, along the heading at (R, 0); tail
+plate f0 = 8.5 Hz, Q = 10, alpha = 64 degree, M = 0.05, across the heading at (-R, 0).
 """
 
 from __future__ import annotations
@@ -318,7 +318,7 @@ def test_reference_stop_detection_converges_driven():
 def test_reference_converges_in_rtol():
     """Steering disk, three drive periods (six slips): rtol 1e-12 (the default, used
     everywhere here) against 1e-13. Measured: 7.4e-15 m in x, 6e-17 m in y,
-    8.3e-15 rad in heading, 3e-14 rad/s in spin: 4e-12 of the motion."""
+    8.3e-15 rad in heading, 3e-14 rad s-1 in spin: 4e-12 of the motion."""
     a, b = ref_scenario("forward", 1e-12), ref_scenario("forward", 1e-13)
     assert_allclose(a.x, b.x, rtol=0, atol=5e-14)
     assert_allclose(a.y, b.y, rtol=0, atol=5e-14)
@@ -403,13 +403,13 @@ def test_reference_onsets_against_brute_force():
     seed of size s changes the result by up to ~s t):
 
     * at t = 0 (|W| > cs n, the twist grows linearly): DOP853, rtol 1e-13, seed
-      1e-16 m/s. Measured: 6e-17 m, 1.5e-16 rad (4e-18 m, 3e-18 rad against
+      1e-16 m s-1. Measured: 6e-17 m, 1.5e-16 rad (4e-18 m, 3e-18 rad against
       rtol = 1e-13).
     * at a release from stick with ck = cs (|W| = ck n: the twist grows like
       (t - t0)^2, too stiff for an explicit method): Radau with atol 1e-22 (a tiny
       absolute tolerance is needed: with atol ~ |u| the direction of a small twist is
-      left free and Radau drifts), seed 1e-14 m/s along W. Measured: 2e-17 m,
-      3e-16 rad, 1.3e-14 m/s (2e-12 relative).
+      left free and Radau drifts), seed 1e-14 m s-1 along W. Measured: 2e-17 m,
+      3e-16 rad, 1.3e-14 m s-1 (2e-12 relative).
     """
     f, a = 14.2, 7.0
     T = 1.0 / f
@@ -489,7 +489,7 @@ def pkg_disk(planar, plates, **kw):
 
 def pkg_run(planar, disk, freq, acc, dur, init, times, tol=PKG_TOL):
     """The package's run from the reference's state ``init`` (heading [rad], spin
-    [rad s^-1]), given to the package in its units (degree, degree s^-1); the
+    [rad s-1]), given to the package in its units (degree, degree s-1); the
     trajectory's heading and spin come back in degree (compare with ``deg``)."""
     from study.transient import IntegratorSettings, Schedule
 
@@ -645,7 +645,7 @@ def test_package_free_slide_power_law(planar, speed, spin, kappa):
 
 
 def test_package_lift_off(planar):
-    """Resonant drive from rest (plates at rest, a = 10 m s^-2 at 14.44 Hz): the
+    """Resonant drive from rest (plates at rest, a = 10 m s-2 at 14.44 Hz): the
     growing head mode makes n reach 0 in the third period. Both stop there, with the
     same time and the same samples before it. Measured: 1.5e-12 s, 6e-13 m."""
     f, a = 14.44, 10.0

@@ -82,7 +82,7 @@ def test_two_way_tends_to_one_way_as_the_plates_get_light():
     ``- x'' sin(alpha)``): their gap does not vanish."""
     schedule = Schedule.constant(8.2, 7.0, 0.15)
     start = np.zeros(7 + 4)
-    start[3], start[4], start[5] = 0.03, 0.01, 1.0   # sliding at the start [m s^-1, rad s^-1]
+    start[3], start[4], start[5] = 0.03, 0.01, 1.0   # sliding at the start [m s-1, rad s-1]
     gaps, mode_gaps = [], []
     for M in (1e-3, 1e-4, 1e-12):
         runs = [simulate_planar(_two_plate_disk(c, M), schedule, initial_state=start,

@@ -13,8 +13,8 @@ checked here against things that do not share its formulation:
 * Painleve's paradox: the boundary ``1 - M sin(alpha) (sin(alpha) + s ck cos(alpha)) = 0``
   and the ``"friction_paradox"`` status only when the bad direction is entered.
 
-Paper structure (README, "Steering"): f0 = 14.44 Hz, Q = 17.5, alpha = 64 deg,
-cs = ck = 0.25, g = 9.8 m s^-2.
+Paper structure (README, "Steering"): f0 = 14.44 Hz, Q = 17.5, alpha = 64 degree,
+cs = ck = 0.25, g = 9.8 m s-2.
 """
 
 from __future__ import annotations
@@ -179,7 +179,7 @@ def test_paradox_boundary_in_free_slide():
 
 
 def test_paradox_status_only_when_bad_direction_is_entered():
-    """alpha = 85 deg, M = 1: det(+1) < 0 < det(-1).
+    """alpha = 85 degree, M = 1: det(+1) < 0 < det(-1).
 
     At 14.44 Hz the structure slips forward: friction_paradox. At 16 Hz it slips only
     backward (one-way velocity < 0, no forward slip): a normal two-way orbit.

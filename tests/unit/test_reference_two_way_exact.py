@@ -217,7 +217,7 @@ def test_two_way_matches_the_integrator(paper_structure, f, a, slips):
 
 
 def test_two_way_reverses_the_one_way_direction(paper_structure):
-    """(14.5 Hz, 9 m s^-2): one-way goes backward, two-way forward at +2.7455 mm/s."""
+    """(14.5 Hz, 9 m s-2): one-way goes backward, two-way forward at +2.7455 mm s-1."""
     two = reference_orbit(paper_structure, 14.5, 9.0)
     one = reference_orbit(paper_structure, 14.5, 9.0, coupling="one-way")
     assert_allclose(float(two.velocity), 2.7455215736682266e-3, rtol=1e-15)

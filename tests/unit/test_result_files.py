@@ -34,7 +34,7 @@ observables = ["thresholds", "lift_off", "velocity", "diagnostics"]
 [structure]
 f0 = 14.44   # Hz
 Q = 17.5
-alpha = 64.0 # deg
+alpha = 64.0 # degree
 M = 0.08
 cs = 0.25
 

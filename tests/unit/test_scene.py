@@ -224,7 +224,7 @@ def test_calibration_scene_matches_periodic_motion(tmp_path):
 
 
 def test_arc_displacement_is_the_integral_of_the_body_velocity():
-    """Turn rate in degree s^-1 (0.3 rad s^-1), turn in degree."""
+    """Turn rate in degree s-1 (0.3 rad s-1), turn in degree."""
     command = calibrate_commands.__globals__["Command"]("x", 14.2, 7.0, 0.01, 0.002,
                                                         math.degrees(0.3))
     duration = 4.0
@@ -241,7 +241,7 @@ def test_a_planned_leg_ends_on_its_target_in_the_calibrated_model():
     commands = calibrate_commands(spec.disk, spec.options["frequencies"],
                                   spec.options["acceleration"],
                                   settings=IntegratorSettings(tolerance=1e-9))
-    assert commands["left"].turn_rate > 10.0  # degree s^-1 (README: 0.542 rad s^-1)
+    assert commands["left"].turn_rate > 10.0  # degree s-1 (README: 0.542 rad s-1)
     for target in [(0.05, 0.03), (-0.04, 0.0), (0.0, -0.2)]:
         legs = plan_leg((0.0, 0.0, 17.0), target, commands)  # heading in degree
         assert_allclose(legs[-1].predicted_pose[:2], target, rtol=0, atol=1e-9)

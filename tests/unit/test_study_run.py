@@ -307,5 +307,5 @@ def test_ctrl_c_keeps_finished_chunks_and_the_next_run_resumes(tmp_path):
     np.testing.assert_array_equal(ds["status"].values, status)
     # the attractor counts of a row from the kept chunks and one computed on resume
     for row in (0, f.size - 1):
-        found = study.solver.attractors(s, f[row], a)
+        found = study.solver.attractors(s, f[row], a, coupling="two-way")
         np.testing.assert_array_equal(ds["attractor_count"].values[row], found.count)

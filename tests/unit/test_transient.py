@@ -182,7 +182,7 @@ def test_short_slip_between_samples_is_not_missed():
     assert exact.status == Status.STICK_SLIP
     assert run.status == Status.STICK_SLIP
     assert run.slips_per_period == 1.0
-    # v ~ 2e-14 m/s here: the error is judged against the drive's velocity scale g/w.
+    # v ~ 2e-14 m s-1 here: the error is judged against the drive's velocity scale g/w.
     assert run.velocity > 0
     assert_allclose(run.velocity, exact.velocity, rtol=0, atol=1e-13 * PAPER.g / (2 * np.pi * f))
 

@@ -1,0 +1,80 @@
+"""CITATION.cff: valid Citation File Format 1.2.0 naming this software, its release and
+the paper whose model it computes.
+
+The structure is checked against the fields CFF 1.2.0 requires (the file itself was
+validated with ``cffconvert --validate``, which pins an old jsonschema and so is not a
+test dependency); the release against the newest release tag git knows, if any.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import tomllib
+from pathlib import Path
+
+import pytest
+import yaml
+from packaging.version import Version
+
+from study.version import DISTRIBUTION
+
+REPO = Path(__file__).resolve().parents[2]
+CITATION = REPO / "CITATION.cff"
+
+PAPER_TITLE = "Controlled locomotion of a minimal soft structure by stick-slip nonlinearity"
+PAPER_AUTHORS = ["Barois", "Boucherie", "Tadrist", "Kellay"]
+
+
+@pytest.fixture(scope="module")
+def citation() -> dict:
+    return yaml.safe_load(CITATION.read_text(encoding="utf-8"))
+
+
+def test_required_fields_of_cff_1_2_0(citation):
+    assert citation["cff-version"] == "1.2.0"
+    for key in ("message", "title", "authors"):
+        assert citation[key], key
+    assert citation["type"] == "software"
+    for author in citation["authors"]:
+        # A person has a family name, an entity a name (CFF 1.2.0).
+        assert author.get("family-names") or author.get("name"), author
+    for reference in citation.get("references", []):
+        assert {"type", "title", "authors"} <= set(reference), reference
+
+
+def test_names_this_software_and_its_licence(citation):
+    assert DISTRIBUTION in citation["title"]
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    assert citation["license"] == project["license"]
+
+
+def test_names_the_paper_it_implements(citation):
+    papers = [r for r in citation["references"] if r["title"] == PAPER_TITLE]
+    assert len(papers) == 1, citation["references"]
+    (paper,) = papers
+    assert paper["type"] == "article"
+    assert [a["family-names"] for a in paper["authors"]] == PAPER_AUTHORS
+    assert PAPER_TITLE in " ".join(citation["message"].split())
+
+
+def _newest_release_tag() -> str | None:
+    """The newest ``vX.Y.Z`` tag reachable from HEAD, if git and a tag are there."""
+    try:
+        done = subprocess.run(
+            ["git", "-C", str(REPO), "describe", "--tags", "--abbrev=0", "--match", "v[0-9]*"],
+            capture_output=True, text=True, timeout=30, check=False)
+    except OSError:
+        return None
+    return done.stdout.strip() if done.returncode == 0 else None
+
+
+def test_the_version_is_a_release_not_older_than_the_newest_tag(citation):
+    """The cited version is a release; once tagged, the file is not left behind (it may
+    already name the next release, written before its tag is made)."""
+    version = Version(str(citation["version"]))
+    assert not (version.is_devrelease or version.is_prerelease or version.local), version
+    assert re.fullmatch(r"\d+\.\d+\.\d+", str(citation["version"]))
+    tag = _newest_release_tag()
+    if tag is not None:
+        assert version >= Version(tag.removeprefix("v")), (version, tag)
