@@ -21,6 +21,8 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 
+import study
+
 work = Path(tempfile.mkdtemp(prefix="study-example-"))
 atexit.register(shutil.rmtree, work, ignore_errors=True)
 
@@ -77,6 +79,13 @@ a = { start = 0.0, stop = 12.0, num = 49 }    # m s-2
 (work / "results").mkdir()
 shell("study run own.toml -o results/own.nc --no-progress")
 shell("study run own.toml -o results/own.nc --no-progress")
+
+# %%
+# The same from Python: :func:`study.run` is ``study run`` without the shell (the same
+# runner, here finding the result up to date) and returns the result as a labelled
+# :class:`xarray.Dataset`.
+own = study.run(work / "own.toml", work / "results" / "own.nc")
+print(own["velocity"].sel(f=16.5, a=6.0, method="nearest"))
 
 # %%
 # What the file holds

@@ -20,7 +20,8 @@ import tempfile
 from pathlib import Path
 
 import matplotlib.pyplot as plt
-import xarray as xr
+
+import study
 
 work = Path(tempfile.mkdtemp(prefix="study-example-"))
 atexit.register(shutil.rmtree, work, ignore_errors=True)
@@ -113,8 +114,10 @@ duration = 3.0
 # %%
 # Simulate and draw
 # -----------------
+# :func:`study.run` runs a scene as ``study run`` does and returns its result; the
+# ``study figure steering`` command draws the file.
 (work / "results").mkdir()
-shell("study run steer.toml -o results/steer.nc --no-progress")
+scene = study.run(work / "steer.toml", work / "results" / "steer.nc")
 shell("study figure steering results/steer.nc -o steer")
 show("steer.png")
 
@@ -123,11 +126,9 @@ show("steer.png")
 # ---------------------
 # The file holds the path (over ``t``) and one row per segment: how far the disk went
 # and how much it turned, in the units the file states.
-scene = xr.open_dataset(work / "results" / "steer.nc")
 columns = ["frequency", "duration", "forward_displacement", "lateral_displacement",
            "heading_change"]
 table = scene[columns].to_dataframe()
 table.columns = [f"{name} [{scene[name].attrs['units']}]" for name in columns]
 table.index = scene["segment_label"].values
 print(table.round(4).to_string())
-scene.close()

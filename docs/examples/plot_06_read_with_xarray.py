@@ -10,18 +10,18 @@ read it, so a file can be shared with anyone.
 """
 
 # %%
-# A small result to read (any result file will do: ``results/regime-map.nc`` after
-# ``make``).
+# A small result to read, written by :func:`study.run` (any result file will do:
+# ``results/regime-map.nc`` after ``make``).
 import atexit
 import shutil
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+
+import study
 
 work = Path(tempfile.mkdtemp(prefix="study-example-"))
 atexit.register(shutil.rmtree, work, ignore_errors=True)
@@ -41,9 +41,7 @@ cs = 0.25
 f = { start = 12.0, stop = 17.0, num = 51 }   # Hz
 a = { start = 0.0, stop = 12.0, num = 49 }    # m s-2
 """)
-subprocess.run([sys.executable, "-m", "study.cli", "run", "map.toml",
-                "-o", "map.nc", "--no-progress"],
-               cwd=work, check=True, capture_output=True)
+study.run(work / "map.toml", work / "map.nc")  # or: study run map.toml -o map.nc
 
 # %%
 # Open it
