@@ -2,6 +2,8 @@
 #   make            run every workflow whose spec or package changed: results/<name>.nc
 #                   (parameter studies and the steering scenes alike)
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
+#   make docs       the documentation site, build/html/index.html (Sphinx, warnings are
+#                   errors; runs the example gallery); needs the figures, so `make` first
 #   make test       set up .venv on a fresh machine, lint, run the test suite
 #   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc,
@@ -23,8 +25,8 @@ WORKFLOWS := $(wildcard workflows/*.toml)
 RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs test test-slow fuzz lint bench cf-check list clean schemas \
-        designs FORCE
+.PHONY: all results figures docs docs-html test test-slow fuzz lint bench cf-check list clean \
+        schemas designs FORCE
 
 all: results
 
@@ -50,7 +52,7 @@ $(STAMP): pyproject.toml
 	@# record owns the `study` command, which the install writes again.
 	$(PY) -m pip uninstall --quiet --yes study 2>/dev/null || true
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[test,docs]'
 	touch $(STAMP)
 
 # The package reads study/schemas/ (package data, shipped in the wheel); results_schema/
@@ -104,15 +106,27 @@ figures/%-two-way.png: $(PACKAGE) FORCE | $(STAMP)
 
 FORCE:
 
-# The README's pictures are the figures of a full run.
+# The documentation site. Its pictures (docs/images/) are the figures of a full run,
+# copied in by `make docs`; `make docs-html` builds the pages from the pictures as they
+# are (no results needed). Warnings are errors; the example gallery (docs/examples/)
+# runs at every build.
+# The figures the pages show: every images/NAME.png a page names that `make figures` draws
+# (the benchmark figures are copied by `make bench`).
+DOC_FIGURES := $(filter $(FIGURES),$(sort $(patsubst images/%.png,%,$(shell \
+    grep -rhoE 'images/[a-z0-9-]+[.]png' README.md docs --include='*.md'))))
+
 docs: figures
-	mkdir -p docs && cp $(addprefix figures/,$(addsuffix .png,$(FIGURES))) docs/
+	mkdir -p docs/images && cp $(addprefix figures/,$(addsuffix .png,$(DOC_FIGURES))) docs/images/
+	$(MAKE) docs-html
+
+docs-html: | $(STAMP)
+	$(PY) -m sphinx -W --keep-going -b html docs build/html
 
 list: $(STAMP)
 	$(STUDY) list
 
 lint: $(STAMP)
-	$(PY) -m ruff check study tests benchmarks
+	$(PY) -m ruff check study tests benchmarks docs
 
 test: $(STAMP) lint
 	$(PY) -m pytest -m "not slow and not fuzz"
@@ -133,10 +147,11 @@ bench: $(STAMP)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_two_way_map.py
 	$(PY) benchmarks/bench_planar.py
 	$(PY) benchmarks/two_way_agreement.py
-	mkdir -p docs && cp figures/work-precision.png figures/work-precision-two-way.png docs/
+	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
+	    docs/images/
 
 cf-check: $(RESULTS)
 	$(VENV)/bin/compliance-checker --test cf:1.11 --criteria strict $(RESULTS)
 
 clean:
-	rm -rf $(VENV) results figures .pytest_cache .ruff_cache .hypothesis
+	rm -rf $(VENV) results figures build .pytest_cache .ruff_cache .hypothesis

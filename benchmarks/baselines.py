@@ -1,6 +1,6 @@
 """Baselines of the work-precision benchmark: how a typical user would compute the velocity.
 
-Two time integrators of the paper's one-way stick-slip model (README, "How the solver works"),
+Two time integrators of the paper's one-way stick-slip model (docs/theory/exact-solvers.md),
 written independently of :mod:`study`'s kernels (only :class:`study.Structure`, the
 input checks and the :class:`study.Status` codes are shared):
 
@@ -8,7 +8,7 @@ input checks and the :class:`study.Status` codes are shared):
   decided by sign tests at step ends only;
 * :func:`solve_ivp_velocity`: :func:`scipy.integrate.solve_ivp` with terminal
   events, restarted at every contact event; it also integrates the two-way coupled
-  model (``coupling="two-way"``: README, "Time integration and two-way coupling").
+  model (``coupling="two-way"``: docs/theory/exact-solvers.md, "Time integration").
 
 Both start where the exact solver starts (at rest, drive phase 0, mode on its steady
 one-way response), integrate ``transient_periods`` drive periods, then return the
@@ -285,7 +285,7 @@ class _Contact:
     """Right-hand sides, forces and event functions of one drive point, per contact mode.
 
     One-way: the mode obeys ``delta'' = A ca - c delta' - k delta`` in every contact
-    mode. Two-way (README, "Time integration and two-way coupling"): in a slip ``s``
+    mode. Two-way (docs/theory/exact-solvers.md, "Time integration"): in a slip ``s``
     the base's acceleration ``x''`` also forces the mode, ``delta'' = F - sa x''`` with
     ``F = A ca - c delta' - k delta``, and eliminating ``delta''`` gives
     ``x'' = (tau_F - s ck n_F) / D_s``, ``D_s = 1 - M sa (sa + s ck ca)``, with

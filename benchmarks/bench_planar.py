@@ -9,7 +9,8 @@ distance of the final position from the tightest package run (tolerance 1e-13,
 slaving 1e-7), relative to the distance slid; time is per drive period, one thread,
 warm, minimum of three repeats. Timings are reported, never asserted.
 
-Writes ``results/bench-planar.md``. Usage: ``python benchmarks/bench_planar.py``
+Writes ``results/bench-planar.md`` and the documentation's table,
+``docs/speed/planar.md``. Usage: ``python benchmarks/bench_planar.py``
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from docs_tables import exponent, write_docs_table
 
 from study.planar import rest_state, simulate_planar
 from study.scene import load_scene
@@ -57,6 +59,12 @@ def _reference(disk, f, rtol):
     return np.array([run.x[-1], run.y[-1], run.heading[-1]])
 
 
+def _milliseconds(seconds: float) -> str:
+    """Two significant digits, no exponent: ``0.56 ms``, ``72 ms``, ``120 ms``."""
+    ms = seconds * 1e3
+    return f"{ms:.2g} ms" if ms < 100 else f"{ms:.0f} ms"
+
+
 def _timed(function, *args):
     best = np.inf
     result = None
@@ -83,15 +91,16 @@ def main() -> None:
                 errors.append(np.hypot(*(state[:2] - truth[name][:2])) / slid)
                 seconds.append(spent / PERIODS)
                 steps.append(count / PERIODS)
-            rows.append(("package", f"tol {tolerance:g}, slaving {slaving:g}", max(errors),
-                         float(np.mean(seconds)), float(np.mean(steps))))
+            rows.append(("package", f"tolerance {exponent(tolerance)}, slaving "
+                         f"{exponent(slaving)}", max(errors), float(np.mean(seconds)),
+                         float(np.mean(steps))))
     for rtol in (1e-8, 1e-10):
         errors, seconds = [], []
         for name, f in COMMANDS.items():
             pose, spent = _timed(_reference, disk, f, rtol)
             errors.append(np.hypot(*(pose[:2] - truth[name][:2])) / truth[name][6])
             seconds.append(spent / PERIODS)
-        rows.append(("reference (scipy)", f"rtol {rtol:g}", max(errors),
+        rows.append(("reference (scipy Radau + DOP853)", f"rtol {exponent(rtol)}", max(errors),
                      float(np.mean(seconds)), float("nan")))
     machine = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, " \
         f"Python {platform.python_version()}"
@@ -113,6 +122,13 @@ def main() -> None:
     output.parent.mkdir(exist_ok=True)
     output.write_text(text)
     print(text)
+    docs = ["| method | setting | error | time per drive period |", "|---|---|---|---|"]
+    docs += [f"| {method} | {setting} | {error:.1e} | {_milliseconds(seconds)} |"
+             for method, setting, error, seconds, _ in rows]
+    write_docs_table("planar", "bench_planar.py", f"{machine}, one thread", "\n".join(docs),
+                     "Three drive periods at each of the four commands (7.2, 8.2, 14.2, 15.2 Hz "
+                     "at 7 m s^-2); error of the final position relative to the distance slid, "
+                     "against the package at tolerance 1e-13 and slaving 1e-7.")
 
 
 if __name__ == "__main__":

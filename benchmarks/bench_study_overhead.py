@@ -23,7 +23,8 @@ The measurements alternate ``--repeats`` times, so that each repeat sees the
 machine in one state; each timing is the minimum (other work on the machine only ever
 adds time), with the CPU time of the same process beside it, and the peak RSS is the
 largest seen (``ru_maxrss`` of the child). Timings are reported, never asserted. The
-table goes to ``results/bench-study.md``.
+table goes to ``results/bench-study.md`` and to the documentation's
+``docs/speed/study-overhead.md``.
 
 Usage: ``python benchmarks/bench_study_overhead.py [--sizes 1e6 1e7 1e8] [--repeats 3]
 [--repeats-large 1]``
@@ -45,6 +46,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from docs_tables import write_docs_table
 
 F_RANGE = (10.0, 20.0)  # Hz
 A_RANGE = (0.0, 12.0)  # m s-2
@@ -325,6 +327,10 @@ def main() -> None:
     print(text)
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text(text + "\n")
+    write_docs_table(
+        "study-overhead", "bench_study_overhead.py",
+        f"{machine()}; load average {load:.1f} before and {os.getloadavg()[0]:.1f} after; "
+        f"time = minimum over {repeats} processes per measurement", table(rows, "").strip())
 
 
 if __name__ == "__main__":

@@ -20,7 +20,8 @@ a random sample of moving points of the two-way map against the 40-digit mpmath 
 at <= 1e-12 relative error where the velocity is well conditioned (here: cond <= 1e3,
 ``eps cond <= 2.2e-13``). Timings are reported, never asserted.
 
-Writes ``results/bench-two-way-map.md``.
+Writes ``results/bench-two-way-map.md`` and the documentation's table,
+``docs/speed/two-way-map.md`` (CPU time per point).
 
 Usage: ``python benchmarks/bench_two_way_map.py [--size 1000] [--repeats 3] [--sample 30]``
 """
@@ -45,6 +46,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from docs_tables import exponent, write_docs_table  # noqa: E402
 
 import study  # noqa: E402
 from study.provenance import git_state, utc_now  # noqa: E402
@@ -235,7 +238,27 @@ def main(argv: list[str] | None = None) -> int:
     args.output.write_text(text)
     print(text)
     print(f"wrote {args.output}")
+    write_docs_table(
+        "two-way-map", "bench_two_way_map.py",
+        f"{_machine()}; load average {load_timed} (1, 5, 15 min) after the timed rounds; "
+        f"CPU times, minimum of {args.repeats} rounds", docs_table(n, cpu))
     return 0
+
+
+def docs_table(n: int, cpu: dict[str, float]) -> str:
+    """The documentation's table: CPU time per point of each call, and the two-way
+    call's time over it."""
+    two = "steady_velocity two-way"
+    lines = [f"| one thread, paper map, {exponent(n)} points | CPU per point | two-way / this |",
+             "|---|---|---|"]
+    for name in ("steady_velocity one-way", "steady_state one-way", two):
+        function, coupling = name.split()
+        ratio = "1" if name == two else f"{cpu[two] / cpu[name]:.1f}x"
+        label = f'`{function}(..., coupling="{coupling}")`'
+        if name == two:
+            label += " (exact orbit)"
+        lines.append(f"| {label} | {cpu[name] / n * 1e6:.2g} us | {ratio} |")
+    return "\n".join(lines)
 
 
 def _verdict(wall_ratio: float, cpu_ratio: float) -> str:

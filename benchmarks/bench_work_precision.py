@@ -22,13 +22,13 @@ work = steps per period for the fixed-step methods (their classical order) and
 seconds per point for the adaptive ones (order per unit of work).
 
 Writes ``results/bench.nc`` (dims ``method``, ``setting``, ``point``; variables
-``error`` and ``seconds_per_point`` with units), ``results/bench.md`` (the README
-table) and ``figures/work-precision.png`` (and ``.pdf``). Timings are reported, never
-asserted.
+``error`` and ``seconds_per_point`` with units), ``results/bench.md``,
+``figures/work-precision.png`` (and ``.pdf``) and the documentation's table,
+``docs/speed/work-precision.md``. Timings are reported, never asserted.
 
-``--coupling two-way``: the same report for the two-way coupled model (README, "Time
-integration and two-way coupling"), written to ``results/bench-two-way.nc``, ``.md``
-and ``figures/work-precision-two-way.png``. Methods: ``exact`` (the exact orbit
+``--coupling two-way``: the same report for the two-way coupled model, written to
+``results/bench-two-way.nc``, ``.md``, ``figures/work-precision-two-way.png`` and
+``docs/speed/work-precision-two-way.md``. Methods: ``exact`` (the exact orbit
 solver, ``steady_state(..., coupling="two-way")``), ``integrator`` (adaptive, until
 the orbit repeats) and ``solve_ivp`` (``baselines.solve_ivp_velocity(...,
 coupling="two-way")``, whole periods until the orbit repeats). Points: the paper's
@@ -63,6 +63,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from baselines import naive_velocity, solve_ivp_velocity  # noqa: E402
+from docs_tables import write_docs_table  # noqa: E402
 from exact_reference import exact_velocity  # noqa: E402
 
 import study  # noqa: E402
@@ -481,10 +482,16 @@ def _umask() -> int:
     return mask
 
 
-def table(dataset: xr.Dataset) -> str:
-    """The README's Markdown table (two-way: with the CPU time as well)."""
+def table(dataset: xr.Dataset, compact: bool = False) -> str:
+    """The Markdown table (two-way: with the CPU time as well; ``compact``: the
+    documentation's, without the CPU time and, two-way, without the observed order)."""
     two_way = dataset.attrs.get("coupling") == "two-way"
-    if two_way:
+    if two_way and compact:
+        lines = [
+            "| method | setting | max error [m/s] | time per point [s] | statuses |",
+            "|---|---|---|---|---|",
+        ]
+    elif two_way:
         lines = [
             "| method | setting | max error [m/s] | time per point [s] | CPU per point [s] "
             "| statuses | observed order |",
@@ -505,12 +512,13 @@ def table(dataset: xr.Dataset) -> str:
             if not math.isfinite(value):
                 continue
             setting = "-" if method == "exact" else f"{row['setting_name'].item()} = {value:g}"
-            cpu = (f"{float(row['cpu_seconds_per_point'][j]):.1e} | " if two_way else "")
+            cpu = (f"{float(row['cpu_seconds_per_point'][j]):.1e} | "
+                   if two_way and not compact else "")
+            order_cell = "" if two_way and compact else f" {order_text if j == 0 else ''} |"
             lines.append(
                 f"| {method} | {setting} | {float(row['error'][j]):.1e} | "
                 f"{float(row['seconds_per_point'][j]):.1e} | {cpu}"
-                f"{'agree' if int(row['statuses_agree'][j]) else 'differ'} | "
-                f"{order_text if j == 0 else ''} |"
+                f"{'agree' if int(row['statuses_agree'][j]) else 'differ'} |{order_cell}"
             )
     return "\n".join(lines)
 
@@ -653,6 +661,9 @@ def main(argv: list[str] | None = None) -> int:
     else:
         text = f"Machine: {dataset.attrs['machine']}\n\n{markdown}\n"
     output.with_suffix(".md").write_text(text)
+    write_docs_table(f"work-precision{suffix}", "bench_work_precision.py",
+                     f"{dataset.attrs['machine']}; load average "
+                     f"{dataset.attrs['load_average']}", table(dataset, compact=True))
     figure(dataset, stem)
     print(text)
     print(f"wrote {output}, {output.with_suffix('.md')}, {stem.with_suffix('.png')}")

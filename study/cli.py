@@ -15,7 +15,7 @@ from pathlib import Path
 from study.units import spoken
 from study.version import DISTRIBUTION, VERSION
 
-__all__ = ["default_figure_output", "main"]
+__all__ = ["build_parser", "default_figure_output", "main"]
 
 
 def _show_cluster(pool) -> None:
@@ -536,6 +536,11 @@ def _parser() -> argparse.ArgumentParser:
     listing.add_argument("--results", default="results", help="result folder")
     listing.set_defaults(handler=_list)
     return parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``study`` command's argument parser (the CLI reference page is generated from it)."""
+    return _parser()
 
 
 def _overwrite_option(command: argparse.ArgumentParser, what: str) -> None:

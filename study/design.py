@@ -459,16 +459,25 @@ def disk_limits(disk: Disk, f: float, samples: int = PHASES) -> tuple[float, flo
 class Evaluation:
     """Every target's motion and margins at one point of the design space.
 
-    Attributes (arrays over targets)
+    Every attribute is an array over the targets.
+
+    Attributes
     ----------
-    forward_speed : mean velocity [m s-1] (the single plate's ``v``; the disk's along
-        its heading); lateral_speed [m s-1] and turn_rate [rad s-1] (NaN for a plate);
-    status : :class:`~study.status.Status` codes;
-    threshold, lift : the motion threshold and lift-off acceleration at ``f`` [m s-2];
-    rim : the disk's rim contact margin (:func:`study.planar.contact_margins`; NaN for a
-        plate);
-    speed_margin (NaN for static), threshold_margin, lift_margin, margin : [1];
-    limiting : which margin is the target's (``speed``, ``threshold`` or ``lift``).
+    forward_speed : numpy.ndarray
+        Mean velocity [m s-1] (the single plate's ``v``; the disk's along its heading).
+    lateral_speed, turn_rate : numpy.ndarray
+        The disk's lateral speed [m s-1] and turn rate [rad s-1] (NaN for a plate).
+    status : numpy.ndarray
+        :class:`~study.status.Status` codes.
+    threshold, lift : numpy.ndarray
+        The motion threshold and lift-off acceleration at ``f`` [m s-2].
+    rim : numpy.ndarray
+        The disk's rim contact margin (:func:`study.planar.contact_margins`; NaN for a
+        plate).
+    speed_margin, threshold_margin, lift_margin, margin : numpy.ndarray
+        The margins [1] (``speed_margin`` is NaN for a static target).
+    limiting : numpy.ndarray
+        Which margin is the target's (``speed``, ``threshold`` or ``lift``).
     """
 
     forward_speed: NDArray[np.float64]

@@ -1,0 +1,79 @@
+"""The benchmark tables of the documentation: ``docs/speed/NAME.md``.
+
+``docs/speed-and-accuracy.md`` includes these files; they are never typed by hand. Each
+benchmark that ``make bench`` runs writes its table here (beside its own report in
+``results/``), headed by one line that says which script wrote it, when, and on what
+machine, so the page always shows the numbers of the last ``make bench`` with their
+date. The files are committed: the documentation builds without running benchmarks.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+#: Where the documentation's benchmark tables live.
+DOCS_SPEED = Path(__file__).resolve().parent.parent / "docs" / "speed"
+
+
+def written_by(script: str, measured: str, date: str | None = None) -> str:
+    """The first line of a table file: who wrote it, when and where it was measured.
+
+    Parameters
+    ----------
+    script : str
+        The benchmark's file name in ``benchmarks/``.
+    measured : str
+        The machine and conditions (CPU, cores, threads, versions, load).
+    date : str, optional
+        ``YYYY-MM-DD`` (UTC); default today.
+    """
+    date = date or time.strftime("%Y-%m-%d", time.gmtime())
+    return (f"*Written by `make bench` (`benchmarks/{script}`); the next run overwrites "
+            f"this file. Measured {date}, {measured}.*")
+
+
+def write_docs_table(name: str, script: str, measured: str, table: str,
+                     notes: str = "") -> Path:
+    """Write ``docs/speed/NAME.md``: the :func:`written_by` line, the table, notes.
+
+    Parameters
+    ----------
+    name : str
+        File stem, e.g. ``"velocity-map"``.
+    script : str
+        The benchmark's file name in ``benchmarks/``.
+    measured : str
+        The machine and conditions, for :func:`written_by`.
+    table : str
+        The Markdown table.
+    notes : str, optional
+        Markdown after the table (accuracy, what a column means).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written (via a temporary file beside it, then renamed).
+    """
+    text = f"{written_by(script, measured)}\n\n{table.rstrip()}\n"
+    if notes:
+        text += f"\n{notes.rstrip()}\n"
+    path = DOCS_SPEED / f"{name}.md"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_name(f".{path.name}.tmp")
+    temporary.write_text(text, encoding="utf-8")
+    temporary.replace(path)
+    print(f"wrote {path}")
+    return path
+
+
+def per_point(seconds: float, points: int) -> str:
+    """Time per point in ns below 1 us, else in us (``216 ns``, ``1.4 us``)."""
+    nanoseconds = seconds / points * 1e9
+    return f"{nanoseconds:.0f} ns" if nanoseconds < 999.5 else f"{nanoseconds / 1e3:.2g} us"
+
+
+def exponent(value: float) -> str:
+    """A power of ten as people write it: ``1e-8``, not ``1e-08``."""
+    mantissa, power = f"{value:.0e}".split("e")
+    return f"{mantissa}e{int(power)}"
