@@ -275,6 +275,7 @@ def plan_leg(pose: tuple[float, float, float], target: tuple[float, float],
     its path is an arc of a circle, so a target farther than a third of that circle's
     diameter is approached through intermediate points on the line to it, each
     reached by its own fastest pair.
+
     Raises
     ------
     ValueError, TypeError
