@@ -1,7 +1,8 @@
 """study: parameter studies of vibration-driven stick-slip locomotion.
 
 A soft structure with a resonant plate, on a vertically shaken table, walks forward
-or backward by stick-slip (Barois, Boucherie, Tadrist & Kellay). See README.md.
+or backward by stick-slip (Barois, Boucherie, Tadrist & Kellay). See the documentation
+in docs/ (``make docs``).
 
 The computing functions are imported with the package; :func:`run`, :func:`open_result`
 and :class:`ResultError`, which read and write result files, are imported on first use

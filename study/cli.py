@@ -478,8 +478,8 @@ def _parser() -> argparse.ArgumentParser:
     figure.add_argument("--measurements", action="append", type=Path, default=None,
                         metavar="CSV",
                         help="thresholds, velocity-curves, mass-ratio: measurement file "
-                        "drawn with error bars over the model (repeatable; README: "
-                        "Measurements and fits)")
+                        "drawn with error bars over the model (repeatable; format: "
+                        "docs/user-guide/measurements-and-fits.md)")
     _overwrite_option(figure, "figure")
     figure.set_defaults(handler=_figure)
 
@@ -506,10 +506,10 @@ def _parser() -> argparse.ArgumentParser:
         description="Estimate the free parameters of a fit spec (TOML: [fit] measurements, "
         "free = { NAME = [lower, upper] }, coupling; [structure] start values) from "
         "measurement CSV files; writes estimates, standard errors, correlations, residuals, "
-        "chi^2 and its p-value to a netCDF file (README: Measurements and fits). Warns, and "
-        "stores the warnings in the file, when an estimate is on a bound, a parameter is "
-        "not identifiable or chi^2 is improbable (p < 0.001); refuses velocities plainly "
-        "in mm/s.")
+        "chi^2 and its p-value to a netCDF file (docs/user-guide/measurements-and-fits.md). "
+        "Warns, and stores the warnings in the file, when an estimate is on a bound, a "
+        "parameter is not identifiable or chi^2 is improbable (p < 0.001); refuses "
+        "velocities plainly in mm s-1.")
     fitting.add_argument("spec", type=Path, help="fit spec (TOML)")
     fitting.add_argument("-o", "--output", type=_output_path,
                          help="result file (default: results/<spec file stem>.nc)")
@@ -523,7 +523,7 @@ def _parser() -> argparse.ArgumentParser:
         description="Search the free parameters of a design spec (TOML: [design], "
         "[structure] or [disk] with [[plate]], [free] bounds, [[target]] f, a, behaviour) "
         "for the largest smallest margin over the targets; writes the design, every "
-        "target's velocities and margins, and whether all are met (README: Design). An "
+        "target's velocities and margins, and whether all are met (docs/user-guide/design.md). An "
         "infeasible design is reported (exit status 0) naming the target that fails.")
     designing.add_argument("spec", type=Path, help="design spec (TOML)")
     designing.add_argument("-o", "--output", type=_output_path,

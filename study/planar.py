@@ -9,7 +9,7 @@ point of the disk along a direction in its body frame. The disk's contact is pla
 Coulomb friction with an ellipsoidal limit surface (the friction force and torque at
 sliding lie on the ellipsoid ``|f|^2 / (mu n)^2 + tau^2 / (mu n c)^2 = 1``; the twist
 is normal to it), with stick and slip for force and torque together. See
-:mod:`study.kernels.planar` for the equations and README "Steering" for the choices.
+:mod:`study.kernels.planar` for the equations and docs/user-guide/steering.md for the choices.
 
 Per unit total mass, SI units: lengths in m; every angle a caller passes or gets back
 is in degrees (the plates' tilt and direction, as in :class:`study.structure.Structure`;
@@ -570,8 +570,8 @@ def simulate_planar(
         A slip that starts from rest moves along its slaved direction until its twist
         exceeds ``slaving * ck * g / (2 pi f_max)`` [1]: this removes the stiffness of
         the direction's relaxation (rate ``ck n / |u|``) at the cost of an error of
-        order ``slaving^2`` relative (measured; see README, Steering). Exact for motion along
-        one axis.
+        order ``slaving^2`` relative (measured; see docs/user-guide/steering.md). Exact
+        for motion along one axis.
     on_progress : callable, optional
         Called with the drive time reached [s] each time the integration stops (at every
         heading kick with noise, else at the end); the integration is the same with or

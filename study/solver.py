@@ -206,14 +206,14 @@ def steady_state(
 ) -> SteadyState:
     """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
 
-    Event-driven and closed form between events (README, "How the solver works"); no time
+    Event-driven and closed form between events (docs/theory/exact-solvers.md); no time
     step. The orbit is the one reached from rest at drive phase 0 with the mode on
     its steady response. Runs in parallel over points and releases the GIL.
 
     With ``coupling="two-way"`` the base's sliding acceleration also forces the mode,
     which becomes a state of the orbit: the orbit is the fixed point of the period map,
-    found by Newton's method with the exact Jacobian (README, "Two-way coupling,
-    exact"), and its largest Floquet multiplier is returned.
+    found by Newton's method with the exact Jacobian (docs/theory/two-way.md), and its
+    largest Floquet multiplier is returned.
 
     Parameters
     ----------
@@ -355,10 +355,10 @@ def attractors(
     """Multistability check: the distinct stable orbits reached from several starts.
 
     From rest at four drive phases, with the mode at 0, 1 and 2 times its steady
-    response (:data:`ATTRACTOR_STARTS`), the exact orbit solver (README, "Two-way
-    coupling, exact") finds the attracting periodic orbit each start leads to; orbits
-    are the same when their periods agree and their mean velocities agree to
-    ``1e-9 a / w``. Costs twelve solves per point.
+    response (:data:`ATTRACTOR_STARTS`), the exact orbit solver (docs/theory/two-way.md)
+    finds the attracting periodic orbit each start leads to; orbits are the same when
+    their periods agree and their mean velocities agree to ``1e-9 a / w``. Costs twelve
+    solves per point.
 
     Parameters
     ----------

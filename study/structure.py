@@ -55,7 +55,7 @@ UNITS = {"f0": HERTZ, "Q": DIMENSIONLESS, "alpha": DEGREE, "M": DIMENSIONLESS,
 
 @dataclass(frozen=True)
 class Structure:
-    """A rigid base carrying one tilted resonant plate (README, "How the solver works").
+    """A rigid base carrying one tilted resonant plate (docs/theory/model.md).
 
     All forces in the model are per unit total mass, so the structure is fully
     described by its mode and its friction with the table.

@@ -1,7 +1,7 @@
 """Time integration of the full single-plate model: transients, schedules, two-way coupling.
 
 The exact solver (:mod:`study.solver`) gives the steady orbit only, under either
-coupling (README, "Two-way coupling, exact"). This module integrates the whole
+coupling (docs/theory/two-way.md). This module integrates the whole
 model in time with an event-driven Dormand-Prince 5(4) scheme
 (:mod:`study.kernels.transient`): any initial state, a drive given as a schedule of
 segments with continuous phase, and optionally the two-way coupling in which the

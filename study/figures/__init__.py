@@ -43,7 +43,7 @@ class Figure:
     def source(self) -> str:
         """Where its data come from, for messages."""
         if self.workflow == "fit":
-            return "a 'study fit' result (README: Measurements and fits)"
+            return "a 'study fit' result (docs/user-guide/measurements-and-fits.md)"
         return f"the '{self.workflow}' workflow: workflows/{self.workflow}.toml"
 
 

@@ -3,8 +3,7 @@
 State ``z = (delta, d delta/dt, v)`` at time ``t`` and a contact mode: stick (0),
 forward slip (+1), backward slip (-1). Per unit total mass, table frame, drive
 ``A = a cos(w t)``; ``c = w0/Q``, ``k = w0^2``. In every contact mode the mode obeys a
-linear ODE with constant coefficients and harmonic forcing (README, "Two-way
-coupling, exact")::
+linear ODE with constant coefficients and harmonic forcing (docs/theory/two-way.md)::
 
     stick:         delta'' + c delta' + k delta = A cos(alpha)
     slip s:   D_s delta'' + c delta' + k delta = A (cos(alpha) - s ck sin(alpha))

@@ -1,4 +1,4 @@
-"""Event-driven, closed-form steady-state stick-slip kernel (README, "How the solver works").
+"""Event-driven, closed-form steady-state stick-slip kernel (docs/theory/exact-solvers.md).
 
 Time is measured by the drive phase ``theta = w t``. In a slip of sign ``s``
 started at rest at ``theta0``, the scaled speed ``U = s w v`` obeys::

@@ -1,4 +1,4 @@
-"""Closed-form physics of the single-plate model, pure numpy (README, "How the solver works")."""
+"""Closed-form physics of the single-plate model, pure numpy (docs/theory/model.md)."""
 
 from study.physics.forces import (
     force_amplitudes,

@@ -10,7 +10,7 @@ mode on its steady harmonic response::
     n(t)   = g + Re[N e^{i w t}]      N = -a (1 + w^2 M cos^2(alpha) G)
     tau(t) =     Re[T e^{i w t}]      T =  a w^2 M sin(alpha) cos(alpha) G
 
-with ``G = 1 / (w0^2 - w^2 + i w0 w / Q)`` (README, "How the solver works").
+with ``G = 1 / (w0^2 - w^2 + i w0 w / Q)`` (docs/theory/model.md).
 """
 
 from __future__ import annotations
