@@ -686,7 +686,7 @@ def _read_file(path: Path) -> bytes:
         why = ("a symbolic link, not followed" if err.errno == errno.ELOOP
                else err.strerror or str(err))
         raise MeasurementError(f"{path}: cannot read the measurement file ({why})") from None
-    with os.fdopen(handle, "rb") as stream:
+    try:
         info = os.fstat(handle)
         if not stat.S_ISREG(info.st_mode):
             raise MeasurementError(f"{path}: {_kind(info.st_mode)}, not a regular file; a "
@@ -695,6 +695,10 @@ def _read_file(path: Path) -> bytes:
             raise MeasurementError(f"{path}: {info.st_size} bytes; a measurement file is at "
                                    f"most {MAX_BYTES} bytes")
         os.set_blocking(handle, True)
+    except BaseException:
+        os.close(handle)
+        raise
+    with os.fdopen(handle, "rb") as stream:
         try:
             data = stream.read(MAX_BYTES + 1)
         except OSError as err:
