@@ -8,7 +8,8 @@
 #                   two-way work-precision -> results/bench-two-way.nc and .md,
 #                   one-thread map against a single-purpose floor -> results/bench-floor.md,
 #                   one-thread map, one-way against two-way -> results/bench-two-way-map.md,
-#                   exact two-way solver vs integrator -> results/bench-two-way-agreement.md
+#                   exact two-way solver vs integrator -> results/bench-two-way-agreement.md,
+#                   reading a million-row measurement file (printed)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
 #   make designs    run every design spec in designs/: results/design-<name>.nc
@@ -133,6 +134,7 @@ bench: $(STAMP)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_two_way_map.py
 	$(PY) benchmarks/bench_planar.py
 	$(PY) benchmarks/two_way_agreement.py
+	$(PY) benchmarks/bench_measurements.py
 	mkdir -p docs && cp figures/work-precision.png figures/work-precision-two-way.png docs/
 
 cf-check: $(RESULTS)
