@@ -3,7 +3,8 @@
 #                   (parameter studies and the steering scenes alike)
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
 #   make test       set up .venv on a fresh machine, lint, run the test suite
-#   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash
+#   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash;
+#                   counts of what they tried -> results/reliability.md
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc,
 #                   two-way work-precision -> results/bench-two-way.nc and .md,
 #                   one-thread map against a single-purpose floor -> results/bench-floor.md,
@@ -121,9 +122,15 @@ test: $(STAMP) lint
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow
 
-# Seeded fuzz tiers (corrupted result files...): CI runs them.
+# Seeded fuzz tiers (corrupted result files, damaged caches, mutated specs, measurement
+# files, command lines): CI runs them. Each passed tier records what it tried; the
+# table of counts (cases, faults injected, results lost) goes to results/reliability.md.
+RELIABILITY_COUNTS := results/reliability-counts.json
 fuzz: $(STAMP)
-	$(PY) -m pytest -m fuzz
+	mkdir -p results && rm -f $(RELIABILITY_COUNTS)
+	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -m fuzz
+	$(PY) -m tests.reliability $(RELIABILITY_COUNTS) > results/reliability.md
+	cat results/reliability.md
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_velocity_map.py

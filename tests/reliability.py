@@ -35,9 +35,11 @@ def record(tier: str, what: str, *, cases: int, faults: int, results_checked: in
     faults : int
         Faults injected or hostile inputs given [1].
     results_checked : int
-        Finished results compared with a clean reference afterwards [1].
+        Results or input files checked afterwards [1]: bit-identical to a clean
+        reference (damaged cache), sealed and valid (spec runs, accepted result files),
+        or byte-identical to before (the command line's input files).
     results_lost : int
-        Of those, results lost or changed [1] (0 for a passed tier).
+        Of those, lost or changed [1] (0 for a passed tier: it fails first).
     """
     name = os.environ.get(ENV)
     if not name:
