@@ -64,6 +64,7 @@ __all__ = [
     "Quantity",
     "check_velocity_units",
     "export_measurement_schema",
+    "measurement_file_bytes",
     "measurement_schema",
     "parse_measurements",
     "read_measurements",
@@ -662,7 +663,7 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
-def _read_file(path: Path) -> bytes:
+def measurement_file_bytes(path: str | Path) -> bytes:
     """The bytes of a measurement file: a regular file of at most :data:`MAX_BYTES`.
 
     A link is followed only to a file in the link's own folder (or below it); the file
@@ -670,7 +671,13 @@ def _read_file(path: Path) -> bytes:
     O_NONBLOCK``, then ``fstat``), so a FIFO, a device such as ``/dev/zero``, a folder
     or a file swapped for a link is refused before a byte is read, and nothing is read
     beyond the limit.
+
+    Raises
+    ------
+    MeasurementError
+        Naming the file and why it is not read.
     """
+    path = Path(path)
     target = path
     if path.is_symlink():
         folder = path.absolute().parent.resolve()
@@ -725,7 +732,7 @@ def read_measurements(paths: str | Path | Iterable[str | Path]) -> xr.Dataset:
     parts = []
     for path in paths:
         path = Path(path)
-        data = _read_file(path)
+        data = measurement_file_bytes(path)
         try:
             text = data.decode("utf-8-sig")
         except UnicodeDecodeError as err:

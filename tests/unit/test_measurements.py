@@ -3,6 +3,7 @@ refusals that name the file, the line and the column."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import sys
@@ -319,3 +320,22 @@ def test_a_row_is_read_exactly_when_the_schema_accepts_it(row: dict[str, str]) -
         if COLUMNS[name].number:
             expected = float(cell) if cell else np.nan
             np.testing.assert_equal(data[name].values[0], expected, err_msg=name)
+
+
+def test_the_figure_request_reads_measurements_as_the_figure_does(tmp_path: Path) -> None:
+    """`study figure --if-changed --measurements /dev/zero` hashed the device without
+    bound, and waited forever on a FIFO."""
+    import xarray as xr
+
+    from study.figures import figure_request
+
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    good = tmp_path / "good.csv"
+    good.write_text(MINIMAL)
+    with deadline(60):
+        request = json.loads(figure_request("thresholds", xr.Dataset(),
+                                            measurements=["/dev/zero", fifo, good]))
+    digests = [digest for _, digest in request["measurements"]]
+    assert digests[:2] == [None, None]
+    assert digests[2] == hashlib.sha256(MINIMAL.encode()).hexdigest()
