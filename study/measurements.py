@@ -307,8 +307,11 @@ class _Table:
         columns = list(zip(*rows, strict=True)) if rows else [()] * len(header)
         self.cells = {name: list(map(str.strip, column))
                       for name, column in zip(header, columns, strict=True)}
+        # Blank text cells; a number column's blanks are its NaN (see _numbers).
         self.blank = {name: np.fromiter(map(operator.not_, cells), bool, n)
-                      for name, cells in self.cells.items()}
+                      for name, cells in self.cells.items() if not COLUMNS[name].number}
+        self.quantity = np.array(self.cells["quantity"] if "quantity" in self.cells else
+                                 [""] * n, dtype=object).reshape(-1)
 
 
 def _csv_rows(text: str, path: str) -> tuple[list[str], int, list[list[str]], np.ndarray,
@@ -450,8 +453,8 @@ def _numbers(table: _Table, path: str) -> tuple[dict[str, np.ndarray], dict[int,
             cells = [c if _NUMBER_CELL.fullmatch(c) else "" for c in cells]
         column = np.fromiter(map(float, [c or "nan" for c in cells]), np.float64,
                              len(cells))
-        given = np.fromiter(map(bool, cells), bool, len(cells))
-        for row in np.flatnonzero(given & ~np.isfinite(column)):
+        table.blank[name] = np.isnan(column)  # "nan" is no number: NaN only where blank
+        for row in np.flatnonzero(~table.blank[name] & ~np.isfinite(column)):
             refuse(int(row), name, f"{_shown(cells[row])} is not a finite number (beyond "
                    f"the largest float64, {sys.float_info.max:.4g})")
         if name == "sigma":
@@ -487,9 +490,8 @@ def _invalid(table: _Table, values: dict[str, np.ndarray]) -> np.ndarray:
                     invalid |= v <= column.exclusive_minimum
                 if column.maximum is not None:
                     invalid |= v > column.maximum
-    quantity = np.array(table.cells["quantity"], dtype=object).reshape(-1)
     for q in QUANTITIES.values():
-        rows = quantity == q.name
+        rows = table.quantity == q.name
         for name in q.required:
             invalid |= rows & blank.get(name, nothing)
         for name in q.blank:
@@ -576,7 +578,7 @@ def _parse(text: str, path: str) -> xr.Dataset:
 
 
 def _dataset(table: _Table, values: dict[str, np.ndarray], path: str) -> xr.Dataset:
-    quantity = np.array(table.cells["quantity"], dtype=object).reshape(-1)
+    quantity = table.quantity
     if "direction" in table.cells:
         direction = np.array(table.cells["direction"], dtype=object).reshape(-1)
     else:
