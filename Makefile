@@ -5,12 +5,15 @@
 #   make docs       the documentation site, build/html/index.html (Sphinx, warnings are
 #                   errors; runs the example gallery); needs the figures, so `make` first
 #   make test       set up .venv on a fresh machine, lint, run the test suite
-#   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash
+#   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash;
+#                   counts of what they tried -> results/reliability.md
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc,
 #                   two-way work-precision -> results/bench-two-way.nc and .md,
+#                   each benchmark's table for the documentation -> docs/speed/*.md,
 #                   one-thread map against a single-purpose floor -> results/bench-floor.md,
 #                   one-thread map, one-way against two-way -> results/bench-two-way-map.md,
-#                   exact two-way solver vs integrator -> results/bench-two-way-agreement.md
+#                   exact two-way solver vs integrator -> results/bench-two-way-agreement.md,
+#                   reading a million-row measurement file (printed)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
 #   make designs    run every design spec in designs/: results/design-<name>.nc
@@ -134,9 +137,15 @@ test: $(STAMP) lint
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow
 
-# Seeded fuzz tiers (corrupted result files...): CI runs them.
+# Seeded fuzz tiers (corrupted result files, damaged caches, mutated specs, measurement
+# files, command lines): CI runs them. Each passed tier records what it tried; the
+# table of counts (cases, faults injected, results lost) goes to results/reliability.md.
+RELIABILITY_COUNTS := results/reliability-counts.json
 fuzz: $(STAMP)
-	$(PY) -m pytest -m fuzz
+	mkdir -p results && rm -f $(RELIABILITY_COUNTS)
+	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -m fuzz
+	$(PY) -m tests.reliability $(RELIABILITY_COUNTS) > results/reliability.md
+	cat results/reliability.md
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_velocity_map.py
@@ -147,6 +156,7 @@ bench: $(STAMP)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_two_way_map.py
 	$(PY) benchmarks/bench_planar.py
 	$(PY) benchmarks/two_way_agreement.py
+	$(PY) benchmarks/bench_measurements.py
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
 

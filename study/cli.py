@@ -564,7 +564,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
-    args.argv = argv  # recorded in the result's history
+    # Recorded in the result's history: a name that is not UTF-8 (kept by Python as
+    # lone surrogates) is written escaped, not refused by the netCDF attribute.
+    args.argv = [a.encode("utf-8", "backslashreplace").decode("utf-8") for a in argv]
     if getattr(args, "workers", None) is not None and args.workers < 1:
         parser.error(f"--workers must be >= 1, got {args.workers}")
     try:
@@ -579,6 +581,12 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 141
+    except OSError as err:
+        # What the commands do not name themselves (a name too long, a path through a
+        # file, ...): one line naming the path, not a traceback.
+        where = f"{err.filename}: " if err.filename is not None else ""
+        print(f"study: {where}{err.strerror or err}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -305,6 +306,11 @@ def parse_fit_spec(text: str, path: str = "<string>", base: str | Path = ".") ->
 
 
 def _fill_sigma(data: xr.Dataset, defaults: dict[str, float], path: str) -> xr.Dataset:
+    for quantity, value in defaults.items():
+        if float(value) < sys.float_info.min:  # positive (the schema): subnormal
+            raise SpecError(f"{path}: [fit] sigma.{quantity} = {value!r} is below the "
+                            f"smallest normal float64 ({sys.float_info.min:.4g}); an "
+                            "uncertainty is a positive normal number")
     sigma = data["sigma"].values.copy()
     quantity = data["quantity"].values
     for i in np.flatnonzero(~np.isfinite(sigma)):

@@ -149,7 +149,12 @@ def _open(path: Path, mode: str = "r"):
     import netCDF4
 
     path = Path(path)
-    if not path.is_file():
+    try:
+        regular = path.is_file()
+    except OSError as err:  # a name too long, a permission denied on the way...
+        raise ResultError(f"{path}: cannot read the result file ({err.strerror or err})"
+                          ) from None
+    if not regular:
         raise ResultError(f"{path}: no such file")
     try:
         nc = netCDF4.Dataset(path, mode)

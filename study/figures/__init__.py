@@ -216,14 +216,15 @@ def figure_request(name: str, dataset: xr.Dataset, *, sel: Iterable[str] = (),
     import json
 
     from study.fingerprint import code_fingerprint
+    from study.measurements import MeasurementError, measurement_file_bytes
 
     if name not in FIGURES:
         raise FigureError(f"unknown figure {name!r}; figures: {', '.join(FIGURES)}")
     files = []
     for path in measurements or ():
-        try:
-            digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
-        except OSError:
+        try:  # as the figure reads it: never a FIFO, a device or beyond the size limit
+            digest = hashlib.sha256(measurement_file_bytes(path)).hexdigest()
+        except MeasurementError:
             digest = None  # unreadable: draw_figure says why
         files.append([str(path), digest])
     code = code_fingerprint(("study.figures", FIGURES[name].module)).sha256

@@ -50,6 +50,7 @@ from study.validate import (
     read_attributes,
     validate_file,
 )
+from tests.reliability import record
 
 pytestmark = pytest.mark.fuzz
 
@@ -383,3 +384,7 @@ def test_corrupted_results_are_refused_or_unchanged(sealed, tmp_path: Path) -> N
         assert counts["refused"] >= PER_KIND // 2, (kind, counts)
         assert counts["accepted"] >= 10, (kind, counts)
     assert drawn == {name: DRAWN_PER_FILE for name in FIGURES}
+    record("tests/fuzz/test_corrupted_results.py",
+           "result files: attribute, value, dtype and byte corruptions, refused or unchanged",
+           cases=number, faults=number,
+           results_checked=sum(c["accepted"] for c in outcomes.values()))

@@ -24,6 +24,7 @@ import pytest
 from study.cli import main
 from study.runner import run_study
 from study.store import open_result
+from tests.reliability import record
 from tests.unit.test_cache_health import KINDS, damage, deadline, garble
 from tests.unit.test_incremental import spec_text
 
@@ -94,3 +95,7 @@ def test_a_damaged_cache_never_changes_a_result(tmp_path_factory, capsys):
             assert main(["cache", "verify", "--cache", str(cache)]) == 0, case
             capsys.readouterr()
     assert sum(tried.values()) >= CASES
+    record("tests/fuzz/test_damaged_cache.py",
+           "cache: one to three damaged blocks, axis files, entry records or links per "
+           "rerun; values bit-identical", cases=CASES, faults=sum(tried.values()),
+           results_checked=CASES)

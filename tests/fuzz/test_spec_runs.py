@@ -59,6 +59,7 @@ from study.runner import load_any
 from study.scene import SceneSpec
 from study.specfile import SpecError
 from study.status import INVALID_STATUSES
+from tests.reliability import record
 
 pytestmark = pytest.mark.fuzz
 
@@ -998,3 +999,6 @@ def test_mutated_specs_run_or_are_refused(tmp_path: Path, capfd) -> None:
     # Both outcomes must be common, or the fuzz would prove little.
     assert outcomes["refused"] >= CASES // 3, outcomes
     assert outcomes["accepted"] >= CASES // 10, outcomes
+    record("tests/fuzz/test_spec_runs.py",
+           "specs of every workflow kind: one to three mutations each, run through study run",
+           cases=CASES, faults=CASES, results_checked=outcomes["accepted"])

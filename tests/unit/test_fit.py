@@ -199,6 +199,13 @@ def test_blank_sigma_needs_a_default(tmp_path: Path) -> None:
     assert list(spec.measurements["sigma"].values) == [0.2, 0.1]
 
 
+def test_a_subnormal_default_sigma_is_refused_naming_its_key(tmp_path: Path) -> None:
+    csv = "quantity,f,value,sigma\nthreshold,13,6.2,\nthreshold,16,6.6,0.1\n"
+    with pytest.raises(SpecError, match=r"\[fit\] sigma.threshold = 1e-320 is below the "
+                                        r"smallest normal float64"):
+        make_spec(tmp_path, csv, "cs = [0.05, 1.0]", extra="sigma = { threshold = 1e-320 }")
+
+
 MINIMAL_CSV = """quantity,f,a,value,sigma
 threshold,13.0,,6.25,0.05
 threshold,16.5,,6.6,0.05

@@ -3,21 +3,30 @@ refusals that name the file, the line and the column."""
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import study
+from study import measurements
 from study.measurements import (
     COLUMNS,
+    MAX_FIELD_CHARS,
+    MAX_LINE_CHARS,
     QUANTITIES,
     MeasurementError,
     export_measurement_schema,
     parse_measurements,
     read_measurements,
 )
+from tests.unit.test_cache_health import deadline
 
 MINIMAL = """quantity,f,a,value,sigma
 threshold,13.0,,6.25,0.05
@@ -124,3 +133,209 @@ def test_unreadable_and_non_utf8_files_are_named(tmp_path: Path) -> None:
     bad.write_bytes(b"quantity,value\nthreshold\xff,1\n")
     with pytest.raises(MeasurementError, match=r"bad.csv, line 2: not UTF-8"):
         read_measurements(bad)
+
+
+# ---------------------------------------------------------------------------
+# Numbers read strictly; sigma a normal float (issue 19, item 6)
+
+HEADER = "quantity,f,a,value,sigma\n"
+
+
+@pytest.mark.parametrize("cell", [
+    "6_25", "0x10", "0o17", "inf", "-inf", "Infinity", "nan", "NaN", "1e999", "-1e999",
+    "6.25 x", "6.25x", "x6.25", "\uff16.25", "\u0666.25", "1.2.3", "e5", "1e", "+-1", "--1", ".",
+    "6,25", "6.25 7", "1_000.5", "0b1", "6.25\x00", "6.25\x0b7",
+])
+def test_a_number_float_would_take_or_not_is_refused_naming_the_cell(cell: str) -> None:
+    text = HEADER + f'threshold,13,,"{cell}",0.05\n'
+    message = refusal(text)
+    assert f"lab.csv, line 2, column 'value': {cell.strip(' ')!r}" in message
+    assert "not a finite number" in message and "Traceback" not in message
+
+
+@pytest.mark.parametrize("cell, expected", [
+    ("6.25", 6.25), (" 6.25 ", 6.25), ("+6.25", 6.25), ("625e-2", 6.25), ("6.25E0", 6.25),
+    ("6.", 6.0), (".5", 0.5), ("0006.25", 6.25), ("6.250000000000000000001", 6.25),
+])
+def test_plain_decimal_numbers_read_as_python_reads_the_literal(cell: str, expected: float
+                                                                ) -> None:
+    data = parse_measurements(HEADER + f"threshold,13,,{cell},0.05\n", "lab.csv")
+    assert data["value"].values[0] == expected
+
+
+def test_a_subnormal_sigma_is_refused_and_the_smallest_normal_one_read() -> None:
+    message = refusal(HEADER + "threshold,13,,6.25,1e-320\n")
+    assert "line 2, column 'sigma': '1e-320' is below the smallest normal float64" in message
+    tiny = sys.float_info.min
+    data = parse_measurements(HEADER + f"threshold,13,,6.25,{tiny!r}\n", "lab.csv")
+    assert data["sigma"].values[0] == tiny
+
+
+# ---------------------------------------------------------------------------
+# Layout: one row per line, limits on lines, cells and rows
+
+def test_a_quoted_cell_spanning_lines_is_one_error_naming_the_lines() -> None:
+    message = refusal(HEADER + 'threshold,13,,"6.25\n7",0.05\nthreshold,14,,6,0.05\n')
+    assert "lab.csv, lines 2-3: a quoted cell spans lines" in message
+
+
+def test_an_unclosed_quote_is_one_error_naming_its_line() -> None:
+    message = refusal(HEADER + "threshold,13,,6.25,0.05\nthreshold,14,,\"6,0.05\n")
+    assert "lab.csv, line 3: not CSV (an unclosed quote)" in message
+
+
+def test_a_quoted_comma_in_a_note_and_spaces_after_commas_are_read() -> None:
+    text = 'quantity, f, value, note\nthreshold, 13, 6.25, "plate 2, taped"\n'
+    data = parse_measurements(text, "lab.csv")
+    assert data["value"].values[0] == 6.25 and data["f"].values[0] == 13.0
+
+
+def test_a_huge_line_and_a_long_cell_are_refused_naming_line_and_limit() -> None:
+    message = refusal(HEADER + "threshold,13,," + "1" * 200_000 + ",0.05\n")
+    assert f"lab.csv, line 2: 200019 characters; a line of a measurement file holds at most " \
+           f"{MAX_LINE_CHARS}" in message
+    long_note = "quantity,f,value,note\nthreshold,13,6.25," + "n" * (MAX_FIELD_CHARS + 1)
+    assert (f"lab.csv, line 2, column 'note': {MAX_FIELD_CHARS + 1} characters; a cell holds "
+            f"at most {MAX_FIELD_CHARS}") in refusal(long_note)
+    data = parse_measurements(long_note[:-1], "lab.csv")  # at the limit: read
+    assert len(data["value"]) == 1
+
+
+def test_more_rows_than_the_limit_are_refused(monkeypatch) -> None:
+    monkeypatch.setattr(measurements, "MAX_ROWS", 3)
+    rows = "threshold,13,,6.25,0.05\n"
+    assert parse_measurements(HEADER + 3 * rows, "lab.csv").sizes["measurement"] == 3
+    assert "lab.csv, line 5: more than 3 rows" in refusal(HEADER + 4 * rows)
+
+
+def test_line_numbers_count_comments_blank_lines_and_crlf_endings() -> None:
+    text = "# lab book p. 3\r\n\r\n" + HEADER.replace("\n", "\r\n") + \
+        "threshold,13,,6.25,0.05\r\n# retake\r\nthreshold,14,,6.5,0.05\r\n"
+    data = parse_measurements(text, "lab.csv")
+    assert list(data["line"].values) == [4, 6]
+    np.testing.assert_array_equal(data["value"].values, [6.25, 6.5])
+
+
+def test_many_bad_rows_list_thirty_and_count_the_rest() -> None:
+    message = refusal(HEADER + 100 * "threshold,13,5,6.25,0.05\n")
+    assert message.count("must be blank") == 30
+    assert message.endswith("... and 70 more")
+
+
+# ---------------------------------------------------------------------------
+# Files: only regular files, no link out of their folder, bounded size
+
+@pytest.fixture
+def good_file(tmp_path: Path) -> Path:
+    path = tmp_path / "lab" / "measured.csv"
+    path.parent.mkdir()
+    path.write_text(MINIMAL)
+    return path
+
+
+def read_refusal(path: Path) -> str:
+    with deadline(20), pytest.raises(MeasurementError) as err:
+        read_measurements(path)
+    return str(err.value)
+
+
+def test_dev_zero_a_fifo_and_a_folder_are_refused_before_a_byte_is_read(tmp_path: Path
+                                                                        ) -> None:
+    assert read_refusal(Path("/dev/zero")) == (
+        "/dev/zero: a character device, not a regular file; a measurement file is a CSV "
+        "text file")
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    assert read_refusal(fifo) == f"{fifo}: a FIFO, not a regular file; a measurement file " \
+                                 "is a CSV text file"
+    assert "a folder, not a regular file" in read_refusal(tmp_path)
+
+
+def test_a_link_out_of_its_folder_is_refused_and_one_inside_is_read(good_file: Path,
+                                                                    tmp_path: Path) -> None:
+    outside = tmp_path / "elsewhere.csv"
+    outside.write_text(MINIMAL)
+    link = good_file.parent / "linked.csv"
+    link.symlink_to(outside)
+    assert read_refusal(link).startswith(f"{link}: a symbolic link out of its folder")
+    to_zero = good_file.parent / "zero.csv"
+    to_zero.symlink_to("/dev/zero")
+    assert "a symbolic link out of its folder" in read_refusal(to_zero)
+    inside = good_file.parent / "same.csv"
+    inside.symlink_to(good_file.name)
+    assert read_measurements(inside).sizes["measurement"] == 3
+
+
+def test_a_file_beyond_the_size_limit_is_refused_unread(good_file: Path, monkeypatch) -> None:
+    monkeypatch.setattr(measurements, "MAX_BYTES", 40)
+    assert read_refusal(good_file) == (
+        f"{good_file}: {len(MINIMAL)} bytes; a measurement file is at most 40 bytes")
+
+
+def test_reading_changes_no_file(good_file: Path) -> None:
+    before = good_file.read_bytes(), good_file.stat().st_mtime_ns
+    read_measurements(good_file)
+    assert (good_file.read_bytes(), good_file.stat().st_mtime_ns) == before
+
+
+# ---------------------------------------------------------------------------
+# The column-wise checks agree with the schema, row by row (an independent check:
+# jsonschema reads the exported schema; the reader checks columns with numpy).
+
+_CELLS = {
+    "quantity": st.sampled_from([*QUANTITIES, "thresh", "Threshold", ""]),
+    "direction": st.sampled_from(["forward", "backward", "unknown", "sideways", ""]),
+    "note": st.sampled_from(["", "tap test", "x"]),
+}
+_NUMBERS = st.sampled_from(["", "0", "-0", "1", "-1", "0.5", "1.0", "1.5", "13", "6.25",
+                            "1e-300", "-3", "2.5e-308", "1e300"])
+
+
+@st.composite
+def rows(draw) -> dict[str, str]:
+    names = draw(st.lists(st.sampled_from(list(COLUMNS)), unique=True, min_size=0))
+    names = ["quantity", "value", *[n for n in names if n not in ("quantity", "value")]]
+    return {n: draw(_CELLS[n] if n in _CELLS else _NUMBERS) for n in names}
+
+
+@settings(max_examples=400, deadline=None, derandomize=True)
+@given(rows())
+def test_a_row_is_read_exactly_when_the_schema_accepts_it(row: dict[str, str]) -> None:
+    import jsonschema
+
+    text = ",".join(row) + "\n" + ",".join(row.values()) + "\n"
+    as_schema_sees_it = {name: float(cell) if COLUMNS[name].number else cell
+                         for name, cell in row.items() if cell}
+    valid = jsonschema.Draft202012Validator(
+        json.loads(export_measurement_schema())).is_valid(as_schema_sees_it)
+    valid = valid and not ("m_add" in as_schema_sees_it and "M" in as_schema_sees_it)
+    try:
+        data = parse_measurements(text, "row.csv")
+    except MeasurementError as err:
+        assert not valid, str(err)
+        assert "row.csv, line 2" in str(err)
+        return
+    assert valid, row
+    for name, cell in row.items():
+        if COLUMNS[name].number:
+            expected = float(cell) if cell else np.nan
+            np.testing.assert_equal(data[name].values[0], expected, err_msg=name)
+
+
+def test_the_figure_request_reads_measurements_as_the_figure_does(tmp_path: Path) -> None:
+    """`study figure --if-changed --measurements /dev/zero` hashed the device without
+    bound, and waited forever on a FIFO."""
+    import xarray as xr
+
+    from study.figures import figure_request
+
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    good = tmp_path / "good.csv"
+    good.write_text(MINIMAL)
+    with deadline(60):
+        request = json.loads(figure_request("thresholds", xr.Dataset(),
+                                            measurements=["/dev/zero", fifo, good]))
+    digests = [digest for _, digest in request["measurements"]]
+    assert digests[:2] == [None, None]
+    assert digests[2] == hashlib.sha256(MINIMAL.encode()).hexdigest()
