@@ -144,8 +144,12 @@ RELIABILITY_COUNTS := results/reliability-counts.json
 fuzz: $(STAMP)
 	mkdir -p results && rm -f $(RELIABILITY_COUNTS)
 	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -m fuzz
+	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -q \
+	    tests/property/test_api_inputs.py
 	$(PY) -m tests.reliability $(RELIABILITY_COUNTS) > results/reliability.md
 	cat results/reliability.md
+	{ echo "*Written by \`make fuzz\` on $$(date -u +%Y-%m-%d) ($$(nproc) cores); the next run overwrites this file.*"; \
+	  echo; cat results/reliability.md; } > docs/speed/reliability.md
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_velocity_map.py

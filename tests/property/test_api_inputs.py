@@ -288,3 +288,17 @@ def test_every_public_function_is_fuzzed_or_says_why_not():
     covered = {name.split()[0] for name in CALLS}
     assert public - covered - set(NOT_FUZZED) == set()
     assert len(SLOTS) * EXAMPLES >= 5000  # the cases a run tries (docs quote it)
+
+
+def test_the_tier_s_counts_are_recorded_for_the_docs():
+    """Runs after the cases above (pytest keeps file order): ``make fuzz`` records what
+    this tier tried, beside the fuzz tiers, for the reliability table of the docs."""
+    from tests.reliability import record
+
+    tried = CASES["result"] + CASES["refused"]
+    if tried == 0:
+        pytest.skip("run with the cases above (a selection ran this test alone)")
+    record("tests/property/test_api_inputs.py",
+           "arguments of every public function: wrong types and extreme numbers",
+           cases=tried, faults=tried, results_checked=CASES["result"])
+    assert tried >= len(SLOTS)
