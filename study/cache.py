@@ -62,6 +62,7 @@ from typing import Any, BinaryIO
 import numpy as np
 from numpy.typing import NDArray
 
+from study.files import NotRegularFile, SymbolicLink, TooLarge, file_kind, open_regular
 from study.store import StoreBusy
 
 __all__ = [
@@ -117,49 +118,30 @@ class _Bad(Exception):
     """A file of the cache that cannot be used; the message says why."""
 
 
-def _kind(mode: int) -> str:
-    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"),
-                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
-                       (stat.S_ISSOCK, "a socket"), (stat.S_ISLNK, "a symbolic link")):
-        if test(mode):
-            return name
-    return "not a regular file"
-
-
 def _open_regular(path: Path, limit: int) -> BinaryIO:
-    """``path`` opened for reading if it is a regular file of at most ``limit`` bytes.
-
-    Never follows a symbolic link (O_NOFOLLOW) and never blocks on a FIFO or device
-    (O_NONBLOCK, then fstat): a link out of the cache, a FIFO or ``/dev/zero`` put in
-    place of a block is refused before a byte is read.
+    """``path`` opened for reading if it is a regular file of at most ``limit`` bytes
+    (:func:`study.files.open_regular`, links never followed): a link out of the cache, a
+    FIFO or ``/dev/zero`` put in place of a block is refused before a byte is read.
 
     Raises
     ------
     _Bad
-        If it is a link, not a regular file, or larger than ``limit``.
+        If it is a link, not a regular file, larger than ``limit`` or unopenable.
     FileNotFoundError
         If it is gone (moved aside or pruned by another process).
     """
-    flags = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)
     try:
-        handle = os.open(path, flags)
+        return open_regular(path, limit)
     except FileNotFoundError:
         raise
+    except SymbolicLink:
+        raise _Bad("a symbolic link (never followed out of the cache)") from None
+    except NotRegularFile as err:
+        raise _Bad(f"{err.kind}, not a regular file") from None
+    except TooLarge as err:
+        raise _Bad(f"{err.size} bytes, more than any block holds ({limit})") from None
     except OSError as err:
-        if err.errno == errno.ELOOP:
-            raise _Bad("a symbolic link (never followed out of the cache)") from None
         raise _Bad(f"cannot be opened ({err.strerror or err})") from None
-    try:
-        info = os.fstat(handle)
-        if not stat.S_ISREG(info.st_mode):
-            raise _Bad(f"{_kind(info.st_mode)}, not a regular file")
-        if info.st_size > limit:
-            raise _Bad(f"{info.st_size} bytes, more than any block holds ({limit})")
-        os.set_blocking(handle, True)
-        return os.fdopen(handle, "rb")
-    except BaseException:
-        os.close(handle)
-        raise
 
 
 def _read_regular(path: Path, limit: int) -> bytes:
@@ -440,7 +422,7 @@ class ResultCache:
                 self._quarantine(path, "a symbolic link (never followed out of the cache)")
                 return None
             if not stat.S_ISDIR(mode):
-                self._quarantine(path, f"{_kind(mode)} in place of a folder")
+                self._quarantine(path, f"{file_kind(mode)} in place of a folder")
                 return None
         return folder
 

@@ -32,13 +32,10 @@ million rows read in a few seconds.
 from __future__ import annotations
 
 import csv
-import errno
 import gc
 import json
 import operator
-import os
 import re
-import stat
 import sys
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -51,6 +48,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from study.files import GrewWhileRead, NotRegularFile, SymbolicLink, TooLarge, read_regular
 from study.specfile import SCHEMA_DIR, SpecError
 from study.units import DIMENSIONLESS, HERTZ, KILOGRAM, METRE_PER_SECOND, METRE_PER_SECOND_SQUARED
 
@@ -656,15 +654,6 @@ def check_velocity_units(data: xr.Dataset, rows: np.ndarray, model_speed: float)
             "(m s-1, not mm/s)")
 
 
-def _kind(mode: int) -> str:
-    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"),
-                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
-                       (stat.S_ISSOCK, "a socket")):
-        if test(mode):
-            return name
-    return "not a regular file"
-
-
 def measurement_file_bytes(path: str | Path) -> bytes:
     """The bytes of a measurement file: a regular file of at most :data:`MAX_BYTES`.
 
@@ -688,35 +677,22 @@ def measurement_file_bytes(path: str | Path) -> bytes:
             raise MeasurementError(f"{path}: a symbolic link out of its folder (to "
                                    f"{target}); measurement files are read only in their "
                                    "own folder: copy the file there or name it directly")
-    flags = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)
     try:
-        handle = os.open(target, flags)
-    except OSError as err:
-        why = ("a symbolic link, not followed" if err.errno == errno.ELOOP
-               else err.strerror or str(err))
-        raise MeasurementError(f"{path}: cannot read the measurement file ({why})") from None
-    try:
-        info = os.fstat(handle)
-        if not stat.S_ISREG(info.st_mode):
-            raise MeasurementError(f"{path}: {_kind(info.st_mode)}, not a regular file; a "
-                                   "measurement file is a CSV text file")
-        if info.st_size > MAX_BYTES:
-            raise MeasurementError(f"{path}: {info.st_size} bytes; a measurement file is at "
-                                   f"most {MAX_BYTES} bytes")
-        os.set_blocking(handle, True)
-    except BaseException:
-        os.close(handle)
-        raise
-    with os.fdopen(handle, "rb") as stream:
-        try:
-            data = stream.read(MAX_BYTES + 1)
-        except OSError as err:
-            raise MeasurementError(f"{path}: cannot read the measurement file "
-                                   f"({err.strerror or err})") from None
-    if len(data) > MAX_BYTES:
+        return read_regular(target, MAX_BYTES)
+    except SymbolicLink:
+        why = "a symbolic link, not followed"
+    except NotRegularFile as err:
+        raise MeasurementError(f"{path}: {err.kind}, not a regular file; a measurement "
+                               "file is a CSV text file") from None
+    except TooLarge as err:
+        raise MeasurementError(f"{path}: {err.size} bytes; a measurement file is at most "
+                               f"{MAX_BYTES} bytes") from None
+    except GrewWhileRead:
         raise MeasurementError(f"{path}: grew beyond {MAX_BYTES} bytes while read; a "
-                               f"measurement file is at most {MAX_BYTES} bytes")
-    return data
+                               f"measurement file is at most {MAX_BYTES} bytes") from None
+    except OSError as err:
+        why = err.strerror or str(err)
+    raise MeasurementError(f"{path}: cannot read the measurement file ({why})")
 
 
 def read_measurements(paths: str | Path | Iterable[str | Path]) -> xr.Dataset:

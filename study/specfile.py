@@ -22,7 +22,7 @@ import hashlib
 import json
 import math
 import os
-import stat
+import sys
 import tomllib
 from collections.abc import Mapping
 from functools import cache
@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from study.files import NotRegularFile, open_regular
 from study.inputs import InputTypeError
 
 __all__ = [
@@ -143,21 +144,19 @@ def read_spec_text(path: str | Path, what: str = "spec") -> str:
     """
     path = Path(path)
     try:
-        # Opened without blocking and checked to be a regular file: a FIFO named as the
-        # spec would wait for a writer forever, a device or a folder is no spec.
-        handle = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
-        with os.fdopen(handle, "rb", buffering=0) as stream:
-            mode = os.fstat(handle).st_mode
-            if not stat.S_ISREG(mode):
-                kind = ("a folder" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode)
-                        else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
-                        else "not a regular file")
-                raise SpecError(f"{path}: {kind}, not a regular file; a {what} is a TOML "
-                                "file")
-            os.set_blocking(handle, True)
+        # A FIFO named as the spec would wait for a writer forever, a device or a folder
+        # is no spec; its size is judged by decode_spec_bytes, from what is read.
+        with open_regular(path, sys.maxsize, follow_links=True) as stream:
             # One byte more than allowed tells "too large" without reading a huge file.
             data = stream.read(MAX_SPEC_BYTES + 1)
-            size = os.fstat(handle).st_size
+            size = os.fstat(stream.fileno()).st_size
+    except NotRegularFile as err:
+        if err.kind == "a folder":
+            raise SpecError(f"{path}: cannot read the {what} (a folder, not a TOML file)"
+                            ) from None
+        kind = "a device" if err.kind.endswith("device") else err.kind
+        raise SpecError(f"{path}: {kind}, not a regular file; a {what} is a TOML "
+                        "file") from None
     except OSError as err:
         reason = err.strerror or str(err)
         raise SpecError(f"{path}: cannot read the {what} ({reason})") from None
