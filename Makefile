@@ -60,12 +60,12 @@ $(STAMP): pyproject.toml
 
 # The package reads study/schemas/ (package data, shipped in the wheel); results_schema/
 # keeps an identical copy at the top of the repo (a test checks they agree).
-# The spec schema's observables are exported from study/observables.py; results_schema/
+# The spec schema's observables are exported from study/engine/observables.py; results_schema/
 # is the repository's copy of the package's schemas (a test checks both).
 schemas: | $(STAMP)
-	$(PY) -c "from study.spec import export_spec_schema as e; text = e(); \
+	$(PY) -c "from study.engine.study_spec import export_spec_schema as e; text = e(); \
 	open('study/schemas/study-spec-v1.schema.json', 'w').write(text)"
-	$(PY) -c "from study.measurements import export_measurement_schema as e; text = e(); \
+	$(PY) -c "from study.analyses.measurements import export_measurement_schema as e; text = e(); \
 	open('study/schemas/study-measurements-v1.schema.json', 'w').write(text)"
 	$(MAKE) $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
 

@@ -23,8 +23,8 @@ the mode's transient decays only with the orbit's Floquet multiplier:
 Both return ``(velocity, status)`` arrays of the broadcast shape of ``f`` and ``a``:
 velocity in m s^-1 (positive forward, NaN unless the status is ``STATIC``,
 ``STICK_SLIP`` or ``CONTINUOUS_SLIDING``), status as int8
-:class:`study.status.Status` codes, so they compare directly with
-:func:`study.solver.steady_velocity`:
+:class:`study.model.status.Status` codes, so they compare directly with
+:func:`study.solvers.exact.steady_velocity`:
 
 * ``STATIC`` (0): no slip in the averaging window (velocity exactly 0);
 * ``STICK_SLIP`` (1): slipped, and stuck at some time in the averaging window;
@@ -46,9 +46,9 @@ from numba import njit
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 
-from study.physics import as_acceleration, as_frequency
-from study.status import Status
-from study.structure import Structure
+from study.model import as_acceleration, as_frequency
+from study.model.status import Status
+from study.model.structure import Structure
 
 __all__ = ["naive_velocity", "solve_ivp_velocity"]
 
@@ -256,7 +256,7 @@ def naive_velocity(
     velocity : numpy.ndarray of float64
         Mean velocity [m s^-1], positive forward; NaN for ``LIFT_OFF``.
     status : numpy.ndarray of int8
-        :class:`study.status.Status` codes (see the module docstring).
+        :class:`study.model.status.Status` codes (see the module docstring).
     """
     p = _parameters(structure)
     if (isinstance(steps_per_period, bool) or not isinstance(steps_per_period, int | np.integer)
@@ -560,7 +560,7 @@ def solve_ivp_velocity(
     periodic) until the state at the period boundaries (``delta``, ``delta'``, ``v``,
     mode) and the displacement over a period repeat after ``q <= max_orbit_period``
     periods within ``period_tolerance`` in the units above (default
-    ``max(100 rtol, 1e-12)``, the rule of :func:`study.transient.integrated_steady_state`);
+    ``max(100 rtol, 1e-12)``, the rule of :func:`study.solvers.integrator.integrated_steady_state`);
     the velocity is then the displacement over those ``q`` periods divided by
     ``q T``. ``NOT_CONVERGED`` after ``max_periods`` periods; a slip with
     ``D_s <= 0`` is ``FRICTION_PARADOX``.
@@ -606,7 +606,7 @@ def solve_ivp_velocity(
         Mean velocity [m s^-1], positive forward; NaN for ``LIFT_OFF``,
         ``NOT_CONVERGED`` and ``FRICTION_PARADOX``.
     status : numpy.ndarray of int8
-        :class:`study.status.Status` codes (see the module docstring).
+        :class:`study.model.status.Status` codes (see the module docstring).
     """
     p = _parameters(structure)
     if not (isinstance(rtol, int | float | np.floating) and 0.0 < float(rtol) < 1.0):

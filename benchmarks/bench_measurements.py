@@ -1,8 +1,8 @@
-"""Benchmark: reading a measurement file of a million rows (``study.measurements``).
+"""Benchmark: reading a measurement file of a million rows (``study.analyses.measurements``).
 
 Writes a file of ``--rows`` rows (half thresholds, half velocities, with a direction
 and a short note: 49 bytes a row) into a temporary folder and times
-:func:`study.measurements.read_measurements` on it ``--repeats`` times, each in this
+:func:`study.analyses.measurements.read_measurements` on it ``--repeats`` times, each in this
 process after a first read that imports what the reader needs. Reports the minimum
 and the CPU time beside it (other work on the machine only ever adds time). Timed,
 never asserted. Before the column-wise reader, a million rows took 106 s (row by row
@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from study.measurements import read_measurements
+from study.analyses.measurements import read_measurements
 
 
 def write_rows(path: Path, rows: int) -> None:

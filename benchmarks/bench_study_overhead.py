@@ -90,8 +90,8 @@ def _warm() -> None:
     import xarray  # noqa: F401
 
     import study
-    import study.runner
-    from study.solver import PARALLEL_THRESHOLD, steady_state
+    import study.engine.runner
+    from study.solvers.exact import PARALLEL_THRESHOLD, steady_state
 
     structure = study.Structure(**STRUCTURE)
     f = np.linspace(*F_RANGE, 64)[:, None]
@@ -127,7 +127,7 @@ def _bare(n: int, block_points: int | None) -> dict[str, float]:
 
 
 def _run(spec: Path, output: Path, cache: Path, force: bool) -> dict[str, float]:
-    from study.runner import run_study
+    from study.engine.runner import run_study
 
     # Peak RSS when the last computed chunk is written: before the file is sealed.
     computing = {"max_rss": 0}

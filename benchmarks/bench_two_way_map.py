@@ -50,8 +50,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from docs_tables import exponent, write_docs_table  # noqa: E402
 
 import study  # noqa: E402
-from study.provenance import git_state, utc_now  # noqa: E402
-from study.solver import steady_state, steady_velocity  # noqa: E402
+from study.engine.provenance import git_state, utc_now  # noqa: E402
+from study.solvers.exact import steady_state, steady_velocity  # noqa: E402
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 #: Relative condition number up to which a velocity counts as well conditioned.
@@ -142,7 +142,7 @@ def _status_check(f: np.ndarray, a: np.ndarray, status: np.ndarray, stride: int,
 
     Returns the confusion counts (rows exact, columns integrator, by status code), the
     subgrid's shape and the integrator's time."""
-    from study.transient import IntegratorSettings, integrated_steady_state
+    from study.solvers.integrator import IntegratorSettings, integrated_steady_state
 
     f_sub, a_sub, s_sub = (x[::stride, ::stride] for x in (f, a, status))
     start = time.perf_counter()

@@ -28,8 +28,8 @@ import numpy as np
 from docs_tables import per_point, write_docs_table
 
 import study
-from study.kernels import steady as kernel
-from study.physics import lift_off_acceleration, release_amplitudes, slip_amplitudes
+from study.kernels import one_way as kernel
+from study.model import lift_off_acceleration, release_amplitudes, slip_amplitudes
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 

@@ -4,9 +4,9 @@ Methods, each at several settings, on a fixed set of drive points (the paper's
 structure; P, N, three PN points including both signs at 14.5 Hz, and two points just
 above a threshold, where slips are short and easy to miss):
 
-* ``exact``: the closed-form event-driven steady-state solver (:mod:`study.solver`);
+* ``exact``: the closed-form event-driven steady-state solver (:mod:`study.solvers.exact`);
 * ``integrator``: study's Dormand-Prince 5(4) integrator with events on the dense
-  output, adaptive, at several tolerances (:mod:`study.transient`);
+  output, adaptive, at several tolerances (:mod:`study.solvers.integrator`);
 * ``integrator-fixed``: the same integrator with a fixed step (steps per period);
 * ``naive``: fixed-step RK4 with contact switches by step-end sign tests only
   (``benchmarks/baselines.py``);
@@ -67,10 +67,10 @@ from docs_tables import write_docs_table  # noqa: E402
 from exact_reference import exact_velocity  # noqa: E402
 
 import study  # noqa: E402
-from study.physics import thresholds  # noqa: E402
-from study.provenance import code_sha256, git_state, utc_now  # noqa: E402
-from study.solver import steady_state  # noqa: E402
-from study.transient import IntegratorSettings, integrated_steady_state  # noqa: E402
+from study.engine.provenance import code_sha256, git_state, utc_now  # noqa: E402
+from study.model import thresholds  # noqa: E402
+from study.solvers.exact import steady_state  # noqa: E402
+from study.solvers.integrator import IntegratorSettings, integrated_steady_state  # noqa: E402
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 HIGH_Q = STRUCTURE.replace(Q=1000.0)

@@ -43,11 +43,11 @@ from pathlib import Path
 
 import numpy as np
 
-from study.physics import thresholds
-from study.solver import steady_state
-from study.status import Status
-from study.structure import Structure, tilt_warnings
-from study.transient import IntegratorSettings, integrated_steady_state
+from study.model import thresholds
+from study.model.status import Status
+from study.model.structure import Structure, tilt_warnings
+from study.solvers.exact import steady_state
+from study.solvers.integrator import IntegratorSettings, integrated_steady_state
 
 ROOT = Path(__file__).resolve().parent.parent
 EPS = float(np.finfo(float).eps)

@@ -7,13 +7,14 @@ in docs/ (``make docs``).
 The computing functions are imported with the package; :func:`run`, :func:`open_result`
 and :class:`ResultError`, which read and write result files, are imported on first use
 (so that ``import study`` stays light and the code fingerprint of results covers the
-computing modules only, see :mod:`study.fingerprint`).
+computing modules only, see :mod:`study.engine.fingerprint`).
 """
 
-from study.analysis import frontier, minimum_threshold
-from study.inputs import StudyWarning, SuspectInputWarning
-from study.maps import compute_map
-from study.physics import (
+from study.analyses.frontier import frontier
+from study.analyses.thresholds import minimum_threshold
+from study.engine.maps import compute_map
+from study.engine.spec_files import SpecError
+from study.model import (
     force_amplitudes,
     lift_off_acceleration,
     mode_response,
@@ -21,10 +22,10 @@ from study.physics import (
     tangential_force,
     thresholds,
 )
-from study.solver import SolverSettings, SteadyState, steady_state, steady_velocity
-from study.specfile import SpecError
-from study.status import NonConvergence, Status
-from study.structure import Structure
+from study.model.inputs import StudyWarning, SuspectInputWarning
+from study.model.status import NonConvergence, Status
+from study.model.structure import Structure
+from study.solvers.exact import SolverSettings, SteadyState, steady_state, steady_velocity
 from study.version import VERSION as __version__
 
 __all__ = [
@@ -56,8 +57,8 @@ __all__ = [
 
 #: Public names defined by the modules that keep and read result files, imported on
 #: first use: name -> module.
-_ON_FIRST_USE = {"run": "study.api", "open_result": "study.validate",
-                 "ResultError": "study.validate"}
+_ON_FIRST_USE = {"run": "study.api", "open_result": "study.engine.validation",
+                 "ResultError": "study.engine.validation"}
 
 
 def __getattr__(name: str):

@@ -2,7 +2,7 @@
 
 :func:`run` is ``study run`` without the shell: the same runner, with its lock,
 atomic write, provenance and kept values, returning the result file opened as a
-dataset. :func:`study.open_result` (from :mod:`study.validate`) opens a result file
+dataset. :func:`study.open_result` (from :mod:`study.engine.validation`) opens a result file
 written earlier.
 """
 
@@ -74,12 +74,12 @@ def run(
         the key); nothing is computed.
     study.ResultError
         The written file fails validation (names the file).
-    study.runner.StudyBusy
+    study.engine.runner.StudyBusy
         Another process is writing the same result.
-    study.outputs.OutputError
+    study.engine.outputs.OutputError
         ``output`` is the spec, a folder, or (without ``overwrite``) a file of another
         kind; nothing is computed.
-    study.cluster.ClusterError
+    study.engine.executors.ClusterError
         ``scheduler`` cannot be reached or has no worker.
 
     See Also
@@ -93,9 +93,9 @@ def run(
     >>> ds = study.run("workflows/regime-map.toml")          # doctest: +SKIP
     >>> ds["velocity"].sel(f=14.0, a=6.0, method="nearest")  # doctest: +SKIP
     """
-    from study.runner import load_any
-    from study.runner import run as run_any
-    from study.validate import open_result
+    from study.engine.runner import load_any
+    from study.engine.runner import run as run_any
+    from study.engine.validation import open_result
 
     loaded = load_any(spec)
     report = run_any(

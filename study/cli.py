@@ -12,7 +12,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from study.units import spoken
+from study.model.units import spoken
 from study.version import DISTRIBUTION, VERSION
 
 __all__ = ["build_parser", "default_figure_output", "main"]
@@ -27,7 +27,7 @@ def _show_cluster(pool) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from study.runner import StudyInterrupted, load_any, run
+    from study.engine.runner import StudyInterrupted, load_any, run
 
     spec = load_any(args.spec)
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
@@ -72,8 +72,8 @@ def _run(args: argparse.Namespace) -> int:
 def _cache(args: argparse.Namespace) -> int:
     import time
 
-    from study.cache import ResultCache
-    from study.provenance import code_sha256
+    from study.engine.cache import ResultCache
+    from study.engine.provenance import code_sha256
 
     cache = ResultCache(args.cache)
     if args.action == "list":
@@ -168,7 +168,7 @@ def _cache_prune(cache, args: argparse.Namespace, current: str, now: float) -> i
 
 
 def _validate(args: argparse.Namespace) -> int:
-    from study.validate import ResultError, validate_file
+    from study.engine.validation import ResultError, validate_file
 
     status = 0
     for path in args.files:
@@ -183,7 +183,7 @@ def _validate(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
-    from study.validate import describe, validate_file
+    from study.engine.validation import describe, validate_file
 
     # Both read the file in slabs: info works on results larger than memory.
     validate_file(args.file)
@@ -192,9 +192,9 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _figure(args: argparse.Namespace) -> int:
+    from study.engine.outputs import check_output
+    from study.engine.validation import open_result
     from study.figures import draw_figure, figure_request, is_current
-    from study.outputs import check_output
-    from study.validate import open_result
 
     dataset = open_result(args.file)
     output = args.output or default_figure_output(args.name, args.file)
@@ -272,9 +272,9 @@ def _point(text: str) -> tuple[float, float]:
 
 
 def _export(args: argparse.Namespace) -> int:
-    from study.export import export_csv
-    from study.selection import select
-    from study.validate import open_result
+    from study.analyses.export import export_csv
+    from study.analyses.selection import select
+    from study.engine.validation import open_result
 
     dataset = open_result(args.file)
     if args.sel:
@@ -287,9 +287,9 @@ def _export(args: argparse.Namespace) -> int:
 
 
 def _fit(args: argparse.Namespace) -> int:
-    from study.fit import FIT_RESULT_SCHEMA, PARAMETERS, fit, fit_dataset, load_fit_spec
-    from study.outputs import check_output
-    from study.store import write_atomic
+    from study.analyses.fit import FIT_RESULT_SCHEMA, PARAMETERS, fit, fit_dataset, load_fit_spec
+    from study.engine.outputs import check_output
+    from study.engine.store import write_atomic
 
     spec = load_fit_spec(args.spec)
     output = args.output or Path("results") / f"{args.spec.stem}.nc"
@@ -319,7 +319,7 @@ def _fit(args: argparse.Namespace) -> int:
     for warning in result.warnings:
         print(f"study: warning: {warning}", file=sys.stderr)
     if args.figure is not None:
-        from study.figures.fit import draw
+        from study.figures.fit_result import draw
 
         for path in draw(dataset, args.figure):
             print(f"wrote {path}")
@@ -327,14 +327,14 @@ def _fit(args: argparse.Namespace) -> int:
 
 
 def _design(args: argparse.Namespace) -> int:
-    from study.design import (
+    from study.analyses.design import (
         DESIGN_RESULT_SCHEMA,
         design,
         design_dataset,
         load_design_spec,
     )
-    from study.outputs import check_output
-    from study.store import write_atomic
+    from study.engine.outputs import check_output
+    from study.engine.store import write_atomic
 
     spec = load_design_spec(args.spec)
     output = args.output or Path("results") / f"{args.spec.stem}.nc"
@@ -361,8 +361,8 @@ def _design(args: argparse.Namespace) -> int:
 
 
 def _list(args: argparse.Namespace) -> int:
-    from study.runner import is_up_to_date, load_any
-    from study.spec import SpecError
+    from study.engine.runner import is_up_to_date, load_any
+    from study.engine.study_spec import SpecError
 
     specs = sorted(Path(args.workflows).glob("*.toml"))
     if not specs:
@@ -386,7 +386,7 @@ def _list(args: argparse.Namespace) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
-    from study.cluster import TASK_TIMEOUT
+    from study.engine.executors import TASK_TIMEOUT
 
     parser = argparse.ArgumentParser(
         prog="study",
@@ -552,14 +552,14 @@ def _overwrite_option(command: argparse.ArgumentParser, what: str) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``study`` console script."""
-    from study.cluster import ClusterError
-    from study.export import ExportError
+    from study.analyses.export import ExportError
+    from study.analyses.selection import SelectionError
+    from study.engine.executors import ClusterError
+    from study.engine.outputs import OutputError
+    from study.engine.store import StoreBusy, StoreError
+    from study.engine.study_spec import SpecError
+    from study.engine.validation import ResultError
     from study.figures import FigureError
-    from study.outputs import OutputError
-    from study.selection import SelectionError
-    from study.spec import SpecError
-    from study.store import StoreBusy, StoreError
-    from study.validate import ResultError
 
     parser = _parser()
     argv = sys.argv[1:] if argv is None else list(argv)

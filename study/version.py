@@ -4,7 +4,7 @@ The version is made from git tags by setuptools-scm when the package is built or
 installed (see ``[tool.setuptools_scm]`` in ``pyproject.toml``): ``0.1.0`` at tag
 ``v0.1.0``, ``0.1.1.devN+g<hash>`` N commits later. It is not written into any file of
 the package, so making a tag changes no source file: the code fingerprint of results
-(:mod:`study.fingerprint`, which hashes the package's sources) does not move with it.
+(:mod:`study.engine.fingerprint`, which hashes the package's sources) does not move with it.
 An editable install keeps the version it was installed with until it is reinstalled
 (``pip install -e .``); the provenance of every result also records the git commit.
 """

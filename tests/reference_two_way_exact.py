@@ -1,7 +1,7 @@
 """High-precision reference for the steady periodic orbit of the TWO-WAY coupled model.
 
 Plain Python and :mod:`mpmath` (no numba, nothing from ``study``'s kernels or physics:
-only :class:`study.structure.Structure` is accepted as a parameter holder). Slow,
+only :class:`study.model.structure.Structure` is accepted as a parameter holder). Slow,
 exact to the working precision (``dps`` significant digits, default 40): it is the
 yardstick of the fast double-precision two-way solver.
 
@@ -29,7 +29,7 @@ a slip started at ``t0``::
 With ``coupling="one-way"`` the slip's mode equation is the stick one (``D_s -> 1``, no
 ``-x'' sin(alpha)`` term) and ``v'`` keeps the same expression: that is the paper's
 one-way model, written here with the mode as a state, which validates the machinery
-against :func:`study.solver.steady_velocity`.
+against :func:`study.solvers.exact.steady_velocity`.
 
 Closed forms between events
 ---------------------------
@@ -109,7 +109,7 @@ __all__ = [
 #: Version of this reference's algorithm: bump whenever its results may change.
 CODE_VERSION = "1"
 
-#: Statuses, named as :class:`study.status.Status`.
+#: Statuses, named as :class:`study.model.status.Status`.
 STATUSES = (
     "STATIC",
     "STICK_SLIP",
@@ -976,7 +976,7 @@ def reference_points(path: Path = CACHE_PATH) -> list[dict]:
     Returns
     -------
     list of dict
-        Per point: ``name``, ``structure`` (a :class:`study.structure.Structure`),
+        Per point: ``name``, ``structure`` (a :class:`study.model.structure.Structure`),
         ``params`` (its parameters), ``f``, ``a``, ``status`` (a :data:`STATUSES`
         name), ``velocity`` (float; NaN for LIFT_OFF / FRICTION_PARADOX),
         ``velocity_text`` (the cached decimal string), ``orbit_period``, ``floquet``,
@@ -989,7 +989,7 @@ def reference_points(path: Path = CACHE_PATH) -> list[dict]:
         When the cache was written by another :data:`CODE_VERSION` (regenerate it with
         ``python tests/reference_two_way_exact.py``).
     """
-    from study.structure import Structure
+    from study.model.structure import Structure
 
     content = json.loads(path.read_text())
     if content["code_version"] != CODE_VERSION:

@@ -1,7 +1,8 @@
 """Small sealed result files of every kind, for the validation tests and the fuzz tier.
 
-Made with today's runners (:func:`study.runner.run_study`, :func:`study.runner.run_scene`),
-then sealed with :func:`study.validate.seal`, as the streaming writer does.
+Made with today's runners (:func:`study.engine.runner.run_study`,
+:func:`study.engine.runner.run_scene`),
+then sealed with :func:`study.engine.validation.seal`, as the streaming writer does.
 """
 
 from __future__ import annotations
@@ -9,8 +10,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from study.runner import run_scene, run_study
-from study.validate import seal
+from study.engine.runner import run_scene, run_study
+from study.engine.validation import seal
 
 WORKFLOWS = Path(__file__).resolve().parents[1] / "workflows"
 

@@ -3,10 +3,10 @@
 Each figure module has ``draw(dataset, output, **options) -> list[Path]`` and computes
 nothing the file does not hold (closed-form force traces are evaluated from the
 structure parameters stored in the file). :func:`draw_figure` first applies the
-``--sel`` selections (:mod:`study.selection`), so that every figure draws any study
+``--sel`` selections (:mod:`study.analyses.selection`), so that every figure draws any study
 whose other axes are selected; a figure takes the options it declares
 (:attr:`Figure.options`): ``points`` (``--point F,A``) and ``measurements``
-(``--measurements FILE.csv``, :mod:`study.measurements`).
+(``--measurements FILE.csv``, :mod:`study.analyses.measurements`).
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import xarray as xr
 
+from study.analyses.selection import select
 from study.figures.record import DRAWN_FROM, drawn_from
-from study.selection import select
 
 __all__ = ["FIGURES", "FigureError", "draw_figure", "figure_request", "is_current"]
 
@@ -109,7 +109,7 @@ FIGURES: dict[str, Figure] = {
         "Steering through waypoints: open-loop plan against closed-loop correction",
     ),
     "fit": Figure(
-        "study.figures.fit", "fit",
+        "study.figures.fit_result", "fit",
         ("estimate", "standard_error", "quantity", "value", "sigma"),
         "A fit: measurements with error bars over the fitted thresholds and velocities",
     ),
@@ -122,8 +122,8 @@ _OPTION_FLAGS = {"points": "--point", "measurements": "--measurements"}
 def _missing_message(name: str, dataset: xr.Dataset, missing: Sequence[str]) -> str:
     """Why figure ``name`` cannot be drawn from ``dataset``, and the observables to add
     to the study's spec (from the registry's declared variables) when a spec can."""
-    from study.observables import OBSERVABLES
-    from study.validate import RESULT_SCHEMA
+    from study.engine.observables import OBSERVABLES
+    from study.engine.validation import RESULT_SCHEMA
 
     figure = FIGURES[name]
     message = (f"figure {name!r} needs {', '.join(missing)}, which this file does not hold "
@@ -164,7 +164,7 @@ def draw_figure(name: str, dataset: xr.Dataset, output: str | Path, *,
         paper's structure, else one per region the file holds).
     measurements : sequence of paths, optional
         ``thresholds``, ``velocity-curves``, ``mass-ratio``: measurement files
-        (:mod:`study.measurements`) drawn with error bars over the model.
+        (:mod:`study.analyses.measurements`) drawn with error bars over the model.
 
     Raises
     ------
@@ -172,9 +172,9 @@ def draw_figure(name: str, dataset: xr.Dataset, output: str | Path, *,
         For an unknown figure, an option it does not take, a dataset without the
         variables it needs (the message names them and the workflow that makes them),
         or more axes than it draws (the message names the ``--sel`` keys to give).
-    study.selection.SelectionError
+    study.analyses.selection.SelectionError
         For a selection that does not apply (the available values listed).
-    study.measurements.MeasurementError
+    study.analyses.measurements.MeasurementError
         For an unreadable or invalid measurement file.
     """
     if name not in FIGURES:
@@ -215,8 +215,8 @@ def figure_request(name: str, dataset: xr.Dataset, *, sel: Iterable[str] = (),
     import hashlib
     import json
 
-    from study.fingerprint import code_fingerprint
-    from study.measurements import MeasurementError, measurement_file_bytes
+    from study.analyses.measurements import MeasurementError, measurement_file_bytes
+    from study.engine.fingerprint import code_fingerprint
 
     if name not in FIGURES:
         raise FigureError(f"unknown figure {name!r}; figures: {', '.join(FIGURES)}")

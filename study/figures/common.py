@@ -1,5 +1,5 @@
 """What the figures share: saving as PNG and PDF with provenance in the metadata, the
-structure a file was computed for, the paper's regime points (:mod:`study.paper`), what
+structure a file was computed for, the paper's regime points (:mod:`study.model.paper`), what
 a figure needs selected, colours for many curves, and a few checks."""
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from study.analyses.selection import available
 from study.figures.record import DRAWN_FROM
-from study.paper import PAPER_POINTS, is_paper_structure
-from study.selection import available
-from study.status import Status
+from study.model.paper import PAPER_POINTS, is_paper_structure
+from study.model.status import Status
 
 __all__ = [
     "MAX_LEGEND_ENTRIES",
@@ -151,7 +151,7 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
             del params["m_add"]
     if "ck" not in params and "cs" in params:
         params["ck"] = params["cs"]
-    from study.structure import tilt_warnings
+    from study.model.structure import tilt_warnings
 
     with tilt_warnings(False):  # a result file's tilts are in degree by its schema
         return study.Structure(**params)
@@ -329,7 +329,7 @@ def single_structure(dataset: xr.Dataset, figure: str) -> xr.Dataset:
 
 
 def is_paper_file(dataset: xr.Dataset, ignore: tuple[str, ...] = ()) -> bool:
-    """Whether the file's (selected) structure is the paper's (:mod:`study.paper`):
+    """Whether the file's (selected) structure is the paper's (:mod:`study.model.paper`):
     only then are the paper's points and statements drawn."""
     params = {}
     for name in ("f0", "Q", "alpha", "M", "cs", "ck", "g"):

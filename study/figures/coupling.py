@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from study.analysis import coupling_effect
+from study.analyses.coupling import coupling_effect
 from study.figures import FigureError
 from study.figures.common import (
     VALID,

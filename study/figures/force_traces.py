@@ -6,7 +6,7 @@ also gives the velocity the file holds at the grid point nearest to its point. A
 is possible forward where ``tau > cs n`` and backward where ``-tau > cs n``.
 
 The points: those named with ``--point F,A`` (repeatable); by default the paper's four
-points S, P, N, PN for the paper's structure (:mod:`study.paper`), and for any other
+points S, P, N, PN for the paper's structure (:mod:`study.model.paper`), and for any other
 structure one point in each region the file's grid holds below lift-off (S, P, N, PN:
 the grid point nearest the middle of the region, :func:`regime_points`).
 """
@@ -30,13 +30,13 @@ from study.figures.common import (
     parameter_text,
     single_structure,
 )
-from study.physics.forces import (
+from study.model.forces import (
     lift_off_acceleration,
     normal_force,
     tangential_force,
     thresholds,
 )
-from study.status import Status
+from study.model.status import Status
 
 __all__ = ["draw", "regime_points", "region_of"]
 

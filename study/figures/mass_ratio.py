@@ -4,10 +4,10 @@ Left: ``a* = min(a*_+, a*_-)`` against the drive frequency for every load (the
 lift-off acceleration dashed in the same colour). Right: the lowest threshold over
 the frequency axis of the file against the mass ratio ``M = m1 / (m0 + m_add)``,
 with the closed form at resonance ``g / sqrt(1 + x^2)``
-(``x = max |x_pm|``, :func:`study.analysis.collapse_variable`) and the exact minimum
-over ``f`` of the closed-form thresholds (:func:`study.analysis.lowest_threshold`)
+(``x = max |x_pm|``, :func:`study.analyses.thresholds.collapse_variable`) and the exact minimum
+over ``f`` of the closed-form thresholds (:func:`study.analyses.thresholds.lowest_threshold`)
 over a fine range of ``M`` for the same structure. The paper's statement (about g/2 at
-resonance for M = 6.6 %) is drawn only for the paper's structure (:mod:`study.paper`,
+resonance for M = 6.6 %) is drawn only for the paper's structure (:mod:`study.model.paper`,
 ``M`` aside). More than 8 loads get a colour bar of ``M`` instead of a legend entry
 each. With ``--measurements lab.csv``, the measured thresholds of rows naming their
 structure (``m_add`` or ``M``) are drawn with error bars: on the left in the colour of
@@ -25,7 +25,7 @@ import numpy as np
 import xarray as xr
 
 import study
-from study.analysis import lowest_threshold, resonance_threshold
+from study.analyses.thresholds import lowest_threshold, resonance_threshold
 from study.figures import FigureError, measured
 from study.figures.common import (
     coupling_label,

@@ -36,7 +36,7 @@ from study.figures.common import (
     structure_from_dataset,
     structure_text,
 )
-from study.status import Status
+from study.model.status import Status
 
 __all__ = ["draw", "panel_indices", "valid_velocity_mm_s"]
 

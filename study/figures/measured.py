@@ -1,6 +1,6 @@
 """Measurements beside the model: ``study figure NAME FILE --measurements lab.csv``.
 
-Measurement files (:mod:`study.measurements`: CSV, SI units, optional per-row
+Measurement files (:mod:`study.analyses.measurements`: CSV, SI units, optional per-row
 ``sigma``) are read, the rows of the quantity a figure compares are picked, and drawn
 with error bars (one standard deviation; none where ``sigma`` is blank):
 
@@ -17,7 +17,7 @@ Every refusal is a :class:`study.figures.FigureError` naming the file(s): no row
 the quantity the figure compares (and what the files hold instead), rows all of
 another structure, or values in other units than the format's; velocities plainly
 in mm s-1 where m s-1 is expected are refused by
-:func:`study.measurements.check_velocity_units`, the check ``study fit`` makes too.
+:func:`study.analyses.measurements.check_velocity_units`, the check ``study fit`` makes too.
 """
 
 from __future__ import annotations
@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from study.analyses.measurements import QUANTITIES, read_measurements
 from study.figures import FigureError
-from study.measurements import QUANTITIES, read_measurements
 
 __all__ = [
     "MARKERS",
@@ -62,11 +62,11 @@ def _names(paths: Sequence[str | Path]) -> str:
 
 
 def load(paths: Sequence[str | Path]) -> xr.Dataset:
-    """Read measurement files (:func:`study.measurements.read_measurements`).
+    """Read measurement files (:func:`study.analyses.measurements.read_measurements`).
 
     Raises
     ------
-    study.measurements.MeasurementError
+    study.analyses.measurements.MeasurementError
         For a missing or invalid file (file, line and column named).
     FigureError
         For a row whose value is not in its quantity's units.

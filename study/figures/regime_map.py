@@ -27,7 +27,7 @@ from study.figures.common import (
     restore_dim,
     single_structure,
 )
-from study.status import Status
+from study.model.status import Status
 
 __all__ = ["draw"]
 
@@ -47,7 +47,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     """Draw the regime map of a ``regime-map`` result into ``output.png/.pdf``.
 
     The paper's points S, P, N, PN are drawn only when the file's structure is the
-    paper's (:func:`study.paper.is_paper_structure`); a file sweeping the structure
+    paper's (:func:`study.model.paper.is_paper_structure`); a file sweeping the structure
     is drawn for one structure selected with ``--sel``.
 
     Parameters

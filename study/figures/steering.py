@@ -30,7 +30,7 @@ from study.figures.common import (
     selected_keys,
     selection_text,
 )
-from study.units import DEGREE
+from study.model.units import DEGREE
 
 __all__ = [
     "LABEL_COLORS",

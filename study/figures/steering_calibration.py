@@ -30,8 +30,8 @@ from study.figures.common import (
     selection_text,
 )
 from study.figures.steering import angle_values, check_scene_kind, flag_codes, flag_names
-from study.status import Status
-from study.units import DEGREE_PER_SECOND
+from study.model.status import Status
+from study.model.units import DEGREE_PER_SECOND
 
 __all__ = ["COMMANDS", "draw"]
 

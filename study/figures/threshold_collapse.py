@@ -2,7 +2,7 @@
 
 At resonance ``w^2 G = -i Q``, so ``a*_pm(f0) = g / sqrt(1 + x_pm^2)`` with
 ``x_pm = Q M cos(alpha) (cos(alpha) +- sin(alpha)/cs)``
-(:func:`study.analysis.collapse_variable`). Main panel: the lowest threshold over the
+(:func:`study.analyses.thresholds.collapse_variable`). Main panel: the lowest threshold over the
 file's frequency axis, ``min_f min(a*_+, a*_-) / g``, for every structure against
 ``x = max(|x_+|, |x_-|)``, log-log, with ``1 / sqrt(1 + x^2)`` in black. The minimum
 over ``f`` sits slightly off resonance and below that value; for ``Q >> 1``,
@@ -25,7 +25,7 @@ import xarray as xr
 from matplotlib.colors import LogNorm, Normalize
 from matplotlib.ticker import NullFormatter
 
-from study.analysis import collapse_variable
+from study.analyses.thresholds import collapse_variable
 from study.figures.common import (
     grid_minimum,
     require_axis,

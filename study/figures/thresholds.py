@@ -23,7 +23,7 @@ from study.figures.common import (
     single_structure,
     structure_text,
 )
-from study.physics.forces import lift_off_acceleration
+from study.model.forces import lift_off_acceleration
 
 __all__ = ["draw"]
 

@@ -21,6 +21,7 @@ from matplotlib.cm import ScalarMappable
 from matplotlib.colors import ListedColormap, Normalize
 from matplotlib.lines import Line2D
 
+from study.analyses.measurements import check_velocity_units
 from study.figures import FigureError, common, measured
 from study.figures.common import (
     MAX_LEGEND_ENTRIES,
@@ -32,8 +33,7 @@ from study.figures.common import (
     restore_dim,
     single_structure,
 )
-from study.measurements import check_velocity_units
-from study.status import Status
+from study.model.status import Status
 
 __all__ = ["FREQUENCY_COLORS", "draw", "frequency_position"]
 

@@ -1,1 +1,1 @@
-"""Numba kernels: loops only, called through the validating wrappers of :mod:`study.solver`."""
+"""Numba kernels: loops only, called through the validating wrappers of :mod:`study.solvers`."""

@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
-from study.kernels.codes import STICK
+from study.model.codes import STICK
 
 # Bisection-safeguarded Illinois iterations per event (each halves the bracket at worst
 # every other step): enough for any tolerance down to the rounding of t.

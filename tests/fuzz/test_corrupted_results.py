@@ -1,4 +1,4 @@
-"""Seeded corruption fuzz of sealed result files of every kind (study.validate).
+"""Seeded corruption fuzz of sealed result files of every kind (study.engine.validation).
 
 Variants of sealed files (three studies, one steering scene) get random global
 attribute edits and deletions, variable attribute edits, value edits, dtype and
@@ -39,10 +39,8 @@ import numpy as np
 import pytest
 from sealed_results import make_sealed_results, rewrite
 
-from study.figures import draw_figure
-from study.scene import parse_scene
-from study.spec import parse_spec
-from study.validate import (
+from study.engine.study_spec import parse_spec
+from study.engine.validation import (
     ResultError,
     content_sha256,
     describe,
@@ -50,6 +48,8 @@ from study.validate import (
     read_attributes,
     validate_file,
 )
+from study.figures import draw_figure
+from study.scenes.scene_kind import parse_scene
 from tests.reliability import record
 
 pytestmark = pytest.mark.fuzz

@@ -1,4 +1,4 @@
-"""Seeded damage fuzz of the cache of kept values (study.cache).
+"""Seeded damage fuzz of the cache of kept values (study.engine.cache).
 
 Each case damages one to three files of a finished study's cache at random (every
 kind of block damage of tests/unit/test_cache_health.py, plus damaged axis files,
@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 from study.cli import main
-from study.runner import run_study
-from study.store import open_result
+from study.engine.runner import run_study
+from study.engine.store import open_result
 from tests.reliability import record
 from tests.unit.test_cache_health import KINDS, damage, deadline, garble
 from tests.unit.test_incremental import spec_text

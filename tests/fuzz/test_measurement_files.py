@@ -1,4 +1,4 @@
-"""Seeded fuzz of measurement files (study.measurements.read_measurements).
+"""Seeded fuzz of measurement files (study.analyses.measurements.read_measurements).
 
 Two generators (hypothesis, derandomized: the same cases on every run):
 
@@ -32,7 +32,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from study.measurements import (
+from study.analyses.measurements import (
     COLUMNS,
     MAX_FIELD_CHARS,
     QUANTITIES,

@@ -55,10 +55,10 @@ import numpy as np
 import pytest
 
 from study.cli import main
-from study.runner import load_any
-from study.scene import SceneSpec
-from study.specfile import SpecError
-from study.status import INVALID_STATUSES
+from study.engine.runner import load_any
+from study.engine.spec_files import SpecError
+from study.model.status import INVALID_STATUSES
+from study.scenes.scene_kind import SceneSpec
 from tests.reliability import record
 
 pytestmark = pytest.mark.fuzz

@@ -59,10 +59,10 @@ from reference_integrator import reference_velocity
 
 import study
 from study import NonConvergence, Status
-from study.analysis import FRONTIER_CROSSING
-from study.kernels.steady import CYCLE_TOLERANCE
-from study.physics import release_amplitudes, slip_amplitudes
-from study.structure import tilt_warnings
+from study.kernels.one_way import CYCLE_TOLERANCE
+from study.model import release_amplitudes, slip_amplitudes
+from study.model.structure import tilt_warnings
+from study.solvers.frontier import FRONTIER_CROSSING
 from tests.conftest import PAPER
 
 EPS = float(np.finfo(float).eps)

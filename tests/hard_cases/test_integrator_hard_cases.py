@@ -12,12 +12,12 @@ import pytest
 from numpy.testing import assert_allclose
 
 from study import Structure
-from study.analysis import frontier
-from study.inputs import SuspectInputWarning, tilt_looks_like_radians
-from study.physics import lift_off_acceleration, release_amplitudes, thresholds
-from study.solver import steady_state
-from study.status import Status
-from study.transient import (
+from study.analyses.frontier import frontier
+from study.model import lift_off_acceleration, release_amplitudes, thresholds
+from study.model.inputs import SuspectInputWarning, tilt_looks_like_radians
+from study.model.status import Status
+from study.solvers.exact import steady_state
+from study.solvers.integrator import (
     IntegratorSettings,
     Schedule,
     integrated_steady_state,

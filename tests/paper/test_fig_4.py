@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from study.planar import periodic_motion, rest_state, simulate_planar
-from study.scene import load_scene
-from study.status import Status
-from study.transient import IntegratorSettings, Schedule
+from study.model.status import Status
+from study.scenes.planar_model import periodic_motion, rest_state, simulate_planar
+from study.scenes.scene_kind import load_scene
+from study.solvers.integrator import IntegratorSettings, Schedule
 
 WORKFLOW = "workflows/steering.toml"
 A_OPERATING = 7.0  # m s-2
@@ -116,7 +116,7 @@ def test_heading_noise_reproduces_the_measured_drift(disk):
 
 def test_the_commands_keep_the_disk_in_full_contact(disk):
     """The model assumes full contact; at the operating point it holds, rim included."""
-    from study.planar import contact_margins
+    from study.scenes.planar_model import contact_margins
 
     for f in (FORWARD, BACKWARD, LEFT, RIGHT):
         rim, normal = contact_margins(disk, f, A_OPERATING)

@@ -27,10 +27,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import study
-from study import export as export_module
-from study import fit, planar, planner, selection, transient
-from study.design import disk_limits, load_design_spec, parse_design_spec
-from study.structure import tilt_warnings
+from study.analyses import export as export_module
+from study.analyses import fit, selection
+from study.analyses.design import disk_limits, load_design_spec, parse_design_spec
+from study.model.structure import tilt_warnings
+from study.scenes import planar_model as planar
+from study.scenes import planner
+from study.solvers import integrator as transient
 
 #: Seconds one case may take: a call that has not returned by then hangs (the slowest
 #: valid calls here take well under a second).
@@ -279,8 +282,11 @@ NOT_FUZZED = {
 def test_every_public_function_is_fuzzed_or_says_why_not():
     import inspect
 
-    from study import design, planar, planner, selection, transient
-    from study import export as export_module
+    from study.analyses import design, selection
+    from study.analyses import export as export_module
+    from study.scenes import planar_model as planar
+    from study.scenes import planner
+    from study.solvers import integrator as transient
 
     modules = [study, planar, planner, transient, fit, design, selection, export_module]
     public = {name for module in modules for name in module.__all__

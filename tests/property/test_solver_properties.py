@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 import study
 from study import NonConvergence, Status
-from study.structure import tilt_warnings
+from study.model.structure import tilt_warnings
 
 finite = {"allow_nan": False, "allow_infinity": False}
 

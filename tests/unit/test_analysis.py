@@ -8,15 +8,11 @@ from numpy.testing import assert_allclose
 from scipy.optimize import brentq
 
 import study
-from study.analysis import (
-    FRONTIER_CROSSING,
-    frontier,
-    frontier_from_grid,
-    minimum_threshold,
-    resonance_threshold,
-)
-from study.runner import run_study
-from study.store import open_result
+from study.analyses.frontier import frontier
+from study.analyses.thresholds import minimum_threshold, resonance_threshold
+from study.engine.runner import run_study
+from study.engine.store import open_result
+from study.solvers.frontier import FRONTIER_CROSSING, frontier_from_grid
 
 
 def _assert_sign_changes_across(structure, a, points, delta=1e-8):

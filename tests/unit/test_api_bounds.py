@@ -13,16 +13,16 @@ import numpy as np
 import pytest
 
 import study
-from study.analysis import (
+from study.analyses.thresholds import lowest_threshold
+from study.engine.study_spec import spec_schema
+from study.model.inputs import InputTypeError
+from study.solvers.exact import MAX_SOLVER_BUDGET
+from study.solvers.frontier import (
     MAX_SCAN_POINTS,
     TOLERANCE_SPACINGS,
     finest_tolerance,
     frontier_from_grid,
-    lowest_threshold,
 )
-from study.inputs import InputTypeError
-from study.solver import MAX_SOLVER_BUDGET
-from study.spec import spec_schema
 
 S = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 
@@ -74,8 +74,8 @@ def test_frontier_from_grid_refuses_the_same() -> None:
 
 
 def test_a_spec_uses_the_same_rule() -> None:
-    from study.spec import parse_spec
-    from study.specfile import SpecError
+    from study.engine.spec_files import SpecError
+    from study.engine.study_spec import parse_spec
 
     text = ('[study]\nname = "x"\nobservables = ["frontier"]\n[structure]\n'
             "f0 = 14.44\nQ = 17.5\nalpha = 64.0\nM = 0.08\ncs = 0.25\n"
@@ -204,7 +204,7 @@ def test_the_force_functions_name_structure(bad) -> None:
 # -- the disk, the integrator and the planner ---------------------------------------------
 
 def _disk():
-    from study.planar import Disk, Plate
+    from study.scenes.planar_model import Disk, Plate
 
     return Disk(radius=0.02, plates=(Plate(14.44, 17.5, 64.0, 0.08, 0.0, (0.005, 0.0)),),
                 cs=0.25)
@@ -214,8 +214,8 @@ def _disk():
 def test_a_disk_drive_outside_the_finite_physics_names_f(f) -> None:
     """periodic_motion(f=1e-300) ended in a ZeroDivisionError, f=1e300 in an
     OverflowError; contact_margins and disk_limits in an OverflowError."""
-    from study.design import disk_limits
-    from study.planar import contact_margins, periodic_motion
+    from study.analyses.design import disk_limits
+    from study.scenes.planar_model import contact_margins, periodic_motion
 
     for call in (lambda: periodic_motion(_disk(), f, 7.0, max_periods=2),
                  lambda: contact_margins(_disk(), f, 7.0, samples=8),
@@ -226,7 +226,7 @@ def test_a_disk_drive_outside_the_finite_physics_names_f(f) -> None:
 
 
 def test_the_lowest_disk_drive_is_computed() -> None:
-    from study.planar import MIN_DISK_FREQUENCY, contact_margins
+    from study.scenes.planar_model import MIN_DISK_FREQUENCY, contact_margins
 
     rim, normal = contact_margins(_disk(), MIN_DISK_FREQUENCY, 7.0, samples=8)
     assert math.isfinite(rim) and math.isfinite(normal)
@@ -235,7 +235,7 @@ def test_the_lowest_disk_drive_is_computed() -> None:
 def test_a_short_calibration_keeps_its_default_orbit_length() -> None:
     """max_periods = 2 is schema-valid for a calibration: the default max_orbit_period
     (8) is bounded by its own maximum, not by max_periods."""
-    from study.planar import periodic_motion
+    from study.scenes.planar_model import periodic_motion
 
     motion = periodic_motion(_disk(), 14.2, 7.0, max_periods=2)
     assert motion.periods <= 2
@@ -245,7 +245,7 @@ def test_a_short_calibration_keeps_its_default_orbit_length() -> None:
     ("max_steps", 2**62, 1_000_000_000), ("max_periods", 10**9, 100_000),
     ("steps_per_period", 10**6, 10_000), ("max_orbit_period", 10**4, 1000)])
 def test_integrator_budgets_are_bounded_as_in_a_spec(name, value, largest) -> None:
-    from study.transient import IntegratorSettings, integrator_budget_maxima
+    from study.solvers.integrator import IntegratorSettings, integrator_budget_maxima
 
     assert integrator_budget_maxima()[name] == largest
     IntegratorSettings(**{name: largest})
@@ -257,8 +257,8 @@ def test_integrator_budgets_are_bounded_as_in_a_spec(name, value, largest) -> No
 @pytest.mark.parametrize("max_events", [2**40, -1, 1.5, math.inf, "10"])
 def test_recorded_events_are_bounded(max_events) -> None:
     """2**40 allocated terabytes; inf ended in an OverflowError."""
-    from study.planar import simulate_planar
-    from study.transient import Schedule, simulate
+    from study.scenes.planar_model import simulate_planar
+    from study.solvers.integrator import Schedule, simulate
 
     schedule = Schedule(np.array([14.2]), np.array([7.0]), np.array([0.1]))
     with pytest.raises(ValueError, match="max_events"):
@@ -268,7 +268,7 @@ def test_recorded_events_are_bounded(max_events) -> None:
 
 
 def test_the_planner_bounds_its_loops_and_names_its_arguments() -> None:
-    from study.planner import MAX_PLAN_ITERATIONS, Command, plan_leg, refined_legs
+    from study.scenes.planner import MAX_PLAN_ITERATIONS, Command, plan_leg, refined_legs
 
     commands = {name: Command(name, 14.0, 7.0, 0.01, 0.0, 0.1) for name in
                 ("forward", "backward", "left", "right")}
@@ -285,12 +285,13 @@ def test_the_planner_bounds_its_loops_and_names_its_arguments() -> None:
 
 
 @pytest.mark.parametrize("call", [
-    lambda: __import__("study.selection", fromlist=["x"]).select(None, ["f=1"]),
-    lambda: __import__("study.selection", fromlist=["x"]).available(None),
-    lambda: __import__("study.export", fromlist=["x"]).tables(None),
-    lambda: __import__("study.planar", fromlist=["x"]).state_names(None),
-    lambda: __import__("study.planar", fromlist=["x"]).describe_disk(None),
-    lambda: __import__("study.transient", fromlist=["x"]).steady_mode_state(None, 14.0, 8.0),
+    lambda: __import__("study.analyses.selection", fromlist=["x"]).select(None, ["f=1"]),
+    lambda: __import__("study.analyses.selection", fromlist=["x"]).available(None),
+    lambda: __import__("study.analyses.export", fromlist=["x"]).tables(None),
+    lambda: __import__("study.scenes.planar_model", fromlist=["x"]).state_names(None),
+    lambda: __import__("study.scenes.planar_model", fromlist=["x"]).describe_disk(None),
+    lambda: __import__("study.solvers.integrator",
+                       fromlist=["x"]).steady_mode_state(None, 14.0, 8.0),
 ], ids=["select", "available", "tables", "state_names", "describe_disk", "steady_mode_state"])
 def test_none_for_the_main_argument_names_it(call) -> None:
     """Each ended in "AttributeError: 'NoneType' object has no attribute ..."."""
@@ -298,7 +299,8 @@ def test_none_for_the_main_argument_names_it(call) -> None:
         call()
 
 
-@pytest.mark.parametrize("parse", ["study.fit.parse_fit_spec", "study.design.parse_design_spec"])
+@pytest.mark.parametrize("parse", ["study.analyses.fit.parse_fit_spec",
+                                   "study.analyses.design.parse_design_spec"])
 def test_a_spec_text_that_is_not_text_is_refused(parse) -> None:
     import importlib
 
@@ -311,8 +313,8 @@ def test_a_spec_text_that_is_not_text_is_refused(parse) -> None:
 def test_a_default_output_grid_too_large_to_hold_is_refused(duration) -> None:
     """A 1e12 s schedule asked simulate for 6.4 PiB (MemoryError); 1e300 s ended in
     numpy's "Maximum allowed size exceeded"."""
-    from study.planar import simulate_planar
-    from study.transient import MAX_OUTPUT_SAMPLES, Schedule, simulate
+    from study.scenes.planar_model import simulate_planar
+    from study.solvers.integrator import MAX_OUTPUT_SAMPLES, Schedule, simulate
 
     schedule = Schedule(np.array([14.0]), np.array([8.0]), np.array([duration]))
     for run in (lambda: simulate(S, schedule), lambda: simulate_planar(_disk(), schedule)):

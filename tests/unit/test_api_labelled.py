@@ -11,8 +11,8 @@ import xarray as xr
 from numpy.testing import assert_allclose, assert_array_equal
 
 import study
-from study.analysis import lowest_threshold
-from study.solver import DEFAULT_COUPLING
+from study.analyses.thresholds import lowest_threshold
+from study.solvers.exact import DEFAULT_COUPLING
 
 PAPER = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 
@@ -154,13 +154,13 @@ def test_scalar_results_are_the_array_results() -> None:
 
 
 def test_one_coupling_default_everywhere() -> None:
-    from study.design import DesignSpec
-    from study.fit import FitSpec
-    from study.observables import Method
-    from study.planar import Disk
-    from study.solver import attractors
-    from study.spec import StudySpec
-    from study.transient import integrated_steady_state, simulate
+    from study.analyses.design import DesignSpec
+    from study.analyses.fit import FitSpec
+    from study.engine.observables import Method
+    from study.engine.study_spec import StudySpec
+    from study.scenes.planar_model import Disk
+    from study.solvers.exact import attractors
+    from study.solvers.integrator import integrated_steady_state, simulate
 
     assert DEFAULT_COUPLING == "one-way"
     functions = (study.steady_state, study.steady_velocity, attractors, study.frontier,

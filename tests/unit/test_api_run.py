@@ -125,7 +125,7 @@ def test_study_info_names_the_coupling(spec_file: Path, tmp_path: Path, capsys) 
 
 def test_another_kind_of_file_is_not_overwritten_unless_asked(spec_file: Path,
                                                               tmp_path: Path) -> None:
-    from study.outputs import OutputError
+    from study.engine.outputs import OutputError
 
     notes = tmp_path / "notes.nc"
     notes.write_text("my notes")

@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 
 from study.cli import main
-from study.provenance import package_version
-from study.runner import StudyInterrupted, run_study
-from study.store import open_result
+from study.engine.provenance import package_version
+from study.engine.runner import StudyInterrupted, run_study
+from study.engine.store import open_result
 
 # 7 x 5 points, 2 frequencies (10 points) per chunk: 4 chunks.
 CHUNKS = 4

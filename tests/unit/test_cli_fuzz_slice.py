@@ -60,7 +60,7 @@ def test_a_cache_name_that_is_not_utf8_runs_and_is_recorded_escaped(workspace: P
                        "--no-progress"])
     err = capsys.readouterr().err
     assert status == 0, err
-    from study.store import open_result
+    from study.engine.store import open_result
 
     assert "--cache '\\udcff'" in open_result(workspace / "new/escaped.nc").attrs["history"]
     restore(workspace)

@@ -12,12 +12,12 @@ from numpy.testing import assert_allclose
 from reference_integrator import reference_velocity
 
 from study import Structure
-from study.analysis import coupling_effect
+from study.analyses.coupling import coupling_effect
 from study.cli import main
-from study.runner import run_study
-from study.status import Status
-from study.store import open_result
-from study.transient import IntegratorSettings, integrated_steady_state
+from study.engine.runner import run_study
+from study.engine.store import open_result
+from study.model.status import Status
+from study.solvers.integrator import IntegratorSettings, integrated_steady_state
 
 PAPER = dict(f0=14.44, Q=17.5, alpha=64.0, cs=0.25)
 REFERENCE_STATUS = {"static": 0, "stick_slip": 1, "continuous_sliding": 2, "lift_off": 3,
@@ -114,7 +114,7 @@ def coupling_file(tmp_path_factory) -> Path:
 def test_coupling_study_stores_both_models(coupling_file):
     dataset = open_result(coupling_file)
     assert dataset.attrs["study_coupling"] == "two-way"
-    from study.solver import steady_state
+    from study.solvers.exact import steady_state
 
     for i, M in enumerate(dataset["M"].values):
         structure = Structure(M=float(M), **PAPER)

@@ -1,4 +1,4 @@
-"""study.design: target behaviours at drive commands -> the structure with the largest
+"""study.analyses.design: target behaviours at drive commands -> the structure with the largest
 smallest margin, checked by solving at the result; infeasible designs name the target."""
 
 from __future__ import annotations
@@ -11,9 +11,8 @@ import pytest
 import xarray as xr
 from numpy.testing import assert_allclose
 
-import study.design as design_module
-from study.cli import main
-from study.design import (
+import study.analyses.design as design_module
+from study.analyses.design import (
     DESIGN_RESULT_SCHEMA,
     MIN_MARGIN,
     design,
@@ -23,15 +22,16 @@ from study.design import (
     load_design_spec,
     parse_design_spec,
 )
-from study.physics import lift_off_acceleration, thresholds
-from study.planar import Disk, Plate, periodic_motion
-from study.scene import load_scene
-from study.solver import steady_velocity
-from study.specfile import SpecError
-from study.status import Status
-from study.store import write_atomic
-from study.structure import Structure
-from study.validate import open_result
+from study.cli import main
+from study.engine.spec_files import SpecError
+from study.engine.store import write_atomic
+from study.engine.validation import open_result
+from study.model import lift_off_acceleration, thresholds
+from study.model.status import Status
+from study.model.structure import Structure
+from study.scenes.planar_model import Disk, Plate, periodic_motion
+from study.scenes.scene_kind import load_scene
+from study.solvers.exact import steady_velocity
 
 REPO = Path(__file__).resolve().parents[2]
 FORWARD_BACKWARD = REPO / "designs" / "forward-backward.toml"

@@ -25,10 +25,10 @@ import pytest
 
 import study
 from study.cli import main
-from study.cluster import ClusterError, executor
-from study.provenance import code_sha256
-from study.runner import run_study
-from study.store import open_result
+from study.engine.executors import ClusterError, executor
+from study.engine.provenance import code_sha256
+from study.engine.runner import run_study
+from study.engine.store import open_result
 
 DASK = Path(sys.executable).with_name("dask")
 # The checkout these tests import study from: the workers import the same one.
@@ -258,7 +258,7 @@ def other_code(tmp_path) -> Path:
     root = tmp_path / "other"
     shutil.copytree(PACKAGE_ROOT / "study", root / "study",
                     ignore=shutil.ignore_patterns("__pycache__"))
-    with open(root / "study" / "solver.py", "a") as solver:
+    with open(root / "study" / "solvers" / "exact.py", "a") as solver:
         solver.write("# a comment: other source, another code hash\n")
     return root
 
@@ -484,15 +484,15 @@ def test_the_local_executor_yields_every_item_once():
 
 def test_the_time_reported_includes_writing_the_file(tmp_path, monkeypatch):
     """The CLI prints ``RunReport.wall_seconds``: it must cover the write and its check."""
-    import study.runner
+    import study.engine.runner
 
-    write = study.runner.commit
+    write = study.engine.runner.commit
 
     def slow_write(*args, **kwargs):
         time.sleep(0.5)  # a slow disk
         return write(*args, **kwargs)
 
-    monkeypatch.setattr(study.runner, "commit", slow_write)
+    monkeypatch.setattr(study.engine.runner, "commit", slow_write)
     spec = write_spec(tmp_path, "timed", n_f=4, n_a=3, chunk_points=3)
     report = run_study(spec, tmp_path / "timed.nc", workers=1, progress=False)
     assert report.wall_seconds >= 0.5

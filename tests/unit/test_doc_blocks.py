@@ -9,8 +9,9 @@ The pages are README.md and every docs/**/*.md page (MyST markdown). In each pag
   error, as a reader would see them.
 * Each ```toml block that is a spec (it has a ``[study]``, ``[scene]``, ``[fit]`` or
   ``[design]`` table) is read by the project's parser of that kind
-  (:func:`study.spec.parse_spec`, :func:`study.scene.parse_scene`,
-  :func:`study.fit.parse_fit_spec`, :func:`study.design.parse_design_spec`) and must be
+  (:func:`study.engine.study_spec.parse_spec`, :func:`study.scenes.scene_kind.parse_scene`,
+  :func:`study.analyses.fit.parse_fit_spec`,
+  :func:`study.analyses.design.parse_design_spec`) and must be
   valid. A fit spec names measurement files, which a page does not ship: each is
   stood in for by a one-row valid file, so that the spec itself is checked in full.
   TOML blocks without such a table (fragments, ``pyproject.toml``) are not specs.
@@ -116,10 +117,10 @@ def check_spec(code: str, where: str, folder: Path) -> None:
     """Parse a spec block with the project's parser of its kind (raises if invalid)."""
     import tomllib
 
-    from study.design import parse_design_spec
-    from study.fit import parse_fit_spec
-    from study.scene import parse_scene
-    from study.spec import parse_spec
+    from study.analyses.design import parse_design_spec
+    from study.analyses.fit import parse_fit_spec
+    from study.engine.study_spec import parse_spec
+    from study.scenes.scene_kind import parse_scene
 
     kind = spec_kind(code)
     if kind == "study":

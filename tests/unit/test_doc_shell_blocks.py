@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 from study.cli import build_parser, main
-from study.store import open_result
+from study.engine.store import open_result
 from tests.unit.test_doc_blocks import PAGES, ROOT, blocks, name
 
 STUDY = ".venv/bin/study"

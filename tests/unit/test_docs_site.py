@@ -68,11 +68,12 @@ def documented_names(text: str) -> dict[str, list[str]]:
 def test_documented_names_are_read_from_autosummary_tables() -> None:
     text = ("```{eval-rst}\n.. currentmodule:: study\n\n.. autosummary::\n   :toctree: g\n\n"
             "   Structure\n   thresholds\n```\n\nprose Structure\n\n```{eval-rst}\n"
-            ".. py:currentmodule:: None\n\n.. autosummary::\n   :toctree: g\n\n   study.fit\n"
+            ".. py:currentmodule:: None\n\n.. autosummary::\n   :toctree: g\n\n"
+            "   study.analyses.fit\n"
             "```\n\n```{eval-rst}\n.. py:data:: study.__version__\n   :type: str\n\n"
             "   The version.\n```\n")
     assert documented_names(text) == {"study": ["Structure", "thresholds", "__version__"],
-                                      "None": ["study.fit"]}
+                                      "None": ["study.analyses.fit"]}
 
 
 def test_the_api_reference_lists_every_public_name() -> None:
@@ -87,7 +88,7 @@ def test_the_api_reference_lists_every_public_name() -> None:
 
 def test_the_api_reference_modules_exist_and_are_not_private() -> None:
     modules = documented_names(API_PAGE.read_text(encoding="utf-8")).get("None", [])
-    assert "study.fit" in modules
+    assert "study.analyses.fit" in modules
     for module in modules:
         assert not any(part.startswith("_") for part in module.split("."))
         assert importlib.import_module(module).__all__, f"{module} has no __all__"

@@ -13,10 +13,10 @@ import pytest
 import xarray as xr
 from sealed_results import scene_text
 
+from study.analyses.export import ExportError, export_csv, tables
 from study.cli import main
-from study.export import ExportError, export_csv, tables
-from study.runner import run_scene, run_study
-from study.validate import open_result
+from study.engine.runner import run_scene, run_study
+from study.engine.validation import open_result
 
 SPEC = """
 [study]

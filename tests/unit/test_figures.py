@@ -9,12 +9,12 @@ import pytest
 from PIL import Image
 
 from study.cli import main
+from study.engine.runner import run_study
+from study.engine.store import open_result
 from study.figures import FIGURES, draw_figure
 from study.figures.force_traces import region_of
 from study.figures.velocity_curves import frequency_position
-from study.runner import run_study
-from study.status import Status
-from study.store import open_result
+from study.model.status import Status
 
 STRUCTURE = """\
 [structure]
@@ -180,7 +180,7 @@ def test_a_refusal_names_the_observables_to_add(tmp_path, capsys):
     """The README's example spec (thresholds, velocity) drawn as regime-map: the message
     names lift_off and frontier, the observables the registry says write the missing
     variables, and the spec so extended holds everything the figure needs."""
-    from study.observables import variables_of
+    from study.engine.observables import variables_of
 
     spec = tmp_path / "own.toml"
     spec.write_text(README_SPEC.format(structure=STRUCTURE))

@@ -12,10 +12,10 @@ from matplotlib.figure import Figure
 from PIL import Image
 
 from study.cli import main
+from study.engine.runner import run_study
+from study.engine.store import open_result
 from study.figures import FIGURES, FigureError, common, draw_figure
-from study.paper import PAPER_STRUCTURE, is_paper_structure, paper_structure
-from study.runner import run_study
-from study.store import open_result
+from study.model.paper import PAPER_STRUCTURE, is_paper_structure, paper_structure
 
 #: The issue's new user: f0 = 22 Hz, Q = 30, alpha = 45, M = 0.15, cs = 0.35, ck = 0.3.
 OWN = """\

@@ -9,13 +9,13 @@ from numpy.testing import assert_allclose
 from PIL import Image
 
 import study
-from study.analysis import collapse_variable, lowest_threshold, resonance_threshold
+from study.analyses.thresholds import collapse_variable, lowest_threshold, resonance_threshold
 from study.cli import main
+from study.engine.runner import run_study
+from study.engine.store import open_result
 from study.figures import mass_ratio_limit
 from study.figures.common import grid_minimum, structure_from_dataset
-from study.runner import run_study
-from study.status import Status
-from study.store import open_result
+from study.model.status import Status
 
 G = 9.8
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "cs": 0.25}

@@ -17,11 +17,11 @@ import xarray as xr
 from matplotlib.figure import Figure
 from PIL import Image
 
+from study.analyses.selection import select
 from study.cli import main
+from study.engine.runner import run_study
+from study.engine.store import open_result
 from study.figures import FIGURES, FigureError, common, draw_figure
-from study.runner import run_study
-from study.selection import select
-from study.store import open_result
 from tests.unit.test_figures_steering import (
     calibration_dataset,
     plan_dataset,

@@ -10,10 +10,10 @@ import pytest
 from PIL import Image
 
 from study.cli import main
+from study.engine.runner import run_study
+from study.engine.store import open_result
 from study.figures import FIGURES, draw_figure
 from study.figures.common import coupling_label
-from study.runner import run_study
-from study.store import open_result
 
 STRUCTURE = """\
 [structure]

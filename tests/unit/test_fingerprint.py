@@ -1,4 +1,4 @@
-"""Code fingerprints from the import graph (study.fingerprint): closures, staleness, CLI."""
+"""Code fingerprints from the import graph (study.engine.fingerprint): closures, staleness, CLI."""
 
 from __future__ import annotations
 
@@ -10,14 +10,14 @@ from pathlib import Path
 
 import pytest
 
-from study.fingerprint import (
+from study.engine.fingerprint import (
     RESULT_KIND_ENTRIES,
     code_fingerprint,
     import_closure,
     main,
     result_code_sha256,
 )
-from study.provenance import code_sha256, scene_code_sha256
+from study.engine.provenance import code_sha256, scene_code_sha256
 
 PACKAGE = Path(__file__).resolve().parents[2] / "study"
 SCHEMAS = PACKAGE.parent / "results_schema"
@@ -47,18 +47,20 @@ def _source(root: Path, module: str) -> Path:
 
 def test_study_closure_holds_every_computing_module():
     modules = code_fingerprint(RESULT_KIND_ENTRIES["study"]).modules
-    for name in ("study.sweep", "study.analysis", "study.solver", "study.kernels.steady",
-                 "study.physics.forces", "study.structure", "study.transient",
-                 "study.kernels.transient", "study.status", "study", "study.kernels",
-                 "study.physics"):
+    for name in ("study.engine.sweep", "study.solvers.frontier", "study.solvers.exact",
+                 "study.kernels.one_way",
+                 "study.model.forces", "study.model.structure", "study.solvers.integrator",
+                 "study.kernels.integrator", "study.model.status", "study", "study.kernels",
+                 "study.model"):
         assert name in modules, name
     assert not [m for m in modules if m.startswith(NOT_COMPUTING)], modules
 
 
 def test_scene_closure_holds_the_planar_model():
     modules = code_fingerprint(RESULT_KIND_ENTRIES["scene"]).modules
-    for name in ("study.scene", "study.planar", "study.kernels.planar", "study.planner",
-                 "study.physics.forces", "study.transient", "study.status"):
+    for name in ("study.scenes.scene_kind", "study.scenes.planar_model",
+                 "study.kernels.planar_integrator", "study.scenes.planner",
+                 "study.model.forces", "study.solvers.integrator", "study.model.status"):
         assert name in modules, name
     assert not [m for m in modules if m.startswith(NOT_COMPUTING)], modules
 
@@ -142,7 +144,7 @@ def test_deterministic_and_order_free():
     assert first.sha256 == code_sha256() == result_code_sha256("study")
     assert result_code_sha256("scene") == scene_code_sha256()
     # Other entry tuples reaching the same modules hash the same modules.
-    for other in (entries[::-1], (*entries, "study.solver", "study.sweep")):
+    for other in (entries[::-1], (*entries, "study.solvers.exact", "study.engine.sweep")):
         again = code_fingerprint(other, PACKAGE)
         assert again.modules == first.modules
         assert again.sha256 == first.sha256
@@ -160,7 +162,7 @@ def test_module_listing_for_humans(capsys: pytest.CaptureFixture[str]):
     assert main(["scene"]) == 0
     out = capsys.readouterr().out
     assert out.startswith(f"scene: {result_code_sha256('scene')}\n")
-    assert "    study.kernels.planar\n" in out
+    assert "    study.kernels.planar_integrator\n" in out
     assert "study.cli" not in out
 
 
@@ -202,7 +204,7 @@ def test_study_list_follows_computing_edits_only(tmp_path: Path):
     study("run", str(workflows / "tiny.toml"), "-o", str(results / "tiny.nc"),
           "--workers", "1", "--no-progress")
     assert ": up to date" in state()
-    forces = root / "physics" / "forces.py"
+    forces = root / "model" / "forces.py"
     original = forces.read_bytes()
     forces.write_bytes(original + b"\n# edited\n")
     assert ": out of date" in state()

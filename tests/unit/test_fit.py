@@ -12,11 +12,11 @@ import pytest
 import xarray as xr
 
 from study import Structure
+from study.analyses.fit import fit, fit_dataset, model_values, parse_fit_spec
+from study.analyses.measurements import SpecError
 from study.cli import main
-from study.fit import fit, fit_dataset, model_values, parse_fit_spec
-from study.measurements import SpecError
-from study.physics import thresholds
-from study.validate import ResultError, open_result, validate_file
+from study.engine.validation import ResultError, open_result, validate_file
+from study.model import thresholds
 
 TRUE = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08, "cs": 0.25}
 FREQUENCIES = np.array([11.0, 12.0, 13.0, 13.8, 14.6, 15.2, 16.0, 17.0, 18.0])
@@ -56,7 +56,7 @@ def test_threshold_derivatives_are_the_closed_form_differentiated(tmp_path: Path
                      for d in ("forward", "backward", "unknown")))
     spec = make_spec(tmp_path, csv, "f0 = [10, 20], Q = [5, 50], alpha = [30, 80], "
                      "M = [0.01, 0.5], cs = [0.1, 1.0]")
-    from study.fit import _Problem
+    from study.analyses.fit import _Problem
 
     problem = _Problem(spec.start, spec.free, spec.measurements, spec.coupling)
     x = problem.start()
@@ -268,7 +268,7 @@ def test_the_issues_minimal_spec_runs_through_the_cli(tmp_path: Path, monkeypatc
 def test_an_edited_fit_file_is_refused(tmp_path: Path) -> None:
     spec = make_spec(tmp_path, threshold_csv(true_thresholds(), 0.05), "M = [0.01, 0.5]")
     dataset = fit_dataset(spec, fit(spec))
-    from study.store import write_atomic
+    from study.engine.store import write_atomic
 
     path = write_atomic(dataset, tmp_path / "f.nc")
     edited = xr.open_dataset(path).load()
@@ -306,7 +306,11 @@ def test_velocities_in_mm_per_s_are_refused_as_the_figures_refuse_them(tmp_path:
     assert "(m s-1, not mm/s)" in message
     assert not (tmp_path / "out.nc").exists()
     # the same check, and the same words, as a figure with these measurements
-    from study.measurements import MeasurementError, check_velocity_units, read_measurements
+    from study.analyses.measurements import (
+        MeasurementError,
+        check_velocity_units,
+        read_measurements,
+    )
 
     data = read_measurements(folder / "measured.csv")
     with pytest.raises(MeasurementError) as err:
@@ -388,7 +392,7 @@ def test_an_edited_warning_list_is_refused(tmp_path: Path) -> None:
     spec = make_spec(tmp_path, threshold_csv(true_thresholds(), 0.05), "M = [0.01, 0.5]")
     dataset = fit_dataset(spec, fit(spec))
     dataset.attrs["study_warnings"] = "none"
-    from study.store import write_atomic
+    from study.engine.store import write_atomic
 
     with pytest.raises(ResultError, match="study_warnings is not a JSON list"):
         write_atomic(dataset, tmp_path / "f.nc")

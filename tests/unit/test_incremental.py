@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 
 import study
-from study.cache import decode_array, encode_array
 from study.cli import main
-from study.progress import Progress
-from study.runner import run_study
-from study.store import open_result
+from study.engine.cache import decode_array, encode_array
+from study.engine.progress import Progress
+from study.engine.runner import run_study
+from study.engine.store import open_result
 
 BASE = dict(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 
@@ -118,7 +118,7 @@ def test_other_structure_solver_or_code_never_reuses(tmp_path, monkeypatch):
     text = spec_text() + "max_events = 5000\n"
     report, _ = run(tmp_path, text)
     assert report.points_reused == 0
-    monkeypatch.setattr("study.runner.code_sha256", lambda: "0" * 64)
+    monkeypatch.setattr("study.engine.runner.code_sha256", lambda: "0" * 64)
     report, _ = run(tmp_path, spec_text(), force=True)
     assert report.points_reused == 0
 
@@ -201,7 +201,7 @@ def test_a_full_disk_is_one_line_and_keeps_the_old_result(tmp_path, monkeypatch,
     def full(self, name, index, values):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr("study.store.GridWriter._put", full)
+    monkeypatch.setattr("study.engine.store.GridWriter._put", full)
     status = main(["run", str(path), "-o", str(output), "--force", "--no-progress"])
     err = capsys.readouterr().err
     assert status == 1
@@ -229,7 +229,7 @@ def test_cache_list_and_prune(tmp_path, capsys, monkeypatch):
     assert "velocity" in out and "45 pts" in out and "1 entries" in out
     assert main(["cache", "prune", "--stale", "--cache", str(cache)]) == 0
     assert "removed 0 of 1" in capsys.readouterr().out
-    monkeypatch.setattr("study.provenance.code_sha256", lambda: "f" * 64)
+    monkeypatch.setattr("study.engine.provenance.code_sha256", lambda: "f" * 64)
     assert main(["cache", "prune", "--stale", "--dry-run", "--cache", str(cache)]) == 0
     assert "would remove 1 of 1" in capsys.readouterr().out and blocks(tmp_path)
     assert main(["cache", "prune", "--all", "--cache", str(cache)]) == 0

@@ -125,11 +125,11 @@ duration = 0.5
 # Run inside the new venv: where study comes from, and what else is on the path.
 PROBE = """\
 import importlib.util, json, sys
-import numpy, study, study.spec
+import numpy, study, study.engine.study_spec
 print(json.dumps({
     "study": study.__file__,
-    "spec_schema": str(study.spec.SPEC_SCHEMA_PATH),
-    "spec_schema_exists": study.spec.SPEC_SCHEMA_PATH.is_file(),
+    "spec_schema": str(study.engine.study_spec.SPEC_SCHEMA_PATH),
+    "spec_schema_exists": study.engine.study_spec.SPEC_SCHEMA_PATH.is_file(),
     "numpy": numpy.__file__,
     "editable_modules": sorted(m for m in sys.modules if "editable" in m),
     "editable_finders": [repr(f) for f in sys.meta_path if "editable" in repr(f).lower()],
@@ -244,11 +244,11 @@ def test_the_venv_imports_the_installed_copy_not_the_repo(venv):
 
 
 VERSION_PROBE = f"""\
-import importlib.metadata, json, study, study.provenance
+import importlib.metadata, json, study, study.engine.provenance
 print(json.dumps({{
     "metadata": importlib.metadata.version({DISTRIBUTION!r}),
     "study": study.__version__,
-    "provenance": study.provenance.package_version(),
+    "provenance": study.engine.provenance.package_version(),
 }}))
 """
 

@@ -15,8 +15,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import study
-from study import measurements
-from study.measurements import (
+from study.analyses import measurements
+from study.analyses.measurements import (
     COLUMNS,
     MAX_FIELD_CHARS,
     MAX_LINE_CHARS,

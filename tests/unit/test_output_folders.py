@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-import study.runner
+import study.engine.runner
 from study.cli import default_figure_output, main
-from study.store import StoreError, open_result
+from study.engine.store import StoreError, open_result
 
 
 def spec_text(name: str, Q: float = 17.5, observables: str = '"resonance", "thresholds"',
@@ -153,7 +153,7 @@ def test_a_failed_write_after_computing_says_where_the_values_are_kept(
                          "any previous result is unchanged")
 
     with monkeypatch.context() as patched:
-        patched.setattr(study.runner, "commit", disk_full)
+        patched.setattr(study.engine.runner, "commit", disk_full)
         status, _, err = run(capsys, "run", "moving.toml", "--cache", "kept")
     assert status == 1
     match = re.search(r"the (\d+) points computed are kept in (\S+) for the next run", err)

@@ -1,4 +1,4 @@
-"""No command overwrites something it did not write (study.outputs): an input of the
+"""No command overwrites something it did not write (study.engine.outputs): an input of the
 command (by path, symlink or hard link), a folder, a device or a file of another kind
 is refused with one line and left byte for byte as it was; ``--overwrite`` gets past the
 kind check only."""
@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from study.cli import main
-from study.outputs import OutputError, check_output, is_output_of_kind
-from study.store import open_result
+from study.engine.outputs import OutputError, check_output, is_output_of_kind
+from study.engine.store import open_result
 
 SPEC = """\
 [study]

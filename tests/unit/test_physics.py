@@ -10,7 +10,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import study
-from study.physics import release_amplitudes, slip_amplitudes
+from study.model import release_amplitudes, slip_amplitudes
 
 
 def paper_eq5(f, f0, Q, alpha_deg, M, cs, g, sign):

@@ -12,18 +12,18 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from study.kernels import planar as kernel
-from study.planar import (
+from study.kernels import planar_integrator as kernel
+from study.model.status import Status
+from study.model.structure import Structure
+from study.scenes.planar_model import (
     Disk,
     Plate,
     periodic_motion,
     rest_state,
     simulate_planar,
 )
-from study.solver import steady_state
-from study.status import Status
-from study.structure import Structure
-from study.transient import IntegratorSettings, Schedule, simulate
+from study.solvers.exact import steady_state
+from study.solvers.integrator import IntegratorSettings, Schedule, simulate
 
 R = 0.02
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08}
@@ -45,7 +45,7 @@ def _two_plate_disk():
 @pytest.mark.parametrize(("f", "a", "ck"), [(14.2, 7.0, None), (15.2, 7.0, None),
                                             (14.5, 9.0, None), (14.0, 6.0, 0.2)])
 def test_one_plate_along_the_heading_is_the_1d_model(f, a, ck):
-    """Transient from rest, against study.transient.simulate; no rotation at all."""
+    """Transient from rest, against study.solvers.integrator.simulate; no rotation at all."""
     disk = _one_plate_disk(ck)
     structure = Structure(**PAPER, cs=0.25, ck=ck)
     schedule = Schedule(np.array([f, f + 0.5]), np.array([a, a]), np.array([12 / f, 8 / f]))
@@ -236,7 +236,7 @@ def test_bad_run_arguments_are_refused():
 def test_contact_margins_match_the_simulated_plates():
     """Rim and normal margins against n and the tilting moment computed from the plate
     states of a simulated run (the plates do not feel the disk: any run will do)."""
-    from study.planar import contact_margins
+    from study.scenes.planar_model import contact_margins
 
     disk = _two_plate_disk()  # head plate at the rim
     f, a = 14.2, 7.0

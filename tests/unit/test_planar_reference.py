@@ -18,7 +18,7 @@ that share nothing with its formulation:
   Radau) through a linear and a quadratic slip onset;
 * mirror symmetry and rotation invariance.
 
-Part 2 compares ``study.planar.simulate_planar`` with the reference: the 1-D
+Part 2 compares ``study.scenes.planar_model.simulate_planar`` with the reference: the 1-D
 reduction, the paper's two-plate steering disk (forward, backward, turning, and a
 frequency switch mid-run), symmetries, and the free-slide closed forms.
 
@@ -477,7 +477,7 @@ def test_reference_mirror_symmetry_and_rotation_invariance():
 
 @pytest.fixture(scope="module")
 def planar():
-    from study import planar as module
+    from study.scenes import planar_model as module
 
     return module
 
@@ -491,7 +491,7 @@ def pkg_run(planar, disk, freq, acc, dur, init, times, tol=PKG_TOL):
     """The package's run from the reference's state ``init`` (heading [rad], spin
     [rad s-1]), given to the package in its units (degree, degree s-1); the
     trajectory's heading and spin come back in degree (compare with ``deg``)."""
-    from study.transient import IntegratorSettings, Schedule
+    from study.solvers.integrator import IntegratorSettings, Schedule
 
     init = np.array(init, dtype=float)
     init[[2, 5]] = np.degrees(init[[2, 5]])

@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from study.planar import (
+from study.model.status import Status
+from study.model.structure import Structure
+from study.scenes.planar_model import (
     EVENT_KINDS,
     Disk,
     Plate,
@@ -18,10 +20,8 @@ from study.planar import (
     periodic_motion,
     simulate_planar,
 )
-from study.scene import SceneError, load_scene, parse_scene
-from study.status import Status
-from study.structure import Structure
-from study.transient import IntegratorSettings, Schedule, integrated_steady_state, simulate
+from study.scenes.scene_kind import SceneError, load_scene, parse_scene
+from study.solvers.integrator import IntegratorSettings, Schedule, integrated_steady_state, simulate
 
 R = 0.02
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08}
@@ -42,7 +42,7 @@ def _two_plate_disk(coupling, M=0.08):
 
 @pytest.mark.parametrize(("f", "a"), [(14.2, 7.0), (15.2, 7.0), (14.6, 7.0), (13.0, 8.5)])
 def test_one_plate_two_way_steady_speed_is_the_1d_two_way_integrators(f, a):
-    """Same mean velocity as study.transient's two-way model (which waits for the mode's
+    """Same mean velocity as study.solvers.integrator's two-way model (which waits for the mode's
     transient the same way); no rotation at all. Two-way changes it (by 49 % at 14.2 Hz)."""
     motion = periodic_motion(_one_plate_disk("two-way"), f, a, settings=TIGHT,
                              max_periods=2000)

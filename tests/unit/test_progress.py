@@ -6,7 +6,7 @@ import io
 
 import pytest
 
-from study.progress import ETA_MIN_FRACTION, ETA_MIN_SECONDS, Progress, TimeLeft
+from study.engine.progress import ETA_MIN_FRACTION, ETA_MIN_SECONDS, Progress, TimeLeft
 
 
 class Clock:

@@ -8,7 +8,7 @@ against things that do not share its code:
   and over-damped), its slip displacement against quadrature;
 * with the coupling switched off, against the independent 40-digit one-way reference
   (``tests/exact_reference.py``) and the exact float solver ``study.steady_velocity``;
-* with two-way coupling, against the time integrator ``study.transient`` (converging to
+* with two-way coupling, against the time integrator ``study.solvers.integrator`` (converging to
   the reference as its tolerance is tightened), and 40 against 60 digits;
 * its Floquet multipliers against the mode's free decay (one-way, where the slips do
   not act on the mode);
@@ -41,10 +41,10 @@ from reference_two_way_exact import (
 )
 
 import study
-from study.kernels.transient import _accelerations
-from study.status import Status
-from study.structure import Structure
-from study.transient import IntegratorSettings, integrated_steady_state, model_parameters
+from study.kernels.integrator import _accelerations
+from study.model.status import Status
+from study.model.structure import Structure
+from study.solvers.integrator import IntegratorSettings, integrated_steady_state, model_parameters
 from tests.conftest import PAPER
 
 PAPER_ARGS = (PAPER["f0"], PAPER["Q"], PAPER["alpha"], PAPER["M"], PAPER["cs"])

@@ -1,4 +1,4 @@
-"""Result files on disk: schema, CF attributes, refusals and atomic writes (study.store)."""
+"""Result files on disk: schema, CF attributes, refusals and atomic writes (study.engine.store)."""
 
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ import pytest
 import xarray as xr
 
 import study
-import study.store
-from study.runner import run_study
-from study.store import (
+import study.engine.store
+from study.engine.runner import run_study
+from study.engine.store import (
     RESULT_SCHEMA_PATH,
     ResultError,
     describe,
@@ -279,7 +279,7 @@ def test_write_atomic_keeps_the_old_file_when_validation_fails(
     def refuse(path):
         raise ResultError(f"{path}: refused on purpose")
 
-    monkeypatch.setattr(study.store, "seal", refuse)
+    monkeypatch.setattr(study.engine.store, "seal", refuse)
     with pytest.raises(ResultError, match="refused on purpose"):
         write_atomic(result, existing)
     assert existing.read_bytes() == before

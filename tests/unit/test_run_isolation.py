@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from study.cli import main
-from study.runner import StudyInterrupted, run_study
-from study.store import exclusive, new_temporary, open_result
+from study.engine.runner import StudyInterrupted, run_study
+from study.engine.store import exclusive, new_temporary, open_result
 from tests.unit.test_incremental import spec_text
 
 TIMEOUT = 300
@@ -153,7 +153,7 @@ def test_prune_waits_for_a_live_run(tmp_path, reference):
 
 
 def test_a_run_waits_for_maintenance_then_proceeds(tmp_path, reference):
-    from study.cache import ResultCache
+    from study.engine.cache import ResultCache
 
     (tmp_path / "long.toml").write_text(LONG)
     cache = ResultCache(tmp_path / "cache")
@@ -170,7 +170,7 @@ def test_a_run_waits_for_maintenance_then_proceeds(tmp_path, reference):
 
 
 def test_a_stale_cache_temporary_goes_only_when_its_owner_is_dead(tmp_path):
-    from study.cache import ResultCache
+    from study.engine.cache import ResultCache
 
     cache = ResultCache(tmp_path / "cache")
     with cache.session("test"):

@@ -13,12 +13,12 @@ import xarray as xr
 from numpy.testing import assert_allclose
 
 from study.cli import main
-from study.planar import periodic_motion, rest_state, simulate_planar
-from study.planner import arc_displacement, calibrate_commands, plan_leg
-from study.runner import run_scene
-from study.scene import SceneError, load_scene, parse_scene
-from study.store import ResultError, open_result
-from study.transient import IntegratorSettings, Schedule
+from study.engine.runner import run_scene
+from study.engine.store import ResultError, open_result
+from study.scenes.planar_model import periodic_motion, rest_state, simulate_planar
+from study.scenes.planner import arc_displacement, calibrate_commands, plan_leg
+from study.scenes.scene_kind import SceneError, load_scene, parse_scene
+from study.solvers.integrator import IntegratorSettings, Schedule
 
 WORKFLOWS = Path(__file__).resolve().parents[2] / "workflows"
 
@@ -296,8 +296,8 @@ def test_plan_scene_reaches_its_waypoints_without_noise(tmp_path):
 
 
 def test_a_second_writer_is_refused_while_one_runs(tmp_path):
-    from study.runner import StudyBusy
-    from study.store import exclusive
+    from study.engine.runner import StudyBusy
+    from study.engine.store import exclusive
 
     spec = parse_scene(TRAJECTORY, "tiny.toml")
     output = tmp_path / "tiny.nc"
@@ -319,7 +319,7 @@ CALIBRATION = ("[scene]\nname = \"cal\"\nkind = \"calibration\"\n" + DISK
 def test_a_scene_reports_all_its_work_as_it_runs(text, unit):
     """What the scene reports adds up to the work its progress bar counts, in order, and
     the result is the same with or without a report."""
-    from study.scene import scene_dataset, scene_work
+    from study.scenes.scene_kind import scene_dataset, scene_work
 
     spec = parse_scene(text, "scene.toml")
     work, named = scene_work(spec)

@@ -10,8 +10,9 @@ from pathlib import Path
 
 import pytest
 
-import study.scene
-from study.scene import (
+import study.scenes.scene_kind
+from study.engine.spec_files import SpecError
+from study.scenes.scene_kind import (
     MAX_CALIBRATION_PERIODS,
     MAX_PLAN_DRIVE_SECONDS,
     MAX_SCENE_SAMPLES,
@@ -19,7 +20,6 @@ from study.scene import (
     parse_scene,
     scene_dataset,
 )
-from study.specfile import SpecError
 
 REPO = Path(__file__).resolve().parents[2]
 TRAJECTORY = (REPO / "workflows" / "steering.toml").read_text(encoding="utf-8")
@@ -182,8 +182,8 @@ def test_an_absurd_plan_is_refused_before_any_flight(monkeypatch, old, new, frag
     def no_flight(*args, **kwargs):
         raise AssertionError("a flight was simulated before the size was checked")
 
-    monkeypatch.setattr(study.scene, "refined_route", no_flight)
-    monkeypatch.setattr(study.scene, "run_plan", no_flight)
+    monkeypatch.setattr(study.scenes.scene_kind, "refined_route", no_flight)
+    monkeypatch.setattr(study.scenes.scene_kind, "run_plan", no_flight)
     with pytest.raises(SceneError) as excinfo:
         scene_dataset(spec)
     message = str(excinfo.value)
@@ -192,17 +192,19 @@ def test_an_absurd_plan_is_refused_before_any_flight(monkeypatch, old, new, frag
 
 
 def test_the_scene_module_computes_and_does_not_store():
-    """study.scene must not import the store, the runner, provenance, the CLI or figures,
+    """study.scenes.scene_kind must not import the store, the runner, provenance, the CLI or
+    figures,
     not even inside a function: computing a scene does not depend on how it is kept."""
-    tree = ast.parse(Path(study.scene.__file__).read_text(encoding="utf-8"))
+    tree = ast.parse(Path(study.scenes.scene_kind.__file__).read_text(encoding="utf-8"))
     imported = set()
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             imported |= {alias.name for alias in node.names}
         elif isinstance(node, ast.ImportFrom):
             imported.add(node.module or "")
-    forbidden = {"study.store", "study.runner", "study.provenance", "study.cli",
+    forbidden = {"study.engine.store", "study.engine.runner", "study.engine.provenance",
+                 "study.cli",
                  "study.figures"}
-    assert "study.planar" in imported  # the walk sees the imports
+    assert "study.scenes.planar_model" in imported  # the walk sees the imports
     assert not imported & forbidden
     assert not any(name.startswith("study.figures.") for name in imported)

@@ -1,5 +1,5 @@
 """A scheduler address that is none, and an empty cache folder, are refused at once
-with one line, before any connection or computation (study.cluster.check_address)."""
+with one line, before any connection or computation (study.engine.executors.check_address)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from study.cluster import ClusterError, check_address
+from study.engine.executors import ClusterError, check_address
 
 SPEC = """\
 [study]

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from study.selection import Selection, SelectionError, available, parse_selection, select
+from study.analyses.selection import Selection, SelectionError, available, parse_selection, select
 
 
 @pytest.fixture

@@ -16,8 +16,8 @@ from numpy.testing import assert_allclose
 
 import study
 from study import NonConvergence, SolverSettings, Status
-from study.kernels import steady as kernel
-from study.physics import release_amplitudes, slip_amplitudes
+from study.kernels import one_way as kernel
+from study.model import release_amplitudes, slip_amplitudes
 from tests.conftest import PAPER
 
 PARAMS = (PAPER["f0"], PAPER["Q"], PAPER["alpha"], PAPER["M"], PAPER["cs"])

@@ -1,4 +1,4 @@
-"""Study specs (``study.spec``): parsing, axes, structures, the canonical hash, refusals.
+"""Study specs (``study.engine.study_spec``): parsing, axes, structures, the hash, refusals.
 
 Specs are built from Python tables rendered to TOML by :func:`render`; :func:`spec_text`
 applies a few changes to the paper's minimal spec (:data:`MINIMAL`), so each test
@@ -19,14 +19,21 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-import study.observables
-import study.physics
-import study.physics.forces
-import study.solver
-import study.sweep
-from study.solver import SolverSettings
-from study.spec import OBSERVABLES, MassModel, SpecError, StudySpec, load_spec, parse_spec
-from study.structure import Structure
+import study.engine.observables
+import study.engine.sweep
+import study.model
+import study.model.forces
+import study.solvers.exact
+from study.engine.study_spec import (
+    OBSERVABLES,
+    MassModel,
+    SpecError,
+    StudySpec,
+    load_spec,
+    parse_spec,
+)
+from study.model.structure import Structure
+from study.solvers.exact import SolverSettings
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -468,12 +475,12 @@ def no_computation(monkeypatch):
         raise AssertionError("computation started while checking a study spec")
 
     for module, names in [
-        (study.solver, ["steady_state", "steady_velocity"]),
-        (study.physics, ["thresholds", "lift_off_acceleration"]),
-        (study.physics.forces, ["thresholds", "lift_off_acceleration", "force_amplitudes"]),
-        (study.observables, ["steady_state", "thresholds", "lift_off_acceleration",
+        (study.solvers.exact, ["steady_state", "steady_velocity"]),
+        (study.model, ["thresholds", "lift_off_acceleration"]),
+        (study.model.forces, ["thresholds", "lift_off_acceleration", "force_amplitudes"]),
+        (study.engine.observables, ["steady_state", "thresholds", "lift_off_acceleration",
                              "integrated_steady_state"]),
-        (study.sweep, ["compute_task"]),
+        (study.engine.sweep, ["compute_task"]),
     ]:
         for name in names:
             monkeypatch.setattr(module, name, forbidden)

@@ -1,6 +1,6 @@
 """Study specs that would hang or be absurdly large are refused before any work.
 
-The size guard (:func:`study.spec.check_size`) refuses on the axis lengths alone,
+The size guard (:func:`study.engine.study_spec.check_size`) refuses on the axis lengths alone,
 before a value is generated; budgets a user could make endless have maxima in the
 schema; the frontier tolerance must be one doubles can reach.
 """
@@ -14,9 +14,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import study.spec
-from study.analysis import frontier_from_grid
-from study.spec import (
+import study.engine.study_spec
+from study.engine.study_spec import (
     MAX_CHUNK_BYTES,
     MAX_CHUNKS,
     MAX_OUTPUT_BYTES,
@@ -25,8 +24,9 @@ from study.spec import (
     check_size,
     parse_spec,
 )
-from study.status import Status
-from study.structure import Structure
+from study.model.status import Status
+from study.model.structure import Structure
+from study.solvers.frontier import frontier_from_grid
 
 PATH = "workflows/big.toml"
 
@@ -61,7 +61,7 @@ def no_values(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("axis values generated before the size guard refused")
 
-    monkeypatch.setattr(study.spec, "axis_values", forbidden)
+    monkeypatch.setattr(study.engine.study_spec, "axis_values", forbidden)
 
 
 def _refused(text: str) -> str:

@@ -10,12 +10,12 @@ import pytest
 from numpy.testing import assert_allclose
 
 from study import Structure
-from study.runner import run_study
-from study.solver import attractors, steady_state
-from study.spec import SpecError, parse_spec
-from study.status import Status
-from study.store import open_result
-from study.transient import integrated_steady_state
+from study.engine.runner import run_study
+from study.engine.store import open_result
+from study.engine.study_spec import SpecError, parse_spec
+from study.model.status import Status
+from study.solvers.exact import attractors, steady_state
+from study.solvers.integrator import integrated_steady_state
 
 BASE = """\
 [study]

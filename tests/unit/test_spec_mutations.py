@@ -22,9 +22,9 @@ from pathlib import Path
 
 import pytest
 
-from study.scene import SceneSpec, load_scene
-from study.spec import StudySpec, load_spec
-from study.specfile import SpecError, detect_kind
+from study.engine.spec_files import SpecError, detect_kind
+from study.engine.study_spec import StudySpec, load_spec
+from study.scenes.scene_kind import SceneSpec, load_scene
 
 WORKFLOWS = sorted((Path(__file__).resolve().parents[2] / "workflows").glob("*.toml"))
 

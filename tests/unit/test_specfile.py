@@ -1,4 +1,4 @@
-"""The shared spec layer (``study.specfile``): reading, parsing, schema messages, the axis
+"""The shared spec layer (``study.engine.spec_files``): reading, parsing, schema messages, the axis
 grammar, the canonical hash and the kind of a spec, for studies and scenes alike.
 """
 
@@ -14,9 +14,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from study.cli import main
-from study.scene import load_scene, parse_scene
-from study.spec import load_spec, parse_spec
-from study.specfile import (
+from study.engine.spec_files import (
     MAX_NESTING,
     MAX_SPEC_BYTES,
     SpecError,
@@ -30,6 +28,8 @@ from study.specfile import (
     read_spec_text,
     where,
 )
+from study.engine.study_spec import load_spec, parse_spec
+from study.scenes.scene_kind import load_scene, parse_scene
 
 REPO = Path(__file__).resolve().parents[2]
 WORKFLOWS = sorted((REPO / "workflows").glob("*.toml"))

@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 from study.cli import main
-from study.runner import run_study
-from study.store import open_result
+from study.engine.runner import run_study
+from study.engine.store import open_result
 from tests.unit.test_incremental import spec_text
 
 
@@ -59,7 +59,7 @@ def full_disk(*args, **kwargs):
 
 def test_a_full_disk_while_writing(previous, capsys, monkeypatch):
     folder, before = previous
-    monkeypatch.setattr("study.store.GridWriter._put", full_disk)
+    monkeypatch.setattr("study.engine.store.GridWriter._put", full_disk)
     status, err = rerun(folder, capsys)
     assert status == 1
     assert_one_line_and_untouched(folder, before, err, "No space left on device",
@@ -73,7 +73,7 @@ def test_the_netcdf_library_s_bare_hdf_error_on_a_full_disk(previous, capsys, mo
     def hdf_error(*args, **kwargs):
         raise RuntimeError("NetCDF: HDF error")
 
-    monkeypatch.setattr("study.store.GridWriter._put", hdf_error)
+    monkeypatch.setattr("study.engine.store.GridWriter._put", hdf_error)
     monkeypatch.setattr(os, "statvfs", lambda path: SimpleNamespace(
         f_bavail=0, f_frsize=4096, f_flag=0))
     status, err = rerun(folder, capsys)
@@ -176,7 +176,7 @@ def test_a_full_cache_disk_is_one_warning_and_the_result_is_written(previous, ca
     reference = open_result(folder / "inc.nc")["velocity"].values
     for block in (folder / ".study-cache").glob("??/*/block-*.npz"):
         block.unlink()  # everything must be computed again, and kept
-    monkeypatch.setattr("study.cache.ResultCache._write", full_disk)
+    monkeypatch.setattr("study.engine.cache.ResultCache._write", full_disk)
     status, err = rerun(folder, capsys)
     assert status == 0, err
     assert err.count("\n") == 1 and "No space left on device" in err

@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 import study
-from study.provenance import code_sha256, fingerprint
-from study.runner import StudyInterrupted, run_study
-from study.spec import load_spec
-from study.store import open_result
+from study.engine.provenance import code_sha256, fingerprint
+from study.engine.runner import StudyInterrupted, run_study
+from study.engine.store import open_result
+from study.engine.study_spec import load_spec
 
 SPEC = """\
 # a small regime map
@@ -122,8 +122,8 @@ def test_thresholds_only_study_runs_no_solver(tmp_path, monkeypatch):
     def no_solver(*args, **kwargs):
         raise AssertionError("the solver ran for a thresholds-only study")
 
-    monkeypatch.setattr("study.observables.steady_state", no_solver)
-    monkeypatch.setattr("study.observables.integrated_steady_state", no_solver)
+    monkeypatch.setattr("study.engine.observables.steady_state", no_solver)
+    monkeypatch.setattr("study.engine.observables.integrated_steady_state", no_solver)
     spec_path = write_spec(tmp_path, observables='"thresholds"')
     run_study(spec_path, tmp_path / "t.nc", progress=False)
     ds = open_result(tmp_path / "t.nc")
@@ -239,7 +239,7 @@ def test_written_file_passes_the_cf_compliance_checker(finished, tmp_path):
 def test_a_second_writer_of_the_same_result_is_refused(tmp_path):
     import fcntl
 
-    from study.runner import StudyBusy
+    from study.engine.runner import StudyBusy
 
     spec_path = write_spec(tmp_path)
     output = tmp_path / "small.nc"
@@ -307,5 +307,5 @@ def test_ctrl_c_keeps_finished_chunks_and_the_next_run_resumes(tmp_path):
     np.testing.assert_array_equal(ds["status"].values, status)
     # the attractor counts of a row from the kept chunks and one computed on resume
     for row in (0, f.size - 1):
-        found = study.solver.attractors(s, f[row], a, coupling="two-way")
+        found = study.solvers.exact.attractors(s, f[row], a, coupling="two-way")
         np.testing.assert_array_equal(ds["attractor_count"].values[row], found.count)

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import study
-from study.cache import ResultCache, decode_array, encode_array, encode_block, entry_key
-from study.observables import Method, PointWork
-from study.spec import default_chunk_points
+from study.engine.cache import ResultCache, decode_array, encode_array, encode_block, entry_key
+from study.engine.observables import Method, PointWork
+from study.engine.study_spec import default_chunk_points
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 

@@ -1,4 +1,5 @@
-"""The event-driven time integrator (study.transient) against closed forms and the exact solver."""
+"""The event-driven time integrator (study.solvers.integrator) against closed forms and the
+exact solver."""
 
 from __future__ import annotations
 
@@ -9,11 +10,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from study import Structure
-from study.kernels import transient as kernel
-from study.physics import lift_off_acceleration, mode_response, release_amplitudes, thresholds
-from study.solver import steady_state
-from study.status import NonConvergence, Status
-from study.transient import (
+from study.kernels import integrator as kernel
+from study.model import lift_off_acceleration, mode_response, release_amplitudes, thresholds
+from study.model.status import NonConvergence, Status
+from study.solvers.exact import steady_state
+from study.solvers.integrator import (
     IntegratorSettings,
     Schedule,
     integrated_steady_state,

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from study.status import Status
+from study.model.status import Status
 
 _PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "two_way_agreement.py"
 _SPEC = importlib.util.spec_from_file_location("two_way_agreement", _PATH)
@@ -28,7 +28,7 @@ INTEGRATOR_TOLERANCE = 1e-8  # of a / w
 
 
 def _points(count: int = 10, seed: int = 3) -> list:
-    from study.solver import steady_state
+    from study.solvers.exact import steady_state
 
     rng = np.random.default_rng(seed)
     found = []

@@ -28,11 +28,11 @@ from numpy.testing import assert_allclose
 from reference_two_way_exact import reference_points
 
 import study
-from study.kernels import orbit as _orbit
-from study.physics import lift_off_acceleration, thresholds
-from study.solver import attractors, steady_state, steady_velocity, structure_vector
-from study.status import INVALID_STATUSES, Status
-from study.structure import Structure, tilt_warnings
+from study.kernels import two_way as _orbit
+from study.model import lift_off_acceleration, thresholds
+from study.model.status import INVALID_STATUSES, Status
+from study.model.structure import Structure, tilt_warnings
+from study.solvers.exact import attractors, steady_state, steady_velocity, structure_vector
 
 POINTS = reference_points()
 NAMES = [p["name"] for p in POINTS]

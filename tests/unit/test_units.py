@@ -1,8 +1,8 @@
-"""Unit strings: one CF/UDUNITS spelling everywhere (study.units), so they cannot drift.
+"""Unit strings: one CF/UDUNITS spelling everywhere (study.model.units), so they cannot drift.
 
 Three views, each able to fail on its own:
 
-* every spelling of :data:`study.units.UNITS` is one the UDUNITS-2 library parses
+* every spelling of :data:`study.model.units.UNITS` is one the UDUNITS-2 library parses
   (through cf_units, which the compliance checker brings), and ``deg`` is not;
 * the declarations that give every result kind its units (the study variables and
   axes, the fit and design parameters, the measurement columns, the scene's pose) use
@@ -29,8 +29,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-import study.units as units_module
-from study.units import DIMENSIONLESS, UNITS, spoken
+import study.model.units as units_module
+from study.model.units import DIMENSIONLESS, UNITS, spoken
 
 PACKAGE = Path(units_module.__file__).resolve().parent
 
@@ -40,7 +40,7 @@ WRONG = re.compile(
     r"mm s\^-1|s\^-1|s\^-2|1/s|hz|HZ|sec|secs|meter|meters|metre|metres|kgs)"
 )
 #: Markers of the measurement columns that are not units: no units (text columns) and
-#: "in the units of the row's quantity" (see study.measurements.Column).
+#: "in the units of the row's quantity" (see study.analyses.measurements.Column).
 NOT_UNITS = {"", "value"}
 
 
@@ -60,7 +60,10 @@ def test_dimensionless_is_spoken_as_nothing():
 
 def _declared() -> dict[str, str]:
     """Every unit a result kind's declarations give: where -> units."""
-    from study import design, fit, measurements, planar, spec, variables
+    from study.analyses import design, fit, measurements
+    from study.engine import study_spec as spec
+    from study.engine import variables
+    from study.scenes import planar_model as planar
 
     found: dict[str, str] = {}
     found.update({f"study variable {n}": v.units for n, v in variables.VARIABLES.items()})
@@ -147,7 +150,7 @@ def unit_findings(source: str, namespace: dict[str, Any], where: str) -> list[st
 
 def test_the_source_check_finds_a_wrong_spelling():
     """The scan below is not void: old spellings in each position it reads are found."""
-    from study.fit import Parameter
+    from study.analyses.fit import Parameter
 
     source = '''
 ALPHA = "deg"
@@ -226,10 +229,10 @@ def test_a_study_file_holds_the_one_spelling(tmp_path: Path):
 
 
 def _fit_file(tmp_path: Path) -> Path:
-    from study.fit import fit, fit_dataset, parse_fit_spec
-    from study.physics import thresholds
-    from study.store import write_atomic
-    from study.structure import Structure
+    from study.analyses.fit import fit, fit_dataset, parse_fit_spec
+    from study.engine.store import write_atomic
+    from study.model import thresholds
+    from study.model.structure import Structure
 
     f = np.array([11.0, 12.0, 13.0, 13.8, 14.6, 15.2, 16.0])
     plus, minus = thresholds(Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25), f)
@@ -252,7 +255,7 @@ def test_a_fit_file_holds_the_one_spelling(tmp_path: Path):
 def test_a_fit_file_written_before_the_one_spelling_is_refused_as_stale(tmp_path: Path):
     """Format 1 (no ``study_fit_format``) spelled alpha's units ``deg``: refused whole,
     naming the format, what it held and what to do, as stale scenes are."""
-    from study.validate import ResultError, validate_file
+    from study.engine.validation import ResultError, validate_file
 
     with xr.open_dataset(_fit_file(tmp_path)) as dataset:
         old = dataset.load()
@@ -268,8 +271,8 @@ def test_a_fit_file_written_before_the_one_spelling_is_refused_as_stale(tmp_path
 
 
 def test_a_design_file_without_its_format_is_refused_as_stale(tmp_path: Path):
-    from study.design import DESIGN_FORMAT, DESIGN_RESULT_SCHEMA
-    from study.validate import ResultError, validate_file
+    from study.analyses.design import DESIGN_FORMAT, DESIGN_RESULT_SCHEMA
+    from study.engine.validation import ResultError, validate_file
 
     xr.Dataset({"best": ("parameter", [56.2])}, attrs={
         "study_result_schema": DESIGN_RESULT_SCHEMA}).to_netcdf(tmp_path / "old.nc")

@@ -1,4 +1,5 @@
-"""Validation, content checksum and description of result files of every kind (study.validate)."""
+"""Validation, content checksum and description of result files of every kind
+(study.engine.validation)."""
 
 from __future__ import annotations
 
@@ -14,10 +15,9 @@ import pytest
 import xarray as xr
 from sealed_results import make_sealed_results, rewrite
 
-import study.validate
+import study.engine.validation
 from study.cli import main
-from study.status import Status
-from study.validate import (
+from study.engine.validation import (
     CONTENT_ATTRIBUTE,
     ResultError,
     content_sha256,
@@ -27,6 +27,7 @@ from study.validate import (
     seal,
     validate_file,
 )
+from study.model.status import Status
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +106,7 @@ def test_values_are_read_in_bounded_slabs(copy, monkeypatch: pytest.MonkeyPatch)
     path = copy("swept-q")
     whole = content_sha256(path)
     # 24 bytes a read: three float64 values, several reads per row.
-    monkeypatch.setattr(study.validate, "SLAB_BYTES", 24)
+    monkeypatch.setattr(study.engine.validation, "SLAB_BYTES", 24)
     assert content_sha256(path) == whole
     validate_file(path)
     with netCDF4.Dataset(path, "a") as nc:
@@ -383,8 +384,8 @@ def test_mode_phase_is_in_degree_and_a_file_with_it_in_rad_is_stale(sealed, tmp_
     """Format 2 stores the mode's phase lag in degree (90 at resonance); a file without
     ``study_result_format`` (format 1: mode_phase in rad) is refused as stale, while
     one that holds no changed variable stays valid."""
-    from study.runner import run_study
-    from study.variables import RESULT_FORMAT
+    from study.engine.runner import run_study
+    from study.engine.variables import RESULT_FORMAT
 
     spec = tmp_path / "resonance.toml"
     spec.write_text("""

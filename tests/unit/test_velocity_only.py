@@ -8,7 +8,7 @@ import pytest
 
 import study
 from study import SolverSettings, Status
-from study.structure import tilt_warnings
+from study.model.structure import tilt_warnings
 
 
 def _assert_same_bits(structure, f, a, settings=None):

@@ -1,0 +1,285 @@
+"""Labelled maps in memory: the dataset of a study, computed without a file.
+
+:func:`compute_map` writes the study spec its arguments describe (kept in the
+dataset's ``study_spec`` attribute: ``study run`` on that text writes the same
+values to a file), validates it as a spec file is validated, and computes it through
+the engine's own pieces: the chunks of :mod:`study.engine.sweep`, the observables of
+:mod:`study.engine.observables` and the result layout of :mod:`study.engine.layout`. Variables,
+dims, units, long names, flag attributes and status names are those of the file.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Iterable, Mapping
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+import numpy as np
+import xarray as xr
+from numpy.typing import ArrayLike, NDArray
+
+from study.engine.layout import (
+    coordinates,
+    data_variables,
+    method_description,
+    method_of,
+    observables_by_grid,
+    pad_branches,
+)
+from study.engine.observables import OBSERVABLES
+from study.engine.study_spec import STRUCTURE_PARAMETERS, StudySpec, parse_spec
+from study.engine.sweep import Rectangle, Task, compute_task, plan_chunks
+from study.model.inputs import (
+    RADIAN_LIKE_TILT,
+    SuspectInputWarning,
+    as_real_array,
+    bounded_integer,
+    tilt_looks_like_radians,
+)
+from study.model.structure import Structure
+from study.solvers.exact import DEFAULT_COUPLING, SolverSettings, check_coupling, check_structure
+from study.version import VERSION
+
+__all__ = ["MAP_SPEC_SOURCE", "compute_map", "map_spec_text"]
+
+#: Where a map's spec "comes from", in its error messages and attributes.
+MAP_SPEC_SOURCE = "study.compute_map"
+
+
+def _toml_number(value: float) -> str:
+    return repr(float(value))
+
+
+def _toml_values(values: NDArray[np.float64]) -> str:
+    return "{ values = [" + ", ".join(_toml_number(v) for v in values) + "] }"
+
+
+def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+                  observables: tuple[str, ...], coupling: str,
+                  sweep: Mapping[str, NDArray[np.float64]],
+                  settings: SolverSettings) -> str:
+    """The study spec (TOML) of a :func:`compute_map` call.
+
+    The structure's parameters are fixed in ``[structure]`` except those swept; a
+    kinetic friction equal to the static one (the default) follows a swept ``cs``.
+    """
+    fixed = structure.as_dict()
+    if "cs" in sweep and "ck" not in sweep and structure.ck == structure.cs:
+        del fixed["ck"]
+    lines = ["[study]", 'name = "map"',
+             "observables = [" + ", ".join(f'"{o}"' for o in observables) + "]", "",
+             "[structure]"]
+    lines += [f"{name} = {_toml_number(value)}" for name, value in fixed.items()
+              if name not in sweep]
+    lines += ["", "[sweep]"]
+    lines += [f"{name} = {_toml_values(values)}" for name, values in sweep.items()]
+    lines += [f"f = {_toml_values(f)}", f"a = {_toml_values(a)}", "",
+              "[solver]", f'coupling = "{coupling}"',
+              f"max_events = {int(settings.max_events)}",
+              f"max_map_iterations = {int(settings.max_map_iterations)}", ""]
+    return "\n".join(lines)
+
+
+def _axis(name: str, values: ArrayLike) -> NDArray[np.float64]:
+    array = as_real_array(name, values)
+    if array.ndim > 1:
+        raise ValueError(f"{name} must be a scalar or 1-D array, got shape {array.shape}")
+    return np.atleast_1d(array)
+
+
+def _observables(observables: object) -> tuple[str, ...]:
+    if isinstance(observables, str) or not isinstance(observables, Iterable):
+        raise TypeError(f"observables must be a list of names, got {observables!r}")
+    names = tuple(observables)
+    if not all(isinstance(name, str) for name in names):
+        raise TypeError(f"observables must be a list of names, got {observables!r}")
+    unknown = [name for name in names if name not in OBSERVABLES]
+    if unknown:
+        raise ValueError(f"observables: {', '.join(map(repr, unknown))} unknown; allowed: "
+                         f"{', '.join(OBSERVABLES)}")
+    return names
+
+
+def compute_map(
+    structure: Structure,
+    f: ArrayLike,
+    a: ArrayLike,
+    *,
+    observables: Iterable[str] = ("thresholds", "velocity"),
+    coupling: str = DEFAULT_COUPLING,
+    sweep: Mapping[str, ArrayLike] | None = None,
+    settings: SolverSettings | None = None,
+    workers: int | None = None,
+) -> xr.Dataset:
+    """A labelled map over the drive ``(f, a)`` and any swept structure parameter.
+
+    The dataset a study file of the same spec holds, computed in memory: the same
+    variables, dims, coordinates, ``units``, ``long_name`` and CF flag attributes
+    (``status`` holds :class:`study.Status` codes named by its ``flag_meanings``),
+    and bit for bit the same values.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure; the parameters named in ``sweep`` are replaced by the swept
+        values.
+    f : array_like
+        Drive frequencies [Hz], 1-D (a scalar is one frequency), finite, > 0, distinct.
+    a : array_like
+        Drive acceleration amplitudes [m s-2], 1-D, finite, >= 0, distinct.
+    observables : list of str, default ("thresholds", "velocity")
+        What to compute, any of a spec's ``[study] observables``: ``"resonance"``,
+        ``"thresholds"``, ``"lift_off"``, ``"velocity"``, ``"diagnostics"``,
+        ``"floquet"`` (two-way), ``"attractors"``, ``"paper_model"`` (two-way),
+        ``"frontier"`` (needs ascending ``f``).
+    coupling : {"one-way", "two-way"}, default "one-way"
+        The paper's model, or the mode also forced by the sliding base
+        (:data:`study.solvers.exact.DEFAULT_COUPLING` is the default).
+    sweep : dict of str to array_like, optional
+        Structure parameters to sweep, ``{"Q": [10, 17.5, 30], "alpha": [...]}``, each
+        1-D in the parameter's units (``f0`` [Hz], ``alpha`` [degree], ``g`` [m s-2];
+        ``Q``, ``M``, ``cs``, ``ck`` [1]); each becomes a dimension, in the order
+        given, before ``f`` and ``a``.
+    settings : SolverSettings, optional
+        Budgets of the exact solver.
+    workers : int, optional
+        Threads computing the map [1]; default one per core.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``(*sweep, f)`` for closed-form variables (``a_star_plus``,
+        ``a_star_minus``, ...), ``(*sweep, f, a)`` for solver variables (``velocity``
+        [m s-1], ``status``, ...), ``(*sweep, a, branch)`` for the frontier; the
+        fixed structure parameters are scalar coordinates. Global attributes name the
+        coupling (``study_coupling``) and the solver (``source``), and hold the
+        equivalent spec file (``study_spec``): ``study run`` on it writes this
+        dataset's variables to a file.
+
+    Warns
+    -----
+    study.SuspectInputWarning
+        A swept ``alpha`` holds tilts that look like radians (as
+        :class:`study.Structure` warns).
+
+    Raises
+    ------
+    TypeError
+        ``structure`` is not a :class:`study.Structure`; ``f``, ``a`` or a swept
+        parameter is not real numbers (strings, booleans, complex, dates).
+    ValueError
+        An unknown coupling or observable, or values out of range (as a spec's,
+        the message names the key).
+
+    See Also
+    --------
+    run : the same from a spec file, written to a result file.
+    steady_velocity : velocities as plain arrays.
+
+    Examples
+    --------
+    >>> import numpy as np, study
+    >>> s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
+    >>> ds = study.compute_map(s, np.linspace(12, 17, 11), np.linspace(0, 10, 6))
+    >>> ds["velocity"].dims
+    ('f', 'a')
+    >>> ds["velocity"].attrs["units"]
+    'm s-1'
+    """
+    structure = check_structure(structure)
+    coupling = check_coupling(coupling)
+    names = _observables(observables)
+    settings = SolverSettings() if settings is None else settings
+    if not isinstance(settings, SolverSettings):
+        raise TypeError(f"settings must be a study.SolverSettings, got {settings!r}")
+    swept: dict[str, NDArray[np.float64]] = {}
+    for name, values in dict(sweep or {}).items():
+        if name not in STRUCTURE_PARAMETERS:
+            raise ValueError(f"sweep: {name!r} is not a structure parameter; allowed: "
+                             f"{', '.join(STRUCTURE_PARAMETERS)}")
+        swept[name] = _axis(f"sweep[{name!r}]", values)
+    radian_like = [v for v in swept.get("alpha", ()) if tilt_looks_like_radians(v)]
+    if radian_like:
+        low, high = RADIAN_LIKE_TILT
+        warnings.warn(
+            f"sweep['alpha'] holds {len(radian_like)} tilts between {low:g} and {high:.4g} "
+            f"degree (first {radian_like[0]!r}): they look like angles in radians; alpha "
+            "is in degree", SuspectInputWarning, stacklevel=2)
+    f_values = _axis("f", f)
+    a_values = _axis("a", a)
+    text = map_spec_text(structure, f_values, a_values, names, coupling, swept, settings)
+    spec = parse_spec(text, MAP_SPEC_SOURCE)
+    return _computed(spec, workers)
+
+
+def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
+    """Every chunk of ``spec`` computed on threads and gathered into its layout."""
+    rows, points, frontier = observables_by_grid(spec)
+    method = method_of(spec)
+    f = spec.axis("f").values
+    a = spec.axis("a").values if spec.needs_solver else np.empty(0)
+    sizes = {axis.name: len(axis) for axis in spec.axes}
+    variables = data_variables(spec, (*rows, *points))
+    values: dict[str, NDArray[Any]] = {
+        v.name: np.full(tuple(sizes[d] for d in v.dims),
+                        np.nan if np.dtype(v.dtype).kind == "f" else 0, dtype=v.dtype)
+        for v in variables
+    }
+    chunks = plan_chunks(tuple(len(axis) for axis in spec.structure_axes), f.size,
+                         max(a.size, 1) if points else 1, spec.chunk_points)
+    tasks = []
+    for chunk in chunks:
+        part = f[chunk.f_start:chunk.f_stop]
+        rectangles = ((Rectangle(np.arange(part.size), np.arange(a.size)),)
+                      if points and a.size else ())
+        tasks.append(Task(chunk, spec.structure_at(chunk.structure_index), part, a,
+                          tuple(o.name for o in rows), tuple(o.name for o in points),
+                          rectangles, method))
+    threads = workers if workers is not None else (os.cpu_count() or 1)
+    threads = bounded_integer("workers", threads, 1)
+    with ThreadPoolExecutor(max_workers=min(int(threads), len(tasks))) as pool:
+        for task, (row_values, blocks) in zip(tasks, pool.map(compute_task, tasks),
+                                              strict=True):
+            where = (*task.chunk.structure_index, slice(task.chunk.f_start, task.chunk.f_stop))
+            for name, computed in row_values.items():
+                values[name][where] = computed
+            for computed in blocks:
+                for name, block in computed.items():
+                    values[name][(*where, slice(None))] = block
+    data = {v.name: (v.dims, values[v.name], v.attrs) for v in variables}
+    if frontier is not None:
+        data.update(_frontier(spec, frontier, f, a, values, method))
+    dataset = xr.Dataset(
+        data, coords={c.name: (c.dims, c.values, c.attrs) for c in coordinates(spec)})
+    dataset.attrs = {
+        "title": f"study.compute_map: {', '.join(spec.observables)}",
+        "source": f"study: {method_description(spec)}",
+        "study_coupling": spec.coupling,
+        "study_solver_method": spec.method,
+        "study_version": VERSION,
+        "study_spec": spec.text,
+    }
+    return dataset
+
+
+def _frontier(spec: StudySpec, frontier: Any, f: NDArray[np.float64],
+              a: NDArray[np.float64], values: dict[str, NDArray[Any]], method: Any
+              ) -> dict[str, tuple[tuple[str, ...], NDArray[Any], dict[str, Any]]]:
+    """The frontier of every structure from its velocity rows, padded to a common
+    number of branches (as the runner writes it)."""
+    found = {}
+    for index, structure in spec.structures():
+        found[index] = frontier.compute(structure, f, a, values["velocity"][index],
+                                        values["status"][index], method,
+                                        spec.frontier_tolerance)
+    branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
+    shape = tuple(len(axis) for axis in spec.structure_axes)
+    out = {}
+    for variable in data_variables(spec, (frontier,)):
+        array = np.empty((*shape, a.size, branches), dtype=variable.dtype)
+        for index, item in found.items():
+            array[index] = pad_branches(item[variable.name], branches, variable.dtype)
+        out[variable.name] = (variable.dims, array, variable.attrs)
+    return out

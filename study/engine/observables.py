@@ -1,0 +1,285 @@
+"""The observables a study can ask for, each declared once.
+
+An :class:`Observable` names its variables (declared in :mod:`study.engine.variables`),
+the grid it lives on, what it requires, whether its values are worth keeping for
+reuse, and how it is computed. The spec schema, the sweep, the result file and its
+validation all take it from here: adding an observable is one entry in
+:data:`OBSERVABLES` (and its variables in :mod:`study.engine.variables`).
+
+Closed-form observables (``grid = "row"``) cost microseconds per frequency, less
+than reading them back, so they are recomputed and never cached; solver
+observables (``grid = "point"``) are cached point by point.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from study.engine.variables import VARIABLES, Variable
+from study.model import lift_off_acceleration, mode_response, thresholds
+from study.model.structure import Structure
+from study.solvers.exact import (
+    DEFAULT_COUPLING,
+    SolverSettings,
+    SteadyState,
+    attractors,
+    steady_state,
+)
+from study.solvers.frontier import frontier_from_grid
+from study.solvers.integrator import IntegratorSettings, integrated_steady_state
+
+__all__ = [
+    "METHODS",
+    "OBSERVABLES",
+    "Method",
+    "Observable",
+    "PointWork",
+    "resolve",
+    "variables_of",
+]
+
+#: Velocity solvers a spec can choose with ``[solver] method``.
+METHODS = ("exact", "integrator")
+
+
+@dataclass(frozen=True)
+class Method:
+    """How steady velocities are computed: solver, coupling and their settings.
+
+    Attributes
+    ----------
+    name : {"exact", "integrator"}
+        The exact event-driven solver, or time integration until the orbit repeats.
+    coupling : {"one-way", "two-way"}
+        Whether the sliding base also forces the mode.
+    solver : SolverSettings
+        Budgets of the exact solver.
+    integrator : IntegratorSettings
+        Accuracy and budgets of the time integrator.
+    """
+
+    name: str = "exact"
+    coupling: str = DEFAULT_COUPLING
+    solver: SolverSettings = field(default_factory=SolverSettings)
+    integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
+
+    def canonical(self) -> dict[str, Any]:
+        """The settings that decide the numbers, as plain JSON data."""
+        if self.name == "exact":
+            settings = {"max_events": self.solver.max_events,
+                        "max_map_iterations": self.solver.max_map_iterations}
+        else:
+            settings = {
+                "tolerance": self.integrator.tolerance,
+                "steps_per_period": self.integrator.steps_per_period,
+                "max_periods": self.integrator.max_periods,
+                "max_orbit_period": self.integrator.max_orbit_period,
+                "period_tolerance": self.integrator.resolved_period_tolerance,
+            }
+        return {"method": self.name, "coupling": self.coupling, **settings}
+
+    def solve(self, structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+              parallel: bool = False) -> SteadyState:
+        """Steady state at ``(f, a)`` (broadcast) [Hz, m s-2] by this method."""
+        if self.name == "integrator":
+            return integrated_steady_state(structure, f, a, coupling=self.coupling,
+                                           settings=self.integrator, parallel=parallel)
+        return steady_state(structure, f, a, self.solver, coupling=self.coupling,
+                            parallel=parallel)
+
+
+class _solved_once:
+    """``functools.cached_property`` without its lock.
+
+    Before Python 3.12, ``cached_property`` holds one lock per property shared by
+    *all* instances while it computes: worker threads solving different tasks would
+    take turns, one core doing the work of all. A :class:`PointWork` belongs to one
+    task on one thread, so its values need no lock.
+    """
+
+    def __init__(self, function: Callable[[Any], Any]) -> None:
+        self.function = function
+        self.__doc__ = function.__doc__
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, instance: Any, owner: type | None = None) -> Any:
+        if instance is None:
+            return self
+        # Stored under the same name: the instance's value hides this descriptor.
+        value = instance.__dict__[self.name] = self.function(instance)
+        return value
+
+
+@dataclass
+class PointWork:
+    """Drive points of one task and the solves its observables share.
+
+    Attributes
+    ----------
+    structure : Structure
+    f, a : numpy.ndarray
+        Drive frequencies [Hz] and accelerations [m s-2], broadcast together
+        (``f[:, None]`` and ``a[None, :]`` for a block of the grid).
+    method : Method
+    """
+
+    structure: Structure
+    f: NDArray[np.float64]
+    a: NDArray[np.float64]
+    method: Method
+
+    @_solved_once
+    def solution(self) -> SteadyState:
+        """Steady state by the study's method (computed once per task)."""
+        return self.method.solve(self.structure, self.f, self.a)
+
+    @_solved_once
+    def one_way(self) -> SteadyState:
+        """Steady state of the paper's one-way model by the exact solver."""
+        return steady_state(self.structure, self.f, self.a, self.method.solver, parallel=False)
+
+
+@dataclass(frozen=True)
+class Observable:
+    """What a spec can ask for under ``[study] observables``.
+
+    Attributes
+    ----------
+    name : str
+    summary : str
+        One line for docs and error messages.
+    grid : {"row", "point", "frontier"}
+        ``row``: closed form per frequency; ``point``: per drive point, by the
+        solver; ``frontier``: found from whole velocity rows after the grid.
+    variables : tuple of str
+        Names of its variables in :data:`study.engine.variables.VARIABLES`.
+    requires : tuple of str
+        Observables it implies (their variables are written too).
+    cached : bool
+        Whether computed values are kept for reuse by later runs.
+    compute : callable
+        ``row``: ``compute(structure, f) -> {name: (n_f,)}``; ``point``:
+        ``compute(work: PointWork) -> {name: array}``; ``frontier``:
+        ``compute(structure, f, a, velocity, status, method, tolerance)``, each array
+        ``(n_a, n_branch)``.
+    """
+
+    name: str
+    summary: str
+    grid: str
+    variables: tuple[str, ...]
+    compute: Callable[..., dict[str, NDArray[Any]]] = field(repr=False)
+    requires: tuple[str, ...] = ()
+    cached: bool = False
+
+    @property
+    def needs_acceleration(self) -> bool:
+        """Whether the sweep needs the drive acceleration axis ``a``."""
+        return self.grid != "row"
+
+
+def _resonance(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    response = structure.omega0**2 * mode_response(structure, f)
+    # The phase lag in degree (0 at low frequency, 90 at resonance, towards 180 above).
+    return {"mode_gain": np.abs(response), "mode_phase": np.degrees(-np.angle(response))}
+
+
+def _thresholds(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    plus, minus = thresholds(structure, f)
+    return {"a_star_plus": plus, "a_star_minus": minus}
+
+
+def _lift_off(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
+    return {"lift_off_acceleration": lift_off_acceleration(structure, f)}
+
+
+def _velocity(work: PointWork) -> dict[str, NDArray[Any]]:
+    return {"velocity": work.solution.velocity, "status": work.solution.status}
+
+
+def _diagnostics(work: PointWork) -> dict[str, NDArray[Any]]:
+    s = work.solution
+    return {"slips_per_period": s.slips_per_period, "forward_slip_fraction": s.forward_fraction,
+            "backward_slip_fraction": s.backward_fraction, "orbit_period": s.orbit_period,
+            "nonconvergence": s.reason}
+
+
+def _floquet(work: PointWork) -> dict[str, NDArray[Any]]:
+    multiplier = work.solution.floquet_multiplier
+    if multiplier is None:  # the spec refuses it; a direct caller gets this message
+        raise ValueError("floquet needs the exact solver with two-way coupling")
+    return {"floquet_multiplier": multiplier}
+
+
+def _attractors(work: PointWork) -> dict[str, NDArray[Any]]:
+    found = attractors(work.structure, work.f, work.a, work.method.solver,
+                       coupling=work.method.coupling, parallel=False)
+    return {"attractor_count": found.count, "attractor_velocity_spread": found.velocity_spread,
+            "attractor_starts_converged": found.starts_converged}
+
+
+def _paper_model(work: PointWork) -> dict[str, NDArray[Any]]:
+    return {"velocity_one_way": work.one_way.velocity, "status_one_way": work.one_way.status}
+
+
+def _frontier(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+              velocity: NDArray[np.float64], status: NDArray[np.int8], method: Method,
+              tolerance: float) -> dict[str, NDArray[Any]]:
+    found = frontier_from_grid(structure, f, a, velocity, status, tolerance=tolerance,
+                               settings=method.solver, solve=method.solve)
+    return {"frontier_frequency": found.frequency, "frontier_kind": found.kind,
+            "frontier_direction": found.direction, "frontier_bracket": found.width}
+
+
+_DECLARED = (
+    Observable("resonance", "gain and phase of the plate's first mode", "row",
+               ("mode_gain", "mode_phase"), _resonance),
+    Observable("thresholds", "drive accelerations at which forward/backward slips start",
+               "row", ("a_star_plus", "a_star_minus"), _thresholds),
+    Observable("lift_off", "drive acceleration at which the normal force vanishes", "row",
+               ("lift_off_acceleration",), _lift_off),
+    Observable("velocity", "steady mean velocity and the solver's status", "point",
+               ("velocity", "status"), _velocity, cached=True),
+    Observable("diagnostics", "slips per period, slip fractions, orbit period, why not "
+               "converged", "point",
+               ("slips_per_period", "forward_slip_fraction", "backward_slip_fraction",
+                "orbit_period", "nonconvergence"), _diagnostics, requires=("velocity",),
+               cached=True),
+    Observable("floquet", "largest Floquet multiplier of the orbit (exact two-way solver "
+               "only)", "point", ("floquet_multiplier",), _floquet, requires=("velocity",),
+               cached=True),
+    Observable("attractors", "multistability: distinct stable orbits from 12 starting "
+               "states and their velocity spread (exact solver; 12 solves per point)", "point",
+               ("attractor_count", "attractor_velocity_spread", "attractor_starts_converged"),
+               _attractors, requires=("velocity",), cached=True),
+    Observable("paper_model", "the paper's one-way velocity beside a two-way study", "point",
+               ("velocity_one_way", "status_one_way"), _paper_model, requires=("velocity",),
+               cached=True),
+    Observable("frontier", "zero-velocity frontier f*(a), refined by bisection", "frontier",
+               ("frontier_frequency", "frontier_kind", "frontier_direction",
+                "frontier_bracket"), _frontier, requires=("velocity",)),
+)
+
+#: name -> Observable, in the order they appear in a dataset.
+OBSERVABLES: dict[str, Observable] = {o.name: o for o in _DECLARED}
+
+
+def resolve(requested: tuple[str, ...] | list[str]) -> tuple[Observable, ...]:
+    """The requested observables and those they require, in :data:`OBSERVABLES` order."""
+    wanted = set(requested)
+    for name in list(wanted):
+        wanted.update(OBSERVABLES[name].requires)
+    return tuple(o for name, o in OBSERVABLES.items() if name in wanted)
+
+
+def variables_of(requested: tuple[str, ...] | list[str]) -> tuple[Variable, ...]:
+    """Every variable a study with these observables writes, in file order."""
+    names = {v for o in resolve(requested) for v in o.variables}
+    return tuple(v for name, v in VARIABLES.items() if name in names)

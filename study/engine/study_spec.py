@@ -1,0 +1,635 @@
+"""Declarative study specs: TOML files under ``workflows/``, validated before any work.
+
+A spec names the study, the structure (any parameter fixed or swept), the drive
+grid, the observables wanted and optional solver settings::
+
+    [study]
+    name = "regime-map"
+    observables = ["thresholds", "velocity"]
+
+    [structure]
+    f0 = 14.44
+    Q = 17.5
+    alpha = 64.0
+    M = 0.08
+    cs = 0.25
+
+    [sweep]
+    f = { start = 10.0, stop = 20.0, num = 401 }
+    a = { start = 0.0, stop = 12.0, num = 241 }
+
+The machine-readable schema is ``study/schemas/study-spec-v1.schema.json``; the
+checks that a JSON schema cannot express (a parameter both fixed and swept, every
+swept structure being valid) are made here. Every refusal is a :class:`SpecError`
+naming the file, the key and what is allowed.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from study.engine.observables import METHODS, variables_of
+from study.engine.observables import OBSERVABLES as OBSERVABLE_REGISTRY
+from study.engine.spec_files import (
+    SCHEMA_DIR,
+    SpecError,
+    axis_length,
+    axis_values,
+    canonical_sha256,
+    check_schema,
+    load_schema,
+    parse_toml,
+    read_spec_text,
+)
+from study.model.structure import Structure, tilt_warnings
+from study.model.units import DEGREE, DIMENSIONLESS, HERTZ, KILOGRAM, METRE_PER_SECOND_SQUARED
+from study.solvers.exact import DEFAULT_COUPLING, MAX_SOLVER_BUDGET, SolverSettings
+from study.solvers.frontier import finest_tolerance
+from study.solvers.integrator import IntegratorSettings
+
+__all__ = [
+    "METHODS",
+    "OBSERVABLES",
+    "SOLVER_OBSERVABLES",
+    "SPEC_SCHEMA_PATH",
+    "Axis",
+    "MassModel",
+    "SpecError",
+    "StudySpec",
+    "default_chunk_points",
+    "load_spec",
+    "parse_spec",
+]
+
+SPEC_SCHEMA = "study-spec-v1"
+#: The JSON schema of study specs (package data; ``results_schema/`` holds a copy).
+SPEC_SCHEMA_PATH = SCHEMA_DIR / f"{SPEC_SCHEMA}.schema.json"
+
+#: Observables a study can ask for, in the order they appear in a dataset (declared
+#: in :mod:`study.engine.observables`).
+OBSERVABLES = tuple(OBSERVABLE_REGISTRY)
+#: Observables that need the steady-state solver (and hence the drive acceleration a).
+SOLVER_OBSERVABLES = tuple(
+    name for name, o in OBSERVABLE_REGISTRY.items() if o.needs_acceleration
+)
+#: ``[solver]`` keys of the exact solver and of the time integrator.
+EXACT_KEYS = ("max_events", "max_map_iterations")
+INTEGRATOR_KEYS = (
+    "tolerance", "steps_per_period", "max_periods", "max_orbit_period", "period_tolerance",
+)
+
+#: Structure parameters: units and long names (SI inside).
+STRUCTURE_PARAMETERS = {
+    "f0": (HERTZ, "resonance frequency of the plate's first mode"),
+    "Q": (DIMENSIONLESS, "quality factor of the plate's first mode"),
+    "alpha": (DEGREE, "tilt of the plate from the horizontal"),
+    "M": (DIMENSIONLESS, "mass ratio m1/m of the resonant mass to the total mass"),
+    "cs": (DIMENSIONLESS, "static friction coefficient"),
+    "ck": (DIMENSIONLESS, "kinetic friction coefficient"),
+    "g": (METRE_PER_SECOND_SQUARED, "gravitational acceleration"),
+}
+DRIVE_PARAMETERS = {
+    "f": (HERTZ, "drive frequency"),
+    "a": (METRE_PER_SECOND_SQUARED, "drive acceleration amplitude"),
+}
+MASS_PARAMETERS = {
+    "m_add": (KILOGRAM, "added non-resonant mass"),
+}
+SWEEPABLE = {**STRUCTURE_PARAMETERS, **MASS_PARAMETERS, **DRIVE_PARAMETERS}
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One swept parameter: a dimension of the result dataset.
+
+    Attributes
+    ----------
+    name : str
+        Parameter name, also the dimension and coordinate name.
+    values : numpy.ndarray
+        The values, in the parameter's SI units.
+    units, long_name : str
+        CF ``units`` and ``long_name`` of the coordinate.
+    """
+
+    name: str
+    values: NDArray[np.float64] = field(repr=False)
+    units: str
+    long_name: str
+
+    def __len__(self) -> int:
+        return self.values.size
+
+
+@dataclass(frozen=True)
+class MassModel:
+    """The mass ratio in the paper's terms: ``M = m1 / (m0 + m_add)`` (masses in kg)."""
+
+    m0: float
+    m1: float
+
+    def mass_ratio(self, m_add: float) -> float:
+        """``M`` for an added non-resonant mass ``m_add`` [kg]."""
+        return self.m1 / (self.m0 + m_add)
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """A validated study spec.
+
+    Attributes
+    ----------
+    name : str
+        Study name (also the default result file stem).
+    observables : tuple of str
+        Requested observables, in :data:`OBSERVABLES` order.
+    fixed : dict
+        Fixed structure parameters (``m_add`` included when fixed).
+    mass : MassModel or None
+        Set when the mass ratio is declared through masses.
+    axes : tuple of Axis
+        Swept parameters in dataset dimension order: structure axes as declared,
+        then ``f``, then ``a`` (the fastest-varying dimension).
+    solver : SolverSettings
+        Budgets of the exact solver.
+    method : {"exact", "integrator"}
+        Velocity solver: the exact steady-state solver, or time integration until
+        the orbit repeats.
+    coupling : {"one-way", "two-way"}
+        Whether the sliding base also forces the mode (two-way; either method); default
+        :data:`study.solvers.exact.DEFAULT_COUPLING`.
+    integrator : IntegratorSettings
+        Accuracy and budgets of the time integrator (used with ``method = "integrator"``).
+    chunk_points : int
+        Target number of grid points per parallel task (default
+        :func:`default_chunk_points`).
+    frontier_tolerance : float
+        Bracket width at which frontier roots are accepted [Hz].
+    text : str
+        The spec file's text, kept verbatim for provenance.
+    path : str
+        Where it was read from.
+    """
+
+    name: str
+    title: str
+    description: str
+    observables: tuple[str, ...]
+    fixed: dict[str, float]
+    mass: MassModel | None
+    axes: tuple[Axis, ...]
+    solver: SolverSettings
+    chunk_points: int
+    frontier_tolerance: float
+    text: str = field(repr=False)
+    path: str
+    canonical: dict[str, Any] = field(repr=False)
+    method: str = "exact"
+    coupling: str = DEFAULT_COUPLING
+    integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
+
+    @property
+    def sha256(self) -> str:
+        """Hash of the canonical form: formatting, comments and key order do not count."""
+        return canonical_sha256(self.canonical)
+
+    @property
+    def structure_axes(self) -> tuple[Axis, ...]:
+        """Swept parameters that change the structure (everything but f and a)."""
+        return tuple(axis for axis in self.axes if axis.name not in DRIVE_PARAMETERS)
+
+    def axis(self, name: str) -> Axis | None:
+        """The swept axis called ``name``, if any."""
+        return next((axis for axis in self.axes if axis.name == name), None)
+
+    @property
+    def needs_solver(self) -> bool:
+        """Whether any requested observable needs the velocity solver."""
+        return any(o in self.observables for o in SOLVER_OBSERVABLES)
+
+    def structure_at(self, index: tuple[int, ...]) -> Structure:
+        """The structure at one point of the structure axes (``index`` in their order)."""
+        params = dict(self.fixed)
+        for axis, i in zip(self.structure_axes, index, strict=True):
+            params[axis.name] = float(axis.values[i])
+        return _build_structure(params, self.mass)
+
+    def structures(self) -> Iterator[tuple[tuple[int, ...], Structure]]:
+        """Every structure of the study with its index along the structure axes."""
+        ranges = [range(len(axis)) for axis in self.structure_axes]
+        for index in itertools.product(*ranges):
+            yield index, self.structure_at(index)
+
+
+def _build_structure(params: dict[str, float], mass: MassModel | None) -> Structure:
+    params = dict(params)
+    m_add = params.pop("m_add", None)
+    if mass is not None:
+        params["M"] = mass.mass_ratio(0.0 if m_add is None else m_add)
+    with tilt_warnings(False):  # a spec's tilts are in degree by its schema
+        return Structure(**params)
+
+
+def spec_schema() -> dict[str, Any]:
+    """The JSON schema of study specs (``study/schemas/study-spec-v1.schema.json``).
+
+    The observables allowed and their descriptions come from :mod:`study.engine.observables`,
+    the solver's budgets' maxima from :data:`study.solvers.exact.MAX_SOLVER_BUDGET` (the file
+    on disk is their export, see :func:`export_spec_schema`).
+    """
+    schema = load_schema(SPEC_SCHEMA)
+    listed = schema["properties"]["study"]["properties"]["observables"]
+    listed["description"] = ("a non-empty list of distinct names from: "
+                             + ", ".join(OBSERVABLES))
+    items = listed["items"]
+    items["enum"] = list(OBSERVABLES)
+    items["description"] = "; ".join(
+        f"{name}: {o.summary}" for name, o in OBSERVABLE_REGISTRY.items())
+    solver = schema["properties"]["solver"]["properties"]
+    for name, largest in MAX_SOLVER_BUDGET.items():
+        solver[name]["maximum"] = largest
+    return schema
+
+
+def export_spec_schema() -> str:
+    """The spec schema as written to ``study/schemas`` (``make schemas``)."""
+    import json
+
+    return json.dumps(spec_schema(), indent=2) + "\n"
+
+
+def load_spec(path: str | Path) -> StudySpec:
+    """Read and validate a study spec file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A TOML file (UTF-8, at most :data:`study.engine.spec_files.MAX_SPEC_BYTES` bytes).
+
+    Raises
+    ------
+    SpecError
+        If the file cannot be read or parsed, or any key is unknown, mistyped or
+        out of range, or the study would be absurdly large; nothing has been
+        computed at that point.
+    """
+    return parse_spec(read_spec_text(path, "study spec"), str(path))
+
+
+#: Grid points per chunk without ``[solver] chunk_points``: at least ...
+CHUNK_POINTS_MIN = 20_000
+#: ... and at most.
+CHUNK_POINTS_MAX = 100_000
+
+
+def default_chunk_points(points: int) -> int:
+    """Points per chunk for a study of ``points`` grid points in all.
+
+    A sixteenth of the study, within [:data:`CHUNK_POINTS_MIN`,
+    :data:`CHUNK_POINTS_MAX`]: a small study keeps enough chunks to share among
+    threads, and a large one pays the fixed cost of a chunk (a task, a cache block
+    file, an HDF5 chunk: 2-3 ms) on fewer chunks (a 1e7-point velocity study: 8.1
+    instead of 9.2 s of CPU with 100 000 instead of 20 000 points per chunk).
+    """
+    return int(min(CHUNK_POINTS_MAX, max(CHUNK_POINTS_MIN, points // 16)))
+
+
+def parse_spec(text: str, path: str = "<string>") -> StudySpec:
+    """Validate a study spec given as TOML text (see :func:`load_spec`)."""
+    raw = parse_toml(text, path)
+    check_schema(raw, spec_schema(), path, "study spec")
+    return _build(raw, text, path)
+
+
+def _parameter_bounds(name: str) -> tuple[str, Any]:
+    """The schema's range of a parameter: its text and a test of an array against it."""
+    definition = spec_schema()["$defs"]["parameter"][name]
+    operators = {
+        "minimum": (np.greater_equal, ">="), "exclusiveMinimum": (np.greater, ">"),
+        "maximum": (np.less_equal, "<="), "exclusiveMaximum": (np.less, "<"),
+    }
+    checks = [(*operators[k], definition[k]) for k in operators if k in definition]
+    text = " and ".join(f"{symbol} {bound}" for _, symbol, bound in checks)
+
+    def inside(values: NDArray[np.float64]) -> NDArray[np.bool_]:
+        ok = np.ones(values.shape, dtype=bool)
+        for compare, _, bound in checks:
+            ok &= compare(values, bound)
+        return ok
+
+    return text, inside
+
+
+# ---------------------------------------------------------------------------
+# Size guard: refuse a study whose output or memory would be absurd, before any work
+
+#: Grid points of a study at most: 20 times the 1e8-point benchmark study (at about
+#: 1e6 points per second and core, 2e9 points already take hours on a workstation).
+MAX_POINTS = 2_000_000_000
+#: Result file size at most [bytes] (uncompressed values).
+MAX_OUTPUT_BYTES = 64 * 2**30
+#: Values one chunk (one parallel task) holds at most [bytes]: every worker thread
+#: holds one or two chunks, so a 16-thread run stays within a few GiB.
+MAX_CHUNK_BYTES = 256 * 2**20
+#: Chunks (parallel tasks) of a study at most: the plan, the progress and the kept
+#: chunks scale with it.
+MAX_CHUNKS = 1_000_000
+
+def _size(n: float) -> str:
+    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} EiB"  # pragma: no cover
+
+
+def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_points: int,
+               path: str) -> None:
+    """Refuse a study whose output or memory would be absurd, before any work.
+
+    Parameters
+    ----------
+    lengths : dict
+        Swept parameter -> number of values, in dataset dimension order (``f`` and
+        ``a`` last).
+    observables : tuple of str
+        Requested observables.
+    chunk_points : int
+        ``[solver] chunk_points``.
+    path : str
+        The spec file, for messages.
+
+    Raises
+    ------
+    SpecError
+        Naming the sweep keys (or ``chunk_points``), the size and the limit, when the
+        study has more than :data:`MAX_POINTS` points, more than :data:`MAX_OUTPUT_BYTES`
+        of output, a chunk larger than :data:`MAX_CHUNK_BYTES` or more than
+        :data:`MAX_CHUNKS` chunks.
+    """
+    needs_solver = any(o in observables for o in SOLVER_OBSERVABLES)
+    structures = math.prod(n for name, n in lengths.items() if name not in DRIVE_PARAMETERS)
+    n_f = lengths.get("f", 1)
+    n_a = lengths.get("a", 1) if needs_solver else 1
+    # What each variable holds per point, from its declaration.
+    variables = variables_of(observables)
+    per_f_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "row")
+    per_point_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "point")
+    swept = [name for name in lengths if needs_solver or name != "a"]
+    keys = " x ".join(swept)
+    sizes = " x ".join(str(lengths[name]) for name in swept)
+    points = structures * n_f * n_a
+    output = structures * n_f * (per_f_bytes + n_a * per_point_bytes)
+    if points > MAX_POINTS or output > MAX_OUTPUT_BYTES:
+        raise SpecError(
+            f"{path}: [sweep] {keys} = {sizes} = {points:.3g} points ({_size(output)} of "
+            f"output); allowed at most {MAX_POINTS:.3g} points and {_size(MAX_OUTPUT_BYTES)}: "
+            "sweep fewer values"
+        )
+    # How study.engine.sweep cuts the grid: whole frequency rows (every a), about
+    # chunk_points points per chunk.
+    f_per_chunk = max(1, min(n_f, chunk_points // n_a))
+    chunk_bytes = f_per_chunk * (per_f_bytes + n_a * per_point_bytes)
+    if chunk_bytes > MAX_CHUNK_BYTES:
+        if f_per_chunk == 1:
+            raise SpecError(
+                f"{path}: [sweep] a: one frequency row of {n_a} accelerations holds "
+                f"{_size(chunk_bytes)}, more than one task may hold "
+                f"({_size(MAX_CHUNK_BYTES)}); allowed: at most "
+                f"{MAX_CHUNK_BYTES // max(per_point_bytes, 1)} values of a"
+            )
+        per_chunk_point = chunk_bytes / (f_per_chunk * n_a)
+        raise SpecError(
+            f"{path}: [solver] chunk_points = {chunk_points} makes tasks of "
+            f"{_size(chunk_bytes)}; allowed: at most {int(MAX_CHUNK_BYTES // per_chunk_point)} "
+            "points per chunk"
+        )
+    chunks = structures * math.ceil(n_f / f_per_chunk)
+    if chunks > MAX_CHUNKS:
+        smallest = math.ceil(points / MAX_CHUNKS)
+        raise SpecError(
+            f"{path}: [solver] chunk_points = {chunk_points} cuts [sweep] {keys} into "
+            f"{chunks:.3g} chunks; allowed at most {MAX_CHUNKS:.3g}: raise chunk_points to "
+            f"at least {smallest} or sweep fewer structures"
+        )
+
+
+def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
+    study = raw["study"]
+    structure = dict(raw["structure"])
+    mass_table = structure.pop("mass", None)
+    sweep = raw.get("sweep", {})
+    solver_table = dict(raw.get("solver", {}))
+
+    observables = tuple(o for o in OBSERVABLES if o in study["observables"])
+
+    both = sorted(set(structure) & set(sweep))
+    if both:
+        raise SpecError(
+            f"{path}: {', '.join(both)} both fixed in [structure] and swept in [sweep]; "
+            "give each parameter in one place"
+        )
+    mass = None
+    fixed: dict[str, float] = {k: float(v) for k, v in structure.items()}
+    if mass_table is not None:
+        if "M" in structure or "M" in sweep:
+            raise SpecError(
+                f"{path}: [structure.mass] gives M = m1/(m0 + m_add); do not also give M"
+            )
+        m0 = float(mass_table["m0"])
+        if "m1" in mass_table:
+            m1 = float(mass_table["m1"])
+        else:
+            m1 = float(mass_table["m1_fraction"]) * m0
+        mass = MassModel(m0=m0, m1=m1)
+        if "m_add" in mass_table and "m_add" in sweep:
+            raise SpecError(
+                f"{path}: m_add both fixed in [structure.mass] and swept in [sweep]; "
+                "give it in one place"
+            )
+        if "m_add" in mass_table:
+            fixed["m_add"] = float(mass_table["m_add"])
+    elif "m_add" in sweep:
+        raise SpecError(
+            f"{path}: [sweep] m_add needs [structure.mass] (m0 and one of m1, m1_fraction)"
+        )
+
+    required = {"f0", "Q", "alpha", "cs"} | (set() if mass else {"M"})
+    missing = sorted(required - set(fixed) - set(sweep))
+    if missing:
+        raise SpecError(
+            f"{path}: [structure] is missing {', '.join(missing)}; "
+            "give each structure parameter in [structure] or sweep it in [sweep]"
+        )
+    if "f" not in sweep:
+        raise SpecError(f"{path}: [sweep] needs the drive frequency f")
+    needs_solver = any(o in observables for o in SOLVER_OBSERVABLES)
+    if needs_solver and "a" not in sweep:
+        raise SpecError(
+            f"{path}: [sweep] needs the drive acceleration a for observables "
+            f"{', '.join(o for o in observables if o in SOLVER_OBSERVABLES)}"
+        )
+
+    order = [name for name in sweep if name not in DRIVE_PARAMETERS]
+    order += [name for name in ("f", "a") if name in sweep]
+    # The size guard needs only the axis lengths: refuse an absurd study before a
+    # single value is generated.
+    lengths = {name: axis_length(sweep[name]) for name in order}
+    chunk_points = int(solver_table.get("chunk_points",
+                                        default_chunk_points(math.prod(lengths.values()))))
+    check_size(lengths, observables, chunk_points, path)
+    axes = []
+    for name in order:
+        units, long_name = SWEEPABLE[name]
+        values = axis_values(sweep[name], f"{path}: [sweep] {name}")
+        axes.append(Axis(name, values, units, long_name))
+
+    for axis in axes:
+        if axis.name == "f" and np.any(axis.values <= 0):
+            raise SpecError(f"{path}: [sweep] f: drive frequencies must be > 0 Hz")
+        if axis.name == "a" and np.any(axis.values < 0):
+            raise SpecError(f"{path}: [sweep] a: drive accelerations must be >= 0 m s-2")
+        if axis.name == "m_add" and np.any(axis.values < 0):
+            raise SpecError(f"{path}: [sweep] m_add: added masses must be >= 0 kg")
+        if axis.name not in STRUCTURE_PARAMETERS:
+            _check_bounds(axis, path)
+
+    coupling = solver_table.get("coupling", DEFAULT_COUPLING)
+    # The exact solver covers both couplings (closed form between events; with two-way
+    # coupling the mode is a state of the orbit, found by Newton on the period map).
+    method = solver_table.get("method", "exact")
+    if "paper_model" in observables and coupling == "one-way":
+        raise SpecError(
+            f'{path}: [study] observable "paper_model" (the one-way model beside a two-way '
+            'study) needs [solver] coupling = "two-way"; a one-way study\'s velocity already '
+            "is the paper's model"
+        )
+    if "attractors" in observables and method != "exact":
+        raise SpecError(
+            f'{path}: [study] observable "attractors" (stable orbits from several starting '
+            f'states) needs [solver] method = "exact" (the solver that computes it), got '
+            f'method = "{method}" (allowed: method = "exact", with either coupling)'
+        )
+    if "floquet" in observables and (method, coupling) != ("exact", "two-way"):
+        raise SpecError(
+            f'{path}: [study] observable "floquet" (the orbit\'s largest Floquet multiplier) '
+            f'needs [solver] coupling = "two-way" with method = "exact" (the solver that '
+            f'computes it); got coupling = "{coupling}", method = "{method}" (allowed: '
+            'coupling = "two-way", method = "exact")'
+        )
+    wrong = sorted(
+        k for k in solver_table if k in (INTEGRATOR_KEYS if method == "exact" else EXACT_KEYS)
+    )
+    if wrong:
+        raise SpecError(
+            f"{path}: [solver] {', '.join(wrong)} do not apply to method = \"{method}\"; "
+            f"its settings are: {', '.join(EXACT_KEYS if method == 'exact' else INTEGRATOR_KEYS)}"
+        )
+    try:
+        solver = SolverSettings(**{k: v for k, v in solver_table.items() if k in EXACT_KEYS})
+        integrator = IntegratorSettings(
+            **{k: v for k, v in solver_table.items() if k in INTEGRATOR_KEYS}
+        )
+    except ValueError as err:
+        raise SpecError(f"{path}: [solver] {err}") from None
+    frontier_tolerance = float(solver_table.get("frontier_tolerance", 1e-9))
+    # Bisection halves a bracket until it is narrower than the tolerance: below the
+    # spacing of doubles near the largest f the midpoint stops moving and it never is.
+    f_values = next(axis for axis in axes if axis.name == "f").values
+    finest = finest_tolerance(np.max(f_values))
+    if frontier_tolerance < finest:
+        raise SpecError(
+            f"{path}: [solver] frontier_tolerance = {frontier_tolerance!r} Hz is finer than "
+            f"doubles resolve near the largest f; allowed: >= {finest:.3g} Hz"
+        )
+
+    # Defaults written out: a spec that spells them out is the same study.
+    structure_canonical = dict(fixed)
+    if "g" not in fixed and "g" not in sweep:
+        structure_canonical["g"] = Structure.__dataclass_fields__["g"].default
+    if "ck" not in fixed and "ck" not in sweep and "cs" in fixed:
+        structure_canonical["ck"] = fixed["cs"]
+    canonical = {
+        "name": study["name"],
+        "observables": list(observables),
+        "structure": {k: structure_canonical[k] for k in sorted(structure_canonical)},
+        "mass": None if mass is None else {"m0": mass.m0, "m1": mass.m1},
+        # A list, not a mapping: the order of the axes is the layout of the result.
+        "sweep": [[axis.name, axis.values.tolist()] for axis in axes],
+        "solver": {
+            "method": method,
+            "coupling": coupling,
+            **(
+                {
+                    "max_events": solver.max_events,
+                    "max_map_iterations": solver.max_map_iterations,
+                }
+                if method == "exact"
+                else {
+                    "tolerance": integrator.tolerance,
+                    "steps_per_period": integrator.steps_per_period,
+                    "max_periods": integrator.max_periods,
+                    "max_orbit_period": integrator.max_orbit_period,
+                    "period_tolerance": integrator.resolved_period_tolerance,
+                }
+            ),
+            **({"frontier_tolerance": frontier_tolerance} if "frontier" in observables else {}),
+        },
+    }
+    spec = StudySpec(
+        name=study["name"],
+        title=study.get("title", study["name"]),
+        description=study.get("description", ""),
+        observables=observables,
+        fixed=fixed,
+        mass=mass,
+        axes=tuple(axes),
+        solver=solver,
+        chunk_points=chunk_points,
+        frontier_tolerance=frontier_tolerance,
+        text=text,
+        path=path,
+        canonical=canonical,
+        method=method,
+        coupling=coupling,
+        integrator=integrator,
+    )
+    _check_structures(spec, path)
+    # After the structure's own checks: they have the better words where they apply.
+    for axis in spec.structure_axes:
+        _check_bounds(axis, path)
+    return spec
+
+
+def _check_bounds(axis: Axis, path: str) -> None:
+    """Swept values obey the ranges of the schema's parameters, as fixed ones do."""
+    allowed, inside = _parameter_bounds(axis.name)
+    outside = axis.values[~inside(axis.values)]
+    if outside.size:
+        raise SpecError(
+            f"{path}: [sweep] {axis.name}: value {float(outside[0])!r} is out of range; "
+            f"allowed: {allowed}"
+        )
+
+
+def _check_structures(spec: StudySpec, path: str) -> None:
+    """Build every structure of the study now, so a bad one is refused before work."""
+    ranges = [range(len(axis)) for axis in spec.structure_axes]
+    for index in itertools.product(*ranges):
+        try:
+            spec.structure_at(index)
+        except ValueError as err:
+            at = ", ".join(
+                f"{axis.name} = {float(axis.values[i])!r}"
+                for axis, i in zip(spec.structure_axes, index, strict=True)
+            )
+            where = f"[sweep] point {at}" if at else "[structure]"
+            raise SpecError(f"{path}: invalid structure at {where}: {err}") from None

@@ -1,0 +1,185 @@
+"""Every data variable a study result can hold, declared once.
+
+A :class:`Variable` carries what the file needs (dims, dtype, units, long_name, CF
+flags) and what validation checks; :mod:`study.engine.observables` groups them into the
+observables a spec asks for and says how each is computed. Nothing here computes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from study.model.status import NonConvergence, Status
+from study.model.units import (
+    DEGREE,
+    DIMENSIONLESS,
+    HERTZ,
+    METRE_PER_SECOND,
+    METRE_PER_SECOND_SQUARED,
+)
+
+__all__ = ["FRONTIER_KINDS", "GRIDS", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "VARIABLES",
+           "Variable"]
+
+#: Layout of a study result's values (global attribute ``study_result_format``): 2 stores
+#: every angle in degree (``mode_phase`` too). Files without the attribute are format 1,
+#: whose ``mode_phase`` was in rad: one that holds ``mode_phase`` is refused as stale by
+#: validation (and so by ``info``, ``figure`` and ``export``) and rerun by ``study run``;
+#: its other variables never changed units.
+RESULT_FORMAT = 2
+
+#: Variables whose values a stale format stored in other units: format -> {name: units}.
+STALE_RESULT_FORMATS: dict[int, dict[str, str]] = {1: {"mode_phase": "rad"}}
+
+#: Where a variable lives: over (structure..., f), (structure..., f, a), or the
+#: frontier's (structure..., a, branch).
+GRIDS = {"row": ("f",), "point": ("f", "a"), "frontier": ("a", "branch")}
+
+#: How the velocity changes sign at a frontier point.
+FRONTIER_KINDS = ("none", "crossing", "jump")
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One data variable of a result file.
+
+    Attributes
+    ----------
+    name : str
+        netCDF variable name.
+    grid : {"row", "point", "frontier"}
+        Trailing dimensions after the structure axes (see :data:`GRIDS`).
+    dtype : str
+        numpy dtype name on disk.
+    units, long_name : str
+        CF attributes.
+    flags : tuple of str
+        CF ``flag_meanings`` of a flag variable; its ``flag_values`` are
+        ``flag_values`` (default ``0 .. len(flags) - 1``).
+    flag_values : tuple of int
+        Codes of the flags, in the order of ``flags``.
+    comment : str
+        CF ``comment`` (optional).
+    invalid_where : str
+        For a float variable paired with a status flag: the name of that flag
+        variable; the value is NaN exactly where the status is invalid and (with
+        ``zero_when_static``) 0 where it is static.
+    zero_when_static : bool
+        Whether the value must be 0 where the status is static.
+    """
+
+    name: str
+    grid: str
+    dtype: str
+    units: str
+    long_name: str
+    flags: tuple[str, ...] = ()
+    flag_values: tuple[int, ...] = ()
+    comment: str = ""
+    invalid_where: str = ""
+    zero_when_static: bool = True
+
+    def __post_init__(self) -> None:
+        if self.grid not in GRIDS:
+            raise ValueError(f"{self.name}: grid {self.grid!r}; allowed: {', '.join(GRIDS)}")
+        if self.flags and not self.flag_values:
+            object.__setattr__(self, "flag_values", tuple(range(len(self.flags))))
+
+    @property
+    def is_flag(self) -> bool:
+        """Whether the variable is a CF flag variable."""
+        return bool(self.flags)
+
+    def dims(self, structure_dims: tuple[str, ...]) -> tuple[str, ...]:
+        """Dimensions of the variable in a study with these structure axes."""
+        return (*structure_dims, *GRIDS[self.grid])
+
+    def attrs(self) -> dict[str, Any]:
+        """CF/ACDD attributes as written to the file."""
+        attrs: dict[str, Any] = {"units": self.units, "long_name": self.long_name}
+        if self.flags:
+            attrs["flag_values"] = np.array(self.flag_values, dtype=self.dtype)
+            attrs["flag_meanings"] = " ".join(self.flags)
+            attrs["coverage_content_type"] = "qualityInformation"
+        else:
+            attrs["coverage_content_type"] = "modelResult"
+        if self.comment:
+            attrs["comment"] = self.comment
+        return attrs
+
+
+_STATUS_FLAGS = tuple(s.name.lower() for s in Status)
+_STATUS_VALUES = tuple(int(s) for s in Status)
+
+_DECLARED = (
+    Variable("mode_gain", "row", "float64", DIMENSIONLESS,
+             "amplification |w0^2 G| of the plate's first mode (1 at low frequency)"),
+    Variable("mode_phase", "row", "float64", DEGREE,
+             "phase lag of the plate's deflection behind the drive"),
+    Variable("a_star_plus", "row", "float64", METRE_PER_SECOND_SQUARED,
+             "drive acceleration at which forward slips start (paper eq. 5)"),
+    Variable("a_star_minus", "row", "float64", METRE_PER_SECOND_SQUARED,
+             "drive acceleration at which backward slips start (paper eq. 5)"),
+    Variable("lift_off_acceleration", "row", "float64", METRE_PER_SECOND_SQUARED,
+             "drive acceleration above which the normal force becomes negative"),
+    Variable("velocity", "point", "float64", METRE_PER_SECOND,
+             "mean velocity of the steady periodic orbit, positive forward",
+             comment="exactly 0 when static; NaN (missing) where status is lift_off, "
+             "not_converged or friction_paradox", invalid_where="status"),
+    Variable("status", "point", "int8", DIMENSIONLESS, "outcome of the steady-state solver",
+             flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("slips_per_period", "point", "float64", DIMENSIONLESS,
+             "slip events per drive period on the periodic orbit"),
+    Variable("forward_slip_fraction", "point", "float64", DIMENSIONLESS,
+             "fraction of the drive period spent slipping forward"),
+    Variable("backward_slip_fraction", "point", "float64", DIMENSIONLESS,
+             "fraction of the drive period spent slipping backward"),
+    Variable("orbit_period", "point", "int32", DIMENSIONLESS,
+             "period of the steady orbit in drive periods (0: no orbit)"),
+    Variable("nonconvergence", "point", "int8", DIMENSIONLESS,
+             "why the solver found no periodic orbit",
+             flags=tuple(r.name.lower() for r in NonConvergence),
+             flag_values=tuple(int(r) for r in NonConvergence)),
+    Variable("floquet_multiplier", "point", "float64", DIMENSIONLESS,
+             "largest modulus of the Floquet multipliers of the steady orbit on the state "
+             "(plate deflection, its rate, sliding velocity)",
+             comment="below 1: the orbit attracts nearby states; where static, the mode's "
+             "free decay over one drive period; NaN (missing) where status is lift_off, "
+             "not_converged or friction_paradox", invalid_where="status",
+             zero_when_static=False),
+    Variable("attractor_count", "point", "int32", DIMENSIONLESS,
+             "distinct stable outcomes reached from 12 starting states (rest at four drive "
+             "phases, the mode at 0, 1 and 2 times its steady response)",
+             comment="stable orbits told apart by period and mean velocity, lift-off and "
+             "the friction paradox one outcome each; 1 where static; > 1: multistable; "
+             "0: no start converged"),
+    Variable("attractor_velocity_spread", "point", "float64", METRE_PER_SECOND,
+             "largest minus smallest mean velocity among the stable orbits found",
+             comment="0 with a single orbit or none"),
+    Variable("attractor_starts_converged", "point", "int32", DIMENSIONLESS,
+             "starting states (of 12) that reached a stable orbit, lift-off or the "
+             "friction paradox"),
+    Variable("velocity_one_way", "point", "float64", METRE_PER_SECOND,
+             "mean steady velocity of the paper's one-way model at the same point "
+             "(exact solver), for comparison with the two-way velocity",
+             comment="exactly 0 when static; NaN (missing) where status_one_way is "
+             "lift_off or not_converged", invalid_where="status_one_way"),
+    Variable("status_one_way", "point", "int8", DIMENSIONLESS,
+             "outcome of the exact solver for the paper's one-way model",
+             flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("frontier_frequency", "frontier", "float64", HERTZ,
+             "drive frequency f*(a) where the mean velocity changes sign",
+             comment="NaN-padded where an acceleration has fewer branches"),
+    Variable("frontier_kind", "frontier", "int8", DIMENSIONLESS,
+             "how the velocity changes sign at the frontier", flags=FRONTIER_KINDS),
+    Variable("frontier_direction", "frontier", "int8", DIMENSIONLESS,
+             "sign of the velocity just above the frontier frequency (0: none)"),
+    Variable("frontier_bracket", "frontier", "float64", HERTZ,
+             "width of the final bisection bracket of the frontier frequency"),
+)
+
+#: name -> Variable, in the order variables appear in a file.
+VARIABLES: dict[str, Variable] = {v.name: v for v in _DECLARED}

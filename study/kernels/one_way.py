@@ -1,0 +1,763 @@
+"""Event-driven, closed-form steady-state stick-slip kernel (docs/theory/exact-solvers.md).
+
+Time is measured by the drive phase ``theta = w t``. In a slip of sign ``s``
+started at rest at ``theta0``, the scaled speed ``U = s w v`` obeys::
+
+    dU/dtheta = -c + h cos(theta + phi)          c = ck g,  h e^{i phi} = B_s
+
+so ``U(D) = -c D + h [sin(psi0 + D) - sin(psi0)]`` with ``D = theta - theta0`` and
+``psi0 = theta0 + phi``. The extrema of ``U`` are at ``cos(psi) = c / h``: the slip
+end ``U = 0`` always lies on the single decreasing stretch that follows the first
+maximum, so it is bracketed on an interval where ``U`` is monotone and found by
+safeguarded Newton iteration. Stick releases are closed form (an arc of phase on
+which ``s tau - cs n > 0``).
+
+Everything here is private but :func:`sin_minus_x`, which the orbit kernel shares:
+:mod:`study.solvers.exact` validates, allocates and calls :func:`_steady_state`. Results are
+written to ``out`` arrays; nothing is allocated per point on the common (stick-slip)
+path.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from study.model.codes import (
+    CONTINUOUS_SLIDING,
+    LIFT_OFF,
+    NOT_CONVERGED,
+    REASON_EVENT_BUDGET,
+    REASON_NO_PERIODIC_ORBIT,
+    REASON_NONE,
+    STATIC,
+    STICK_SLIP,
+)
+
+TWO_PI = 2.0 * math.pi
+
+# A release that would start this close before the end of its arc (in phase, rad)
+# is a rounding artefact of a slip that ended exactly on the arc's edge: its slip
+# would last < 1e-12 rad and move < 1e-24 of the amplitude.
+EXIT_TOLERANCE = 1e-12
+# Consecutive slips without a stick after which the reversal phases are treated
+# as a circle map (continuous sliding).
+CIRCLE_MAP_AFTER = 4
+# Longest cycle of the circle map searched for, in map iterations.
+MAX_MAP_PERIOD = 16
+# A cycle candidate is refined by Newton iteration once it closes to this phase
+# [rad]; a failed refinement is retried only once the gap has halved. Newton steps
+# make slowly attracting cycles (multiplier near 1) cheap to find.
+CYCLE_DETECTION = 1e-2
+# Newton refinement of a cycle stops once the cycle closes to this phase [rad].
+CYCLE_TOLERANCE = 1e-12
+
+EPS = 2.220446049250313e-16
+# A release needs |A_s| > cs g times this (see _constants).
+RELEASE_MARGIN = 1.0 + 8.0 * EPS
+# A slip end is found once the slip speed there is below this many ulps of the sum of
+# the absolute values of its terms (its rounding error), or once the Newton correction
+# or the bracket is below this many ulps of the phase (see _slip).
+SLIP_END_ULPS = 4.0
+
+# Round-trip status of a sequence of slips.
+_ROUND_OK = 0
+_ROUND_STUCK = 1
+_ROUND_BUDGET = 2
+
+
+@njit(cache=True, nogil=True)
+def _mod_two_pi(x):
+    r = x - TWO_PI * math.floor(x / TWO_PI)
+    if r >= TWO_PI:
+        r -= TWO_PI
+    return r
+
+
+@njit(cache=True, nogil=True)
+def sin_minus_x(d, sin_d):
+    """``sin(d) - d`` without cancellation for small ``d``."""
+    if abs(d) >= 1.0:
+        return sin_d - d
+    x2 = d * d
+    series = 1.0 - x2 / 342.0
+    series = 1.0 - x2 / 272.0 * series
+    series = 1.0 - x2 / 210.0 * series
+    series = 1.0 - x2 / 156.0 * series
+    series = 1.0 - x2 / 110.0 * series
+    series = 1.0 - x2 / 72.0 * series
+    series = 1.0 - x2 / 42.0 * series
+    series = 1.0 - x2 / 20.0 * series
+    return -d * x2 / 6.0 * series
+
+
+@njit(cache=True, nogil=True)
+def _one_minus_cos_minus_half_square(d, one_minus_cos):
+    """``1 - cos(d) - d^2/2`` without cancellation for small ``d``."""
+    if abs(d) >= 1.0:
+        return one_minus_cos - 0.5 * d * d
+    x2 = d * d
+    series = 1.0 - x2 / 380.0
+    series = 1.0 - x2 / 306.0 * series
+    series = 1.0 - x2 / 240.0 * series
+    series = 1.0 - x2 / 182.0 * series
+    series = 1.0 - x2 / 132.0 * series
+    series = 1.0 - x2 / 90.0 * series
+    series = 1.0 - x2 / 56.0 * series
+    series = 1.0 - x2 / 30.0 * series
+    return -x2 * x2 / 24.0 * series
+
+
+@njit(cache=True, nogil=True)
+def _slip_speed(d, slope0, h, cos0, sin0):
+    """``U(d)`` and ``dU/dd`` of a slip started at rest (see module docstring)."""
+    sin_d = math.sin(d)
+    half = math.sin(0.5 * d)
+    one_minus_cos = 2.0 * half * half
+    speed = slope0 * d + h * (cos0 * sin_minus_x(d, sin_d) - sin0 * one_minus_cos)
+    accel = slope0 - h * (cos0 * one_minus_cos + sin0 * sin_d)
+    return speed, accel
+
+
+@njit(cache=True, nogil=True)
+def _slip(psi0, c, h, gamma):
+    """Follow one slip that starts at rest at phase ``psi0`` (relative to ``phi``).
+
+    Returns
+    -------
+    duration, distance, slope_start, slope_end, moved
+        Phase length of the slip [rad], ``integral of U dD`` over it, ``dU/dD`` at
+        its start and end, and whether it moved at all (``False`` for a slip that
+        ends as soon as it starts, e.g. released exactly at the end of its arc).
+    """
+    if gamma < 0.0:
+        return 0.0, 0.0, 0.0, 0.0, False
+    cos0 = math.cos(psi0)
+    sin0 = math.sin(psi0)
+    slope0 = h * cos0 - c
+    # U increases while the phase is in (-gamma, gamma); the first maximum is at +gamma.
+    offset = _mod_two_pi(_mod_two_pi(psi0) + gamma)
+    if offset > TWO_PI - EXIT_TOLERANCE:
+        # Released where dU/dD = 0 (ck = cs, release at the arc's entry): rounding
+        # put the start just before the increasing stretch that physically follows.
+        offset = 0.0
+    if offset > 2.0 * gamma:
+        return 0.0, 0.0, slope0, slope0, False
+    lo = 2.0 * gamma - offset
+    speed_lo, _ = _slip_speed(lo, slope0, h, cos0, sin0)
+    if speed_lo <= 0.0:
+        return 0.0, 0.0, slope0, slope0, False
+    hi = lo + TWO_PI - 2.0 * gamma
+    speed_hi, _ = _slip_speed(hi, slope0, h, cos0, sin0)
+    # U is monotone decreasing on [lo, hi], U(lo) > 0 > U(hi): start from regula falsi,
+    # then Newton, bisecting whenever a step would leave the bracket.
+    d = lo + (hi - lo) * speed_lo / (speed_lo - speed_hi)
+    for iteration in range(200):
+        sin_d = math.sin(d)
+        half = math.sin(0.5 * d)
+        one_minus_cos = 2.0 * half * half
+        sin_minus_d = sin_minus_x(d, sin_d)
+        speed = slope0 * d + h * (cos0 * sin_minus_d - sin0 * one_minus_cos)
+        accel = slope0 - h * (cos0 * one_minus_cos + sin0 * sin_d)
+        # The root is as accurate as the evaluation of U allows once |U(d)| is below
+        # the rounding error of that evaluation: a few ulps of the sum of the absolute
+        # values of its terms (for d >= 1, sin(d) - d is a difference of its terms).
+        size = abs(sin_minus_d) if d < 1.0 else abs(sin_d) + d
+        noise = SLIP_END_ULPS * EPS * (abs(slope0) * d + h * (abs(cos0) * size
+                                                              + abs(sin0) * one_minus_cos))
+        if abs(speed) <= noise or iteration == 199:
+            break
+        if speed > 0.0:
+            lo = d
+        else:
+            hi = d
+        step_ok = accel < 0.0
+        if step_ok:
+            d_new = d - speed / accel
+            step_ok = lo < d_new < hi
+        if not step_ok:
+            d_new = 0.5 * (lo + hi)
+        # A correction or a bracket of a few ulps of d: d is the root to rounding.
+        if abs(d_new - d) <= SLIP_END_ULPS * EPS * d or hi - lo <= SLIP_END_ULPS * EPS * hi:
+            break
+        d = d_new
+    # d is the last point evaluated: its sines give the distance and the end slope.
+    distance = 0.5 * slope0 * d * d + h * (
+        cos0 * _one_minus_cos_minus_half_square(d, one_minus_cos) + sin0 * sin_minus_d
+    )
+    return d, distance, slope0, accel, True
+
+
+@njit(cache=True, nogil=True)
+def _next_release(theta, excluded, k):
+    """Phase to wait from ``theta`` (at rest) until a slip starts, and its sign.
+
+    ``excluded`` (``+1``, ``-1`` or ``0``) forbids an immediate release of that sign,
+    used after a slip of that sign that could not move.
+    """
+    (_c, _hp, _pp, _gp, _hm, _pm, _gm, ok_p, entry_p, width_p, ok_m, entry_m, width_m) = k
+    best_wait = np.inf
+    best_sign = 0
+    if ok_p:
+        d = _mod_two_pi(theta - entry_p)
+        if d < width_p - EXIT_TOLERANCE and excluded != 1:
+            wait = 0.0
+        else:
+            wait = TWO_PI - d
+        best_wait = wait
+        best_sign = 1
+    if ok_m:
+        d = _mod_two_pi(theta - entry_m)
+        if d < width_m - EXIT_TOLERANCE and excluded != -1:
+            wait = 0.0
+        else:
+            wait = TWO_PI - d
+        if wait < best_wait:
+            best_wait = wait
+            best_sign = -1
+    return best_wait, best_sign
+
+
+@njit(cache=True, nogil=True)
+def _advance(theta, sign, k):
+    """One slip of ``sign`` from rest at ``theta``, then the decision at its end.
+
+    Returns
+    -------
+    theta_next, sign_next, wait, duration, distance, derivative
+        The next slip starts at ``theta_next`` with ``sign_next`` after a stick of
+        phase length ``wait`` (0: immediate reversal or continuation). ``distance``
+        is ``integral of U`` over the slip (positive), ``derivative`` is
+        ``d theta_end / d theta_start`` for the circle map.
+    """
+    c, h_p, phi_p, gamma_p, h_m, phi_m, gamma_m = k[0], k[1], k[2], k[3], k[4], k[5], k[6]
+    if sign > 0:
+        duration, distance, slope0, slope1, moved = _slip(theta + phi_p, c, h_p, gamma_p)
+    else:
+        duration, distance, slope0, slope1, moved = _slip(theta + phi_m, c, h_m, gamma_m)
+    if moved:
+        theta_end = theta + duration
+        wait, sign_next = _next_release(theta_end, 0, k)
+        derivative = slope0 / slope1
+    else:
+        theta_end = theta
+        wait, sign_next = _next_release(theta_end, sign, k)
+        derivative = 1.0
+    return theta_end + wait, sign_next, wait, duration, distance, derivative
+
+
+@njit(cache=True, nogil=True)
+def _rounds(theta, count, k, max_events):
+    """From a forward slip starting at rest at ``theta``, run until ``count`` more
+    forward slips have started by immediate reversal.
+
+    Returns
+    -------
+    flag, theta_end, sign_end, derivative, distance, forward, backward, slips
+        ``flag`` is ``_ROUND_OK``, ``_ROUND_STUCK`` (a stick interrupted the
+        sequence: ``theta_end, sign_end`` is its release) or ``_ROUND_BUDGET``.
+        ``distance`` is the signed integral of ``w v`` over phase; ``forward`` and
+        ``backward`` are the phase lengths of forward and backward slips.
+    """
+    sign = 1
+    derivative = 1.0
+    distance = 0.0
+    forward = 0.0
+    backward = 0.0
+    slips = 0
+    done = 0
+    for _ in range(max_events):
+        theta_next, sign_next, wait, duration, moved, factor = _advance(theta, sign, k)
+        if duration > 0.0:
+            slips += 1
+        if sign > 0:
+            distance += moved
+            forward += duration
+        else:
+            distance -= moved
+            backward += duration
+        derivative *= factor
+        theta = theta_next
+        sign = sign_next
+        if wait > 0.0:
+            return _ROUND_STUCK, theta, sign, 0.0, distance, forward, backward, slips
+        if sign > 0:
+            done += 1
+            if done == count:
+                return _ROUND_OK, theta, sign, derivative, distance, forward, backward, slips
+    return _ROUND_BUDGET, theta, sign, derivative, distance, forward, backward, slips
+
+
+@njit(cache=True, nogil=True)
+def _refine_cycle(p, period, turns, k, max_events):
+    """Newton iteration for a cycle of the reversal circle map.
+
+    Solves ``R^period(p) = p + 2 pi turns`` from ``p``, with the analytic
+    derivative of the map. A cycle is accepted when it closes to within
+    ``CYCLE_TOLERANCE`` (a backward error: the exact cycle of a map perturbed by
+    that much; near multiplier 1 the phase itself is ill-conditioned, by
+    ``1 / |1 - multiplier|``) and it is attracting (|multiplier| < 1).
+
+    Returns
+    -------
+    converged, p, end, sign, distance, forward, backward, slips
+        The cycle's phase ``p`` and statistics of ``period`` map iterations along it.
+    """
+    found = False
+    polish = 0
+    best = (np.inf, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0)
+    for _ in range(40):
+        p = _mod_two_pi(p)
+        flag, end, sign, deriv, distance, forward, backward, slips = _rounds(
+            p, period, k, max_events
+        )
+        if flag != _ROUND_OK or deriv == 1.0:
+            break
+        residual = end - p - TWO_PI * turns
+        if found:
+            # Polish down to the rounding floor: near multiplier 1 the phase error is
+            # the residual / (1 - multiplier), so every halving of it counts.
+            if abs(residual) >= best[0]:
+                break
+            polish += 1
+        elif abs(residual) <= CYCLE_TOLERANCE:
+            if abs(deriv) >= 1.0:
+                break
+            found = True
+        if found:
+            best = (abs(residual), p, end, sign, distance, forward, backward, slips)
+            if polish >= 4:
+                break
+        p -= residual / (deriv - 1.0)
+    if found:
+        _, p, end, sign, distance, forward, backward, slips = best
+        return True, p, end, sign, distance, forward, backward, slips
+    return False, p, 0.0, 0, 0.0, 0.0, 0.0, 0
+
+
+@njit(cache=True, nogil=True)
+def _circle_map(theta, k, max_rounds, max_events):
+    """Continuous sliding: find the attracting cycle of the reversal phases.
+
+    ``theta`` is the start of a forward slip by immediate reversal.
+
+    Returns
+    -------
+    flag, theta, sign, mean, slips, forward, backward, period
+        ``flag``: ``_ROUND_OK`` (cycle found; statistics per drive period follow),
+        ``_ROUND_STUCK`` (a stick appeared: resume stick-slip from ``theta, sign``),
+        or ``_ROUND_BUDGET`` (no cycle found).
+    """
+    # Ring buffers over the last iterations: start phase, unwrapped phase advance
+    # and derivative of the map.
+    starts = np.empty(MAX_MAP_PERIOD)
+    advances = np.empty(MAX_MAP_PERIOD)
+    derivatives = np.empty(MAX_MAP_PERIOD)
+    tried = np.full(MAX_MAP_PERIOD + 1, np.inf)
+    p = _mod_two_pi(theta)
+    for iteration in range(max_rounds):
+        flag, end, sign, deriv, _, _, _, _ = _rounds(p, 1, k, max_events)
+        if flag == _ROUND_STUCK:
+            return _ROUND_STUCK, end, sign, 0.0, 0.0, 0.0, 0.0, 0
+        if flag == _ROUND_BUDGET:
+            return _ROUND_BUDGET, end, sign, 0.0, 0.0, 0.0, 0.0, 0
+        slot = iteration % MAX_MAP_PERIOD
+        starts[slot] = p
+        advances[slot] = end - p
+        derivatives[slot] = deriv
+        p = _mod_two_pi(end)
+        total = 0.0
+        product = 1.0
+        for period in range(1, min(iteration + 1, MAX_MAP_PERIOD) + 1):
+            slot = (iteration - period + 1) % MAX_MAP_PERIOD
+            total += advances[slot]
+            product *= derivatives[slot]
+            turns = round(total / TWO_PI)
+            gap = abs(total - TWO_PI * turns)
+            if turns >= 1 and gap < CYCLE_DETECTION and gap < 0.5 * tried[period]:
+                tried[period] = gap
+                # First Newton step from the iterates already computed.
+                guess = starts[slot]
+                if product != 1.0:
+                    guess -= (total - TWO_PI * turns) / (product - 1.0)
+                converged, p_star, end, sign, distance, forward, backward, slips = (
+                    _refine_cycle(guess, period, turns, k, max_events)
+                )
+                if converged:
+                    # Report the cycle's own period, not a multiple that closed first.
+                    for shorter in range(1, period):
+                        if period % shorter or (turns * shorter) % period:
+                            continue
+                        turns_short = turns * shorter // period
+                        short = _rounds(p_star, shorter, k, max_events)
+                        if short[0] == _ROUND_OK and abs(
+                            short[1] - p_star - TWO_PI * turns_short
+                        ) <= 1e3 * CYCLE_TOLERANCE:
+                            _, end, sign, _, distance, forward, backward, slips = short
+                            turns = turns_short
+                            break
+                    span = TWO_PI * turns
+                    return (
+                        _ROUND_OK,
+                        end,
+                        sign,
+                        distance / span,
+                        slips / turns,
+                        forward / span,
+                        backward / span,
+                        int(turns),
+                    )
+                break
+    return _ROUND_BUDGET, p, 1, 0.0, 0.0, 0.0, 0.0, 0
+
+
+@njit(cache=True, nogil=True)
+def _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g):
+    """Per-point constants: slip dynamics and release arcs for both signs."""
+    c = ck_g
+    h_p = abs(b_plus)
+    h_m = abs(b_minus)
+    phi_p = math.atan2(b_plus.imag, b_plus.real)
+    phi_m = math.atan2(b_minus.imag, b_minus.real)
+    gamma_p = math.atan2(math.sqrt((h_p - c) * (h_p + c)), c) if h_p > c else -1.0
+    gamma_m = math.atan2(math.sqrt((h_m - c) * (h_m + c)), c) if h_m > c else -1.0
+    r_p = abs(a_plus)
+    r_m = abs(a_minus)
+    # A release needs |A_s| > cs g. Within a few ulps the comparison is rounding, and
+    # at alpha = 0, a = a_lift it is exactly the lift-off touch (tau = 0, n = 0): no slip.
+    release_level = cs_g * RELEASE_MARGIN
+    ok_p = r_p > release_level
+    ok_m = r_m > release_level
+    entry_p = 0.0
+    width_p = 0.0
+    entry_m = 0.0
+    width_m = 0.0
+    if ok_p:
+        beta = math.atan2(math.sqrt((r_p - cs_g) * (r_p + cs_g)), cs_g)
+        entry_p = _mod_two_pi(-beta - math.atan2(a_plus.imag, a_plus.real))
+        width_p = 2.0 * beta
+    if ok_m:
+        beta = math.atan2(math.sqrt((r_m - cs_g) * (r_m + cs_g)), cs_g)
+        entry_m = _mod_two_pi(-beta - math.atan2(a_minus.imag, a_minus.real))
+        width_m = 2.0 * beta
+    return (c, h_p, phi_p, gamma_p, h_m, phi_m, gamma_m,
+            ok_p, entry_p, width_p, ok_m, entry_m, width_m)
+
+
+@njit(cache=True, nogil=True)
+def _solve_point(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_rounds):
+    """Periodic orbit reached from rest at phase 0, for one drive point.
+
+    Returns
+    -------
+    status, reason, mean, slips, forward, backward, period
+        ``mean`` is the orbit's mean of ``w v`` [m s-2] (divide by ``w``),
+        ``slips`` the slip events per drive period, ``forward``/``backward`` the
+        fractions of the period spent slipping each way, ``period`` the orbit's
+        period in drive periods.
+    """
+    k = _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g)
+    if not k[7] and not k[10]:
+        return STATIC, REASON_NONE, 0.0, 0.0, 0.0, 0.0, 0
+    wait, sign = _next_release(0.0, 0, k)
+    theta = wait
+    # State at the two possible releases after a stick: (phase, distance, fwd, bwd, slips).
+    seen_p = False
+    seen_m = False
+    rec_p = (0.0, 0.0, 0.0, 0.0, 0)
+    rec_m = (0.0, 0.0, 0.0, 0.0, 0)
+    distance = 0.0
+    forward = 0.0
+    backward = 0.0
+    slips = 0
+    since_stick = 0
+    genuine = wait > 0.0
+    for _ in range(max_events):
+        if genuine:
+            since_stick = 0
+            now = (theta, distance, forward, backward, slips)
+            previous = rec_p if sign > 0 else rec_m
+            seen = seen_p if sign > 0 else seen_m
+            turns = round((theta - previous[0]) / TWO_PI)
+            if seen and turns >= 1:
+                span = TWO_PI * turns
+                return (
+                    STICK_SLIP,
+                    REASON_NONE,
+                    (distance - previous[1]) / span,
+                    (slips - previous[4]) / turns,
+                    (forward - previous[2]) / span,
+                    (backward - previous[3]) / span,
+                    int(turns),
+                )
+            if sign > 0:
+                seen_p = True
+                rec_p = now
+            else:
+                seen_m = True
+                rec_m = now
+        elif since_stick >= CIRCLE_MAP_AFTER and sign > 0:
+            flag, theta_c, sign_c, mean, per, fwd, bwd, period = _circle_map(
+                theta, k, max_rounds, max_events
+            )
+            if flag == _ROUND_OK:
+                return CONTINUOUS_SLIDING, REASON_NONE, mean, per, fwd, bwd, period
+            if flag == _ROUND_BUDGET:
+                return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, np.nan, 0.0, 0.0, 0.0, 0
+            # A stick ended the sliding transient: restart the bookkeeping there.
+            theta = theta_c
+            sign = sign_c
+            seen_p = False
+            seen_m = False
+            genuine = True
+            continue
+        theta_next, sign_next, wait, duration, moved, _ = _advance(theta, sign, k)
+        if duration > 0.0:
+            slips += 1
+        if sign > 0:
+            distance += moved
+            forward += duration
+        else:
+            distance -= moved
+            backward += duration
+        theta = theta_next
+        sign = sign_next
+        genuine = wait > 0.0
+        since_stick += 1
+    return NOT_CONVERGED, REASON_EVENT_BUDGET, np.nan, 0.0, 0.0, 0.0, 0
+
+
+@njit(cache=True, nogil=True)
+def _solve_into(
+    i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+    max_events, max_rounds,
+    velocity, status, reason, slips, forward, backward, period,
+):
+    """Solve point ``i`` and write its results into the output arrays."""
+    if lifted[i]:
+        velocity[i] = np.nan
+        status[i] = LIFT_OFF
+        reason[i] = REASON_NONE
+        slips[i] = np.nan
+        forward[i] = np.nan
+        backward[i] = np.nan
+        period[i] = 0
+        return
+    st, why, mean, per, fwd, bwd, n_period = _solve_point(
+        a_plus[i], a_minus[i], b_plus[i], b_minus[i], cs_g, ck_g, max_events, max_rounds
+    )
+    status[i] = st
+    reason[i] = why
+    if st == NOT_CONVERGED:
+        velocity[i] = np.nan
+        slips[i] = np.nan
+        forward[i] = np.nan
+        backward[i] = np.nan
+    else:
+        velocity[i] = mean / omega[i]
+        slips[i] = per
+        forward[i] = fwd
+        backward[i] = bwd
+    period[i] = n_period
+
+
+#: Points a thread takes at a time in the parallel kernels: whole cache lines of every
+#: output array (8 doubles a line).
+POINT_BLOCK = 64
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _steady_state(
+    a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+    max_events, max_rounds,
+    velocity, status, reason, slips, forward, backward, period,
+):
+    """Fill the output arrays, in parallel over points (threads, GIL released).
+
+    Points are dealt to threads in blocks of :data:`POINT_BLOCK` consecutive points,
+    the blocks interleaved over the lanes: the cost of a point depends on its regime,
+    and neighbouring points share a regime, so one contiguous half each would leave
+    one thread with all the slipping points of a map; single points interleaved
+    would make every write miss the cache (a lane touches one value of each cache
+    line, which is evicted before the next lane comes to it).
+    """
+    n = a_plus.shape[0]
+    blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
+    lanes = min(blocks, 256)
+    for lane in prange(lanes):
+        for block in range(lane, blocks, lanes):
+            for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
+                _solve_into(
+                    i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+                    max_events, max_rounds, velocity, status, reason, slips, forward,
+                    backward, period,
+                )
+
+
+@njit(cache=True, nogil=True)
+def _steady_state_serial(
+    a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+    max_events, max_rounds,
+    velocity, status, reason, slips, forward, backward, period,
+):
+    """Same as :func:`_steady_state` on one thread: no thread-pool launch for small inputs."""
+    for i in range(a_plus.shape[0]):
+        _solve_into(
+            i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
+            max_events, max_rounds, velocity, status, reason, slips, forward, backward, period,
+        )
+
+
+# Velocity only (``study.solvers.exact.steady_velocity``): the same orbits, nothing else,
+# dealt to threads in blocks as in _steady_state.
+# Squares of the normal doubles in (1e-140, 1e140): products of three of them are
+# still normal, so their rounding error is a few ulps.
+SQUARES_LOW = 1e-280
+SQUARES_HIGH = 1e280
+# Status of a point the velocity path leaves to numpy's lift-off test.
+LIFT_UNDECIDED = -1
+# Comparisons of squares decided with this relative margin (rounding is < 1e-15).
+SURE_ABOVE = 1.0 + 1e-13
+SURE_BELOW = 1.0 - 1e-13
+
+
+@njit(cache=True, nogil=True)
+def _lift_off(f, a, w0, inv_q, m, cos_a, g):
+    """The mode coupling ``k = w^2 M cos(alpha) G`` at one point and the lift-off
+    test ``a > lift_off_acceleration`` (1, 0 or LIFT_UNDECIDED), operation for operation
+    as numpy evaluates ``study.model`` there (see :func:`_forces`).
+
+    numpy multiplies a real by a complex as ``(x + 0j) * z`` and divides by a real
+    ``q`` as ``z * (1 / q)`` (Smith's algorithm); the zero products are kept so that
+    signed zeros come out as numpy's. ``inv_q = 1 / Q``, ``m = M``, ``cos_a`` is
+    numpy's ``cos`` of the tilt, ``w0`` is ``Structure.omega0``.
+    """
+    w = TWO_PI * f
+    # G = 1 / (w0^2 - w^2 + 1j * w0 * w / Q)
+    d_re = w0 * w0 - w * w + 0.0
+    d_im = 0.0 + (0.0 * 0.0 + w0 * w) * inv_q
+    if abs(d_re) >= abs(d_im):
+        rat = d_im / d_re
+        scl = 1.0 / (d_re + d_im * rat)
+        g_re = (1.0 + 0.0 * rat) * scl
+        g_im = (0.0 - 1.0 * rat) * scl
+    else:
+        rat = d_re / d_im
+        scl = 1.0 / (d_im + d_re * rat)
+        g_re = (1.0 * rat + 0.0) * scl
+        g_im = (0.0 * rat - 1.0) * scl
+    # k = w^2 M cos(alpha) G
+    x = w * w * m * cos_a
+    k_re = x * g_re - 0.0 * g_im
+    k_im = x * g_im + 0.0 * g_re
+    # 1 + k cos(alpha)
+    one_re = 1.0 + (k_re * cos_a - k_im * 0.0)
+    one_im = 0.0 + (k_re * 0.0 + k_im * cos_a)
+    # Lifted if a > g / |1 + k cos(alpha)|, decided on squares (no square root) where
+    # that is sure: farther than 1e-13 from the threshold, all squares normal. Nearer,
+    # the answer depends on how numpy rounds |z| (its SIMD loops do not call hypot):
+    # LIFT_UNDECIDED, for the caller to decide with numpy.
+    a2 = a * a
+    q2 = one_re * one_re + one_im * one_im
+    g2 = g * g
+    lhs = a2 * q2
+    lift = LIFT_UNDECIDED
+    if (SQUARES_LOW < a2 < SQUARES_HIGH and SQUARES_LOW < q2 < SQUARES_HIGH
+            and SQUARES_LOW < g2 < SQUARES_HIGH):
+        if lhs > g2 * SURE_ABOVE:
+            lift = 1
+        elif lhs < g2 * SURE_BELOW:
+            lift = 0
+    return lift, w, k_re, k_im, one_re, one_im
+
+
+@njit(cache=True, nogil=True)
+def _forces(a, k_re, k_im, one_re, one_im, sin_a, cs, ck):
+    """Release and slip amplitudes ``A_s``, ``B_s`` at one point, bit-identical to
+    ``study.model``' ``release_amplitudes`` and ``slip_amplitudes`` there."""
+    # N = -a (1 + k cos(alpha)), T = a k sin(alpha)
+    na = -a
+    n_re = na * one_re - 0.0 * one_im
+    n_im = na * one_im + 0.0 * one_re
+    ak_re = a * k_re - 0.0 * k_im
+    ak_im = a * k_im + 0.0 * k_re
+    t_re = ak_re * sin_a - ak_im * 0.0
+    t_im = ak_re * 0.0 + ak_im * sin_a
+    # s T - c N for c = cs (release) and ck (slip)
+    csn_re = cs * n_re - 0.0 * n_im
+    csn_im = cs * n_im + 0.0 * n_re
+    ckn_re = ck * n_re - 0.0 * n_im
+    ckn_im = ck * n_im + 0.0 * n_re
+    a_plus = complex(t_re - csn_re, t_im - csn_im)
+    a_minus = complex(-t_re - csn_re, -t_im - csn_im)
+    b_plus = complex(t_re - ckn_re, t_im - ckn_im)
+    b_minus = complex(-t_re - ckn_re, -t_im - ckn_im)
+    return a_plus, a_minus, b_plus, b_minus
+
+
+@njit(cache=True, nogil=True)
+def _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                   max_events, max_rounds, velocity, status, given):
+    """Solve point ``i`` for its velocity and status only.
+
+    ``given`` is the lift-off decision if known (0 or 1), else LIFT_UNDECIDED: then a
+    point too near the lift-off threshold to decide here gets that status (velocity
+    NaN), to be solved again with the decision numpy makes.
+    """
+    lift, w, k_re, k_im, one_re, one_im = _lift_off(f[i], a[i], w0, inv_q, m, cos_a, g)
+    if given != LIFT_UNDECIDED:
+        lift = given
+    if lift != 0:
+        velocity[i] = np.nan
+        status[i] = LIFT_OFF if lift == 1 else LIFT_UNDECIDED
+        return
+    a_plus, a_minus, b_plus, b_minus = _forces(a[i], k_re, k_im, one_re, one_im, sin_a, cs, ck)
+    # Most points of a map never slip: decided before the slip constants are computed,
+    # on squares where that is sure (else _solve_point decides, as steady_state does).
+    level2 = cs_g * cs_g * SURE_BELOW
+    p2 = a_plus.real * a_plus.real + a_plus.imag * a_plus.imag
+    m2 = a_minus.real * a_minus.real + a_minus.imag * a_minus.imag
+    if p2 < level2 and m2 < level2 and SQUARES_LOW < level2 < SQUARES_HIGH:
+        velocity[i] = 0.0
+        status[i] = STATIC
+        return
+    # The diagnostics _solve_point also returns are dead code here, and compiled away.
+    st, _, mean, _, _, _, _ = _solve_point(
+        a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_rounds
+    )
+    status[i] = st
+    velocity[i] = np.nan if st == NOT_CONVERGED else mean / w
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _steady_velocity(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                     max_events, max_rounds, velocity, status):
+    """Velocity and status of every point of the flat ``f``, ``a``, in parallel."""
+    n = f.shape[0]
+    blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
+    lanes = min(blocks, 256)
+    for lane in prange(lanes):
+        for block in range(lane, blocks, lanes):
+            for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
+                _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                               max_events, max_rounds, velocity, status, LIFT_UNDECIDED)
+
+
+@njit(cache=True, nogil=True)
+def _steady_velocity_serial(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                            max_events, max_rounds, velocity, status):
+    """Same as :func:`_steady_velocity` on one thread."""
+    for i in range(f.shape[0]):
+        _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                       max_events, max_rounds, velocity, status, LIFT_UNDECIDED)
+
+
+@njit(cache=True, nogil=True)
+def _steady_velocity_given(f, a, lifted, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                           max_events, max_rounds, velocity, status):
+    """Same as :func:`_steady_velocity_serial` with the lift-off decisions given."""
+    for i in range(f.shape[0]):
+        _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
+                       max_events, max_rounds, velocity, status, 1 if lifted[i] else 0)

@@ -1,0 +1,39 @@
+"""Integer codes shared by every kernel and by :mod:`study.model.status`, defined once.
+
+The numba kernels return plain integers; :class:`study.model.status.Status` and
+:class:`study.model.status.NonConvergence` are built from the same values, so a code means
+one thing in a kernel's output, in memory and on disk.
+"""
+
+from __future__ import annotations
+
+# Outcome of a point (study.model.status.Status).
+STATIC = 0
+STICK_SLIP = 1
+CONTINUOUS_SLIDING = 2
+LIFT_OFF = 3
+NOT_CONVERGED = 4
+FRICTION_PARADOX = 5
+
+# Why a point did not converge (study.model.status.NonConvergence).
+REASON_NONE = 0
+REASON_NO_PERIODIC_ORBIT = 1
+REASON_EVENT_BUDGET = 2
+
+# Contact mode "stuck" of the time integrators (their slip modes are their own).
+STICK = 0
+
+# How a time integrator's run ended.
+RUN_DONE = 0
+RUN_LIFT_OFF = 1
+RUN_BUDGET = 2
+RUN_PARADOX = 3
+
+# Event kinds recorded in trajectories. The planar disk's release has no sign: it is
+# EVENT_RELEASE (the single plate's forward code).
+EVENT_RELEASE_FORWARD = 1
+EVENT_RELEASE = EVENT_RELEASE_FORWARD
+EVENT_RELEASE_BACKWARD = 2
+EVENT_SLIP_END = 3
+EVENT_LIFT_OFF = 4
+EVENT_PARADOX = 5

@@ -1,0 +1,90 @@
+"""Checks on drive arrays shared by every public entry point."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from study.engine.spec_files import load_schema
+from study.model.inputs import as_real_array
+from study.model.units import HERTZ, METRE_PER_SECOND_SQUARED, SECOND
+
+#: The spec schema whose ``$defs/parameter`` maxima of ``f`` and ``a`` bound the drive
+#: every public function takes (a study spec's sweep is held to them): 1e6 Hz and
+#: 1e6 m s-2. Far beyond them ``(2 pi f)^2`` overflows (f > 2e153 Hz: NaN forces and a
+#: ZeroDivisionError in the integrator).
+DRIVE_LIMITS_SCHEMA = "study-spec-v1"
+
+
+def drive_maximum(name: str) -> float:
+    """The largest drive ``f`` [Hz] or ``a`` [m s-2] allowed (:data:`DRIVE_LIMITS_SCHEMA`)."""
+    return float(load_schema(DRIVE_LIMITS_SCHEMA)["$defs"]["parameter"][name]["maximum"])
+
+
+def _checked(
+    name: str, values: ArrayLike, units: str, lower: float, inclusive: bool,
+    upper: float = np.inf,
+) -> NDArray[np.float64]:
+    """``values`` as float64, finite, above ``lower`` and at most ``upper``; else a
+    ValueError naming the quantity, the first offending value, its index and the
+    allowed range (a TypeError, :class:`study.model.inputs.InputTypeError`, for strings,
+    booleans, complex numbers or dates)."""
+    array = as_real_array(name, values, units)
+    with np.errstate(invalid="ignore"):
+        bad = (~np.isfinite(array) | ((array < lower) if inclusive else (array <= lower))
+               | (array > upper))
+    if bad.any():
+        index = tuple(int(i) for i in np.argwhere(bad)[0])
+        allowed = (f"finite [{units}]" if lower == -np.inf
+                   else f"finite and {'>=' if inclusive else '>'} {lower:g} {units}")
+        if upper < np.inf:
+            allowed += f" and <= {upper:g} {units}"
+        raise ValueError(
+            f"{name} must be {allowed}; got {float(array[bad].ravel()[0])!r} at index {index}"
+        )
+    return array
+
+
+def as_frequency(f: ArrayLike) -> NDArray[np.float64]:
+    """Validate drive frequencies: finite, > 0 and <= 1e6 [Hz] (:func:`drive_maximum`).
+
+    Raises
+    ------
+    ValueError
+        Naming the first offending value, its index and the allowed range.
+    TypeError
+        For strings, booleans, complex numbers or dates
+        (:class:`study.model.inputs.InputTypeError`).
+    """
+    return _checked("drive frequency f", f, HERTZ, 0.0, inclusive=False,
+                    upper=drive_maximum("f"))
+
+
+def as_acceleration(a: ArrayLike) -> NDArray[np.float64]:
+    """Validate drive acceleration amplitudes: finite, >= 0 and <= 1e6 [m s-2]
+    (:func:`drive_maximum`).
+
+    Raises
+    ------
+    ValueError
+        Naming the first offending value, its index and the allowed range.
+    TypeError
+        For strings, booleans, complex numbers or dates
+        (:class:`study.model.inputs.InputTypeError`).
+    """
+    return _checked("drive acceleration a", a, METRE_PER_SECOND_SQUARED, 0.0, inclusive=True,
+                    upper=drive_maximum("a"))
+
+
+def as_time(t: ArrayLike) -> NDArray[np.float64]:
+    """Validate times: finite [s] (any sign).
+
+    Raises
+    ------
+    ValueError
+        Naming the first value that is not finite and its index.
+    TypeError
+        For strings, booleans, complex numbers or dates
+        (:class:`study.model.inputs.InputTypeError`).
+    """
+    return _checked("time t", t, SECOND, -np.inf, inclusive=True)

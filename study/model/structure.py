@@ -1,0 +1,183 @@
+"""The single-plate structure: a validated value object (paper eqs. 2-4)."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass
+
+from study.model.inputs import (
+    RADIAN_LIKE_TILT,
+    SuspectInputWarning,
+    instance_of,
+    real_number,
+    tilt_looks_like_radians,
+)
+from study.model.units import DEGREE, DIMENSIONLESS, HERTZ, METRE_PER_SECOND_SQUARED
+
+__all__ = ["Structure", "check_structure", "tilt_warnings"]
+
+
+def require_finite(name: str, value: object) -> float:
+    """A structure parameter as a finite float, else an error naming it."""
+    number = real_number(f"Structure parameter {name!r}", value, UNITS.get(name, ""))
+    if not math.isfinite(number):
+        raise ValueError(f"Structure parameter {name!r} must be finite, got {value!r}")
+    return number
+
+
+#: Whether a Structure built in this context warns of a tilt that looks like radians.
+_WARN_OF_RADIANS: ContextVar[bool] = ContextVar("study_warn_of_radians", default=True)
+
+
+@contextmanager
+def tilt_warnings(enabled: bool) -> Iterator[None]:
+    """Turn the radians warning of :class:`Structure` on or off within a ``with`` block.
+
+    The readers of spec, fit and design files build the structures a file declares with
+    the warning off: a file's tilts are in degree by its schema, and an optimiser
+    exploring small tilts is not a mistake. Per thread (a context variable).
+    """
+    token = _WARN_OF_RADIANS.set(bool(enabled))
+    try:
+        yield
+    finally:
+        _WARN_OF_RADIANS.reset(token)
+
+
+#: CF units of the parameters, for messages.
+UNITS = {"f0": HERTZ, "Q": DIMENSIONLESS, "alpha": DEGREE, "M": DIMENSIONLESS,
+         "cs": DIMENSIONLESS, "ck": DIMENSIONLESS, "g": METRE_PER_SECOND_SQUARED}
+
+
+@dataclass(frozen=True)
+class Structure:
+    """A rigid base carrying one tilted resonant plate (docs/theory/model.md).
+
+    All forces in the model are per unit total mass, so the structure is fully
+    described by its mode and its friction with the table.
+
+    Parameters
+    ----------
+    f0 : float
+        Resonance frequency of the plate's first mode [Hz], ``f0 > 0``.
+    Q : float
+        Quality factor of the mode [1], ``Q > 0``.
+    alpha : float
+        Tilt of the plate from the horizontal [degree], ``-90 < alpha < 90``.
+        ``alpha -> -alpha`` mirrors the motion.
+    M : float
+        Mass ratio ``m1 / m`` of the resonant mass to the total mass [1],
+        ``0 < M <= 1``.
+    cs : float
+        Static friction coefficient with the table [1], ``cs > 0``.
+    ck : float, optional
+        Kinetic friction coefficient [1], ``0 < ck <= cs``; defaults to ``cs``
+        (the paper's single coefficient ``c_f``).
+    g : float, optional
+        Gravitational acceleration [m s-2], ``g > 0``; default 9.8 as in the paper.
+
+    Raises
+    ------
+    TypeError
+        If a parameter is not a real number (a string such as ``'30'``, a boolean, a
+        complex number, ``None``): :class:`study.model.inputs.InputTypeError`, which is
+        also a ValueError.
+    ValueError
+        If a parameter is not finite or is outside its allowed range; the message
+        names the parameter, its value and the range.
+
+    Warns
+    -----
+    study.SuspectInputWarning
+        If ``0.05 <= |alpha| < pi/2`` (:data:`study.model.inputs.RADIAN_LIKE_TILT`): a tilt
+        below 1.6 degree that looks like an angle in radians (``alpha=0.785`` for 45
+        degree). The structure is built as given, in degree.
+    """
+
+    f0: float
+    Q: float
+    alpha: float
+    M: float
+    cs: float
+    ck: float | None = None
+    g: float = 9.8
+
+    def __post_init__(self) -> None:
+        values = {}
+        for name in ("f0", "Q", "alpha", "M", "cs", "g"):
+            values[name] = require_finite(name, getattr(self, name))
+        ck = values["cs"] if self.ck is None else require_finite("ck", self.ck)
+        values["ck"] = ck
+
+        def refuse(name: str, allowed: str) -> None:
+            raise ValueError(
+                f"Structure parameter {name!r} = {values[name]!r} is out of range; "
+                f"allowed: {allowed}"
+            )
+
+        if values["f0"] <= 0:
+            refuse("f0", "f0 > 0 [Hz]")
+        if values["Q"] <= 0:
+            refuse("Q", "Q > 0")
+        if not -90.0 < values["alpha"] < 90.0:
+            refuse("alpha", "-90 < alpha < 90 [degree]")
+        if not 0.0 < values["M"] <= 1.0:
+            refuse("M", "0 < M <= 1")
+        if values["cs"] <= 0:
+            refuse("cs", "cs > 0")
+        if not 0.0 < ck <= values["cs"]:
+            refuse("ck", f"0 < ck <= cs (cs = {values['cs']!r})")
+        if values["g"] <= 0:
+            refuse("g", "g > 0 [m s-2]")
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+        if tilt_looks_like_radians(values["alpha"]) and _WARN_OF_RADIANS.get():
+            low, high = RADIAN_LIKE_TILT
+            warnings.warn(
+                f"Structure parameter 'alpha' = {values['alpha']!r} degree: a tilt between "
+                f"{low:g} and {high:.4g} degree looks like an angle in radians; alpha is "
+                f"in degree (for {values['alpha']!r} rad give alpha = "
+                f"{math.degrees(values['alpha']):.6g})",
+                SuspectInputWarning, stacklevel=3)
+
+    @property
+    def omega0(self) -> float:
+        """Angular resonance frequency ``2 pi f0`` [rad s-1]."""
+        return 2.0 * math.pi * self.f0
+
+    @property
+    def alpha_rad(self) -> float:
+        """Plate tilt [rad]."""
+        return math.radians(self.alpha)
+
+    def replace(self, **changes: float) -> Structure:
+        """Return a copy with some parameters changed, validated again.
+
+        ``ck`` is stored explicitly once built: pass it too when lowering ``cs``
+        below it.
+        """
+        params = self.as_dict()
+        params.update(changes)
+        return Structure(**params)
+
+    def as_dict(self) -> dict[str, float]:
+        """Parameters as a plain dict (``ck`` explicit)."""
+        return {
+            "f0": self.f0,
+            "Q": self.Q,
+            "alpha": self.alpha,
+            "M": self.M,
+            "cs": self.cs,
+            "ck": self.ck,
+            "g": self.g,
+        }
+
+
+def check_structure(structure: object, name: str = "structure") -> Structure:
+    """``structure`` if it is a :class:`Structure`, else a TypeError
+    (:class:`study.model.inputs.InputTypeError`) naming the argument."""
+    return instance_of(name, structure, Structure, "a study.Structure")

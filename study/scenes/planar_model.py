@@ -1,0 +1,942 @@
+"""Planar steering model: a rigid disk with resonant plates on a vertically shaken table.
+
+The paper's Fig. 4 structure is a disk with two soft plates: a head plate that moves
+it forward or backward and a tail plate, across the head-tail axis, that turns it.
+Each plate is the single-plate model of paper eqs. 2-4 (a first mode driven by the
+table; one-way coupled by default, or two-way: the disk's sliding acceleration at the
+plate's attachment, projected on its direction, forces the plate too), mounted at a
+point of the disk along a direction in its body frame. The disk's contact is planar
+Coulomb friction with an ellipsoidal limit surface (the friction force and torque at
+sliding lie on the ellipsoid ``|f|^2 / (mu n)^2 + tau^2 / (mu n c)^2 = 1``; the twist
+is normal to it), with stick and slip for force and torque together. See
+:mod:`study.kernels.planar_integrator` for the equations and docs/user-guide/steering.md
+for the choices.
+
+Per unit total mass, SI units: lengths in m; every angle a caller passes or gets back
+is in degrees (the plates' tilt and direction, as in :class:`study.model.structure.Structure`;
+headings, spins and turn rates in degree and degree s-1; the heading noise in degree
+m^-1/2), including the heading and spin of the state vectors (``initial_state``,
+``final_state``, :func:`rest_state`). The kernel (:mod:`study.kernels.planar_integrator`) works in
+radians; the conversion is made here, at the boundary (:func:`_to_kernel`,
+:func:`_from_kernel`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from study.engine.spec_files import load_schema
+from study.kernels import planar_integrator as _kernel
+from study.model import mode_response
+from study.model.inputs import (
+    InputTypeError,
+    as_real_array,
+    bounded_integer,
+    bounded_number,
+    instance_of,
+)
+from study.model.structure import require_finite
+from study.model.units import (
+    DEGREE,
+    DEGREE_PER_SECOND,
+    DIMENSIONLESS,
+    HERTZ,
+    METRE,
+    METRE_PER_SECOND,
+    METRE_PER_SECOND_SQUARED,
+    SECOND,
+    spoken,
+)
+from study.solvers.exact import COUPLINGS, DEFAULT_COUPLING
+from study.solvers.integrator import (
+    MAX_RECORDED_EVENTS,
+    IntegratorSettings,
+    Schedule,
+    check_integrator_settings,
+    check_samples,
+    integrator_budget_maxima,
+)
+
+__all__ = [
+    "DRIVE_SCHEMA",
+    "EVENT_KINDS",
+    "FRICTION_LENGTH_RATIO",
+    "MAX_MARGIN_SAMPLES",
+    "MIN_DISK_FREQUENCY",
+    "OUTCOMES",
+    "PLANAR_VERSION",
+    "SLAVING",
+    "Disk",
+    "PeriodicMotion",
+    "PlanarTrajectory",
+    "Plate",
+    "check_disk",
+    "check_drive",
+    "contact_margins",
+    "describe_disk",
+    "disk_parameters",
+    "max_steady_periods",
+    "periodic_motion",
+    "rest_state",
+    "simulate_planar",
+    "state_names",
+    "steady_plate_states",
+]
+
+#: Bumped whenever the planar model or its numerics change the numbers it returns
+#: (2: headings, spins and turn rates in degree, no longer rad).
+PLANAR_VERSION = "2"
+
+#: How a run ended, by kernel return code.
+OUTCOMES = {
+    _kernel.RUN_DONE: "completed",
+    _kernel.RUN_LIFT_OFF: "lift_off",
+    _kernel.RUN_BUDGET: "step_budget",
+    _kernel.RUN_PARADOX: "friction_paradox",
+}
+
+#: Event kinds recorded in trajectories.
+EVENT_KINDS = {
+    _kernel.EVENT_RELEASE: "release",
+    _kernel.EVENT_SLIP_END: "slip_end",
+    _kernel.EVENT_LIFT_OFF: "lift_off",
+    _kernel.EVENT_PARADOX: "friction_paradox",
+}
+
+#: Default slaving threshold of a slip's onset, in units of ``ck g / w`` [1].
+SLAVING = 1e-4
+
+#: Names of the state components (``delta_i``, ``delta_i'`` follow, plate by plate).
+POSE_STATE = ("x", "y", "heading", "vx", "vy", "spin", "path")
+
+#: Units of the state components a caller sees (the kernel's heading and spin are in
+#: rad and rad s-1).
+POSE_UNITS = (METRE, METRE, DEGREE, METRE_PER_SECOND, METRE_PER_SECOND, DEGREE_PER_SECOND, METRE)
+
+
+def _to_kernel(state: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A state vector in the caller's units (heading [degree], spin [degree s-1]) as
+    the kernel's (rad, rad s-1); a copy."""
+    out = np.array(state, dtype=float)
+    out[[_kernel.HEADING, _kernel.SPIN]] = np.radians(out[[_kernel.HEADING, _kernel.SPIN]])
+    return out
+
+
+def _from_kernel(state: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A kernel state vector (rad, rad s-1) in the caller's units (degree, degree
+    s-1); a copy."""
+    out = np.array(state, dtype=float)
+    out[[_kernel.HEADING, _kernel.SPIN]] = np.degrees(out[[_kernel.HEADING, _kernel.SPIN]])
+    return out
+
+
+@dataclass(frozen=True)
+class Plate:
+    """One resonant plate on the disk.
+
+    Parameters
+    ----------
+    f0 : float
+        Resonance frequency of the plate's first mode [Hz], > 0.
+    Q : float
+        Quality factor [1], > 0.
+    alpha : float
+        Tilt of the mode's direction from the horizontal [degree], in [0, 90].
+    M : float
+        Mass ratio of the plate's modal mass to the whole structure's mass [1], in (0, 1].
+    direction : float
+        Direction of the mode's horizontal component in the body frame, counterclockwise
+        from the heading [degree].
+    attachment : tuple of float
+        Point where the plate acts, body frame ``(forward, left)`` from the disk's
+        centre [m].
+    name : str
+        Label.
+    """
+
+    f0: float
+    Q: float
+    alpha: float
+    M: float
+    direction: float = 0.0
+    attachment: tuple[float, float] = (0.0, 0.0)
+    name: str = "plate"
+
+    def __post_init__(self) -> None:
+        checks = (
+            ("f0", HERTZ, lambda v: v > 0.0, "> 0"),
+            ("Q", DIMENSIONLESS, lambda v: v > 0.0, "> 0"),
+            ("alpha", DEGREE, lambda v: 0.0 <= v <= 90.0, "in [0, 90]"),
+            ("M", DIMENSIONLESS, lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+            ("direction", DEGREE, lambda v: True, "finite"),
+        )
+        for name, units, ok, allowed in checks:
+            value = require_finite(f"Plate.{name}", getattr(self, name))
+            if not ok(value):
+                raise ValueError(
+                    f"Plate {self.name!r}: {name} = {value!r}{spoken(units)} is out of range; "
+                    f"allowed: {allowed}"
+                )
+            object.__setattr__(self, name, value)
+        point = (tuple(self.attachment) if isinstance(self.attachment, Iterable)
+                 and not isinstance(self.attachment, str) else ())
+        if len(point) != 2:
+            raise ValueError(
+                f"Plate {self.name!r}: attachment must be (forward, left) [m], got "
+                f"{self.attachment!r}"
+            )
+        object.__setattr__(self, "attachment", tuple(
+            require_finite(f"Plate.attachment[{i}]", v) for i, v in enumerate(point)
+        ))
+
+    @property
+    def unit_direction(self) -> tuple[float, float]:
+        """Body-frame unit vector of the mode's horizontal component (forward, left)."""
+        angle = math.radians(self.direction)
+        return math.cos(angle), math.sin(angle)
+
+    @property
+    def omega0(self) -> float:
+        """Angular resonance frequency of the plate's mode [rad s-1]."""
+        return 2.0 * math.pi * self.f0
+
+    @property
+    def lever(self) -> float:
+        """Moment arm ``r x e`` of the plate's horizontal force about the centre [m]."""
+        ex, ey = self.unit_direction
+        return self.attachment[0] * ey - self.attachment[1] * ex
+
+
+#: Friction length over the disk's radius [1]. At most 1: the friction torque's lever
+#: cannot exceed the contact's radius (uniform pressure gives 2/3). At least 1e-3: the
+#: kernel divides the friction torque by the length, and a shorter one makes the spin
+#: a stiff, nearly frictionless mode (a 1 s two-plate schedule: 3.5e3 steps at 2/3,
+#: 1e5 at 1e-3, 9.4e4 and 17 times the time at 1e-9, over 5 minutes at 1e-12, a
+#: ZeroDivisionError at 1e-300). Declared here only; the scene and design specs refuse
+#: a [disk] friction_length outside it through :class:`Disk`.
+FRICTION_LENGTH_RATIO = (1e-3, 1.0)
+
+
+@dataclass(frozen=True)
+class Disk:
+    """The rigid disk, its contact with the table and its plates.
+
+    Parameters
+    ----------
+    radius : float
+        Disk radius [m], > 0.
+    plates : tuple of Plate
+        The plates (at least one); their mass ratios sum to at most 1.
+    cs : float
+        Static friction coefficient [1], > 0.
+    ck : float, optional
+        Kinetic friction coefficient [1], in (0, cs]; default ``cs``.
+    g : float
+        Gravitational acceleration [m s-2].
+    gyration_radius : float, optional
+        Radius of gyration about the vertical axis [m]; default ``radius / sqrt(2)``
+        (a uniform disk).
+    friction_length : float, optional
+        Length ``c`` of the ellipsoidal limit surface, the maximum friction torque
+        over the maximum friction force [m]; default ``2 radius / 3`` (uniform
+        pressure on the full disk); ``radius / 1000 <= c <= radius``
+        (:data:`FRICTION_LENGTH_RATIO`).
+    coupling : {"one-way", "two-way"}
+        ``"one-way"`` (default, :data:`study.solvers.exact.DEFAULT_COUPLING`): each plate's mode
+        is forced by the table only.
+        ``"two-way"``: while the disk slides, the acceleration of each plate's
+        attachment point projected on its direction, ``b_i``, forces it too,
+        ``delta_i'' = F_i - sin(alpha_i) b_i`` (as :func:`study.solvers.integrator.simulate`'s
+        two-way model); a slip whose coupled equations have no unique solution
+        (Painleve's paradox) stops a run with outcome ``friction_paradox``.
+    """
+
+    radius: float
+    plates: tuple[Plate, ...]
+    cs: float
+    ck: float | None = None
+    g: float = 9.8
+    gyration_radius: float | None = None
+    friction_length: float | None = None
+    coupling: str = DEFAULT_COUPLING
+    _names: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        radius = require_finite("Disk.radius", self.radius)
+        if radius <= 0.0:
+            raise ValueError(f"Disk: radius = {radius!r} [m] must be > 0")
+        if isinstance(self.plates, Plate | str) or not isinstance(self.plates, Iterable):
+            raise InputTypeError("Disk: plates must be a non-empty sequence of "
+                                 f"study.scenes.planar_model.Plate, got {self.plates!r}")
+        plates = tuple(self.plates)
+        if not plates or not all(isinstance(p, Plate) for p in plates):
+            raise ValueError("Disk: plates must be a non-empty sequence of "
+                             "study.scenes.planar_model.Plate")
+        total = sum(p.M for p in plates)
+        if total > 1.0 + 1e-12:
+            raise ValueError(
+                f"Disk: the plates' mass ratios sum to {total:g} > 1 (each M is a share of "
+                "the whole structure's mass)"
+            )
+        cs = require_finite("Disk.cs", self.cs)
+        if cs <= 0.0:
+            raise ValueError(f"Disk: cs = {cs!r} must be > 0")
+        ck = cs if self.ck is None else require_finite("Disk.ck", self.ck)
+        if not 0.0 < ck <= cs:
+            raise ValueError(f"Disk: ck = {ck!r} must be in (0, cs = {cs!r}]")
+        g = require_finite("Disk.g", self.g)
+        if g <= 0.0:
+            raise ValueError(f"Disk: g = {g!r} [m s-2] must be > 0")
+        gyration = radius / math.sqrt(2.0) if self.gyration_radius is None else (
+            require_finite("Disk.gyration_radius", self.gyration_radius))
+        length = 2.0 * radius / 3.0 if self.friction_length is None else (
+            require_finite("Disk.friction_length", self.friction_length))
+        if self.coupling not in COUPLINGS:
+            raise ValueError(f"Disk: coupling = {self.coupling!r} must be one of {COUPLINGS}")
+        for name, value in (("gyration_radius", gyration), ("friction_length", length)):
+            if value <= 0.0:
+                raise ValueError(f"Disk: {name} = {value!r} [m] must be > 0")
+        low, high = FRICTION_LENGTH_RATIO
+        if not low * radius <= length <= high * radius:
+            raise ValueError(
+                f"Disk: friction_length = {length!r} m is out of range; allowed: "
+                f"radius/{1 / low:g} to radius ({low * radius:g} to {high * radius:g} m; "
+                "uniform pressure gives 2 radius/3)")
+        for name, value in (("radius", radius), ("plates", plates), ("cs", cs), ("ck", ck),
+                            ("g", g), ("gyration_radius", gyration),
+                            ("friction_length", length)):
+            object.__setattr__(self, name, value)
+
+    @property
+    def diameter(self) -> float:
+        """Disk diameter [m]."""
+        return 2.0 * self.radius
+
+
+#: Phases :func:`contact_margins` samples at most (one array of them per plate).
+MAX_MARGIN_SAMPLES = 1_000_000
+
+
+def check_disk(disk: object) -> Disk:
+    """``disk`` if it is a :class:`Disk`, else a TypeError
+    (:class:`study.model.inputs.InputTypeError`) naming the argument."""
+    return instance_of("disk", disk, Disk, "a study.scenes.planar_model.Disk")
+
+
+#: The spec schema whose ``$defs/parameter`` ranges of ``f`` and ``a`` bound a disk's
+#: drive (study.scenes.scene_kind reads its specs against it): the API takes the same drives.
+DRIVE_SCHEMA = "study-scene-spec-v1"
+
+
+def max_steady_periods() -> int:
+    """Drive periods :func:`periodic_motion` integrates at most: the scene schema's
+    ``[calibration] max_periods`` maximum (1e5, about 100 s of one core)."""
+    schema = load_schema(DRIVE_SCHEMA)
+    return int(schema["properties"]["calibration"]["properties"]["max_periods"]["maximum"])
+
+
+#: Lowest drive frequency of a disk [Hz]: the integrator's scales go as
+#: ``g / (2 pi f)^2``, which overflows near 1e-154 Hz (1e-300 Hz ended in a
+#: ZeroDivisionError); 1e-100 Hz keeps them finite with a wide margin. Far below any
+#: drive: a scene's work budget refuses frequencies long before (1e-30 Hz).
+MIN_DISK_FREQUENCY = 1e-100
+
+
+def check_drive(f: object, a: object) -> tuple[float, float]:
+    """A disk's drive ``(f [Hz], a [m s-2])`` as floats, within the ranges the scene
+    spec schema declares for ``f`` and ``a`` (finite, ``1e-100 <= f <= 1e4``,
+    ``0 <= a <= 1e4``: beyond them the period or the forces overflow); else an error
+    naming the argument and the range."""
+    limits = load_schema(DRIVE_SCHEMA)["$defs"]["parameter"]
+    f_value = bounded_number("f", f, HERTZ, lower=MIN_DISK_FREQUENCY,
+                             upper=limits["f"]["maximum"])
+    a_value = bounded_number("a", a, METRE_PER_SECOND_SQUARED, lower=limits["a"]["minimum"],
+                             upper=limits["a"]["maximum"])
+    return f_value, a_value
+
+
+def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The kernel's plate table ``(P, 9)`` and disk vector ``(7,)``."""
+    check_disk(disk)
+    plates = np.empty((len(disk.plates), _kernel.N_PLATE_PARAMETERS))
+    for i, plate in enumerate(disk.plates):
+        w0 = plate.omega0
+        alpha = math.radians(plate.alpha)
+        ex, ey = plate.unit_direction
+        plates[i, _kernel.PL_DAMPING] = w0 / plate.Q
+        plates[i, _kernel.PL_STIFFNESS] = w0 * w0
+        plates[i, _kernel.PL_COS] = math.cos(alpha)
+        plates[i, _kernel.PL_SIN] = math.sin(alpha)
+        plates[i, _kernel.PL_MASS] = plate.M
+        plates[i, _kernel.PL_EX] = ex
+        plates[i, _kernel.PL_EY] = ey
+        plates[i, _kernel.PL_LEVER] = plate.lever
+        plates[i, _kernel.PL_REACH] = plate.attachment[0] * ex + plate.attachment[1] * ey
+    vector = np.empty(_kernel.N_DISK_PARAMETERS)
+    vector[_kernel.DK_CS] = disk.cs
+    vector[_kernel.DK_CK] = disk.ck
+    vector[_kernel.DK_G] = disk.g
+    vector[_kernel.DK_LENGTH] = disk.friction_length
+    vector[_kernel.DK_GYRATION2] = disk.gyration_radius**2
+    vector[_kernel.DK_SLAVED] = 0.0
+    vector[_kernel.DK_TWO_WAY] = 1.0 if disk.coupling == "two-way" else 0.0
+    return plates, vector
+
+
+def _scales(disk: Disk, omega: float) -> NDArray[np.float64]:
+    """Absolute-tolerance scale of each state component at drive pulsation ``omega``."""
+    g = disk.g
+    size = g / omega**2
+    scale = [size, size, size / disk.radius, g / omega, g / omega, g / omega / disk.radius,
+             size]
+    for plate in disk.plates:
+        fastest = max(omega, plate.omega0)
+        scale += [g / fastest**2, g / fastest]
+    return np.array(scale)
+
+
+def _mode_amplitude(plate: Plate, f: float, a: float) -> complex:
+    """Complex amplitude of the plate's steady response ``delta`` to ``a cos(2 pi f t)``
+    [m]: the single-plate model's (:func:`study.model.mode_response`)."""
+    # mode_response needs only the mode's omega0 and Q, which a Plate has too.
+    response = mode_response(plate, float(f))  # type: ignore[arg-type]
+    return complex(float(a) * math.cos(math.radians(plate.alpha)) * response)
+
+
+def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
+                        ) -> NDArray[np.float64]:
+    """Plate states ``(delta_1, delta_1', ...)`` on their steady response to
+    ``a cos(2 pi f t + phase)`` at ``t = 0`` [m, m s-1]: a run started there has no
+    mode transient."""
+    check_disk(disk)
+    f, a = check_drive(f, a)
+    phase = bounded_number("phase", phase)
+    omega = 2.0 * math.pi * float(f)
+    out = np.empty(2 * len(disk.plates))
+    for i, plate in enumerate(disk.plates):
+        rotating = _mode_amplitude(plate, f, a) * complex(math.cos(phase),
+                                                                math.sin(phase))
+        out[2 * i] = rotating.real
+        out[2 * i + 1] = (1j * omega * rotating).real
+    return out
+
+
+def rest_state(disk: Disk, pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
+               drive: tuple[float, float] | None = None) -> NDArray[np.float64]:
+    """A state vector (see :func:`state_names`; heading [degree], spin [degree s-1])
+    with the disk at rest at ``pose`` ``(x [m], y [m], heading [degree])``: the plates at
+    rest, or, with ``drive = (f [Hz], a [m s-2])``, on their steady response to it at
+    drive phase 0."""
+    check_disk(disk)
+    state = np.zeros(len(POSE_STATE) + 2 * len(disk.plates))
+    where = as_real_array("pose", pose)
+    if where.shape != (3,):
+        raise ValueError(f"pose must be (x [m], y [m], heading [degree]), got {pose!r}")
+    state[:3] = where
+    if drive is not None and (isinstance(drive, str) or not isinstance(drive, Iterable)
+                              or len(tuple(drive)) != 2):
+        raise InputTypeError(f"drive must be (f [Hz], a [m s-2]), got {drive!r}")
+    if drive is not None:
+        state[_kernel.MODES:] = steady_plate_states(disk, *drive)
+    return state
+
+
+@dataclass(frozen=True)
+class PlanarTrajectory:
+    """A planar run: samples, events and how it ended.
+
+    Attributes
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    x, y : numpy.ndarray
+        Position of the disk's centre [m].
+    heading : numpy.ndarray
+        Heading, counterclockwise from the x axis, unwrapped [degree].
+    vx, vy : numpy.ndarray
+        Velocity [m s-1].
+    spin : numpy.ndarray
+        Angular velocity, counterclockwise positive [degree s-1].
+    path : numpy.ndarray
+        Distance slid since the start [m].
+    plate_states : numpy.ndarray
+        ``(time, plate, 2)``: each plate's ``delta`` [m] and ``delta'`` [m s-1].
+    slipping : numpy.ndarray
+        True where the disk slides at the sample.
+    event_time, event_kind : numpy.ndarray
+        Recorded events (kinds in :data:`EVENT_KINDS`).
+    outcome : str
+        One of :data:`OUTCOMES`' values; ``"lift_off"`` means the normal force fell
+        below zero at ``end_time`` (the model stops holding there).
+    end_time : float
+        Time the run reached [s].
+    steps, rejected_steps, slips : int
+        Work done.
+    final_state : numpy.ndarray
+        State vector at ``end_time`` (see :func:`state_names`; heading [degree], spin
+        [degree s-1]), to continue a run from.
+    heading_kicks : numpy.ndarray
+        Heading noise added at the end of each drive period [degree] (zeros without
+        noise).
+    """
+
+    time: NDArray[np.float64]
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    heading: NDArray[np.float64]
+    vx: NDArray[np.float64]
+    vy: NDArray[np.float64]
+    spin: NDArray[np.float64]
+    path: NDArray[np.float64]
+    plate_states: NDArray[np.float64] = field(repr=False)
+    slipping: NDArray[np.bool_] = field(repr=False)
+    event_time: NDArray[np.float64] = field(repr=False)
+    event_kind: NDArray[np.int8] = field(repr=False)
+    outcome: str
+    end_time: float
+    steps: int
+    rejected_steps: int
+    slips: int
+    final_state: NDArray[np.float64] = field(repr=False)
+    heading_kicks: NDArray[np.float64] = field(repr=False)
+
+
+def _check_slaving(slaving: float) -> float:
+    # Without slaving (0) a slip's onset is stiff for the explicit integrator: tiny
+    # steps until the budget runs out.
+    value = require_finite("slaving", slaving)
+    if not 0.0 < value <= 0.1:
+        raise ValueError(f"slaving = {slaving!r} [1] is out of range; allowed: (0, 0.1]")
+    return value
+
+
+def _kick_times(schedule: Schedule) -> NDArray[np.float64]:
+    """End of every whole drive period of every segment (and each segment's end)."""
+    times = []
+    for start, end, f in zip(schedule.starts, schedule.ends, schedule.frequency, strict=True):
+        count = math.floor((end - start) * f * (1.0 + 1e-12))
+        times.append(start + np.arange(1, count + 1) / f)
+        times.append([end])
+    merged = np.unique(np.concatenate(times))
+    return merged[merged <= schedule.ends[-1]]
+
+
+def simulate_planar(
+    disk: Disk,
+    schedule: Schedule,
+    *,
+    initial_state: ArrayLike | None = None,
+    output_times: ArrayLike | None = None,
+    settings: IntegratorSettings | None = None,
+    heading_noise: float = 0.0,
+    rng: np.random.Generator | int | None = None,
+    max_events: int = 0,
+    slaving: float = SLAVING,
+    on_progress: Callable[[float], None] | None = None,
+) -> PlanarTrajectory:
+    """Integrate the planar model through a drive schedule.
+
+    Parameters
+    ----------
+    disk : Disk
+        The disk and its plates.
+    schedule : study.solvers.integrator.Schedule
+        The drive; the run ends at the end of its last segment (or at lift-off).
+    initial_state : array_like, optional
+        ``(x [m], y [m], heading [degree], vx [m s-1], vy [m s-1], spin [degree s-1],
+        path [m], delta_1 [m], delta_1' [m s-1], ...)`` at ``t = 0``; default all
+        zero (at rest, plates at rest). With a non-zero twist the run starts sliding.
+    output_times : array_like, optional
+        Sorted sample times within the schedule [s]; default 16 per shortest drive
+        period.
+    settings : IntegratorSettings, optional
+        ``tolerance``, ``event_tolerance``, ``samples_per_step``, ``max_step`` and
+        ``max_steps`` apply (periods are the schedule's shortest); fixed steps are not
+        offered here.
+    heading_noise : float
+        Phenomenological heading diffusion [degree m^-1/2]: at the end of every drive
+        period the heading gets a Gaussian kick of variance ``heading_noise^2 * s``,
+        ``s`` the distance slid in that period. ``5.73 / sqrt(diameter)`` gives the
+        paper's measured drift of 0.1 rad (5.73 degree) per diameter travelled.
+    rng : numpy.random.Generator or int, optional
+        Source (or seed) of the heading kicks.
+    max_events : int
+        Events to record (0: none).
+    slaving : float
+        A slip that starts from rest moves along its slaved direction until its twist
+        exceeds ``slaving * ck * g / (2 pi f_max)`` [1]: this removes the stiffness of
+        the direction's relaxation (rate ``ck n / |u|``) at the cost of an error of
+        order ``slaving^2`` relative (measured; see docs/user-guide/steering.md). Exact
+        for motion along one axis.
+    on_progress : callable, optional
+        Called with the drive time reached [s] each time the integration stops (at every
+        heading kick with noise, else at the end); the integration is the same with or
+        without it.
+
+    Returns
+    -------
+    PlanarTrajectory
+    """
+    plates, disk_vector = disk_parameters(disk)
+    if not isinstance(schedule, Schedule):
+        raise TypeError("schedule must be a study.solvers.integrator.Schedule, "
+                        f"got {type(schedule)}")
+    settings = check_integrator_settings(settings)
+    if settings.steps_per_period is not None:
+        raise ValueError("simulate_planar: fixed steps (steps_per_period) are not offered; "
+                         "set tolerance instead")
+    noise = require_finite("heading_noise", heading_noise)
+    if noise < 0.0:
+        raise ValueError(f"heading_noise = {noise!r} [degree m^-1/2] must be >= 0")
+    noise = math.radians(noise)  # the kernel's heading is in rad
+    names = state_names(disk)
+    size = len(names)
+    y = np.zeros(size) if initial_state is None else np.array(initial_state, dtype=float)
+    if y.shape != (size,) or not np.all(np.isfinite(y)):
+        raise ValueError(
+            f"initial_state must be {size} finite numbers ({', '.join(names)}; heading "
+            f"[degree], spin [degree s-1]), got {initial_state!r}"
+        )
+    y = _to_kernel(y)
+    end = float(schedule.ends[-1])
+    shortest = float(1.0 / np.max(schedule.frequency))
+    if output_times is None:
+        count = max(2, math.ceil(end / shortest * 16) + 1)
+        check_samples(count, "the default output_times (16 a period of the schedule)")
+        out_t = np.linspace(0.0, end, count)
+    else:
+        out_t = as_real_array("output_times", output_times, SECOND).ravel()
+        check_samples(out_t.size, "output_times")
+        if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
+            raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
+        if np.any(np.diff(out_t) < 0):
+            raise ValueError("output_times must be sorted")
+    omega = 2.0 * np.pi * schedule.frequency
+    scale = _scales(disk, float(np.max(omega)))
+    disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / float(
+        np.max(omega))
+    moving = bool(np.any(y[[_kernel.VX, _kernel.VY, _kernel.SPIN]] != 0.0))
+    mode_box = np.array([_kernel.SLIP if moving else _kernel.STICK], dtype=np.int64)
+    t_box = np.array([0.0, settings.max_step * shortest])
+    out_y = np.empty((out_t.size, size))
+    out_mode = np.empty(out_t.size, dtype=np.int64)
+    out_box = np.zeros(1, dtype=np.int64)
+    capacity = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
+    ev_t = np.empty(capacity)
+    ev_kind = np.empty(capacity, dtype=np.int64)
+    ev_y = np.empty((capacity, size))
+    ev_box = np.zeros(1, dtype=np.int64)
+    stats = np.zeros(5)
+    stops = _kick_times(schedule) if noise > 0.0 else np.array([end])
+    kicks = np.zeros(stops.size)
+    generator = np.random.default_rng(rng) if noise > 0.0 else None
+    code = _kernel.RUN_DONE
+    for j, stop in enumerate(stops):
+        path_before = y[_kernel.PATH]
+        code = _kernel._integrate(
+            plates, disk_vector, schedule.starts, omega, schedule.acceleration,
+            schedule.start_phases_rad, schedule.ends, y, mode_box, t_box, float(stop),
+            settings.tolerance, settings.tolerance, scale, settings.max_step * shortest,
+            settings.event_tolerance * shortest, settings.samples_per_step,
+            settings.max_steps, out_t, out_y, out_mode, out_box, ev_t, ev_kind, ev_y,
+            ev_box, stats,
+        )
+        if on_progress is not None:
+            on_progress(float(t_box[0]))
+        if code != _kernel.RUN_DONE:
+            break
+        if generator is not None:
+            slid = y[_kernel.PATH] - path_before
+            kicks[j] = noise * math.sqrt(slid) * generator.standard_normal()
+            y[_kernel.HEADING] += kicks[j]
+    m = int(out_box[0])
+    e = min(int(ev_box[0]), capacity)
+    states = out_y[:m]
+    angles = [_kernel.HEADING, _kernel.SPIN]
+    states[:, angles] = np.degrees(states[:, angles])
+    return PlanarTrajectory(
+        time=out_t[:m].copy(),
+        x=states[:, _kernel.X].copy(),
+        y=states[:, _kernel.Y].copy(),
+        heading=states[:, _kernel.HEADING].copy(),
+        vx=states[:, _kernel.VX].copy(),
+        vy=states[:, _kernel.VY].copy(),
+        spin=states[:, _kernel.SPIN].copy(),
+        path=states[:, _kernel.PATH].copy(),
+        plate_states=states[:, _kernel.MODES:].reshape(m, len(disk.plates), 2).copy(),
+        slipping=out_mode[:m] != _kernel.STICK,
+        event_time=ev_t[:e].copy(),
+        event_kind=ev_kind[:e].astype(np.int8),
+        outcome=OUTCOMES[int(code)],
+        end_time=float(t_box[0]),
+        steps=int(stats[0]),
+        rejected_steps=int(stats[1]),
+        slips=int(stats[2]),
+        final_state=_from_kernel(y),
+        heading_kicks=np.degrees(kicks),
+    )
+
+
+def state_names(disk: Disk) -> tuple[str, ...]:
+    """Names of the components of a planar state vector (units: :data:`POSE_UNITS`,
+    then each plate's ``delta`` [m] and ``delta'`` [m s-1])."""
+    check_disk(disk)
+    names: list[str] = list(POSE_STATE)
+    for plate in disk.plates:
+        names += [f"delta_{plate.name}", f"delta_rate_{plate.name}"]
+    return tuple(names)
+
+
+def describe_disk(disk: Disk) -> dict[str, Any]:
+    """The disk's parameters as plain numbers (for provenance)."""
+    check_disk(disk)
+    return {
+        "radius": disk.radius, "cs": disk.cs, "ck": disk.ck, "g": disk.g,
+        "gyration_radius": disk.gyration_radius, "friction_length": disk.friction_length,
+        # Named only when two-way, so a one-way disk's description (and the hash of
+        # every scene spec written before the option) stays as it was.
+        **({"coupling": disk.coupling} if disk.coupling != "one-way" else {}),
+        "plates": [
+            {"name": p.name, "f0": p.f0, "Q": p.Q, "alpha": p.alpha, "M": p.M,
+             "direction": p.direction, "attachment": list(p.attachment)}
+            for p in disk.plates
+        ],
+    }
+
+
+@dataclass(frozen=True)
+class PeriodicMotion:
+    """Steady motion of the disk under a constant drive, per drive period.
+
+    The motion is periodic in the body frame (friction is isotropic and the plates
+    turn with the disk), so the pose advances by the same body-frame displacement
+    every period once the orbit is reached.
+
+    Attributes
+    ----------
+    forward_speed, lateral_speed : float
+        Mean velocity along the heading and to its left, in the body frame at the
+        period's start [m s-1].
+    turn_rate : float
+        Mean angular velocity, counterclockwise positive [degree s-1].
+    status : int
+        A :class:`study.model.status.Status` code.
+    reason : int
+        A :class:`study.model.status.Reason` code (why not converged).
+    periods : int
+        Drive periods integrated.
+    slips_per_period : float
+        Slips per drive period over the orbit.
+    stuck_fraction : float
+        Fraction of the orbit's time spent stuck [1].
+    orbit_period : int
+        Drive periods after which the motion repeats (0 if it does not).
+    """
+
+    forward_speed: float
+    lateral_speed: float
+    turn_rate: float
+    status: int
+    reason: int
+    periods: int
+    slips_per_period: float
+    stuck_fraction: float
+    orbit_period: int
+
+
+def periodic_motion(
+    disk: Disk,
+    f: float,
+    a: float,
+    *,
+    settings: IntegratorSettings | None = None,
+    max_periods: int = 400,
+    max_orbit_period: int = 8,
+    repeat_tolerance: float | None = None,
+    slaving: float = SLAVING,
+) -> PeriodicMotion:
+    """Steady forward, lateral and turning speed under the drive ``a cos(2 pi f t)``.
+
+    The plates start on their steady response (no mode transient to wait for) and the
+    disk at rest; whole periods are integrated until the body-frame displacement per
+    period and the body-frame twist at the period's end repeat within
+    ``repeat_tolerance`` (in units of ``g / w^2`` and ``g / w``), possibly only after
+    several periods (an orbit of period up to ``max_orbit_period``).
+
+    Parameters
+    ----------
+    disk : Disk
+    f : float
+        Drive frequency [Hz].
+    a : float
+        Drive acceleration amplitude [m s-2].
+    settings : IntegratorSettings, optional
+        Integrator accuracy (default tolerance 1e-10).
+    max_periods : int
+        Budget; beyond it the status is ``NOT_CONVERGED``.
+    max_orbit_period : int
+        Longest orbit looked for [drive periods]; speeds are then means over the orbit.
+    repeat_tolerance : float, optional
+        Periodicity test [1]; default ``max(100 * tolerance, 1e-12)`` (integration
+        noise must not hide the repetition).
+    slaving : float
+        See :func:`simulate_planar`.
+
+    Returns
+    -------
+    PeriodicMotion
+    """
+    from study.model.status import NonConvergence as Reason
+    from study.model.status import Status
+
+    plates, disk_vector = disk_parameters(disk)
+    settings = check_integrator_settings(settings)
+    f, a = check_drive(f, a)
+    max_periods = bounded_integer("max_periods", max_periods, 1, max_steady_periods())
+    max_orbit_period = bounded_integer("max_orbit_period", max_orbit_period, 1,
+                                       integrator_budget_maxima()["max_orbit_period"])
+    if repeat_tolerance is not None:
+        repeat_tolerance = bounded_number("repeat_tolerance", repeat_tolerance, lower=0.0,
+                                          lower_open=True)
+    omega = 2.0 * math.pi * f
+    period = 1.0 / f
+    disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / omega
+    scale = _scales(disk, omega)
+    size = scale.size
+    y = _to_kernel(rest_state(disk, drive=(f, a)))
+    seg = (np.zeros(1), np.full(1, omega), np.full(1, float(a)), np.zeros(1), np.full(1, np.inf))
+    mode_box = np.zeros(1, dtype=np.int64)
+    t_box = np.array([0.0, settings.max_step * period])
+    empty_t = np.empty(0)
+    empty_y = np.empty((0, size))
+    empty_i = np.empty(0, dtype=np.int64)
+    box = np.zeros(1, dtype=np.int64)
+    history: list[tuple[Any, ...]] = []
+    if repeat_tolerance is None:
+        repeat_tolerance = max(100.0 * settings.tolerance, 1e-12)
+    length_unit = disk.g / omega**2
+    speed_unit = disk.g / omega
+    tolerance = repeat_tolerance * np.array([
+        length_unit, length_unit, length_unit / disk.radius,
+        speed_unit, speed_unit, speed_unit / disk.radius,
+    ])
+    for count in range(1, max_periods + 1):
+        start = y.copy()
+        stats = np.zeros(5)
+        # Time restarts each period (phase 2 pi k is phase 0): no loss of precision.
+        t_box[0] = 0.0
+        code = _kernel._integrate(
+            plates, disk_vector, *seg, y, mode_box, t_box, period,
+            settings.tolerance, settings.tolerance, scale, settings.max_step * period,
+            settings.event_tolerance * period, settings.samples_per_step, settings.max_steps,
+            empty_t, empty_y, empty_i, box, empty_t, empty_i, empty_y, box, stats,
+        )
+        if code == _kernel.RUN_LIFT_OFF:
+            return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.LIFT_OFF),
+                                  int(Reason.NONE), count, math.nan, math.nan, 0)
+        if code == _kernel.RUN_PARADOX:
+            return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.FRICTION_PARADOX),
+                                  int(Reason.NONE), count, math.nan, math.nan, 0)
+        if code != _kernel.RUN_DONE:
+            return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
+                                  int(Reason.EVENT_BUDGET), count, math.nan, math.nan, 0)
+        heading = start[_kernel.HEADING]
+        c, s = math.cos(heading), math.sin(heading)
+        dx = y[_kernel.X] - start[_kernel.X]
+        dy = y[_kernel.Y] - start[_kernel.Y]
+        body = np.array([
+            c * dx + s * dy, -s * dx + c * dy, y[_kernel.HEADING] - heading,
+            c * y[_kernel.VX] + s * y[_kernel.VY], -s * y[_kernel.VX] + c * y[_kernel.VY],
+            y[_kernel.SPIN],
+        ])
+        history.append((body, start[:3].copy(), y[:3].copy(), stats.copy()))
+        del history[:-2 * max_orbit_period]
+        orbit = _orbit_period(history, tolerance, max_orbit_period)
+        if orbit:
+            window = history[-orbit:]
+            stuck = sum(h[3][3] for h in window) / (orbit * period)
+            slips = sum(h[3][2] for h in window) / orbit
+            first, last = window[0][1], window[-1][2]
+            c, s = math.cos(first[2]), math.sin(first[2])
+            dx, dy = last[0] - first[0], last[1] - first[1]
+            rate = f / orbit
+            if slips == 0 and dx == 0.0 and dy == 0.0 and last[2] == first[2]:
+                status = Status.STATIC
+            elif stuck > 0.0:
+                status = Status.STICK_SLIP
+            else:
+                status = Status.CONTINUOUS_SLIDING
+            return PeriodicMotion(
+                float((c * dx + s * dy) * rate), float((-s * dx + c * dy) * rate),
+                math.degrees((last[2] - first[2]) * rate), int(status), int(Reason.NONE),
+                count,
+                float(slips), float(stuck), orbit,
+            )
+    return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
+                          int(Reason.NO_PERIODIC_ORBIT), max_periods, math.nan, math.nan, 0)
+
+
+def _orbit_period(history: list[tuple[Any, ...]], tolerance: NDArray[np.float64],
+                  longest: int) -> int:
+    """Smallest ``q <= longest`` for which the last ``q`` periods repeat the ``q`` before
+    (body-frame displacement and end twist within ``tolerance``), else 0."""
+    for q in range(1, longest + 1):
+        if len(history) < 2 * q:
+            return 0
+        if all(np.all(np.abs(history[-1 - j][0] - history[-1 - j - q][0]) <= tolerance)
+               for j in range(q)):
+            return q
+    return 0
+
+
+def contact_margins(disk: Disk, f: float, a: float, samples: int = 512
+                    ) -> tuple[float, float]:
+    """How close the steady drive comes to lifting the disk, whole or at its rim.
+
+    The plates push on the disk vertically at their attachment points. With full
+    contact and a pressure linear across the disk, the pressure stays positive at
+    the rim while the tilting moment ``|sum_i M_i cos(alpha_i) delta_i'' r_i|`` stays
+    below ``n R / 4`` (the kern of a disk). The model assumes full contact with
+    uniform pressure (its limit surface); where the rim margin is negative, part of
+    the disk would leave the table and the model is outside its validity there.
+    Tilting moments of the horizontal forces (which act above the table, at heights
+    the model does not know) are not counted.
+
+    Parameters
+    ----------
+    disk : Disk
+    f : float
+        Drive frequency [Hz].
+    a : float
+        Drive acceleration amplitude [m s-2].
+    samples : int
+        Phases over the period at which the margins are evaluated.
+
+    Returns
+    -------
+    (rim, normal) : tuple of float
+        ``min_t (n R / 4 - |moment|) / (g R / 4)`` and ``min_t n / g`` over a period
+        of the steady plate response [1]; negative means the rim (or the whole disk)
+        leaves the table.
+    """
+    check_disk(disk)
+    f, a = check_drive(f, a)
+    samples = bounded_integer("samples", samples, 1, MAX_MARGIN_SAMPLES)
+    omega = 2.0 * math.pi * float(f)
+    phase = np.linspace(0.0, 2.0 * math.pi, samples, endpoint=False)
+    normal = disk.g - float(a) * np.cos(phase)
+    moment = np.zeros((2, samples))
+    for plate in disk.plates:
+        amplitude = _mode_amplitude(plate, f, a)
+        acceleration = (-(omega**2) * amplitude * np.exp(1j * phase)).real
+        vertical = plate.M * math.cos(math.radians(plate.alpha)) * acceleration
+        normal = normal + vertical
+        moment += np.outer(plate.attachment, vertical)
+    rim = normal * disk.radius / 4.0 - np.hypot(moment[0], moment[1])
+    return float(np.min(rim) / (disk.g * disk.radius / 4.0)), float(np.min(normal) / disk.g)

@@ -1,0 +1,514 @@
+"""Public steady-state solver: validates, allocates, calls the numba kernel."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from study.kernels import one_way as _kernel
+from study.kernels import two_way as _orbit
+from study.model import (
+    as_acceleration,
+    as_frequency,
+    lift_off_acceleration,
+    release_amplitudes,
+    slip_amplitudes,
+)
+from study.model.inputs import InputTypeError, instance_of
+from study.model.structure import Structure, check_structure
+
+__all__ = [
+    "COUPLINGS",
+    "DEFAULT_COUPLING",
+    "MAX_SOLVER_BUDGET",
+    "Attractors",
+    "SolverSettings",
+    "SteadyState",
+    "attractors",
+    "check_coupling",
+    "check_settings",
+    "steady_state",
+    "steady_velocity",
+]
+
+#: Version of the steady-state algorithm; changes whenever its results may change.
+SOLVER_VERSION = "4"
+
+#: How the sliding base and the mode interact: the paper's model, or the physical one
+#: in which the base's sliding acceleration also forces the mode.
+COUPLINGS = ("one-way", "two-way")
+
+#: The coupling of every function, spec, fit and design that does not name one: the
+#: paper's model, the one every workflow uses. Declared here only; everything else
+#: (signatures, spec readers, schemas' descriptions) derives from it.
+DEFAULT_COUPLING = "one-way"
+
+#: Largest budget of each :class:`SolverSettings` field: 100 times the default slip
+#: events (a budget only bounds pathological points; at about 1 us an event, 1e6 events
+#: and 1e6 circle-map iterations of 1e6 events each bound a point's work), and far
+#: below the int64 the kernels take (2**63 wrapped to a negative budget and answered
+#: NOT_CONVERGED). The spec schema's ``[solver]`` maxima are exported from it.
+MAX_SOLVER_BUDGET = {"max_events": 1_000_000, "max_map_iterations": 1_000_000}
+
+#: Inputs with at least this many points are solved by the parallel kernel.
+PARALLEL_THRESHOLD = 2048
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Budgets of the exact steady-state solver.
+
+    Parameters
+    ----------
+    max_events : int
+        Slip events followed from rest before a point is declared not converged
+        (``NonConvergence.EVENT_BUDGET``), 1 to 1e6 (:data:`MAX_SOLVER_BUDGET`). An
+        orbit with a stick closes after a few events; the budget only bounds
+        pathological points.
+    max_map_iterations : int
+        Iterations of the continuous-sliding circle map searched for an attracting
+        cycle before ``NonConvergence.NO_PERIODIC_ORBIT``, 1 to 1e6.
+
+    Raises
+    ------
+    ValueError
+        A budget that is not an integer (:class:`study.model.inputs.InputTypeError`, also
+        a TypeError) or is outside its range, naming the field.
+    """
+
+    max_events: int = 10_000
+    max_map_iterations: int = 5_000
+
+    def __post_init__(self) -> None:
+        for name, largest in MAX_SOLVER_BUDGET.items():
+            value = getattr(self, name)
+            if isinstance(value, bool | np.timedelta64) or not isinstance(
+                    value, int | np.integer):
+                raise InputTypeError(
+                    f"solver setting {name!r} must be an integer >= 1 and <= {largest}, got "
+                    f"{value!r}")
+            if not 1 <= value <= largest:
+                raise ValueError(
+                    f"solver setting {name!r} must be an integer >= 1 and <= {largest}, got "
+                    f"{value!r}")
+
+
+@dataclass(frozen=True)
+class SteadyState:
+    """Steady periodic orbit at each drive point, arrays of the broadcast shape.
+
+    Every attribute has the broadcast shape of the ``f`` and ``a`` given, or is a numpy
+    scalar of the same dtype when both were scalars (as numpy's ufuncs return).
+
+    Attributes
+    ----------
+    velocity : numpy.ndarray of float64
+        Mean velocity over the periodic orbit [m s-1]; exactly 0 for ``STATIC``,
+        NaN for ``LIFT_OFF``, ``NOT_CONVERGED`` and ``FRICTION_PARADOX``.
+    status : numpy.ndarray of int8
+        :class:`~study.model.status.Status` codes [1] (``study.Status(code)`` names one).
+    reason : numpy.ndarray of int8
+        :class:`~study.model.status.NonConvergence` codes [1].
+    slips_per_period : numpy.ndarray
+        Slip events per drive period [1].
+    forward_fraction, backward_fraction : numpy.ndarray
+        Fractions of the drive period spent slipping forward and backward [1].
+    orbit_period : numpy.ndarray of int32
+        Period of the orbit in drive periods (0 when there is no orbit).
+    floquet_multiplier : numpy.ndarray or None
+        Largest modulus of the orbit's Floquet multipliers on the state
+        ``(delta, delta', v)`` [1] (< 1: the orbit attracts its neighbours; for
+        ``STATIC`` the mode's free decay over a period; NaN without an orbit). Good to
+        about 1e-7 relative (taken within the last Newton step of the orbit).
+        Computed by the two-way solver; ``None`` from solvers that do not compute it.
+    """
+
+    velocity: NDArray[np.float64]
+    status: NDArray[np.int8]
+    reason: NDArray[np.int8]
+    slips_per_period: NDArray[np.float64]
+    forward_fraction: NDArray[np.float64]
+    backward_fraction: NDArray[np.float64]
+    orbit_period: NDArray[np.int32]
+    floquet_multiplier: NDArray[np.float64] | None = None
+
+
+def scalar_if_0d(values: NDArray[Any]) -> Any:
+    """``values`` as is, or its numpy scalar when it is 0-d: the array functions return
+    numpy scalars for scalar inputs, as numpy's ufuncs and scipy's functions do."""
+    return values[()]
+
+
+def check_settings(settings: object) -> SolverSettings:
+    """``settings``, or the defaults for None; a TypeError naming the argument for
+    anything but a :class:`SolverSettings`."""
+    if settings is None:
+        return SolverSettings()
+    return instance_of("settings", settings, SolverSettings, "a study.SolverSettings")
+
+
+def check_coupling(coupling: object) -> str:
+    """``coupling`` if it is one of :data:`COUPLINGS`, else a ValueError naming them."""
+    if not isinstance(coupling, str) or coupling not in COUPLINGS:
+        raise ValueError(f"coupling must be one of {', '.join(map(repr, COUPLINGS))}; "
+                         f"got {coupling!r}")
+    return str(coupling)
+
+
+def structure_vector(structure: Structure, coupling: str) -> NDArray[np.float64]:
+    """The orbit kernel's structure vector (SI) for ``structure`` and ``coupling``."""
+    vector = np.zeros(_orbit.N_STRUCTURE)
+    w0 = structure.omega0
+    vector[_orbit.S_DAMPING] = w0 / structure.Q
+    vector[_orbit.S_STIFFNESS] = w0 * w0
+    vector[_orbit.S_COS] = np.cos(structure.alpha_rad)
+    vector[_orbit.S_SIN] = np.sin(structure.alpha_rad)
+    vector[_orbit.S_MASS] = structure.M
+    vector[_orbit.S_CS] = structure.cs
+    vector[_orbit.S_CK] = structure.ck
+    vector[_orbit.S_G] = structure.g
+    vector[_orbit.S_COUPLED] = 1.0 if check_coupling(coupling) == "two-way" else 0.0
+    return vector
+
+
+def _orbit_state(
+    structure: Structure,
+    f_flat: NDArray[np.float64],
+    a_flat: NDArray[np.float64],
+    coupling: str,
+    settings: SolverSettings,
+    parallel: bool | None,
+) -> NDArray[np.float64]:
+    """Rows ``(status, reason, velocity, slips, forward, backward, period, multiplier,
+    z...)`` of the orbit kernel at each point."""
+    lifted = a_flat > lift_off_acceleration(structure, f_flat)
+    omega = 2.0 * np.pi * f_flat
+    out = np.empty((f_flat.size, _orbit.N_OUT))
+    if parallel is None:
+        parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
+    kernel = _orbit._solve_points if parallel else _orbit._solve_points_serial
+    kernel(structure_vector(structure, coupling), omega, a_flat, lifted,
+           int(settings.max_events), int(settings.max_map_iterations), out)
+    return out
+
+
+def steady_state(
+    structure: Structure,
+    f: ArrayLike,
+    a: ArrayLike,
+    settings: SolverSettings | None = None,
+    *,
+    coupling: str = DEFAULT_COUPLING,
+    parallel: bool | None = None,
+) -> SteadyState:
+    """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
+
+    Event-driven and closed form between events (docs/theory/exact-solvers.md); no time
+    step. The orbit is the one reached from rest at drive phase 0 with the mode on
+    its steady response. Runs in parallel over points and releases the GIL.
+
+    With ``coupling="two-way"`` the base's sliding acceleration also forces the mode,
+    which becomes a state of the orbit: the orbit is the fixed point of the period map,
+    found by Newton's method with the exact Jacobian (docs/theory/two-way.md), and its
+    largest Floquet multiplier is returned.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    f : array_like
+        Drive frequency [Hz], > 0. Broadcast against ``a``.
+    a : array_like
+        Drive acceleration amplitude [m s-2], >= 0.
+    settings : SolverSettings, optional
+        Solver budgets; defaults to ``SolverSettings()``.
+    coupling : {"one-way", "two-way"}, default "one-way"
+        The paper's model (mode driven by the table only) or the physical one
+        (:data:`DEFAULT_COUPLING` is the default).
+    parallel : bool, optional
+        Spread points over all cores (numba threads). By default only inputs of
+        at least ``PARALLEL_THRESHOLD`` points do; pass ``False`` when the caller
+        already runs one call per core (as the dask fan-out does).
+
+    Returns
+    -------
+    SteadyState
+        Velocity, status and diagnostics, each a numpy array of the broadcast shape of
+        ``f`` and ``a`` (a numpy scalar when both are scalars).
+
+    Raises
+    ------
+    TypeError
+        ``structure`` is not a :class:`study.Structure`; ``f`` or ``a`` are not real
+        numbers (strings, booleans, complex numbers, dates).
+    ValueError
+        ``f`` or ``a`` out of range or not finite (the message names the first offending
+        value and its index), shapes that do not broadcast, or an unknown coupling.
+
+    See Also
+    --------
+    compute_map : the same over a grid, as a labelled dataset.
+    """
+    structure = check_structure(structure)
+    coupling = check_coupling(coupling)
+    settings = check_settings(settings)
+    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    shape = f_arr.shape
+    f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
+    a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
+    if coupling == "two-way":
+        out = _orbit_state(structure, f_flat, a_flat, coupling, settings, parallel)
+        return SteadyState(
+            velocity=scalar_if_0d(out[:, 2].reshape(shape)),
+            status=scalar_if_0d(out[:, 0].astype(np.int8).reshape(shape)),
+            reason=scalar_if_0d(out[:, 1].astype(np.int8).reshape(shape)),
+            slips_per_period=scalar_if_0d(out[:, 3].reshape(shape)),
+            forward_fraction=scalar_if_0d(out[:, 4].reshape(shape)),
+            backward_fraction=scalar_if_0d(out[:, 5].reshape(shape)),
+            orbit_period=scalar_if_0d(out[:, 6].astype(np.int32).reshape(shape)),
+            floquet_multiplier=scalar_if_0d(out[:, 7].reshape(shape)),
+        )
+    a_plus, a_minus = release_amplitudes(structure, f_flat, a_flat)
+    b_plus, b_minus = slip_amplitudes(structure, f_flat, a_flat)
+    lifted = a_flat > lift_off_acceleration(structure, f_flat)
+    omega = 2.0 * np.pi * f_flat
+    n = f_flat.size
+    velocity = np.empty(n)
+    status = np.empty(n, dtype=np.int8)
+    reason = np.empty(n, dtype=np.int8)
+    slips = np.empty(n)
+    forward = np.empty(n)
+    backward = np.empty(n)
+    period = np.empty(n, dtype=np.int32)
+    # Launching the thread pool costs milliseconds: small inputs run on this thread.
+    if parallel is None:
+        parallel = n >= PARALLEL_THRESHOLD
+    kernel = _kernel._steady_state if parallel else _kernel._steady_state_serial
+    kernel(
+        np.ascontiguousarray(a_plus, dtype=np.complex128),
+        np.ascontiguousarray(a_minus, dtype=np.complex128),
+        np.ascontiguousarray(b_plus, dtype=np.complex128),
+        np.ascontiguousarray(b_minus, dtype=np.complex128),
+        lifted,
+        omega,
+        structure.cs * structure.g,
+        structure.ck * structure.g,
+        int(settings.max_events),
+        int(settings.max_map_iterations),
+        velocity,
+        status,
+        reason,
+        slips,
+        forward,
+        backward,
+        period,
+    )
+    return SteadyState(
+        velocity=scalar_if_0d(velocity.reshape(shape)),
+        status=scalar_if_0d(status.reshape(shape)),
+        reason=scalar_if_0d(reason.reshape(shape)),
+        slips_per_period=scalar_if_0d(slips.reshape(shape)),
+        forward_fraction=scalar_if_0d(forward.reshape(shape)),
+        backward_fraction=scalar_if_0d(backward.reshape(shape)),
+        orbit_period=scalar_if_0d(period.reshape(shape)),
+    )
+
+
+@dataclass(frozen=True)
+class Attractors:
+    """Stable periodic orbits reached from several starting states, per drive point.
+
+    Attributes
+    ----------
+    count : numpy.ndarray of int32
+        Distinct outcomes found [1]: stable orbits told apart by period and mean
+        velocity, plus one for lift-off and one for the friction paradox when some
+        start ends there. 1 for ``STATIC`` points; > 1 flags multistability.
+    velocity_spread : numpy.ndarray
+        Largest minus smallest mean velocity among the orbits found [m s-1].
+    starts_converged : numpy.ndarray of int32
+        Starting states (of :data:`ATTRACTOR_STARTS`) that reached an outcome [1].
+    """
+
+    count: NDArray[np.int32]
+    velocity_spread: NDArray[np.float64]
+    starts_converged: NDArray[np.int32]
+
+
+#: Starting states of :func:`attractors`: rest at each drive phase [periods], with the
+#: mode on each multiple of its steady response.
+ATTRACTOR_STARTS = {"phases": _orbit.START_PHASES, "mode_factors": _orbit.START_FACTORS}
+
+
+def attractors(
+    structure: Structure,
+    f: ArrayLike,
+    a: ArrayLike,
+    settings: SolverSettings | None = None,
+    *,
+    coupling: str = DEFAULT_COUPLING,
+    parallel: bool | None = None,
+) -> Attractors:
+    """Multistability check: the distinct stable orbits reached from several starts.
+
+    From rest at four drive phases, with the mode at 0, 1 and 2 times its steady
+    response (:data:`ATTRACTOR_STARTS`), the exact orbit solver (docs/theory/two-way.md)
+    finds the attracting periodic orbit each start leads to; orbits are the same when
+    their periods agree and their mean velocities agree to ``1e-9 a / w``. Costs twelve
+    solves per point.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    f : array_like
+        Drive frequency [Hz], > 0.
+    a : array_like
+        Drive acceleration amplitude [m s-2], >= 0.
+    settings : SolverSettings, optional
+        Solver budgets.
+    coupling : {"one-way", "two-way"}, default "one-way"
+        The model; with ``"one-way"`` the mode's transient decays on its own and the
+        starts differ in the phase of the first release.
+    parallel : bool, optional
+        Spread points over all cores.
+
+    Returns
+    -------
+    Attractors
+        Arrays of the broadcast shape of ``f`` and ``a`` (numpy scalars for scalars).
+    """
+    structure = check_structure(structure)
+    coupling = check_coupling(coupling)
+    settings = check_settings(settings)
+    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    shape = f_arr.shape
+    f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
+    a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
+    lifted = a_flat > lift_off_acceleration(structure, f_flat)
+    out = np.empty((f_flat.size, 3))
+    if parallel is None:
+        parallel = f_flat.size >= 16
+    vector = structure_vector(structure, coupling)
+    omega = 2.0 * np.pi * f_flat
+    kernel = _orbit._attractors_points if parallel else _orbit._attractors_points_serial
+    kernel(vector, omega, a_flat, lifted, int(settings.max_events),
+           int(settings.max_map_iterations), out)
+    return Attractors(
+        count=scalar_if_0d(out[:, 0].astype(np.int32).reshape(shape)),
+        velocity_spread=scalar_if_0d(out[:, 1].reshape(shape)),
+        starts_converged=scalar_if_0d(out[:, 2].astype(np.int32).reshape(shape)),
+    )
+
+
+def steady_velocity(
+    structure: Structure,
+    f: ArrayLike,
+    a: ArrayLike,
+    settings: SolverSettings | None = None,
+    *,
+    coupling: str = DEFAULT_COUPLING,
+) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
+    """Mean steady velocity and status at each ``(f, a)``.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    f : array_like
+        Drive frequency [Hz], > 0.
+    a : array_like
+        Drive acceleration amplitude [m s-2], >= 0.
+    settings : SolverSettings, optional
+        Solver budgets.
+    coupling : {"one-way", "two-way"}, default "one-way"
+        See :func:`steady_state`.
+
+    Returns
+    -------
+    velocity : numpy.ndarray of float64
+        Mean velocity [m s-1], positive forward, of the broadcast shape of ``f`` and
+        ``a``; exactly 0 where static, NaN exactly where the status is ``LIFT_OFF``,
+        ``NOT_CONVERGED`` or ``FRICTION_PARADOX``. A ``numpy.float64`` when ``f`` and
+        ``a`` are both scalars.
+    status : numpy.ndarray of int8
+        :class:`~study.model.status.Status` codes [1], same shape (a ``numpy.int8`` for
+        scalars); ``study.Status(int(code))`` names one, ``status ==
+        study.Status.STICK_SLIP`` compares.
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`steady_state`.
+
+    See Also
+    --------
+    steady_state : the same with diagnostics.
+    compute_map : velocities over a grid, as a labelled dataset.
+
+    Examples
+    --------
+    >>> import numpy as np, study
+    >>> s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
+    >>> v, status = study.steady_velocity(s, 14.0, 8.0)
+    >>> type(v).__name__, study.Status(int(status)).name
+    ('float64', 'STICK_SLIP')
+    >>> v, status = study.steady_velocity(s, np.array([13.0, 14.0, 15.0])[:, None], [6.0, 8.0])
+    >>> v.shape, status.dtype
+    ((3, 2), dtype('int8'))
+    """
+    if check_coupling(coupling) != "one-way":
+        result = steady_state(structure, f, a, settings, coupling=coupling)
+        return result.velocity, result.status
+    structure = check_structure(structure)
+    settings = check_settings(settings)
+    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    if f_arr.size == 0:  # nothing to solve (numba would be handed a broadcast view)
+        return np.empty(f_arr.shape), np.empty(f_arr.shape, dtype=np.int8)
+    velocity, status = _velocity_only(
+        structure, np.ascontiguousarray(f_arr).ravel(), np.ascontiguousarray(a_arr).ravel(),
+        settings,
+    )
+    return scalar_if_0d(velocity.reshape(f_arr.shape)), scalar_if_0d(status.reshape(f_arr.shape))
+
+
+def _velocity_only(
+    structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+    settings: SolverSettings,
+) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
+    """The orbits of :func:`steady_state` on flat ``f``, ``a``, velocity and status only.
+
+    The kernel evaluates the force amplitudes of ``study.model`` point by point
+    (bit-identical to the arrays :func:`steady_state` computes) and keeps no
+    diagnostics: the same velocity and status, bit for bit, without the temporaries.
+    """
+    n = f.size
+    velocity = np.empty(n)
+    status = np.empty(n, dtype=np.int8)
+    kernel = (_kernel._steady_velocity if n >= PARALLEL_THRESHOLD
+              else _kernel._steady_velocity_serial)
+    constants = (
+        structure.omega0, 1.0 / structure.Q, structure.M,
+        float(np.cos(structure.alpha_rad)), float(np.sin(structure.alpha_rad)),
+        structure.cs, structure.ck, structure.g,
+        structure.cs * structure.g, structure.ck * structure.g,
+        int(settings.max_events), int(settings.max_map_iterations),
+    )
+    kernel(f, a, *constants, velocity, status)
+    # Points within 1e-13 of the lift-off threshold: numpy's rounding of |z| decides,
+    # as in steady_state.
+    undecided = np.flatnonzero(status == _kernel.LIFT_UNDECIDED)
+    if undecided.size:
+        f_u, a_u = f[undecided], a[undecided]
+        v_u = np.empty(undecided.size)
+        s_u = np.empty(undecided.size, dtype=np.int8)
+        _kernel._steady_velocity_given(
+            f_u, a_u, a_u > lift_off_acceleration(structure, f_u), *constants, v_u, s_u
+        )
+        velocity[undecided] = v_u
+        status[undecided] = s_u
+    return velocity, status
+

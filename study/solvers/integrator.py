@@ -1,0 +1,571 @@
+"""Time integration of the full single-plate model: transients, schedules, two-way coupling.
+
+The exact solver (:mod:`study.solvers.exact`) gives the steady orbit only, under either
+coupling (docs/theory/two-way.md). This module integrates the whole
+model in time with an event-driven Dormand-Prince 5(4) scheme
+(:mod:`study.kernels.integrator`): any initial state, a drive given as a schedule of
+segments with continuous phase, and optionally the two-way coupling in which the
+sliding base's acceleration also forces the mode (``-x'' sin(alpha)``).
+
+Two entry points:
+
+* :func:`simulate` follows one structure through a :class:`Schedule` and returns a
+  :class:`Trajectory` (samples at requested times and every contact event);
+* :func:`integrated_steady_state` integrates whole drive periods from the canonical
+  start until the orbit repeats and returns the same :class:`~study.solvers.exact.SteadyState`
+  as the exact solver.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from study.engine.spec_files import load_schema
+from study.kernels import integrator as _kernel
+from study.model import as_acceleration, as_frequency, mode_response
+from study.model.inputs import as_real_array, bounded_integer, instance_of, real_number
+from study.model.structure import Structure
+from study.model.units import DEGREE, SECOND
+from study.solvers.exact import (
+    DEFAULT_COUPLING,
+    PARALLEL_THRESHOLD,
+    SteadyState,
+    check_coupling,
+    check_structure,
+    scalar_if_0d,
+)
+
+__all__ = [
+    "EVENT_KINDS",
+    "INTEGRATOR_VERSION",
+    "MAX_INTEGRATOR_STEPS",
+    "MAX_OUTPUT_SAMPLES",
+    "MAX_RECORDED_EVENTS",
+    "OUTCOMES",
+    "IntegratorSettings",
+    "Schedule",
+    "Trajectory",
+    "check_integrator_settings",
+    "check_samples",
+    "integrated_steady_state",
+    "integrator_budget_maxima",
+    "model_parameters",
+    "simulate",
+    "steady_mode_state",
+]
+
+#: Version of the integrator's algorithm; changes whenever its results may change.
+INTEGRATOR_VERSION = "1"
+
+
+#: Contact event kinds in a :class:`Trajectory`, by code.
+EVENT_KINDS = {
+    _kernel.EVENT_RELEASE_FORWARD: "release_forward",
+    _kernel.EVENT_RELEASE_BACKWARD: "release_backward",
+    _kernel.EVENT_SLIP_END: "slip_end",
+    _kernel.EVENT_LIFT_OFF: "lift_off",
+    _kernel.EVENT_PARADOX: "friction_paradox",
+}
+
+#: How a :func:`simulate` run ended, by kernel return code.
+OUTCOMES = {
+    _kernel.RUN_DONE: "completed",
+    _kernel.RUN_LIFT_OFF: "lift_off",
+    _kernel.RUN_BUDGET: "step_budget",
+    _kernel.RUN_PARADOX: "friction_paradox",
+}
+
+
+#: Steps of one integrator call at most (``IntegratorSettings.max_steps``, default
+#: 1e7): about 1 us each, so a call that never ends a period stops within about 20
+#: minutes of one core.
+MAX_INTEGRATOR_STEPS = 1_000_000_000
+
+#: The spec schema whose ``[solver]`` maxima bound the integrator's budgets (a study
+#: spec's [solver] table is held to them): ``steps_per_period`` 1e4, ``max_periods``
+#: 1e5, ``max_orbit_period`` 1e3.
+BUDGET_SCHEMA = "study-spec-v1"
+
+
+def integrator_budget_maxima() -> dict[str, int]:
+    """The largest value of each integer budget of :class:`IntegratorSettings`."""
+    solver = load_schema(BUDGET_SCHEMA)["properties"]["solver"]["properties"]
+    maxima = {name: int(solver[name]["maximum"])
+              for name in ("steps_per_period", "max_periods", "max_orbit_period")}
+    return {**maxima, "max_steps": MAX_INTEGRATOR_STEPS}
+
+
+#: Events :func:`simulate` (and :func:`study.scenes.planar_model.simulate_planar`) record at most:
+#: the arrays are allocated up front (about 50 bytes an event for the single plate).
+MAX_RECORDED_EVENTS = 10_000_000
+
+
+#: Samples a run returns at most (the trajectory arrays are allocated up front, about 60
+#: bytes a sample): a 1e12 s schedule's default grid asked for 6 PiB.
+MAX_OUTPUT_SAMPLES = 10_000_000
+
+
+def check_samples(count: int, what: str) -> None:
+    """Refuse a run of more than :data:`MAX_OUTPUT_SAMPLES` samples, naming ``what``."""
+    if count > MAX_OUTPUT_SAMPLES:
+        raise ValueError(f"{what}: {count:.3g} samples; allowed at most "
+                         f"{MAX_OUTPUT_SAMPLES:.3g} (give fewer output_times or a shorter "
+                         "schedule duration)")
+
+
+def check_integrator_settings(settings: object) -> IntegratorSettings:
+    """``settings``, or the defaults for None; a TypeError naming the argument for
+    anything but an :class:`IntegratorSettings`."""
+    if settings is None:
+        return IntegratorSettings()
+    return instance_of("settings", settings, IntegratorSettings,
+                       "a study.solvers.integrator.IntegratorSettings")
+
+
+def _positive_int(name: str, value: object) -> int:
+    if (isinstance(value, bool | np.timedelta64) or not isinstance(value, int | np.integer)
+            or value < 1):
+        raise ValueError(f"integrator setting {name!r} must be an integer >= 1, got {value!r}")
+    return int(value)
+
+
+def _positive_float(name: str, value: object, upper: float = math.inf) -> float:
+    if isinstance(value, bool | np.timedelta64) or not isinstance(
+            value, int | float | np.floating | np.integer):
+        raise ValueError(f"integrator setting {name!r} must be a number, got {value!r}")
+    number = float(value)
+    if not (0.0 < number < upper):
+        raise ValueError(
+            f"integrator setting {name!r} = {value!r} is out of range; allowed: 0 < {name} < "
+            f"{upper}"
+        )
+    return number
+
+
+@dataclass(frozen=True)
+class IntegratorSettings:
+    """Accuracy and budgets of the time integrator.
+
+    Parameters
+    ----------
+    tolerance : float
+        Relative and absolute local error tolerance of the adaptive steps [1]. The
+        absolute part is scaled per component by the drive's natural units
+        (``g / W^2`` for ``delta``, ``g / W`` for its rate, ``W = max(w, w0)``;
+        ``g / w^2`` for ``x``, ``g / w`` for ``v``). Ignored with ``steps_per_period``.
+    steps_per_period : int, optional
+        Fixed step of ``1 / steps_per_period`` drive periods (no error control);
+        steps still end exactly at events.
+    event_tolerance : float
+        Width to which every event time is bracketed [drive periods].
+    samples_per_step : int
+        Points of the dense output at which event functions are sampled in each step
+        (their minima between samples are watched as well).
+    max_step : float
+        Largest step [drive periods].
+    max_steps : int
+        Step budget of one call (of one drive period in :func:`integrated_steady_state`).
+    max_periods : int
+        Drive periods integrated by :func:`integrated_steady_state` before a point is
+        declared ``NOT_CONVERGED`` (``NO_PERIODIC_ORBIT``).
+    max_orbit_period : int
+        Longest orbit period looked for [drive periods].
+    period_tolerance : float, optional
+        The orbit is periodic once the state at the period boundaries repeats within
+        this, in the units above [1]. Default ``max(100 * tolerance, 1e-12)``
+        (``1e-9`` with fixed steps): integration noise must not hide the repetition.
+    """
+
+    tolerance: float = 1e-10
+    steps_per_period: int | None = None
+    event_tolerance: float = 1e-12
+    samples_per_step: int = 4
+    max_step: float = 0.125
+    max_steps: int = 10_000_000
+    max_periods: int = 20_000
+    max_orbit_period: int = 8
+    period_tolerance: float | None = None
+
+    def __post_init__(self) -> None:
+        _positive_float("tolerance", self.tolerance, 1.0)
+        if self.steps_per_period is not None:
+            _positive_int("steps_per_period", self.steps_per_period)
+        _positive_float("event_tolerance", self.event_tolerance, 1e-3)
+        _positive_int("samples_per_step", self.samples_per_step)
+        _positive_float("max_step", self.max_step, 1.0 + 1e-12)
+        _positive_int("max_steps", self.max_steps)
+        _positive_int("max_periods", self.max_periods)
+        _positive_int("max_orbit_period", self.max_orbit_period)
+        if self.period_tolerance is not None:
+            _positive_float("period_tolerance", self.period_tolerance, 1.0)
+        for name, largest in integrator_budget_maxima().items():
+            value = getattr(self, name)
+            if value is not None and value > largest:
+                raise ValueError(f"integrator setting {name!r} = {value!r} is out of range; "
+                                 f"allowed: an integer >= 1 and <= {largest}")
+
+    @property
+    def resolved_period_tolerance(self) -> float:
+        """The periodicity tolerance in use [1]."""
+        if self.period_tolerance is not None:
+            return float(self.period_tolerance)
+        if self.steps_per_period is not None:
+            return 1e-9
+        return max(100.0 * self.tolerance, 1e-12)
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """Drive schedule: consecutive segments of constant frequency and amplitude.
+
+    The drive acceleration is ``a_j cos(phi(t))`` in segment ``j`` with the phase
+    ``phi`` continuous across segment boundaries (a frequency switch does not jump
+    the table's phase) and ``phi(0) = phase`` [degree] (angles are in degrees at every
+    public boundary; the kernels take :attr:`start_phases_rad`).
+
+    Parameters
+    ----------
+    frequency : array_like
+        Drive frequency of each segment [Hz], > 0.
+    acceleration : array_like
+        Drive acceleration amplitude of each segment [m s-2], >= 0.
+    duration : array_like
+        Duration of each segment [s], > 0.
+    phase : float
+        Drive phase at ``t = 0`` [degree].
+    """
+
+    frequency: NDArray[np.float64]
+    acceleration: NDArray[np.float64]
+    duration: NDArray[np.float64]
+    phase: float = 0.0
+
+    def __post_init__(self) -> None:
+        f = np.atleast_1d(as_frequency(self.frequency)).astype(float)
+        a = np.atleast_1d(as_acceleration(self.acceleration)).astype(float)
+        d = np.atleast_1d(as_real_array("Schedule: duration", self.duration, SECOND))
+        if f.ndim != 1 or a.shape != f.shape or d.shape != f.shape:
+            raise ValueError(
+                "Schedule: frequency, acceleration and duration must be 1-D of one length, "
+                f"got shapes {f.shape}, {a.shape}, {d.shape}"
+            )
+        if f.size == 0:
+            raise ValueError("Schedule: at least one segment is needed")
+        if not np.all(np.isfinite(d)) or np.any(d <= 0.0):
+            raise ValueError(f"Schedule: every duration must be finite and > 0 [s], got {d}")
+        if not math.isfinite(real_number("Schedule: phase", self.phase, DEGREE)):
+            raise ValueError(f"Schedule: phase must be finite [degree], got {self.phase!r}")
+        for name, value in (("frequency", f), ("acceleration", a), ("duration", d)):
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "phase", float(self.phase))
+
+    @classmethod
+    def constant(cls, f: float, a: float, duration: float, phase: float = 0.0) -> Schedule:
+        """A single segment: drive ``a cos(2 pi f t + phase)`` for ``duration`` [s]
+        (``phase`` in degree)."""
+        return cls(np.array([f]), np.array([a]), np.array([duration]), phase)
+
+    @property
+    def starts(self) -> NDArray[np.float64]:
+        """Start time of each segment [s]."""
+        return np.concatenate(([0.0], np.cumsum(self.duration)[:-1]))
+
+    @property
+    def ends(self) -> NDArray[np.float64]:
+        """End time of each segment [s]."""
+        return np.cumsum(self.duration)
+
+    @property
+    def start_phases(self) -> NDArray[np.float64]:
+        """Drive phase at the start of each segment [degree]."""
+        advance = 360.0 * self.frequency * self.duration
+        return self.phase + np.concatenate(([0.0], np.cumsum(advance)[:-1]))
+
+    @property
+    def start_phases_rad(self) -> NDArray[np.float64]:
+        """Drive phase at the start of each segment [rad], the kernels' unit."""
+        advance = 2.0 * np.pi * self.frequency * self.duration
+        return math.radians(self.phase) + np.concatenate(([0.0], np.cumsum(advance)[:-1]))
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A simulated run: samples at the requested times and every contact event.
+
+    Attributes
+    ----------
+    time : numpy.ndarray
+        Sample times [s] (those reached before the run ended).
+    delta, delta_rate, x, v : numpy.ndarray
+        Plate deflection [m], its rate [m s-1], base position [m] and velocity
+        [m s-1] at the sample times.
+    mode : numpy.ndarray of int8
+        Contact mode at the sample times: 0 stick, +1 forward slip, -1 backward slip.
+    event_time : numpy.ndarray
+        Event times [s].
+    event_kind : numpy.ndarray of int8
+        Event codes, named by :data:`EVENT_KINDS`.
+    event_state : numpy.ndarray
+        State ``(delta, delta', x, v)`` at each event, shape ``(events, 4)``.
+    outcome : str
+        How the run ended: one of :data:`OUTCOMES` values. ``lift_off`` and
+        ``friction_paradox`` stop the run where the model stops holding.
+    end_time : float
+        Time the run reached [s].
+    steps, rejected_steps : int
+        Accepted and rejected steps.
+    events_dropped : int
+        Events beyond ``max_events`` that were not recorded.
+    """
+
+    time: NDArray[np.float64]
+    delta: NDArray[np.float64]
+    delta_rate: NDArray[np.float64]
+    x: NDArray[np.float64]
+    v: NDArray[np.float64]
+    mode: NDArray[np.int8]
+    event_time: NDArray[np.float64]
+    event_kind: NDArray[np.int8]
+    event_state: NDArray[np.float64]
+    outcome: str
+    end_time: float
+    steps: int
+    rejected_steps: int
+    events_dropped: int = field(default=0)
+
+
+def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING
+                     ) -> NDArray[np.float64]:
+    """Parameter vector of the integrator kernel for ``structure`` and ``coupling``."""
+    structure = check_structure(structure)
+    two_way = check_coupling(coupling) == "two-way"
+    p = np.empty(_kernel.N_PARAMETERS)
+    w0 = structure.omega0
+    p[_kernel.P_DAMPING] = w0 / structure.Q
+    p[_kernel.P_STIFFNESS] = w0 * w0
+    p[_kernel.P_COS] = math.cos(structure.alpha_rad)
+    p[_kernel.P_SIN] = math.sin(structure.alpha_rad)
+    p[_kernel.P_MASS] = structure.M
+    p[_kernel.P_CS] = structure.cs
+    p[_kernel.P_CK] = structure.ck
+    p[_kernel.P_G] = structure.g
+    p[_kernel.P_TWO_WAY] = 1.0 if two_way else 0.0
+    return p
+
+
+def _scales(structure: Structure, omega: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per-component scales of the absolute tolerance, one row per drive frequency."""
+    fastest = np.maximum(omega, structure.omega0)
+    g = structure.g
+    return np.stack(
+        [g / fastest**2, g / fastest, g / omega**2, g / omega], axis=-1
+    ).astype(float)
+
+
+def simulate(
+    structure: Structure,
+    schedule: Schedule,
+    *,
+    coupling: str = DEFAULT_COUPLING,
+    initial_state: ArrayLike | None = None,
+    output_times: ArrayLike | None = None,
+    settings: IntegratorSettings | None = None,
+    max_events: int = 100_000,
+) -> Trajectory:
+    """Integrate the full model through a drive schedule.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    schedule : Schedule
+        The drive; the run ends at the end of its last segment.
+    coupling : {"one-way", "two-way"}
+        ``"one-way"`` is the paper's model (the mode does not feel the sliding);
+        ``"two-way"`` adds the base's acceleration to the mode's forcing.
+    initial_state : array_like, optional
+        ``(delta [m], delta' [m s-1], x [m], v [m s-1])`` at ``t = 0``; default all
+        zero (at rest on the table, the mode at rest). With ``v != 0`` the run starts
+        sliding that way; with ``v = 0`` it sticks unless the forces already exceed the
+        static friction.
+    output_times : array_like, optional
+        Times at which to sample the state [s], sorted, within the schedule; default
+        64 per shortest drive period of the schedule, from start to end.
+    settings : IntegratorSettings, optional
+        Accuracy and budgets. ``steps_per_period`` and the step limits refer to the
+        shortest drive period of the schedule.
+    max_events : int
+        Events recorded (later ones are counted in ``events_dropped``), 0 to
+        :data:`MAX_RECORDED_EVENTS`.
+
+    Returns
+    -------
+    Trajectory
+    """
+    structure = check_structure(structure)
+    if not isinstance(schedule, Schedule):
+        raise TypeError("schedule must be a study.solvers.integrator.Schedule, "
+                        f"got {type(schedule)}")
+    settings = check_integrator_settings(settings)
+    max_events = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
+    p = model_parameters(structure, coupling)
+    y = np.zeros(4) if initial_state is None else np.array(initial_state, dtype=float)
+    if y.shape != (4,) or not np.all(np.isfinite(y)):
+        raise ValueError(
+            "initial_state must be 4 finite numbers (delta [m], delta' [m s-1], x [m], "
+            f"v [m s-1]), got {initial_state!r}"
+        )
+    end = float(schedule.ends[-1])
+    shortest = float(1.0 / np.max(schedule.frequency))
+    if output_times is None:
+        count = max(2, math.ceil(end / shortest * 64) + 1)
+        check_samples(count, "the default output_times (64 a period of the schedule)")
+        out_t = np.linspace(0.0, end, count)
+    else:
+        out_t = as_real_array("output_times", output_times, SECOND).ravel()
+        check_samples(out_t.size, "output_times")
+        if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
+            raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
+        if np.any(np.diff(out_t) < 0):
+            raise ValueError("output_times must be sorted")
+    omega = 2.0 * np.pi * schedule.frequency
+    scale = _scales(structure, np.array([np.max(omega)]))[0]
+    fixed = shortest / settings.steps_per_period if settings.steps_per_period else 0.0
+    mode_box = np.array([int(np.sign(y[3]))], dtype=np.int64)
+    t_box = np.array([0.0, settings.max_step * shortest])
+    out_y = np.empty((out_t.size, 4))
+    out_mode = np.empty(out_t.size, dtype=np.int64)
+    out_box = np.zeros(1, dtype=np.int64)
+    ev_t = np.empty(max_events)
+    ev_kind = np.empty(max_events, dtype=np.int64)
+    ev_y = np.empty((max_events, 4))
+    ev_box = np.zeros(1, dtype=np.int64)
+    stats = np.zeros(6)
+    code = _kernel._integrate(
+        p, schedule.starts, omega, schedule.acceleration, schedule.start_phases_rad,
+        schedule.ends, y, mode_box, t_box, end,
+        settings.tolerance, settings.tolerance, scale, fixed, settings.max_step * shortest,
+        settings.event_tolerance * shortest, settings.samples_per_step, settings.max_steps,
+        out_t, out_y, out_mode, out_box, ev_t, ev_kind, ev_y, ev_box, stats,
+    )
+    m = int(out_box[0])
+    e = min(int(ev_box[0]), max_events)
+    return Trajectory(
+        time=out_t[:m],
+        delta=out_y[:m, 0].copy(),
+        delta_rate=out_y[:m, 1].copy(),
+        x=out_y[:m, 2].copy(),
+        v=out_y[:m, 3].copy(),
+        mode=out_mode[:m].astype(np.int8),
+        event_time=ev_t[:e].copy(),
+        event_kind=ev_kind[:e].astype(np.int8),
+        event_state=ev_y[:e].copy(),
+        outcome=OUTCOMES[int(code)],
+        end_time=float(t_box[0]),
+        steps=int(stats[0]),
+        rejected_steps=int(stats[1]),
+        events_dropped=int(ev_box[0]) - e,
+    )
+
+
+def steady_mode_state(structure: Structure, f: ArrayLike, a: ArrayLike) -> NDArray[np.float64]:
+    """Canonical start of a steady orbit: at rest, drive phase 0, mode on its steady response.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(..., 4)`` states ``(delta [m], delta' [m s-1], 0, 0)``; the exact solver's
+        orbit starts from the same state.
+    """
+    structure = check_structure(structure)
+    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    amplitude = a_arr * math.cos(structure.alpha_rad) * mode_response(structure, f_arr)
+    omega = 2.0 * np.pi * f_arr
+    state = np.zeros((*f_arr.shape, 4))
+    state[..., 0] = amplitude.real
+    state[..., 1] = (1j * omega * amplitude).real
+    return state
+
+
+def integrated_steady_state(
+    structure: Structure,
+    f: ArrayLike,
+    a: ArrayLike,
+    *,
+    coupling: str = DEFAULT_COUPLING,
+    settings: IntegratorSettings | None = None,
+    parallel: bool | None = None,
+) -> SteadyState:
+    """Steady orbit at each ``(f, a)`` by time integration until the motion repeats.
+
+    Starts from :func:`steady_mode_state` (the exact solver's canonical start) and
+    integrates whole drive periods until the state at the period boundaries and the
+    displacement per period repeat (see :class:`IntegratorSettings`). With two-way
+    coupling the mode's transient must decay first: about ``Q / pi`` periods per
+    factor ``e``.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    f : array_like
+        Drive frequency [Hz], > 0. Broadcast against ``a``.
+    a : array_like
+        Drive acceleration amplitude [m s-2], >= 0.
+    coupling : {"one-way", "two-way"}
+        See :func:`simulate`.
+    settings : IntegratorSettings, optional
+        Accuracy and budgets.
+    parallel : bool, optional
+        Spread points over all cores; default for inputs of at least
+        ``PARALLEL_THRESHOLD`` points.
+
+    Returns
+    -------
+    SteadyState
+        As :func:`study.solvers.exact.steady_state`; ``LIFT_OFF`` when ``n < 0`` is met on the
+        way (with two-way coupling it can come from the sliding itself),
+        ``FRICTION_PARADOX`` when a two-way slip has no unique solution.
+    """
+    structure = check_structure(structure)
+    settings = check_integrator_settings(settings)
+    p = model_parameters(structure, coupling)
+    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    shape = f_arr.shape
+    # Copies: numba is never handed a broadcast view (numpy warns of its write flag).
+    f_flat = np.array(f_arr, dtype=float).ravel()
+    a_flat = np.array(a_arr, dtype=float).ravel()
+    n = f_flat.size
+    omega = 2.0 * np.pi * f_flat
+    period = 1.0 / f_flat  # f > 0, checked by as_frequency
+    y0 = np.ascontiguousarray(steady_mode_state(structure, f_flat, a_flat).reshape(n, 4))
+    scale = np.ascontiguousarray(_scales(structure, omega).reshape(n, 4))
+    if settings.steps_per_period:
+        fixed = period / settings.steps_per_period
+    else:
+        fixed = np.zeros(n)
+    results = np.zeros((n, 9))
+    if parallel is None:
+        parallel = n >= PARALLEL_THRESHOLD // 64
+    kernel = _kernel._periodic_points if parallel else _kernel._periodic_points_serial
+    kernel(
+        p, omega, a_flat, y0, settings.tolerance, settings.tolerance, scale,
+        np.ascontiguousarray(fixed), settings.max_step * period,
+        settings.event_tolerance * period, settings.samples_per_step, settings.max_steps,
+        settings.max_periods, settings.max_orbit_period, settings.resolved_period_tolerance,
+        results,
+    )
+    return SteadyState(
+        velocity=scalar_if_0d(results[:, 2].reshape(shape)),
+        status=scalar_if_0d(results[:, 0].astype(np.int8).reshape(shape)),
+        reason=scalar_if_0d(results[:, 1].astype(np.int8).reshape(shape)),
+        slips_per_period=scalar_if_0d(results[:, 3].reshape(shape)),
+        forward_fraction=scalar_if_0d(results[:, 4].reshape(shape)),
+        backward_fraction=scalar_if_0d(results[:, 5].reshape(shape)),
+        orbit_period=scalar_if_0d(results[:, 6].astype(np.int32).reshape(shape)),
+    )
