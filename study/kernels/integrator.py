@@ -45,6 +45,17 @@ from study.kernels.dopri import (
 from study.kernels.dopri import workspace as step_workspace
 from study.kernels.events import first_event, record
 from study.kernels.events import workspace as event_workspace
+from study.kernels.structure_vector import (
+    COS_ALPHA,
+    DAMPING,
+    GRAVITY,
+    KINETIC_FRICTION,
+    MASS_RATIO,
+    SIN_ALPHA,
+    STATIC_FRICTION,
+    STIFFNESS,
+    TWO_WAY,
+)
 from study.model.codes import (
     CONTINUOUS_SLIDING,
     EVENT_LIFT_OFF,
@@ -66,35 +77,23 @@ from study.model.codes import (
     STICK_SLIP,
 )
 
-# Indices of the model parameter vector ``p``.
-P_DAMPING = 0  # w0 / Q [s-1]
-P_STIFFNESS = 1  # w0^2 [s-2]
-P_COS = 2
-P_SIN = 3
-P_MASS = 4  # M
-P_CS = 5
-P_CK = 6
-P_G = 7
-P_TWO_WAY = 8  # 1.0 for two-way coupling
-N_PARAMETERS = 9
-
 
 @njit(cache=True, nogil=True)
 def _accelerations(p, mode, drive, y):
     """``(delta'', x'')`` in contact mode ``mode`` with drive acceleration ``drive``."""
-    forcing = drive * p[P_COS] - p[P_DAMPING] * y[1] - p[P_STIFFNESS] * y[0]
+    forcing = drive * p[COS_ALPHA] - p[DAMPING] * y[1] - p[STIFFNESS] * y[0]
     if mode == STICK:
         return forcing, 0.0
     s = float(mode)
-    m = p[P_MASS]
-    ca = p[P_COS]
-    sa = p[P_SIN]
-    ck = p[P_CK]
-    if p[P_TWO_WAY] != 0.0:
+    m = p[MASS_RATIO]
+    ca = p[COS_ALPHA]
+    sa = p[SIN_ALPHA]
+    ck = p[KINETIC_FRICTION]
+    if p[TWO_WAY] != 0.0:
         denominator = 1.0 - m * sa * (sa + s * ck * ca)
-        xdd = (-m * sa * forcing - s * ck * (p[P_G] - drive + m * ca * forcing)) / denominator
+        xdd = (-m * sa * forcing - s * ck * (p[GRAVITY] - drive + m * ca * forcing)) / denominator
         return forcing - sa * xdd, xdd
-    xdd = -m * sa * forcing - s * ck * (p[P_G] - drive + m * ca * forcing)
+    xdd = -m * sa * forcing - s * ck * (p[GRAVITY] - drive + m * ca * forcing)
     return forcing, xdd
 
 
@@ -114,17 +113,17 @@ def _forces(p, mode, drive, drive_rate_neg, y):
     ``drive_rate_neg`` is ``a w sin(phi) = -dA/dt``.
     """
     ddd, xdd = _accelerations(p, mode, drive, y)
-    ca = p[P_COS]
-    sa = p[P_SIN]
-    m = p[P_MASS]
-    forcing_rate = -drive_rate_neg * ca - p[P_DAMPING] * ddd - p[P_STIFFNESS] * y[1]
+    ca = p[COS_ALPHA]
+    sa = p[SIN_ALPHA]
+    m = p[MASS_RATIO]
+    forcing_rate = -drive_rate_neg * ca - p[DAMPING] * ddd - p[STIFFNESS] * y[1]
     dddd = forcing_rate
-    if mode != STICK and p[P_TWO_WAY] != 0.0:
+    if mode != STICK and p[TWO_WAY] != 0.0:
         s = float(mode)
-        ck = p[P_CK]
+        ck = p[KINETIC_FRICTION]
         denominator = 1.0 - m * sa * (sa + s * ck * ca)
         dddd = (forcing_rate + s * ck * sa * drive_rate_neg) / denominator
-    n = p[P_G] - drive + m * ca * ddd
+    n = p[GRAVITY] - drive + m * ca * ddd
     tau = -m * sa * ddd
     n_rate = drive_rate_neg + m * ca * dddd
     tau_rate = -m * sa * dddd
@@ -139,7 +138,7 @@ def _event_values(p, mode, drive, drive_rate_neg, y, values, rates):
     slip s: ``s v`` (slip end); always: ``n`` (lift-off).
     """
     n, tau, n_rate, tau_rate, xdd = _forces(p, mode, drive, drive_rate_neg, y)
-    cs = p[P_CS]
+    cs = p[STATIC_FRICTION]
     if mode == STICK:
         values[0] = cs * n - tau
         rates[0] = cs * n_rate - tau_rate
@@ -188,7 +187,7 @@ def _mode_after_rest(p, drive, y):
     Returns +1/-1 when ``|tau| > cs n`` (slip in the direction of ``tau``), else 0.
     """
     n, tau, _, _, _ = _forces(p, STICK, drive, 0.0, y)
-    limit = p[P_CS] * n
+    limit = p[STATIC_FRICTION] * n
     if tau > limit:
         return 1
     if -tau > limit:
@@ -198,11 +197,11 @@ def _mode_after_rest(p, drive, y):
 
 @njit(cache=True, nogil=True)
 def _paradox(p, mode):
-    if mode == STICK or p[P_TWO_WAY] == 0.0:
+    if mode == STICK or p[TWO_WAY] == 0.0:
         return False
     s = float(mode)
-    sa = p[P_SIN]
-    return 1.0 - p[P_MASS] * sa * (sa + s * p[P_CK] * p[P_COS]) <= 0.0
+    sa = p[SIN_ALPHA]
+    return 1.0 - p[MASS_RATIO] * sa * (sa + s * p[KINETIC_FRICTION] * p[COS_ALPHA]) <= 0.0
 
 
 @njit(cache=True, nogil=True)

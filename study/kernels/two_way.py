@@ -41,6 +41,17 @@ import numpy as np
 from numba import njit, prange
 
 from study.kernels.one_way import sin_minus_x
+from study.kernels.structure_vector import (
+    COS_ALPHA,
+    DAMPING,
+    GRAVITY,
+    KINETIC_FRICTION,
+    MASS_RATIO,
+    SIN_ALPHA,
+    STATIC_FRICTION,
+    STIFFNESS,
+    TWO_WAY,
+)
 from study.model.codes import (
     CONTINUOUS_SLIDING,
     FRICTION_PARADOX,
@@ -56,17 +67,6 @@ from study.model.codes import (
 TWO_PI = 2.0 * math.pi
 EPS = 2.220446049250313e-16
 
-# Indices of the structure vector.
-S_DAMPING = 0  # c = w0 / Q [s-1]
-S_STIFFNESS = 1  # k = w0^2 [s-2]
-S_COS = 2
-S_SIN = 3
-S_MASS = 4
-S_CS = 5
-S_CK = 6
-S_G = 7
-S_COUPLED = 8  # 1.0: two-way coupling
-N_STRUCTURE = 9
 
 # Columns of the per-point mode table (rows: stick, forward slip, backward slip).
 M_D = 0  # D (1 in a stick)
@@ -182,14 +182,14 @@ def mode_table(structure, omega, a, table):
 @njit(cache=True, nogil=True, error_model="numpy")
 def mode_row(structure, omega, a, table, row):
     """Fill one row of :func:`mode_table`: the stick (0), forward (1) or backward (2)."""
-    c = structure[S_DAMPING]
-    k = structure[S_STIFFNESS]
-    ca = structure[S_COS]
-    sa = structure[S_SIN]
-    m = structure[S_MASS]
-    ck = structure[S_CK]
-    g = structure[S_G]
-    coupled = structure[S_COUPLED] != 0.0
+    c = structure[DAMPING]
+    k = structure[STIFFNESS]
+    ca = structure[COS_ALPHA]
+    sa = structure[SIN_ALPHA]
+    m = structure[MASS_RATIO]
+    ck = structure[KINETIC_FRICTION]
+    g = structure[GRAVITY]
+    coupled = structure[TWO_WAY] != 0.0
     s = 0.0 if row == 0 else (1.0 if row == 1 else -1.0)
     if row == 0 or not coupled:
         d = 1.0
@@ -224,12 +224,12 @@ def mode_row(structure, omega, a, table, row):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _event_bounds(structure, row, omega, a):
     """Fill the bound columns of one mode's row (see ``M_SIN_P``...)."""
-    k = structure[S_STIFFNESS]
-    ca = structure[S_COS]
-    sa = structure[S_SIN]
-    m = structure[S_MASS]
-    cs = structure[S_CS]
-    ck = structure[S_CK]
+    k = structure[STIFFNESS]
+    ca = structure[COS_ALPHA]
+    sa = structure[SIN_ALPHA]
+    m = structure[MASS_RATIO]
+    cs = structure[STATIC_FRICTION]
+    ck = structure[KINETIC_FRICTION]
     kd = row[M_KD]
     cd = row[M_CD]
     s = row[M_SIGN]
@@ -452,13 +452,13 @@ def _search(structure, table, j, omega, a, t0, sin_w0, h0, hd0, v0, dd0, t_from,
         The event's bit (0: none before ``t_end``, -1: step budget) and its time [s].
     """
     row = table[j]
-    k = structure[S_STIFFNESS]
-    ca = structure[S_COS]
-    sa = structure[S_SIN]
-    m = structure[S_MASS]
-    cs = structure[S_CS]
-    ck = structure[S_CK]
-    g = structure[S_G]
+    k = structure[STIFFNESS]
+    ca = structure[COS_ALPHA]
+    sa = structure[SIN_ALPHA]
+    m = structure[MASS_RATIO]
+    cs = structure[STATIC_FRICTION]
+    ck = structure[KINETIC_FRICTION]
+    g = structure[GRAVITY]
     d = row[M_D]
     s = row[M_SIGN]
     kk = row[M_K]
@@ -625,13 +625,13 @@ def _search(structure, table, j, omega, a, t0, sin_w0, h0, hd0, v0, dd0, t_from,
 def _stick_releases(structure, a, cw, dl, dld):
     """Release functions ``s tau - cs n`` (stick forces) at state ``(dl, dld)`` and drive
     phase with cosine ``cw``."""
-    ca = structure[S_COS]
-    sa = structure[S_SIN]
-    m = structure[S_MASS]
-    cs = structure[S_CS]
-    g = structure[S_G]
+    ca = structure[COS_ALPHA]
+    sa = structure[SIN_ALPHA]
+    m = structure[MASS_RATIO]
+    cs = structure[STATIC_FRICTION]
+    g = structure[GRAVITY]
     drive = a * cw
-    ddd0 = drive * ca - structure[S_DAMPING] * dld - structure[S_STIFFNESS] * dl
+    ddd0 = drive * ca - structure[DAMPING] * dld - structure[STIFFNESS] * dl
     base = -cs * g + cs * drive
     return -m * (sa + cs * ca) * ddd0 + base, -m * (-sa + cs * ca) * ddd0 + base, ddd0
 
@@ -639,16 +639,16 @@ def _stick_releases(structure, a, cw, dl, dld):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _mode_acceleration(structure, row, cw, dl, dld):
     """``delta''`` in the mode of ``row`` at state ``(dl, dld)``, drive phase cosine ``cw``."""
-    return (row[M_FORCE] * cw + row[M_GCONST] - structure[S_DAMPING] * dld
-            - structure[S_STIFFNESS] * dl) / row[M_D]
+    return (row[M_FORCE] * cw + row[M_GCONST] - structure[DAMPING] * dld
+            - structure[STIFFNESS] * dl) / row[M_D]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _slip_acceleration(structure, row, a, cw, ddd):
     """``v'`` in the slip of ``row`` with mode acceleration ``ddd``."""
     s = row[M_SIGN]
-    ck = structure[S_CK]
-    return -row[M_K] * ddd - s * ck * structure[S_G] + s * ck * a * cw
+    ck = structure[KINETIC_FRICTION]
+    return -row[M_K] * ddd - s * ck * structure[GRAVITY] + s * ck * a * cw
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -739,7 +739,7 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_marg
             mask |= EV_LIFT_OFF
         kind, te, steps = _search(structure, table, j, omega, a, t, sw, h0, hd0, v0, dd0,
                            max(t, t_from), t_stop, mask, horizon,
-                           structure[S_G] + max(lift_margin, 0.0))
+                           structure[GRAVITY] + max(lift_margin, 0.0))
         acc[A_STEPS] += steps
         if kind < 0:
             acc[A_EVENTS] += events
@@ -765,8 +765,8 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_marg
         else:
             s = row[M_SIGN]
             kk = row[M_K]
-            ck = structure[S_CK]
-            g = structure[S_G]
+            ck = structure[KINETIC_FRICTION]
+            g = structure[GRAVITY]
             tw = omega * tau
             # v and the displacement over the slip, cancellation-free in tau.
             dsin = (cw * math.sin(tw) - sw * _one_minus_cos(tw)) / omega
@@ -836,15 +836,16 @@ def run(structure, table, omega, a, z, t_begin, t_stop, jac, want_jac, lift_marg
                 rown = table[jn]
                 accn = _mode_acceleration(structure, rown, cwe, dl, dld)
                 vdot = _slip_acceleration(structure, rown, a, cwe, accn)
-                m = structure[S_MASS]
-                kap = -m * (new * structure[S_SIN] + structure[S_CS] * structure[S_COS])
+                m = structure[MASS_RATIO]
+                kap = -m * (new * structure[SIN_ALPHA]
+                            + structure[STATIC_FRICTION] * structure[COS_ALPHA])
                 # Gradient of s tau - cs n in (delta, delta'); time rate along the stick.
-                g_d = -kap * structure[S_STIFFNESS]
-                g_dd = -kap * structure[S_DAMPING]
+                g_d = -kap * structure[STIFFNESS]
+                g_dd = -kap * structure[DAMPING]
                 swe2 = swe
-                ddd_rate = (-a * omega * swe2 * structure[S_COS]
-                            - structure[S_DAMPING] * acc0 - structure[S_STIFFNESS] * dld)
-                rate = kap * ddd_rate - structure[S_CS] * a * omega * swe2
+                ddd_rate = (-a * omega * swe2 * structure[COS_ALPHA]
+                            - structure[DAMPING] * acc0 - structure[STIFFNESS] * dld)
+                rate = kap * ddd_rate - structure[STATIC_FRICTION] * a * omega * swe2
                 if rate > 0.0:
                     q = 1.0 / rate
                     ds0 = -(g_d * jac[0, 0] + g_dd * jac[1, 0]) * q
@@ -1044,7 +1045,7 @@ def _newton(structure, table, omega, a, z, periods, scales, max_events, jac, acc
 def _scales(structure, table, omega, a):
     """Natural sizes of ``(delta, delta', v)`` for residuals [m, m s-1, m s-1]."""
     amp = math.hypot(table[0, M_PRE], table[0, M_PIM])
-    k = structure[S_STIFFNESS]
+    k = structure[STIFFNESS]
     size = max(amp, a / (k + omega * omega), 1e-300)
     return size, size * max(omega, math.sqrt(k)), max(a / omega, 1e-300)
 
@@ -1064,13 +1065,13 @@ def _start(table, omega, t, z, factor):
 def _is_static(structure, table, omega, a):
     """Neither release can happen with the mode on its steady response."""
     w2 = omega * omega
-    m = structure[S_MASS]
-    ca = structure[S_COS]
-    sa = structure[S_SIN]
-    cs = structure[S_CS]
+    m = structure[MASS_RATIO]
+    ca = structure[COS_ALPHA]
+    sa = structure[SIN_ALPHA]
+    cs = structure[STATIC_FRICTION]
     pr = table[0, M_PRE]
     pi = table[0, M_PIM]
-    level = cs * structure[S_G] * (1.0 + 8.0 * EPS)
+    level = cs * structure[GRAVITY] * (1.0 + 8.0 * EPS)
     for sign in (1.0, -1.0):
         kappa = -m * (sign * sa + cs * ca)
         if math.hypot(-kappa * w2 * pr + cs * a, -kappa * w2 * pi) > level:
@@ -1335,8 +1336,8 @@ def attractors_point(structure, omega, a, lifted, max_events, max_iterations, ou
             _start(table, omega, t_start, start, factor)
             _, _, acc0 = _stick_releases(structure, a, math.cos(omega * t_start), start[0],
                                          start[1])
-            if (structure[S_G] - a * math.cos(omega * t_start)
-                    + structure[S_MASS] * structure[S_COS] * acc0) < 0.0:
+            if (structure[GRAVITY] - a * math.cos(omega * t_start)
+                    + structure[MASS_RATIO] * structure[COS_ALPHA] * acc0) < 0.0:
                 # A start off the table is no state of the model.
                 continue
             solve_point(structure, omega, a, lifted, max_events, max_iterations,

@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import one_way as _kernel
+from study.kernels import structure_vector as sv
 from study.kernels import two_way as _orbit
 from study.model import (
     as_acceleration,
@@ -160,17 +161,17 @@ def check_coupling(coupling: object) -> str:
 
 def structure_vector(structure: Structure, coupling: str) -> NDArray[np.float64]:
     """The orbit kernel's structure vector (SI) for ``structure`` and ``coupling``."""
-    vector = np.zeros(_orbit.N_STRUCTURE)
+    vector = np.zeros(sv.SIZE)
     w0 = structure.omega0
-    vector[_orbit.S_DAMPING] = w0 / structure.Q
-    vector[_orbit.S_STIFFNESS] = w0 * w0
-    vector[_orbit.S_COS] = np.cos(structure.alpha_rad)
-    vector[_orbit.S_SIN] = np.sin(structure.alpha_rad)
-    vector[_orbit.S_MASS] = structure.M
-    vector[_orbit.S_CS] = structure.cs
-    vector[_orbit.S_CK] = structure.ck
-    vector[_orbit.S_G] = structure.g
-    vector[_orbit.S_COUPLED] = 1.0 if check_coupling(coupling) == "two-way" else 0.0
+    vector[sv.DAMPING] = w0 / structure.Q
+    vector[sv.STIFFNESS] = w0 * w0
+    vector[sv.COS_ALPHA] = np.cos(structure.alpha_rad)
+    vector[sv.SIN_ALPHA] = np.sin(structure.alpha_rad)
+    vector[sv.MASS_RATIO] = structure.M
+    vector[sv.STATIC_FRICTION] = structure.cs
+    vector[sv.KINETIC_FRICTION] = structure.ck
+    vector[sv.GRAVITY] = structure.g
+    vector[sv.TWO_WAY] = 1.0 if check_coupling(coupling) == "two-way" else 0.0
     return vector
 
 

@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.engine.spec_files import load_schema
 from study.kernels import integrator as _kernel
+from study.kernels import structure_vector as sv
 from study.model import as_acceleration, as_frequency, mode_response
 from study.model.inputs import as_real_array, bounded_integer, instance_of, real_number
 from study.model.structure import Structure
@@ -344,17 +345,17 @@ def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING
     """Parameter vector of the integrator kernel for ``structure`` and ``coupling``."""
     structure = check_structure(structure)
     two_way = check_coupling(coupling) == "two-way"
-    p = np.empty(_kernel.N_PARAMETERS)
+    p = np.empty(sv.SIZE)
     w0 = structure.omega0
-    p[_kernel.P_DAMPING] = w0 / structure.Q
-    p[_kernel.P_STIFFNESS] = w0 * w0
-    p[_kernel.P_COS] = math.cos(structure.alpha_rad)
-    p[_kernel.P_SIN] = math.sin(structure.alpha_rad)
-    p[_kernel.P_MASS] = structure.M
-    p[_kernel.P_CS] = structure.cs
-    p[_kernel.P_CK] = structure.ck
-    p[_kernel.P_G] = structure.g
-    p[_kernel.P_TWO_WAY] = 1.0 if two_way else 0.0
+    p[sv.DAMPING] = w0 / structure.Q
+    p[sv.STIFFNESS] = w0 * w0
+    p[sv.COS_ALPHA] = math.cos(structure.alpha_rad)
+    p[sv.SIN_ALPHA] = math.sin(structure.alpha_rad)
+    p[sv.MASS_RATIO] = structure.M
+    p[sv.STATIC_FRICTION] = structure.cs
+    p[sv.KINETIC_FRICTION] = structure.ck
+    p[sv.GRAVITY] = structure.g
+    p[sv.TWO_WAY] = 1.0 if two_way else 0.0
     return p
 
 
