@@ -128,10 +128,8 @@ __all__ = [
     "Target",
     "design",
     "design_dataset",
-    "design_spec_schema",
     "disk_limits",
     "evaluate",
-    "export_design_spec_schema",
     "load_design_spec",
     "parse_design_spec",
 ]

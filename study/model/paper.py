@@ -69,7 +69,7 @@ def is_paper_structure(structure: Structure | Mapping[str, float],
         on-board loads, whose ``M`` is swept).
     """
     params = structure.as_dict() if isinstance(structure, Structure) else dict(structure)
-    params.setdefault("g", 9.8)
+    params.setdefault("g", STRUCTURE["g"].default)
     if "cs" in params:
         params.setdefault("ck", params["cs"])
     skip = set(ignore)
