@@ -14,7 +14,8 @@ digits the paper states it with. Everything else derives from this table:
 - the drive limits of every public function (:mod:`study.model.drive`);
 - the docs' parameter table (:func:`markdown_table`).
 
-Adding a parameter is one :class:`Parameter` in :data:`PARAMETERS` (and its physics).
+Adding a parameter is one :class:`Parameter` in its group, :data:`STRUCTURE`,
+:data:`MASS` or :data:`DRIVE` (and its physics).
 SI units inside, angles in degree.
 """
 
@@ -94,11 +95,8 @@ class Parameter:
     paper: str = field(default="", kw_only=True)
 
     def allowed(self) -> str:
-        """The range in words, as fits and designs say it: ``"M > 0 and <= 1"``."""
-        left = f"{self.name} {'>' if self.lower_open else '>='} {self.lower:g}"
-        if math.isinf(self.upper):
-            return left
-        return f"{left} and {'<' if self.upper_open else '<='} {self.upper:g}"
+        """The range in words, as messages say it: ``"0 < M <= 1"`` (:meth:`range_text`)."""
+        return self.range_text()
 
     def inside(self, value: float) -> bool:
         """Whether ``value`` is in the range (not checking :attr:`at_most`)."""
@@ -143,9 +141,14 @@ _FRICTION_REASON = ("1e-6 is far below any measured dry or lubricated friction, 
                     "1e-308 sin(alpha)/cs overflows; 100 is far above any")
 _MASS_REASON = "a mass is positive; 1e6 kg bounds a table-top structure many times over"
 
-#: Every parameter, declared once: the structure's, the mass model's, the drive's.
-PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
-    # The structure (study.Structure, the [structure] table of specs).
+
+def _by_name(*parameters: Parameter) -> dict[str, Parameter]:
+    return {p.name: p for p in parameters}
+
+
+#: The structure's parameters, in the order of :class:`study.Structure`'s arguments (the
+#: ``[structure]`` table of specs).
+STRUCTURE: dict[str, Parameter] = _by_name(
     Parameter("f0", HERTZ, "resonance frequency of the plate's first mode", 0.0, _LARGEST,
               upper_open=False, symbol="f_0", reason=_FREQUENCY_REASON, paper="14.44"),
     Parameter("Q", DIMENSIONLESS, "quality factor of the plate's first mode", 0.01, _LARGEST,
@@ -172,7 +175,10 @@ PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
               upper_open=False, symbol="g",
               reason="gravity presses the base on the table; 1000 m s-2 is 100 Earths",
               default=9.8, paper="9.8"),
-    # The mass model (the [structure.mass] table: M = m1 / (m0 + m_add)).
+)
+#: The mass model's parameters (the ``[structure.mass]`` table of specs:
+#: ``M = m1 / (m0 + m_add)``).
+MASS: dict[str, Parameter] = _by_name(
     Parameter("m0", KILOGRAM, "mass of the bare structure", 0.0, _LARGEST, upper_open=False,
               symbol="m_0", reason=_MASS_REASON),
     Parameter("m1", KILOGRAM, "resonant (modal) mass", 0.0, _LARGEST, upper_open=False,
@@ -184,22 +190,19 @@ PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
     Parameter("m_add", KILOGRAM, "added non-resonant mass", 0.0, _LARGEST, lower_open=False,
               upper_open=False, symbol="m_\\mathrm{add}",
               reason="a load is a mass added, none at 0", default=0.0),
-    # The drive (the [sweep] f and a of specs, the f and a of every public function).
+)
+#: The drive's parameters (the ``[sweep]`` f and a of specs, the f and a of every public
+#: function).
+DRIVE: dict[str, Parameter] = _by_name(
     Parameter("f", HERTZ, "drive frequency", 0.0, _LARGEST, upper_open=False, symbol="f",
               reason=_FREQUENCY_REASON),
     Parameter("a", METRE_PER_SECOND_SQUARED, "drive acceleration amplitude", 0.0, _LARGEST,
               lower_open=False, upper_open=False, symbol="a",
               reason=("an amplitude is not negative; 1e6 m s-2 is 1e5 g, far beyond any "
                       "shaker and far below overflow")),
-)}
-
-#: The structure's parameters, in the order of :class:`study.Structure`'s arguments.
-STRUCTURE: dict[str, Parameter] = {n: PARAMETERS[n] for n in
-                                   ("f0", "Q", "alpha", "M", "cs", "ck", "g")}
-#: The mass model's parameters (``[structure.mass]`` of specs).
-MASS: dict[str, Parameter] = {n: PARAMETERS[n] for n in ("m0", "m1", "m1_fraction", "m_add")}
-#: The drive's parameters.
-DRIVE: dict[str, Parameter] = {n: PARAMETERS[n] for n in ("f", "a")}
+)
+#: Every parameter, declared once (above): the structure's, the mass model's, the drive's.
+PARAMETERS: dict[str, Parameter] = {**STRUCTURE, **MASS, **DRIVE}
 
 
 def _json_number(value: float) -> float | int:
