@@ -137,8 +137,8 @@ class Parameter:
 _LARGEST = 1e6
 _FREQUENCY_REASON = ("a frequency is positive; 1e6 Hz is far above any plate's mode and far "
                      "below where (2 pi f)^2 overflows, near 2e153 Hz")
-_FRICTION_REASON = ("1e-6 is far below any measured dry or lubricated friction, and near "
-                    "1e-308 sin(alpha)/cs overflows; 100 is far above any")
+_FRICTION_REASON = ("1e-6 is far below any measured dry or lubricated friction (near "
+                    "cs = 1e-308, sin(alpha)/cs overflows); 100 is far above any")
 _MASS_REASON = "a mass is positive; 1e6 kg bounds a table-top structure many times over"
 
 
@@ -268,7 +268,7 @@ def markdown_table(names: Iterable[str] | None = None) -> str:
         p = PARAMETERS[name]
         default = p.default_text or ("-" if p.default is None else number(p.default))
         cells = [f"`{p.name}`", f"${p.symbol}$", f"`{p.units}`",
-                 f"{p.range_text()} ({p.reason})".replace("|", "\\|"),
+                 f"`{p.range_text()}` ({p.reason})".replace("|", "\\|"),
                  default if not p.default_text else f"`{default}`", p.paper or "-"]
         rows.append("| " + " | ".join(cells) + " |")
     return "\n".join(rows) + "\n"

@@ -178,6 +178,6 @@ def test_markdown_table_is_a_table_with_a_row_per_parameter() -> None:
     for row, (name, p) in zip(rows, PARAMETERS.items(), strict=True):
         assert row[0] == f"`{name}`"
         assert row[2] == f"`{p.units}`"
-        assert row[3].startswith(p.range_text())
+        assert row[3].startswith(f"`{p.range_text()}` (")
         assert row[5] == (p.paper or "-")
     assert markdown_table(["Q"]).count("\n") == 3
