@@ -92,7 +92,7 @@ from study.engine.spec_files import (
 )
 from study.model import lift_off_acceleration, mode_response, thresholds
 from study.model.inputs import bounded_integer
-from study.model.parameters import STRUCTURE, Parameter, structure_properties, units_list
+from study.model.parameters import STRUCTURE, Parameter, schema_properties, units_list
 from study.model.status import Status
 from study.model.structure import Structure, tilt_warnings
 from study.model.units import (
@@ -180,7 +180,7 @@ def design_spec_schema() -> dict[str, Any]:
     the single-plate structure's ranges and free parameters from the parameter table
     (the file on disk is its export: ``make schemas``)."""
     schema = load_schema(DESIGN_SPEC_SCHEMA)
-    schema["properties"]["structure"]["properties"] = structure_properties(STRUCTURE)
+    schema["properties"]["structure"]["properties"] = schema_properties(STRUCTURE)
     free = schema["properties"]["free"]
     free["properties"] = {name: {"$ref": "#/$defs/bounds"} for name in STRUCTURE_PARAMETERS}
     free["description"] = (

@@ -72,7 +72,7 @@ from study.engine.spec_files import (
 from study.model import thresholds
 from study.model.inputs import bounded_integer, instance_of, real_number
 from study.model.parameters import PARAMETERS as PARAMETER_TABLE
-from study.model.parameters import STRUCTURE, Parameter, structure_properties, units_list
+from study.model.parameters import STRUCTURE, Parameter, schema_properties, units_list
 from study.model.structure import Structure, tilt_warnings
 from study.model.units import DIMENSIONLESS, KILOGRAM, spoken
 from study.solvers.exact import DEFAULT_COUPLING, steady_velocity
@@ -129,8 +129,8 @@ def fit_spec_schema() -> dict[str, Any]:
     schema = load_schema(FIT_SPEC_SCHEMA)
     properties = schema["properties"]["structure"]["properties"]
     mass = properties["mass"]
-    mass["properties"] = structure_properties(("m0", "m1", "m1_fraction"))
-    schema["properties"]["structure"]["properties"] = {**structure_properties(STRUCTURE),
+    mass["properties"] = schema_properties(("m0", "m1", "m1_fraction"))
+    schema["properties"]["structure"]["properties"] = {**schema_properties(STRUCTURE),
                                                        "mass": mass}
     free = schema["properties"]["fit"]["properties"]["free"]
     free["properties"] = {name: {"$ref": "#/$defs/bounds"} for name in PARAMETERS}

@@ -49,7 +49,13 @@ from study.engine.spec_files import (
     parse_toml,
     read_spec_text,
 )
-from study.model.parameters import DRIVE, MASS, STRUCTURE, schema_definition
+from study.model.parameters import (
+    DRIVE,
+    MASS,
+    STRUCTURE,
+    schema_definition,
+    schema_properties,
+)
 from study.model.structure import Structure, tilt_warnings
 from study.solvers.exact import DEFAULT_COUPLING, MAX_SOLVER_BUDGET, SolverSettings
 from study.solvers.frontier import finest_tolerance
@@ -236,13 +242,12 @@ def spec_schema() -> dict[str, Any]:
     """
     schema = load_schema(SPEC_SCHEMA)
     schema["$defs"]["parameter"] = {name: schema_definition(name) for name in SWEEPABLE}
-    structure = schema["properties"]["structure"]["properties"]
-    mass = structure.pop("mass")
-    structure.clear()
-    structure.update({name: {"$ref": f"#/$defs/parameter/{name}"} for name in STRUCTURE})
-    structure["mass"] = mass
-    mass["properties"] = {name: schema_definition(name) for name in MASS if name != "m_add"}
-    mass["properties"]["m_add"] = {"$ref": "#/$defs/parameter/m_add"}
+    structure = schema["properties"]["structure"]
+    mass = structure["properties"]["mass"]
+    mass["properties"] = {**schema_properties(name for name in MASS if name != "m_add"),
+                          "m_add": {"$ref": "#/$defs/parameter/m_add"}}
+    structure["properties"] = {
+        **{name: {"$ref": f"#/$defs/parameter/{name}"} for name in STRUCTURE}, "mass": mass}
     schema["properties"]["sweep"]["properties"] = {
         name: {"$ref": "#/$defs/axis"} for name in (*DRIVE, *STRUCTURE, "m_add")}
     listed = schema["properties"]["study"]["properties"]["observables"]

@@ -37,7 +37,7 @@ __all__ = [
     "markdown_table",
     "number",
     "schema_definition",
-    "structure_properties",
+    "schema_properties",
     "units_list",
 ]
 
@@ -236,7 +236,7 @@ def schema_definition(name: str) -> dict[str, Any]:
     return definition
 
 
-def structure_properties(names: Iterable[str]) -> dict[str, Any]:
+def schema_properties(names: Iterable[str]) -> dict[str, Any]:
     """JSON schema properties: a :func:`schema_definition` per parameter named."""
     return {name: schema_definition(name) for name in names}
 
