@@ -60,13 +60,18 @@ $(STAMP): pyproject.toml
 
 # The package reads study/schemas/ (package data, shipped in the wheel); results_schema/
 # keeps an identical copy at the top of the repo (a test checks they agree).
-# The spec schema's observables are exported from study/engine/observables.py; results_schema/
+# The spec schema's observables are exported from study/engine/observables.py, the
+# parameters of the study, fit and design spec schemas from study/model/parameters.py; results_schema/
 # is the repository's copy of the package's schemas (a test checks both).
 schemas: | $(STAMP)
 	$(PY) -c "from study.engine.study_spec import export_spec_schema as e; text = e(); \
 	open('study/schemas/study-spec-v1.schema.json', 'w').write(text)"
 	$(PY) -c "from study.analyses.measurements import export_measurement_schema as e; text = e(); \
 	open('study/schemas/study-measurements-v1.schema.json', 'w').write(text)"
+	$(PY) -c "from study.analyses.fit import export_fit_spec_schema as e; text = e(); \
+	open('study/schemas/study-fit-spec-v1.schema.json', 'w').write(text)"
+	$(PY) -c "from study.analyses.design import export_design_spec_schema as e; text = e(); \
+	open('study/schemas/study-design-spec-v1.schema.json', 'w').write(text)"
 	$(MAKE) $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
 
 results_schema/%.json: study/schemas/%.json

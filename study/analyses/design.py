@@ -82,8 +82,6 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
-from study.analyses.fit import PARAMETERS as FIT_PARAMETERS
-from study.analyses.fit import Parameter
 from study.engine.spec_files import (
     SpecError,
     canonical_sha256,
@@ -94,6 +92,7 @@ from study.engine.spec_files import (
 )
 from study.model import lift_off_acceleration, mode_response, thresholds
 from study.model.inputs import bounded_integer
+from study.model.parameters import STRUCTURE, Parameter, schema_properties, units_list
 from study.model.status import Status
 from study.model.structure import Structure, tilt_warnings
 from study.model.units import (
@@ -172,8 +171,27 @@ PLATE_PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
     Parameter("direction", DEGREE, "direction of the plate's mode in the body frame",
               -360.0, 360.0, lower_open=False, upper_open=False),
 )}
-#: Parameters of the single-plate structure (as a fit's).
-STRUCTURE_PARAMETERS = {n: FIT_PARAMETERS[n] for n in ("f0", "Q", "alpha", "M", "cs", "ck")}
+#: Parameters of the single-plate structure a design can free (:mod:`study.model.parameters`).
+STRUCTURE_PARAMETERS = {n: STRUCTURE[n] for n in ("f0", "Q", "alpha", "M", "cs", "ck")}
+
+
+def design_spec_schema() -> dict[str, Any]:
+    """The JSON schema of design specs (``study/schemas/study-design-spec-v1.schema.json``):
+    the single-plate structure's ranges and free parameters from the parameter table
+    (the file on disk is its export: ``make schemas``)."""
+    schema = load_schema(DESIGN_SPEC_SCHEMA)
+    schema["properties"]["structure"]["properties"] = schema_properties(STRUCTURE)
+    free = schema["properties"]["free"]
+    free["properties"] = {name: {"$ref": "#/$defs/bounds"} for name in STRUCTURE_PARAMETERS}
+    free["description"] = (
+        "free parameters with their bounds: single plate " + units_list(STRUCTURE_PARAMETERS)
+        + "; disk cs, ck and a table per plate name (e.g. [free.tail] f0 = [6.5, 9.5])")
+    return schema
+
+
+def export_design_spec_schema() -> str:
+    """The design spec schema as written to ``study/schemas`` (``make schemas``)."""
+    return json.dumps(design_spec_schema(), indent=2) + "\n"
 
 
 @dataclass(frozen=True)
@@ -271,7 +289,7 @@ def _label(target: dict[str, Any]) -> str:
 def parse_design_spec(text: str, path: str = "<string>") -> DesignSpec:
     """A design spec from its text (see :func:`load_design_spec`)."""
     raw = parse_toml(text, path)
-    check_schema(raw, load_schema(DESIGN_SPEC_SCHEMA), path, "design spec")
+    check_schema(raw, design_spec_schema(), path, "design spec")
     table = raw["design"]
     has_structure = "structure" in raw
     has_disk = "disk" in raw or "plate" in raw

@@ -71,8 +71,10 @@ from study.engine.spec_files import (
 )
 from study.model import thresholds
 from study.model.inputs import bounded_integer, instance_of, real_number
+from study.model.parameters import PARAMETERS as PARAMETER_TABLE
+from study.model.parameters import STRUCTURE, Parameter, schema_properties, units_list
 from study.model.structure import Structure, tilt_warnings
-from study.model.units import DEGREE, DIMENSIONLESS, HERTZ, KILOGRAM, spoken
+from study.model.units import DIMENSIONLESS, KILOGRAM, spoken
 from study.solvers.exact import DEFAULT_COUPLING, steady_velocity
 
 __all__ = [
@@ -114,51 +116,32 @@ BOUND_MARGIN = 1e-3
 CHI2_P_LIMIT = 1e-3
 
 
-@dataclass(frozen=True)
-class Parameter:
-    """A parameter that a fit can estimate.
-
-    Attributes
-    ----------
-    name, units, long_name : str
-    lower, upper : float
-        Its allowed range.
-    lower_open, upper_open : bool
-        Whether ``lower`` (``upper``) itself is excluded.
-    """
-
-    name: str
-    units: str
-    long_name: str
-    lower: float
-    upper: float
-    lower_open: bool = True
-    upper_open: bool = True
-
-    def allowed(self) -> str:
-        left = f"{self.name} {'>' if self.lower_open else '>='} {self.lower:g}"
-        if math.isinf(self.upper):
-            return left
-        return f"{left} and {'<' if self.upper_open else '<='} {self.upper:g}"
-
-    def inside(self, value: float) -> bool:
-        low = value > self.lower if self.lower_open else value >= self.lower
-        high = value < self.upper if self.upper_open else value <= self.upper
-        return bool(low and high)
+#: The parameters a fit can free, from the parameter table (:mod:`study.model.parameters`;
+#: m0 and m1_fraction: [structure.mass]).
+PARAMETERS: dict[str, Parameter] = {name: PARAMETER_TABLE[name] for name in (
+    "f0", "Q", "alpha", "M", "cs", "ck", "m0", "m1_fraction")}
 
 
-#: The parameters a fit can free, declared once (m0 and m1_fraction: [structure.mass]).
-PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
-    Parameter("f0", HERTZ, "resonance frequency of the plate's first mode", 0.0, math.inf),
-    Parameter("Q", DIMENSIONLESS, "quality factor of the mode", 0.0, math.inf),
-    Parameter("alpha", DEGREE, "tilt of the plate from the horizontal", -90.0, 90.0),
-    Parameter("M", DIMENSIONLESS, "mass ratio m1/m", 0.0, 1.0, upper_open=False),
-    Parameter("cs", DIMENSIONLESS, "static friction coefficient", 0.0, math.inf),
-    Parameter("ck", DIMENSIONLESS, "kinetic friction coefficient (ck <= cs)", 0.0, math.inf),
-    Parameter("m0", KILOGRAM, "mass of the bare structure", 0.0, math.inf),
-    Parameter("m1_fraction", DIMENSIONLESS, "resonant mass over the bare structure's mass, m1/m0",
-              0.0, 1.0, upper_open=False),
-)}
+def fit_spec_schema() -> dict[str, Any]:
+    """The JSON schema of fit specs (``study/schemas/study-fit-spec-v1.schema.json``): its
+    parameters' ranges and the free ones from the parameter table (the file on disk is
+    its export: ``make schemas``)."""
+    schema = load_schema(FIT_SPEC_SCHEMA)
+    properties = schema["properties"]["structure"]["properties"]
+    mass = properties["mass"]
+    mass["properties"] = schema_properties(("m0", "m1", "m1_fraction"))
+    schema["properties"]["structure"]["properties"] = {**schema_properties(STRUCTURE),
+                                                       "mass": mass}
+    free = schema["properties"]["fit"]["properties"]["free"]
+    free["properties"] = {name: {"$ref": "#/$defs/bounds"} for name in PARAMETERS}
+    free["description"] = ("free parameters with their bounds: " + units_list(PARAMETERS)
+                           + " (m0 and m1_fraction with [structure.mass])")
+    return schema
+
+
+def export_fit_spec_schema() -> str:
+    """The fit spec schema as written to ``study/schemas`` (``make schemas``)."""
+    return json.dumps(fit_spec_schema(), indent=2) + "\n"
 
 
 @dataclass(frozen=True)
@@ -225,7 +208,7 @@ def load_fit_spec(path: str | Path) -> FitSpec:
 def parse_fit_spec(text: str, path: str = "<string>", base: str | Path = ".") -> FitSpec:
     """A fit spec from its text (see :func:`load_fit_spec`)."""
     raw = parse_toml(text, path)
-    check_schema(raw, load_schema(FIT_SPEC_SCHEMA), path, "fit spec")
+    check_schema(raw, fit_spec_schema(), path, "fit spec")
     table = raw["fit"]
     structure = dict(raw["structure"])
     mass = structure.pop("mass", None)
@@ -499,7 +482,9 @@ class _Problem:
             upper[j] = min(upper[j], self.spec_start["cs"])
         if self.ratio:
             j = self.names.index("ck")
-            lower[j] = max(self.free["ck"][0] / self.free["cs"][1], 1e-12)
+            # ck = r cs >= its smallest allowed value for every cs within the bounds.
+            lower[j] = max(self.free["ck"][0] / self.free["cs"][1],
+                           PARAMETERS["ck"].lower / self.free["cs"][0])
             upper[j] = min(1.0, self.free["ck"][1] / self.free["cs"][0])
         self.lower, self.upper = lower, upper
 

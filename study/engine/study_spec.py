@@ -49,8 +49,14 @@ from study.engine.spec_files import (
     parse_toml,
     read_spec_text,
 )
+from study.model.parameters import (
+    DRIVE,
+    MASS,
+    STRUCTURE,
+    schema_definition,
+    schema_properties,
+)
 from study.model.structure import Structure, tilt_warnings
-from study.model.units import DEGREE, DIMENSIONLESS, HERTZ, KILOGRAM, METRE_PER_SECOND_SQUARED
 from study.solvers.exact import DEFAULT_COUPLING, MAX_SOLVER_BUDGET, SolverSettings
 from study.solvers.frontier import finest_tolerance
 from study.solvers.integrator import IntegratorSettings
@@ -86,23 +92,11 @@ INTEGRATOR_KEYS = (
     "tolerance", "steps_per_period", "max_periods", "max_orbit_period", "period_tolerance",
 )
 
-#: Structure parameters: units and long names (SI inside).
-STRUCTURE_PARAMETERS = {
-    "f0": (HERTZ, "resonance frequency of the plate's first mode"),
-    "Q": (DIMENSIONLESS, "quality factor of the plate's first mode"),
-    "alpha": (DEGREE, "tilt of the plate from the horizontal"),
-    "M": (DIMENSIONLESS, "mass ratio m1/m of the resonant mass to the total mass"),
-    "cs": (DIMENSIONLESS, "static friction coefficient"),
-    "ck": (DIMENSIONLESS, "kinetic friction coefficient"),
-    "g": (METRE_PER_SECOND_SQUARED, "gravitational acceleration"),
-}
-DRIVE_PARAMETERS = {
-    "f": (HERTZ, "drive frequency"),
-    "a": (METRE_PER_SECOND_SQUARED, "drive acceleration amplitude"),
-}
-MASS_PARAMETERS = {
-    "m_add": (KILOGRAM, "added non-resonant mass"),
-}
+#: Structure parameters: units and long names (SI inside), from the parameter table
+#: (:mod:`study.model.parameters`), as are the drive's and the swept mass's.
+STRUCTURE_PARAMETERS = {name: (p.units, p.long_name) for name, p in STRUCTURE.items()}
+DRIVE_PARAMETERS = {name: (p.units, p.long_name) for name, p in DRIVE.items()}
+MASS_PARAMETERS = {name: (MASS[name].units, MASS[name].long_name) for name in ("m_add",)}
 SWEEPABLE = {**STRUCTURE_PARAMETERS, **MASS_PARAMETERS, **DRIVE_PARAMETERS}
 
 
@@ -241,11 +235,21 @@ def _build_structure(params: dict[str, float], mass: MassModel | None) -> Struct
 def spec_schema() -> dict[str, Any]:
     """The JSON schema of study specs (``study/schemas/study-spec-v1.schema.json``).
 
-    The observables allowed and their descriptions come from :mod:`study.engine.observables`,
+    The parameters' ranges and descriptions come from :mod:`study.model.parameters`, the
+    observables allowed and their descriptions from :mod:`study.engine.observables`,
     the solver's budgets' maxima from :data:`study.solvers.exact.MAX_SOLVER_BUDGET` (the file
     on disk is their export, see :func:`export_spec_schema`).
     """
     schema = load_schema(SPEC_SCHEMA)
+    schema["$defs"]["parameter"] = {name: schema_definition(name) for name in SWEEPABLE}
+    structure = schema["properties"]["structure"]
+    mass = structure["properties"]["mass"]
+    mass["properties"] = {**schema_properties(name for name in MASS if name != "m_add"),
+                          "m_add": {"$ref": "#/$defs/parameter/m_add"}}
+    structure["properties"] = {
+        **{name: {"$ref": f"#/$defs/parameter/{name}"} for name in STRUCTURE}, "mass": mass}
+    schema["properties"]["sweep"]["properties"] = {
+        name: {"$ref": "#/$defs/axis"} for name in (*DRIVE, *STRUCTURE, "m_add")}
     listed = schema["properties"]["study"]["properties"]["observables"]
     listed["description"] = ("a non-empty list of distinct names from: "
                              + ", ".join(OBSERVABLES))

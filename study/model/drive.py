@@ -5,20 +5,17 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from study.engine.spec_files import load_schema
 from study.model.inputs import as_real_array
-from study.model.units import HERTZ, METRE_PER_SECOND_SQUARED, SECOND
-
-#: The spec schema whose ``$defs/parameter`` maxima of ``f`` and ``a`` bound the drive
-#: every public function takes (a study spec's sweep is held to them): 1e6 Hz and
-#: 1e6 m s-2. Far beyond them ``(2 pi f)^2`` overflows (f > 2e153 Hz: NaN forces and a
-#: ZeroDivisionError in the integrator).
-DRIVE_LIMITS_SCHEMA = "study-spec-v1"
+from study.model.parameters import DRIVE
+from study.model.units import SECOND
 
 
 def drive_maximum(name: str) -> float:
-    """The largest drive ``f`` [Hz] or ``a`` [m s-2] allowed (:data:`DRIVE_LIMITS_SCHEMA`)."""
-    return float(load_schema(DRIVE_LIMITS_SCHEMA)["$defs"]["parameter"][name]["maximum"])
+    """The largest drive ``f`` [Hz] or ``a`` [m s-2] allowed: 1e6 Hz and 1e6 m s-2
+    (:data:`study.model.parameters.DRIVE`, which a study spec's sweep is held to too).
+    Far beyond them ``(2 pi f)^2`` overflows (f > 2e153 Hz: NaN forces and a
+    ZeroDivisionError in the integrator)."""
+    return DRIVE[name].upper
 
 
 def _checked(
@@ -56,8 +53,9 @@ def as_frequency(f: ArrayLike) -> NDArray[np.float64]:
         For strings, booleans, complex numbers or dates
         (:class:`study.model.inputs.InputTypeError`).
     """
-    return _checked("drive frequency f", f, HERTZ, 0.0, inclusive=False,
-                    upper=drive_maximum("f"))
+    limits = DRIVE["f"]
+    return _checked("drive frequency f", f, limits.units, limits.lower,
+                    inclusive=not limits.lower_open, upper=limits.upper)
 
 
 def as_acceleration(a: ArrayLike) -> NDArray[np.float64]:
@@ -72,8 +70,9 @@ def as_acceleration(a: ArrayLike) -> NDArray[np.float64]:
         For strings, booleans, complex numbers or dates
         (:class:`study.model.inputs.InputTypeError`).
     """
-    return _checked("drive acceleration a", a, METRE_PER_SECOND_SQUARED, 0.0, inclusive=True,
-                    upper=drive_maximum("a"))
+    limits = DRIVE["a"]
+    return _checked("drive acceleration a", a, limits.units, limits.lower,
+                    inclusive=not limits.lower_open, upper=limits.upper)
 
 
 def as_time(t: ArrayLike) -> NDArray[np.float64]:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 
+from study.model.parameters import STRUCTURE
 from study.model.structure import Structure
 
 __all__ = [
@@ -27,16 +28,17 @@ __all__ = [
     "paper_structure",
 ]
 
-#: The paper's structure: parameter -> value (SI, alpha in degrees); ck = cs, g = 9.8.
+#: The paper's structure: parameter -> value (SI, alpha in degrees); ck = cs, g = 9.8
+#: (:attr:`study.model.parameters.Parameter.paper`).
 PAPER_STRUCTURE: dict[str, float] = {
-    "f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08, "cs": 0.25, "ck": 0.25, "g": 9.8,
+    name: p.paper_value for name, p in STRUCTURE.items() if p.paper_value is not None
 }
 
 #: How far a parameter may be from the paper's and still be the paper's: half a unit
 #: of the last digit the paper states (``ck`` is compared with ``cs``, to a relative
 #: 1e-9: the paper has a single coefficient).
 PAPER_TOLERANCE: dict[str, float] = {
-    "f0": 0.005, "Q": 0.05, "alpha": 0.5, "M": 0.005, "cs": 0.005, "ck": 0.005, "g": 0.05,
+    name: p.paper_tolerance for name, p in STRUCTURE.items() if p.paper_tolerance is not None
 }
 
 #: The paper's points in its regions S, P, N and PN (Fig. 2 insets): name -> (f [Hz],
@@ -67,7 +69,7 @@ def is_paper_structure(structure: Structure | Mapping[str, float],
         on-board loads, whose ``M`` is swept).
     """
     params = structure.as_dict() if isinstance(structure, Structure) else dict(structure)
-    params.setdefault("g", 9.8)
+    params.setdefault("g", STRUCTURE["g"].default)
     if "cs" in params:
         params.setdefault("ck", params["cs"])
     skip = set(ignore)

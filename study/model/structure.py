@@ -16,7 +16,8 @@ from study.model.inputs import (
     real_number,
     tilt_looks_like_radians,
 )
-from study.model.units import DEGREE, DIMENSIONLESS, HERTZ, METRE_PER_SECOND_SQUARED
+from study.model.parameters import STRUCTURE
+from study.model.units import spoken
 
 __all__ = ["Structure", "check_structure", "tilt_warnings"]
 
@@ -48,9 +49,8 @@ def tilt_warnings(enabled: bool) -> Iterator[None]:
         _WARN_OF_RADIANS.reset(token)
 
 
-#: CF units of the parameters, for messages.
-UNITS = {"f0": HERTZ, "Q": DIMENSIONLESS, "alpha": DEGREE, "M": DIMENSIONLESS,
-         "cs": DIMENSIONLESS, "ck": DIMENSIONLESS, "g": METRE_PER_SECOND_SQUARED}
+#: CF units of the parameters, for messages (:data:`study.model.parameters.STRUCTURE`).
+UNITS = {name: p.units for name, p in STRUCTURE.items()}
 
 
 @dataclass(frozen=True)
@@ -63,9 +63,9 @@ class Structure:
     Parameters
     ----------
     f0 : float
-        Resonance frequency of the plate's first mode [Hz], ``f0 > 0``.
+        Resonance frequency of the plate's first mode [Hz], ``0 < f0 <= 1e6``.
     Q : float
-        Quality factor of the mode [1], ``Q > 0``.
+        Quality factor of the plate's first mode [1], ``0.01 <= Q <= 1e6``.
     alpha : float
         Tilt of the plate from the horizontal [degree], ``-90 < alpha < 90``.
         ``alpha -> -alpha`` mirrors the motion.
@@ -73,12 +73,16 @@ class Structure:
         Mass ratio ``m1 / m`` of the resonant mass to the total mass [1],
         ``0 < M <= 1``.
     cs : float
-        Static friction coefficient with the table [1], ``cs > 0``.
+        Static friction coefficient with the table [1], ``1e-6 <= cs <= 100``.
     ck : float, optional
-        Kinetic friction coefficient [1], ``0 < ck <= cs``; defaults to ``cs``
+        Kinetic friction coefficient [1], ``1e-6 <= ck <= cs``; defaults to ``cs``
         (the paper's single coefficient ``c_f``).
     g : float, optional
-        Gravitational acceleration [m s-2], ``g > 0``; default 9.8 as in the paper.
+        Gravitational acceleration [m s-2], ``0 < g <= 1000``; default 9.8 as in the
+        paper.
+
+    The ranges, units and defaults are declared in :mod:`study.model.parameters`, with
+    the reason for each range.
 
     Raises
     ------
@@ -103,36 +107,25 @@ class Structure:
     alpha: float
     M: float
     cs: float
-    ck: float | None = None
-    g: float = 9.8
+    ck: float | None = STRUCTURE["ck"].default
+    g: float = STRUCTURE["g"].default  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         values = {}
-        for name in ("f0", "Q", "alpha", "M", "cs", "g"):
-            values[name] = require_finite(name, getattr(self, name))
-        ck = values["cs"] if self.ck is None else require_finite("ck", self.ck)
-        values["ck"] = ck
-
-        def refuse(name: str, allowed: str) -> None:
-            raise ValueError(
-                f"Structure parameter {name!r} = {values[name]!r} is out of range; "
-                f"allowed: {allowed}"
-            )
-
-        if values["f0"] <= 0:
-            refuse("f0", "f0 > 0 [Hz]")
-        if values["Q"] <= 0:
-            refuse("Q", "Q > 0")
-        if not -90.0 < values["alpha"] < 90.0:
-            refuse("alpha", "-90 < alpha < 90 [degree]")
-        if not 0.0 < values["M"] <= 1.0:
-            refuse("M", "0 < M <= 1")
-        if values["cs"] <= 0:
-            refuse("cs", "cs > 0")
-        if not 0.0 < ck <= values["cs"]:
-            refuse("ck", f"0 < ck <= cs (cs = {values['cs']!r})")
-        if values["g"] <= 0:
-            refuse("g", "g > 0 [m s-2]")
+        for name, parameter in STRUCTURE.items():
+            given = getattr(self, name)
+            if given is None and parameter.at_most:  # ck: defaults to cs
+                values[name] = values[parameter.at_most]
+            else:
+                values[name] = require_finite(name, given)
+        for name, parameter in STRUCTURE.items():
+            value = values[name]
+            limit = values[parameter.at_most] if parameter.at_most else None
+            if not parameter.inside(value) or (limit is not None and value > limit):
+                raise ValueError(
+                    f"Structure parameter {name!r} = {value!r} is out of range; allowed: "
+                    f"{parameter.range_text(limit)}{spoken(parameter.units)}"
+                )
         for name, value in values.items():
             object.__setattr__(self, name, value)
         if tilt_looks_like_radians(values["alpha"]) and _WARN_OF_RADIANS.get():
@@ -166,15 +159,7 @@ class Structure:
 
     def as_dict(self) -> dict[str, float]:
         """Parameters as a plain dict (``ck`` explicit)."""
-        return {
-            "f0": self.f0,
-            "Q": self.Q,
-            "alpha": self.alpha,
-            "M": self.M,
-            "cs": self.cs,
-            "ck": self.ck,
-            "g": self.g,
-        }
+        return {name: getattr(self, name) for name in STRUCTURE}
 
 
 def check_structure(structure: object, name: str = "structure") -> Structure:

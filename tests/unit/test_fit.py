@@ -171,7 +171,7 @@ def test_masses_per_structure_are_fitted_from_added_loads(tmp_path: Path) -> Non
 
 
 @pytest.mark.parametrize("free, structure, message", [
-    ("M = [0.0, 0.5]", "", "[fit] free.M = [0, 0.5]: bound 0 is out of range; allowed: M > 0"),
+    ("M = [0.0, 0.5]", "", "[fit] free.M = [0, 0.5]: bound 0 is out of range; allowed: 0 < M <= 1"),
     ("cs = [0.4, 1.0]", "", "start value cs = 0.3 from [structure] is outside the bounds"),
     ("cs = [0.05, 0.2]", "f0 = 14.44\nQ = 17.5\nalpha = 64.0\nM = 0.1\ncs = 0.15\nck = 0.1",
      ""),

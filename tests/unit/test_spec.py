@@ -604,7 +604,7 @@ REFUSALS = [
     pytest.param({"structure": {"g": -9.8}}, ["[structure] g = -9.8", "> 0"], id="g-neg"),
     pytest.param(
         {"structure": {"ck": 0.3}},
-        ["[structure]", "'ck' = 0.3", "0 < ck <= cs (cs = 0.25)"],
+        ["[structure]", "'ck' = 0.3", "1e-6 <= ck <= cs (cs = 0.25)"],
         id="ck-above-cs",
     ),
     pytest.param(
@@ -759,12 +759,12 @@ REFUSALS = [
     # invalid swept structures: the message names the parameter and the value
     pytest.param(
         {"sweep": {"ck": {"values": [0.1, 0.3]}}},
-        ["invalid structure at [sweep] point ck = 0.3", "'ck' = 0.3", "0 < ck <= cs"],
+        ["invalid structure at [sweep] point ck = 0.3", "'ck' = 0.3", "1e-6 <= ck <= cs"],
         id="ck-swept-above-cs",
     ),
     pytest.param(
         {"structure": {"Q": None}, "sweep": {"Q": {"values": [10.0, -1.0]}}},
-        ["invalid structure at [sweep] point Q = -1.0", "'Q' = -1.0", "Q > 0"],
+        ["invalid structure at [sweep] point Q = -1.0", "'Q' = -1.0", "0.01 <= Q <= 1e6"],
         id="Q-swept-negative",
     ),
     pytest.param(

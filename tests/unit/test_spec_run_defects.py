@@ -119,8 +119,8 @@ def test_absurd_structure_values_are_refused(old, new, fragment):
 def test_swept_values_obey_the_same_minimum():
     text = workflow("threshold-collapse").replace("[3.0, 10.0, 17.5, 50.0, 150.0]",
                                                   "[0.001, 10.0]")
-    assert "[sweep] Q: value 0.001 is out of range; allowed: >= 0.01" in refusal(
-        parse_spec, text)
+    assert ("invalid structure at [sweep] point Q = 0.001, M = 0.002: Structure parameter "
+            "'Q' = 0.001 is out of range; allowed: 0.01 <= Q <= 1e6") in refusal(parse_spec, text)
 
 
 # --------------------------------------------------------------------------- scenes

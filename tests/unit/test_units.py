@@ -32,7 +32,7 @@ import xarray as xr
 import study.model.units as units_module
 from study.model.units import DIMENSIONLESS, UNITS, spoken
 
-PACKAGE = Path(units_module.__file__).resolve().parents[1]
+PACKAGE = Path(units_module.__file__).resolve().parents[1]  # study/, not study/model/
 
 #: Whole strings that are units spelled otherwise than CF/UDUNITS (or than study does).
 WRONG = re.compile(
