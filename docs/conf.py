@@ -16,6 +16,12 @@ DOCS = Path(__file__).resolve().parent
 sys.path.insert(0, str(DOCS / "_ext"))
 
 from offline_inventories import write_inventories  # noqa: E402
+
+from study.model.parameters import markdown_table  # noqa: E402
+
+# The parameter table of docs/user-guide/specs.md, from its one declaration in the package.
+(DOCS / "_generated").mkdir(exist_ok=True)
+(DOCS / "_generated" / "parameters.md").write_text(markdown_table(), encoding="utf-8")
 from sphinx.ext import autosummary  # noqa: E402
 
 import study  # noqa: E402
@@ -39,8 +45,8 @@ extensions = [
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"
-exclude_patterns = ["_build", "_ext", "_templates", "examples", "**/*.ipynb", "**/*.py",
-                    "**/*.zip", "**/*.md5", "**/*.codeobj.json"]
+exclude_patterns = ["_build", "_ext", "_generated", "_templates", "examples", "**/*.ipynb",
+                    "**/*.py", "**/*.zip", "**/*.md5", "**/*.codeobj.json"]
 templates_path = ["_templates"]
 
 # --- pages (MyST) ---------------------------------------------------------------------
