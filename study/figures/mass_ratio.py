@@ -114,6 +114,17 @@ def _measured_structures(data: xr.Dataset, rows: np.ndarray, dataset: xr.Dataset
     return rows, load, ratio
 
 
+class _Loads(NamedTuple):
+    """The file's loads: their axis (None: one load), mass ratios [1], added masses [kg]
+    if given, colour by index, and a colour bar for many (else None)."""
+
+    dim: str | None
+    ratios: np.ndarray
+    m_add: np.ndarray | None
+    colours: dict[int, object]
+    bar: object
+
+
 class _Measured(NamedTuple):
     """Measured threshold rows naming their structure (:func:`_measured_structures`)."""
 
@@ -132,7 +143,7 @@ def draw(dataset: xr.Dataset, output: Path,
     dataset, dim, ratios, m_add = _loads(dataset)
     paper = is_paper_file(dataset, ignore=("M",))
     colors, bar = value_colours(100 * ratios)
-    color_of = {i: colors[i] for i in range(ratios.size)}
+    loads = _Loads(dim, ratios, m_add, {i: colors[i] for i in range(ratios.size)}, bar)
     found = None
     if measurements:
         data = measured.load(measurements)
@@ -141,9 +152,8 @@ def draw(dataset: xr.Dataset, output: Path,
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12.5, 5.2), layout="constrained",
                                  gridspec_kw={"width_ratios": [1.25, 1.0]})
-    minima, structures = _threshold_panel(fig, ax, dataset, dim, ratios, m_add, color_of,
-                                          bar, found)
-    _minimum_panel(bx, dataset, ratios, minima, structures[0], color_of, found, paper)
+    minima, structures = _threshold_panel(fig, ax, dataset, loads, found)
+    _minimum_panel(bx, dataset, loads, minima, structures[0], found, paper)
 
     title = (
         f"{'Fig. 3: ' if paper else ''}motion threshold with on-board loads "
@@ -161,9 +171,8 @@ def draw(dataset: xr.Dataset, output: Path,
     return save(fig, output, dataset, title)
 
 
-def _threshold_panel(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset, dim: str | None,
-                     ratios: np.ndarray, m_add: np.ndarray | None, color_of: dict,
-                     bar: object, found: _Measured | None
+def _threshold_panel(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset, loads: _Loads,
+                     found: _Measured | None
                      ) -> tuple[list[tuple[float, float, bool]], list[study.Structure]]:
     """Left: the threshold against f for every load with its lift-off and its minimum.
 
@@ -176,36 +185,7 @@ def _threshold_panel(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset, dim: st
         a_top = float(dataset["a"].values.max())
     elif "a" in dataset.coords:
         a_line = float(np.ravel(dataset["a"].values)[0])
-    minima, structures = [], []
-    beyond_drawn = False
-    for i in range(ratios.size):
-        at = {dim: i} if dim is not None else {}
-        structure = structure_from_dataset(dataset, **at)
-        structures.append(structure)
-        a_star = np.minimum(dataset["a_star_plus"].isel(at).values,
-                            dataset["a_star_minus"].isel(at).values)
-        if "lift_off_acceleration" in dataset:
-            a_lift = dataset["lift_off_acceleration"].isel(at).values
-        else:
-            a_lift = study.lift_off_acceleration(structure, f)
-        color = color_of[i]
-        label = _label(ratios[i], None if m_add is None else m_add[i])
-        # A threshold above lift-off is outside the model: drawn faint, never as valid.
-        valid = a_star < a_lift
-        ax.plot(f, np.where(valid, a_star, np.nan), color=color, lw=1.8,
-                label=None if bar is not None else label)
-        if not valid.all():
-            ax.plot(f, np.where(valid, np.nan, a_star), color=color, lw=1.0, ls=":",
-                    alpha=0.6)
-            beyond_drawn = True
-        ax.plot(f, a_lift, color=color, lw=1.0, ls="--")
-        if not valid.any():
-            minima.append((np.nan, np.nan, True))
-            continue
-        j, resolved = grid_minimum(f, np.where(valid, a_star, np.inf), structure.f0,
-                                   structure.Q)
-        minima.append((a_star[j], f[j], not resolved))
-        ax.plot(f[j], a_star[j], "o", color=color, ms=5, mec="k", mew=0.6)
+    minima, structures, beyond_drawn = _load_curves(ax, dataset, loads)
     ax.plot([], [], color="0.3", lw=1.0, ls="--",
             label="lift-off $a_{lift}$ (model invalid above)")
     if beyond_drawn:
@@ -226,23 +206,65 @@ def _threshold_panel(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset, dim: st
         on_load = found.load >= 0
         if on_load.any():
             measured.draw_rows(ax, found.data, found.rows[on_load], "f",
-                               colours=[color_of[j] for j in found.load[on_load]])
+                               colours=[loads.colours[j] for j in found.load[on_load]])
             ax.plot([], [], "o", mfc="0.6", mec="k", label="measured $\\pm\\sigma$ "
                     "(colour of its load;\n^ forward, v backward, o unknown)")
-    if bar is not None:
-        fig.colorbar(bar, ax=ax, pad=0.01, label=f"mass ratio M [%] ({ratios.size} loads)")
+    if loads.bar is not None:
+        fig.colorbar(loads.bar, ax=ax, pad=0.01,
+                     label=f"mass ratio M [%] ({loads.ratios.size} loads)")
     ax.legend(loc="lower left", fontsize=8, framealpha=0.9)
     return minima, structures
 
 
-def _minimum_panel(bx: plt.Axes, dataset: xr.Dataset, ratios: np.ndarray,
+def _load_curves(ax: plt.Axes, dataset: xr.Dataset, loads: _Loads
+                 ) -> tuple[list[tuple[float, float, bool]], list[study.Structure], bool]:
+    """Each load's threshold (faint above lift-off), its lift-off acceleration and its
+    minimum over f. Returns per load the minimum ``(a*, f, not resolved)`` and the
+    structure, and whether some threshold lies above lift-off."""
+    f = dataset["f"].values
+    dim, ratios, m_add, bar = loads.dim, loads.ratios, loads.m_add, loads.bar
+    minima, structures = [], []
+    beyond_drawn = False
+    for i in range(ratios.size):
+        at = {dim: i} if dim is not None else {}
+        structure = structure_from_dataset(dataset, **at)
+        structures.append(structure)
+        a_star = np.minimum(dataset["a_star_plus"].isel(at).values,
+                            dataset["a_star_minus"].isel(at).values)
+        if "lift_off_acceleration" in dataset:
+            a_lift = dataset["lift_off_acceleration"].isel(at).values
+        else:
+            a_lift = study.lift_off_acceleration(structure, f)
+        color = loads.colours[i]
+        label = _label(ratios[i], None if m_add is None else m_add[i])
+        # A threshold above lift-off is outside the model: drawn faint, never as valid.
+        valid = a_star < a_lift
+        ax.plot(f, np.where(valid, a_star, np.nan), color=color, lw=1.8,
+                label=None if bar is not None else label)
+        if not valid.all():
+            ax.plot(f, np.where(valid, np.nan, a_star), color=color, lw=1.0, ls=":",
+                    alpha=0.6)
+            beyond_drawn = True
+        ax.plot(f, a_lift, color=color, lw=1.0, ls="--")
+        if not valid.any():
+            minima.append((np.nan, np.nan, True))
+            continue
+        j, resolved = grid_minimum(f, np.where(valid, a_star, np.inf), structure.f0,
+                                   structure.Q)
+        minima.append((a_star[j], f[j], not resolved))
+        ax.plot(f[j], a_star[j], "o", color=color, ms=5, mec="k", mew=0.6)
+    return minima, structures, beyond_drawn
+
+
+def _minimum_panel(bx: plt.Axes, dataset: xr.Dataset, loads: _Loads,
                    minima: list[tuple[float, float, bool]], base: study.Structure,
-                   color_of: dict, found: _Measured | None, paper: bool) -> None:
+                   found: _Measured | None, paper: bool) -> None:
     """Right: the minimum over f against M, with the closed forms over a fine M range,
     the lowest measured threshold of each structure and, for the paper's structure,
     its statement."""
     f = dataset["f"].values
     g = base.g
+    ratios, color_of = loads.ratios, loads.colours
     spanned = ratios if found is None else np.concatenate([ratios, found.ratio])
     fine = np.linspace(min(1e-3, 0.5 * spanned.min()), min(1.0, 1.25 * spanned.max()), 121)
     at_resonance = np.array([min(resonance_threshold(replace(base, M=m))) for m in fine])
