@@ -11,6 +11,7 @@ import os
 import shlex
 import sys
 from pathlib import Path
+from typing import Any
 
 from study.model.units import spoken
 from study.version import DISTRIBUTION, VERSION
@@ -386,8 +387,6 @@ def _list(args: argparse.Namespace) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
-    from study.engine.executors import TASK_TIMEOUT
-
     parser = argparse.ArgumentParser(
         prog="study",
         description="Parameter studies of vibration-driven stick-slip locomotion.",
@@ -395,6 +394,32 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {VERSION}",
                         help=f"print the version of {DISTRIBUTION} and exit")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    _add_run_command(commands)
+    _add_cache_command(commands)
+
+    validate = commands.add_parser("validate", help="check result files against the schema")
+    validate.add_argument("files", type=Path, nargs="+", metavar="FILE")
+    validate.set_defaults(handler=_validate)
+
+    info = commands.add_parser("info", help="summary of a result file with its provenance")
+    info.add_argument("file", type=Path, metavar="FILE")
+    info.set_defaults(handler=_info)
+
+    _add_figure_command(commands)
+    _add_export_command(commands)
+    _add_fit_command(commands)
+    _add_design_command(commands)
+
+    listing = commands.add_parser("list", help="the workflows and whether results are current")
+    listing.add_argument("--workflows", default="workflows", help="spec folder")
+    listing.add_argument("--results", default="results", help="result folder")
+    listing.set_defaults(handler=_list)
+    return parser
+
+
+def _add_run_command(commands: Any) -> None:
+    """``study run``: a study spec to a netCDF result."""
+    from study.engine.executors import TASK_TIMEOUT
 
     run = commands.add_parser("run", help="run a study spec and write its netCDF result")
     run.add_argument("spec", type=Path, help="study spec (TOML), e.g. workflows/regime-map.toml")
@@ -420,6 +445,9 @@ def _parser() -> argparse.ArgumentParser:
     _overwrite_option(run, "result")
     run.set_defaults(handler=_run)
 
+
+def _add_cache_command(commands: Any) -> None:
+    """``study cache``: list, prune or verify the kept values."""
     cache = commands.add_parser(
         "cache", help="show, prune or verify the kept computed values",
         description="list: what is kept (read-only). prune: remove entries (--stale, "
@@ -442,14 +470,9 @@ def _parser() -> argparse.ArgumentParser:
                        "finish, then give up (default: 60)")
     cache.set_defaults(handler=_cache)
 
-    validate = commands.add_parser("validate", help="check result files against the schema")
-    validate.add_argument("files", type=Path, nargs="+", metavar="FILE")
-    validate.set_defaults(handler=_validate)
 
-    info = commands.add_parser("info", help="summary of a result file with its provenance")
-    info.add_argument("file", type=Path, metavar="FILE")
-    info.set_defaults(handler=_info)
-
+def _add_figure_command(commands: Any) -> None:
+    """``study figure``: a figure from a result file."""
     from study.figures import FIGURES
 
     figure = commands.add_parser(
@@ -483,6 +506,9 @@ def _parser() -> argparse.ArgumentParser:
     _overwrite_option(figure, "figure")
     figure.set_defaults(handler=_figure)
 
+
+def _add_export_command(commands: Any) -> None:
+    """``study export``: a result file as CSV tables."""
     export = commands.add_parser(
         "export", help="write a result file as tidy CSV tables (units in the header)",
         description="One row per point, one column per coordinate and variable, "
@@ -501,6 +527,9 @@ def _parser() -> argparse.ArgumentParser:
     _overwrite_option(export, "table")
     export.set_defaults(handler=_export)
 
+
+def _add_fit_command(commands: Any) -> None:
+    """``study fit``: structure parameters fitted to measurements."""
     fitting = commands.add_parser(
         "fit", help="fit free structure parameters to measurements (weighted least squares)",
         description="Estimate the free parameters of a fit spec (TOML: [fit] measurements, "
@@ -518,6 +547,9 @@ def _parser() -> argparse.ArgumentParser:
     _overwrite_option(fitting, "result")
     fitting.set_defaults(handler=_fit)
 
+
+def _add_design_command(commands: Any) -> None:
+    """``study design``: structure parameters for target behaviours."""
     designing = commands.add_parser(
         "design", help="search structure parameters that achieve target behaviours",
         description="Search the free parameters of a design spec (TOML: [design], "
@@ -530,12 +562,6 @@ def _parser() -> argparse.ArgumentParser:
                            help="result file (default: results/<spec file stem>.nc)")
     _overwrite_option(designing, "result")
     designing.set_defaults(handler=_design)
-
-    listing = commands.add_parser("list", help="the workflows and whether results are current")
-    listing.add_argument("--workflows", default="workflows", help="spec folder")
-    listing.add_argument("--results", default="results", help="result folder")
-    listing.set_defaults(handler=_list)
-    return parser
 
 
 def build_parser() -> argparse.ArgumentParser:

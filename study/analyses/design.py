@@ -807,14 +807,47 @@ def _effective(space: _Space, which: str) -> NDArray[np.float64]:
 def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") -> xr.Dataset:
     """The design as a self-describing dataset (the layout of ``study-design-v1``)."""
     from study.engine.fingerprint import code_fingerprint
-    from study.engine.provenance import environment, git_state, package_version, utc_now
+    from study.engine.provenance import utc_now
 
-    names = result.names
-    ev = result.evaluation
-    units = [spec.parameter(n).units for n in names]
     code = code_fingerprint(("study.analyses.design",)).sha256
     now = utc_now()
-    provenance = {
+    variables = {**_parameter_variables(result), **_target_variables(spec, result),
+                 **_summary_variables(spec, result)}
+    designed = {k: v for k, v in result.params.items() if v is not None}
+    attrs = {
+        "Conventions": "CF-1.11",
+        "title": spec.title,
+        "study_result_schema": DESIGN_RESULT_SCHEMA,
+        "study_design_format": DESIGN_FORMAT,
+        "study_design_name": spec.name,
+        "study_name": spec.name,
+        "study_spec": spec.text,
+        "study_spec_sha256": spec.sha256,
+        "study_code_sha256": code,
+        "study_model": spec.model,
+        "study_coupling": spec.coupling,
+        "study_weights": json.dumps(spec.weights),
+        "study_designed_structure": json.dumps(designed),
+        "study_feasible": int(result.feasible),
+        "study_failing_targets": json.dumps(result.failing),
+        "study_report": result.message,
+        "date_created": now,
+        "history": f"{now}: {command or 'study.analyses.design'}",
+        "provenance": json.dumps(_design_provenance(spec, result, code, now, command),
+                                 default=str),
+    }
+    return xr.Dataset({k: xr.Variable(*v) for k, v in variables.items()},
+                      coords={k: xr.Variable(*v) for k, v in _design_coords(spec, result).items()},
+                      attrs=attrs)
+
+
+def _design_provenance(spec: DesignSpec, result: DesignResult, code: str, now: str,
+                       command: str) -> dict[str, Any]:
+    """The run's provenance record: spec, code, environment and how the search went."""
+    from study.engine.provenance import environment, git_state, package_version
+
+    names = result.names
+    return {
         "spec": spec.text, "spec_sha256": spec.sha256, "code_sha256": code,
         "package_version": package_version(), **git_state(),
         "environment": environment(), "end_time": now, "command": command,
@@ -823,24 +856,45 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
                       "scipy.optimize.differential_evolution + minimize(method='Nelder-Mead')"),
         "evaluations": result.evaluations, "wall_seconds": result.wall_seconds,
     }
-    per_unit = {"units_variable": "parameter_units",
-                "comment": "in each parameter's own units (parameter_units)"}
+
+
+def _design_coords(spec: DesignSpec, result: DesignResult) -> dict[str, tuple[Any, ...]]:
+    """The free parameters' axis with their units, and the targets' axis."""
+    names = result.names
+    units = [spec.parameter(n).units for n in names]
     p, t = ("parameter",), ("target",)
-    coords = {
+    return {
         "parameter": (p, np.array(names, dtype=object), {"long_name": "free parameter"}),
         "parameter_units": (p, np.array(units, dtype=object),
                             {"long_name": "units of the parameter's values"}),
         "target": (t, np.array([x.label for x in spec.targets], dtype=object),
                    {"long_name": "target behaviour at a drive command"}),
     }
-    one = {"units": DIMENSIONLESS}
-    variables: dict[str, tuple[Any, ...]] = {
+
+
+#: The per-parameter variables' note on units.
+_PER_UNIT = {"units_variable": "parameter_units",
+             "comment": "in each parameter's own units (parameter_units)"}
+
+
+def _parameter_variables(result: DesignResult) -> dict[str, tuple[Any, ...]]:
+    """The variables over the free parameters: the design, the bounds and the start."""
+    p, per_unit = ("parameter",), _PER_UNIT
+    return {
         "best": (p, result.best, {"long_name": "designed value", **per_unit}),
         "lower_bound": (p, result.lower, {"long_name": "lower bound of the search",
                                           **per_unit}),
         "upper_bound": (p, result.upper, {"long_name": "upper bound of the search",
                                           **per_unit}),
         "start": (p, result.start, {"long_name": "start value", **per_unit}),
+    }
+
+
+def _target_variables(spec: DesignSpec, result: DesignResult) -> dict[str, tuple[Any, ...]]:
+    """The variables over the targets: the drive asked for, the motion and margins at
+    the design, whether each is met and its best margin searched alone."""
+    t, one, ev = ("target",), {"units": DIMENSIONLESS}, result.evaluation
+    return {
         "f": (t, np.array([x.f for x in spec.targets]), {
             "long_name": "drive frequency", "units": HERTZ}),
         "a": (t, np.array([x.a for x in spec.targets]), {
@@ -885,6 +939,13 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
         "best_margin_alone": (t, result.alone, {
             "long_name": "the target's best margin searched alone (infeasible designs)",
             **one, "comment": "NaN: not searched (the design is feasible)"}),
+    }
+
+
+def _summary_variables(spec: DesignSpec, result: DesignResult) -> dict[str, tuple[Any, ...]]:
+    """The design's score and feasibility, and the scan of a one-parameter search."""
+    names, one = result.names, {"units": DIMENSIONLESS}
+    variables: dict[str, tuple[Any, ...]] = {
         "score": ((), result.score, {
             "long_name": "smallest target margin at the design (the objective)", **one}),
         "feasible": ((), np.int8(result.feasible), {
@@ -898,27 +959,4 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
             "units": spec.parameter(names[0]).units})
         variables["scan_score"] = (("scan",), result.scan_scores, {
             "long_name": "smallest target margin at the scanned value", **one})
-    designed = {k: v for k, v in result.params.items() if v is not None}
-    attrs = {
-        "Conventions": "CF-1.11",
-        "title": spec.title,
-        "study_result_schema": DESIGN_RESULT_SCHEMA,
-        "study_design_format": DESIGN_FORMAT,
-        "study_design_name": spec.name,
-        "study_name": spec.name,
-        "study_spec": spec.text,
-        "study_spec_sha256": spec.sha256,
-        "study_code_sha256": code,
-        "study_model": spec.model,
-        "study_coupling": spec.coupling,
-        "study_weights": json.dumps(spec.weights),
-        "study_designed_structure": json.dumps(designed),
-        "study_feasible": int(result.feasible),
-        "study_failing_targets": json.dumps(result.failing),
-        "study_report": result.message,
-        "date_created": now,
-        "history": f"{now}: {command or 'study.analyses.design'}",
-        "provenance": json.dumps(provenance, default=str),
-    }
-    return xr.Dataset({k: xr.Variable(*v) for k, v in variables.items()},
-                      coords={k: xr.Variable(*v) for k, v in coords.items()}, attrs=attrs)
+    return variables

@@ -707,15 +707,7 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
     started = time.perf_counter()
     data = spec.measurements
     problem = _Problem(spec.start, spec.free, data, spec.coupling)
-    model0, _ = model_values(problem.params(problem.start()), data, spec.coupling)
-    bad = np.flatnonzero(~np.isfinite(model0))
-    if bad.size:
-        rows = ", ".join(f"{data['source'].values[i]} line {int(data['line'].values[i])}"
-                         for i in bad[:5])
-        raise SpecError(f"{spec.path}: the model has no value at the start values for "
-                        f"{rows} (lift-off or no steady orbit); change the start values")
-    velocity = np.flatnonzero(data["quantity"].values == "velocity")
-    check_velocity_units(data, velocity, float(np.max(np.abs(model0[velocity]), initial=0.0)))
+    _check_start(spec, problem)
     solution = _minimise(problem, spec.max_evaluations)
     x = solution.x
     names = problem.names
@@ -728,6 +720,47 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
     jac = problem.physical_jacobian(x)
     lower = np.array([spec.free[n][0] for n in names])
     upper = np.array([spec.free[n][1] for n in names])
+    cov, degenerate, se, corr, identifiable = _uncertainty(jac, lower, upper)
+    p_value = chi2_p_value(chi2, dof)
+    warnings = [
+        *_bound_warnings(spec, names, estimate, p, lower, upper),
+        *_identifiability_warnings(names, identifiable, degenerate, se),
+        *_quality_warnings(spec, chi2, dof, p_value, resid, model, solution),
+    ]
+    profile_values, profile_chi2 = _profiles(spec, problem, p, identifiable, lower, upper,
+                                             progress)
+    return FitResult(
+        names=names, estimate=estimate, standard_error=se, lower=lower, upper=upper,
+        start=np.array([float(spec.start[n]) for n in names]), covariance=cov,
+        correlation=corr, identifiable=identifiable, model=model, status=status, chi2=chi2,
+        dof=dof, profile_values=profile_values, profile_chi2=profile_chi2,
+        success=bool(solution.success), message=str(solution.message),
+        evaluations=problem.evaluations, wall_seconds=time.perf_counter() - started,
+        warnings=warnings,
+    )
+
+
+def _check_start(spec: FitSpec, problem: _Problem) -> None:
+    """Refuse start values at which some row has no model value, and velocities in the
+    wrong units (:func:`study.analyses.measurements.check_velocity_units`)."""
+    data = spec.measurements
+    model0, _ = model_values(problem.params(problem.start()), data, spec.coupling)
+    bad = np.flatnonzero(~np.isfinite(model0))
+    if bad.size:
+        rows = ", ".join(f"{data['source'].values[i]} line {int(data['line'].values[i])}"
+                         for i in bad[:5])
+        raise SpecError(f"{spec.path}: the model has no value at the start values for "
+                        f"{rows} (lift-off or no steady orbit); change the start values")
+    velocity = np.flatnonzero(data["quantity"].values == "velocity")
+    check_velocity_units(data, velocity, float(np.max(np.abs(model0[velocity]), initial=0.0)))
+
+
+def _uncertainty(jac: NDArray[np.float64], lower: NDArray[np.float64],
+                 upper: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_],
+                                                      NDArray[np.float64], NDArray[np.float64],
+                                                      NDArray[np.bool_]]:
+    """Covariance, null directions, standard errors, correlation and which parameters
+    the data fix, from the Jacobian at the estimate and the bounds of the search."""
     cov, degenerate = _covariance(jac, upper - lower)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, np.inf))
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -736,28 +769,53 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
     np.fill_diagonal(corr, np.where(np.isfinite(se) & (se > 0), 1.0, np.nan))
     identifiable = ~degenerate & np.isfinite(se) & (se <= UNIDENTIFIABLE_FRACTION
                                                       * (upper - lower))
-    warnings = _bound_warnings(spec, names, estimate, p, lower, upper)
+    return cov, degenerate, se, corr, identifiable
+
+
+def _identifiability_warnings(names: list[str], identifiable: NDArray[np.bool_],
+                              degenerate: NDArray[np.bool_], se: NDArray[np.float64]
+                              ) -> list[str]:
+    """A warning for every parameter the data do not fix, saying why and what to do."""
+    out = []
     for j in np.flatnonzero(~identifiable):
         why = ("the data do not depend on it (or only through a combination with other "
                "parameters)" if degenerate[j] else
                f"its standard error {se[j]:.3g}{spoken(PARAMETERS[names[j]].units)} is more than "
                f"{UNIDENTIFIABLE_FRACTION:g} of its bounds' width")
-        warnings.append(f"parameter {names[j]} is not identifiable from these data: {why}; "
-                        f"see its chi^2 profile (profile_chi2 in the file); fix {names[j]} "
-                        "in [structure] (drop it from [fit] free) or add measurements that "
-                        "depend on it")
-    p_value = chi2_p_value(chi2, dof)
-    if p_value < CHI2_P_LIMIT:
-        warnings.append(_misfit_warning(spec, chi2, dof, p_value, resid))
-    if dof <= 0:
-        warnings.append(f"{data.sizes['measurement']} measurements for {len(names)} free "
-                        "parameters: no degree of freedom left, chi^2 per dof undefined")
-    if not np.all(np.isfinite(model)):
-        warnings.append("the model has no value (lift-off or no orbit) at the estimate for "
-                        f"{int(np.sum(~np.isfinite(model)))} rows")
-    if not solution.success:
-        warnings.append(f"the optimiser stopped: {solution.message}")
+        out.append(f"parameter {names[j]} is not identifiable from these data: {why}; "
+                   f"see its chi^2 profile (profile_chi2 in the file); fix {names[j]} "
+                   "in [structure] (drop it from [fit] free) or add measurements that "
+                   "depend on it")
+    return out
 
+
+def _quality_warnings(spec: FitSpec, chi2: float, dof: int, p_value: float,
+                      resid: NDArray[np.float64], model: NDArray[np.float64],
+                      solution: Any) -> list[str]:
+    """Warnings on the fit as a whole: a misfit, no degree of freedom, rows without a
+    model value at the estimate, an optimiser that stopped short."""
+    data = spec.measurements
+    out = []
+    if p_value < CHI2_P_LIMIT:
+        out.append(_misfit_warning(spec, chi2, dof, p_value, resid))
+    if dof <= 0:
+        out.append(f"{data.sizes['measurement']} measurements for {len(spec.free)} free "
+                   "parameters: no degree of freedom left, chi^2 per dof undefined")
+    if not np.all(np.isfinite(model)):
+        out.append("the model has no value (lift-off or no orbit) at the estimate for "
+                   f"{int(np.sum(~np.isfinite(model)))} rows")
+    if not solution.success:
+        out.append(f"the optimiser stopped: {solution.message}")
+    return out
+
+
+def _profiles(spec: FitSpec, problem: _Problem, best: dict[str, float | None],
+              identifiable: NDArray[np.bool_], lower: NDArray[np.float64],
+              upper: NDArray[np.float64], progress: Callable[[str], None] | None
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The chi^2 profiles ``spec.profile`` asks for (:func:`_profile`): the values each
+    parameter is held at and the chi^2 there, NaN rows for those not profiled."""
+    names = problem.names
     npoints = spec.profile_points
     profile_values = np.full((len(names), npoints), np.nan)
     profile_chi2 = np.full((len(names), npoints), np.nan)
@@ -771,16 +829,8 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
             low, high = problem.lower[j], problem.upper[j]
         values = np.linspace(low, high, npoints)
         profile_values[j] = values
-        profile_chi2[j] = _profile(spec, p, names[j], values)
-    return FitResult(
-        names=names, estimate=estimate, standard_error=se, lower=lower, upper=upper,
-        start=np.array([float(spec.start[n]) for n in names]), covariance=cov,
-        correlation=corr, identifiable=identifiable, model=model, status=status, chi2=chi2,
-        dof=dof, profile_values=profile_values, profile_chi2=profile_chi2,
-        success=bool(solution.success), message=str(solution.message),
-        evaluations=problem.evaluations, wall_seconds=time.perf_counter() - started,
-        warnings=warnings,
-    )
+        profile_chi2[j] = _profile(spec, best, names[j], values)
+    return profile_values, profile_chi2
 
 
 def _bound_warnings(spec: FitSpec, names: list[str], estimate: NDArray[np.float64],
@@ -868,17 +918,45 @@ def _profile(spec: FitSpec, best: dict[str, float | None], name: str,
 def fit_dataset(spec: FitSpec, result: FitResult, command: str = "") -> xr.Dataset:
     """The fit as a self-describing dataset (the layout of ``study-fit-v1``)."""
     from study.engine.fingerprint import code_fingerprint
-    from study.engine.provenance import environment, git_state, package_version, utc_now
+    from study.engine.provenance import utc_now
 
     data = spec.measurements
-    names = result.names
-    units = [PARAMETERS[n].units for n in names]
-    long_names = [PARAMETERS[n].long_name for n in names]
     n_rows = data.sizes["measurement"]
-    residual = result.model - data["value"].values
     code = code_fingerprint(("study.analyses.fit",)).sha256
     now = utc_now()
-    provenance = {
+    variables = {**_parameter_variables(result), **_measurement_variables(data, result)}
+    attrs = {
+        "Conventions": "CF-1.11",
+        "title": spec.title,
+        "study_result_schema": FIT_RESULT_SCHEMA,
+        "study_fit_format": FIT_FORMAT,
+        "study_fit_name": spec.name,
+        "study_spec": spec.text,
+        "study_spec_sha256": spec.sha256,
+        "study_code_sha256": code,
+        "study_coupling": spec.coupling,
+        "study_measurement_files": json.dumps(sorted(set(map(str, data["source"].values)))),
+        "study_fitted_structure": json.dumps(
+            {k: v for k, v in _fitted(spec, result).items() if v is not None}),
+        "study_success": int(result.success),
+        "study_warnings": json.dumps(result.warnings),
+        "date_created": now,
+        "history": f"{now}: {command or 'study.analyses.fit'}",
+        "provenance": json.dumps(_fit_provenance(spec, result, code, now, command),
+                                 default=str),
+    }
+    ds = xr.Dataset({k: xr.Variable(*v) for k, v in variables.items()}, coords={
+        k: xr.Variable(*v) for k, v in _parameter_coords(result.names).items()}, attrs=attrs)
+    assert n_rows == ds.sizes["measurement"]
+    return ds
+
+
+def _fit_provenance(spec: FitSpec, result: FitResult, code: str, now: str, command: str
+                    ) -> dict[str, Any]:
+    """The run's provenance record: spec, code, environment and how the search went."""
+    from study.engine.provenance import environment, git_state, package_version
+
+    return {
         "spec": spec.text, "spec_sha256": spec.sha256, "code_sha256": code,
         "package_version": package_version(), **git_state(),
         "environment": environment(), "end_time": now, "command": command,
@@ -887,8 +965,13 @@ def fit_dataset(spec: FitSpec, result: FitResult, command: str = "") -> xr.Datas
         "evaluations": result.evaluations, "wall_seconds": result.wall_seconds,
         "message": result.message,
     }
-    pdim, qdim = ("parameter",), ("parameter_2",)
-    coords = {
+
+
+def _parameter_coords(names: list[str]) -> dict[str, tuple[Any, ...]]:
+    """The free parameters' axes (twice, for matrices), with their units and long names."""
+    units = [PARAMETERS[n].units for n in names]
+    long_names = [PARAMETERS[n].long_name for n in names]
+    return {
         "parameter": ("parameter", np.array(names, dtype=object),
                       {"long_name": "free parameter"}),
         "parameter_2": ("parameter_2", np.array(names, dtype=object),
@@ -898,16 +981,15 @@ def fit_dataset(spec: FitSpec, result: FitResult, command: str = "") -> xr.Datas
         "parameter_long_name": ("parameter", np.array(long_names, dtype=object),
                                 {"long_name": "what the parameter is"}),
     }
+
+
+def _parameter_variables(result: FitResult) -> dict[str, tuple[Any, ...]]:
+    """The variables over the free parameters (estimates, errors, profiles) and the
+    fit's scalars (chi^2, degrees of freedom, p-value)."""
+    pdim, qdim = ("parameter",), ("parameter_2",)
     per_unit = {"units_variable": "parameter_units",
                 "comment": "in each parameter's own units (parameter_units)"}
-
-    def status_names() -> NDArray[Any]:
-        from study.model.status import Status
-
-        return np.array(["" if s < 0 else Status(int(s)).name for s in result.status],
-                        dtype=object)
-
-    variables = {
+    return {
         "estimate": (pdim, result.estimate, {"long_name": "best estimate", **per_unit}),
         "standard_error": (pdim, result.standard_error, {
             "long_name": "standard error (one standard deviation, sigma taken as absolute)",
@@ -945,17 +1027,19 @@ def fit_dataset(spec: FitSpec, result: FitResult, command: str = "") -> xr.Datas
                         f"{CHI2_P_LIMIT:g} the fit warns (study_warnings); NaN: no degree "
                         "of freedom")}),
     }
+
+
+def _measurement_variables(data: xr.Dataset, result: FitResult) -> dict[str, tuple[Any, ...]]:
+    """The variables over the measurement rows: the rows as read, the model's value and
+    the residuals at the estimate, and the solver's status of velocity rows."""
+    from study.model.status import Status
+
     mdim = ("measurement",)
-    rows = {
-        "quantity": data["quantity"].values, "f": data["f"].values, "a": data["a"].values,
-        "value": data["value"].values, "sigma": data["sigma"].values,
-        "value_units": data["value_units"].values, "direction": data["direction"].values,
-        "m_add": data["m_add"].values, "M": data["M"].values,
-        "source": data["source"].values, "line": data["line"].values,
-    }
-    for name, values in rows.items():
-        attrs = dict(data[name].attrs)
-        variables[name] = (mdim, values, attrs)
+    residual = result.model - data["value"].values
+    variables = {}
+    for name in ("quantity", "f", "a", "value", "sigma", "value_units", "direction",
+                 "m_add", "M", "source", "line"):
+        variables[name] = (mdim, data[name].values, dict(data[name].attrs))
     variables["model"] = (mdim, result.model, {
         "long_name": "fitted model's value", "comment": "units by quantity, see value_units"})
     variables["residual"] = (mdim, residual, {
@@ -963,31 +1047,11 @@ def fit_dataset(spec: FitSpec, result: FitResult, command: str = "") -> xr.Datas
         "comment": "units by quantity, see value_units"})
     variables["normalized_residual"] = (mdim, residual / data["sigma"].values, {
         "long_name": "residual over sigma", "units": DIMENSIONLESS})
-    variables["solver_status"] = (mdim, status_names(), {
+    status_names = np.array(["" if s < 0 else Status(int(s)).name for s in result.status],
+                            dtype=object)
+    variables["solver_status"] = (mdim, status_names, {
         "long_name": "solver status of velocity rows at the estimate (empty: closed form)"})
-    attrs = {
-        "Conventions": "CF-1.11",
-        "title": spec.title,
-        "study_result_schema": FIT_RESULT_SCHEMA,
-        "study_fit_format": FIT_FORMAT,
-        "study_fit_name": spec.name,
-        "study_spec": spec.text,
-        "study_spec_sha256": spec.sha256,
-        "study_code_sha256": code,
-        "study_coupling": spec.coupling,
-        "study_measurement_files": json.dumps(sorted(set(map(str, rows["source"])))),
-        "study_fitted_structure": json.dumps(
-            {k: v for k, v in _fitted(spec, result).items() if v is not None}),
-        "study_success": int(result.success),
-        "study_warnings": json.dumps(result.warnings),
-        "date_created": now,
-        "history": f"{now}: {command or 'study.analyses.fit'}",
-        "provenance": json.dumps(provenance, default=str),
-    }
-    ds = xr.Dataset({k: xr.Variable(*v) for k, v in variables.items()}, coords={
-        k: xr.Variable(*v) for k, v in coords.items()}, attrs=attrs)
-    assert n_rows == ds.sizes["measurement"]
-    return ds
+    return variables
 
 
 def _fitted(spec: FitSpec, result: FitResult) -> dict[str, float | None]:

@@ -36,6 +36,7 @@ __all__ = [
     "require_dims",
     "restore_dim",
     "save",
+    "scene_suptitle",
     "selected_keys",
     "selection_text",
     "single_structure",
@@ -310,8 +311,7 @@ def restore_dim(dataset: xr.Dataset, dim: str, names: Iterable[str]) -> xr.Datas
 
 def _first(dataset: xr.Dataset, dim: str) -> str:
     if dim in dataset.coords and dataset[dim].ndim == 1 and dataset[dim].size:
-        value = dataset[dim].values[0]
-        return f"{float(value):g}" if np.asarray(value).dtype.kind in "iuf" else str(value)
+        return _text(dataset[dim].values[0])
     return "0"
 
 
@@ -499,6 +499,15 @@ def disk_text(dataset: xr.Dataset, tex: bool = True) -> str:
             f"({mm * value('plate_attachment_forward'):.3g}, "
             f"{mm * value('plate_attachment_left'):.3g}) mm")
     return f"{disk}\nplates: " + "; ".join(plates)
+
+
+def scene_suptitle(fig: plt.Figure, dataset: xr.Dataset, head: str, fontsize: float) -> None:
+    """A scene figure's title: ``head``, then the disk's and plates' parameters
+    (:func:`disk_text`) and what ``--sel`` selected, each on its own line if any."""
+    selected = selection_text(dataset)
+    disk = disk_text(dataset)
+    fig.suptitle(head + (f"\n{disk}" if disk else "")
+                 + (f"\n{selected}" if selected else ""), fontsize=fontsize)
 
 
 def parameter_text(dataset: xr.Dataset, omit: Iterable[str] = ()) -> str:

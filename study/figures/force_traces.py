@@ -138,27 +138,7 @@ def draw(dataset: xr.Dataset, output: Path,
     """
     dataset = single_structure(dataset, "force-traces")
     structure = common.structure_from_dataset(dataset)
-    g, cs = structure.g, structure.cs
-    phase = np.linspace(0.0, PERIODS, 1601)  # time in drive periods
-    paper = is_paper_file(dataset)
-    if points:
-        chosen = {f"point {k + 1}": (float(fp), float(ap))
-                  for k, (fp, ap) in enumerate(points)}
-        which = "at the points asked for"
-    elif paper:
-        chosen = dict(PAPER_POINTS)
-        which = "at the paper's points S, P, N, PN"
-    else:
-        chosen = regime_points(dataset)
-        which = "at a point of each region " + ", ".join(chosen) + " of the file's grid"
-        if not chosen:
-            selected = dataset.attrs.get("study_selection")
-            grid = f"the grid as selected ({selected})" if selected else "the grid"
-            raise FigureError(
-                "figure 'force-traces' draws the forces at a point of each region of the "
-                f"file's grid of (f, a), but {grid} holds no point with 0 < a below "
-                "lift-off; name points with --point F,A"
-                + (" or select other values of f and a" if selected else ""))
+    chosen, which = _chosen_points(dataset, points)
     ncols = 1 if len(chosen) == 1 else 2
     nrows = -(-len(chosen) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(5.0 * ncols, 3.3 * nrows + 0.6),
@@ -168,39 +148,10 @@ def draw(dataset: xr.Dataset, output: Path,
     lowest = highest = 0.0
     any_lift = False
     for ax, (name, (f_point, a_point)) in zip(axes.flat, chosen.items(), strict=False):
-        t = phase / f_point
-        n = normal_force(structure, f_point, a_point, t)
-        tau = tangential_force(structure, f_point, a_point, t)
-        lifted = n < 0.0  # outside the model: neither slip criterion applies
-        forward = (tau > cs * n) & ~lifted
-        backward = (-tau > cs * n) & ~lifted
-        strip = ax.get_xaxis_transform()
-        ax.fill_between(phase, 0, 1, where=forward, color="tab:blue", alpha=0.18, lw=0,
-                        transform=strip)
-        ax.fill_between(phase, 0, 1, where=backward, color="tab:red", alpha=0.18, lw=0,
-                        transform=strip)
-        if np.any(lifted):
-            any_lift = True
-            ax.fill_between(phase, 0, 1, where=lifted, facecolor="none", edgecolor="0.4",
-                            hatch="xx", lw=0, transform=strip)
-        ax.axhline(0.0, color="0.6", lw=0.6)
-        ax.plot(phase, n / g, color="black", lw=1.6)
-        ax.plot(phase, -n / g, color="black", lw=0.9, ls=":")
-        ax.plot(phase, tau / (cs * g), color="tab:purple", lw=1.6)
-        lowest = min(lowest, float(np.min(-n / g)), float(np.min(tau / (cs * g))))
-        highest = max(highest, float(np.max(n / g)), float(np.max(tau / (cs * g))))
-
-        a_plus, a_minus = (float(x) for x in thresholds(structure, f_point))
-        model = region_of(a_point, a_plus, a_minus)
-        if name.startswith("point"):
-            region = f"{name}, region {model}"
-        else:
-            region = f"region {name}" if model == name else f"region {name} (model: {model})"
-        ax.set_title(
-            f"{region}: f = {f_point:g} Hz, a = {a_point:g} m s$^{{-2}}$\n"
-            f"{_grid_text(dataset, f_point, a_point)}",
-            fontsize=9.5,
-        )
+        lows, highs, lifted = _trace(ax, dataset, structure, name, f_point, a_point)
+        any_lift = any_lift or lifted
+        lowest = min(lowest, *lows)
+        highest = max(highest, *highs)
     pad = 0.06 * (highest - lowest)
     axes[0, 0].set(xlim=(0.0, PERIODS), ylim=(lowest - pad, highest + pad))
     for k, ax in enumerate(axes.flat[:len(chosen)]):
@@ -210,6 +161,86 @@ def draw(dataset: xr.Dataset, output: Path,
     for ax in axes[:, 0]:
         ax.set_ylabel("force per unit weight [1]")
 
+    title = f"Contact forces over two drive periods {which}"
+    traces = "forces with the base at rest and the mode on its steady response"
+    if dataset.attrs.get("study_coupling") == "two-way":
+        # Two-way coupling changes the forces only once the base slides: the traces
+        # still decide where slips start, the velocities are the file's.
+        traces += " (as in both couplings until a slip starts)"
+    title = f"{title}; velocities: {coupling_label(dataset)}"
+    fig.suptitle(f"{title.replace('; ', chr(10), 1)}\n{traces}\n{parameter_text(dataset)}",
+                 fontsize=10.5)
+    fig.legend(handles=_legend_handles(any_lift), loc="outside lower center", ncol=3,
+               fontsize=8.5, frameon=False)
+    return common.save(fig, output, dataset,
+                       f"{title} ({common.structure_text(dataset, tex=False)})")
+
+
+def _chosen_points(dataset: xr.Dataset, points: Sequence[tuple[float, float]] | None
+                   ) -> tuple[dict[str, tuple[float, float]], str]:
+    """The drive points to draw by name, and which they are for the title."""
+    if points:
+        chosen = {f"point {k + 1}": (float(fp), float(ap))
+                  for k, (fp, ap) in enumerate(points)}
+        return chosen, "at the points asked for"
+    if is_paper_file(dataset):
+        return dict(PAPER_POINTS), "at the paper's points S, P, N, PN"
+    chosen = regime_points(dataset)
+    which = "at a point of each region " + ", ".join(chosen) + " of the file's grid"
+    if not chosen:
+        selected = dataset.attrs.get("study_selection")
+        grid = f"the grid as selected ({selected})" if selected else "the grid"
+        raise FigureError(
+            "figure 'force-traces' draws the forces at a point of each region of the "
+            f"file's grid of (f, a), but {grid} holds no point with 0 < a below "
+            "lift-off; name points with --point F,A"
+            + (" or select other values of f and a" if selected else ""))
+    return chosen, which
+
+
+def _trace(ax: plt.Axes, dataset: xr.Dataset, structure, name: str, f_point: float,
+           a_point: float) -> tuple[tuple[float, float], tuple[float, float], bool]:
+    """One point's panel: n(t), -n(t) and tau(t)/cs over two periods, the phases where
+    a slip is possible shaded. Returns the lowest and the highest values drawn [1] and
+    whether the base lifts off."""
+    g, cs = structure.g, structure.cs
+    phase = np.linspace(0.0, PERIODS, 1601)  # time in drive periods
+    t = phase / f_point
+    n = normal_force(structure, f_point, a_point, t)
+    tau = tangential_force(structure, f_point, a_point, t)
+    lifted = n < 0.0  # outside the model: neither slip criterion applies
+    forward = (tau > cs * n) & ~lifted
+    backward = (-tau > cs * n) & ~lifted
+    strip = ax.get_xaxis_transform()
+    ax.fill_between(phase, 0, 1, where=forward, color="tab:blue", alpha=0.18, lw=0,
+                    transform=strip)
+    ax.fill_between(phase, 0, 1, where=backward, color="tab:red", alpha=0.18, lw=0,
+                    transform=strip)
+    if np.any(lifted):
+        ax.fill_between(phase, 0, 1, where=lifted, facecolor="none", edgecolor="0.4",
+                        hatch="xx", lw=0, transform=strip)
+    ax.axhline(0.0, color="0.6", lw=0.6)
+    ax.plot(phase, n / g, color="black", lw=1.6)
+    ax.plot(phase, -n / g, color="black", lw=0.9, ls=":")
+    ax.plot(phase, tau / (cs * g), color="tab:purple", lw=1.6)
+
+    a_plus, a_minus = (float(x) for x in thresholds(structure, f_point))
+    model = region_of(a_point, a_plus, a_minus)
+    if name.startswith("point"):
+        region = f"{name}, region {model}"
+    else:
+        region = f"region {name}" if model == name else f"region {name} (model: {model})"
+    ax.set_title(
+        f"{region}: f = {f_point:g} Hz, a = {a_point:g} m s$^{{-2}}$\n"
+        f"{_grid_text(dataset, f_point, a_point)}",
+        fontsize=9.5,
+    )
+    return ((float(np.min(-n / g)), float(np.min(tau / (cs * g)))),
+            (float(np.max(n / g)), float(np.max(tau / (cs * g)))), bool(np.any(lifted)))
+
+
+def _legend_handles(any_lift: bool) -> list:
+    """The legend of the traces (lift-off only where some panel lifts off)."""
     handles = [
         Line2D([], [], color="black", lw=1.6, label="n(t) / g  (normal)"),
         Line2D([], [], color="black", lw=0.9, ls=":", label="-n(t) / g"),
@@ -221,16 +252,4 @@ def draw(dataset: xr.Dataset, output: Path,
     if any_lift:
         handles.append(Patch(facecolor="none", edgecolor="0.4", hatch="xx",
                              label="n < 0: lift-off, model invalid"))
-    title = f"Contact forces over two drive periods {which}"
-    traces = "forces with the base at rest and the mode on its steady response"
-    if dataset.attrs.get("study_coupling") == "two-way":
-        # Two-way coupling changes the forces only once the base slides: the traces
-        # still decide where slips start, the velocities are the file's.
-        traces += " (as in both couplings until a slip starts)"
-    title = f"{title}; velocities: {coupling_label(dataset)}"
-    fig.suptitle(f"{title.replace('; ', chr(10), 1)}\n{traces}\n{parameter_text(dataset)}",
-                 fontsize=10.5)
-    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,
-               frameon=False)
-    return common.save(fig, output, dataset,
-                       f"{title} ({common.structure_text(dataset, tex=False)})")
+    return handles

@@ -71,14 +71,50 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     dataset = restore_dim(dataset, "branch", ("frontier_frequency",))
     f = dataset["f"].values
     a = dataset["a"].values
+
+    fig, ax = plt.subplots(figsize=(8.0, 6.0), layout="constrained")
+    sliding, stuck = _velocity_map(fig, ax, dataset)
+    handles = _curves(ax, dataset)
+    handles.append(Patch(facecolor="0.62", edgecolor="0.3", lw=0.5,
+                         label="lift-off: model invalid, no velocity"))
+    # The paper's points belong to the paper's structure: drawn on its maps only.
+    points = PAPER_POINTS if is_paper_file(dataset) else {}
+    if any(f[0] <= fp <= f[-1] and a[0] <= ap <= a[-1] for fp, ap in points.values()):
+        handles.append(Line2D([], [], ls="none", marker="o", ms=5, mfc="white", mec="black",
+                              label="the paper's points in regions S, P, N, PN"))
+    if np.any(sliding):
+        handles.append(Patch(facecolor="none", edgecolor="black", hatch="////",
+                             label="continuous sliding (no stick)"))
+    if np.any(stuck):
+        handles.append(Patch(facecolor="black", label="not converged: no velocity"))
+
+    ax.set(xlim=(f[0], f[-1]), ylim=(a[0], a[-1]), xlabel="drive frequency f [Hz]",
+           ylabel="drive acceleration a [m s$^{-2}$]")
+    _paper_points(ax, f, a, points)
+    title = (f"Mean steady velocity over drive frequency and acceleration, "
+             f"{coupling_label(dataset)}")
+    ax.set_title(title.replace(", ", "\n", 1) + f"\n{parameter_text(dataset)}",
+                 fontsize=11)
+    # Three columns fit the figure's width up to six entries; more take two.
+    fig.legend(handles=handles, loc="outside lower center",
+               ncol=3 if len(handles) <= 6 else 2, fontsize=8.5, frameon=False)
+    return common.save(fig, output, dataset,
+                       f"{title} ({common.structure_text(dataset, tex=False)})")
+
+
+def _velocity_map(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The velocity over (f, a) with its colour bar, lift-off and not-converged points
+    as flat layers, continuous sliding hatched. Returns where the structure slides
+    continuously and where the solver did not converge, over (a, f)."""
+    f = dataset["f"].values
+    a = dataset["a"].values
     velocity = 1e3 * dataset["velocity"].transpose("a", "f").values  # mm s-1 over (a, f)
     status = dataset["status"].transpose("a", "f").values
     valid = np.isin(status, VALID)
     lifted = status == Status.LIFT_OFF
     stuck = status == Status.NOT_CONVERGED
     sliding = status == Status.CONTINUOUS_SLIDING
-
-    fig, ax = plt.subplots(figsize=(8.0, 6.0), layout="constrained")
     shown = np.ma.masked_where(~valid | ~np.isfinite(velocity), velocity)
     limit = float(np.max(np.abs(shown))) if shown.count() else 0.0
     limit = limit if limit > 0 else 1.0
@@ -91,7 +127,14 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     if np.any(sliding):
         ax.contourf(f, a, sliding.astype(float), levels=[0.5, 1.5], colors="none",
                     hatches=["////"])
+    return sliding, stuck
 
+
+def _curves(ax: plt.Axes, dataset: xr.Dataset) -> list:
+    """The thresholds, the lift-off acceleration, the frontier branches and, beside a
+    two-way study, the one-way model's frontier; returns their legend handles."""
+    f = dataset["f"].values
+    a = dataset["a"].values
     handles = []
     lines = [
         ("a_star_plus", dict(color="tab:blue", lw=1.8), "$a^*_+$: forward slips start"),
@@ -118,21 +161,12 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                    linewidths=1.1, linestyles="--", zorder=4)
         handles.append(Line2D([], [], color="0.25", lw=1.1, ls="--",
                               label="one-way (paper's) model: v changes sign"))
-    handles.append(Patch(facecolor="0.62", edgecolor="0.3", lw=0.5,
-                         label="lift-off: model invalid, no velocity"))
-    # The paper's points belong to the paper's structure: drawn on its maps only.
-    points = PAPER_POINTS if is_paper_file(dataset) else {}
-    if any(f[0] <= fp <= f[-1] and a[0] <= ap <= a[-1] for fp, ap in points.values()):
-        handles.append(Line2D([], [], ls="none", marker="o", ms=5, mfc="white", mec="black",
-                              label="the paper's points in regions S, P, N, PN"))
-    if np.any(sliding):
-        handles.append(Patch(facecolor="none", edgecolor="black", hatch="////",
-                             label="continuous sliding (no stick)"))
-    if np.any(stuck):
-        handles.append(Patch(facecolor="black", label="not converged: no velocity"))
+    return handles
 
-    ax.set(xlim=(f[0], f[-1]), ylim=(a[0], a[-1]), xlabel="drive frequency f [Hz]",
-           ylabel="drive acceleration a [m s$^{-2}$]")
+
+def _paper_points(ax: plt.Axes, f: np.ndarray, a: np.ndarray,
+                  points: dict[str, tuple[float, float]]) -> None:
+    """The paper's points S, P, N, PN that lie on the map, labelled."""
     for name, (f_point, a_point) in points.items():
         if f[0] <= f_point <= f[-1] and a[0] <= a_point <= a[-1]:
             ax.plot(f_point, a_point, marker="o", ms=5, mfc="white", mec="black", zorder=5)
@@ -140,12 +174,3 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                         ha="left", va="bottom", fontsize=12, fontweight="bold", zorder=5,
                         bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.3",
                                   alpha=0.85))
-    title = (f"Mean steady velocity over drive frequency and acceleration, "
-             f"{coupling_label(dataset)}")
-    ax.set_title(title.replace(", ", "\n", 1) + f"\n{parameter_text(dataset)}",
-                 fontsize=11)
-    # Three columns fit the figure's width up to six entries; more take two.
-    fig.legend(handles=handles, loc="outside lower center",
-               ncol=3 if len(handles) <= 6 else 2, fontsize=8.5, frameon=False)
-    return common.save(fig, output, dataset,
-                       f"{title} ({common.structure_text(dataset, tex=False)})")

@@ -14,6 +14,7 @@ The label colours and the flag decoding are shared with the other steering figur
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -23,13 +24,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
 
 from study.figures import FigureError
-from study.figures.common import (
-    disk_text,
-    restore_dim,
-    save,
-    selected_keys,
-    selection_text,
-)
+from study.figures.common import restore_dim, save, scene_suptitle, selected_keys
 from study.model.units import DEGREE
 
 __all__ = [
@@ -221,10 +216,31 @@ def _segments(dataset: xr.Dataset) -> list[np.ndarray]:
     return [np.flatnonzero(index == value) for value in dataset["segment"].values]
 
 
-def _plot(dataset: xr.Dataset) -> plt.Figure:
-    """The steering figure (not saved): path lines carry gid ``segment-K``."""
-    check_scene_kind(dataset, "steering", "trajectory")
-    dataset = _selected(dataset)
+@dataclass(frozen=True)
+class _Trajectory:
+    """What the steering figure draws, read from the file: positions in mm, heading in
+    degree, and per segment its label, samples, number and status."""
+
+    x: np.ndarray
+    y: np.ndarray
+    heading: np.ndarray
+    time: np.ndarray
+    labels: list[str]
+    frequency: np.ndarray
+    colors: dict[str, str]
+    samples: list[np.ndarray]
+    numbers: np.ndarray
+    radius: float
+    failed: dict[str, list[int]]  # status name: the segments that did not complete
+
+    def ends(self, segments: list[int]) -> list[int]:
+        """The last sample of each segment (the run's last for one never reached)."""
+        return [int(self.samples[k][-1]) if self.samples[k].size else self.x.size - 1
+                for k in segments]
+
+
+def _read_trajectory(dataset: xr.Dataset) -> _Trajectory:
+    """The trajectory and its segments, checked."""
     for name in ("x", "y", "heading", "segment_index"):
         if dataset[name].dims != ("t",):
             raise FigureError(
@@ -238,9 +254,6 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     if x.size == 0:
         raise FigureError("figure 'steering' needs a trajectory with samples; this one is empty")
     labels = labels_of(dataset["segment_label"].values)
-    frequency = dataset["frequency"].values
-    colors = label_colors(labels)
-    samples = _segments(dataset)
     n_segments = len(labels)
     if "segment_status" in dataset:
         status = flag_codes(dataset["segment_status"], missing=0)
@@ -248,23 +261,46 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     else:
         status = np.zeros(n_segments, dtype=int)
         names = dict(enumerate(SEGMENT_STATUS))
-    radius = 1e3 * float(dataset.attrs.get("disk_radius", np.nan))
-    numbers = (dataset["segment"].values if "segment" in dataset.coords
-               else np.arange(n_segments))
     cut = "t" in selected_keys(dataset)
+    failed: dict[str, list[int]] = {}
+    for k in np.flatnonzero(status != 0):
+        if cut and not _ends_within(dataset, k, time):
+            continue  # the times selected stop before this segment's end
+        failed.setdefault(names.get(int(status[k]), f"status {status[k]}"), []).append(int(k))
+    return _Trajectory(
+        x=x, y=y, heading=heading, time=time, labels=labels,
+        frequency=dataset["frequency"].values, colors=label_colors(labels),
+        samples=_segments(dataset),
+        numbers=(dataset["segment"].values if "segment" in dataset.coords
+                 else np.arange(n_segments)),
+        radius=1e3 * float(dataset.attrs.get("disk_radius", np.nan)), failed=failed)
 
+
+def _plot(dataset: xr.Dataset) -> plt.Figure:
+    """The steering figure (not saved): path lines carry gid ``segment-K``."""
+    check_scene_kind(dataset, "steering", "trajectory")
+    dataset = _selected(dataset)
+    path = _read_trajectory(dataset)
     fig, (left, right) = plt.subplots(
         1, 2, figsize=(12.0, 5.6), layout="constrained", width_ratios=(1.15, 1.0))
+    _draw_path(left, path)
+    _draw_heading(right, dataset, path)
+    scene_suptitle(fig, dataset, _title(dataset, path), 10)
+    return fig
 
-    # Left: the path, coloured by segment label.
-    for k, (label, picked) in enumerate(zip(labels, samples, strict=True)):
+
+def _draw_path(left: plt.Axes, path: _Trajectory) -> None:
+    """Left: the path, coloured by segment label, with the disk, headings and the ends
+    of segments that did not complete."""
+    x, y, radius, samples, colors = path.x, path.y, path.radius, path.samples, path.colors
+    for k, (label, picked) in enumerate(zip(path.labels, samples, strict=True)):
         if picked.size == 0:
             continue
         first, last = int(picked[0]), int(picked[-1])
         span = slice(max(first - 1, 0), last + 1)  # joined to the previous segment's end
         (line,) = left.plot(x[span], y[span], color=colors[label], lw=1.8,
                             solid_capstyle="round", zorder=4)
-        line.set_gid(f"segment-{numbers[k]}")
+        line.set_gid(f"segment-{path.numbers[k]}")
     if x.size == 1 or not any(p.size for p in samples):
         left.plot(x, y, ".", color="0.3")
     extent = max(float(np.nanmax(x) - np.nanmin(x)), float(np.nanmax(y) - np.nanmin(y)), 1e-3)
@@ -275,15 +311,16 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
                               ls="--"))
     poses = sorted({0, x.size - 1} | {int(p[0]) for p in samples if p.size})
     for i in poses:
-        if np.isfinite(x[i]) and np.isfinite(y[i]) and np.isfinite(heading[i]):
-            heading_arrow(left, x[i], y[i], heading[i], arrow)
+        if np.isfinite(x[i]) and np.isfinite(y[i]) and np.isfinite(path.heading[i]):
+            heading_arrow(left, x[i], y[i], path.heading[i], arrow)
     left.plot(x[0], y[0], "o", color="black", ms=4)
     left.annotate("start", (x[0], y[0]), xytext=(4, -10), textcoords="offset points",
                   fontsize=8)
 
+    labels = path.labels
     handles: list = [
         Line2D([], [], color=colors[label], lw=2.0,
-               label=f"{label} {frequency_text(frequency[[lab == label for lab in labels]])}")
+               label=f"{label} {frequency_text(path.frequency[[lab == label for lab in labels]])}")
         for label in colors
     ]
     handles.append(Line2D([], [], color="black", lw=0.8, marker=r"$\rightarrow$", ms=9,
@@ -294,21 +331,16 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
 
     # Segments that did not complete: red marks at their end (where the run stopped
     # for those never reached).
-    failed: dict[str, list[int]] = {}
-    for k in np.flatnonzero(status != 0):
-        if cut and not _ends_within(dataset, k, time):
-            continue  # the times selected stop before this segment's end
-        failed.setdefault(names.get(int(status[k]), f"status {status[k]}"), []).append(int(k))
-    for name, segments in failed.items():
+    for name, segments in path.failed.items():
         marker = STATUS_MARKERS.get(name, "x")
-        ends = [int(samples[k][-1]) if samples[k].size else x.size - 1 for k in segments]
+        ends = path.ends(segments)
         face = "none" if marker == "o" else "tab:red"
         left.plot(x[ends], y[ends], marker, ls="none", color="tab:red", mfc=face, ms=9,
                   mew=1.8, gid=f"status-{name}")
         handles.append(Line2D([], [], marker=marker, ls="none", color="tab:red", mfc=face,
                               ms=8, mew=1.8,
                               label=f"{name}: segment{'s' if len(segments) > 1 else ''} "
-                                    f"{', '.join(str(numbers[k]) for k in segments)}"))
+                                    f"{', '.join(str(path.numbers[k]) for k in segments)}"))
     left.set_aspect("equal", adjustable="datalim")
     left.set_xlabel("x [mm]")
     left.set_ylabel("y [mm]")
@@ -317,10 +349,13 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     left.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13),
                 ncol=2, frameon=False)
 
-    # Right: heading over time, segments shaded by label.
+
+def _draw_heading(right: plt.Axes, dataset: xr.Dataset, path: _Trajectory) -> None:
+    """Right: heading over time, segments shaded by label."""
+    time, samples = path.time, path.samples
     starts = dataset["start_time"].values if "start_time" in dataset else None
     ends_t = dataset["end_time"].values if "end_time" in dataset else None
-    for k, label in enumerate(labels):
+    for k, label in enumerate(path.labels):
         if starts is not None and ends_t is not None:
             t0, t1 = float(starts[k]), float(ends_t[k])
         elif samples[k].size:
@@ -328,12 +363,12 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         else:
             continue
         if np.isfinite(t0) and np.isfinite(t1) and t1 > t0:
-            right.axvspan(t0, t1, color=colors[label], alpha=0.18, lw=0)
-    degrees = heading
+            right.axvspan(t0, t1, color=path.colors[label], alpha=0.18, lw=0)
+    degrees = path.heading
     right.plot(time, degrees, color="black", lw=1.2, marker="." if time.size == 1 else None)
-    for name, segments in failed.items():
+    for name, segments in path.failed.items():
         marker = STATUS_MARKERS.get(name, "x")
-        ends = [int(samples[k][-1]) if samples[k].size else x.size - 1 for k in segments]
+        ends = path.ends(segments)
         right.plot(time[ends], degrees[ends], marker, ls="none", color="tab:red",
                    mfc="none" if marker == "o" else "tab:red", ms=9, mew=1.8, clip_on=False)
     right.set_xlabel("time t [s]")
@@ -343,24 +378,23 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         right.set_xlim(float(time[0]), float(time[-1]) if time[-1] > time[0] else None)
     right.set_title("heading; segments shaded by label", fontsize=10)
 
+
+def _title(dataset: xr.Dataset, path: _Trajectory) -> str:
+    """The figure's heading: segments (or the pose selected), drive, path length, time."""
+    time, n_segments = path.time, len(path.labels)
     parts = [f"{n_segments} segment{'s' if n_segments != 1 else ''}"]
     if time.size == 1:  # one time selected (--sel t=10): the pose then
         parts = [f"the pose at t = {float(time[0]):g} s, in segment "
-                 + ", ".join(f"{numbers[k]} ({labels[k]})" for k in range(n_segments)
-                             if samples[k].size)]
+                 + ", ".join(f"{path.numbers[k]} ({path.labels[k]})" for k in range(n_segments)
+                             if path.samples[k].size)]
     if "acceleration" in dataset:
         parts.append(f"a = {value_range_text(dataset['acceleration'].values)} m s$^{{-2}}$")
     if "path_length" in dataset and time.size > 1:
-        path = dataset["path_length"].values  # from the start of the file's trajectory
-        parts.append(f"path length {1e3 * float(path[-1] - path[0]):.1f} mm")
+        length = dataset["path_length"].values  # from the start of the file's trajectory
+        parts.append(f"path length {1e3 * float(length[-1] - length[0]):.1f} mm")
     if time.size > 1:
         parts.append(f"{float(time[-1] - time[0]):g} s")
-    selected = selection_text(dataset)
-    disk = disk_text(dataset)
-    fig.suptitle("Steering the disk by the drive frequency (paper Fig. 4A): "
-                 + ", ".join(parts) + (f"\n{disk}" if disk else "")
-                 + (f"\n{selected}" if selected else ""), fontsize=10)
-    return fig
+    return "Steering the disk by the drive frequency (paper Fig. 4A): " + ", ".join(parts)
 
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:

@@ -22,13 +22,7 @@ from matplotlib.colors import ListedColormap, Normalize
 from matplotlib.lines import Line2D
 
 from study.figures import FigureError
-from study.figures.common import (
-    disk_text,
-    require_axis,
-    restore_dim,
-    save,
-    selection_text,
-)
+from study.figures.common import require_axis, restore_dim, save, scene_suptitle
 from study.figures.steering import angle_values, check_scene_kind, flag_codes, flag_names
 from study.model.status import Status
 from study.model.units import DEGREE_PER_SECOND
@@ -133,11 +127,8 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     fig.legend(handles=marks, fontsize=8, loc="outside lower center", frameon=False,
                ncol=min(len(marks), 4))
     at = (f"a = {a[0]:g} m s$^{{-2}}$" if a.size == 1 else f"{a.size} accelerations")
-    selected = selection_text(dataset)
-    disk = disk_text(dataset)
-    fig.suptitle(f"Steering commands: steady motion of the disk over f = {low:g}-{high:g} Hz "
-                 f"at {at}" + (f"\n{disk}" if disk else "")
-                 + (f"\n{selected}" if selected else ""), fontsize=10)
+    scene_suptitle(fig, dataset, "Steering commands: steady motion of the disk over "
+                   f"f = {low:g}-{high:g} Hz at {at}", 10)
     return fig
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import textwrap
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -21,13 +22,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
 
 from study.figures import FigureError
-from study.figures.common import (
-    disk_text,
-    restore_dim,
-    save,
-    selected_keys,
-    selection_text,
-)
+from study.figures.common import restore_dim, save, scene_suptitle, selected_keys
 from study.figures.steering import angle_values, check_scene_kind, heading_arrow, labels_of
 
 __all__ = ["STRATEGY_STYLES", "draw"]
@@ -95,12 +90,39 @@ def _plan_text(dataset: xr.Dataset) -> str:
     return f"open-loop plan: {len(labels)} segments{total}: " + "; ".join(parts)
 
 
-def _plot(dataset: xr.Dataset) -> plt.Figure:
-    """The plan figure (not saved): paths carry gid ``path-STRATEGY-I`` for realisation
-    index ``I``, the miss-distance points ``miss-STRATEGY``."""
-    check_scene_kind(dataset, "steering-plan", "plan")
-    for dim, names in ALONG.items():
-        dataset = restore_dim(dataset, dim, names)
+@dataclass(frozen=True)
+class _Plan:
+    """What the plan figure draws, read from the file: positions in mm, angles in degree."""
+
+    x: np.ndarray  # (strategy, realisation, t)
+    y: np.ndarray
+    miss: np.ndarray  # (strategy, realisation, waypoint)
+    wx: np.ndarray
+    wy: np.ndarray
+    numbers: np.ndarray  # the waypoints' numbers, from 1
+    strategies: list[str]
+    styles: dict[str, tuple[str, str]]
+    clean: int | None  # the noise-free realisation
+    single: bool  # one time selected (--sel t=10): the poses at that time
+    radius: float
+    start: list[float]
+    start_heading: float
+
+    @property
+    def n_real(self) -> int:
+        return self.x.shape[1]
+
+    @property
+    def diameter(self) -> float:
+        return 2 * self.radius if np.isfinite(self.radius) and self.radius > 0 else np.nan
+
+    @property
+    def noisy(self) -> list[int]:
+        return [r for r in range(self.n_real) if r != self.clean]
+
+
+def _read_plan(dataset: xr.Dataset) -> _Plan:
+    """The plan's paths, waypoints, misses and start pose, checked."""
     for name in ("x", "y"):
         if set(dataset[name].dims) != {"strategy", "realisation", "t"}:
             raise FigureError(
@@ -116,11 +138,8 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     names = dataset["strategy_name"] if "strategy_name" in dataset.variables else (
         dataset["strategy"])
     strategies = labels_of(names.values)
-    styles = _styles(strategies)
     clean = _noise_free(dataset)
     first = 0 if clean is None else clean
-    n_real = x.shape[1]
-    single = x.shape[2] == 1  # one time selected (--sel t=10): the poses at that time
     radius = 1e3 * float(dataset.attrs.get("disk_radius", np.nan))
     start = [1e3 * float(dataset.attrs[k]) if k in dataset.attrs else np.nan
              for k in ("start_x", "start_y")]
@@ -130,73 +149,99 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     if not np.isfinite(start_heading) and "heading" in dataset:
         angle_values(dataset, "heading", "steering-plan")
         start_heading = float(dataset["heading"].transpose(*order).values[0, first, 0])
+    numbers = (dataset["waypoint"].values + 1 if "waypoint" in dataset.coords
+               else np.arange(1, wx.size + 1))
+    return _Plan(x=x, y=y, miss=miss, wx=wx, wy=wy, numbers=numbers, strategies=strategies,
+                 styles=_styles(strategies), clean=clean, single=x.shape[2] == 1,
+                 radius=radius, start=start, start_heading=start_heading)
 
+
+def _plot(dataset: xr.Dataset) -> plt.Figure:
+    """The plan figure (not saved): paths carry gid ``path-STRATEGY-I`` for realisation
+    index ``I``, the miss-distance points ``miss-STRATEGY``."""
+    check_scene_kind(dataset, "steering-plan", "plan")
+    for dim, names in ALONG.items():
+        dataset = restore_dim(dataset, dim, names)
+    plan = _read_plan(dataset)
     fig, (left, right) = plt.subplots(1, 2, figsize=(12.5, 5.8), layout="constrained",
                                       width_ratios=(1.2, 1.0))
+    _draw_paths(left, dataset, plan)
+    _draw_misses(right, dataset, plan)
+    scene_suptitle(fig, dataset, _title(dataset, plan), 9)
+    return fig
 
-    # Left: waypoints, start pose, all paths.
-    for s, strategy in enumerate(strategies):
-        color, style = styles[strategy]
-        for r in range(n_real):
-            thick = r == clean
+
+def _draw_paths(left: plt.Axes, dataset: xr.Dataset, plan: _Plan) -> None:
+    """Left: waypoints, start pose, all paths."""
+    x, y, wx, wy, radius, start = plan.x, plan.y, plan.wx, plan.wy, plan.radius, plan.start
+    for s, strategy in enumerate(plan.strategies):
+        color, style = plan.styles[strategy]
+        for r in range(plan.n_real):
+            thick = r == plan.clean
             (line,) = left.plot(x[s, r], y[s, r], ls=style, color=color,
-                                marker="o" if single else None, ms=6 if thick else 3.5,
+                                marker="o" if plan.single else None, ms=6 if thick else 3.5,
                                 lw=2.0 if thick else 0.7, alpha=1.0 if thick else 0.45,
                                 zorder=(3.5 if style != "-" else 3) if thick else 2)
             line.set_gid(f"path-{strategy}-{r}")
-    diameter = 2 * radius if np.isfinite(radius) and radius > 0 else np.nan
-    if np.isfinite(diameter):
+    if np.isfinite(plan.diameter):
         for px, py in zip(wx, wy, strict=True):
             left.add_patch(Circle((px, py), radius, fill=False, color="0.55", lw=0.7,
                                   ls=":"))
         left.add_patch(Circle(start, radius, fill=False, color="0.2", lw=1.0))
     left.plot(wx, wy, "*", color="black", ms=11, zorder=5)
-    numbers = (dataset["waypoint"].values + 1 if "waypoint" in dataset.coords
-               else np.arange(1, wx.size + 1))
-    for number, px, py in zip(numbers, wx, wy, strict=True):
+    for number, px, py in zip(plan.numbers, wx, wy, strict=True):
         left.annotate(str(number), (px, py), xytext=(6, 5), textcoords="offset points",
                       fontsize=10, fontweight="bold")
     if "planned_x" in dataset and "planned_y" in dataset:
         left.plot(1e3 * dataset["planned_x"].values, 1e3 * dataset["planned_y"].values, "s",
                   mfc="none", color="0.3", ms=6, zorder=4)
     left.plot(*start, "o", color="black", ms=4, zorder=5)
-    if np.isfinite(start_heading):
+    if np.isfinite(plan.start_heading):
         extent = max(float(np.nanmax(x) - np.nanmin(x)), float(np.nanmax(y) - np.nanmin(y)),
                      1e-3)
         length = radius if np.isfinite(radius) and radius > 0 else 0.05 * extent
-        heading_arrow(left, start[0], start[1], start_heading, length, lw=1.2, color="black")
+        heading_arrow(left, start[0], start[1], plan.start_heading, length, lw=1.2,
+                      color="black")
     left.annotate("start", start, xytext=(4, -12), textcoords="offset points", fontsize=8)
     left.set_aspect("equal", adjustable="datalim")
     left.set_xlabel("x [mm]")
     left.set_ylabel("y [mm]")
     left.grid(color="0.92", lw=0.6)
     left.set_title(f"waypoints and the positions at t = {float(dataset['t'].values[0]):g} s"
-                   if single else "waypoints and paths", fontsize=10)
+                   if plan.single else "waypoints and paths", fontsize=10)
+    left.legend(handles=_path_handles(dataset, plan), fontsize=8, loc="upper center",
+                bbox_to_anchor=(0.5, -0.13), ncol=3, frameon=False)
 
+
+def _path_handles(dataset: xr.Dataset, plan: _Plan) -> list[Line2D]:
+    """The legend of the paths' panel."""
+    styles, clean = plan.styles, plan.clean
     handles = [Line2D([], [], color=styles[s][0], ls=styles[s][1], lw=1.5,
-                      label=s.replace("_", " ")) for s in strategies]
+                      label=s.replace("_", " ")) for s in plan.strategies]
     handles += [
         *([Line2D([], [], color="0.3", lw=2.0, label="noise-free (thick)")]
           if clean is not None else []),
         *([Line2D([], [], color="0.3", lw=0.7, alpha=0.6, label="heading noise (thin)")]
-          if n_real > (clean is not None) else []),
+          if plan.n_real > (clean is not None) else []),
         Line2D([], [], marker="*", color="black", ls="none", ms=10, label="waypoint"),
     ]
     if "planned_x" in dataset:
         handles.append(Line2D([], [], marker="s", mfc="none", color="0.3", ls="none", ms=6,
                               label="plan's predicted leg end"))
-    if np.isfinite(diameter):
+    if np.isfinite(plan.diameter):
         handles.append(Line2D([], [], color="0.55", ls=":", lw=0.8,
                               label="disk outline centred on a waypoint"))
         handles.append(Line2D([], [], color="0.2", lw=1.0, label="disk at the start"))
-    left.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13),
-                ncol=3, frameon=False)
+    return handles
 
-    # Right: miss distance per waypoint.
-    n_way = wx.size
+
+def _draw_misses(right: plt.Axes, dataset: xr.Dataset, plan: _Plan) -> None:
+    """Right: miss distance per waypoint, each realisation and the noisy ones' median."""
+    strategies, styles, clean, noisy, miss = (plan.strategies, plan.styles, plan.clean,
+                                              plan.noisy, plan.miss)
+    n_way = plan.wx.size
     positions = np.arange(1, n_way + 1)
     width = 0.6 / max(len(strategies), 1)
-    noisy = [r for r in range(n_real) if r != clean]
     jitter = np.linspace(-0.35, 0.35, len(noisy)) * width if noisy else np.zeros(0)
     for s, strategy in enumerate(strategies):
         color, _ = styles[strategy]
@@ -213,15 +258,16 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
         if clean is not None:
             right.plot(centre, miss[s, clean], "D", color=color, mec="black", ms=7,
                        mew=1.0, zorder=4, gid=f"miss-{strategy}-noise-free", clip_on=False)
+    diameter = plan.diameter
     if np.isfinite(diameter):
         right.axhline(diameter, color="0.3", ls="--", lw=1.0)
         right.annotate(f"disk diameter {diameter:g} mm", (0.01, diameter),
                        xycoords=("axes fraction", "data"), xytext=(0, 3),
                        textcoords="offset points", fontsize=8, color="0.3")
-    if np.array_equal(numbers, positions):
+    if np.array_equal(plan.numbers, positions):
         right.set_xticks(positions)
     else:  # the waypoints selected, by their number
-        right.set_xticks(positions, [str(n) for n in numbers])
+        right.set_xticks(positions, [str(n) for n in plan.numbers])
     right.set_xlim(0.5, n_way + 0.5)
     right.set_ylim(bottom=0.0)
     right.set_xlabel("waypoint")
@@ -241,21 +287,21 @@ def _plot(dataset: xr.Dataset) -> plt.Figure:
     right.legend(handles=miss_handles, fontsize=8, loc="upper center",
                  bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
 
+
+def _title(dataset: xr.Dataset, plan: _Plan) -> str:
+    """The figure's heading: waypoints, strategies, the runs drawn and the plan."""
+    noisy, n_way = plan.noisy, plan.wx.size
     noise = f"{len(noisy)} realisation{'s' if len(noisy) != 1 else ''} with heading noise"
     if "realisation_heading_drift" in dataset and noisy:
         drift = angle_values(dataset, "realisation_heading_drift", "steering-plan")[noisy]
         noise += (f" (drift rms {float(np.sqrt(np.nanmean(drift ** 2))):.3g} degree per "
                   "diameter)")
-    runs = " and ".join(([] if clean is None else ["noise-free"]) + ([noise] if noisy else []))
+    runs = " and ".join(([] if plan.clean is None else ["noise-free"])
+                        + ([noise] if noisy else []))
     title = (f"Steering through {n_way} waypoint{'s' if n_way != 1 else ''}: "
-             f"{' vs '.join(s.replace('_', ' ') for s in strategies)}, {runs}")
-    plan = _plan_text(dataset)
-    selected = selection_text(dataset)
-    disk = disk_text(dataset)
-    fig.suptitle(title + ("\n" + textwrap.fill(plan, 170) if plan else "")
-                 + (f"\n{disk}" if disk else "")
-                 + (f"\n{selected}" if selected else ""), fontsize=9)
-    return fig
+             f"{' vs '.join(s.replace('_', ' ') for s in plan.strategies)}, {runs}")
+    text = _plan_text(dataset)
+    return title + ("\n" + textwrap.fill(text, 170) if text else "")
 
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:

@@ -17,6 +17,7 @@ collapse removes. The structures are coloured by ``Q`` when it is swept (else by
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -41,6 +42,7 @@ __all__ = ["draw"]
 
 _AXES = ("Q", "M")
 
+
 def _minima(dataset: xr.Dataset):
     """Per structure: its index, x, the minimum over f and whether it is at a range edge."""
     lower = np.minimum(dataset["a_star_plus"], dataset["a_star_minus"])
@@ -58,15 +60,20 @@ def _minima(dataset: xr.Dataset):
     return dims, rows
 
 
-def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
-    """Draw the collapse from a ``threshold-collapse`` result; returns the PNG and the PDF."""
-    dataset = require_dims(dataset, "threshold-collapse", ("f", *_AXES),
-                           "minimum thresholds over the Q and M axes", variable="a_star_plus")
-    require_axis(dataset, "threshold-collapse", "f",
-                 "the minimum of the thresholds over f for each structure")
-    dims, rows = _minima(dataset)
-    f = dataset["f"].values
-    # Colour by Q when it is swept, else by M: one legend entry each, or a colour bar.
+@dataclass(frozen=True)
+class _Colouring:
+    """The structures' colours: by ``Q`` when it is swept, else by ``M``; ``groups``
+    lists the rows (structures) of each value."""
+
+    by: str
+    values: np.ndarray
+    colors: list
+    bar: object  # a ScalarMappable for a colour bar, or None: a legend entry each
+    groups: list[list[int]]
+
+
+def _colouring(dataset: xr.Dataset, dims: list[str], rows: list) -> _Colouring:
+    """Colour by Q when it is swept, else by M: one legend entry each, or a colour bar."""
     by = "Q" if "Q" in dims else ("M" if "M" in dims else "Q")
     c_values = np.atleast_1d(dataset[by].values).astype(float)
     spread = c_values.max() / c_values.min() if c_values.min() > 0 else 1.0
@@ -75,16 +82,48 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                       else c_values.min() + 1.0))
     colors, bar = value_colours(c_values, norm=norm)
     swept = by in dims
+    groups = [[i for i, r in enumerate(rows) if not swept or r[0][by] == k]
+              for k in range(c_values.size)]
+    return _Colouring(by, c_values, colors, bar, groups)
+
+
+def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+    """Draw the collapse from a ``threshold-collapse`` result; returns the PNG and the PDF."""
+    dataset = require_dims(dataset, "threshold-collapse", ("f", *_AXES),
+                           "minimum thresholds over the Q and M axes", variable="a_star_plus")
+    require_axis(dataset, "threshold-collapse", "f",
+                 "the minimum of the thresholds over f for each structure")
+    dims, rows = _minima(dataset)
+    f = dataset["f"].values
+    colouring = _colouring(dataset, dims, rows)
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12.0, 5.4), layout="constrained",
                                  gridspec_kw={"width_ratios": [1.7, 1.0]})
+    _collapse_panel(ax, rows, colouring)
+    _side_panel(bx, dataset, dims, rows, colouring)
+    if colouring.bar is not None:
+        fig.colorbar(colouring.bar, ax=bx, pad=0.01,
+                     label=f"{colouring.by} ({colouring.values.size} values)")
+
+    # Thresholds do not depend on ck.
+    title = (
+        f"Q m1 ~ m: minimum motion threshold over f in [{f[0]:g}, {f[-1]:g}] Hz for "
+        f"{len(rows)} structures ({structure_text(dataset, omit=('ck',), tex=False)})"
+    )
+    selected = selection_text(dataset)
+    fig.suptitle(title + (f"\n{selected}" if selected else ""), fontsize=11)
+    return save(fig, output, dataset, title)
+
+
+def _collapse_panel(ax: plt.Axes, rows: list, colouring: _Colouring) -> None:
+    """Main panel: every structure's minimum against x, log-log, with the closed forms
+    and a note on how far the resolved minima lie from them."""
+    by, colors, bar = colouring.by, colouring.colors, colouring.bar
     xs = np.array([r[2] for r in rows])
     ys = np.array([r[3] for r in rows])
     edge = np.array([r[4] for r in rows])
-    groups = [[i for i, r in enumerate(rows) if not swept or r[0][by] == k]
-              for k in range(c_values.size)]
-    for k, value in enumerate(c_values):
-        pick = groups[k]
+    for k, value in enumerate(colouring.values):
+        pick = colouring.groups[k]
         inside = [i for i in pick if not edge[i]]
         ax.plot(xs[inside], ys[inside], "o", ms=6 if len(rows) <= 200 else 3.5,
                 color=colors[k], mec="k", mew=0.4,
@@ -100,6 +139,19 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
             label="closed form at $f_0$: $1/\\sqrt{1+x^2}$")
     ax.plot(span, np.sqrt(1.0 + span**2 / 4) - span / 2, color="0.35", lw=1.1, ls="--",
             zorder=4, label="min over f for $Q \\gg 1$: $\\sqrt{1+x^2/4} - x/2$")
+    ax.text(0.03, 0.04, _gap_note(xs, ys, edge), transform=ax.transAxes, fontsize=8,
+            va="bottom", bbox={"facecolor": "white", "edgecolor": "0.7", "alpha": 0.9})
+    ax.set(xscale="log", yscale="log", xlim=(span[0], span[-1]),
+           xlabel="collapse variable $x = \\max|x_\\pm|$, "
+                  "$x_\\pm = Q M \\cos\\alpha(\\cos\\alpha \\pm \\sin\\alpha / c_s)$ [1]",
+           ylabel="minimum threshold over f, $a^*_{min}/g$ [1]",
+           title="Minimum thresholds collapse on the resonance closed form")
+    ax.legend(loc="best", fontsize=8, framealpha=0.9)
+
+
+def _gap_note(xs: np.ndarray, ys: np.ndarray, edge: np.ndarray) -> str:
+    """How far the resolved minima lie from the closed form at resonance, and how many
+    the f grid does not resolve."""
     ratio = ys / (1.0 / np.hypot(1.0, xs))
     good = ~edge
     if good.any():
@@ -114,16 +166,15 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         note = "no minimum resolved by the f grid"
     if edge.any():
         note += f"\n{int(edge.sum())} of {edge.size} minima not resolved by the f grid"
-    ax.text(0.03, 0.04, note, transform=ax.transAxes, fontsize=8, va="bottom",
-            bbox={"facecolor": "white", "edgecolor": "0.7", "alpha": 0.9})
-    ax.set(xscale="log", yscale="log", xlim=(span[0], span[-1]),
-           xlabel="collapse variable $x = \\max|x_\\pm|$, "
-                  "$x_\\pm = Q M \\cos\\alpha(\\cos\\alpha \\pm \\sin\\alpha / c_s)$ [1]",
-           ylabel="minimum threshold over f, $a^*_{min}/g$ [1]",
-           title="Minimum thresholds collapse on the resonance closed form")
-    ax.legend(loc="best", fontsize=8, framealpha=0.9)
+    return note
 
-    # Side panel: the same minima against M alone (or Q, when only Q is swept).
+
+def _side_panel(bx: plt.Axes, dataset: xr.Dataset, dims: list[str], rows: list,
+                colouring: _Colouring) -> None:
+    """Side panel: the same minima against M alone (or Q, when only Q is swept)."""
+    by, colors, bar = colouring.by, colouring.colors, colouring.bar
+    ys = np.array([r[3] for r in rows])
+    edge = np.array([r[4] for r in rows])
     along = "M" if "M" in dims else ("Q" if "Q" in dims else "M")
     axis_values = np.atleast_1d(dataset[along].values)
     if along == by:  # one line through every structure, coloured point by point
@@ -132,8 +183,8 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         bx.plot(xv, ys[order], "-", lw=1.0, color="0.6", zorder=1)
         bx.scatter(xv, ys[order], s=22, zorder=2, edgecolors="k", linewidths=0.4,
                    c=[colors[rows[i][0].get(by, 0)] for i in order])
-    for k, value in enumerate(c_values if along != by else []):
-        order = sorted(groups[k], key=lambda i: rows[i][0].get(along, 0))
+    for k, value in enumerate(colouring.values if along != by else []):
+        order = sorted(colouring.groups[k], key=lambda i: rows[i][0].get(along, 0))
         xv = axis_values[[rows[i][0].get(along, 0) for i in order]]
         bx.plot(xv, ys[order], "-", lw=1.2, color=colors[k],
                 label=None if bar is not None else f"{by} = {value:g}")
@@ -147,14 +198,3 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
            title=f"The same minima against {along} alone\n(not collapsed)")
     if bx.get_legend_handles_labels()[0]:
         bx.legend(loc="lower left", fontsize=8, framealpha=0.9)
-    if bar is not None:
-        fig.colorbar(bar, ax=bx, pad=0.01, label=f"{by} ({c_values.size} values)")
-
-    # Thresholds do not depend on ck.
-    title = (
-        f"Q m1 ~ m: minimum motion threshold over f in [{f[0]:g}, {f[-1]:g}] Hz for "
-        f"{len(rows)} structures ({structure_text(dataset, omit=('ck',), tex=False)})"
-    )
-    selected = selection_text(dataset)
-    fig.suptitle(title + (f"\n{selected}" if selected else ""), fontsize=11)
-    return save(fig, output, dataset, title)

@@ -71,15 +71,7 @@ def draw(dataset: xr.Dataset, output: Path,
         top = max(top, 1.1 * float(np.max(high)))
 
     fig, ax = plt.subplots(figsize=(7.5, 5.0), layout="constrained")
-    behind = ax.twinx()
-    # The resonance curve sits behind the thresholds: the twin axis is drawn first.
-    ax.set_zorder(behind.get_zorder() + 1)
-    ax.patch.set_visible(False)
-    behind.fill_between(f, 0.0, gain, color="0.88", lw=0)
-    behind.plot(f, gain, color="0.65", lw=0.8)
-    behind.set_ylim(0.0, 1.15 * float(np.nanmax(gain)))
-    behind.set_ylabel(r"mode gain $|\omega_0^2 G|$ [1]", color="0.4")
-    behind.tick_params(axis="y", colors="0.4")
+    _mode_gain_behind(ax, f, gain)
 
     ax.fill_between(f, 0.0, lowest, color="tab:green", alpha=0.12, lw=0)
     ax.fill_between(f, a_lift, top, facecolor="none", edgecolor="0.6", hatch="///", lw=0)
@@ -99,6 +91,32 @@ def draw(dataset: xr.Dataset, output: Path,
     ax.set(xlim=xlim, ylim=(0.0, top), xlabel="drive frequency f [Hz]",
            ylabel="drive acceleration a [m s$^{-2}$]")
 
+    title = "Motion thresholds against drive frequency"
+    if rows is not None:
+        title += f", with {rows.size} measured"
+    # Thresholds, lift-off and the mode's gain do not depend on ck.
+    ax.set_title(f"{title}\n{parameter_text(dataset, omit=('ck',))}", fontsize=11)
+    fig.legend(handles=_legend_handles(data, rows), loc="outside lower center", ncol=3,
+               fontsize=8.5, frameon=False)
+    return common.save(fig, output, dataset,
+                       f"{title} ({structure_text(dataset, omit=('ck',), tex=False)})")
+
+
+def _mode_gain_behind(ax: plt.Axes, f: np.ndarray, gain: np.ndarray) -> None:
+    """The mode's gain over f [1], shaded on a twin axis behind the thresholds."""
+    behind = ax.twinx()
+    # The resonance curve sits behind the thresholds: the twin axis is drawn first.
+    ax.set_zorder(behind.get_zorder() + 1)
+    ax.patch.set_visible(False)
+    behind.fill_between(f, 0.0, gain, color="0.88", lw=0)
+    behind.plot(f, gain, color="0.65", lw=0.8)
+    behind.set_ylim(0.0, 1.15 * float(np.nanmax(gain)))
+    behind.set_ylabel(r"mode gain $|\omega_0^2 G|$ [1]", color="0.4")
+    behind.tick_params(axis="y", colors="0.4")
+
+
+def _legend_handles(data: xr.Dataset | None, rows: np.ndarray | None) -> list:
+    """The legend: the curves and regions, and a marker per direction measured."""
     handles = [
         plt.Line2D([], [], color="tab:blue", lw=2.0, label="$a^*_+$: forward slips start"),
         plt.Line2D([], [], color="tab:red", lw=2.0, label="$a^*_-$: backward slips start"),
@@ -120,12 +138,4 @@ def draw(dataset: xr.Dataset, output: Path,
                 handles.append(plt.Line2D([], [], ls="none", marker=measured.MARKERS[direction],
                                           ms=6, mfc=colour, mec="black",
                                           label=f"{text} $\\pm\\sigma$"))
-    title = "Motion thresholds against drive frequency"
-    if rows is not None:
-        title += f", with {rows.size} measured"
-    # Thresholds, lift-off and the mode's gain do not depend on ck.
-    ax.set_title(f"{title}\n{parameter_text(dataset, omit=('ck',))}", fontsize=11)
-    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8.5,
-               frameon=False)
-    return common.save(fig, output, dataset,
-                       f"{title} ({structure_text(dataset, omit=('ck',), tex=False)})")
+    return handles

@@ -137,29 +137,8 @@ def draw(dataset: xr.Dataset, output: Path,
 
     fig, ax = plt.subplots(figsize=(8.0, 5.2), layout="constrained")
     ax.axhline(0.0, color="black", lw=0.8)
-    handles = []
-    any_lift = any_stuck = False
-    lw = 1.6 if f.size <= 30 else 1.0
-    for i, frequency in enumerate(f):
-        color = colours[i]
-        lifted = np.flatnonzero(status[i] == Status.LIFT_OFF)
-        end = int(lifted[0]) if lifted.size else a.size
-        valid = np.isin(status[i, :end], VALID)
-        shown = np.where(valid, velocity[i, :end], np.nan)
-        (line,) = ax.plot(a[:end], shown, color=color, lw=lw, label=f"{frequency:g} Hz")
-        if not colour_bar:
-            handles.append(line)
-        if paper is not None:
-            ax.plot(a, 1e3 * paper[i], color=color, lw=0.9, ls="--", alpha=0.8)
-        if lifted.size and end > 0 and valid[-1]:
-            any_lift = True
-            ax.plot(a[end - 1], shown[-1], ls="none", marker="o", ms=5.5 if lw > 1 else 3.5,
-                    mfc="white", mec=color, mew=1.6 if lw > 1 else 1.0, zorder=4)
-        stuck = np.flatnonzero(status[i] == Status.NOT_CONVERGED)
-        if stuck.size:
-            any_stuck = True
-            ax.plot(a[stuck], np.full(stuck.size, 0.03), ls="none", marker="x", ms=5,
-                    color=color, transform=ax.get_xaxis_transform(), clip_on=False)
+    handles, any_lift, any_stuck = _curves(ax, a, f, velocity, status, paper, colours,
+                                           colour_bar)
     xlim = (float(a[0]), float(a[-1]))
     if rows is not None:
         measured.draw_rows(ax, data, rows, "a", scale=1e3,
@@ -185,15 +164,55 @@ def draw(dataset: xr.Dataset, output: Path,
         title += f", with {rows.size} measured"
     ax.set_title(title.replace("frequencies, ", "frequencies\n", 1)
                  + f"\n{parameter_text(dataset)}", fontsize=11)
+    _legend(fig, ax, handles, colour_bar, ScalarMappable(norm=norm, cmap=cmap), f,
+            structure.f0)
+    return common.save(fig, output, dataset,
+                       f"{title} ({common.structure_text(dataset, tex=False)})")
+
+
+def _curves(ax: plt.Axes, a: np.ndarray, f: np.ndarray, velocity: np.ndarray,
+            status: np.ndarray, paper: np.ndarray | None, colours: list,
+            colour_bar: bool) -> tuple[list, bool, bool]:
+    """One velocity curve per frequency [mm s-1] (up to its first lift-off), the
+    one-way model's beside a two-way study, and marks where the solver did not
+    converge. Returns the curves' legend handles, whether a curve ends at lift-off and
+    whether any point did not converge."""
+    handles = []
+    any_lift = any_stuck = False
+    lw = 1.6 if f.size <= 30 else 1.0
+    for i, frequency in enumerate(f):
+        color = colours[i]
+        lifted = np.flatnonzero(status[i] == Status.LIFT_OFF)
+        end = int(lifted[0]) if lifted.size else a.size
+        valid = np.isin(status[i, :end], VALID)
+        shown = np.where(valid, velocity[i, :end], np.nan)
+        (line,) = ax.plot(a[:end], shown, color=color, lw=lw, label=f"{frequency:g} Hz")
+        if not colour_bar:
+            handles.append(line)
+        if paper is not None:
+            ax.plot(a, 1e3 * paper[i], color=color, lw=0.9, ls="--", alpha=0.8)
+        if lifted.size and end > 0 and valid[-1]:
+            any_lift = True
+            ax.plot(a[end - 1], shown[-1], ls="none", marker="o", ms=5.5 if lw > 1 else 3.5,
+                    mfc="white", mec=color, mew=1.6 if lw > 1 else 1.0, zorder=4)
+        stuck = np.flatnonzero(status[i] == Status.NOT_CONVERGED)
+        if stuck.size:
+            any_stuck = True
+            ax.plot(a[stuck], np.full(stuck.size, 0.03), ls="none", marker="x", ms=5,
+                    color=color, transform=ax.get_xaxis_transform(), clip_on=False)
+    return handles, any_lift, any_stuck
+
+
+def _legend(fig: plt.Figure, ax: plt.Axes, handles: list, colour_bar: bool,
+            mappable: ScalarMappable, f: np.ndarray, f0: float) -> None:
+    """The frequencies' colour bar (many curves) and the legend."""
     if colour_bar:
-        bar = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, pad=0.01)
+        bar = fig.colorbar(mappable, ax=ax, pad=0.01)
         bar.set_label(f"drive frequency f [Hz] ({f.size} curves; blue < $f_0$ = "
-                      f"{structure.f0:g} Hz < red)")
+                      f"{f0:g} Hz < red)")
     if handles:
         ax.legend(handles=handles, loc="best" if colour_bar else "upper left",
                   bbox_to_anchor=None if colour_bar else (1.01, 1.0),
                   borderaxespad=0.5 if colour_bar else 0.0, fontsize=8.5,
                   title=None if colour_bar else "drive frequency f\n(blue < $f_0$ < red)",
                   title_fontsize=9, frameon=colour_bar)
-    return common.save(fig, output, dataset,
-                       f"{title} ({common.structure_text(dataset, tex=False)})")
