@@ -45,7 +45,7 @@ phase. The orbit is therefore closed as soon as a canonical release of the same 
 and phase (mod 2 pi) as an earlier one occurs; the mean velocity is the displacement
 between the two releases divided by the elapsed time.
 
-Run ``python tests/exact_reference.py`` for a demo on the paper's parameters.
+Run ``python -m tests.reference.one_way_exact`` for a demo on the paper's parameters.
 """
 
 from __future__ import annotations
