@@ -146,7 +146,7 @@ fuzz: $(STAMP)
 	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -m fuzz
 	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -q \
 	    tests/property/test_api_inputs.py
-	$(PY) -m tests.reliability $(RELIABILITY_COUNTS) > results/reliability.md
+	$(PY) -m tests.support.reliability $(RELIABILITY_COUNTS) > results/reliability.md
 	cat results/reliability.md
 	{ echo "*Written by \`make fuzz\` on $$(date -u +%Y-%m-%d) ($$(nproc) cores); the next run overwrites this file.*"; \
 	  echo; cat results/reliability.md; } > docs/speed/reliability.md

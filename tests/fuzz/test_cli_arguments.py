@@ -46,7 +46,7 @@ from hypothesis import strategies as st
 from study.cli import main
 from study.engine.runner import run_study
 from tests.fuzz.test_spec_runs import CaseTimeout, time_limit
-from tests.reliability import record
+from tests.support.reliability import record
 from tests.unit.test_incremental import spec_text
 from tests.unit.test_measurements import MINIMAL
 
