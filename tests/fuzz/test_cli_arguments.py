@@ -12,7 +12,7 @@ empty strings, ``.``, ``/``, long and odd text, and numbers of every kind.
 
 The workspace is a temporary folder that is the current directory while a case
 runs. Not fuzzed: ``--scheduler`` and ``--workers`` (they start or wait for a dask
-cluster; tests/unit/test_scheduler_address.py and test_distributed.py cover them).
+cluster; tests/integration/test_scheduler_address.py and test_distributed.py cover them).
 
 Allowed outcomes: exit status 0, 1 or 2 (``SystemExit`` from argparse included);
 with 1, one message on stderr, starting ``study: `` (an indented list of problems
