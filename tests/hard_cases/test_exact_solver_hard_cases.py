@@ -63,7 +63,7 @@ from study.model.structure import tilt_warnings
 from study.solvers.frontier import FRONTIER_CROSSING
 from tests.reference import one_way_exact
 from tests.reference.integrator import reference_velocity
-from tests.reference.one_way_exact import _slip_displacement, _slip_end, exact_velocity
+from tests.reference.one_way_exact import end_of_slip, exact_velocity, slip_displacement
 
 EPS = float(np.finfo(float).eps)
 TWO_PI = 2.0 * math.pi
@@ -179,7 +179,7 @@ class _SlidingModel:
         return mpmath.re(self.release[sign] * mpmath.expjpi(theta / mp.pi)) > self.level
 
     def slip_end(self, sign: int, theta: mpf) -> mpf:
-        return _slip_end(self.slip[sign], self.kg, theta, self.tol)
+        return end_of_slip(self.slip[sign], self.kg, theta, self.tol)
 
     def round_trip(self, p: mpf):
         """Forward slip from rest at ``p``, reversal, backward slip, reversal: the gap
@@ -191,7 +191,7 @@ class _SlidingModel:
         t2 = self.slip_end(-1, t1)
         if t2 == t1 or not self.released(1, t2):
             return None
-        moved = _slip_displacement(self.slip[1], self.kg, p, t1, self.w) - _slip_displacement(
+        moved = slip_displacement(self.slip[1], self.kg, p, t1, self.w) - slip_displacement(
             self.slip[-1], self.kg, t1, t2, self.w
         )
         return t2 - p - self.two_pi, moved * self.w / self.two_pi
@@ -213,7 +213,7 @@ class _SlidingModel:
             if sign == 0:  # stick: wait for the first release of either sign
                 starts = []
                 for s in (1, -1):
-                    t = one_way_exact._next_release(self.release[s], self.level, theta,
+                    t = one_way_exact.next_release(self.release[s], self.level, theta,
                                                       self.tol)
                     if t is not None:
                         starts.append((max(t, theta), s))

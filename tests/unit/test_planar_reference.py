@@ -39,7 +39,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 from scipy.integrate import quad, solve_ivp
 
-from tests.reference.integrator import _Integrator, _System
+from tests.reference.integrator import Integrator, System
 from tests.reference.planar import RefPlate, onset_direction, reference_planar
 
 R, CS, G = 0.02, 0.25, 9.8
@@ -118,8 +118,8 @@ def ref_scenario(name, rtol=1e-12):
 def ref_1d_period_ends(f, a, n_periods, mode0):
     """``x`` at the ends of the first drive periods from ``tests/reference/integrator.py``."""
     T = 1.0 / f
-    sys_ = _System(HEAD["f0"], HEAD["Q"], HEAD["alpha"], HEAD["M"], CS, CS, G, f, a)
-    integ = _Integrator(sys_, T, 1e-13, 1e-15, T / 64)
+    sys_ = System(HEAD["f0"], HEAD["Q"], HEAD["alpha"], HEAD["M"], CS, CS, G, f, a)
+    integ = Integrator(sys_, T, 1e-13, 1e-15, T / 64)
     y = [mode0[0], mode0[1], 0.0, 0.0]
     mode = integ.release_direction(0.0, y)
     fresh = mode != 0
