@@ -5,6 +5,8 @@
 #   make docs       the documentation site, build/html/index.html (Sphinx, warnings are
 #                   errors; runs the example gallery); needs the figures, so `make` first
 #   make test       set up .venv on a fresh machine, lint, run the test suite
+#   make test-unit  the fast tier only (tests/unit: no process, install, cluster or docs run)
+#   make test-integration  the tier that runs processes, installs, clusters and the docs
 #   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash;
 #                   counts of what they tried -> results/reliability.md
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc,
@@ -28,7 +30,8 @@ WORKFLOWS := $(wildcard workflows/*.toml)
 RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs docs-html test test-slow fuzz lint bench cf-check list clean \
+.PHONY: all results figures docs docs-html test test-unit test-integration test-slow fuzz \
+        lint bench cf-check list clean \
         schemas designs FORCE
 
 all: results
@@ -136,8 +139,16 @@ list: $(STAMP)
 lint: $(STAMP)
 	$(PY) -m ruff check study tests benchmarks docs
 
+# Every tier: unit, integration, paper, hard_cases, property (the fuzz tiers are marked
+# fuzz and run by `make fuzz`; slow tests by `make test-slow`).
 test: $(STAMP) lint
 	$(PY) -m pytest -m "not slow and not fuzz"
+
+test-unit: $(STAMP)
+	$(PY) -m pytest tests/unit -m "not slow and not fuzz"
+
+test-integration: $(STAMP)
+	$(PY) -m pytest tests/integration -m "not slow and not fuzz"
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow
@@ -151,7 +162,7 @@ fuzz: $(STAMP)
 	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -m fuzz
 	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -q \
 	    tests/property/test_api_inputs.py
-	$(PY) -m tests.reliability $(RELIABILITY_COUNTS) > results/reliability.md
+	$(PY) -m tests.support.reliability $(RELIABILITY_COUNTS) > results/reliability.md
 	cat results/reliability.md
 	{ echo "*Written by \`make fuzz\` on $$(date -u +%Y-%m-%d) ($$(nproc) cores); the next run overwrites this file.*"; \
 	  echo; cat results/reliability.md; } > docs/speed/reliability.md

@@ -4,7 +4,7 @@ For the steering disk of ``workflows/steering.toml`` at the four paper commands
 (7.2, 8.2, 14.2, 15.2 Hz at a = 7 m s^-2), integrates three drive periods from the
 plates' steady response with ``study.scenes.planar_model.simulate_planar`` over a grid of
 tolerances and slaving thresholds, and with the independent reference of the tests
-(``tests/reference_planar.py``: scipy Radau/DOP853). The error is the largest
+(``tests/reference/planar.py``: scipy Radau/DOP853). The error is the largest
 distance of the final position from the tightest package run (tolerance 1e-13,
 slaving 1e-7), relative to the distance slid; time is per drive period, one thread,
 warm, minimum of three repeats. Timings are reported, never asserted.
@@ -29,9 +29,10 @@ from study.scenes.scene_kind import load_scene
 from study.solvers.integrator import IntegratorSettings, Schedule
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tests"))
+# The repo root, for tests.reference: the independent oracles are not installed.
+sys.path.insert(0, str(ROOT))
 
-from reference_planar import RefPlate, reference_planar  # noqa: E402
+from tests.reference.planar import RefPlate, reference_planar  # noqa: E402
 
 COMMANDS = {"left": 7.2, "right": 8.2, "forward": 14.2, "backward": 15.2}
 ACCELERATION = 7.0

@@ -14,7 +14,7 @@ Reported: seconds, us per point, the ratio two-way / one-way per point for both
 one-way calls, and the two-way time by two-way status (the points of each status
 solved as one call, again against both one-way calls on the same points). Accuracy:
 a random sample of moving points of the two-way map against the 40-digit mpmath orbit
-(``tests/reference_two_way_exact.py``), with each point's relative condition number
+(``tests/reference/two_way_exact.py``), with each point's relative condition number
 ``|d ln v/d ln f| + |d ln v/d ln a|``: float64 inputs alone allow a relative error
 ``eps cond``. The issue's goal: two-way within 10x the one-way exact time per point,
 at <= 1e-12 relative error where the velocity is well conditioned (here: cond <= 1e3,
@@ -44,7 +44,8 @@ import numba
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tests"))
+# The repo root, for tests.reference: the independent oracles are not installed.
+sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from docs_tables import exponent, write_docs_table  # noqa: E402
@@ -110,7 +111,8 @@ def _accuracy(f: np.ndarray, a: np.ndarray, velocity: np.ndarray, status: np.nda
               sample: int, seed: int) -> list[dict]:
     """Random moving points of the two-way map against the 40-digit mpmath orbit."""
     from bench_work_precision import two_way_condition
-    from reference_two_way_exact import reference_orbit
+
+    from tests.reference.two_way_exact import reference_orbit
 
     moving = np.flatnonzero((status == study.Status.STICK_SLIP)
                             | (status == study.Status.CONTINUOUS_SLIDING))

@@ -4,7 +4,7 @@ Reports kernel time (parallel and one-thread, after compilation, minimum of
 repeats), the whole ``steady_state`` call, the first calls of a fresh process with a
 cold numba cache and with the cache loaded, and the accuracy of a random sample of
 points against a 40-digit mpmath implementation of the same event-driven closed
-form (``tests/exact_reference.py``, which shares no code with ``study``).
+form (``tests/reference/one_way_exact.py``, which shares no code with ``study``).
 Timings are reported, never asserted.
 
 Writes the documentation's table, ``docs/speed/velocity-map.md``.
@@ -31,7 +31,8 @@ import study
 from study.kernels import one_way as kernel
 from study.model import lift_off_acceleration, release_amplitudes, slip_amplitudes
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+# The repo root, for tests.reference: the independent oracles are not installed.
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 # The first calls of a fresh process (imports excluded): the numba kernels are compiled
 # on first use, or loaded from numba's cache when they were compiled before.
@@ -169,7 +170,7 @@ def main() -> None:
     measured = f"{_machine()}, load average {os.getloadavg()[0]:.1f}"
 
     try:
-        from exact_reference import exact_velocity
+        from tests.reference.one_way_exact import exact_velocity
     except ImportError as err:  # mpmath is in the test extra
         print(f"accuracy check skipped: {err}")
         write_docs_table("velocity-map", "bench_velocity_map.py", measured, table)

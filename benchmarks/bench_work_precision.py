@@ -14,7 +14,7 @@ above a threshold, where slips are short and easy to miss):
   careful user would write it (``benchmarks/baselines.py``).
 
 Error: largest ``|v - v_ref|`` over the points, against a 40-digit mpmath
-implementation of the exact solution (``tests/exact_reference.py``, no code shared
+implementation of the exact solution (``tests/reference/one_way_exact.py``, no code shared
 with study). Time: seconds per point on one thread, warm-up (compilation) excluded,
 minimum of repeats; cheap methods are timed on the point set tiled to a measurable
 workload. Observed order: ``-slope`` of ``log(error)`` against ``log(work)``, with
@@ -34,7 +34,7 @@ the orbit repeats) and ``solve_ivp`` (``baselines.solve_ivp_velocity(...,
 coupling="two-way")``, whole periods until the orbit repeats). Points: the paper's
 P, N, PN (both signs at 14.5 Hz), two points ``1e-3`` above a threshold and S, plus
 one P point of the same structure at ``Q = 1000``. Reference: the 40-digit mpmath
-orbit of ``tests/reference_two_way_exact.py`` (its cached points where they are the
+orbit of ``tests/reference/two_way_exact.py`` (its cached points where they are the
 same drive point, computed otherwise); the ``.md`` adds a per-point cross-check of the
 exact solver and of the integrator at its tightest tolerance against it.
 
@@ -59,18 +59,19 @@ import numpy as np
 import xarray as xr
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tests"))
+# The repo root, for tests.reference: the independent oracles are not installed.
+sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from baselines import naive_velocity, solve_ivp_velocity  # noqa: E402
 from docs_tables import write_docs_table  # noqa: E402
-from exact_reference import exact_velocity  # noqa: E402
 
 import study  # noqa: E402
 from study.engine.provenance import code_sha256, git_state, utc_now  # noqa: E402
 from study.model import thresholds  # noqa: E402
 from study.solvers.exact import steady_state  # noqa: E402
 from study.solvers.integrator import IntegratorSettings, integrated_steady_state  # noqa: E402
+from tests.reference.one_way_exact import exact_velocity  # noqa: E402
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 HIGH_Q = STRUCTURE.replace(Q=1000.0)
@@ -117,7 +118,8 @@ def two_way_condition(structure: study.Structure, f: float, a: float,
     float64 inputs are known only to ``eps``: ``eps * cond`` is the best relative error
     any float64 solver can promise at the point."""
     from mpmath import mp, mpf
-    from reference_two_way_exact import reference_orbit
+
+    from tests.reference.two_way_exact import reference_orbit
 
     with mp.workdps(dps):
         v = (reference_orbit(structure, f, a, coupling="two-way", dps=dps).velocity
@@ -135,7 +137,7 @@ def two_way_condition(structure: study.Structure, f: float, a: float,
 def two_way_reference(points) -> tuple[np.ndarray, list[str], list[str], np.ndarray]:
     """40-digit two-way velocities, statuses, sources (cache or computed) and condition
     numbers (:func:`two_way_condition`)."""
-    from reference_two_way_exact import reference_orbit, reference_points
+    from tests.reference.two_way_exact import reference_orbit, reference_points
 
     cached = {(json.dumps(e["structure"].as_dict(), sort_keys=True), e["f"], e["a"]): e
               for e in reference_points()}
@@ -387,7 +389,7 @@ def run(quick: bool, coupling: str = "one-way") -> xr.Dataset:
                              "(mpmath differences); NaN where v = 0",
             }),
             "reference_source": (("point",), np.array(reference_source), {
-                "long_name": "cached in tests/data/two_way_reference.json, or computed",
+                "long_name": "cached in tests/reference/data/two_way_reference.json, or computed",
             }),
             "point_structure": (("point",), np.array(
                 [json.dumps(s.as_dict()) for s in structures]), {
@@ -652,7 +654,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{' (dirty)' if dataset.attrs['git_dirty'] == 'true' else ''}, "
             f"{dataset.attrs['date_created']}.\n\n"
             "Error: largest |v - v_ref| over the points, v_ref the 40-digit mpmath two-way "
-            "orbit (tests/reference_two_way_exact.py). Time: one thread, warm-up excluded, "
+            "orbit (tests/reference/two_way_exact.py). Time: one thread, warm-up excluded, "
             "minimum of repeats (exact: the point set tiled 2000 times); wall and process "
             "time.\n\n"
             f"{markdown}\n\n## Per point: the references against each other\n\n"

@@ -12,7 +12,7 @@ empty strings, ``.``, ``/``, long and odd text, and numbers of every kind.
 
 The workspace is a temporary folder that is the current directory while a case
 runs. Not fuzzed: ``--scheduler`` and ``--workers`` (they start or wait for a dask
-cluster; tests/unit/test_scheduler_address.py and test_distributed.py cover them).
+cluster; tests/integration/test_scheduler_address.py and test_distributed.py cover them).
 
 Allowed outcomes: exit status 0, 1 or 2 (``SystemExit`` from argparse included);
 with 1, one message on stderr, starting ``study: `` (an indented list of problems
@@ -46,7 +46,7 @@ from hypothesis import strategies as st
 from study.cli import main
 from study.engine.runner import run_study
 from tests.fuzz.test_spec_runs import CaseTimeout, time_limit
-from tests.reliability import record
+from tests.support.reliability import record
 from tests.unit.test_incremental import spec_text
 from tests.unit.test_measurements import MINIMAL
 

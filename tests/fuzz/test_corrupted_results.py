@@ -37,7 +37,6 @@ from typing import Any
 import netCDF4
 import numpy as np
 import pytest
-from sealed_results import make_sealed_results, rewrite
 
 from study.engine.study_spec import parse_spec
 from study.engine.validation import (
@@ -50,7 +49,8 @@ from study.engine.validation import (
 )
 from study.figures import draw_figure
 from study.scenes.scene_kind import parse_scene
-from tests.reliability import record
+from tests.support.reliability import record
+from tests.support.sealed_results import make_sealed_results, rewrite
 
 pytestmark = pytest.mark.fuzz
 

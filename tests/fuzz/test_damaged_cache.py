@@ -24,7 +24,7 @@ import pytest
 from study.cli import main
 from study.engine.runner import run_study
 from study.engine.store import open_result
-from tests.reliability import record
+from tests.support.reliability import record
 from tests.unit.test_cache_health import KINDS, damage, deadline, garble
 from tests.unit.test_incremental import spec_text
 

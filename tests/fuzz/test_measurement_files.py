@@ -40,7 +40,7 @@ from study.analyses.measurements import (
     read_measurements,
 )
 from tests.fuzz.test_spec_runs import time_limit
-from tests.reliability import record
+from tests.support.reliability import record
 
 #: Cases of each generator in ``make fuzz``.
 CASES = 1500

@@ -59,7 +59,7 @@ from study.engine.runner import load_any
 from study.engine.spec_files import SpecError
 from study.model.status import INVALID_STATUSES
 from study.scenes.scene_kind import SceneSpec
-from tests.reliability import record
+from tests.support.reliability import record
 
 pytestmark = pytest.mark.fuzz
 

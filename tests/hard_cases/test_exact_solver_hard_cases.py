@@ -5,15 +5,15 @@ is far more accurate than the assertion -- never just "it returned something".
 
 References (none shares code with ``study``)
 --------------------------------------------
-* ``exact_reference.exact_velocity``: the event-driven closed form in 40-digit mpmath
+* ``tests.reference.one_way_exact.exact_velocity``: the event-driven closed form in 40-digit mpmath
   (stick-slip only).
 * :func:`_sliding_cycle` (below): continuous sliding in 30-digit mpmath. A period-1
   orbit without stick is a forward slip from rest at phase ``p``, a reversal, a
   backward slip and a reversal at ``p + 2 pi``; its phase is the root of
   ``gap(p) = R(p) - p - 2 pi`` (``R``: reversal map built from the slip primitives of
-  ``exact_reference``) reached by following the motion from rest, refined by secant.
+  ``one_way_exact``) reached by following the motion from rest, refined by secant.
   Its multiplier ``R'(p)`` tells how slowly the cycle attracts.
-* ``reference_integrator.reference_velocity``: ``solve_ivp`` (DOP853, rtol 1e-12) of the
+* ``tests.reference.integrator.reference_velocity``: ``solve_ivp`` (DOP853, rtol 1e-12) of the
   full ODE with event location; slow, so used on a few points (more in ``slow`` tests).
 
 Tolerances (the error model, used by :attr:`Reference.bound`)
@@ -49,21 +49,21 @@ import functools
 import math
 from dataclasses import dataclass
 
-import exact_reference
 import mpmath
 import numpy as np
 import pytest
-from exact_reference import _slip_displacement, _slip_end, exact_velocity
 from mpmath import mp, mpf
-from reference_integrator import reference_velocity
 
 import study
 from study import NonConvergence, Status
 from study.kernels.one_way import CYCLE_TOLERANCE
 from study.model import release_amplitudes, slip_amplitudes
+from study.model.paper import PAPER_STRUCTURE as PAPER
 from study.model.structure import tilt_warnings
 from study.solvers.frontier import FRONTIER_CROSSING
-from tests.conftest import PAPER
+from tests.reference import one_way_exact
+from tests.reference.integrator import reference_velocity
+from tests.reference.one_way_exact import end_of_slip, exact_velocity, slip_displacement
 
 EPS = float(np.finfo(float).eps)
 TWO_PI = 2.0 * math.pi
@@ -155,7 +155,7 @@ class SlidingCycle:
 class _SlidingModel:
     """Reversal map of continuous sliding, in ``CYCLE_DPS``-digit mpmath.
 
-    Built on the slip primitives of ``exact_reference`` (closed-form slip end and
+    Built on the slip primitives of ``one_way_exact`` (closed-form slip end and
     displacement); the amplitudes are re-derived here from the model (see the README).
     """
 
@@ -179,7 +179,7 @@ class _SlidingModel:
         return mpmath.re(self.release[sign] * mpmath.expjpi(theta / mp.pi)) > self.level
 
     def slip_end(self, sign: int, theta: mpf) -> mpf:
-        return _slip_end(self.slip[sign], self.kg, theta, self.tol)
+        return end_of_slip(self.slip[sign], self.kg, theta, self.tol)
 
     def round_trip(self, p: mpf):
         """Forward slip from rest at ``p``, reversal, backward slip, reversal: the gap
@@ -191,7 +191,7 @@ class _SlidingModel:
         t2 = self.slip_end(-1, t1)
         if t2 == t1 or not self.released(1, t2):
             return None
-        moved = _slip_displacement(self.slip[1], self.kg, p, t1, self.w) - _slip_displacement(
+        moved = slip_displacement(self.slip[1], self.kg, p, t1, self.w) - slip_displacement(
             self.slip[-1], self.kg, t1, t2, self.w
         )
         return t2 - p - self.two_pi, moved * self.w / self.two_pi
@@ -213,7 +213,7 @@ class _SlidingModel:
             if sign == 0:  # stick: wait for the first release of either sign
                 starts = []
                 for s in (1, -1):
-                    t = exact_reference._next_release(self.release[s], self.level, theta,
+                    t = one_way_exact.next_release(self.release[s], self.level, theta,
                                                       self.tol)
                     if t is not None:
                         starts.append((max(t, theta), s))
@@ -273,21 +273,21 @@ SLIDING_AFTER = 40
 @contextlib.contextmanager
 def _exact_budgets(slips_without_stick: int, events: int):
     """Temporarily set the budgets of the 40-digit reference (module constants)."""
-    saved = exact_reference.MAX_SLIPS_WITHOUT_STICK, exact_reference.MAX_EVENTS
-    exact_reference.MAX_SLIPS_WITHOUT_STICK, exact_reference.MAX_EVENTS = (
+    saved = one_way_exact.MAX_SLIPS_WITHOUT_STICK, one_way_exact.MAX_EVENTS
+    one_way_exact.MAX_SLIPS_WITHOUT_STICK, one_way_exact.MAX_EVENTS = (
         slips_without_stick, events)
     try:
         yield
     finally:
-        exact_reference.MAX_SLIPS_WITHOUT_STICK, exact_reference.MAX_EVENTS = saved
+        one_way_exact.MAX_SLIPS_WITHOUT_STICK, one_way_exact.MAX_EVENTS = saved
 
 
 @functools.cache
 def _reference(s: study.Structure, f: float, a: float) -> Reference:
     """40-digit reference; the mpmath sliding cycle once the motion slides."""
-    with _exact_budgets(SLIDING_AFTER, exact_reference.MAX_EVENTS):
+    with _exact_budgets(SLIDING_AFTER, one_way_exact.MAX_EVENTS):
         value, status, slips = _exact(s, f, a)
-    budgets = (exact_reference.MAX_SLIPS_WITHOUT_STICK, exact_reference.MAX_EVENTS)
+    budgets = (one_way_exact.MAX_SLIPS_WITHOUT_STICK, one_way_exact.MAX_EVENTS)
     if status == "continuous_sliding_unsupported":
         try:
             return _sliding_reference(s, f, a)
@@ -656,8 +656,8 @@ def test_long_sliding_transient_before_the_stick_slip_orbit(monkeypatch):
     s = _paper(ck=PAPER["cs"] / 1000)
     f, a = 14.6, 7.0
     assert _exact(s, f, a)[1] == "continuous_sliding_unsupported"
-    monkeypatch.setattr(exact_reference, "MAX_SLIPS_WITHOUT_STICK", 100_000)
-    monkeypatch.setattr(exact_reference, "MAX_EVENTS", 100_000)
+    monkeypatch.setattr(one_way_exact, "MAX_SLIPS_WITHOUT_STICK", 100_000)
+    monkeypatch.setattr(one_way_exact, "MAX_EVENTS", 100_000)
     value, status, _ = _exact(s, f, a)
     assert status == "stick_slip"
     v, solver_status = study.steady_velocity(s, f, a)

@@ -1,6 +1,6 @@
 """Hard cases of the exact two-way solver, each accurate against a reference or flagged.
 
-References: the 30-digit mpmath orbit (``tests/reference_two_way_exact.py``, run live on
+References: the 30-digit mpmath orbit (``tests/reference/two_way_exact.py``, run live on
 a few points) and the time integrator ``study.solvers.integrator.integrated_steady_state`` at
 tolerance 1e-11, which agrees with the cached 40-digit points to <= 8e-10 a / w (its
 error is trusted to ``INTEGRATOR_TOLERANCE`` = 1e-8 a / w). The integrator flags
@@ -18,13 +18,13 @@ import math
 
 import numpy as np
 import pytest
-from reference_two_way_exact import reference_orbit
 
 from study.model import lift_off_acceleration, thresholds
 from study.model.status import INVALID_STATUSES, Status
 from study.model.structure import Structure, tilt_warnings
 from study.solvers.exact import steady_state
 from study.solvers.integrator import IntegratorSettings, integrated_steady_state
+from tests.reference.two_way_exact import reference_orbit
 
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08, "cs": 0.25}
 INTEGRATOR_TOLERANCE = 1e-8  # of a / w
@@ -379,10 +379,10 @@ REGIME_EDGES = [
 def test_velocity_kinks_at_regime_edges_are_orbits_of_the_reference(params, f, a, step,
                                                                     changes):
     from mpmath import mp, mpf
-    from reference_two_way_exact import TwoWayModel, period_map
 
     from study.kernels import two_way as _orbit
     from study.solvers.exact import structure_vector
+    from tests.reference.two_way_exact import TwoWayModel, period_map
 
     s = Structure(**params)
     rows = []

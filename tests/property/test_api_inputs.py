@@ -299,7 +299,7 @@ def test_every_public_function_is_fuzzed_or_says_why_not():
 def test_the_tier_s_counts_are_recorded_for_the_docs():
     """Runs after the cases above (pytest keeps file order): ``make fuzz`` records what
     this tier tried, beside the fuzz tiers, for the reliability table of the docs."""
-    from tests.reliability import record
+    from tests.support.reliability import record
 
     tried = CASES["result"] + CASES["refused"]
     if tried == 0:

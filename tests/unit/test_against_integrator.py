@@ -1,6 +1,6 @@
 """The exact solver against an independent time integrator of the full model.
 
-``tests/reference_integrator.py`` integrates the mode ODE and the sliding ODE with
+``tests/reference/integrator.py`` integrates the mode ODE and the sliding ODE with
 scipy's ``solve_ivp`` (DOP853, rtol 1e-12) and event location, from the same
 canonical start (at rest, drive phase 0, mode on its steady response), until the
 orbit is periodic. It uses no closed form of the sliding motion and imports nothing
@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
-from reference_integrator import reference_velocity
 
 import study
 from study import Status
+from tests.reference.integrator import reference_velocity
 
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "cs": 0.25}
 STATUS_NAMES = {

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 import xarray as xr
 from numpy.testing import assert_allclose
-from reference_integrator import reference_velocity
 
 from study import Structure
 from study.analyses.coupling import coupling_effect
@@ -18,6 +17,7 @@ from study.engine.runner import run_study
 from study.engine.store import open_result
 from study.model.status import Status
 from study.solvers.integrator import IntegratorSettings, integrated_steady_state
+from tests.reference.integrator import reference_velocity
 
 PAPER = dict(f0=14.44, Q=17.5, alpha=64.0, cs=0.25)
 REFERENCE_STATUS = {"static": 0, "stick_slip": 1, "continuous_sliding": 2, "lift_off": 3,

@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from sealed_results import scene_text
 
 from study.analyses.export import ExportError, export_csv, tables
 from study.cli import main
 from study.engine.runner import run_scene, run_study
 from study.engine.validation import open_result
+from tests.support.sealed_results import scene_text
 
 SPEC = """
 [study]

@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -25,7 +22,7 @@ SCHEMAS = PACKAGE.parent / "results_schema"
 NOT_COMPUTING = ("study.cli", "study.figures")
 
 
-def _copy_package(destination: Path) -> Path:
+def copy_package(destination: Path) -> Path:
     """A scratch copy of the package (and the schemas next to it); its package folder."""
     shutil.copytree(PACKAGE, destination / "study",
                     ignore=shutil.ignore_patterns("__pycache__"))
@@ -37,7 +34,7 @@ def _copy_package(destination: Path) -> Path:
 @pytest.fixture(scope="module")
 def copy(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A scratch copy of ``study``; tests that edit it restore what they edit."""
-    return _copy_package(tmp_path_factory.mktemp("copy"))
+    return copy_package(tmp_path_factory.mktemp("copy"))
 
 
 def _source(root: Path, module: str) -> Path:
@@ -164,54 +161,6 @@ def test_module_listing_for_humans(capsys: pytest.CaptureFixture[str]):
     assert out.startswith(f"scene: {result_code_sha256('scene')}\n")
     assert "    study.kernels.planar_integrator\n" in out
     assert "study.cli" not in out
-
-
-TINY = """\
-[study]
-name = "tiny"
-title = "Thresholds only, for the fingerprint test"
-observables = ["thresholds"]
-
-[structure]
-f0 = 14.44   # Hz
-Q = 17.5
-alpha = 64.0 # degree
-M = 0.08
-cs = 0.25
-
-[sweep]
-f = { start = 10.0, stop = 20.0, num = 5 }  # Hz
-"""
-
-
-def test_study_list_follows_computing_edits_only(tmp_path: Path):
-    root = _copy_package(tmp_path / "copy")
-    workflows, results = tmp_path / "workflows", tmp_path / "results"
-    workflows.mkdir()
-    results.mkdir()
-    (workflows / "tiny.toml").write_text(TINY)
-    env = {**os.environ, "PYTHONPATH": str(root.parent)}
-
-    def study(*argv: str) -> str:
-        done = subprocess.run([sys.executable, "-m", "study.cli", *argv], cwd=tmp_path,
-                              env=env, capture_output=True, text=True, timeout=300)
-        assert done.returncode == 0, done.stderr
-        return done.stdout
-
-    def state() -> str:
-        return study("list", "--workflows", str(workflows), "--results", str(results))
-
-    study("run", str(workflows / "tiny.toml"), "-o", str(results / "tiny.nc"),
-          "--workers", "1", "--no-progress")
-    assert ": up to date" in state()
-    forces = root / "model" / "forces.py"
-    original = forces.read_bytes()
-    forces.write_bytes(original + b"\n# edited\n")
-    assert ": out of date" in state()
-    forces.write_bytes(original)
-    (root / "figures" / "common.py").write_bytes(
-        (root / "figures" / "common.py").read_bytes() + b"\n# edited\n")
-    assert ": up to date" in state()
 
 
 def test_the_package_version_is_not_in_the_fingerprint(copy: Path,

@@ -1,6 +1,6 @@
 """The planar reference integrator, and the package's planar solver against it.
 
-Part 1 checks ``tests/reference_planar.py`` (independent of ``study``) against things
+Part 1 checks ``tests/reference/planar.py`` (independent of ``study``) against things
 that share nothing with its formulation:
 
 * the onset direction of a slip, by its defining property;
@@ -13,7 +13,7 @@ that share nothing with its formulation:
 * convergence studies in the stop threshold ``stop_tol`` (the accuracy parameter of
   the stop detection) and in ``rtol``;
 * the exact reduction to the 1-D model (one plate along the heading, lever 0),
-  compared with ``tests/reference_integrator.py``;
+  compared with ``tests/reference/integrator.py``;
 * brute-force integrations of the plain Cartesian slip equation (scipy's DOP853 and
   Radau) through a linear and a quadratic slip onset;
 * mirror symmetry and rotation invariance.
@@ -37,9 +37,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
-from reference_integrator import _Integrator, _System
-from reference_planar import RefPlate, onset_direction, reference_planar
 from scipy.integrate import quad, solve_ivp
+
+from tests.reference.integrator import Integrator, System
+from tests.reference.planar import RefPlate, onset_direction, reference_planar
 
 R, CS, G = 0.02, 0.25, 9.8
 C = 2.0 * R / 3.0  # default friction length
@@ -115,10 +116,10 @@ def ref_scenario(name, rtol=1e-12):
 
 
 def ref_1d_period_ends(f, a, n_periods, mode0):
-    """``x`` at the ends of the first drive periods from ``tests/reference_integrator.py``."""
+    """``x`` at the ends of the first drive periods from ``tests/reference/integrator.py``."""
     T = 1.0 / f
-    sys_ = _System(HEAD["f0"], HEAD["Q"], HEAD["alpha"], HEAD["M"], CS, CS, G, f, a)
-    integ = _Integrator(sys_, T, 1e-13, 1e-15, T / 64)
+    sys_ = System(HEAD["f0"], HEAD["Q"], HEAD["alpha"], HEAD["M"], CS, CS, G, f, a)
+    integ = Integrator(sys_, T, 1e-13, 1e-15, T / 64)
     y = [mode0[0], mode0[1], 0.0, 0.0]
     mode = integ.release_direction(0.0, y)
     fresh = mode != 0
@@ -347,7 +348,7 @@ def test_reference_convergence_table_in_rtol():
 @pytest.mark.parametrize(("f", "a"), [(14.2, 7.0), (14.6, 7.0), (16.5, 8.5)])
 def test_reference_reduces_to_1d_model(f, a):
     """One plate along the heading with lever 0 is the 1-D model along the heading:
-    x at the period ends against tests/reference_integrator.py (forward, with
+    x at the period ends against tests/reference/integrator.py (forward, with
     reversals, backward). Measured: 6e-15, 3e-15, 1e-16 m (rtol 1e-12)."""
     n = 3
     T = 1.0 / f

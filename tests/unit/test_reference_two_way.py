@@ -1,4 +1,4 @@
-"""Self-checks of the two-way coupled path of ``tests/reference_integrator.py``.
+"""Self-checks of the two-way coupled path of ``tests/reference/integrator.py``.
 
 The reference integrator is itself the independent check of the package's solvers,
 so its two-way path (sliding base acceleration ``x''`` forcing the plate mode) is
@@ -24,7 +24,8 @@ import math
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
-from reference_integrator import (
+
+from tests.reference.integrator import (
     STATUSES,
     ReferenceModelInvalid,
     reference_slide_to_rest,

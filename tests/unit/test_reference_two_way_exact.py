@@ -1,4 +1,4 @@
-"""Self-checks of ``tests/reference_two_way_exact.py``, the 40-digit two-way reference.
+"""Self-checks of ``tests/reference/two_way_exact.py``, the 40-digit two-way reference.
 
 The reference is the yardstick of the fast two-way solver, so it is checked here
 against things that do not share its code:
@@ -7,12 +7,12 @@ against things that do not share its code:
   closed forms against the ODE they solve (residuals at 40 digits, under-, critically
   and over-damped), its slip displacement against quadrature;
 * with the coupling switched off, against the independent 40-digit one-way reference
-  (``tests/exact_reference.py``) and the exact float solver ``study.steady_velocity``;
+  (``tests/reference/one_way_exact.py``) and the exact float solver ``study.steady_velocity``;
 * with two-way coupling, against the time integrator ``study.solvers.integrator`` (converging to
   the reference as its tolerance is tightened), and 40 against 60 digits;
 * its Floquet multipliers against the mode's free decay (one-way, where the slips do
   not act on the mode);
-* the cached points (``tests/data/two_way_reference.json``) against a regeneration.
+* the cached points (``tests/reference/data/two_way_reference.json``) against a regeneration.
 """
 
 from __future__ import annotations
@@ -23,10 +23,17 @@ import math
 import mpmath
 import numpy as np
 import pytest
-from exact_reference import exact_velocity
 from mpmath import mp, mpf
 from numpy.testing import assert_allclose
-from reference_two_way_exact import (
+
+import study
+from study.kernels.integrator import _accelerations
+from study.model.paper import PAPER_STRUCTURE as PAPER
+from study.model.status import Status
+from study.model.structure import Structure
+from study.solvers.integrator import IntegratorSettings, integrated_steady_state, model_parameters
+from tests.reference.one_way_exact import exact_velocity
+from tests.reference.two_way_exact import (
     CACHE_DPS,
     CACHE_PATH,
     CODE_VERSION,
@@ -39,13 +46,6 @@ from reference_two_way_exact import (
     reference_points,
     segment_forms,
 )
-
-import study
-from study.kernels.integrator import _accelerations
-from study.model.status import Status
-from study.model.structure import Structure
-from study.solvers.integrator import IntegratorSettings, integrated_steady_state, model_parameters
-from tests.conftest import PAPER
 
 PAPER_ARGS = (PAPER["f0"], PAPER["Q"], PAPER["alpha"], PAPER["M"], PAPER["cs"])
 

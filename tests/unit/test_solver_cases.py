@@ -1,6 +1,6 @@
 """The exact solver on its difficult cases, against the 40-digit mpmath reference.
 
-``tests/exact_reference.py`` re-derives the event-driven closed form in mpmath
+``tests/reference/one_way_exact.py`` re-derives the event-driven closed form in mpmath
 (sharing no code with ``study``); it is exact to 40 digits, so every comparison
 here is limited by float64 and the problem's own conditioning.
 """
@@ -11,14 +11,14 @@ import threading
 
 import numpy as np
 import pytest
-from exact_reference import exact_velocity
 from numpy.testing import assert_allclose
 
 import study
 from study import NonConvergence, SolverSettings, Status
 from study.kernels import one_way as kernel
 from study.model import release_amplitudes, slip_amplitudes
-from tests.conftest import PAPER
+from study.model.paper import PAPER_STRUCTURE as PAPER
+from tests.reference.one_way_exact import exact_velocity
 
 PARAMS = (PAPER["f0"], PAPER["Q"], PAPER["alpha"], PAPER["M"], PAPER["cs"])
 

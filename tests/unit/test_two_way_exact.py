@@ -1,6 +1,6 @@
 """The exact two-way solver (``steady_state(..., coupling="two-way")``) against references.
 
-* every cached 40-digit point of ``tests/reference_two_way_exact.py``: status, mean
+* every cached 40-digit point of ``tests/reference/two_way_exact.py``: status, mean
   velocity, Floquet multiplier, slip statistics;
 * the orbit kernel run with ``coupling="one-way"`` (the paper's model with the mode as a
   state) against the exact one-way solver, on a random sample of structures;
@@ -25,7 +25,6 @@ import math
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
-from reference_two_way_exact import reference_points
 
 import study
 from study.kernels import two_way as _orbit
@@ -33,6 +32,7 @@ from study.model import lift_off_acceleration, thresholds
 from study.model.status import INVALID_STATUSES, Status
 from study.model.structure import Structure, tilt_warnings
 from study.solvers.exact import attractors, steady_state, steady_velocity, structure_vector
+from tests.reference.two_way_exact import reference_points
 
 POINTS = reference_points()
 NAMES = [p["name"] for p in POINTS]
@@ -359,7 +359,8 @@ def test_an_orbit_crossing_phase_zero_in_a_sliver_of_slip_is_found():
     elsewhere in the period. The 30-digit reference's period map (independent code)
     confirms the fixed point and the velocity."""
     from mpmath import mp, mpf
-    from reference_two_way_exact import TwoWayModel, period_map
+
+    from tests.reference.two_way_exact import TwoWayModel, period_map
 
     s = Structure(f0=14.44, Q=17.5, alpha=64.0, M=1.0, cs=0.25)
     f, a = 13.9, 4.4

@@ -13,7 +13,6 @@ import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
-from sealed_results import make_sealed_results, rewrite
 
 import study.engine.validation
 from study.cli import main
@@ -28,6 +27,7 @@ from study.engine.validation import (
     validate_file,
 )
 from study.model.status import Status
+from tests.support.sealed_results import make_sealed_results, rewrite
 
 
 @pytest.fixture(scope="module")

@@ -75,7 +75,7 @@ all lie inside the unit circle is the orbit. When the orbit sticks at phase 0, `
 there and the map acts on ``(delta, delta')`` only (the stick absorbs a perturbation of
 ``v``: its multiplier is 0).
 
-Run ``python tests/reference_two_way_exact.py`` to regenerate the cached reference points.
+Run ``python -m tests.reference.two_way_exact`` to regenerate the cached reference points.
 """
 
 from __future__ import annotations
@@ -956,9 +956,9 @@ def write_reference_points(path: Path = CACHE_PATH) -> dict:
         "description": (
             "Steady periodic orbits of the single-plate two-way coupled model "
             "(README, 'Time integration and two-way coupling'), from "
-            "tests/reference_two_way_exact.py; decimal strings exact to about dps - 5 digits"
+            "tests/reference/two_way_exact.py; decimal strings exact to about dps - 5 digits"
         ),
-        "generator": "tests/reference_two_way_exact.py",
+        "generator": "tests/reference/two_way_exact.py",
         "code_version": CODE_VERSION,
         "dps": CACHE_DPS,
         "mpmath": mpmath.__version__,
@@ -987,7 +987,7 @@ def reference_points(path: Path = CACHE_PATH) -> list[dict]:
     ------
     RuntimeError
         When the cache was written by another :data:`CODE_VERSION` (regenerate it with
-        ``python tests/reference_two_way_exact.py``).
+        ``python -m tests.reference.two_way_exact``).
     """
     from study.model.structure import Structure
 
@@ -995,7 +995,7 @@ def reference_points(path: Path = CACHE_PATH) -> list[dict]:
     if content["code_version"] != CODE_VERSION:
         raise RuntimeError(
             f"{path} was written by reference version {content['code_version']!r}, this is "
-            f"{CODE_VERSION!r}: run python tests/reference_two_way_exact.py"
+            f"{CODE_VERSION!r}: run python -m tests.reference.two_way_exact"
         )
     out = []
     for e in content["points"]:

@@ -24,7 +24,7 @@ import pytest
 
 from study.cli import build_parser, main
 from study.engine.store import open_result
-from tests.unit.test_doc_blocks import PAGES, ROOT, blocks, name
+from tests.integration.test_doc_blocks import PAGES, ROOT, blocks, name
 
 STUDY = ".venv/bin/study"
 #: Words a reader replaces: a command holding one is a template, not a command.

@@ -45,7 +45,7 @@ phase. The orbit is therefore closed as soon as a canonical release of the same 
 and phase (mod 2 pi) as an earlier one occurs; the mean velocity is the displacement
 between the two releases divided by the elapsed time.
 
-Run ``python tests/exact_reference.py`` for a demo on the paper's parameters.
+Run ``python -m tests.reference.one_way_exact`` for a demo on the paper's parameters.
 """
 
 from __future__ import annotations
@@ -80,7 +80,7 @@ def _to_mpf(x: float | int | str | mpf) -> mpf:
     return mpf(x)
 
 
-def _next_release(amp: mpmath.mpc, level: mpf, theta: mpf, tol: mpf) -> mpf | None:
+def next_release(amp: mpmath.mpc, level: mpf, theta: mpf, tol: mpf) -> mpf | None:
     """First upward crossing of ``Re[amp e^{i t}] = level`` at or after ``theta``.
 
     Parameters
@@ -136,7 +136,7 @@ def _bisect(func, lo: mpf, hi: mpf) -> mpf:
     return (lo + hi) / 2
 
 
-def _slip_end(b: mpmath.mpc, kg: mpf, theta0: mpf, tol: mpf) -> mpf:
+def end_of_slip(b: mpmath.mpc, kg: mpf, theta0: mpf, tol: mpf) -> mpf:
     """End of a slip: first zero after ``theta0`` of ``F`` (``w s v``).
 
     Parameters
@@ -200,7 +200,7 @@ def _slip_end(b: mpmath.mpc, kg: mpf, theta0: mpf, tol: mpf) -> mpf:
     return root
 
 
-def _slip_displacement(b: mpmath.mpc, kg: mpf, theta0: mpf, theta1: mpf, w: mpf) -> mpf:
+def slip_displacement(b: mpmath.mpc, kg: mpf, theta0: mpf, theta1: mpf, w: mpf) -> mpf:
     """Signed-speed integral ``s * (x(theta1) - x(theta0))`` of a slip (closed form).
 
     Parameters
@@ -327,7 +327,7 @@ def exact_velocity(
                     continue
                 candidates = []
                 for s in (1, -1):
-                    t = _next_release(a_s[s], sg, theta, tol)
+                    t = next_release(a_s[s], sg, theta, tol)
                     if t is not None:
                         candidates.append((t, s))
                 t_rel, s = min(candidates)
@@ -344,8 +344,8 @@ def exact_velocity(
                 continue
 
             s = mode
-            theta1 = _slip_end(b_s[s], kg, theta, tol)
-            x += s * _slip_displacement(b_s[s], kg, theta, theta1, w)
+            theta1 = end_of_slip(b_s[s], kg, theta, tol)
+            x += s * slip_displacement(b_s[s], kg, theta, theta1, w)
             slips += 1
             since_stick += 1
             theta = theta1

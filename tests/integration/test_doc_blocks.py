@@ -16,7 +16,7 @@ The pages are README.md and every docs/**/*.md page (MyST markdown). In each pag
   stood in for by a one-row valid file, so that the spec itself is checked in full.
   TOML blocks without such a table (fragments, ``pyproject.toml``) are not specs.
 
-Shell blocks (```sh) are checked by ``tests/unit/test_doc_shell_blocks.py``: every
+Shell blocks (```sh) are checked by ``tests/integration/test_doc_shell_blocks.py``: every
 ``study`` command parsed by the real parser, every ``make`` target known to make, the
 README's own-structure example run as printed.
 """

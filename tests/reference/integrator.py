@@ -104,7 +104,7 @@ class ReferenceModelInvalid(ValueError):
         self.status = status
 
 
-class _System:
+class System:
     """Right-hand sides and event functions of the hybrid system.
 
     Parameters
@@ -377,7 +377,7 @@ def _min_normal_force(sys_, y_mode, T, rtol, atol, max_step):
     return float(n.min())
 
 
-class _Integrator:
+class Integrator:
     """Piecewise integration of the hybrid system over one drive period.
 
     Local time runs over ``[0, T]`` in every period (the drive is T-periodic), so
@@ -858,7 +858,7 @@ def reference_slide_to_rest(
     s = 1 if v0 > 0.0 else -1
     two_way = coupling == "two-way"
     # No drive: a = 0, so the drive frequency only enters through cos(w t) * 0.
-    sys_ = _System(f0, Q, alpha_deg, M, cs, ck, g, f0, 0.0, two_way=two_way)
+    sys_ = System(f0, Q, alpha_deg, M, cs, ck, g, f0, 0.0, two_way=two_way)
     if two_way and not sys_.det[s] > 0.0:
         raise ReferenceModelInvalid(
             "friction_paradox", f"determinant {sys_.det[s]:.3g} <= 0 for slip sign {s:+d}"
@@ -866,7 +866,7 @@ def reference_slide_to_rest(
     T0 = 1.0 / f0
     if max_time is None:
         max_time = 10.0 * abs(v0) / (ck * g) + 10.0 * T0
-    integ = _Integrator(sys_, T0, rtol, atol, T0 / _STEPS_PER_PERIOD)
+    integ = Integrator(sys_, T0, rtol, atol, T0 / _STEPS_PER_PERIOD)
     y = [float(mode0[0]), float(mode0[1]), 0.0, float(v0)]
     pieces = []
     t1, y1, fired = integ._solve(
@@ -907,7 +907,7 @@ def _reference_velocity(
     two_way = coupling == "two-way"
     T = 1.0 / f
     max_step = T / steps_per_period
-    sys_ = _System(f0, Q, alpha_deg, M, cs, ck, g, f, a, two_way=two_way)
+    sys_ = System(f0, Q, alpha_deg, M, cs, ck, g, f, a, two_way=two_way)
     d0, dd0 = _initial_mode_state(sys_)
 
     # Lift-off: the mode is on its steady response, so one period of n(t) is
@@ -919,7 +919,7 @@ def _reference_velocity(
     amp_d = abs(sys_.A / complex(sys_.k - sys_.w * sys_.w, sys_.c * sys_.w))  # |a cos(alpha) G|
     amp_dd = sys_.w * amp_d
 
-    integ = _Integrator(sys_, T, rtol, atol, max_step)
+    integ = Integrator(sys_, T, rtol, atol, max_step)
     y = [d0, dd0, 0.0, 0.0]
     mode = integ.release_direction(0.0, y)
     fresh = mode != _STICK

@@ -13,7 +13,7 @@ from pathlib import Path
 from study.engine.runner import run_scene, run_study
 from study.engine.validation import seal
 
-WORKFLOWS = Path(__file__).resolve().parents[1] / "workflows"
+WORKFLOWS = Path(__file__).resolve().parents[2] / "workflows"
 
 _STRUCTURE = """
 [structure]

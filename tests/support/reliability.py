@@ -5,7 +5,7 @@ what it tried: cases run, faults injected (damaged files, mutations, corrupted c
 hostile arguments) and finished results compared afterwards, of which none may be
 lost (a tier that loses one fails before it records). When the environment names a
 file in :data:`ENV` (``make fuzz`` does), the counts are merged into it as JSON;
-``python -m tests.reliability COUNTS.json`` prints the page's table. Without the
+``python -m tests.support.reliability COUNTS.json`` prints the page's table. Without the
 variable, :func:`record` does nothing: a plain ``pytest`` run writes no file.
 """
 

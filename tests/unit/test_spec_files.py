@@ -1,5 +1,6 @@
-"""The shared spec layer (``study.engine.spec_files``): reading, parsing, schema messages, the axis
-grammar, the canonical hash and the kind of a spec, for studies and scenes alike.
+"""The shared spec layer (``study.engine.spec_files``): reading files on disk (encodings,
+size, what is not a regular file), parsing, schema messages, the axis grammar, the
+canonical hash and the kind of a spec, for studies and scenes alike.
 """
 
 from __future__ import annotations
@@ -7,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +32,7 @@ from study.engine.spec_files import (
 )
 from study.engine.study_spec import load_spec, parse_spec
 from study.scenes.scene_kind import load_scene, parse_scene
+from tests.unit.test_cache_health import deadline
 
 REPO = Path(__file__).resolve().parents[2]
 WORKFLOWS = sorted((REPO / "workflows").glob("*.toml"))
@@ -98,6 +101,24 @@ def test_the_cli_refuses_a_utf16_spec_without_a_traceback(tmp_path, capsys):
     assert err.startswith(f"study: {path}: a spec must be UTF-8")
     assert "Traceback" not in err
     assert not (tmp_path / "out.nc").exists()
+
+
+@pytest.mark.parametrize("command", ["run", "design", "fit"])
+def test_a_fifo_device_or_folder_as_the_spec_is_refused(command: str, tmp_path: Path,
+                                                        capsys) -> None:
+    """Refused in one line, never waited on (found by the command-line fuzz tier:
+    `study design FIFO` hung)."""
+    fifo = tmp_path / "spec.toml"
+    os.mkfifo(fifo)
+    for path, kind in ((fifo, "a FIFO"), (Path("/dev/zero"), "a device"),
+                       (Path("/dev/null"), "a device")):
+        with deadline(20):
+            status = main([command, str(path), "-o", str(tmp_path / "out.nc")])
+        err = capsys.readouterr().err
+        assert status == 1 and err.startswith(f"study: {path}: {kind}, not a regular file"), err
+    with deadline(20):
+        assert main([command, str(tmp_path), "-o", str(tmp_path / "out.nc")]) == 1
+    assert capsys.readouterr().err.count("\n") == 1
 
 
 # --------------------------------------------------------------------------- parsing

@@ -1,6 +1,6 @@
 """Slow, high-accuracy reference integrator for the planar (2-D) steering model.
 
-Like :mod:`reference_integrator` (the 1-D model), this module is an *independent*
+Like :mod:`tests.reference.integrator` (the 1-D model), this module is an *independent*
 check of the package: it imports nothing from ``study`` and uses no closed form of
 the motion. The hybrid stick / slip system is integrated numerically with scipy's
 ``DOP853`` (explicit, order 8, dense output of order 7) and, only where the
