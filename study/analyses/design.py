@@ -84,6 +84,7 @@ from numpy.typing import NDArray
 
 from study.analyses.fit import PARAMETERS as FIT_PARAMETERS
 from study.analyses.fit import Parameter
+from study.engine.kinds import ResultKind, register
 from study.engine.spec_files import (
     SpecError,
     canonical_sha256,
@@ -119,6 +120,7 @@ from study.solvers.exact import DEFAULT_COUPLING, steady_velocity
 __all__ = [
     "BEHAVIOURS",
     "DESIGN_FORMAT",
+    "DESIGN_KIND",
     "DESIGN_RESULT_SCHEMA",
     "DESIGN_SPEC_SCHEMA",
     "FAILED",
@@ -904,3 +906,23 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
     }
     return xr.Dataset({k: xr.Variable(*v) for k, v in variables.items()},
                       coords={k: xr.Variable(*v) for k, v in coords.items()}, attrs=attrs)
+
+
+# ---------------------------------------------------------------------------
+# The design kind (study.engine.kinds): what the runner, validation and the CLI need
+
+
+def _design_for_runner(spec: DesignSpec, progress: Any) -> DesignResult:
+    return design(spec, progress=progress.say)
+
+
+#: The design kind: structure parameters searched for target behaviours.
+DESIGN_KIND = register(ResultKind(
+    name="design", spec_table="design", spec_schema=DESIGN_SPEC_SCHEMA,
+    result_schema=DESIGN_RESULT_SCHEMA, entry_modules=("study.analyses.design",),
+    summary="design: structure parameters that achieve target behaviours",
+    label="design result", spec_type=DesignSpec, load=load_design_spec,
+    parse=parse_design_spec, validator="study.analyses.fit_checks:design_problems",
+    name_attribute="study_design_name", compute=_design_for_runner, build=design_dataset,
+    own_provenance=True,
+))

@@ -53,6 +53,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from study.engine.kinds import ResultKind, register
 from study.engine.spec_files import (
     SpecError,
     axis_length,
@@ -104,6 +105,7 @@ __all__ = [
     "MAX_TRAJECTORY_PERIODS",
     "PLATE_OSCILLATION_COST",
     "SCENE_FORMAT",
+    "SCENE_KIND",
     "SCENE_KINDS",
     "SCENE_SPEC_SCHEMA",
     "SceneError",
@@ -113,7 +115,10 @@ __all__ = [
     "load_scene",
     "parse_scene",
     "period_weight",
+    "scene_build",
+    "scene_compute",
     "scene_dataset",
+    "scene_metadata",
     "scene_work",
 ]
 
@@ -788,6 +793,22 @@ def _run_plan(spec: SceneSpec, report: Report = _ignore
 _RUNNERS = {"trajectory": _run_trajectory, "calibration": _run_calibration, "plan": _run_plan}
 
 
+def scene_metadata(spec: SceneSpec) -> dict[str, Any]:
+    """Attributes that follow the scene spec's text but not its numbers (rewritten without
+    recomputing when only they change)."""
+    return {
+        "title": spec.title,
+        "summary": spec.description or (
+            f"Steering scene '{spec.name}' ({spec.kind}) of a rigid disk with resonant plates "
+            "on a vertically shaken table: planar stick-slip with an ellipsoidal limit "
+            "surface, integrated with events (study.scenes.planar_model)."),
+        "id": f"{spec.name}-{spec.sha256[:16]}",
+        "study_name": spec.name,
+        "study_spec": spec.text,
+        "study_spec_path": spec.path,
+    }
+
+
 def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
     """Compute a scene: its labelled dataset with the scene's own attributes.
 
@@ -796,7 +817,8 @@ def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
 
     The attributes describe the scene (title, summary, the disk, the integrator and
     how the run ended); provenance (spec text and hash, code, environment, history)
-    is added by :func:`study.scene_run.run_scene` when the result is written.
+    is added by the runner (:func:`study.engine.runner.run_scene`) when the result is
+    written.
 
     Raises
     ------
@@ -804,14 +826,25 @@ def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
         For a plan whose commands cannot steer the disk, or whose flights would be
         absurdly long (checked before any flight is simulated).
     """
-    variables, extra = _RUNNERS[spec.kind](spec, report or _ignore)
+    return scene_build(spec, scene_compute(spec, report))
+
+
+def scene_compute(spec: SceneSpec, report: Report | None = None
+                  ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+    """Run a scene: its variables and the attributes its run found (how it ended)."""
+    return _RUNNERS[spec.kind](spec, report or _ignore)
+
+
+def scene_build(spec: SceneSpec, computed: tuple[dict[str, xr.Variable], dict[str, Any]],
+                command: str = "") -> xr.Dataset:
+    """The labelled dataset of a computed scene (:func:`scene_compute`), with the scene's
+    own attributes (provenance is the runner's)."""
+    variables, extra = computed
     disk = spec.disk
+    metadata = scene_metadata(spec)
     attrs = {
-        "title": spec.title,
-        "summary": spec.description or (
-            f"Steering scene '{spec.name}' ({spec.kind}) of a rigid disk with resonant plates "
-            "on a vertically shaken table: planar stick-slip with an ellipsoidal limit "
-            "surface, integrated with events (study.scenes.planar_model)."),
+        "title": metadata["title"],
+        "summary": metadata["summary"],
         "keywords": "stick-slip, friction, locomotion, steering, limit surface, resonance",
         "source": "study.scenes.planar_model: Dormand-Prince 5(4) time integration with "
                   "events of the "
@@ -855,3 +888,28 @@ def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
                                                           "waypoint")}
     data = {k: v for k, v in {**variables, **plate_vars}.items() if k not in coords}
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+# ---------------------------------------------------------------------------
+# The scene kind (study.engine.kinds): everything the engine needs of a scene
+
+
+def _compute_for_runner(spec: SceneSpec, progress: Any
+                        ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+    return scene_compute(spec, progress.update)
+
+
+def _variant(spec: SceneSpec) -> str:
+    return spec.kind
+
+
+#: The steering-scene kind.
+SCENE_KIND = register(ResultKind(
+    name="scene", spec_table="scene", spec_schema=SCENE_SPEC_SCHEMA,
+    result_schema="study-scene-v1", entry_modules=("study.scenes.scene_kind",),
+    summary="steering scene of the planar disk: trajectory, calibration or plan",
+    label="steering scene result", spec_type=SceneSpec, load=load_scene, parse=parse_scene,
+    validator="study.scenes.scene_checks:scene_problems",
+    compute=_compute_for_runner, build=scene_build, work=scene_work, variant=_variant,
+    metadata=scene_metadata,
+))
