@@ -369,6 +369,10 @@ def run_study(
 ) -> RunReport:
     """Run a study and write its result file.
 
+    The public entry of a study run (thirteen documented keywords, the options of
+    ``study run``): it reads the spec and hands it down to :func:`run_kind`, the
+    options travelling on as the job's (:func:`study.engine.study_kind.stream_study`).
+
     Parameters
     ----------
     spec : study.engine.study_spec.StudySpec or path

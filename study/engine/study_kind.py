@@ -204,6 +204,8 @@ class _Run:
         a_axis = spec.axis("a")
         self.a = a_axis.values if (a_axis is not None and spec.needs_solver) else np.empty(0)
         self.chunks = _plan(spec)
+        #: Every structure of the study by its index: the spec is read once, here.
+        self.structures = dict(spec.structures())
         self.code = code_sha256()
         self.points_computed = 0
         self.points_reused = 0
@@ -224,7 +226,7 @@ class _Run:
             content = {
                 "observable": observable.name,
                 "variables": {v: VARIABLES[v].dtype for v in observable.variables},
-                "structure": _structure_content(self.spec.structure_at(structure_index)),
+                "structure": _structure_content(self.structures[structure_index]),
                 "method": self.method.canonical(),
                 "code_sha256": self.code,
             }
@@ -259,7 +261,7 @@ class _Run:
         whole are written at once (``pending`` keeps the found values until the
         task's result arrives)."""
         for chunk in self.chunks:
-            structure = self.spec.structure_at(chunk.structure_index)
+            structure = self.structures[chunk.structure_index]
             f = self.f[chunk.f_start:chunk.f_stop]
             found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]] = {}
             missing = np.zeros((f.size, self.a.size), dtype=bool)
@@ -397,7 +399,7 @@ class _Run:
         """Frontier f*(a) of every structure from its whole velocity rows."""
         spec = self.spec
         found = {}
-        for index, structure in spec.structures():
+        for index, structure in self.structures.items():
             where = (*index, slice(None), slice(None))
             velocity = self.writer.read("velocity", where)
             status = self.writer.read("status", where)
