@@ -521,6 +521,35 @@ def scene_work(spec: SceneSpec) -> tuple[float, str]:
     return float(1 + _CORRECTIONS + (len(STRATEGIES) + _CORRECTIONS) * count), "flight"
 
 
+def _segment_summaries(run: Any, schedule: Schedule, segments: int
+                       ) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Each segment's displacement in the frame of its start, heading change, path and
+    how it ended (NaN and "not_reached" for segments the run never reached)."""
+    t = run.time
+    summary = {k: np.zeros(segments) for k in ("fwd", "lat", "turn", "path")}
+    status = np.zeros(segments, dtype=np.int8)
+    for j, (start, stop) in enumerate(zip(schedule.starts, schedule.ends, strict=True)):
+        i0 = int(np.searchsorted(t, start))
+        i1 = int(np.searchsorted(t, stop))
+        if i0 >= t.size:
+            status[j] = SEGMENT_STATUS.index("not_reached")
+            for key in summary:
+                summary[key][j] = math.nan
+            continue
+        if i1 >= t.size or t[i1] != stop:
+            status[j] = SEGMENT_STATUS.index(run.outcome if run.outcome in SEGMENT_STATUS
+                                             else "step_budget")
+            i1 = t.size - 1
+        dx, dy = run.x[i1] - run.x[i0], run.y[i1] - run.y[i0]
+        heading = math.radians(run.heading[i0])
+        c, s = math.cos(heading), math.sin(heading)
+        summary["fwd"][j] = c * dx + s * dy
+        summary["lat"][j] = -s * dx + c * dy
+        summary["turn"][j] = run.heading[i1] - run.heading[i0]
+        summary["path"][j] = run.path[i1] - run.path[i0]
+    return summary, status
+
+
 def _run_trajectory(spec: SceneSpec, report: Report = _ignore
                     ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     options = spec.options
@@ -545,27 +574,7 @@ def _run_trajectory(spec: SceneSpec, report: Report = _ignore
     t = run.time
     index = np.clip(np.searchsorted(schedule.ends, t, side="right"), 0, len(rows) - 1)
     index[t == end] = len(rows) - 1
-    summary = {k: np.zeros(len(rows)) for k in ("fwd", "lat", "turn", "path")}
-    status = np.zeros(len(rows), dtype=np.int8)
-    for j, (start, stop) in enumerate(zip(schedule.starts, schedule.ends, strict=True)):
-        i0 = int(np.searchsorted(t, start))
-        i1 = int(np.searchsorted(t, stop))
-        if i0 >= t.size:
-            status[j] = SEGMENT_STATUS.index("not_reached")
-            for key in summary:
-                summary[key][j] = math.nan
-            continue
-        if i1 >= t.size or t[i1] != stop:
-            status[j] = SEGMENT_STATUS.index(run.outcome if run.outcome in SEGMENT_STATUS
-                                             else "step_budget")
-            i1 = t.size - 1
-        dx, dy = run.x[i1] - run.x[i0], run.y[i1] - run.y[i0]
-        heading = math.radians(run.heading[i0])
-        c, s = math.cos(heading), math.sin(heading)
-        summary["fwd"][j] = c * dx + s * dy
-        summary["lat"][j] = -s * dx + c * dy
-        summary["turn"][j] = run.heading[i1] - run.heading[i0]
-        summary["path"][j] = run.path[i1] - run.path[i0]
+    summary, status = _segment_summaries(run, schedule, len(rows))
     variables = {
         "x": _variable("t", run.x, METRE, "x position of the disk's centre"),
         "y": _variable("t", run.y, METRE, "y position of the disk's centre"),
@@ -694,9 +703,17 @@ def _check_plan_size(spec: SceneSpec, route: list, count: int) -> None:
 
 def _run_plan(spec: SceneSpec, report: Report = _ignore
               ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+    """Calibrate the commands, plan the routes, fly every strategy and realisation, and
+    lay the flights out as variables."""
+    commands, routes = _plan_routes(spec, report)
+    runs = _fly_plans(spec, commands, routes, report)
+    return _plan_variables(spec, commands, routes, runs)
+
+
+def _plan_routes(spec: SceneSpec, report: Report) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The calibrated commands and each strategy's route (None: planned in flight)."""
     options = spec.options
     disk = spec.disk
-    strategies = STRATEGIES
     count = options["realisations"] + 1
     waypoints = options["waypoints"]
     try:
@@ -716,6 +733,17 @@ def _run_plan(spec: SceneSpec, report: Report = _ignore
         report(float(_CORRECTIONS))
     except PlanError as err:
         raise SceneError(f"{spec.path}: [plan]: {err}") from None
+    return commands, routes
+
+
+def _fly_plans(spec: SceneSpec, commands: dict[str, Any], routes: dict[str, Any],
+               report: Report) -> dict[tuple[int, int], Any]:
+    """Every strategy's flights: realisation 0 without heading noise, the others with."""
+    options = spec.options
+    disk = spec.disk
+    strategies = STRATEGIES
+    count = options["realisations"] + 1
+    waypoints = options["waypoints"]
     noise = _heading_noise(options["heading_drift_deg"], disk)
     runs = {}
     for s, strategy in enumerate(strategies):
@@ -728,6 +756,17 @@ def _run_plan(spec: SceneSpec, report: Report = _ignore
             )
             # A closed-loop run corrects each leg as the open-loop route was corrected.
             report(1.0 + (_CORRECTIONS if strategy == "closed_loop" else 0))
+    return runs
+
+
+def _plan_variables(spec: SceneSpec, commands: dict[str, Any], routes: dict[str, Any],
+                    runs: dict[tuple[int, int], Any]
+                    ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+    """The flights sampled on one time axis, the waypoints, misses and commands."""
+    options = spec.options
+    strategies = STRATEGIES
+    count = options["realisations"] + 1
+    waypoints = options["waypoints"]
     end = max(float(run.time[-1]) for run in runs.values())
     t = np.arange(0.0, end + options["sample_interval"], options["sample_interval"])
     shape = (len(strategies), count, t.size)
