@@ -56,7 +56,7 @@ def _run(args: argparse.Namespace) -> int:
         print(f"{report.output}: metadata updated (numbers unchanged, nothing recomputed)")
     elif report.up_to_date:
         print(f"{report.output}: up to date (spec and code unchanged)")
-    elif report.chunks == 1 and report.points == 1:  # a result computed in one piece
+    elif report.in_one_piece:
         what = " ".join(reversed(report.kind.split(":")))  # "trajectory scene", "fit"
         print(f"{report.output}: {what} computed in {report.wall_seconds:.2f} s")
     else:

@@ -103,6 +103,8 @@ class RunReport:
     metadata_updated: bool = False
     kind: str = "study"
 
+    #: Computed in one piece (a scene, a fit, a design), not chunk by chunk.
+    in_one_piece: bool = False
     #: What the kind computed (a fit's or a design's result object), for the CLI's
     #: summary; None for studies and scenes, and when nothing was computed.
     outcome: Any = field(default=None, compare=False)
@@ -281,8 +283,10 @@ def _compute_and_write(job: RunJob, spec: Any) -> RunReport:
         dataset.attrs = {"Conventions": provenance.pop("Conventions"), **dataset.attrs,
                          **provenance}
     write_atomic(dataset, job.output)
+    # The outcome goes back only where it is a small summary object (a fit's, a
+    # design's result, printed by the CLI); a scene's arrays are left to the file.
     return job.report(False, 1, 1, 0, points=1, points_computed=1, kind=_tag(kind, spec),
-                      outcome=outcome if kind.own_provenance else None)
+                      in_one_piece=True, outcome=outcome if kind.own_provenance else None)
 
 
 def _provenance(job: RunJob, spec: Any, finished_utc: str) -> dict[str, Any]:
