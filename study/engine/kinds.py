@@ -98,6 +98,8 @@ class ResultKind:
     variant : callable, optional
         ``variant(spec) -> str``: which sort of this kind a spec is (a scene's
         ``"trajectory"``), shown as ``RunReport.kind == "scene:trajectory"``.
+    variant_attribute : str, optional
+        Global attribute of its files that holds the variant (``study info``).
     metadata : callable, optional
         ``metadata(spec) -> dict``: attributes that follow the spec's text but not its
         numbers (rewritten without recomputing); None: the kind is always recomputed.
@@ -127,6 +129,7 @@ class ResultKind:
     stream: Callable[[Any, Any], Any] | None = None
     work: Callable[[Any], tuple[float, str]] | None = None
     variant: Callable[[Any], str] | None = None
+    variant_attribute: str | None = None
     metadata: Callable[[Any], dict[str, Any]] | None = None
     own_provenance: bool = False
     inputs: Callable[[Any], list[str]] = field(default=_no_inputs)

@@ -107,6 +107,7 @@ __all__ = [
     "SCENE_FORMAT",
     "SCENE_KIND",
     "SCENE_KINDS",
+    "SCENE_RESULT_SCHEMA",
     "SCENE_SPEC_SCHEMA",
     "SceneError",
     "SceneSpec",
@@ -125,6 +126,8 @@ __all__ = [
 SCENE_KINDS = ("trajectory", "calibration", "plan")
 #: The JSON schema of scene specs (package data in ``study/schemas/``).
 SCENE_SPEC_SCHEMA = "study-scene-spec-v1"
+#: The ``study_result_schema`` of scene files (and the name of their JSON schema).
+SCENE_RESULT_SCHEMA = "study-scene-v1"
 #: Layout of a scene result's values (``study_scene_format``): 3 stores every angle in
 #: degree (heading, heading_change, start_heading; turn rates in degree s-1; the plan's
 #: realisation_heading_drift in degree per diameter, its spec key heading_drift_deg).
@@ -945,10 +948,11 @@ def _variant(spec: SceneSpec) -> str:
 #: The steering-scene kind.
 SCENE_KIND = register(ResultKind(
     name="scene", spec_table="scene", spec_schema=SCENE_SPEC_SCHEMA,
-    result_schema="study-scene-v1", entry_modules=("study.scenes.scene_kind",),
+    result_schema=SCENE_RESULT_SCHEMA, entry_modules=("study.scenes.scene_kind",),
     summary="steering scene of the planar disk: trajectory, calibration or plan",
     label="steering scene result", spec_type=SceneSpec, load=load_scene, parse=parse_scene,
     validator="study.scenes.scene_checks:scene_problems",
     compute=_compute_for_runner, build=scene_build, work=scene_work, variant=_variant,
+    variant_attribute="study_scene_kind",
     metadata=scene_metadata,
 ))

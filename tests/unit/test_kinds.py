@@ -80,6 +80,13 @@ def test_a_kind_is_found_by_its_name_table_and_schema(name):
     assert callable(getattr(__import__(module, fromlist=[function]), function))
 
 
+def test_the_schema_names_validation_exports_are_the_kinds():
+    from study.engine import validation
+
+    assert [validation.RESULT_SCHEMA, validation.SCENE_SCHEMA, validation.FIT_SCHEMA,
+            validation.DESIGN_SCHEMA] == [k.result_schema for k in RESULT_KINDS.values()]
+
+
 def test_a_second_kind_with_a_taken_table_is_refused_naming_both():
     twin = ResultKind(**{**{f: getattr(FIT_KIND, f) for f in FIT_KIND.__dataclass_fields__},
                          "name": "twin", "result_schema": "study-twin-v1", "spec_type": dict})

@@ -61,12 +61,15 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
     run = _section(provenance, "run")
     package = _section(provenance, "package")
     lines = [f"{path or attrs.get('study_name')}: {attrs.get('title')}"]
-    kind = attrs.get("study_scene_kind") if isinstance(attrs.get("study_scene_kind"), str) else ""
     schema = attrs.get("study_result_schema")
     result_kind = kind_of_schema(schema) if isinstance(schema, str) else None
-    # Each kind names its results by its own attribute (a fit by its fit spec's name).
+    # Each kind names its results by its own attribute (a fit by its fit spec's name),
+    # and a scene says which sort of scene it is.
     what = result_kind.name if result_kind else "study"
     name = attrs.get(result_kind.name_attribute if result_kind else "study_name")
+    variant = attrs.get(result_kind.variant_attribute) if (
+        result_kind and result_kind.variant_attribute) else None
+    kind = variant if isinstance(variant, str) else ""
     coupling = attrs.get("study_coupling")
     lines.append(f"  {what} {name!r}"
                  f"{f' ({kind})' if kind else ''}"
