@@ -32,7 +32,9 @@ from study.version import VERSION as __version__
 
 # The result kinds register themselves (study.engine.kinds) when their modules are
 # imported, in this order (which messages listing the kinds follow): the engine looks
-# them up there and imports no scene or analysis module.
+# them up there and imports no scene or analysis module. Through an alias the code
+# fingerprint does not follow, on purpose: registering one kind changes no other kind's
+# numbers, so each kind's code hash stays its own modules' (study.engine.fingerprint).
 _import_module("study.engine.study_kind")
 _import_module("study.scenes.scene_kind")
 _import_module("study.analyses.fit")

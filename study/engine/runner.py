@@ -23,7 +23,6 @@ from pathlib import Path
 from typing import Any
 
 from study.engine.executors import TASK_TIMEOUT, Executor
-from study.engine.fingerprint import result_code_sha256
 from study.engine.kinds import ResultKind, kind_named, kind_of_spec
 from study.engine.outputs import check_output
 from study.engine.progress import Progress
@@ -31,6 +30,7 @@ from study.engine.provenance import (
     environment,
     fingerprint,
     git_state,
+    kind_code_sha256,
     package_version,
     utc_now,
 )
@@ -170,7 +170,7 @@ def default_cache(output: Path) -> Path:
 
 def _identity(kind: ResultKind, spec: Any) -> tuple[str, dict[str, Any]]:
     """Fingerprint and metadata attributes a current file of ``spec`` must carry."""
-    code = result_code_sha256(kind.name)
+    code = kind_code_sha256(kind.name)
     return fingerprint(spec.sha256, code), kind.metadata(spec) if kind.metadata else {}
 
 
@@ -293,7 +293,7 @@ def _provenance(job: RunJob, spec: Any, finished_utc: str) -> dict[str, Any]:
     """The ACDD and provenance attributes of a result computed in one piece by this code."""
     kind = job.kind
     git = git_state()
-    code = result_code_sha256(kind.name)
+    code = kind_code_sha256(kind.name)
     run_fingerprint = fingerprint(spec.sha256, code)
     section = {"name": spec.name, "spec_path": spec.path, "spec_sha256": spec.sha256,
                "canonical_spec": spec.canonical}
