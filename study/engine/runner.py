@@ -52,7 +52,6 @@ __all__ = [
     "RunReport",
     "StudyBusy",
     "StudyInterrupted",
-    "default_cache",
     "default_output",
     "is_up_to_date",
     "load_any",
@@ -160,12 +159,6 @@ def default_output(spec: Any) -> Path:
     source = Path(spec.path)
     stem = source.stem if source.suffix == ".toml" else spec.name
     return Path("results") / f"{stem}.nc"
-
-
-def default_cache(output: Path) -> Path:
-    """Where kept values live: ``$STUDY_CACHE``, else ``.study-cache`` beside the result
-    (so every study writing into one folder shares them)."""
-    return Path(os.environ.get("STUDY_CACHE") or output.parent / ".study-cache")
 
 
 def _identity(kind: ResultKind, spec: Any) -> tuple[str, dict[str, Any]]:
@@ -400,7 +393,8 @@ def run_study(
     on_chunk : callable, optional
         Called with the chunk number each time a computed chunk is written.
     cache : path, optional
-        Folder of kept values (default :func:`default_cache`).
+        Folder of kept values (default
+        :func:`study.engine.study_kind.default_cache`).
     on_start : callable, optional
         Called with the :class:`study.engine.executors.Executor` once it is ready, before any
         chunk is computed (to show where the run goes, e.g. the dashboard).

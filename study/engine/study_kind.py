@@ -44,7 +44,7 @@ from study.engine.provenance import (
     package_version,
     utc_now,
 )
-from study.engine.runner import RunJob, RunReport, StudyInterrupted, default_cache
+from study.engine.runner import RunJob, RunReport, StudyInterrupted
 from study.engine.store import (
     PAPER_REFERENCE,
     RESULT_SCHEMA,
@@ -58,7 +58,7 @@ from study.engine.sweep import Chunk, Task, compute_task, missing_rectangles, pl
 from study.engine.variables import RESULT_FORMAT, VARIABLES
 from study.model.structure import Structure
 
-__all__ = ["STUDY_KIND", "stream_study"]
+__all__ = ["STUDY_KIND", "default_cache", "stream_study"]
 
 
 def _metadata_attrs(spec: StudySpec) -> dict[str, Any]:
@@ -75,6 +75,12 @@ def _metadata_attrs(spec: StudySpec) -> dict[str, Any]:
         "study_spec": spec.text,
         "study_spec_path": spec.path,
     }
+
+
+def default_cache(output: Path) -> Path:
+    """Where kept values live: ``$STUDY_CACHE``, else ``.study-cache`` beside the result
+    (so every study writing into one folder shares them)."""
+    return Path(os.environ.get("STUDY_CACHE") or output.parent / ".study-cache")
 
 
 def stream_study(spec: StudySpec, job: RunJob) -> RunReport:
