@@ -4,11 +4,13 @@ A soft structure with a resonant plate, on a vertically shaken table, walks forw
 or backward by stick-slip (Barois, Boucherie, Tadrist & Kellay). See the documentation
 in docs/ (``make docs``).
 
-The computing functions are imported with the package; :func:`run`, :func:`open_result`
-and :class:`ResultError`, which read and write result files, are imported on first use
-(so that ``import study`` stays light and the code fingerprint of results covers the
-computing modules only, see :mod:`study.engine.fingerprint`).
+The computing functions are imported with the package, and so are the modules of the
+result kinds (study, scene, fit, design), which register themselves in
+:mod:`study.engine.kinds`; :func:`run`, :func:`open_result` and :class:`ResultError`
+are imported on first use.
 """
+
+from importlib import import_module as _import_module
 
 from study.analyses.frontier import frontier
 from study.analyses.thresholds import minimum_threshold
@@ -27,6 +29,16 @@ from study.model.status import NonConvergence, Status
 from study.model.structure import Structure
 from study.solvers.exact import SolverSettings, SteadyState, steady_state, steady_velocity
 from study.version import VERSION as __version__
+
+# The result kinds register themselves (study.engine.kinds) when their modules are
+# imported, in this order (which messages listing the kinds follow): the engine looks
+# them up there and imports no scene or analysis module. Through an alias the code
+# fingerprint does not follow, on purpose: registering one kind changes no other kind's
+# numbers, so each kind's code hash stays its own modules' (study.engine.fingerprint).
+_import_module("study.engine.study_kind")
+_import_module("study.scenes.scene_kind")
+_import_module("study.analyses.fit")
+_import_module("study.analyses.design")
 
 __all__ = [
     "NonConvergence",

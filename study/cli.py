@@ -57,9 +57,9 @@ def _run(args: argparse.Namespace) -> int:
         print(f"{report.output}: metadata updated (numbers unchanged, nothing recomputed)")
     elif report.up_to_date:
         print(f"{report.output}: up to date (spec and code unchanged)")
-    elif report.kind.startswith("scene:"):
-        print(f"{report.output}: {report.kind.split(':')[1]} scene computed in "
-              f"{report.wall_seconds:.2f} s")
+    elif report.in_one_piece:
+        what = " ".join(reversed(report.kind.split(":")))  # "trajectory scene", "fit"
+        print(f"{report.output}: {what} computed in {report.wall_seconds:.2f} s")
     else:
         print(
             f"{report.output}: {report.points} points ({report.points_computed} computed, "
@@ -287,24 +287,25 @@ def _export(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fit(args: argparse.Namespace) -> int:
-    from study.analyses.fit import FIT_RESULT_SCHEMA, PARAMETERS, fit, fit_dataset, load_fit_spec
-    from study.engine.outputs import check_output
-    from study.engine.store import write_atomic
+def _command(args: argparse.Namespace) -> str:
+    """The command line, as recorded in a result's history."""
+    return "study " + " ".join(shlex.quote(a) for a in args.argv)
 
-    spec = load_fit_spec(args.spec)
-    output = args.output or Path("results") / f"{args.spec.stem}.nc"
-    inputs = [args.spec, *sorted({str(p) for p in spec.measurements["source"].values})]
-    check_output(output, FIT_RESULT_SCHEMA, inputs=inputs, overwrite=args.overwrite)
+
+def _fit(args: argparse.Namespace) -> int:
+    from study.analyses.fit import FIT_KIND, PARAMETERS
+    from study.engine.outputs import check_output
+    from study.engine.runner import run_kind
+
+    spec = FIT_KIND.load(args.spec)
     if args.figure is not None:
         for suffix in (".png", ".pdf"):
-            check_output(Path(args.figure).with_suffix(suffix), "figure", inputs=inputs,
+            check_output(Path(args.figure).with_suffix(suffix), "figure",
+                         inputs=FIT_KIND.inputs(spec),
                          overwrite=args.overwrite, option="--figure")
-    result = fit(spec, progress=lambda line: print(f"study: {line}", file=sys.stderr,
-                                                    flush=True))
-    command = "study " + " ".join(shlex.quote(a) for a in args.argv)
-    dataset = fit_dataset(spec, result, command)
-    write_atomic(dataset, output)
+    report = run_kind(FIT_KIND, spec, args.output, overwrite=args.overwrite,
+                      command=_command(args))
+    output, result = report.output, report.outcome
     rows = spec.measurements.sizes["measurement"]
     print(f"{output}: fit '{spec.name}' of {len(result.names)} parameters to {rows} "
           f"measurements ({spec.coupling} coupling), chi^2/dof = {result.chi2_per_dof:.4g} "
@@ -320,30 +321,22 @@ def _fit(args: argparse.Namespace) -> int:
     for warning in result.warnings:
         print(f"study: warning: {warning}", file=sys.stderr)
     if args.figure is not None:
+        from study.engine.validation import open_result
         from study.figures.fit_result import draw
 
-        for path in draw(dataset, args.figure):
+        for path in draw(open_result(output), args.figure):
             print(f"wrote {path}")
     return 0
 
 
 def _design(args: argparse.Namespace) -> int:
-    from study.analyses.design import (
-        DESIGN_RESULT_SCHEMA,
-        design,
-        design_dataset,
-        load_design_spec,
-    )
-    from study.engine.outputs import check_output
-    from study.engine.store import write_atomic
+    from study.analyses.design import DESIGN_KIND
+    from study.engine.runner import run_kind
 
-    spec = load_design_spec(args.spec)
-    output = args.output or Path("results") / f"{args.spec.stem}.nc"
-    check_output(output, DESIGN_RESULT_SCHEMA, inputs=[args.spec], overwrite=args.overwrite)
-    result = design(spec, progress=lambda line: print(f"study: {line}", file=sys.stderr,
-                                                       flush=True))
-    command = "study " + " ".join(shlex.quote(a) for a in args.argv)
-    write_atomic(design_dataset(spec, result, command), output)
+    spec = DESIGN_KIND.load(args.spec)
+    report = run_kind(DESIGN_KIND, spec, args.output, overwrite=args.overwrite,
+                      command=_command(args))
+    output, result = report.output, report.outcome
     print(f"{output}: design '{spec.name}' of {len(result.names)} parameters for "
           f"{len(spec.targets)} targets ({spec.coupling} coupling), {result.evaluations} "
           f"model evaluations in {result.wall_seconds:.1f} s")

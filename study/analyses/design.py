@@ -82,6 +82,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
+from study.engine.kinds import ResultKind, register
 from study.engine.spec_files import (
     SpecError,
     canonical_sha256,
@@ -118,6 +119,7 @@ from study.solvers.exact import DEFAULT_COUPLING, steady_velocity
 __all__ = [
     "BEHAVIOURS",
     "DESIGN_FORMAT",
+    "DESIGN_KIND",
     "DESIGN_RESULT_SCHEMA",
     "DESIGN_SPEC_SCHEMA",
     "FAILED",
@@ -960,3 +962,23 @@ def _summary_variables(spec: DesignSpec, result: DesignResult) -> dict[str, tupl
         variables["scan_score"] = (("scan",), result.scan_scores, {
             "long_name": "smallest target margin at the scanned value", **one})
     return variables
+
+
+# ---------------------------------------------------------------------------
+# The design kind (study.engine.kinds): what the runner, validation and the CLI need
+
+
+def _design_for_runner(spec: DesignSpec, progress: Any) -> DesignResult:
+    return design(spec, progress=progress.say)
+
+
+#: The design kind: structure parameters searched for target behaviours.
+DESIGN_KIND = register(ResultKind(
+    name="design", spec_table="design", spec_schema=DESIGN_SPEC_SCHEMA,
+    result_schema=DESIGN_RESULT_SCHEMA, entry_modules=("study.analyses.design",),
+    summary="design: structure parameters that achieve target behaviours",
+    label="design result", spec_type=DesignSpec, load=load_design_spec,
+    parse=parse_design_spec, validator="study.analyses.fit_checks:design_problems",
+    name_attribute="study_design_name", compute=_design_for_runner, build=design_dataset,
+    own_provenance=True,
+))

@@ -61,6 +61,7 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from study.analyses.measurements import QUANTITIES, check_velocity_units, read_measurements
+from study.engine.kinds import ResultKind, register
 from study.engine.spec_files import (
     SpecError,
     canonical_sha256,
@@ -79,6 +80,7 @@ from study.solvers.exact import DEFAULT_COUPLING, steady_velocity
 
 __all__ = [
     "FIT_FORMAT",
+    "FIT_KIND",
     "FIT_RESULT_SCHEMA",
     "FIT_SPEC_SCHEMA",
     "PARAMETERS",
@@ -1078,3 +1080,27 @@ def fitted_structure(params: dict[str, float | None], m_add: float = 0.0,
 def quantity_units() -> dict[str, str]:
     """Units of ``value`` by quantity (documentation helper)."""
     return {q.name: q.units for q in QUANTITIES.values()}
+
+
+# ---------------------------------------------------------------------------
+# The fit kind (study.engine.kinds): what the runner, validation and the CLI need
+
+
+def _fit_for_runner(spec: FitSpec, progress: Any) -> FitResult:
+    return fit(spec, progress=progress.say)
+
+
+def _fit_inputs(spec: FitSpec) -> list[str]:
+    """The spec and its measurement files: a fit never writes over what it reads."""
+    return [spec.path, *sorted({str(p) for p in spec.measurements["source"].values})]
+
+
+#: The fit kind: free structure parameters fitted to measurements.
+FIT_KIND = register(ResultKind(
+    name="fit", spec_table="fit", spec_schema=FIT_SPEC_SCHEMA, result_schema=FIT_RESULT_SCHEMA,
+    entry_modules=("study.analyses.fit",),
+    summary="fit: free structure parameters estimated from measurements",
+    label="fit result", spec_type=FitSpec, load=load_fit_spec, parse=parse_fit_spec,
+    validator="study.analyses.fit_checks:fit_problems", name_attribute="study_fit_name",
+    compute=_fit_for_runner, build=fit_dataset, own_provenance=True, inputs=_fit_inputs,
+))

@@ -25,12 +25,13 @@ import ast
 import hashlib
 import platform
 import sys
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cache, lru_cache
 from importlib import metadata
 from pathlib import Path
 
-from study.engine.kinds import RESULT_KINDS
+from study.engine.kinds import RESULT_KINDS, kind_named
 
 __all__ = [
     "RESULT_KIND_ENTRIES",
@@ -42,11 +43,23 @@ __all__ = [
 
 PACKAGE = "study"
 
-#: The modules whose import closure decides the numbers of each result kind
-#: (declared with the kinds in :mod:`study.engine.kinds`).
-RESULT_KIND_ENTRIES: dict[str, tuple[str, ...]] = {
-    name: kind.entry_modules for name, kind in RESULT_KINDS.items()
-}
+class _KindEntries(Mapping[str, tuple[str, ...]]):
+    """A live view of the registered kinds' entry modules (kinds register on ``import
+    study``, after this module may have been imported)."""
+
+    def __getitem__(self, kind: str) -> tuple[str, ...]:
+        return RESULT_KINDS[kind].entry_modules
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(RESULT_KINDS)
+
+    def __len__(self) -> int:
+        return len(RESULT_KINDS)
+
+
+#: The modules whose import closure decides the numbers of each result kind: kind name
+#: -> entry modules (declared where each kind registers, :mod:`study.engine.kinds`).
+RESULT_KIND_ENTRIES: Mapping[str, tuple[str, ...]] = _KindEntries()
 
 # Libraries whose version can change computed values (the kernels are compiled by
 # numba through llvmlite; numpy does the vectorised parts).
@@ -280,20 +293,16 @@ def code_fingerprint(
 
 
 def _entries(kind: str) -> tuple[str, ...]:
-    try:
-        return RESULT_KIND_ENTRIES[kind]
-    except KeyError:
-        allowed = ", ".join(sorted(RESULT_KIND_ENTRIES))
-        raise ValueError(f"unknown result kind {kind!r}; allowed: {allowed}") from None
+    return kind_named(kind).entry_modules
 
 
 def result_code_sha256(kind: str, root: Path | None = None) -> str:
-    """The code hash of result kind ``kind`` (``"study"`` or ``"scene"``).
+    """The code hash of result kind ``kind`` (``"study"``, ``"scene"``, ``"fit"``, ...).
 
     Raises
     ------
-    ValueError
-        If ``kind`` is not a key of :data:`RESULT_KIND_ENTRIES`.
+    study.engine.kinds.UnknownKind
+        If ``kind`` is not a registered kind (a :class:`ValueError`).
     """
     return code_fingerprint(_entries(kind), root).sha256
 

@@ -1,27 +1,65 @@
-"""The kinds of result ``study`` writes, declared once.
+"""The kinds of result ``study`` writes: a registry that each kind fills from its own module.
 
-A result kind ties together what a spec of that kind looks like (its top table and
-spec schema), the result schema its files carry, and the modules whose import
-closure computes it (the code fingerprint). The spec layer, the runner, the
-fingerprint and validation each look kinds up here by name; each stage keeps its
-own implementation for a kind next to its other code, keyed by the same name.
+A result kind (a parameter study, a steering scene, a fit, a design) registers once,
+next to its own code, with :func:`register`: what a spec of that kind looks like
+(its top table and spec schema), how to read one (its spec parser), how to compute
+it and build its dataset, how to check a file of it (its validator), how to name
+it for people (its description), the result schema its files carry and the modules
+whose import closure computes it (the code fingerprint). The modules that register
+are imported by ``import study`` (``study/__init__.py``):
+
+==========  ====================================
+study       :mod:`study.engine.study_kind`
+scene       :mod:`study.scenes.scene_kind`
+fit         :mod:`study.analyses.fit`
+design      :mod:`study.analyses.design`
+==========  ====================================
+
+The spec layer (which kind a TOML file is), the runner, validation, ``study info``,
+the fingerprint and the CLI look kinds up here and call their hooks; none of them
+branches on a kind, and the engine imports no scene or analysis module.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import importlib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
 
-__all__ = ["RESULT_KINDS", "ResultKind", "kind_of_schema"]
+__all__ = [
+    "RESULT_KINDS",
+    "ResultKind",
+    "UnknownKind",
+    "kind_named",
+    "kind_of_schema",
+    "kind_of_spec",
+    "kind_of_table",
+    "register",
+    "registered",
+]
+
+
+class UnknownKind(ValueError):
+    """A kind, a spec object or a result schema that no registered kind has."""
+
+
+def _no_inputs(spec: Any) -> list[str]:
+    return [str(spec.path)]
+
+
+def _one_unit(spec: Any) -> int:
+    return 1
 
 
 @dataclass(frozen=True)
 class ResultKind:
-    """One kind of result.
+    """One kind of result and the hooks the engine calls for it.
 
     Attributes
     ----------
     name : str
-        ``"study"`` or ``"scene"``.
+        ``"study"``, ``"scene"``, ``"fit"`` or ``"design"``.
     spec_table : str
         The top-level TOML table that marks a spec of this kind.
     spec_schema : str
@@ -33,6 +71,45 @@ class ResultKind:
         Modules whose import closure decides the numbers (see :mod:`study.engine.fingerprint`).
     summary : str
         One line for docs and ``study info``.
+    label : str
+        What ``study validate`` calls a valid file: ``"study result"``, ...
+    spec_type : type
+        The class of its parsed specs (the runner finds a spec's kind by it).
+    load : callable
+        ``load(path) -> spec``: read and validate a spec file.
+    parse : callable
+        ``parse(text, source) -> spec``: read a spec from its text (a file's embedded spec).
+    validator : str
+        ``"module:function"`` of ``problems(nc, meta, source) -> list[str]``, imported on
+        first use: the checks read netCDF through :mod:`study.engine.validation`, which the
+        computing modules that register kinds must not import.
+    name_attribute : str
+        Global attribute that names the result (``study info``).
+    compute : callable, optional
+        ``compute(spec, progress) -> result``; ``progress`` is a
+        :class:`study.engine.progress.Progress` (``update(work)``, ``say(line)``).
+    build : callable, optional
+        ``build(spec, result, command) -> xarray.Dataset``: the dataset written.
+    stream : callable, optional
+        ``stream(spec, job) -> RunReport``: for a kind that writes its file as it computes
+        (a study, chunk by chunk) instead of ``compute`` and ``build``.
+    work : callable, optional
+        ``work(spec) -> (total, unit)`` for a progress bar; None: progress in lines.
+    variant : callable, optional
+        ``variant(spec) -> str``: which sort of this kind a spec is (a scene's
+        ``"trajectory"``), shown as ``RunReport.kind == "scene:trajectory"``.
+    variant_attribute : str, optional
+        Global attribute of its files that holds the variant (``study info``).
+    metadata : callable, optional
+        ``metadata(spec) -> dict``: attributes that follow the spec's text but not its
+        numbers (rewritten without recomputing); None: the kind is always recomputed.
+    own_provenance : bool
+        The builder writes the kind's provenance itself (its layout fixed by its result
+        schema); otherwise the runner adds the common provenance attributes.
+    inputs : callable
+        ``inputs(spec) -> list of str``: files a run reads (never replaced by its output).
+    size : callable
+        ``size(spec) -> int``: chunks a run of it counts (1 but for studies).
     """
 
     name: str
@@ -41,21 +118,89 @@ class ResultKind:
     result_schema: str
     entry_modules: tuple[str, ...]
     summary: str
+    label: str
+    spec_type: type
+    load: Callable[[Any], Any]
+    parse: Callable[[str, str], Any]
+    validator: str
+    name_attribute: str = "study_name"
+    compute: Callable[[Any, Any], Any] | None = None
+    build: Callable[[Any, Any, str], Any] | None = None
+    stream: Callable[[Any, Any], Any] | None = None
+    work: Callable[[Any], tuple[float, str]] | None = None
+    variant: Callable[[Any], str] | None = None
+    variant_attribute: str | None = None
+    metadata: Callable[[Any], dict[str, Any]] | None = None
+    own_provenance: bool = False
+    inputs: Callable[[Any], list[str]] = field(default=_no_inputs)
+    size: Callable[[Any], int] = field(default=_one_unit)
+
+    def problems(self, nc: Any, meta: Any, source: str) -> list[str]:
+        """What is wrong with a file of this kind (its registered validator)."""
+        module, function = self.validator.split(":")
+        return getattr(importlib.import_module(module), function)(nc, meta, source)
 
 
-_DECLARED = (
-    ResultKind("study", "study", "study-spec-v1", "study-result-v1",
-               ("study.engine.sweep", "study.solvers.frontier", "study.engine.study_spec"),
-               "parameter study: observables over swept structure and drive parameters"),
-    ResultKind("scene", "scene", "study-scene-spec-v1", "study-scene-v1",
-               ("study.scenes.scene_kind",),
-               "steering scene of the planar disk: trajectory, calibration or plan"),
-)
+#: name -> ResultKind, in the order the kinds registered.
+RESULT_KINDS: dict[str, ResultKind] = {}
 
-#: name -> ResultKind.
-RESULT_KINDS: dict[str, ResultKind] = {k.name: k for k in _DECLARED}
+
+def register(kind: ResultKind) -> ResultKind:
+    """Add a kind (once: a second kind of the same name, table, schema or spec class is
+    refused, naming both)."""
+    for other in RESULT_KINDS.values():
+        for key in ("name", "spec_table", "result_schema", "spec_type"):
+            if getattr(other, key) == getattr(kind, key) and other is not kind:
+                raise ValueError(f"result kind {kind.name!r}: its {key} "
+                                 f"{getattr(kind, key)!r} is already kind {other.name!r}'s")
+    RESULT_KINDS[kind.name] = kind
+    return kind
+
+
+def registered() -> str:
+    """The registered kinds, for messages: ``'study', 'scene', 'fit', 'design'``."""
+    return ", ".join(repr(name) for name in RESULT_KINDS) or "none (import study first)"
+
+
+def kind_named(name: str) -> ResultKind:
+    """The kind called ``name``; :class:`UnknownKind` names the registered ones."""
+    try:
+        return RESULT_KINDS[name]
+    except KeyError:
+        raise UnknownKind(f"unknown result kind {name!r}; the kinds are {registered()}") from None
 
 
 def kind_of_schema(result_schema: str) -> ResultKind | None:
     """The kind whose files carry ``study_result_schema == result_schema``, if any."""
-    return next((k for k in _DECLARED if k.result_schema == result_schema), None)
+    return next((k for k in RESULT_KINDS.values() if k.result_schema == result_schema), None)
+
+
+def kind_of_spec(spec: Any) -> ResultKind:
+    """The kind of a parsed spec, found by its class."""
+    kind = next((k for k in RESULT_KINDS.values() if type(spec) is k.spec_type), None)
+    if kind is None:
+        raise UnknownKind(f"{type(spec).__name__} is not the spec of a result kind; the kinds "
+                          f"are {registered()}")
+    return kind
+
+
+def kind_of_table(raw: Mapping[str, Any], path: str) -> ResultKind:
+    """The kind of a parsed TOML document: the one kind whose top table it has.
+
+    Raises
+    ------
+    UnknownKind
+        Naming the file, the tables found and the tables of every kind.
+    """
+    found = [k for k in RESULT_KINDS.values() if k.spec_table in raw]
+    tables = " or ".join(f"[{k.spec_table}]" for k in RESULT_KINDS.values())
+    if len(found) > 1:
+        both = " and ".join(f"[{k.spec_table}]" for k in found)
+        raise UnknownKind(f"{path}: both {both} tables; a spec is one of them ({tables})")
+    if found and isinstance(raw[found[0].spec_table], dict):
+        return found[0]
+    if found:
+        raise UnknownKind(f"{path}: [{found[0].spec_table}] must be a table, not a value")
+    present = ", ".join(sorted(map(repr, raw))) or "none"
+    raise UnknownKind(f"{path}: not a spec of a result kind ({registered()}): it needs a "
+                      f"{tables} table (top-level tables found: {present})")

@@ -124,6 +124,8 @@ class Progress:
         self.unit = unit
         self.clock = clock
         self.enabled = (enabled is not False) and self.total > 0
+        #: Lines (:meth:`say`) are shown unless progress is off.
+        self.quiet = enabled is False
         terminal = bool(getattr(self.stream, "isatty", lambda: False)())
         self.bar: tqdm | None = None
         if self.enabled and terminal:
@@ -157,6 +159,16 @@ class Progress:
                     or now - self._last_time >= LOG_INTERVAL or self.done >= self.total):
                 self._last_fraction = fraction
                 self._write(now)
+
+    def say(self, line: str) -> None:
+        """Show one line of what the work is doing (``study: LINE``), above the bar if one
+        is drawn; nothing when progress is off."""
+        if self.quiet:
+            return
+        if self.bar is not None:
+            self.bar.write(f"study: {line}", file=self.stream)
+        else:
+            print(f"study: {line}", file=self.stream, flush=True)
 
     def line(self, now: float | None = None) -> str:
         """The log line: share done, counts, elapsed, rate and time left (if known)."""

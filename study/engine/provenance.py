@@ -13,7 +13,6 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from study.engine.fingerprint import result_code_sha256
 from study.version import VERSION
 
 __all__ = [
@@ -21,6 +20,7 @@ __all__ = [
     "environment",
     "fingerprint",
     "git_state",
+    "kind_code_sha256",
     "package_version",
     "scene_code_sha256",
     "scene_fingerprint",
@@ -35,18 +35,27 @@ def utc_now() -> str:
     return datetime.now(UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z")
 
 
+def kind_code_sha256(kind: str) -> str:
+    """Hash of the code behind result kind ``kind`` (see :mod:`study.engine.fingerprint`)."""
+    # Imported on first use: ``import study`` (which registers the kinds) must not import
+    # the fingerprint module, or ``python -m study.engine.fingerprint`` would run it twice.
+    from study.engine.fingerprint import result_code_sha256
+
+    return result_code_sha256(kind)
+
+
 def code_sha256() -> str:
     """Hash of the code behind parameter-study results (see :mod:`study.engine.fingerprint`).
 
     It covers every module that ``study.engine.sweep`` and ``study.solvers.frontier`` import, found
     from the import graph, so the solver and integrator versions are in it too.
     """
-    return result_code_sha256("study")
+    return kind_code_sha256("study")
 
 
 def scene_code_sha256() -> str:
     """Hash of the code behind steering scenes (see :mod:`study.engine.fingerprint`)."""
-    return result_code_sha256("scene")
+    return kind_code_sha256("scene")
 
 
 def scene_fingerprint(spec_sha256: str) -> str:

@@ -1,14 +1,14 @@
-"""The one engine: runs studies and scenes; the only module that crosses
-spec -> sweep -> cache -> store.
+"""The one runner: every kind of result is run, locked, written and recorded here.
 
-A run plans the grid in chunks, looks every chunk up in the cache of kept values,
-sends what is missing to the executor (local threads, or a dask scheduler), and
-writes each chunk into the result file as it arrives, together with its computed
-values into the cache. Memory holds a bounded number of chunks, never the study.
-An interrupted run loses nothing: the next run finds the values in the cache. A
-result whose spec and code are unchanged is not recomputed (deciding so reads the
-file's attributes only); a spec changed only in its metadata (title, description,
-comments) gets new metadata without recomputation.
+A run of any kind (:mod:`study.engine.kinds`) goes down one path: read the spec
+(the kind's parser), decide from the file's attributes alone whether it is current
+(same spec numbers and code: nothing is computed; only the spec's text changed: the
+metadata is rewritten), take the output's lock, compute (the kind's computation and
+dataset builder, or its own streaming writer: a study writes chunk by chunk, see
+:mod:`study.engine.study_kind`), add the provenance and write the file atomically
+through :mod:`study.engine.store` (sealed with its content checksum and validated
+before it replaces the output). The runner never branches on a kind: it calls the
+kind's hooks.
 """
 
 from __future__ import annotations
@@ -16,72 +16,50 @@ from __future__ import annotations
 import json
 import os
 import shlex
-import threading
 import time
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from study.engine.cache import ResultCache, encode_block, entry_key
-from study.engine.executors import TASK_TIMEOUT, Executor, executor
-from study.engine.layout import (
-    coordinates,
-    data_variables,
-    method_description,
-    method_of,
-    observables_by_grid,
-    pad_branches,
-)
-from study.engine.observables import Observable
+from study.engine.executors import TASK_TIMEOUT, Executor
+from study.engine.kinds import ResultKind, kind_named, kind_of_spec
 from study.engine.outputs import check_output
 from study.engine.progress import Progress
 from study.engine.provenance import (
-    code_sha256,
     environment,
     fingerprint,
     git_state,
+    kind_code_sha256,
     package_version,
-    scene_code_sha256,
     utc_now,
 )
 from study.engine.spec_files import detect_kind
 from study.engine.store import (
     PAPER_REFERENCE,
-    RESULT_SCHEMA,
-    SCENE_SCHEMA,
-    GridWriter,
     StoreBusy,
-    StoreError,
-    advice,
     clean_temporaries,
     commit,
     exclusive,
     file_attributes,
-    new_temporary,
     rewrite_attributes,
     write_atomic,
 )
-from study.engine.study_spec import StudySpec, load_spec
-from study.engine.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
-from study.engine.variables import RESULT_FORMAT, VARIABLES
-from study.model.structure import Structure
-from study.scenes.scene_kind import SceneSpec, load_scene, scene_dataset, scene_work
 
 __all__ = [
     "PAPER_REFERENCE",
+    "RunJob",
     "RunReport",
     "StudyBusy",
     "StudyInterrupted",
-    "default_cache",
     "default_output",
     "is_up_to_date",
+    "load_any",
+    "run",
+    "run_scene",
     "run_study",
 ]
 
-#: Another process is writing the same result (re-exported for callers of the runner).
 StudyBusy = StoreBusy
 
 
@@ -124,13 +102,58 @@ class RunReport:
     metadata_updated: bool = False
     kind: str = "study"
 
+    #: Computed in one piece (a scene, a fit, a design), not chunk by chunk.
+    in_one_piece: bool = False
+    #: What the kind computed (a fit's or a design's result object), for the CLI's
+    #: summary; None for studies and scenes, and when nothing was computed.
+    outcome: Any = field(default=None, compare=False)
 
-def load_any(path: str | Path) -> StudySpec | SceneSpec:
-    """Read and validate a spec of any result kind (:mod:`study.engine.kinds`)."""
-    return load_scene(path) if detect_kind(Path(path)) == "scene" else load_spec(path)
+
+@dataclass
+class RunJob:
+    """One run as a kind's hooks see it: where it goes, when it started, its options.
+
+    Attributes
+    ----------
+    kind : ResultKind
+    output : pathlib.Path
+    started : float
+        :func:`time.perf_counter` at the start [s].
+    started_utc : str
+    command : str
+        The command line recorded in the file's history.
+    options : dict
+        The kind's own run options (a study's scheduler, workers, cache, ...).
+    """
+
+    kind: ResultKind
+    output: Path
+    started: float
+    started_utc: str
+    command: str
+    options: dict[str, Any]
+
+    def seconds(self) -> float:
+        """Wall time since the start [s]."""
+        return time.perf_counter() - self.started
+
+    def commit(self, temporary: Path) -> Path:
+        """Seal, validate and rename a finished temporary file over the output."""
+        return commit(temporary, self.output)
+
+    def report(self, up_to_date: bool, chunks: int, computed: int, reused: int,
+               **counts: Any) -> RunReport:
+        return RunReport(self.output, up_to_date, chunks, computed, reused, self.seconds(),
+                         **counts)
 
 
-def default_output(spec: StudySpec | SceneSpec) -> Path:
+def load_any(path: str | Path) -> Any:
+    """Read and validate a spec of any result kind (:mod:`study.engine.kinds`): the kind
+    whose top table the file has reads it."""
+    return kind_named(detect_kind(Path(path))).load(path)
+
+
+def default_output(spec: Any) -> Path:
     """``results/<spec file stem>.nc`` (what ``make`` and ``study list`` use), or
     ``results/<study name>.nc`` for a spec that did not come from a file."""
     source = Path(spec.path)
@@ -138,56 +161,21 @@ def default_output(spec: StudySpec | SceneSpec) -> Path:
     return Path("results") / f"{stem}.nc"
 
 
-def default_cache(output: Path) -> Path:
-    """Where kept values live: ``$STUDY_CACHE``, else ``.study-cache`` beside the result
-    (so every study writing into one folder shares them)."""
-    return Path(os.environ.get("STUDY_CACHE") or output.parent / ".study-cache")
+def _identity(kind: ResultKind, spec: Any) -> tuple[str, dict[str, Any]]:
+    """Fingerprint and metadata attributes a current file of ``spec`` must carry."""
+    code = kind_code_sha256(kind.name)
+    return fingerprint(spec.sha256, code), kind.metadata(spec) if kind.metadata else {}
 
 
-def _metadata_attrs(spec: StudySpec) -> dict[str, Any]:
-    """Attributes that follow the spec's text but not its numbers."""
-    return {
-        "title": spec.title,
-        "summary": spec.description or (
-            f"Parameter study '{spec.name}' of vibration-driven stick-slip locomotion: "
-            f"{', '.join(spec.observables)} of a soft structure with a resonant plate on a "
-            f"vertically shaken table, computed by {method_description(spec)}."
-        ),
-        "id": f"{spec.name}-{spec.sha256[:16]}",
-        "study_name": spec.name,
-        "study_spec": spec.text,
-        "study_spec_path": spec.path,
-    }
-
-
-def _scene_metadata_attrs(spec: SceneSpec) -> dict[str, Any]:
-    return {
-        "title": spec.title,
-        "summary": spec.description or (
-            f"Steering scene '{spec.name}' ({spec.kind}) of a rigid disk with resonant plates "
-            "on a vertically shaken table: planar stick-slip with an ellipsoidal limit "
-            "surface, integrated with events (study.scenes.planar_model)."),
-        "id": f"{spec.name}-{spec.sha256[:16]}",
-        "study_name": spec.name,
-        "study_spec": spec.text,
-        "study_spec_path": spec.path,
-    }
-
-
-def _identity(spec: StudySpec | SceneSpec) -> tuple[str, str, dict[str, Any]]:
-    """Result schema, fingerprint and metadata attributes a current file must carry."""
-    if isinstance(spec, SceneSpec):
-        return (SCENE_SCHEMA, fingerprint(spec.sha256, scene_code_sha256()),
-                _scene_metadata_attrs(spec))
-    return RESULT_SCHEMA, fingerprint(spec.sha256), _metadata_attrs(spec)
-
-
-def _state(spec: StudySpec | SceneSpec, output: Path) -> str:
+def _state(kind: ResultKind, spec: Any, output: Path) -> str:
     """"current", "metadata" (same numbers, other spec text) or "stale"; reads only the
-    file's attributes."""
-    schema, wanted_fingerprint, wanted = _identity(spec)
+    file's attributes. A kind without metadata rules (a fit, a design) is always
+    "stale": it is recomputed at every run."""
+    if kind.metadata is None:
+        return "stale"
+    wanted_fingerprint, wanted = _identity(kind, spec)
     attrs = file_attributes(output)
-    if attrs is None or attrs.get("study_result_schema") != schema:
+    if attrs is None or attrs.get("study_result_schema") != kind.result_schema:
         return "stale"
     if "study_content_sha256" not in attrs:  # never sealed: not a finished result
         return "stale"
@@ -196,42 +184,151 @@ def _state(spec: StudySpec | SceneSpec, output: Path) -> str:
     return "current" if all(attrs.get(k) == v for k, v in wanted.items()) else "metadata"
 
 
-def is_up_to_date(spec: StudySpec | SceneSpec, output: Path) -> bool:
+def is_up_to_date(spec: Any, output: Path) -> bool:
     """Whether ``output`` holds this spec's numbers computed by this code (reads only
     the file's attributes; ``study validate`` checks the data)."""
-    return _state(spec, Path(output)) != "stale"
+    return _state(kind_of_spec(spec), spec, Path(output)) != "stale"
 
 
-def _update_metadata(spec: StudySpec | SceneSpec, output: Path, command: str,
-                     when: str) -> None:
+def _update_metadata(job: RunJob, spec: Any) -> None:
     """Rewrite the metadata of a current file whose spec text changed (data untouched)."""
-    _, _, wanted = _identity(spec)
-    attrs = file_attributes(output) or {}
-    history = f"{attrs.get('history', '')}\n{when}: {command} (metadata only)".strip()
-    rewrite_attributes(output, {**wanted, "history": history, "date_modified": when})
+    _, wanted = _identity(job.kind, spec)
+    attrs = file_attributes(job.output) or {}
+    history = f"{attrs.get('history', '')}\n{job.started_utc}: {job.command} (metadata only)"
+    rewrite_attributes(job.output, {**wanted, "history": history.strip(),
+                                    "date_modified": job.started_utc})
 
 
-def run(spec: StudySpec | SceneSpec | str | Path, output: str | Path | None = None,
-        **options: Any) -> RunReport:
-    """Run a spec of any kind: :func:`run_study` or :func:`run_scene`."""
-    if not isinstance(spec, StudySpec | SceneSpec):
+def _spec_of(kind: ResultKind, spec: Any) -> Any:
+    """``spec`` itself if it is one of ``kind``'s, else read from the file it names."""
+    return spec if type(spec) is kind.spec_type else kind.load(spec)
+
+
+def run(spec: Any, output: str | Path | None = None, *, force: bool = False,
+        command: str | None = None, overwrite: bool = False, **options: Any) -> RunReport:
+    """Run a spec (or a spec file) of any kind and write its result.
+
+    Parameters
+    ----------
+    spec : spec of a registered kind, or path of a spec file
+    output : path, optional
+        Result file; default ``results/<spec file stem>.nc``.
+    force : bool
+        Recompute even if the result is up to date.
+    command : str, optional
+        The command line recorded in the file's history.
+    overwrite : bool
+        Replace an existing file at ``output`` that is not a result of this kind
+        (:func:`study.engine.outputs.check_output`; the spec itself is never replaced).
+    **options
+        The kind's own options (:func:`run_study`'s for a study; ``progress`` for all).
+    """
+    if isinstance(spec, str | os.PathLike):
         spec = load_any(spec)
-    if isinstance(spec, SceneSpec):
-        scene_options = {k: options[k] for k in ("force", "command", "overwrite", "progress")
-                         if k in options}
-        return run_scene(spec, output, **scene_options)
-    return run_study(spec, output, **options)
+    return run_kind(kind_of_spec(spec), spec, output, force=force, command=command,
+                    overwrite=overwrite, **options)
 
 
-def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
-              force: bool = False, command: str | None = None,
-              overwrite: bool = False, progress: bool | None = None) -> RunReport:
+def run_kind(kind: ResultKind, spec: Any, output: str | Path | None = None, *,
+             force: bool = False, command: str | None = None, overwrite: bool = False,
+             **options: Any) -> RunReport:
+    """Run ``spec`` of ``kind`` (a spec or a spec file): :func:`run` once the kind is known."""
+    started, started_utc = time.perf_counter(), utc_now()
+    spec = _spec_of(kind, spec)
+    output = Path(output) if output is not None else default_output(spec)
+    check_output(output, kind.result_schema, inputs=kind.inputs(spec), overwrite=overwrite)
+    command = command or f"study.run({shlex.quote(spec.path)})"
+    job = RunJob(kind, output, started, started_utc, command, options)
+    size = kind.size(spec)
+    if not force and _state(kind, spec, output) == "current":
+        output.touch()  # tell make the target is current
+        return job.report(True, size, 0, size, kind=_tag(kind, spec))
+    with exclusive(output):
+        clean_temporaries(output)
+        if not force and _state(kind, spec, output) == "metadata":
+            _update_metadata(job, spec)
+            return job.report(True, size, 0, size, metadata_updated=True, kind=_tag(kind, spec))
+        if kind.stream is not None:
+            return kind.stream(spec, job)
+        return _compute_and_write(job, spec)
+
+
+def _tag(kind: ResultKind, spec: Any) -> str:
+    """``RunReport.kind``: the kind's name, and its variant (``"scene:trajectory"``)."""
+    return f"{kind.name}:{kind.variant(spec)}" if kind.variant else kind.name
+
+
+def _compute_and_write(job: RunJob, spec: Any) -> RunReport:
+    """A kind computed in one piece: compute, build the dataset, add the provenance,
+    write it atomically."""
+    kind = job.kind
+    total, unit = kind.work(spec) if kind.work else (0, "pt")
+    shown = Progress(total, spec.name, job.options.get("progress"), unit=unit)
+    try:
+        with shown.running():
+            outcome = kind.compute(spec, shown)
+    finally:
+        shown.close()
+    dataset = kind.build(spec, outcome, job.command)
+    if not kind.own_provenance:
+        provenance = _provenance(job, spec, utc_now())
+        # Provenance first, then what the result says of itself (the order ncdump shows).
+        dataset.attrs = {"Conventions": provenance.pop("Conventions"), **dataset.attrs,
+                         **provenance}
+    write_atomic(dataset, job.output)
+    # The outcome goes back only where it is a small summary object (a fit's, a
+    # design's result, printed by the CLI); a scene's arrays are left to the file.
+    return job.report(False, 1, 1, 0, points=1, points_computed=1, kind=_tag(kind, spec),
+                      in_one_piece=True, outcome=outcome if kind.own_provenance else None)
+
+
+def _provenance(job: RunJob, spec: Any, finished_utc: str) -> dict[str, Any]:
+    """The ACDD and provenance attributes of a result computed in one piece by this code."""
+    kind = job.kind
+    git = git_state()
+    code = kind_code_sha256(kind.name)
+    run_fingerprint = fingerprint(spec.sha256, code)
+    section = {"name": spec.name, "spec_path": spec.path, "spec_sha256": spec.sha256,
+               "canonical_spec": spec.canonical}
+    if kind.variant:
+        section["kind"] = kind.variant(spec)
+    provenance = {
+        "result_schema": kind.result_schema,
+        kind.name: section,
+        "code": {"code_sha256": code, "fingerprint": run_fingerprint},
+        "package": {"name": "study", "version": package_version(), **git},
+        "environment": environment(),
+        "run": {"started_utc": job.started_utc, "finished_utc": finished_utc,
+                "wall_seconds": job.seconds()},
+    }
+    return {
+        "Conventions": "CF-1.11, ACDD-1.3",
+        **(kind.metadata(spec) if kind.metadata else {}),
+        "naming_authority": "study",
+        "processing_level": "model output",
+        "references": PAPER_REFERENCE,
+        "history": f"{job.started_utc}: {job.command} (study {package_version()})",
+        "date_created": finished_utc,
+        "study_result_schema": kind.result_schema,
+        "study_spec_sha256": spec.sha256,
+        "study_code_sha256": code,
+        "study_fingerprint": run_fingerprint,
+        "study_version": package_version(),
+        "git_commit": str(git["git_commit"]),
+        "git_dirty": str(git["git_dirty"]).lower(),
+        "provenance": json.dumps(provenance, sort_keys=True),
+    }
+
+
+def run_scene(spec: Any, output: str | Path | None = None, *, force: bool = False,
+              command: str | None = None, overwrite: bool = False,
+              progress: bool | None = None) -> RunReport:
     """Compute a steering scene and write its result (one task; same lock, atomic
     write, seal, up-to-date and metadata rules as a study).
 
     Parameters
     ----------
-    spec : SceneSpec or path
+    spec : study.scenes.scene_kind.SceneSpec or path
     output : path, optional
         Result file; default ``results/<spec file stem>.nc``.
     force : bool
@@ -245,78 +342,14 @@ def run_scene(spec: SceneSpec | str | Path, output: str | Path | None = None, *,
         Force progress output on or off; default: a bar on a terminal, log lines
         otherwise (work in the units of :func:`study.scenes.scene_kind.scene_work`).
     """
-    started = time.perf_counter()
-    started_utc = utc_now()
-    if not isinstance(spec, SceneSpec):
-        spec = load_scene(spec)
-    output = Path(output) if output is not None else default_output(spec)
-    check_output(output, SCENE_SCHEMA, inputs=[spec.path], overwrite=overwrite)
-    command = command or "study.run_scene(" + shlex.quote(spec.path) + ")"
-    if not force and _state(spec, output) == "current":
-        output.touch()
-        return RunReport(output, True, 1, 0, 1, time.perf_counter() - started,
-                         kind=f"scene:{spec.kind}")
-    with exclusive(output):
-        clean_temporaries(output)
-        if not force and _state(spec, output) == "metadata":
-            _update_metadata(spec, output, command, started_utc)
-            return RunReport(output, True, 1, 0, 1, time.perf_counter() - started,
-                             metadata_updated=True, kind=f"scene:{spec.kind}")
-        work, unit = scene_work(spec)
-        shown = Progress(work, spec.name, progress, unit=unit)
-        try:
-            with shown.running():
-                dataset = scene_dataset(spec, shown.update)
-        finally:
-            shown.close()
-        finished_utc = utc_now()
-        provenance = _scene_provenance(spec, started_utc, finished_utc,
-                                       time.perf_counter() - started, command)
-        # Provenance first, then what the scene says of itself (the order ncdump shows).
-        dataset.attrs = {"Conventions": provenance.pop("Conventions"), **dataset.attrs,
-                         **provenance}
-        write_atomic(dataset, output)
-    return RunReport(output, False, 1, 1, 0, time.perf_counter() - started, 1, 1, 0,
-                     kind=f"scene:{spec.kind}")
-
-
-def _scene_provenance(spec: SceneSpec, started_utc: str, finished_utc: str,
-                      wall_seconds: float, command: str) -> dict[str, Any]:
-    """The ACDD and provenance attributes of a scene result computed by this code."""
-    git = git_state()
-    code = scene_code_sha256()
-    run_fingerprint = fingerprint(spec.sha256, code)
-    provenance = {
-        "result_schema": SCENE_SCHEMA,
-        "scene": {"name": spec.name, "kind": spec.kind, "spec_path": spec.path,
-                  "spec_sha256": spec.sha256, "canonical_spec": spec.canonical},
-        "code": {"code_sha256": code, "fingerprint": run_fingerprint},
-        "package": {"name": "study", "version": package_version(), **git},
-        "environment": environment(),
-        "run": {"started_utc": started_utc, "finished_utc": finished_utc,
-                "wall_seconds": wall_seconds},
-    }
-    return {
-        "Conventions": "CF-1.11, ACDD-1.3",
-        **_scene_metadata_attrs(spec),
-        "naming_authority": "study",
-        "processing_level": "model output",
-        "references": PAPER_REFERENCE,
-        "history": f"{started_utc}: {command} (study {package_version()})",
-        "date_created": finished_utc,
-        "study_result_schema": SCENE_SCHEMA,
-        "study_spec_sha256": spec.sha256,
-        "study_code_sha256": code,
-        "study_fingerprint": run_fingerprint,
-        "study_version": package_version(),
-        "git_commit": str(git["git_commit"]),
-        "git_dirty": str(git["git_dirty"]).lower(),
-        "provenance": json.dumps(provenance, sort_keys=True),
-    }
+    kind = kind_named("scene")
+    spec = _spec_of(kind, spec)
+    return run_kind(kind, spec, output, force=force, overwrite=overwrite, progress=progress,
+                    command=command or "study.run_scene(" + shlex.quote(spec.path) + ")")
 
 
 def run_study(
-    spec: StudySpec | str | Path,
+    spec: Any,
     output: str | Path | None = None,
     *,
     scheduler: str | None = None,
@@ -333,9 +366,13 @@ def run_study(
 ) -> RunReport:
     """Run a study and write its result file.
 
+    The public entry of a study run (thirteen documented keywords, the options of
+    ``study run``): it reads the spec and hands it down to :func:`run_kind`, the
+    options travelling on as the job's (:func:`study.engine.study_kind.stream_study`).
+
     Parameters
     ----------
-    spec : StudySpec or path
+    spec : study.engine.study_spec.StudySpec or path
         The study (a spec file is read and validated first).
     output : path, optional
         Result file; default ``results/<spec file stem>.nc``.
@@ -356,7 +393,8 @@ def run_study(
     on_chunk : callable, optional
         Called with the chunk number each time a computed chunk is written.
     cache : path, optional
-        Folder of kept values (default :func:`default_cache`).
+        Folder of kept values (default
+        :func:`study.engine.study_kind.default_cache`).
     on_start : callable, optional
         Called with the :class:`study.engine.executors.Executor` once it is ready, before any
         chunk is computed (to show where the run goes, e.g. the dashboard).
@@ -380,391 +418,10 @@ def run_study(
     study.engine.store.StoreError, study.engine.store.StoreBusy
         The result cannot be written, or another process is writing it.
     """
-    started = time.perf_counter()
-    started_utc = utc_now()
-    if not isinstance(spec, StudySpec):
-        spec = load_spec(spec)
-    output = Path(output) if output is not None else default_output(spec)
-    check_output(output, RESULT_SCHEMA, inputs=[spec.path], overwrite=overwrite)
-    n_chunks = len(_plan(spec))
-    if not force and _state(spec, output) == "current":
-        output.touch()  # tell make the target is current
-        return RunReport(output, True, n_chunks, 0, n_chunks, time.perf_counter() - started)
-    command = command or "study.run_study(" + shlex.quote(spec.path) + ")"
-    with exclusive(output):
-        clean_temporaries(output)
-        if not force and _state(spec, output) == "metadata":
-            _update_metadata(spec, output, command, started_utc)
-            return RunReport(output, True, n_chunks, 0, n_chunks,
-                             time.perf_counter() - started, metadata_updated=True)
-        kept = ResultCache(Path(cache) if cache is not None else default_cache(output))
-        computing = _Run(spec, output, started, started_utc, command, kept, on_chunk)
-        try:
-            # Shared with other runs; cache maintenance (prune, verify) waits for it.
-            with kept.session(f"study run -> {output}", on_wait=kept.warn):
-                return computing.execute(scheduler, workers, progress, stop_after, on_start,
-                                         task_timeout)
-        except StoreError as err:
-            if not computing.points_kept:
-                raise
-            raise StoreError(f"{err}; the {computing.points_kept} points computed are "
-                             f"kept in {computing.cache.root} for the next run") from None
-
-
-def _plan(spec: StudySpec) -> list[Chunk]:
-    a_axis = spec.axis("a")
-    n_a = len(a_axis) if (a_axis is not None and spec.needs_solver) else 1
-    return plan_chunks(tuple(len(axis) for axis in spec.structure_axes), len(spec.axis("f")),
-                       n_a, spec.chunk_points)
-
-
-def _structure_content(structure: Structure) -> dict[str, float]:
-    return {name: float(getattr(structure, name)) for name in Structure.__dataclass_fields__}
-
-
-def _creator() -> str:
-    """Who ran the study: $STUDY_CREATOR, else the login name."""
-    import getpass
-
-    try:
-        return os.environ.get("STUDY_CREATOR") or getpass.getuser()
-    except (KeyError, OSError):
-        return "unknown"
-
-
-def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
-    return {
-        "Conventions": "CF-1.11, ACDD-1.3",
-        **_metadata_attrs(spec),
-        "keywords": "stick-slip, friction, locomotion, resonance, vibration, parameter study",
-        "naming_authority": "study",
-        "source": f"study: {method_description(spec)}",
-        "study_solver_method": spec.method,
-        "study_coupling": spec.coupling,
-        "processing_level": "model output",
-        "references": PAPER_REFERENCE,
-        "standard_name_vocabulary": "CF Standard Name Table v85",
-        "comment": "Forces per unit total mass in the table frame; SI units. No CF standard "
-        "names exist for these model quantities, so variables carry long_name only.",
-        "acknowledgement": "Model of " + PAPER_REFERENCE,
-        "creator_name": _creator(),
-        "study_result_schema": RESULT_SCHEMA,
-        "study_result_format": RESULT_FORMAT,
-        "study_spec_sha256": spec.sha256,
-    }
-
-
-@dataclass(frozen=True)
-class _Job:
-    """A task and the cache entries its computed values go to: what a worker gets."""
-
-    task: Task
-    #: (entry key, variable names) of each solver observable the task computes.
-    entries: tuple[tuple[str, tuple[str, ...]], ...]
-
-
-def _compute_and_encode(job: _Job) -> tuple[dict[str, np.ndarray], list[dict[str, Any]],
-                                            list[list[bytes]]]:
-    """Compute a task and encode its values as cache blocks, on the worker: compression
-    and checksums run beside the solver, in parallel, not on the one thread that
-    writes the file (and a remote worker sends compressed blocks).
-
-    Returns
-    -------
-    rows, rectangles
-        As :func:`study.engine.sweep.compute_task`.
-    blocks : list of list of bytes
-        For each rectangle, one encoded block per entry of ``job.entries``.
-    """
-    rows, rectangles = compute_task(job.task)
-    task = job.task
-    blocks = [
-        [encode_block(key, task.f[rectangle.rows], task.a[rectangle.columns],
-                      {v: computed[v] for v in variables})
-         for key, variables in job.entries]
-        for rectangle, computed in zip(task.rectangles, rectangles, strict=True)
-    ]
-    return rows, rectangles, blocks
-
-
-def _gather_provenance(found: dict[str, Any]) -> None:
-    """Fill the caches of :func:`git_state` and :func:`environment`; the package
-    version (read from its metadata) goes into ``found``."""
-    git_state()
-    environment()
-    found["version"] = package_version()
-
-
-class _Run:
-    """One computing run of a study into a temporary file, committed at the end."""
-
-    def __init__(self, spec: StudySpec, output: Path, started: float, started_utc: str,
-                 command: str, cache: ResultCache, on_chunk: Callable[[int], None] | None):
-        self.spec = spec
-        self.output = output
-        self.started = started
-        self.started_utc = started_utc
-        self.command = command
-        self.cache = cache
-        self.on_chunk = on_chunk
-        self.method = method_of(spec)
-        self.rows, self.points, self.frontier = observables_by_grid(spec)
-        self.f = spec.axis("f").values
-        a_axis = spec.axis("a")
-        self.a = a_axis.values if (a_axis is not None and spec.needs_solver) else np.empty(0)
-        self.chunks = _plan(spec)
-        self.code = code_sha256()
-        self.points_computed = 0
-        self.points_reused = 0
-        #: Computed points kept in the cache (all of them unless it cannot be written).
-        self.points_kept = 0
-        self.keeping = True
-        self.chunks_computed = 0
-        self.chunks_reused = 0
-        self._keys: dict[tuple[tuple[int, ...], str], tuple[str, dict[str, Any]]] = {}
-
-    # -- cache keys --------------------------------------------------------------
-
-    def key(self, structure_index: tuple[int, ...], observable: Observable
-            ) -> tuple[str, dict[str, Any]]:
-        """Cache key and content of an observable's values for one structure."""
-        item = (structure_index, observable.name)
-        if item not in self._keys:
-            content = {
-                "observable": observable.name,
-                "variables": {v: VARIABLES[v].dtype for v in observable.variables},
-                "structure": _structure_content(self.spec.structure_at(structure_index)),
-                "method": self.method.canonical(),
-                "code_sha256": self.code,
-            }
-            self._keys[item] = (entry_key(content), content)
-        return self._keys[item]
-
-    # -- the file ------------------------------------------------------------------
-
-    def _open(self, path: Path) -> GridWriter:
-        spec = self.spec
-        writer = GridWriter(path, _standard_attrs(spec), self.output)
-        scalars = []
-        for coordinate in coordinates(spec):
-            writer.coordinate(coordinate.name, coordinate.dims, coordinate.values,
-                              coordinate.attrs)
-            if coordinate.auxiliary:
-                scalars.append(coordinate.name)
-        self.auxiliary = " ".join(scalars)
-        block = max(chunk.size for chunk in self.chunks)
-        ones = (1,) * len(spec.structure_axes)
-        for variable in data_variables(spec, (*self.rows, *self.points)):
-            chunks = (*ones, block) if variable.grid == "row" else (
-                *ones, block, max(self.a.size, 1))
-            writer.variable(variable.name, variable.dims, variable.dtype,
-                            {**variable.attrs, "coordinates": self.auxiliary}, chunks)
-        return writer
-
-    # -- the work --------------------------------------------------------------------
-
-    def _jobs(self, pending: dict[int, Any]) -> Iterator[_Job]:
-        """Look each chunk up in the cache; yield what needs computing. Chunks found
-        whole are written at once (``pending`` keeps the found values until the
-        task's result arrives)."""
-        for chunk in self.chunks:
-            structure = self.spec.structure_at(chunk.structure_index)
-            f = self.f[chunk.f_start:chunk.f_stop]
-            found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]] = {}
-            missing = np.zeros((f.size, self.a.size), dtype=bool)
-            for observable in self.points:
-                key, _ = self.key(chunk.structure_index, observable)
-                dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in observable.variables}
-                values, present = self.cache.lookup(key, f, self.a, dtypes)
-                found[observable.name] = (values, present)
-                missing |= ~present
-            rectangles = missing_rectangles(missing) if self.points else ()
-            needed = tuple(o.name for o in self.points if not found[o.name][1].all())
-            task = Task(chunk, structure, f, self.a, tuple(o.name for o in self.rows), needed,
-                        rectangles, self.method)
-            pending[chunk.number] = found
-            if not rectangles and not self.rows:
-                self._finish(task, ({}, [], []), pending.pop(chunk.number))
-                continue
-            entries = tuple((self.key(chunk.structure_index, observable)[0],
-                             observable.variables)
-                            for observable in self.points if observable.name in needed)
-            yield _Job(task, entries)
-
-    def _finish(self, task: Task,
-                result: tuple[dict[str, np.ndarray], list[dict[str, Any]], list[list[bytes]]],
-                found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]]) -> None:
-        """Write one chunk into the file and its computed values (encoded by the
-        worker) into the cache."""
-        chunk = task.chunk
-        rows, blocks, encoded = result
-        where_rows = (*chunk.structure_index, slice(chunk.f_start, chunk.f_stop))
-        for name, values in rows.items():
-            self.writer.write(name, where_rows, values)
-        where_points = (*where_rows, slice(None))
-        for observable in self.points:
-            values, _ = found[observable.name]
-            for rectangle, computed in zip(task.rectangles, blocks, strict=True):
-                for name in observable.variables:
-                    if name in computed:
-                        values[name][np.ix_(rectangle.rows, rectangle.columns)] = computed[name]
-            for name in observable.variables:
-                self.writer.write(name, where_points, values[name])
-        stored = [o for o in self.points if o.name in task.points]
-        for rectangle, datas in zip(task.rectangles, encoded, strict=True):
-            for observable, data in zip(stored, datas, strict=True):
-                key, content = self.key(chunk.structure_index, observable)
-                self._keep(key, content, task.a[rectangle.columns], data)
-        size = chunk.size * max(self.a.size, 1)
-        computed_points = task.point_count if self.points else size
-        self.points_computed += computed_points
-        if self.keeping and self.points:
-            self.points_kept += computed_points
-        self.points_reused += size - computed_points
-        if computed_points:
-            self.chunks_computed += 1
-        else:
-            self.chunks_reused += 1
-        self.progress.update(size, computed_points)
-
-    def _keep(self, key: str, content: dict[str, Any], a: np.ndarray, block: bytes) -> None:
-        """Keep a computed block; a cache that cannot be written (disk full, read-only)
-        is said once and the run goes on without keeping values: the result matters
-        more than its reuse."""
-        if not self.keeping:
-            return
-        try:
-            self.cache.store_encoded(key, content, a, block)
-        except OSError as err:
-            self.keeping = False
-            what_to_do = advice(err).replace("(-o)", "(--cache)")
-            self.cache.warn(
-                f"{self.cache.root}: cannot keep computed values ({err.strerror or err}); "
-                "the run goes on without keeping them" + (f": {what_to_do}" if what_to_do
-                                                          else ""))
-
-    def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
-                stop_after: int | None, on_start: Callable[[Executor], None] | None,
-                task_timeout: float = TASK_TIMEOUT) -> RunReport:
-        self.cache.clean_temporaries()
-        # What the provenance records of the checkout and the machine (a git
-        # subprocess, package metadata) does not depend on the run: gathered while the
-        # workers compute, not after the last chunk, when nothing overlaps it.
-        self.gathered: dict[str, Any] = {}
-        gathering = threading.Thread(target=_gather_provenance, args=(self.gathered,),
-                                     daemon=True)
-        gathering.start()
-        temporary = new_temporary(self.output)
-        try:
-            self.writer = self._open(temporary)
-            total = len(self.f) * max(self.a.size, 1) * int(np.prod(
-                [len(axis) for axis in self.spec.structure_axes], dtype=np.int64))
-            self.progress = Progress(total, self.spec.name, progress)
-            pending: dict[int, Any] = {}
-            computed_chunks = 0
-            try:
-                with executor(scheduler, workers, self.code,
-                              task_timeout=task_timeout) as pool, self.progress.running():
-                    self.scheduler_name, self.threads = pool.name, pool.threads
-                    if on_start is not None:
-                        on_start(pool)
-                    for job, result in pool.run_unordered(_compute_and_encode,
-                                                          self._jobs(pending),
-                                                          label=self.spec.name):
-                        task = job.task
-                        self._finish(task, result, pending.pop(task.chunk.number))
-                        if task.rectangles:
-                            computed_chunks += 1
-                            if self.on_chunk is not None:
-                                self.on_chunk(task.chunk.number)
-                        if stop_after is not None and computed_chunks >= stop_after:
-                            kept = (f"their values are kept in {self.cache.root}"
-                                    if self.keeping else "the cache could not keep them")
-                            raise StudyInterrupted(
-                                f"stopped after {computed_chunks} computed chunks on request; "
-                                f"{kept}")
-            finally:
-                self.progress.close()
-            if self.frontier is not None:
-                self._write_frontier()
-            gathering.join()
-            self.writer.set_attributes(self._provenance_attrs())
-            self.writer.close()
-        except BaseException:
-            if hasattr(self, "writer"):
-                self.writer.discard()  # never raises: the first failure is reported
-            temporary.unlink(missing_ok=True)
-            raise
-        commit(temporary, self.output)
-        return RunReport(
-            self.output, False, len(self.chunks), self.chunks_computed, self.chunks_reused,
-            time.perf_counter() - self.started, self.points_computed + self.points_reused,
-            self.points_computed, self.points_reused,
-        )
-
-    def _write_frontier(self) -> None:
-        """Frontier f*(a) of every structure from its whole velocity rows."""
-        spec = self.spec
-        found = {}
-        for index, structure in spec.structures():
-            where = (*index, slice(None), slice(None))
-            velocity = self.writer.read("velocity", where)
-            status = self.writer.read("status", where)
-            found[index] = self.frontier.compute(structure, self.f, self.a, velocity, status,
-                                                 self.method, spec.frontier_tolerance)
-        branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
-        self.writer.dimension("branch", branches)
-        ones = (1,) * len(spec.structure_axes)
-        variables = data_variables(spec, (self.frontier,))
-        for variable in variables:
-            self.writer.variable(variable.name, variable.dims, variable.dtype,
-                                 {**variable.attrs, "coordinates": self.auxiliary},
-                                 (*ones, self.a.size, branches))
-        for index, item in found.items():
-            for variable in variables:
-                self.writer.write(variable.name, (*index, slice(None), slice(None)),
-                                  pad_branches(item[variable.name], branches, variable.dtype))
-
-    def _provenance_attrs(self) -> dict[str, Any]:
-        spec = self.spec
-        finished_utc = utc_now()
-        git = git_state()
-        run_fingerprint = fingerprint(spec.sha256, self.code)
-        version = self.gathered.get("version") or package_version()
-        provenance: dict[str, Any] = {
-            "result_schema": RESULT_SCHEMA,
-            "study": {"name": spec.name, "spec_path": spec.path, "spec_sha256": spec.sha256,
-                      "canonical_spec": spec.canonical},
-            "code": {"code_sha256": self.code, "fingerprint": run_fingerprint},
-            "package": {"name": "study", "version": version, **git},
-            "environment": environment(),
-            "run": {
-                "started_utc": self.started_utc,
-                "finished_utc": finished_utc,
-                "wall_seconds": time.perf_counter() - self.started,
-                "scheduler": self.scheduler_name,
-                "workers": self.threads,
-                "chunks": len(self.chunks),
-                "chunks_computed": self.chunks_computed,
-                "chunks_reused": self.chunks_reused,
-                "points": self.points_computed + self.points_reused,
-                "points_computed": self.points_computed,
-                "points_reused": self.points_reused,
-                "cache": str(self.cache.root),
-                "solver_settings": {**spec.canonical["solver"],
-                                    "chunk_points": spec.chunk_points},
-                "host": environment()["host"],
-            },
-        }
-        return {
-            "history": f"{self.started_utc}: {self.command} (study {version})",
-            "date_created": finished_utc,
-            "date_modified": finished_utc,
-            "product_version": version,
-            "study_version": version,
-            "study_code_sha256": self.code,
-            "study_fingerprint": run_fingerprint,
-            "git_commit": str(git["git_commit"]),
-            "git_dirty": str(git["git_dirty"]).lower(),
-            "provenance": json.dumps(provenance, sort_keys=True),
-        }
+    kind = kind_named("study")
+    spec = _spec_of(kind, spec)
+    return run_kind(kind, spec, output, force=force, overwrite=overwrite,
+                    command=command or "study.run_study(" + shlex.quote(spec.path) + ")",
+                    scheduler=scheduler, workers=workers, progress=progress,
+                    stop_after=stop_after, on_chunk=on_chunk, cache=cache, on_start=on_start,
+                    task_timeout=task_timeout)

@@ -1,6 +1,7 @@
 """The one spec layer of studies and scenes: read, parse, check, hash.
 
-Both kinds of spec (a study: ``[study]``; a scene: ``[scene]``) go through the same
+Every kind of spec (a study: ``[study]``; a scene: ``[scene]``; a fit, a design; the
+kinds of :mod:`study.engine.kinds`, each marked by its top table) goes through the same
 steps, each refusing bad input with a :class:`SpecError` that names the file, the key
 and what is allowed, before anything is computed:
 
@@ -34,11 +35,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from study.engine.files import NotRegularFile, open_regular
+from study.engine.kinds import UnknownKind, kind_of_table
 from study.model.inputs import InputTypeError
 
 __all__ = [
     "AXIS_FORMS",
-    "KINDS",
     "MAX_AXIS_VALUES",
     "MAX_NESTING",
     "MAX_SPEC_BYTES",
@@ -74,9 +75,6 @@ MAX_NESTING = 8
 
 #: Values of one axis at most (also the schemas' maximum of ``num``).
 MAX_AXIS_VALUES = 10_000_000
-
-#: Top-level table that tells a spec's kind.
-KINDS = {"study": "[study]", "scene": "[scene]"}
 
 
 class SpecError(ValueError):
@@ -277,26 +275,16 @@ def parse_toml(text: str, path: str = "<string>") -> dict[str, Any]:
 
 
 def kind_of(raw: Mapping[str, Any], path: str = "<string>") -> str:
-    """``"study"`` or ``"scene"``: the kind of spec a parsed TOML document is."""
-    found = [kind for kind in KINDS if kind in raw]
-    if len(found) == 1 and isinstance(raw[found[0]], dict):
-        return found[0]
-    tables = " or ".join(KINDS.values())
-    if len(found) > 1:
-        raise SpecError(
-            f"{path}: both [study] and [scene] tables; a spec is one of them ({tables})"
-        )
-    if found:
-        raise SpecError(f"{path}: {KINDS[found[0]]} must be a table, not a value")
-    present = ", ".join(sorted(map(repr, raw))) or "none"
-    raise SpecError(
-        f"{path}: not a study or scene spec: it needs a {tables} table "
-        f"(top-level tables found: {present})"
-    )
+    """The name of the result kind (:mod:`study.engine.kinds`) whose top table a parsed
+    TOML document has: ``"study"``, ``"scene"``, ``"fit"`` or ``"design"``."""
+    try:
+        return kind_of_table(raw, path).name
+    except UnknownKind as err:
+        raise SpecError(str(err)) from None
 
 
 def detect_kind(source: str | Path) -> str:
-    """``"study"`` (a ``[study]`` table) or ``"scene"`` (a ``[scene]`` table).
+    """The name of the result kind of a spec: the kind whose top table it has.
 
     Parameters
     ----------
@@ -307,7 +295,7 @@ def detect_kind(source: str | Path) -> str:
     ------
     SpecError
         If the file cannot be read or parsed (see :func:`read_spec_text` and
-        :func:`parse_toml`), or has neither or both tables.
+        :func:`parse_toml`), or has no kind's table or more than one.
     """
     if isinstance(source, Path):
         path = str(source)

@@ -427,6 +427,8 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
 
 
 def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
+    """A checked :class:`StudySpec` from a spec's tables, checked in the order its
+    messages assume: the structure, the sweep, the solver, then each structure."""
     study = raw["study"]
     structure = dict(raw["structure"])
     mass_table = structure.pop("mass", None)
@@ -434,7 +436,42 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     solver_table = dict(raw.get("solver", {}))
 
     observables = tuple(o for o in OBSERVABLES if o in study["observables"])
+    fixed, mass = _fixed_structure(structure, mass_table, sweep, path)
+    axes, chunk_points = _sweep_axes(sweep, observables, solver_table, path)
+    method, coupling, solver, integrator, frontier_tolerance = _solver(
+        solver_table, observables, axes, path)
+    canonical = _canonical(study, observables, fixed, mass, sweep, axes, method, coupling,
+                           solver, integrator, frontier_tolerance)
+    spec = StudySpec(
+        name=study["name"],
+        title=study.get("title", study["name"]),
+        description=study.get("description", ""),
+        observables=observables,
+        fixed=fixed,
+        mass=mass,
+        axes=tuple(axes),
+        solver=solver,
+        chunk_points=chunk_points,
+        frontier_tolerance=frontier_tolerance,
+        text=text,
+        path=path,
+        canonical=canonical,
+        method=method,
+        coupling=coupling,
+        integrator=integrator,
+    )
+    _check_structures(spec, path)
+    # After the structure's own checks: they have the better words where they apply.
+    for axis in spec.structure_axes:
+        _check_bounds(axis, path)
+    return spec
 
+
+def _fixed_structure(structure: dict[str, Any], mass_table: dict[str, Any] | None,
+                     sweep: dict[str, Any], path: str
+                     ) -> tuple[dict[str, float], MassModel | None]:
+    """The fixed structure parameters and the mass model; every structure parameter
+    given once, in [structure] or [sweep]."""
     both = sorted(set(structure) & set(sweep))
     if both:
         raise SpecError(
@@ -473,6 +510,13 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             f"{path}: [structure] is missing {', '.join(missing)}; "
             "give each structure parameter in [structure] or sweep it in [sweep]"
         )
+    return fixed, mass
+
+
+def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
+                solver_table: dict[str, Any], path: str) -> tuple[list[Axis], int]:
+    """The axes in result order (structure axes, then f, a) and the chunk size; the size
+    guard runs on the axis lengths before any value is generated."""
     if "f" not in sweep:
         raise SpecError(f"{path}: [sweep] needs the drive frequency f")
     needs_solver = any(o in observables for o in SOLVER_OBSERVABLES)
@@ -505,7 +549,13 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             raise SpecError(f"{path}: [sweep] m_add: added masses must be >= 0 kg")
         if axis.name not in STRUCTURE_PARAMETERS:
             _check_bounds(axis, path)
+    return axes, chunk_points
 
+
+def _solver(solver_table: dict[str, Any], observables: tuple[str, ...], axes: list[Axis],
+            path: str) -> tuple[str, str, SolverSettings, IntegratorSettings, float]:
+    """Method, coupling, the settings of both solvers and the frontier tolerance, with
+    what each observable needs of them."""
     coupling = solver_table.get("coupling", DEFAULT_COUPLING)
     # The exact solver covers both couplings (closed form between events; with two-way
     # coupling the mode is a state of the orbit, found by Newton on the period map).
@@ -554,8 +604,19 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             f"{path}: [solver] frontier_tolerance = {frontier_tolerance!r} Hz is finer than "
             f"doubles resolve near the largest f; allowed: >= {finest:.3g} Hz"
         )
+    return method, coupling, solver, integrator, frontier_tolerance
 
-    # Defaults written out: a spec that spells them out is the same study.
+
+def _canonical(study: dict[str, Any], observables: tuple[str, ...], fixed: dict[str, float],
+               mass: MassModel | None, sweep: dict[str, Any], axes: list[Axis], method: str,
+               coupling: str, solver: SolverSettings, integrator: IntegratorSettings,
+               frontier_tolerance: float) -> dict[str, Any]:
+    """What the numbers depend on, in a canonical form (hashed); defaults written out,
+    so a spec that spells them out is the same study.
+
+    Eleven arguments: the parts of a spec, each computed and checked by its own step
+    of :func:`_build`; gathering them into an object would only rename them.
+    """
     structure_canonical = dict(fixed)
     if "g" not in fixed and "g" not in sweep:
         structure_canonical["g"] = Structure.__dataclass_fields__["g"].default
@@ -588,29 +649,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             **({"frontier_tolerance": frontier_tolerance} if "frontier" in observables else {}),
         },
     }
-    spec = StudySpec(
-        name=study["name"],
-        title=study.get("title", study["name"]),
-        description=study.get("description", ""),
-        observables=observables,
-        fixed=fixed,
-        mass=mass,
-        axes=tuple(axes),
-        solver=solver,
-        chunk_points=chunk_points,
-        frontier_tolerance=frontier_tolerance,
-        text=text,
-        path=path,
-        canonical=canonical,
-        method=method,
-        coupling=coupling,
-        integrator=integrator,
-    )
-    _check_structures(spec, path)
-    # After the structure's own checks: they have the better words where they apply.
-    for axis in spec.structure_axes:
-        _check_bounds(axis, path)
-    return spec
+    return canonical
 
 
 def _check_bounds(axis: Axis, path: str) -> None:

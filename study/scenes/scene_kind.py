@@ -53,6 +53,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from study.engine.kinds import ResultKind, register
 from study.engine.spec_files import (
     SpecError,
     axis_length,
@@ -104,7 +105,9 @@ __all__ = [
     "MAX_TRAJECTORY_PERIODS",
     "PLATE_OSCILLATION_COST",
     "SCENE_FORMAT",
+    "SCENE_KIND",
     "SCENE_KINDS",
+    "SCENE_RESULT_SCHEMA",
     "SCENE_SPEC_SCHEMA",
     "SceneError",
     "SceneSpec",
@@ -113,13 +116,18 @@ __all__ = [
     "load_scene",
     "parse_scene",
     "period_weight",
+    "scene_build",
+    "scene_compute",
     "scene_dataset",
+    "scene_metadata",
     "scene_work",
 ]
 
 SCENE_KINDS = ("trajectory", "calibration", "plan")
 #: The JSON schema of scene specs (package data in ``study/schemas/``).
 SCENE_SPEC_SCHEMA = "study-scene-spec-v1"
+#: The ``study_result_schema`` of scene files (and the name of their JSON schema).
+SCENE_RESULT_SCHEMA = "study-scene-v1"
 #: Layout of a scene result's values (``study_scene_format``): 3 stores every angle in
 #: degree (heading, heading_change, start_heading; turn rates in degree s-1; the plan's
 #: realisation_heading_drift in degree per diameter, its spec key heading_drift_deg).
@@ -516,6 +524,35 @@ def scene_work(spec: SceneSpec) -> tuple[float, str]:
     return float(1 + _CORRECTIONS + (len(STRATEGIES) + _CORRECTIONS) * count), "flight"
 
 
+def _segment_summaries(run: Any, schedule: Schedule, segments: int
+                       ) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Each segment's displacement in the frame of its start, heading change, path and
+    how it ended (NaN and "not_reached" for segments the run never reached)."""
+    t = run.time
+    summary = {k: np.zeros(segments) for k in ("fwd", "lat", "turn", "path")}
+    status = np.zeros(segments, dtype=np.int8)
+    for j, (start, stop) in enumerate(zip(schedule.starts, schedule.ends, strict=True)):
+        i0 = int(np.searchsorted(t, start))
+        i1 = int(np.searchsorted(t, stop))
+        if i0 >= t.size:
+            status[j] = SEGMENT_STATUS.index("not_reached")
+            for key in summary:
+                summary[key][j] = math.nan
+            continue
+        if i1 >= t.size or t[i1] != stop:
+            status[j] = SEGMENT_STATUS.index(run.outcome if run.outcome in SEGMENT_STATUS
+                                             else "step_budget")
+            i1 = t.size - 1
+        dx, dy = run.x[i1] - run.x[i0], run.y[i1] - run.y[i0]
+        heading = math.radians(run.heading[i0])
+        c, s = math.cos(heading), math.sin(heading)
+        summary["fwd"][j] = c * dx + s * dy
+        summary["lat"][j] = -s * dx + c * dy
+        summary["turn"][j] = run.heading[i1] - run.heading[i0]
+        summary["path"][j] = run.path[i1] - run.path[i0]
+    return summary, status
+
+
 def _run_trajectory(spec: SceneSpec, report: Report = _ignore
                     ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
     options = spec.options
@@ -540,27 +577,7 @@ def _run_trajectory(spec: SceneSpec, report: Report = _ignore
     t = run.time
     index = np.clip(np.searchsorted(schedule.ends, t, side="right"), 0, len(rows) - 1)
     index[t == end] = len(rows) - 1
-    summary = {k: np.zeros(len(rows)) for k in ("fwd", "lat", "turn", "path")}
-    status = np.zeros(len(rows), dtype=np.int8)
-    for j, (start, stop) in enumerate(zip(schedule.starts, schedule.ends, strict=True)):
-        i0 = int(np.searchsorted(t, start))
-        i1 = int(np.searchsorted(t, stop))
-        if i0 >= t.size:
-            status[j] = SEGMENT_STATUS.index("not_reached")
-            for key in summary:
-                summary[key][j] = math.nan
-            continue
-        if i1 >= t.size or t[i1] != stop:
-            status[j] = SEGMENT_STATUS.index(run.outcome if run.outcome in SEGMENT_STATUS
-                                             else "step_budget")
-            i1 = t.size - 1
-        dx, dy = run.x[i1] - run.x[i0], run.y[i1] - run.y[i0]
-        heading = math.radians(run.heading[i0])
-        c, s = math.cos(heading), math.sin(heading)
-        summary["fwd"][j] = c * dx + s * dy
-        summary["lat"][j] = -s * dx + c * dy
-        summary["turn"][j] = run.heading[i1] - run.heading[i0]
-        summary["path"][j] = run.path[i1] - run.path[i0]
+    summary, status = _segment_summaries(run, schedule, len(rows))
     variables = {
         "x": _variable("t", run.x, METRE, "x position of the disk's centre"),
         "y": _variable("t", run.y, METRE, "y position of the disk's centre"),
@@ -689,9 +706,17 @@ def _check_plan_size(spec: SceneSpec, route: list, count: int) -> None:
 
 def _run_plan(spec: SceneSpec, report: Report = _ignore
               ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+    """Calibrate the commands, plan the routes, fly every strategy and realisation, and
+    lay the flights out as variables."""
+    commands, routes = _plan_routes(spec, report)
+    runs = _fly_plans(spec, commands, routes, report)
+    return _plan_variables(spec, commands, routes, runs)
+
+
+def _plan_routes(spec: SceneSpec, report: Report) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The calibrated commands and each strategy's route (None: planned in flight)."""
     options = spec.options
     disk = spec.disk
-    strategies = STRATEGIES
     count = options["realisations"] + 1
     waypoints = options["waypoints"]
     try:
@@ -711,6 +736,17 @@ def _run_plan(spec: SceneSpec, report: Report = _ignore
         report(float(_CORRECTIONS))
     except PlanError as err:
         raise SceneError(f"{spec.path}: [plan]: {err}") from None
+    return commands, routes
+
+
+def _fly_plans(spec: SceneSpec, commands: dict[str, Any], routes: dict[str, Any],
+               report: Report) -> dict[tuple[int, int], Any]:
+    """Every strategy's flights: realisation 0 without heading noise, the others with."""
+    options = spec.options
+    disk = spec.disk
+    strategies = STRATEGIES
+    count = options["realisations"] + 1
+    waypoints = options["waypoints"]
     noise = _heading_noise(options["heading_drift_deg"], disk)
     runs = {}
     for s, strategy in enumerate(strategies):
@@ -723,6 +759,17 @@ def _run_plan(spec: SceneSpec, report: Report = _ignore
             )
             # A closed-loop run corrects each leg as the open-loop route was corrected.
             report(1.0 + (_CORRECTIONS if strategy == "closed_loop" else 0))
+    return runs
+
+
+def _plan_variables(spec: SceneSpec, commands: dict[str, Any], routes: dict[str, Any],
+                    runs: dict[tuple[int, int], Any]
+                    ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+    """The flights sampled on one time axis, the waypoints, misses and commands."""
+    options = spec.options
+    strategies = STRATEGIES
+    count = options["realisations"] + 1
+    waypoints = options["waypoints"]
     end = max(float(run.time[-1]) for run in runs.values())
     t = np.arange(0.0, end + options["sample_interval"], options["sample_interval"])
     shape = (len(strategies), count, t.size)
@@ -788,6 +835,22 @@ def _run_plan(spec: SceneSpec, report: Report = _ignore
 _RUNNERS = {"trajectory": _run_trajectory, "calibration": _run_calibration, "plan": _run_plan}
 
 
+def scene_metadata(spec: SceneSpec) -> dict[str, Any]:
+    """Attributes that follow the scene spec's text but not its numbers (rewritten without
+    recomputing when only they change)."""
+    return {
+        "title": spec.title,
+        "summary": spec.description or (
+            f"Steering scene '{spec.name}' ({spec.kind}) of a rigid disk with resonant plates "
+            "on a vertically shaken table: planar stick-slip with an ellipsoidal limit "
+            "surface, integrated with events (study.scenes.planar_model)."),
+        "id": f"{spec.name}-{spec.sha256[:16]}",
+        "study_name": spec.name,
+        "study_spec": spec.text,
+        "study_spec_path": spec.path,
+    }
+
+
 def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
     """Compute a scene: its labelled dataset with the scene's own attributes.
 
@@ -796,7 +859,8 @@ def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
 
     The attributes describe the scene (title, summary, the disk, the integrator and
     how the run ended); provenance (spec text and hash, code, environment, history)
-    is added by :func:`study.scene_run.run_scene` when the result is written.
+    is added by the runner (:func:`study.engine.runner.run_scene`) when the result is
+    written.
 
     Raises
     ------
@@ -804,14 +868,25 @@ def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
         For a plan whose commands cannot steer the disk, or whose flights would be
         absurdly long (checked before any flight is simulated).
     """
-    variables, extra = _RUNNERS[spec.kind](spec, report or _ignore)
+    return scene_build(spec, scene_compute(spec, report))
+
+
+def scene_compute(spec: SceneSpec, report: Report | None = None
+                  ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+    """Run a scene: its variables and the attributes its run found (how it ended)."""
+    return _RUNNERS[spec.kind](spec, report or _ignore)
+
+
+def scene_build(spec: SceneSpec, computed: tuple[dict[str, xr.Variable], dict[str, Any]],
+                command: str = "") -> xr.Dataset:
+    """The labelled dataset of a computed scene (:func:`scene_compute`), with the scene's
+    own attributes (provenance is the runner's)."""
+    variables, extra = computed
     disk = spec.disk
+    metadata = scene_metadata(spec)
     attrs = {
-        "title": spec.title,
-        "summary": spec.description or (
-            f"Steering scene '{spec.name}' ({spec.kind}) of a rigid disk with resonant plates "
-            "on a vertically shaken table: planar stick-slip with an ellipsoidal limit "
-            "surface, integrated with events (study.scenes.planar_model)."),
+        "title": metadata["title"],
+        "summary": metadata["summary"],
         "keywords": "stick-slip, friction, locomotion, steering, limit surface, resonance",
         "source": "study.scenes.planar_model: Dormand-Prince 5(4) time integration with "
                   "events of the "
@@ -855,3 +930,29 @@ def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
                                                           "waypoint")}
     data = {k: v for k, v in {**variables, **plate_vars}.items() if k not in coords}
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+# ---------------------------------------------------------------------------
+# The scene kind (study.engine.kinds): everything the engine needs of a scene
+
+
+def _compute_for_runner(spec: SceneSpec, progress: Any
+                        ) -> tuple[dict[str, xr.Variable], dict[str, Any]]:
+    return scene_compute(spec, progress.update)
+
+
+def _variant(spec: SceneSpec) -> str:
+    return spec.kind
+
+
+#: The steering-scene kind.
+SCENE_KIND = register(ResultKind(
+    name="scene", spec_table="scene", spec_schema=SCENE_SPEC_SCHEMA,
+    result_schema=SCENE_RESULT_SCHEMA, entry_modules=("study.scenes.scene_kind",),
+    summary="steering scene of the planar disk: trajectory, calibration or plan",
+    label="steering scene result", spec_type=SceneSpec, load=load_scene, parse=parse_scene,
+    validator="study.scenes.scene_checks:scene_problems",
+    compute=_compute_for_runner, build=scene_build, work=scene_work, variant=_variant,
+    variant_attribute="study_scene_kind",
+    metadata=scene_metadata,
+))

@@ -51,7 +51,7 @@ def graph() -> dict[str, set[str]]:
 def test_the_walk_sees_imports():
     edges = graph()
     assert "study.engine.observables" in edges["study.engine.sweep"]
-    assert "study.engine.cache" in edges["study.engine.runner"]
+    assert "study.engine.cache" in edges["study.engine.study_kind"]
 
 
 def test_no_private_name_crosses_modules():

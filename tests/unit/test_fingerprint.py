@@ -149,7 +149,8 @@ def test_deterministic_and_order_free():
 
 
 def test_unknown_kind_names_the_allowed_ones():
-    with pytest.raises(ValueError, match="unknown result kind 'nope'; allowed: scene, study"):
+    with pytest.raises(ValueError, match="unknown result kind 'nope'; the kinds are 'study', "
+                                         "'scene', 'fit', 'design'"):
         result_code_sha256("nope")
     with pytest.raises(ValueError, match=r"no source for module 'study\.missing'"):
         code_fingerprint(("study.missing",), PACKAGE)

@@ -175,8 +175,8 @@ def test_every_workflow_has_a_kind_and_loads_as_it(path):
 @pytest.mark.parametrize(
     ("text", "fragment"),
     [
-        ("[structure]\nQ = 1\n", "needs a [study] or [scene] table (top-level tables found: "
-                                 "'structure')"),
+        ("[structure]\nQ = 1\n", "needs a [study] or [scene] or [fit] or [design] table "
+                                 "(top-level tables found: 'structure')"),
         ("", "top-level tables found: none"),
         ("[study]\nname = 'x'\n[scene]\nname = 'y'\n", "both [study] and [scene]"),
         ("study = 3\n", "[study] must be a table"),

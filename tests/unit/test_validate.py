@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-import study.engine.validation
+import study.engine.validation.reading
 from study.cli import main
 from study.engine.validation import (
     CONTENT_ATTRIBUTE,
@@ -106,7 +106,7 @@ def test_values_are_read_in_bounded_slabs(copy, monkeypatch: pytest.MonkeyPatch)
     path = copy("swept-q")
     whole = content_sha256(path)
     # 24 bytes a read: three float64 values, several reads per row.
-    monkeypatch.setattr(study.engine.validation, "SLAB_BYTES", 24)
+    monkeypatch.setattr(study.engine.validation.reading, "SLAB_BYTES", 24)
     assert content_sha256(path) == whole
     validate_file(path)
     with netCDF4.Dataset(path, "a") as nc:

@@ -1,0 +1,155 @@
+"""The study kind's own checks of its result files (:func:`study_problems`, registered
+as its validator in :mod:`study.engine.study_kind`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from study.engine.observables import variables_of
+from study.engine.study_spec import parse_spec
+from study.engine.validation.checks import (
+    Checker,
+    checksum_problems,
+    fingerprint_problems,
+    identity_problems,
+    is_number,
+    not_required_checksum,
+    parse_embedded,
+    provenance_problems,
+    provenance_spec_problems,
+    same_text,
+    shown_format,
+    size_problems,
+)
+from study.engine.validation.header import (
+    RESULT_SCHEMA,
+    RESULT_SCHEMA_PATH,
+    file_header,
+    schema_problems,
+    short,
+)
+from study.engine.validation.reading import StoredFile
+from study.engine.variables import RESULT_FORMAT, STALE_RESULT_FORMATS, VARIABLES
+
+__all__ = ["study_problems"]
+
+
+def _stale_format_problems(meta: StoredFile) -> list[str]:
+    """A study file of an older ``study_result_format`` that holds a variable whose units
+    changed since: its numbers would be misread, so it is refused whole as stale."""
+    written = meta.attrs.get("study_result_format", 1)
+    if is_number(written) and written == RESULT_FORMAT:
+        return []
+    changed = STALE_RESULT_FORMATS.get(written if is_number(written) else None)
+    if changed is None:
+        return [f"study_result_format {shown_format(written)} is unknown: this study reads format "
+                f"{RESULT_FORMAT}; rerun its spec"]
+    held = [f"{name} in {units}" for name, units in changed.items() if name in meta.variables]
+    if not held:
+        return []  # nothing in it changed units
+    now = ", ".join(f"{name} in {VARIABLES[name].units}" for name in changed
+                    if name in meta.variables)
+    return [f"study result format {shown_format(written)} ({', '.join(held)}) is stale: "
+            f"this study reads format {RESULT_FORMAT} ({now}); rerun its spec"]
+
+
+def study_problems(nc: Any, meta: StoredFile, source: str) -> list[str]:
+    attrs = meta.attrs
+    stale = _stale_format_problems(meta)
+    if stale:
+        return stale
+    problems = [p for p in schema_problems(RESULT_SCHEMA_PATH, file_header(meta))
+                if not_required_checksum(p)]
+    problems += fingerprint_problems(attrs)
+    problems += provenance_problems(attrs, RESULT_SCHEMA)
+    too_large = size_problems(meta)
+    if too_large:  # reading the values would be pointless, and could take hours
+        return problems + too_large
+    check = Checker(nc, meta)
+    spec, spec_problems = parse_embedded(attrs, source, parse_spec)
+    problems += spec_problems
+    if spec is not None:
+        problems += identity_problems(attrs, spec)
+        problems += provenance_spec_problems(attrs, spec, "study")
+        for key, value in (("study_solver_method", spec.method),
+                           ("study_coupling", spec.coupling)):
+            if not same_text(attrs.get(key), value):
+                problems.append(f"{key} differs from the embedded spec ({value!r})")
+        problems += _study_content_problems(check, meta, spec)
+    problems += checksum_problems(nc, meta)
+    return problems
+
+
+def _study_content_problems(check: Checker, meta: StoredFile, spec: Any) -> list[str]:
+    """Coordinates and variables against the spec and the declarations."""
+    problems = []
+    variables = meta.variables
+    for axis in spec.axes:
+        var = variables.get(axis.name)
+        if var is None:
+            problems.append(f"coordinate {axis.name!r} of the embedded spec is missing")
+        elif var.dims != (axis.name,) or var.type_name != "float64":
+            problems.append(f"coordinate {axis.name!r} must be float64 over ({axis.name},)")
+        elif not same_text(var.attrs.get("units"), axis.units):
+            problems.append(f"coordinate {axis.name!r}: units {var.attrs.get('units')!r}, "
+                            f"declared {axis.units!r}")
+        elif not check.equals(axis.name, axis.values):
+            problems.append(f"coordinate {axis.name!r} differs from the embedded spec")
+    structure = spec.canonical.get("structure") if isinstance(spec.canonical, dict) else None
+    for name, value in (structure.items() if isinstance(structure, dict) else ()):
+        var = variables.get(name)
+        if not is_number(value):
+            continue  # not a fixed value in the spec layer's form
+        if var is None or var.shape != () or var.type_name != "float64":
+            problems.append(f"fixed parameter {name!r} must be a float64 scalar")
+        elif not check.equals(name, np.array([value], dtype=np.float64)):
+            problems.append(f"{name} differs from the embedded spec's {value!r}")
+    structure_dims = tuple(axis.name for axis in spec.axes if axis.name not in ("f", "a"))
+    wanted = variables_of(spec.observables)
+    wanted_names = {v.name for v in wanted}
+    for name in variables:
+        if name in VARIABLES and name not in wanted_names:
+            problems.append(f"variable {name!r} is not among the spec's observables")
+    good: set[str] = set()
+    for declared in wanted:
+        name = declared.name
+        var = variables.get(name)
+        if var is None:
+            problems.append(f"variable {name!r} asked for by the spec is missing")
+            continue
+        before = len(problems)
+        dims = declared.dims(structure_dims)
+        if var.dims != dims:
+            problems.append(f"{name} has dimensions ({', '.join(var.dims)}); declared "
+                            f"({', '.join(dims)})")
+        if var.type_name != declared.dtype:
+            problems.append(f"{name} is {var.type_name}; declared {declared.dtype}")
+        for key in ("units", "long_name"):
+            if not same_text(var.attrs.get(key), getattr(declared, key)):
+                problems.append(f"{name}: {key} {short(repr(var.attrs.get(key)), 80)}; "
+                                f"declared {getattr(declared, key)!r}")
+        if declared.is_flag:
+            flag_values = np.atleast_1d(np.asarray(var.attrs.get("flag_values", [])))
+            if (flag_values.dtype != np.dtype(declared.dtype)
+                    or flag_values.tolist() != list(declared.flag_values)):
+                problems.append(f"{name}: flag_values {flag_values.tolist()}; declared "
+                                f"{list(declared.flag_values)} ({declared.dtype})")
+            if not same_text(var.attrs.get("flag_meanings"), " ".join(declared.flags)):
+                problems.append(f"{name}: flag_meanings differ from the declared "
+                                f"{' '.join(declared.flags)!r}")
+        elif "flag_values" in var.attrs or "flag_meanings" in var.attrs:
+            problems.append(f"{name} is not a flag variable but has flag attributes")
+        if len(problems) == before:
+            good.add(name)
+    for declared in wanted:
+        if declared.name not in good:
+            continue  # its values cannot be checked against a wrong layout
+        if declared.is_flag:
+            problems += check.flags_in_range(declared.name,
+                                             np.asarray(declared.flag_values))
+        if declared.invalid_where and declared.invalid_where in good:
+            problems += check.invalid_where(declared.name, declared.invalid_where,
+                                            declared.zero_when_static)
+    return problems

@@ -1,0 +1,484 @@
+"""The parameter-study kind: a spec's sweep computed chunk by chunk into its file.
+
+Registers the ``study`` kind (:mod:`study.engine.kinds`): its spec parser
+(:mod:`study.engine.study_spec`), its computation, which streams (the grid is planned
+in chunks, looked up in the cache of kept values, the missing ones sent to the
+executor and each chunk written into the result file as it arrives, together with its
+computed values into the cache; memory holds a bounded number of chunks, never the
+study), its validator (:mod:`study.engine.study_checks`) and its description. The
+runner (:mod:`study.engine.runner`) decides whether to run at all, holds the lock and
+commits the file; this module is what a run of a study does once it runs.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from study.engine.cache import ResultCache, encode_block, entry_key
+from study.engine.executors import TASK_TIMEOUT, Executor, executor
+from study.engine.kinds import ResultKind, register
+from study.engine.layout import (
+    coordinates,
+    data_variables,
+    method_description,
+    method_of,
+    observables_by_grid,
+    pad_branches,
+)
+from study.engine.observables import Observable
+from study.engine.progress import Progress
+from study.engine.provenance import (
+    code_sha256,
+    environment,
+    fingerprint,
+    git_state,
+    package_version,
+    utc_now,
+)
+from study.engine.runner import RunJob, RunReport, StudyInterrupted
+from study.engine.store import (
+    PAPER_REFERENCE,
+    RESULT_SCHEMA,
+    GridWriter,
+    StoreError,
+    advice,
+    new_temporary,
+)
+from study.engine.study_spec import SPEC_SCHEMA, StudySpec, load_spec, parse_spec
+from study.engine.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
+from study.engine.variables import RESULT_FORMAT, VARIABLES
+from study.model.structure import Structure
+
+__all__ = ["STUDY_KIND", "default_cache", "stream_study"]
+
+
+def _metadata_attrs(spec: StudySpec) -> dict[str, Any]:
+    """Attributes that follow the spec's text but not its numbers."""
+    return {
+        "title": spec.title,
+        "summary": spec.description or (
+            f"Parameter study '{spec.name}' of vibration-driven stick-slip locomotion: "
+            f"{', '.join(spec.observables)} of a soft structure with a resonant plate on a "
+            f"vertically shaken table, computed by {method_description(spec)}."
+        ),
+        "id": f"{spec.name}-{spec.sha256[:16]}",
+        "study_name": spec.name,
+        "study_spec": spec.text,
+        "study_spec_path": spec.path,
+    }
+
+
+def default_cache(output: Path) -> Path:
+    """Where kept values live: ``$STUDY_CACHE``, else ``.study-cache`` beside the result
+    (so every study writing into one folder shares them)."""
+    return Path(os.environ.get("STUDY_CACHE") or output.parent / ".study-cache")
+
+
+def stream_study(spec: StudySpec, job: RunJob) -> RunReport:
+    """Compute a study into a temporary file and commit it (the runner holds the lock).
+
+    ``job.options`` are :func:`study.engine.runner.run_study`'s: ``scheduler``,
+    ``workers``, ``progress``, ``stop_after``, ``on_chunk``, ``cache``, ``on_start``,
+    ``task_timeout``.
+    """
+    options = job.options
+    cache = options.get("cache")
+    kept = ResultCache(Path(cache) if cache is not None else default_cache(job.output))
+    computing = _Run(spec, job, kept)
+    try:
+        # Shared with other runs; cache maintenance (prune, verify) waits for it.
+        with kept.session(f"study run -> {job.output}", on_wait=kept.warn):
+            return computing.execute(
+                options.get("scheduler"), options.get("workers"), options.get("progress"),
+                options.get("stop_after"), options.get("on_start"),
+                options.get("task_timeout", TASK_TIMEOUT))
+    except StoreError as err:
+        if not computing.points_kept:
+            raise
+        raise StoreError(f"{err}; the {computing.points_kept} points computed are "
+                         f"kept in {computing.cache.root} for the next run") from None
+
+
+def _plan(spec: StudySpec) -> list[Chunk]:
+    a_axis = spec.axis("a")
+    n_a = len(a_axis) if (a_axis is not None and spec.needs_solver) else 1
+    return plan_chunks(tuple(len(axis) for axis in spec.structure_axes), len(spec.axis("f")),
+                       n_a, spec.chunk_points)
+
+
+def _structure_content(structure: Structure) -> dict[str, float]:
+    return {name: float(getattr(structure, name)) for name in Structure.__dataclass_fields__}
+
+
+def _creator() -> str:
+    """Who ran the study: $STUDY_CREATOR, else the login name."""
+    import getpass
+
+    try:
+        return os.environ.get("STUDY_CREATOR") or getpass.getuser()
+    except (KeyError, OSError):
+        return "unknown"
+
+
+def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
+    return {
+        "Conventions": "CF-1.11, ACDD-1.3",
+        **_metadata_attrs(spec),
+        "keywords": "stick-slip, friction, locomotion, resonance, vibration, parameter study",
+        "naming_authority": "study",
+        "source": f"study: {method_description(spec)}",
+        "study_solver_method": spec.method,
+        "study_coupling": spec.coupling,
+        "processing_level": "model output",
+        "references": PAPER_REFERENCE,
+        "standard_name_vocabulary": "CF Standard Name Table v85",
+        "comment": "Forces per unit total mass in the table frame; SI units. No CF standard "
+        "names exist for these model quantities, so variables carry long_name only.",
+        "acknowledgement": "Model of " + PAPER_REFERENCE,
+        "creator_name": _creator(),
+        "study_result_schema": RESULT_SCHEMA,
+        "study_result_format": RESULT_FORMAT,
+        "study_spec_sha256": spec.sha256,
+    }
+
+
+@dataclass(frozen=True)
+class _Job:
+    """A task and the cache entries its computed values go to: what a worker gets."""
+
+    task: Task
+    #: (entry key, variable names) of each solver observable the task computes.
+    entries: tuple[tuple[str, tuple[str, ...]], ...]
+
+
+def _compute_and_encode(job: _Job) -> tuple[dict[str, np.ndarray], list[dict[str, Any]],
+                                            list[list[bytes]]]:
+    """Compute a task and encode its values as cache blocks, on the worker: compression
+    and checksums run beside the solver, in parallel, not on the one thread that
+    writes the file (and a remote worker sends compressed blocks).
+
+    Returns
+    -------
+    rows, rectangles
+        As :func:`study.engine.sweep.compute_task`.
+    blocks : list of list of bytes
+        For each rectangle, one encoded block per entry of ``job.entries``.
+    """
+    rows, rectangles = compute_task(job.task)
+    task = job.task
+    blocks = [
+        [encode_block(key, task.f[rectangle.rows], task.a[rectangle.columns],
+                      {v: computed[v] for v in variables})
+         for key, variables in job.entries]
+        for rectangle, computed in zip(task.rectangles, rectangles, strict=True)
+    ]
+    return rows, rectangles, blocks
+
+
+def _gather_provenance(found: dict[str, Any]) -> None:
+    """Fill the caches of :func:`git_state` and :func:`environment`; the package
+    version (read from its metadata) goes into ``found``."""
+    git_state()
+    environment()
+    found["version"] = package_version()
+
+
+class _Run:
+    """One computing run of a study into a temporary file, committed at the end."""
+
+    def __init__(self, spec: StudySpec, job: RunJob, cache: ResultCache):
+        self.spec = spec
+        self.job = job
+        self.output = job.output
+        self.started = job.started
+        self.started_utc = job.started_utc
+        self.command = job.command
+        self.cache = cache
+        self.on_chunk: Callable[[int], None] | None = job.options.get("on_chunk")
+        self.method = method_of(spec)
+        self.rows, self.points, self.frontier = observables_by_grid(spec)
+        self.f = spec.axis("f").values
+        a_axis = spec.axis("a")
+        self.a = a_axis.values if (a_axis is not None and spec.needs_solver) else np.empty(0)
+        self.chunks = _plan(spec)
+        #: Every structure of the study by its index: the spec is read once, here.
+        self.structures = dict(spec.structures())
+        self.code = code_sha256()
+        self.points_computed = 0
+        self.points_reused = 0
+        #: Computed points kept in the cache (all of them unless it cannot be written).
+        self.points_kept = 0
+        self.keeping = True
+        self.chunks_computed = 0
+        self.chunks_reused = 0
+        self._keys: dict[tuple[tuple[int, ...], str], tuple[str, dict[str, Any]]] = {}
+
+    # -- cache keys --------------------------------------------------------------
+
+    def key(self, structure_index: tuple[int, ...], observable: Observable
+            ) -> tuple[str, dict[str, Any]]:
+        """Cache key and content of an observable's values for one structure."""
+        item = (structure_index, observable.name)
+        if item not in self._keys:
+            content = {
+                "observable": observable.name,
+                "variables": {v: VARIABLES[v].dtype for v in observable.variables},
+                "structure": _structure_content(self.structures[structure_index]),
+                "method": self.method.canonical(),
+                "code_sha256": self.code,
+            }
+            self._keys[item] = (entry_key(content), content)
+        return self._keys[item]
+
+    # -- the file ------------------------------------------------------------------
+
+    def _open(self, path: Path) -> GridWriter:
+        spec = self.spec
+        writer = GridWriter(path, _standard_attrs(spec), self.output)
+        scalars = []
+        for coordinate in coordinates(spec):
+            writer.coordinate(coordinate.name, coordinate.dims, coordinate.values,
+                              coordinate.attrs)
+            if coordinate.auxiliary:
+                scalars.append(coordinate.name)
+        self.auxiliary = " ".join(scalars)
+        block = max(chunk.size for chunk in self.chunks)
+        ones = (1,) * len(spec.structure_axes)
+        for variable in data_variables(spec, (*self.rows, *self.points)):
+            chunks = (*ones, block) if variable.grid == "row" else (
+                *ones, block, max(self.a.size, 1))
+            writer.variable(variable.name, variable.dims, variable.dtype,
+                            {**variable.attrs, "coordinates": self.auxiliary}, chunks)
+        return writer
+
+    # -- the work --------------------------------------------------------------------
+
+    def _jobs(self, pending: dict[int, Any]) -> Iterator[_Job]:
+        """Look each chunk up in the cache; yield what needs computing. Chunks found
+        whole are written at once (``pending`` keeps the found values until the
+        task's result arrives)."""
+        for chunk in self.chunks:
+            structure = self.structures[chunk.structure_index]
+            f = self.f[chunk.f_start:chunk.f_stop]
+            found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]] = {}
+            missing = np.zeros((f.size, self.a.size), dtype=bool)
+            for observable in self.points:
+                key, _ = self.key(chunk.structure_index, observable)
+                dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in observable.variables}
+                values, present = self.cache.lookup(key, f, self.a, dtypes)
+                found[observable.name] = (values, present)
+                missing |= ~present
+            rectangles = missing_rectangles(missing) if self.points else ()
+            needed = tuple(o.name for o in self.points if not found[o.name][1].all())
+            task = Task(chunk, structure, f, self.a, tuple(o.name for o in self.rows), needed,
+                        rectangles, self.method)
+            pending[chunk.number] = found
+            if not rectangles and not self.rows:
+                self._finish(task, ({}, [], []), pending.pop(chunk.number))
+                continue
+            entries = tuple((self.key(chunk.structure_index, observable)[0],
+                             observable.variables)
+                            for observable in self.points if observable.name in needed)
+            yield _Job(task, entries)
+
+    def _finish(self, task: Task,
+                result: tuple[dict[str, np.ndarray], list[dict[str, Any]], list[list[bytes]]],
+                found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]]) -> None:
+        """Write one chunk into the file and its computed values (encoded by the
+        worker) into the cache."""
+        chunk = task.chunk
+        rows, blocks, encoded = result
+        where_rows = (*chunk.structure_index, slice(chunk.f_start, chunk.f_stop))
+        for name, values in rows.items():
+            self.writer.write(name, where_rows, values)
+        where_points = (*where_rows, slice(None))
+        for observable in self.points:
+            values, _ = found[observable.name]
+            for rectangle, computed in zip(task.rectangles, blocks, strict=True):
+                for name in observable.variables:
+                    if name in computed:
+                        values[name][np.ix_(rectangle.rows, rectangle.columns)] = computed[name]
+            for name in observable.variables:
+                self.writer.write(name, where_points, values[name])
+        stored = [o for o in self.points if o.name in task.points]
+        for rectangle, datas in zip(task.rectangles, encoded, strict=True):
+            for observable, data in zip(stored, datas, strict=True):
+                key, content = self.key(chunk.structure_index, observable)
+                self._keep(key, content, task.a[rectangle.columns], data)
+        size = chunk.size * max(self.a.size, 1)
+        computed_points = task.point_count if self.points else size
+        self.points_computed += computed_points
+        if self.keeping and self.points:
+            self.points_kept += computed_points
+        self.points_reused += size - computed_points
+        if computed_points:
+            self.chunks_computed += 1
+        else:
+            self.chunks_reused += 1
+        self.progress.update(size, computed_points)
+
+    def _keep(self, key: str, content: dict[str, Any], a: np.ndarray, block: bytes) -> None:
+        """Keep a computed block; a cache that cannot be written (disk full, read-only)
+        is said once and the run goes on without keeping values: the result matters
+        more than its reuse."""
+        if not self.keeping:
+            return
+        try:
+            self.cache.store_encoded(key, content, a, block)
+        except OSError as err:
+            self.keeping = False
+            what_to_do = advice(err).replace("(-o)", "(--cache)")
+            self.cache.warn(
+                f"{self.cache.root}: cannot keep computed values ({err.strerror or err}); "
+                "the run goes on without keeping them" + (f": {what_to_do}" if what_to_do
+                                                          else ""))
+
+    def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
+                stop_after: int | None, on_start: Callable[[Executor], None] | None,
+                task_timeout: float = TASK_TIMEOUT) -> RunReport:
+        self.cache.clean_temporaries()
+        # What the provenance records of the checkout and the machine (a git
+        # subprocess, package metadata) does not depend on the run: gathered while the
+        # workers compute, not after the last chunk, when nothing overlaps it.
+        self.gathered: dict[str, Any] = {}
+        gathering = threading.Thread(target=_gather_provenance, args=(self.gathered,),
+                                     daemon=True)
+        gathering.start()
+        temporary = new_temporary(self.output)
+        try:
+            self.writer = self._open(temporary)
+            total = len(self.f) * max(self.a.size, 1) * int(np.prod(
+                [len(axis) for axis in self.spec.structure_axes], dtype=np.int64))
+            self.progress = Progress(total, self.spec.name, progress)
+            pending: dict[int, Any] = {}
+            computed_chunks = 0
+            try:
+                with executor(scheduler, workers, self.code,
+                              task_timeout=task_timeout) as pool, self.progress.running():
+                    self.scheduler_name, self.threads = pool.name, pool.threads
+                    if on_start is not None:
+                        on_start(pool)
+                    for job, result in pool.run_unordered(_compute_and_encode,
+                                                          self._jobs(pending),
+                                                          label=self.spec.name):
+                        task = job.task
+                        self._finish(task, result, pending.pop(task.chunk.number))
+                        if task.rectangles:
+                            computed_chunks += 1
+                            if self.on_chunk is not None:
+                                self.on_chunk(task.chunk.number)
+                        if stop_after is not None and computed_chunks >= stop_after:
+                            kept = (f"their values are kept in {self.cache.root}"
+                                    if self.keeping else "the cache could not keep them")
+                            raise StudyInterrupted(
+                                f"stopped after {computed_chunks} computed chunks on request; "
+                                f"{kept}")
+            finally:
+                self.progress.close()
+            if self.frontier is not None:
+                self._write_frontier()
+            gathering.join()
+            self.writer.set_attributes(self._provenance_attrs())
+            self.writer.close()
+        except BaseException:
+            if hasattr(self, "writer"):
+                self.writer.discard()  # never raises: the first failure is reported
+            temporary.unlink(missing_ok=True)
+            raise
+        self.job.commit(temporary)
+        return RunReport(
+            self.output, False, len(self.chunks), self.chunks_computed, self.chunks_reused,
+            time.perf_counter() - self.started, self.points_computed + self.points_reused,
+            self.points_computed, self.points_reused,
+        )
+
+    def _write_frontier(self) -> None:
+        """Frontier f*(a) of every structure from its whole velocity rows."""
+        spec = self.spec
+        found = {}
+        for index, structure in self.structures.items():
+            where = (*index, slice(None), slice(None))
+            velocity = self.writer.read("velocity", where)
+            status = self.writer.read("status", where)
+            found[index] = self.frontier.compute(structure, self.f, self.a, velocity, status,
+                                                 self.method, spec.frontier_tolerance)
+        branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
+        self.writer.dimension("branch", branches)
+        ones = (1,) * len(spec.structure_axes)
+        variables = data_variables(spec, (self.frontier,))
+        for variable in variables:
+            self.writer.variable(variable.name, variable.dims, variable.dtype,
+                                 {**variable.attrs, "coordinates": self.auxiliary},
+                                 (*ones, self.a.size, branches))
+        for index, item in found.items():
+            for variable in variables:
+                self.writer.write(variable.name, (*index, slice(None), slice(None)),
+                                  pad_branches(item[variable.name], branches, variable.dtype))
+
+    def _provenance_attrs(self) -> dict[str, Any]:
+        spec = self.spec
+        finished_utc = utc_now()
+        git = git_state()
+        run_fingerprint = fingerprint(spec.sha256, self.code)
+        version = self.gathered.get("version") or package_version()
+        provenance: dict[str, Any] = {
+            "result_schema": RESULT_SCHEMA,
+            "study": {"name": spec.name, "spec_path": spec.path, "spec_sha256": spec.sha256,
+                      "canonical_spec": spec.canonical},
+            "code": {"code_sha256": self.code, "fingerprint": run_fingerprint},
+            "package": {"name": "study", "version": version, **git},
+            "environment": environment(),
+            "run": {
+                "started_utc": self.started_utc,
+                "finished_utc": finished_utc,
+                "wall_seconds": time.perf_counter() - self.started,
+                "scheduler": self.scheduler_name,
+                "workers": self.threads,
+                "chunks": len(self.chunks),
+                "chunks_computed": self.chunks_computed,
+                "chunks_reused": self.chunks_reused,
+                "points": self.points_computed + self.points_reused,
+                "points_computed": self.points_computed,
+                "points_reused": self.points_reused,
+                "cache": str(self.cache.root),
+                "solver_settings": {**spec.canonical["solver"],
+                                    "chunk_points": spec.chunk_points},
+                "host": environment()["host"],
+            },
+        }
+        return {
+            "history": f"{self.started_utc}: {self.command} (study {version})",
+            "date_created": finished_utc,
+            "date_modified": finished_utc,
+            "product_version": version,
+            "study_version": version,
+            "study_code_sha256": self.code,
+            "study_fingerprint": run_fingerprint,
+            "git_commit": str(git["git_commit"]),
+            "git_dirty": str(git["git_dirty"]).lower(),
+            "provenance": json.dumps(provenance, sort_keys=True),
+        }
+
+
+def _study_chunks(spec: StudySpec) -> int:
+    return len(_plan(spec))
+
+
+#: The parameter-study kind.
+STUDY_KIND = register(ResultKind(
+    name="study", spec_table="study", spec_schema=SPEC_SCHEMA, result_schema=RESULT_SCHEMA,
+    entry_modules=("study.engine.sweep", "study.solvers.frontier", "study.engine.study_spec"),
+    summary="parameter study: observables over swept structure and drive parameters",
+    label="study result", spec_type=StudySpec, load=load_spec, parse=parse_spec,
+    validator="study.engine.study_checks:study_problems",
+    stream=stream_study, metadata=_metadata_attrs, size=_study_chunks,
+))
