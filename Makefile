@@ -31,7 +31,7 @@ RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
 .PHONY: all results figures docs docs-html test test-unit test-integration test-slow fuzz \
-        lint bench cf-check list clean \
+        lint bench compare cf-check list clean \
         schemas designs FORCE
 
 all: results
@@ -179,6 +179,12 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_measurements.py
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
+
+# A refactor keeps results bit-identical: `make compare BEFORE=other/results` checks
+# every file of that folder against results/, variable by variable.
+compare: $(RESULTS)
+	@test -n "$(BEFORE)" || { echo "make compare BEFORE=FOLDER: the folder of the results to compare with" >&2; exit 2; }
+	$(PY) -m tests.support.compare_results $(BEFORE) results
 
 cf-check: $(RESULTS)
 	$(VENV)/bin/compliance-checker --test cf:1.11 --criteria strict $(RESULTS)
