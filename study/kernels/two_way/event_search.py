@@ -71,6 +71,11 @@ START_SLOPE = 1e-9
 # Nudge [drive periods] past a slip start that does not accelerate at first order.
 NUDGE = 1e-6
 
+#: Where a search looks: from ``t_from`` to ``t_end`` [s]; ``horizon`` [s] scales the
+#: smallest step taken; lift-off is ``n < g - lift_level`` [m s-2] (``lift_level = g``:
+#: ``n < 0``).
+SearchLimits = namedtuple("SearchLimits", ("t_from", "t_end", "horizon", "lift_level"))
+
 #: The start of a piece in one contact mode: its time ``t0`` [s], ``sin(w t0)`` [1],
 #: the homogeneous state ``(h0, hd0)`` [m, m s-1], the speed ``v0`` [m s-1] and
 #: ``delta'(t0) = dd0`` [m s-1].
@@ -266,11 +271,15 @@ def _nudged_slip_speed(row, structure, a, omega, start, t):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def search(point, j, start, t_from, t_end, mask, horizon, lift_level):
-    """First event of the functions in ``mask`` in ``(t0, t_end]`` for a piece in contact
-    mode ``j`` (row of the point's mode table) from ``start`` (a :data:`PieceStart`),
-    looking from ``t_from`` [s]. Lift-off is ``n < g - lift_level`` [m s-2]
-    (``lift_level = g``: ``n < 0``). ``horizon`` [s] scales the smallest step taken.
+def search(structure, row, omega, a, start, mask, limits):
+    """First event of the functions in ``mask`` in ``(t0, t_end]`` for a piece in the
+    contact mode of ``row`` (a row of the mode table) from ``start`` (a
+    :data:`PieceStart`) within ``limits`` (:data:`SearchLimits`), for the structure
+    vector ``structure`` and the drive ``omega`` [rad s-1], ``a`` [m s-2].
+
+    The arrays are passed apart, not in a :data:`~study.kernels.two_way.modes.DrivePoint`:
+    this is the innermost call of the orbit, and taking arrays out of a tuple costs
+    reference counts on every call (a pass of the orbit was 3 % slower).
 
     Returns
     -------
@@ -278,10 +287,9 @@ def search(point, j, start, t_from, t_end, mask, horizon, lift_level):
         The event's bit (0: none before ``t_end``, -1: step budget), its time [s] and
         the steps taken.
     """
-    structure = point.structure
-    omega = point.omega
-    a = point.a
-    row = point.table[j]
+    t_end = limits.t_end
+    horizon = limits.horizon
+    lift_level = limits.lift_level
     k = structure[STIFFNESS]
     ca = structure[COS_ALPHA]
     sa = structure[SIN_ALPHA]
@@ -295,12 +303,24 @@ def search(point, j, start, t_from, t_end, mask, horizon, lift_level):
     kappa_p = -m * (sa + cs * ca)
     kappa_m = -m * (-sa + cs * ca)
     sin_p = row[M_SIN_P]
+    hom_p = row[M_HOM2_P]
+    hom3_p = row[M_HOM3_P]
     sin_m = row[M_SIN_M]
+    hom_m = row[M_HOM2_M]
+    hom3_m = row[M_HOM3_M]
     sin_v = row[M_SIN_V]
+    hom_v = row[M_HOM2_V]
+    hom3_v = row[M_HOM3_V]
+    amp_p = row[M_AMP_P]
+    arg_p = row[M_ARG_P]
+    amp_m = row[M_AMP_M]
+    arg_m = row[M_ARG_M]
+    amp_n = row[M_AMP_N]
+    arg_n = row[M_ARG_N]
     t0 = start.t0
     v0 = start.v0
-    t = t_from
-    first = t_from == t0
+    t = limits.t_from
+    first = t == t0
     # Functions made of a sinusoid, a constant and a functional of h cannot reach 0
     # before the sinusoid reaches -(constant + bound of the functional): with the energy
     # non-increasing, that arc's entry is a safe first look (one step over a stick).
@@ -329,15 +349,15 @@ def search(point, j, start, t_from, t_end, mask, horizon, lift_level):
         # entry of the arc on which they can be positive.
         if mask & EV_RELEASE_FORWARD:
             if t >= exit_p:
-                entry_p, exit_p = _arc_window(t, omega, row[M_AMP_P], row[M_ARG_P], level_p)
+                entry_p, exit_p = _arc_window(t, omega, amp_p, arg_p, level_p)
             if entry_p > t:
                 if entry_p - t < step:
                     step = entry_p - t
                     kind = 0
             else:
                 fired, h_step = _release_look(
-                    jet, kappa_p, cs, g, a, omega, sin_p + row[M_HOM2_P] * energy,
-                    omega * sin_p + row[M_HOM3_P] * energy)
+                    jet, kappa_p, cs, g, a, omega, sin_p + hom_p * energy,
+                    omega * sin_p + hom3_p * energy)
                 if fired:
                     return EV_RELEASE_FORWARD, t, steps
                 if h_step < step:
@@ -345,15 +365,15 @@ def search(point, j, start, t_from, t_end, mask, horizon, lift_level):
                     kind = EV_RELEASE_FORWARD
         if mask & EV_RELEASE_BACKWARD:
             if t >= exit_m:
-                entry_m, exit_m = _arc_window(t, omega, row[M_AMP_M], row[M_ARG_M], level_m)
+                entry_m, exit_m = _arc_window(t, omega, amp_m, arg_m, level_m)
             if entry_m > t:
                 if entry_m - t < step:
                     step = entry_m - t
                     kind = 0
             else:
                 fired, h_step = _release_look(
-                    jet, kappa_m, cs, g, a, omega, sin_m + row[M_HOM2_M] * energy,
-                    omega * sin_m + row[M_HOM3_M] * energy)
+                    jet, kappa_m, cs, g, a, omega, sin_m + hom_m * energy,
+                    omega * sin_m + hom3_m * energy)
                 if fired:
                     return EV_RELEASE_BACKWARD, t, steps
                 if h_step < step:
@@ -381,13 +401,13 @@ def search(point, j, start, t_from, t_end, mask, horizon, lift_level):
             if phi > 0.0 or (phi == 0.0 and dphi > 0.0):
                 return EV_SLIP_END, t, steps
             d2phi = s * kk * jet.dddd + ck * a * omega * jet.sw
-            h_step = _bounded_step(phi, dphi, d2phi, sin_v + row[M_HOM2_V] * energy,
-                                   omega * sin_v + row[M_HOM3_V] * energy)
+            h_step = _bounded_step(phi, dphi, d2phi, sin_v + hom_v * energy,
+                                   omega * sin_v + hom3_v * energy)
             if h_step < step:
                 step = h_step
                 kind = EV_SLIP_END
         if mask & EV_LIFT_OFF and t >= exit_n:
-            entry_n, exit_n = _arc_window(t, omega, row[M_AMP_N], row[M_ARG_N], level_n)
+            entry_n, exit_n = _arc_window(t, omega, amp_n, arg_n, level_n)
         if mask & EV_LIFT_OFF and entry_n > t:
             if entry_n - t < step:
                 step = entry_n - t

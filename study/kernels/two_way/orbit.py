@@ -31,6 +31,7 @@ from study.kernels.two_way.event_search import (
     EV_SLIP_END,
     NUDGE,
     PieceStart,
+    SearchLimits,
     search,
 )
 from study.kernels.two_way.modes import M_D, M_K, M_SIGN, TWO_PI
@@ -69,6 +70,8 @@ N_ACC = 9
 #: gradients of the displacement and of the forward and backward slip times with
 #: respect to the state ``jac`` started from).
 PassRecord = namedtuple("PassRecord", ("acc", "jac", "grad"))
+# The state at an event: cosine and sine of the drive phase, delta [m], delta' [m s-1].
+EventState = namedtuple("EventState", ("cw", "sw", "dl", "dld"))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -83,14 +86,14 @@ def _mat_left(jac, r00, r01, r02, r10, r11, r12, r20, r21, r22):
         jac[2, col] = r20 * x0 + r21 * x1 + r22 * x2
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def _initial_mode(point, t, z):
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _initial_mode(structure, omega, a, t, z):
     """Contact mode of state ``z`` at ``t``: the sign of ``v``, or the stick test."""
     if z[2] > 0.0:
         return 1
     if z[2] < 0.0:
         return -1
-    r_p, r_m, _ = stick_releases(point.structure, point.a, math.cos(point.omega * t), z[0], z[1])
+    r_p, r_m, _ = stick_releases(structure, a, math.cos(omega * t), z[0], z[1])
     # Both positive only off the table (n < 0): the larger wins, as the mirror image
     # alpha -> -alpha swaps them.
     if r_p > 0.0 and r_p >= r_m:
@@ -100,17 +103,16 @@ def _initial_mode(point, t, z):
     return 0
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def _release_saltation(point, new, cwe, swe, dl, dld, acc0, jac, ds0, ds1, ds2):
-    """A release from a stick into the slip of sign ``new`` at state ``(dl, dld)`` and
-    drive phase ``(cwe, swe)`` (cosine, sine), the stick's ``delta'' = acc0``: ``jac`` is
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _release_saltation(structure, rown, omega, a, event, acc0, jac, ds):
+    """A release from a stick into the slip of ``rown`` (its mode table row) at the
+    :data:`EventState` ``event``, the stick's ``delta'' = acc0`` [m s-2]: ``jac`` is
     multiplied on the left by the saltation matrix. Returns the gradient of the slip's
-    start time with respect to the state ``jac`` started from (``ds*`` as given when the
+    start time with respect to the state ``jac`` started from (``ds`` as given when the
     release function does not rise)."""
-    structure = point.structure
-    omega = point.omega
-    a = point.a
-    rown = point.table[1 if new > 0 else 2]
+    new = rown[M_SIGN]
+    cwe, swe, dl, dld = event
+    ds0, ds1, ds2 = ds
     accn = mode_acceleration(structure, rown, cwe, dl, dld)
     vdot = slip_acceleration(structure, rown, a, cwe, accn)
     m = structure[MASS_RATIO]
@@ -134,17 +136,15 @@ def _release_saltation(point, new, cwe, swe, dl, dld, acc0, jac, ds0, ds1, ds2):
     return ds0, ds1, ds2
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def _slip_tangent(point, row, kind, tau, propagator, cwe, dl, dld, record, ds):
-    """The Jacobian and the gradients over a slip piece of ``tau`` [s] in the mode of
-    ``row`` ending at state ``(dl, dld)`` (event ``kind``, drive phase cosine ``cwe``),
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _slip_tangent(structure, row, a, kind, tau, propagator, event, jac, grad, ds):
+    """``jac`` and ``grad`` (of :data:`PassRecord`) over a slip piece of ``tau`` [s] in
+    the mode of ``row`` ending at the :data:`EventState` ``event`` (event ``kind``),
     ``propagator`` its ``(e11, e12, e21, e22)`` and ``ds`` the gradient of the slip's
     start time. Returns the gradient of the next slip's start time: this slip's end
     time when it ends at rest (a reversal may follow), else 0."""
-    structure = point.structure
-    jac = record.jac
-    grad = record.grad
     e11, e12, e21, e22 = propagator
+    cwe, _, dl, dld = event
     ds0, ds1, ds2 = ds
     s = row[M_SIGN]
     kk = row[M_K]
@@ -165,7 +165,7 @@ def _slip_tangent(point, row, kind, tau, propagator, cwe, dl, dld, record, ds):
     ds2 = 0.0
     if kind == EV_SLIP_END:
         v_rate = slip_acceleration(
-            structure, row, point.a, cwe,
+            structure, row, a, cwe,
             mode_acceleration(structure, row, cwe, dl, dld))
         if v_rate != 0.0:
             ds0 = -jac[2, 0] / v_rate
@@ -204,9 +204,10 @@ def run(point, z, t_begin, t_stop, record, want_jac, lift_margin, max_events):
     a = point.a
     acc = record.acc
     jac = record.jac
+    grad = record.grad
     horizon = max(abs(t_stop), TWO_PI / omega)
     t = t_begin
-    mode = _initial_mode(point, t, z)
+    mode = _initial_mode(structure, omega, a, t, z)
     if mode != 0:
         if table[1 if mode > 0 else 2, M_D] <= 0.0:
             return RUN_PARADOX
@@ -244,9 +245,10 @@ def run(point, z, t_begin, t_stop, record, want_jac, lift_margin, max_events):
             mask = EV_SLIP_END
         if lift_margin >= 0.0:
             mask |= EV_LIFT_OFF
-        kind, te, steps = search(point, j, PieceStart(t, sw, h0, hd0, v0, dd0),
-                                 max(t, t_from), t_stop, mask, horizon,
-                                 structure[GRAVITY] + max(lift_margin, 0.0))
+        kind, te, steps = search(
+            structure, row, omega, a, PieceStart(t, sw, h0, hd0, v0, dd0), mask,
+            SearchLimits(max(t, t_from), t_stop, horizon,
+                         structure[GRAVITY] + max(lift_margin, 0.0)))
         acc[A_STEPS] += steps
         if kind < 0:
             acc[A_EVENTS] += events
@@ -298,8 +300,9 @@ def run(point, z, t_begin, t_stop, record, want_jac, lift_margin, max_events):
             z[1] = dld
             z[2] = 0.0 if kind == EV_SLIP_END else v_end
             if want_jac:
-                ds0, ds1, ds2 = _slip_tangent(point, row, kind, tau, (e11, e12, e21, e22),
-                                              cwe, dl, dld, record, (ds0, ds1, ds2))
+                ds0, ds1, ds2 = _slip_tangent(
+                    structure, row, a, kind, tau, (e11, e12, e21, e22),
+                    EventState(cwe, swe, dl, dld), jac, grad, (ds0, ds1, ds2))
         t = te
         t_trig = te
         cw = cwe
@@ -316,8 +319,9 @@ def run(point, z, t_begin, t_stop, record, want_jac, lift_margin, max_events):
                 return RUN_PARADOX
             acc[A_SLIPS] += 1.0
             if want_jac:
-                ds0, ds1, ds2 = _release_saltation(point, new, cwe, swe, dl, dld, acc0, jac,
-                                                   ds0, ds1, ds2)
+                ds0, ds1, ds2 = _release_saltation(
+                    structure, table[jn], omega, a, EventState(cwe, swe, dl, dld), acc0, jac,
+                    (ds0, ds1, ds2))
             mode = new
         else:
             s = int(row[M_SIGN])
