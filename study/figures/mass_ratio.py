@@ -24,7 +24,6 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-import study
 from study.analyses.thresholds import lowest_threshold, resonance_threshold
 from study.figures import FigureError, measured
 from study.figures.common import (
@@ -39,6 +38,7 @@ from study.figures.common import (
     structure_text,
     value_colours,
 )
+from study.model import lift_off_acceleration
 
 __all__ = ["draw"]
 
@@ -150,7 +150,7 @@ def draw(dataset: xr.Dataset, output: Path,
         if "lift_off_acceleration" in dataset:
             a_lift = dataset["lift_off_acceleration"].isel(at).values
         else:
-            a_lift = study.lift_off_acceleration(structure, f)
+            a_lift = lift_off_acceleration(structure, f)
         color = color_of[i]
         label = _label(ratios[i], None if m_add is None else m_add[i])
         # A threshold above lift-off is outside the model: drawn faint, never as valid.
