@@ -279,7 +279,10 @@ def search(structure, row, omega, a, start, mask, limits):
 
     The arrays are passed apart, not in a :data:`~study.kernels.two_way.modes.DrivePoint`:
     this is the innermost call of the orbit, and taking arrays out of a tuple costs
-    reference counts on every call (a pass of the orbit was 3 % slower).
+    reference counts on every call (a pass of the orbit was 3 % slower). One loop over
+    the steps, kept whole: the arc windows, the nudge of a slip's start and the nearest
+    event carry from step to step; the mode's derivatives (:func:`_jet`) and each event
+    function's look are split out.
 
     Returns
     -------
