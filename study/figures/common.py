@@ -139,8 +139,6 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
     Fixed parameters come from the file's scalar coordinates; for a swept one give
     its index, e.g. ``structure_from_dataset(ds, M=3)`` (``m_add`` for mass studies).
     """
-    import study
-
     params = {}
     for name in ("f0", "Q", "alpha", "M", "cs", "ck", "g"):
         if name in dataset.coords and dataset[name].ndim == 0:
@@ -152,10 +150,10 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
             del params["m_add"]
     if "ck" not in params and "cs" in params:
         params["ck"] = params["cs"]
-    from study.model.structure import tilt_warnings
+    from study.model.structure import Structure, tilt_warnings
 
     with tilt_warnings(False):  # a result file's tilts are in degree by its schema
-        return study.Structure(**params)
+        return Structure(**params)
 
 
 #: Statuses with a valid velocity (0 when static).

@@ -25,7 +25,6 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-import study
 from study.analyses.thresholds import lowest_threshold, resonance_threshold
 from study.figures import FigureError, measured
 from study.figures.common import (
@@ -40,6 +39,8 @@ from study.figures.common import (
     structure_text,
     value_colours,
 )
+from study.model import lift_off_acceleration
+from study.model.structure import Structure
 
 __all__ = ["draw"]
 
@@ -173,7 +174,7 @@ def draw(dataset: xr.Dataset, output: Path,
 
 def _threshold_panel(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset, loads: _Loads,
                      found: _Measured | None
-                     ) -> tuple[list[tuple[float, float, bool]], list[study.Structure]]:
+                     ) -> tuple[list[tuple[float, float, bool]], list[Structure]]:
     """Left: the threshold against f for every load with its lift-off and its minimum.
 
     Returns per load the minimum over f ``(a*, f, not resolved)`` and the structure."""
@@ -217,7 +218,7 @@ def _threshold_panel(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset, loads: 
 
 
 def _load_curves(ax: plt.Axes, dataset: xr.Dataset, loads: _Loads
-                 ) -> tuple[list[tuple[float, float, bool]], list[study.Structure], bool]:
+                 ) -> tuple[list[tuple[float, float, bool]], list[Structure], bool]:
     """Each load's threshold (faint above lift-off), its lift-off acceleration and its
     minimum over f. Returns per load the minimum ``(a*, f, not resolved)`` and the
     structure, and whether some threshold lies above lift-off."""
@@ -234,7 +235,7 @@ def _load_curves(ax: plt.Axes, dataset: xr.Dataset, loads: _Loads
         if "lift_off_acceleration" in dataset:
             a_lift = dataset["lift_off_acceleration"].isel(at).values
         else:
-            a_lift = study.lift_off_acceleration(structure, f)
+            a_lift = lift_off_acceleration(structure, f)
         color = loads.colours[i]
         label = _label(ratios[i], None if m_add is None else m_add[i])
         # A threshold above lift-off is outside the model: drawn faint, never as valid.
@@ -257,7 +258,7 @@ def _load_curves(ax: plt.Axes, dataset: xr.Dataset, loads: _Loads
 
 
 def _minimum_panel(bx: plt.Axes, dataset: xr.Dataset, loads: _Loads,
-                   minima: list[tuple[float, float, bool]], base: study.Structure,
+                   minima: list[tuple[float, float, bool]], base: Structure,
                    found: _Measured | None, paper: bool) -> None:
     """Right: the minimum over f against M, with the closed forms over a fine M range,
     the lowest measured threshold of each structure and, for the paper's structure,
@@ -311,7 +312,7 @@ def _lowest_measured(bx: plt.Axes, found: _Measured, color_of: dict) -> None:
             label="measured: lowest threshold of each structure $\\pm\\sigma$")
 
 
-def _paper_statement(bx: plt.Axes, base: study.Structure, f_range: tuple[float, float]
+def _paper_statement(bx: plt.Axes, base: Structure, f_range: tuple[float, float]
                      ) -> None:
     """The paper's statement (about g/2 at resonance for M = 6.6 %) beside the model's
     values there."""

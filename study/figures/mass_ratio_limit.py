@@ -23,7 +23,6 @@ from matplotlib.colors import ListedColormap, TwoSlopeNorm
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-import study
 from study.figures.common import (
     VALID,
     coupling_label,
@@ -36,6 +35,7 @@ from study.figures.common import (
     structure_from_dataset,
     structure_text,
 )
+from study.model import lift_off_acceleration, thresholds
 from study.model.status import Status
 
 __all__ = ["draw", "panel_indices", "valid_velocity_mm_s"]
@@ -84,8 +84,8 @@ def _closed(dataset: xr.Dataset, name: str, at: dict, structure, f) -> np.ndarra
     if name in dataset:
         return dataset[name].isel(at).values
     if name == "lift_off_acceleration":
-        return study.lift_off_acceleration(structure, f)
-    a_plus, a_minus = study.thresholds(structure, f)
+        return lift_off_acceleration(structure, f)
+    a_plus, a_minus = thresholds(structure, f)
     return a_plus if name == "a_star_plus" else a_minus
 
 

@@ -205,7 +205,7 @@ def _paradox(p, mode):
 
 
 @njit(cache=True, nogil=True)
-def _integrate(
+def integrate(
     p, seg_t0, seg_omega, seg_a, seg_phase0, seg_end,
     y, mode_box, t_box, t_stop,
     rtol, atol, scale, fixed_step, max_step, xtol_time, samples, max_steps,
@@ -428,7 +428,7 @@ def _periodic_point(
         t_box[0] = 0.0
         for i in range(6):
             stats[i] = 0.0
-        code = _integrate(
+        code = integrate(
             p, seg_t0, seg_omega, seg_a, seg_phase0, seg_end, y, mode_box, t_box, period,
             rtol, atol, scale, fixed_step, max_step, xtol_time, samples, max_steps,
             out_t, out_y, out_mode, out_box, ev_t, ev_kind, ev_y, ev_box, stats,
@@ -505,7 +505,7 @@ def _periodic_point(
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def _periodic_points(
+def periodic_points(
     p, omega, amplitude, y0, rtol, atol, scale, fixed_step, max_step, xtol_time, samples,
     max_steps, max_periods, max_orbit, period_tolerance, results,
 ):
@@ -526,11 +526,11 @@ def _periodic_points(
 
 
 @njit(cache=True, nogil=True)
-def _periodic_points_serial(
+def periodic_points_serial(
     p, omega, amplitude, y0, rtol, atol, scale, fixed_step, max_step, xtol_time, samples,
     max_steps, max_periods, max_orbit, period_tolerance, results,
 ):
-    """Same as :func:`_periodic_points` on the calling thread."""
+    """Same as :func:`periodic_points` on the calling thread."""
     for i in range(omega.shape[0]):
         _periodic_point(
             p, omega[i], amplitude[i], y0[i], rtol, atol, scale[i], fixed_step[i],

@@ -12,15 +12,17 @@ maximum, so it is bracketed on an interval where ``U`` is monotone and found by
 safeguarded Newton iteration. Stick releases are closed form (an arc of phase on
 which ``s tau - cs n > 0``).
 
-Everything here is private but :func:`sin_minus_x`, which the orbit kernel shares:
-:mod:`study.solvers.exact` validates, allocates and calls :func:`_steady_state`. Results are
-written to ``out`` arrays; nothing is allocated per point on the common (stick-slip)
-path.
+:mod:`study.solvers.exact` validates, allocates and calls the drivers
+:func:`solve_points` (all diagnostics) and :func:`velocity_points` (velocity and status
+only), with their arguments grouped in the named tuples below; :func:`sin_minus_x` is
+shared with the orbit kernel. Results are written to ``out`` arrays; nothing is
+allocated per point on the common (stick-slip) path.
 """
 
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit, prange
@@ -61,6 +63,35 @@ RELEASE_MARGIN = 1.0 + 8.0 * EPS
 # the absolute values of its terms (its rounding error), or once the Newton correction
 # or the bracket is below this many ulps of the phase (see _slip).
 SLIP_END_ULPS = 4.0
+
+#: The release and slip amplitudes ``A_+, A_-, B_+, B_-`` [m s-2] of
+#: ``study.model.forces`` at each point (complex128 arrays).
+Amplitudes = namedtuple("Amplitudes", ("a_plus", "a_minus", "b_plus", "b_minus"))
+#: The friction levels ``cs g`` (``static``) and ``ck g`` (``kinetic``) [m s-2].
+FrictionLevels = namedtuple("FrictionLevels", ("static", "kinetic"))
+#: The output arrays of :func:`solve_points`, one value per point: velocity [m s-1],
+#: status and reason codes (int8), slips per period [1], forward and backward slip
+#: fractions [1], orbit period in drive periods (int32).
+SteadyOutputs = namedtuple(
+    "SteadyOutputs",
+    ("velocity", "status", "reason", "slips", "forward", "backward", "period"))
+#: The structure as the velocity path reads it, operation for operation as numpy
+#: evaluates ``study.model`` (see :func:`_lift_off`): ``Structure.omega0`` [rad s-1],
+#: ``1 / Q``, ``M``, numpy's cos and sin of the tilt, ``cs``, ``ck``, ``g`` [m s-2].
+ForceConstants = namedtuple(
+    "ForceConstants",
+    ("w0", "inv_q", "mass_ratio", "cos_alpha", "sin_alpha", "static_friction",
+     "kinetic_friction", "gravity"))
+#: The output arrays of :func:`velocity_points`: velocity [m s-1] and status (int8).
+VelocityOutputs = namedtuple("VelocityOutputs", ("velocity", "status"))
+# Per-point constants of the slips and releases (see _constants): the slip's friction
+# level c = ck g, the slip amplitudes h, phases phi and half-widths gamma of the
+# increasing stretch for each sign, whether each release happens, and its arc's entry
+# and width [rad].
+SlipConstants = namedtuple(
+    "SlipConstants",
+    ("c", "h_p", "phi_p", "gamma_p", "h_m", "phi_m", "gamma_m",
+     "ok_p", "entry_p", "width_p", "ok_m", "entry_m", "width_m"))
 
 # Round-trip status of a sequence of slips.
 _ROUND_OK = 0
@@ -197,20 +228,19 @@ def _next_release(theta, excluded, k):
     ``excluded`` (``+1``, ``-1`` or ``0``) forbids an immediate release of that sign,
     used after a slip of that sign that could not move.
     """
-    (_c, _hp, _pp, _gp, _hm, _pm, _gm, ok_p, entry_p, width_p, ok_m, entry_m, width_m) = k
     best_wait = np.inf
     best_sign = 0
-    if ok_p:
-        d = _mod_two_pi(theta - entry_p)
-        if d < width_p - EXIT_TOLERANCE and excluded != 1:
+    if k.ok_p:
+        d = _mod_two_pi(theta - k.entry_p)
+        if d < k.width_p - EXIT_TOLERANCE and excluded != 1:
             wait = 0.0
         else:
             wait = TWO_PI - d
         best_wait = wait
         best_sign = 1
-    if ok_m:
-        d = _mod_two_pi(theta - entry_m)
-        if d < width_m - EXIT_TOLERANCE and excluded != -1:
+    if k.ok_m:
+        d = _mod_two_pi(theta - k.entry_m)
+        if d < k.width_m - EXIT_TOLERANCE and excluded != -1:
             wait = 0.0
         else:
             wait = TWO_PI - d
@@ -232,11 +262,12 @@ def _advance(theta, sign, k):
         is ``integral of U`` over the slip (positive), ``derivative`` is
         ``d theta_end / d theta_start`` for the circle map.
     """
-    c, h_p, phi_p, gamma_p, h_m, phi_m, gamma_m = k[0], k[1], k[2], k[3], k[4], k[5], k[6]
     if sign > 0:
-        duration, distance, slope0, slope1, moved = _slip(theta + phi_p, c, h_p, gamma_p)
+        duration, distance, slope0, slope1, moved = _slip(theta + k.phi_p, k.c, k.h_p,
+                                                          k.gamma_p)
     else:
-        duration, distance, slope0, slope1, moved = _slip(theta + phi_m, c, h_m, gamma_m)
+        duration, distance, slope0, slope1, moved = _slip(theta + k.phi_m, k.c, k.h_m,
+                                                          k.gamma_m)
     if moved:
         theta_end = theta + duration
         wait, sign_next = _next_release(theta_end, 0, k)
@@ -415,7 +446,7 @@ def _circle_map(theta, k, max_rounds, max_events):
 
 @njit(cache=True, nogil=True)
 def _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g):
-    """Per-point constants: slip dynamics and release arcs for both signs."""
+    """Per-point :data:`SlipConstants`: slip dynamics and release arcs for both signs."""
     c = ck_g
     h_p = abs(b_plus)
     h_m = abs(b_minus)
@@ -442,13 +473,15 @@ def _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g):
         beta = math.atan2(math.sqrt((r_m - cs_g) * (r_m + cs_g)), cs_g)
         entry_m = _mod_two_pi(-beta - math.atan2(a_minus.imag, a_minus.real))
         width_m = 2.0 * beta
-    return (c, h_p, phi_p, gamma_p, h_m, phi_m, gamma_m,
-            ok_p, entry_p, width_p, ok_m, entry_m, width_m)
+    return SlipConstants(c, h_p, phi_p, gamma_p, h_m, phi_m, gamma_m,
+                         ok_p, entry_p, width_p, ok_m, entry_m, width_m)
 
 
 @njit(cache=True, nogil=True)
-def _solve_point(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_rounds):
-    """Periodic orbit reached from rest at phase 0, for one drive point.
+def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget):
+    """Periodic orbit reached from rest at phase 0, for one drive point of amplitudes
+    ``a_plus`` ... ``b_minus`` [m s-2], friction ``levels`` (:data:`FrictionLevels`),
+    within ``budget`` (a :data:`~study.kernels.budget.Budget`).
 
     Returns
     -------
@@ -458,8 +491,9 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_r
         fractions of the period spent slipping each way, ``period`` the orbit's
         period in drive periods.
     """
-    k = _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g)
-    if not k[7] and not k[10]:
+    max_events = budget.max_events
+    k = _constants(a_plus, a_minus, b_plus, b_minus, levels.static, levels.kinetic)
+    if not k.ok_p and not k.ok_m:
         return STATIC, REASON_NONE, 0.0, 0.0, 0.0, 0.0, 0
     wait, sign = _next_release(0.0, 0, k)
     theta = wait
@@ -500,7 +534,7 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_r
                 rec_m = now
         elif since_stick >= CIRCLE_MAP_AFTER and sign > 0:
             flag, theta_c, sign_c, mean, per, fwd, bwd, period = _circle_map(
-                theta, k, max_rounds, max_events
+                theta, k, budget.max_map_iterations, max_events
             )
             if flag == _ROUND_OK:
                 return CONTINUOUS_SLIDING, REASON_NONE, mean, per, fwd, bwd, period
@@ -530,37 +564,34 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_r
 
 
 @njit(cache=True, nogil=True)
-def _solve_into(
-    i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
-    max_events, max_rounds,
-    velocity, status, reason, slips, forward, backward, period,
-):
-    """Solve point ``i`` and write its results into the output arrays."""
+def _solve_into(i, amplitudes, lifted, omega, levels, budget, out):
+    """Solve point ``i`` and write its results into the :data:`SteadyOutputs` ``out``."""
     if lifted[i]:
-        velocity[i] = np.nan
-        status[i] = LIFT_OFF
-        reason[i] = REASON_NONE
-        slips[i] = np.nan
-        forward[i] = np.nan
-        backward[i] = np.nan
-        period[i] = 0
+        out.velocity[i] = np.nan
+        out.status[i] = LIFT_OFF
+        out.reason[i] = REASON_NONE
+        out.slips[i] = np.nan
+        out.forward[i] = np.nan
+        out.backward[i] = np.nan
+        out.period[i] = 0
         return
     st, why, mean, per, fwd, bwd, n_period = _solve_point(
-        a_plus[i], a_minus[i], b_plus[i], b_minus[i], cs_g, ck_g, max_events, max_rounds
+        amplitudes.a_plus[i], amplitudes.a_minus[i], amplitudes.b_plus[i],
+        amplitudes.b_minus[i], levels, budget
     )
-    status[i] = st
-    reason[i] = why
+    out.status[i] = st
+    out.reason[i] = why
     if st == NOT_CONVERGED:
-        velocity[i] = np.nan
-        slips[i] = np.nan
-        forward[i] = np.nan
-        backward[i] = np.nan
+        out.velocity[i] = np.nan
+        out.slips[i] = np.nan
+        out.forward[i] = np.nan
+        out.backward[i] = np.nan
     else:
-        velocity[i] = mean / omega[i]
-        slips[i] = per
-        forward[i] = fwd
-        backward[i] = bwd
-    period[i] = n_period
+        out.velocity[i] = mean / omega[i]
+        out.slips[i] = per
+        out.forward[i] = fwd
+        out.backward[i] = bwd
+    out.period[i] = n_period
 
 
 #: Points a thread takes at a time in the parallel kernels: whole cache lines of every
@@ -569,12 +600,12 @@ POINT_BLOCK = 64
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def _steady_state(
-    a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
-    max_events, max_rounds,
-    velocity, status, reason, slips, forward, backward, period,
-):
-    """Fill the output arrays, in parallel over points (threads, GIL released).
+def solve_points(amplitudes, lifted, omega, levels, budget, out):
+    """Fill the :data:`SteadyOutputs` ``out`` at points of :data:`Amplitudes`
+    ``amplitudes``, ``lifted`` (past lift-off) and ``omega`` [rad s-1], friction
+    ``levels`` (:data:`FrictionLevels`), within ``budget`` (a
+    :data:`~study.kernels.budget.Budget`), in parallel over points (threads, GIL
+    released).
 
     Points are dealt to threads in blocks of :data:`POINT_BLOCK` consecutive points,
     the blocks interleaved over the lanes: the cost of a point depends on its regime,
@@ -583,35 +614,24 @@ def _steady_state(
     would make every write miss the cache (a lane touches one value of each cache
     line, which is evicted before the next lane comes to it).
     """
-    n = a_plus.shape[0]
+    n = omega.shape[0]
     blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
     lanes = min(blocks, 256)
     for lane in prange(lanes):
         for block in range(lane, blocks, lanes):
             for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
-                _solve_into(
-                    i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
-                    max_events, max_rounds, velocity, status, reason, slips, forward,
-                    backward, period,
-                )
+                _solve_into(i, amplitudes, lifted, omega, levels, budget, out)
 
 
 @njit(cache=True, nogil=True)
-def _steady_state_serial(
-    a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
-    max_events, max_rounds,
-    velocity, status, reason, slips, forward, backward, period,
-):
-    """Same as :func:`_steady_state` on one thread: no thread-pool launch for small inputs."""
-    for i in range(a_plus.shape[0]):
-        _solve_into(
-            i, a_plus, a_minus, b_plus, b_minus, lifted, omega, cs_g, ck_g,
-            max_events, max_rounds, velocity, status, reason, slips, forward, backward, period,
-        )
+def solve_points_serial(amplitudes, lifted, omega, levels, budget, out):
+    """Same as :func:`solve_points` on one thread: no thread-pool launch for small inputs."""
+    for i in range(omega.shape[0]):
+        _solve_into(i, amplitudes, lifted, omega, levels, budget, out)
 
 
 # Velocity only (``study.solvers.exact.steady_velocity``): the same orbits, nothing else,
-# dealt to threads in blocks as in _steady_state.
+# dealt to threads in blocks as in solve_points.
 # Squares of the normal doubles in (1e-140, 1e140): products of three of them are
 # still normal, so their rounding error is a few ulps.
 SQUARES_LOW = 1e-280
@@ -624,16 +644,20 @@ SURE_BELOW = 1.0 - 1e-13
 
 
 @njit(cache=True, nogil=True)
-def _lift_off(f, a, w0, inv_q, m, cos_a, g):
+def _lift_off(f, a, constants):
     """The mode coupling ``k = w^2 M cos(alpha) G`` at one point and the lift-off
     test ``a > lift_off_acceleration`` (1, 0 or LIFT_UNDECIDED), operation for operation
     as numpy evaluates ``study.model`` there (see :func:`_forces`).
 
     numpy multiplies a real by a complex as ``(x + 0j) * z`` and divides by a real
     ``q`` as ``z * (1 / q)`` (Smith's algorithm); the zero products are kept so that
-    signed zeros come out as numpy's. ``inv_q = 1 / Q``, ``m = M``, ``cos_a`` is
-    numpy's ``cos`` of the tilt, ``w0`` is ``Structure.omega0``.
+    signed zeros come out as numpy's. ``constants`` are :data:`ForceConstants`.
     """
+    w0 = constants.w0
+    inv_q = constants.inv_q
+    m = constants.mass_ratio
+    cos_a = constants.cos_alpha
+    g = constants.gravity
     w = TWO_PI * f
     # G = 1 / (w0^2 - w^2 + 1j * w0 * w / Q)
     d_re = w0 * w0 - w * w + 0.0
@@ -698,66 +722,66 @@ def _forces(a, k_re, k_im, one_re, one_im, sin_a, cs, ck):
 
 
 @njit(cache=True, nogil=True)
-def _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                   max_events, max_rounds, velocity, status, given):
-    """Solve point ``i`` for its velocity and status only.
+def _velocity_into(i, f, a, constants, levels, budget, out, given):
+    """Solve point ``i`` for its velocity and status only, into the
+    :data:`VelocityOutputs` ``out``.
 
     ``given`` is the lift-off decision if known (0 or 1), else LIFT_UNDECIDED: then a
     point too near the lift-off threshold to decide here gets that status (velocity
     NaN), to be solved again with the decision numpy makes.
     """
-    lift, w, k_re, k_im, one_re, one_im = _lift_off(f[i], a[i], w0, inv_q, m, cos_a, g)
+    lift, w, k_re, k_im, one_re, one_im = _lift_off(f[i], a[i], constants)
     if given != LIFT_UNDECIDED:
         lift = given
     if lift != 0:
-        velocity[i] = np.nan
-        status[i] = LIFT_OFF if lift == 1 else LIFT_UNDECIDED
+        out.velocity[i] = np.nan
+        out.status[i] = LIFT_OFF if lift == 1 else LIFT_UNDECIDED
         return
-    a_plus, a_minus, b_plus, b_minus = _forces(a[i], k_re, k_im, one_re, one_im, sin_a, cs, ck)
+    a_plus, a_minus, b_plus, b_minus = _forces(
+        a[i], k_re, k_im, one_re, one_im, constants.sin_alpha, constants.static_friction,
+        constants.kinetic_friction)
     # Most points of a map never slip: decided before the slip constants are computed,
     # on squares where that is sure (else _solve_point decides, as steady_state does).
+    cs_g = levels.static
     level2 = cs_g * cs_g * SURE_BELOW
     p2 = a_plus.real * a_plus.real + a_plus.imag * a_plus.imag
     m2 = a_minus.real * a_minus.real + a_minus.imag * a_minus.imag
     if p2 < level2 and m2 < level2 and SQUARES_LOW < level2 < SQUARES_HIGH:
-        velocity[i] = 0.0
-        status[i] = STATIC
+        out.velocity[i] = 0.0
+        out.status[i] = STATIC
         return
     # The diagnostics _solve_point also returns are dead code here, and compiled away.
-    st, _, mean, _, _, _, _ = _solve_point(
-        a_plus, a_minus, b_plus, b_minus, cs_g, ck_g, max_events, max_rounds
-    )
-    status[i] = st
-    velocity[i] = np.nan if st == NOT_CONVERGED else mean / w
+    st, _, mean, _, _, _, _ = _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget)
+    out.status[i] = st
+    out.velocity[i] = np.nan if st == NOT_CONVERGED else mean / w
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def _steady_velocity(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                     max_events, max_rounds, velocity, status):
-    """Velocity and status of every point of the flat ``f``, ``a``, in parallel."""
+def velocity_points(f, a, constants, levels, budget, out):
+    """Velocity and status of every point of the flat ``f`` [Hz], ``a`` [m s-2] into the
+    :data:`VelocityOutputs` ``out``, in parallel; ``constants`` the
+    :data:`ForceConstants`, ``levels`` the :data:`FrictionLevels`, ``budget`` a
+    :data:`~study.kernels.budget.Budget`. Points too near lift-off to decide here get
+    the status ``LIFT_UNDECIDED`` (see :func:`velocity_points_given`)."""
     n = f.shape[0]
     blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
     lanes = min(blocks, 256)
     for lane in prange(lanes):
         for block in range(lane, blocks, lanes):
             for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
-                _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                               max_events, max_rounds, velocity, status, LIFT_UNDECIDED)
+                _velocity_into(i, f, a, constants, levels, budget, out, LIFT_UNDECIDED)
 
 
 @njit(cache=True, nogil=True)
-def _steady_velocity_serial(f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                            max_events, max_rounds, velocity, status):
-    """Same as :func:`_steady_velocity` on one thread."""
+def velocity_points_serial(f, a, constants, levels, budget, out):
+    """Same as :func:`velocity_points` on one thread."""
     for i in range(f.shape[0]):
-        _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                       max_events, max_rounds, velocity, status, LIFT_UNDECIDED)
+        _velocity_into(i, f, a, constants, levels, budget, out, LIFT_UNDECIDED)
 
 
 @njit(cache=True, nogil=True)
-def _steady_velocity_given(f, a, lifted, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                           max_events, max_rounds, velocity, status):
-    """Same as :func:`_steady_velocity_serial` with the lift-off decisions given."""
+def velocity_points_given(f, a, lifted, constants, levels, budget, out):
+    """Same as :func:`velocity_points_serial` with the lift-off decisions ``lifted``
+    given."""
     for i in range(f.shape[0]):
-        _velocity_into(i, f, a, w0, inv_q, m, cos_a, sin_a, cs, ck, g, cs_g, ck_g,
-                       max_events, max_rounds, velocity, status, 1 if lifted[i] else 0)
+        _velocity_into(i, f, a, constants, levels, budget, out, 1 if lifted[i] else 0)

@@ -494,7 +494,7 @@ def _mode_after_rest(plates, disk, drive, y, work):
 
 
 @njit(cache=True, nogil=True)
-def _integrate(
+def integrate(
     plates, disk, seg_t0, seg_omega, seg_a, seg_phase0, seg_end,
     y, mode_box, t_box, t_stop,
     rtol, atol, scale, max_step, xtol_time, samples, max_steps,

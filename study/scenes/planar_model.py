@@ -639,7 +639,7 @@ def simulate_planar(
     code = _kernel.RUN_DONE
     for j, stop in enumerate(stops):
         path_before = y[_kernel.PATH]
-        code = _kernel._integrate(
+        code = _kernel.integrate(
             plates, disk_vector, schedule.starts, omega, schedule.acceleration,
             schedule.start_phases_rad, schedule.ends, y, mode_box, t_box, float(stop),
             settings.tolerance, settings.tolerance, scale, settings.max_step * shortest,
@@ -831,7 +831,7 @@ def periodic_motion(
         stats = np.zeros(5)
         # Time restarts each period (phase 2 pi k is phase 0): no loss of precision.
         t_box[0] = 0.0
-        code = _kernel._integrate(
+        code = _kernel.integrate(
             plates, disk_vector, *seg, y, mode_box, t_box, period,
             settings.tolerance, settings.tolerance, scale, settings.max_step * period,
             settings.event_tolerance * period, settings.samples_per_step, settings.max_steps,

@@ -1,4 +1,13 @@
-"""Public steady-state solver: validates, allocates, calls the numba kernel."""
+"""Public exact steady-state solvers: validate, allocate, call the numba kernels.
+
+Each function here checks its arguments, flattens and allocates the arrays, packs the
+kernel's named arguments (:class:`study.kernels.budget.Budget`, the structure vector,
+the one-way kernel's named tuples) and calls the kernel's driver, which loops over the
+points (:mod:`study.kernels.one_way` for the one-way coupling,
+:mod:`study.kernels.two_way.points` and :mod:`study.kernels.two_way.attractors` for the
+orbit with the mode as a state). Results are read from the kernels' outputs by the
+names they declare.
+"""
 
 from __future__ import annotations
 
@@ -8,9 +17,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from study.kernels import one_way as _kernel
+from study.kernels import one_way as one_way_kernel
 from study.kernels import structure_vector as sv
-from study.kernels import two_way as _orbit
+from study.kernels.budget import Budget
+from study.kernels.two_way import attractors as attractor_kernel
+from study.kernels.two_way import points as orbit_kernel
 from study.model import (
     as_acceleration,
     as_frequency,
@@ -175,7 +186,12 @@ def structure_vector(structure: Structure, coupling: str) -> NDArray[np.float64]
     return vector
 
 
-def _orbit_state(
+def kernel_budget(settings: SolverSettings) -> Budget:
+    """The kernels' :class:`~study.kernels.budget.Budget` of ``settings``."""
+    return Budget(int(settings.max_events), int(settings.max_map_iterations))
+
+
+def _orbit_table(
     structure: Structure,
     f_flat: NDArray[np.float64],
     a_flat: NDArray[np.float64],
@@ -183,17 +199,94 @@ def _orbit_state(
     settings: SolverSettings,
     parallel: bool | None,
 ) -> NDArray[np.float64]:
-    """Rows ``(status, reason, velocity, slips, forward, backward, period, multiplier,
-    z...)`` of the orbit kernel at each point."""
+    """Rows of the orbit kernel (:data:`study.kernels.two_way.points.OUTPUT_COLUMNS`)
+    at each point."""
     lifted = a_flat > lift_off_acceleration(structure, f_flat)
     omega = 2.0 * np.pi * f_flat
-    out = np.empty((f_flat.size, _orbit.N_OUT))
+    out = np.empty((f_flat.size, orbit_kernel.N_OUT))
     if parallel is None:
         parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
-    kernel = _orbit._solve_points if parallel else _orbit._solve_points_serial
+    kernel = orbit_kernel.solve_points if parallel else orbit_kernel.solve_points_serial
     kernel(structure_vector(structure, coupling), omega, a_flat, lifted,
-           int(settings.max_events), int(settings.max_map_iterations), out)
+           kernel_budget(settings), out)
     return out
+
+
+def _orbit_steady_state(
+    structure: Structure,
+    f_flat: NDArray[np.float64],
+    a_flat: NDArray[np.float64],
+    shape: tuple[int, ...],
+    coupling: str,
+    settings: SolverSettings,
+    parallel: bool | None,
+) -> SteadyState:
+    """:func:`steady_state` by the orbit kernel (the mode as a state) on flat ``f``, ``a``."""
+    out = _orbit_table(structure, f_flat, a_flat, coupling, settings, parallel)
+
+    def column(index: int, dtype: type | None = None) -> Any:
+        values = out[:, index] if dtype is None else out[:, index].astype(dtype)
+        return scalar_if_0d(values.reshape(shape))
+
+    return SteadyState(
+        velocity=column(orbit_kernel.OUT_VELOCITY),
+        status=column(orbit_kernel.OUT_STATUS, np.int8),
+        reason=column(orbit_kernel.OUT_REASON, np.int8),
+        slips_per_period=column(orbit_kernel.OUT_SLIPS),
+        forward_fraction=column(orbit_kernel.OUT_FORWARD),
+        backward_fraction=column(orbit_kernel.OUT_BACKWARD),
+        orbit_period=column(orbit_kernel.OUT_PERIOD, np.int32),
+        floquet_multiplier=column(orbit_kernel.OUT_MULTIPLIER),
+    )
+
+
+def _friction_levels(structure: Structure) -> Any:
+    """The one-way kernel's :data:`~study.kernels.one_way.FrictionLevels`."""
+    return one_way_kernel.FrictionLevels(structure.cs * structure.g,
+                                         structure.ck * structure.g)
+
+
+def _one_way_steady_state(
+    structure: Structure,
+    f_flat: NDArray[np.float64],
+    a_flat: NDArray[np.float64],
+    shape: tuple[int, ...],
+    settings: SolverSettings,
+    parallel: bool | None,
+) -> SteadyState:
+    """:func:`steady_state` by the one-way kernel on flat ``f``, ``a``."""
+    a_plus, a_minus = release_amplitudes(structure, f_flat, a_flat)
+    b_plus, b_minus = slip_amplitudes(structure, f_flat, a_flat)
+    lifted = a_flat > lift_off_acceleration(structure, f_flat)
+    omega = 2.0 * np.pi * f_flat
+    n = f_flat.size
+    out = one_way_kernel.SteadyOutputs(
+        velocity=np.empty(n),
+        status=np.empty(n, dtype=np.int8),
+        reason=np.empty(n, dtype=np.int8),
+        slips=np.empty(n),
+        forward=np.empty(n),
+        backward=np.empty(n),
+        period=np.empty(n, dtype=np.int32),
+    )
+    amplitudes = one_way_kernel.Amplitudes(
+        *(np.ascontiguousarray(x, dtype=np.complex128)
+          for x in (a_plus, a_minus, b_plus, b_minus)))
+    # Launching the thread pool costs milliseconds: small inputs run on this thread.
+    if parallel is None:
+        parallel = n >= PARALLEL_THRESHOLD
+    kernel = one_way_kernel.solve_points if parallel else one_way_kernel.solve_points_serial
+    kernel(amplitudes, lifted, omega, _friction_levels(structure), kernel_budget(settings),
+           out)
+    return SteadyState(
+        velocity=scalar_if_0d(out.velocity.reshape(shape)),
+        status=scalar_if_0d(out.status.reshape(shape)),
+        reason=scalar_if_0d(out.reason.reshape(shape)),
+        slips_per_period=scalar_if_0d(out.slips.reshape(shape)),
+        forward_fraction=scalar_if_0d(out.forward.reshape(shape)),
+        backward_fraction=scalar_if_0d(out.backward.reshape(shape)),
+        orbit_period=scalar_if_0d(out.period.reshape(shape)),
+    )
 
 
 def steady_state(
@@ -261,61 +354,9 @@ def steady_state(
     f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
     a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
     if coupling == "two-way":
-        out = _orbit_state(structure, f_flat, a_flat, coupling, settings, parallel)
-        return SteadyState(
-            velocity=scalar_if_0d(out[:, 2].reshape(shape)),
-            status=scalar_if_0d(out[:, 0].astype(np.int8).reshape(shape)),
-            reason=scalar_if_0d(out[:, 1].astype(np.int8).reshape(shape)),
-            slips_per_period=scalar_if_0d(out[:, 3].reshape(shape)),
-            forward_fraction=scalar_if_0d(out[:, 4].reshape(shape)),
-            backward_fraction=scalar_if_0d(out[:, 5].reshape(shape)),
-            orbit_period=scalar_if_0d(out[:, 6].astype(np.int32).reshape(shape)),
-            floquet_multiplier=scalar_if_0d(out[:, 7].reshape(shape)),
-        )
-    a_plus, a_minus = release_amplitudes(structure, f_flat, a_flat)
-    b_plus, b_minus = slip_amplitudes(structure, f_flat, a_flat)
-    lifted = a_flat > lift_off_acceleration(structure, f_flat)
-    omega = 2.0 * np.pi * f_flat
-    n = f_flat.size
-    velocity = np.empty(n)
-    status = np.empty(n, dtype=np.int8)
-    reason = np.empty(n, dtype=np.int8)
-    slips = np.empty(n)
-    forward = np.empty(n)
-    backward = np.empty(n)
-    period = np.empty(n, dtype=np.int32)
-    # Launching the thread pool costs milliseconds: small inputs run on this thread.
-    if parallel is None:
-        parallel = n >= PARALLEL_THRESHOLD
-    kernel = _kernel._steady_state if parallel else _kernel._steady_state_serial
-    kernel(
-        np.ascontiguousarray(a_plus, dtype=np.complex128),
-        np.ascontiguousarray(a_minus, dtype=np.complex128),
-        np.ascontiguousarray(b_plus, dtype=np.complex128),
-        np.ascontiguousarray(b_minus, dtype=np.complex128),
-        lifted,
-        omega,
-        structure.cs * structure.g,
-        structure.ck * structure.g,
-        int(settings.max_events),
-        int(settings.max_map_iterations),
-        velocity,
-        status,
-        reason,
-        slips,
-        forward,
-        backward,
-        period,
-    )
-    return SteadyState(
-        velocity=scalar_if_0d(velocity.reshape(shape)),
-        status=scalar_if_0d(status.reshape(shape)),
-        reason=scalar_if_0d(reason.reshape(shape)),
-        slips_per_period=scalar_if_0d(slips.reshape(shape)),
-        forward_fraction=scalar_if_0d(forward.reshape(shape)),
-        backward_fraction=scalar_if_0d(backward.reshape(shape)),
-        orbit_period=scalar_if_0d(period.reshape(shape)),
-    )
+        return _orbit_steady_state(structure, f_flat, a_flat, shape, coupling, settings,
+                                   parallel)
+    return _one_way_steady_state(structure, f_flat, a_flat, shape, settings, parallel)
 
 
 @dataclass(frozen=True)
@@ -341,7 +382,8 @@ class Attractors:
 
 #: Starting states of :func:`attractors`: rest at each drive phase [periods], with the
 #: mode on each multiple of its steady response.
-ATTRACTOR_STARTS = {"phases": _orbit.START_PHASES, "mode_factors": _orbit.START_FACTORS}
+ATTRACTOR_STARTS = {"phases": attractor_kernel.START_PHASES,
+                    "mode_factors": attractor_kernel.START_FACTORS}
 
 
 def attractors(
@@ -390,18 +432,19 @@ def attractors(
     f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
     a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
     lifted = a_flat > lift_off_acceleration(structure, f_flat)
-    out = np.empty((f_flat.size, 3))
+    out = np.empty((f_flat.size, attractor_kernel.N_ATTRACTOR_OUT))
     if parallel is None:
         parallel = f_flat.size >= 16
     vector = structure_vector(structure, coupling)
     omega = 2.0 * np.pi * f_flat
-    kernel = _orbit._attractors_points if parallel else _orbit._attractors_points_serial
-    kernel(vector, omega, a_flat, lifted, int(settings.max_events),
-           int(settings.max_map_iterations), out)
+    kernel = (attractor_kernel.attractors_points if parallel
+              else attractor_kernel.attractors_points_serial)
+    kernel(vector, omega, a_flat, lifted, kernel_budget(settings), out)
     return Attractors(
-        count=scalar_if_0d(out[:, 0].astype(np.int32).reshape(shape)),
-        velocity_spread=scalar_if_0d(out[:, 1].reshape(shape)),
-        starts_converged=scalar_if_0d(out[:, 2].astype(np.int32).reshape(shape)),
+        count=scalar_if_0d(out[:, attractor_kernel.OUT_COUNT].astype(np.int32).reshape(shape)),
+        velocity_spread=scalar_if_0d(out[:, attractor_kernel.OUT_SPREAD].reshape(shape)),
+        starts_converged=scalar_if_0d(
+            out[:, attractor_kernel.OUT_STARTS_CONVERGED].astype(np.int32).reshape(shape)),
     )
 
 
@@ -487,29 +530,27 @@ def _velocity_only(
     diagnostics: the same velocity and status, bit for bit, without the temporaries.
     """
     n = f.size
-    velocity = np.empty(n)
-    status = np.empty(n, dtype=np.int8)
-    kernel = (_kernel._steady_velocity if n >= PARALLEL_THRESHOLD
-              else _kernel._steady_velocity_serial)
-    constants = (
-        structure.omega0, 1.0 / structure.Q, structure.M,
+    out = one_way_kernel.VelocityOutputs(np.empty(n), np.empty(n, dtype=np.int8))
+    kernel = (one_way_kernel.velocity_points if n >= PARALLEL_THRESHOLD
+              else one_way_kernel.velocity_points_serial)
+    constants = one_way_kernel.ForceConstants(
+        float(structure.omega0), 1.0 / structure.Q, float(structure.M),
         float(np.cos(structure.alpha_rad)), float(np.sin(structure.alpha_rad)),
-        structure.cs, structure.ck, structure.g,
-        structure.cs * structure.g, structure.ck * structure.g,
-        int(settings.max_events), int(settings.max_map_iterations),
+        float(structure.cs), float(structure.ck), float(structure.g),
     )
-    kernel(f, a, *constants, velocity, status)
+    levels = _friction_levels(structure)
+    budget = kernel_budget(settings)
+    kernel(f, a, constants, levels, budget, out)
     # Points within 1e-13 of the lift-off threshold: numpy's rounding of |z| decides,
     # as in steady_state.
-    undecided = np.flatnonzero(status == _kernel.LIFT_UNDECIDED)
+    undecided = np.flatnonzero(out.status == one_way_kernel.LIFT_UNDECIDED)
     if undecided.size:
         f_u, a_u = f[undecided], a[undecided]
-        v_u = np.empty(undecided.size)
-        s_u = np.empty(undecided.size, dtype=np.int8)
-        _kernel._steady_velocity_given(
-            f_u, a_u, a_u > lift_off_acceleration(structure, f_u), *constants, v_u, s_u
-        )
-        velocity[undecided] = v_u
-        status[undecided] = s_u
-    return velocity, status
-
+        out_u = one_way_kernel.VelocityOutputs(np.empty(undecided.size),
+                                               np.empty(undecided.size, dtype=np.int8))
+        one_way_kernel.velocity_points_given(
+            f_u, a_u, a_u > lift_off_acceleration(structure, f_u), constants, levels, budget,
+            out_u)
+        out.velocity[undecided] = out_u.velocity
+        out.status[undecided] = out_u.status
+    return out.velocity, out.status

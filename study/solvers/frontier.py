@@ -180,7 +180,28 @@ def frontier_from_grid(
     v_lo = velocity[i_f, i_a].copy()
     v_hi = velocity[i_f + 1, i_a].copy()
     scale = np.maximum(np.abs(v_lo), np.abs(v_hi))
-    a_points = a[i_a]
+    lo, hi, v_lo, v_hi = _bisect(structure, (lo, hi, v_lo, v_hi), a[i_a], tolerance, settings,
+                                 solve)
+    point = 0.5 * (lo + hi)
+    jump = np.abs(v_hi - v_lo) > 1e-6 * scale
+    direction = np.sign(v_hi).astype(np.int8)
+    return _by_acceleration(a.size, i_a, point, jump, hi - lo, direction)
+
+
+def _bisect(
+    structure: Structure,
+    bracket: tuple[NDArray[np.float64], ...],
+    a_points: NDArray[np.float64],
+    tolerance: float,
+    settings: SolverSettings,
+    solve: Callable[[Structure, NDArray[np.float64], NDArray[np.float64]], SteadyState]
+    | None,
+) -> tuple[NDArray[np.float64], ...]:
+    """Bisect every bracket ``bracket = (lo, hi, v_lo, v_hi)`` of a sign change of the
+    velocity (ends ``[lo, hi]`` [Hz], velocities there [m s-1], at ``a_points``
+    [m s-2]) together, until all are narrower than ``tolerance`` [Hz]; returns the
+    final ``lo, hi, v_lo, v_hi``."""
+    lo, hi, v_lo, v_hi = bracket
     while lo.size and np.max(hi - lo) > tolerance:
         mid = 0.5 * (lo + hi)
         if solve is None:
@@ -197,22 +218,32 @@ def frontier_from_grid(
         v_lo = np.where(take_lo, v_mid, v_lo)
         hi = np.where(take_hi, mid, hi)
         v_hi = np.where(take_hi, np.where(valid, v_mid, v_hi), v_hi)
-    point = 0.5 * (lo + hi)
-    jump = np.abs(v_hi - v_lo) > 1e-6 * scale
-    direction = np.sign(v_hi).astype(np.int8)
-    counts = np.bincount(i_a, minlength=a.size)
+    return lo, hi, v_lo, v_hi
+
+
+def _by_acceleration(
+    n_a: int,
+    i_a: NDArray[np.intp],
+    point: NDArray[np.float64],
+    jump: NDArray[np.bool_],
+    width: NDArray[np.float64],
+    direction: NDArray[np.int8],
+) -> Frontier:
+    """The frontier points (acceleration index ``i_a`` of each) as a :class:`Frontier`:
+    one row per acceleration, its branches ascending in frequency, NaN/0 padded."""
+    counts = np.bincount(i_a, minlength=n_a)
     n_branch = max(1, int(counts.max(initial=0)))
-    frequency = np.full((a.size, n_branch), np.nan)
-    kind = np.zeros((a.size, n_branch), dtype=np.int8)
-    width = np.full((a.size, n_branch), np.nan)
-    directions = np.zeros((a.size, n_branch), dtype=np.int8)
+    frequency = np.full((n_a, n_branch), np.nan)
+    kind = np.zeros((n_a, n_branch), dtype=np.int8)
+    widths = np.full((n_a, n_branch), np.nan)
+    directions = np.zeros((n_a, n_branch), dtype=np.int8)
     order = np.lexsort((point, i_a))
-    slot = np.zeros(a.size, dtype=int)
+    slot = np.zeros(n_a, dtype=int)
     for k in order:
         j = i_a[k]
         frequency[j, slot[j]] = point[k]
         kind[j, slot[j]] = FRONTIER_JUMP if jump[k] else FRONTIER_CROSSING
-        width[j, slot[j]] = hi[k] - lo[k]
+        widths[j, slot[j]] = width[k]
         directions[j, slot[j]] = direction[k]
         slot[j] += 1
-    return Frontier(frequency, kind, width, directions)
+    return Frontier(frequency, kind, widths, directions)

@@ -447,7 +447,7 @@ def simulate(
     ev_y = np.empty((max_events, 4))
     ev_box = np.zeros(1, dtype=np.int64)
     stats = np.zeros(6)
-    code = _kernel._integrate(
+    code = _kernel.integrate(
         p, schedule.starts, omega, schedule.acceleration, schedule.start_phases_rad,
         schedule.ends, y, mode_box, t_box, end,
         settings.tolerance, settings.tolerance, scale, fixed, settings.max_step * shortest,
@@ -553,7 +553,7 @@ def integrated_steady_state(
     results = np.zeros((n, 9))
     if parallel is None:
         parallel = n >= PARALLEL_THRESHOLD // 64
-    kernel = _kernel._periodic_points if parallel else _kernel._periodic_points_serial
+    kernel = _kernel.periodic_points if parallel else _kernel.periodic_points_serial
     kernel(
         p, omega, a_flat, y0, settings.tolerance, settings.tolerance, scale,
         np.ascontiguousarray(fixed), settings.max_step * period,

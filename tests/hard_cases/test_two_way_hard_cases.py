@@ -380,27 +380,37 @@ def test_velocity_kinks_at_regime_edges_are_orbits_of_the_reference(params, f, a
                                                                     changes):
     from mpmath import mp, mpf
 
-    from study.kernels import two_way as _orbit
+    from study.kernels.budget import Budget
+    from study.kernels.two_way import points
+    from study.kernels.two_way.points import (
+        OUT_DELTA,
+        OUT_PERIOD,
+        OUT_SPEED,
+        OUT_STATUS,
+        OUT_VELOCITY,
+    )
     from study.solvers.exact import structure_vector
     from tests.reference.two_way_exact import TwoWayModel, period_map
 
     s = Structure(**params)
     rows = []
     for ai in (a - step, a, a + step):
-        out = np.empty(_orbit.N_OUT)
-        _orbit.solve_point(structure_vector(s, "two-way"), 2.0 * math.pi * f, ai,
-                           bool(ai > lift_off_acceleration(s, f)), 10_000, 5_000, 0.0, 1.0,
+        out = np.empty(points.N_OUT)
+        points.solve_point(structure_vector(s, "two-way"), 2.0 * math.pi * f, ai,
+                           bool(ai > lift_off_acceleration(s, f)), Budget(10_000, 5_000),
+                           0.0, 1.0,
                            out)
-        assert Status(int(out[0])) == Status.STICK_SLIP and out[6] == 1
+        assert Status(int(out[OUT_STATUS])) == Status.STICK_SLIP and out[OUT_PERIOD] == 1
         with mp.workdps(30):
             model = TwoWayModel(s, f, ai)
-            z = tuple(mpf(float(x)) for x in out[8:11])
+            z = tuple(mpf(float(x)) for x in out[OUT_DELTA:OUT_SPEED + 1])
             image = period_map(model, z)
             residual = [float((image.state[i] - z[i]) / model.scale[i]) for i in range(3)]
             velocity = float(image.dx * f)
         np.testing.assert_allclose(residual, 0.0, atol=1e-13)
-        np.testing.assert_allclose(out[2], velocity, rtol=0.0, atol=1e-13 * _scale(f, ai))
-        assert float(_solve(s, f, ai).velocity) == out[2]
+        np.testing.assert_allclose(out[OUT_VELOCITY], velocity, rtol=0.0,
+                                   atol=1e-13 * _scale(f, ai))
+        assert float(_solve(s, f, ai).velocity) == out[OUT_VELOCITY]
         rows.append(out)
     below, tip, above = rows
     # a V: the tip stands out of both neighbours, on the same side

@@ -1,5 +1,6 @@
-"""The package's shape: no import cycle, no private name used across modules, and the
-computing code independent of how results are kept, shown and run."""
+"""The package's shape: no import cycle, no private name used across modules (imported
+or reached as an attribute), imports only going down the stages, and the computing code
+independent of how results are kept, shown and run."""
 
 from __future__ import annotations
 
@@ -48,6 +49,110 @@ def graph() -> dict[str, set[str]]:
             for name, path in known.items()}
 
 
+#: The stages, lowest first: a module imports only modules of its own stage or of
+#: stages before it. ``top`` is the public face: ``study/__init__.py``, ``api``, ``cli``.
+STAGES = ("model", "kernels", "solvers", "engine", "scenes", "analyses", "figures", "top")
+
+#: Modules outside the stage folders and the stage they belong to. ``study.version``
+#: is a leaf every stage may read (the package's version, for provenance).
+LOOSE_MODULES = {"study": "top", "study.api": "top", "study.cli": "top",
+                 "study.version": "model"}
+
+#: What the kernels may import outside ``study.kernels``: the status codes as plain
+#: ints (numba reads module-level ints as constants).
+KERNEL_IMPORTS = ("study.model.codes",)
+
+#: Climbs up the stages being removed by other parts of issue 20, with the reason; the
+#: list is deleted once those parts are merged (an entry that no longer climbs fails).
+KNOWN_CLIMBS = {
+    ("study.model.drive", "study.engine.spec_files"):
+        "drive-array checks read the spec schema (parameter table part)",
+    ("study.engine.runner", "study.scenes.scene_kind"):
+        "runner dispatches on the scene kind (kind registry part)",
+    ("study.engine.validation", "study.scenes.scene_kind"):
+        "validation parses scene files (kind registry part)",
+    ("study.engine.validation", "study.analyses.design"):
+        "validation checks design files (kind registry part)",
+    ("study.engine.validation", "study.analyses.fit"):
+        "validation checks fit files (kind registry part)",
+    ("study.solvers.integrator", "study.engine.spec_files"):
+        "the integrator's budget limits are read from the spec schema (parameter table "
+        "part: the limits belong in the model, the schema derived from them)",
+}
+
+
+def stage(name: str) -> str:
+    """The stage of the module ``name``: its folder under ``study``, or
+    :data:`LOOSE_MODULES`."""
+    if name in LOOSE_MODULES:
+        return LOOSE_MODULES[name]
+    folder = name.split(".")[1]
+    assert folder in STAGES, f"{name} is in no stage folder: add it to STAGES or LOOSE_MODULES"
+    return folder
+
+
+def climbs() -> dict[tuple[str, str], None]:
+    """Every import (module, imported module) that goes up the stages."""
+    found = {}
+    for name, targets in graph().items():
+        for target in targets:
+            if STAGES.index(stage(target)) > STAGES.index(stage(name)):
+                found[(name, target)] = None
+    return found
+
+
+def module_aliases(name: str, path: Path, known: dict[str, Path]) -> dict[str, str]:
+    """Local names bound to modules of the package: ``import study.x as m``,
+    ``from study.x import m`` and the bare ``import study.x`` (bound as ``study``)."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    aliases = {}
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] != "study":
+                    continue
+                if alias.asname:
+                    aliases[alias.asname] = alias.name
+                else:
+                    aliases["study"] = "study"
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                module = ".".join(base + ([node.module] if node.module else []))
+            else:
+                module = node.module or ""
+            for alias in node.names:
+                full = f"{module}.{alias.name}"
+                if full in known:
+                    aliases[alias.asname or alias.name] = full
+    return aliases
+
+
+def attribute_reaches(name: str, path: Path, known: dict[str, Path]) -> list[tuple[str, str]]:
+    """(module, attribute) for every ``m.attribute`` (or ``study.x.m.attribute``) with
+    ``m`` a module of the package bound in ``name``."""
+    aliases = module_aliases(name, path, known)
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not isinstance(node, ast.Attribute):
+            continue
+        chain = []
+        base = node.value
+        while isinstance(base, ast.Attribute):
+            chain.append(base.attr)
+            base = base.value
+        if not isinstance(base, ast.Name) or base.id not in aliases:
+            continue
+        module = ".".join([aliases[base.id], *reversed(chain)])
+        if module in known:
+            found.append((module, node.attr))
+    return found
+
+
+def private(what: str) -> bool:
+    return what.startswith("_") and not what.startswith("__")
+
+
 def test_the_walk_sees_imports():
     edges = graph()
     assert "study.engine.observables" in edges["study.engine.sweep"]
@@ -63,6 +168,59 @@ def test_no_private_name_crosses_modules():
         if what.startswith("_") and imported != name
     ]
     assert not crossing, crossing
+
+
+def test_no_private_name_is_reached_as_an_attribute():
+    """``kernel._solve(...)`` on an imported module is a private name crossing modules
+    too: a wrapper calls the kernel's public entry point."""
+    known = modules()
+    crossing = [
+        f"{name} reaches {module}.{what}"
+        for name, path in known.items()
+        for module, what in attribute_reaches(name, path, known)
+        if private(what) and module != name
+    ]
+    assert not crossing, crossing
+
+
+def test_the_attribute_walk_sees_attribute_access(tmp_path: Path):
+    """The check above can fail: it sees ``m._x``, ``study.m._x`` and aliased imports."""
+    known = {"study.kernels.k": tmp_path / "k.py", "study.solvers.s": tmp_path / "s.py"}
+    known["study.solvers.s"].write_text(
+        "import study.kernels.k\n"
+        "from study.kernels import k as kernel\n"
+        "import study.kernels.k as other\n"
+        "kernel._a()\nstudy.kernels.k._b\nother.public\nother.__doc__\n",
+        encoding="utf-8")
+    found = attribute_reaches("study.solvers.s", known["study.solvers.s"], known)
+    assert sorted(what for _, what in found if private(what)) == ["_a", "_b"]
+    assert ("study.kernels.k", "public") in found
+
+
+def test_imports_only_go_down_the_stages():
+    """model < kernels < solvers < engine < scenes < analyses < figures < top."""
+    found = climbs()
+    unknown = sorted(set(found) - set(KNOWN_CLIMBS))
+    assert not unknown, unknown
+    # A known climb that is gone must leave the list (then delete the list).
+    gone = sorted(set(KNOWN_CLIMBS) - set(found))
+    assert not gone, gone
+
+
+def test_every_module_has_a_stage():
+    for name in modules():
+        assert stage(name) in STAGES
+
+
+def test_kernels_import_only_kernels_and_the_codes():
+    """The numba kernels depend on nothing but each other and the plain-int codes."""
+    edges = graph()
+    for name, targets in edges.items():
+        if stage(name) != "kernels":
+            continue
+        outside = {t for t in targets
+                   if stage(t) != "kernels" and t not in KERNEL_IMPORTS}
+        assert not outside, (name, outside)
 
 
 def test_no_import_cycle():

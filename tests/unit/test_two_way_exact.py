@@ -27,7 +27,19 @@ import pytest
 from numpy.testing import assert_allclose
 
 import study
-from study.kernels import two_way as _orbit
+from study.kernels.budget import Budget
+from study.kernels.two_way import attractors as attractor_kernel
+from study.kernels.two_way import modes, newton, orbit, points
+from study.kernels.two_way.points import (
+    OUT_BACKWARD,
+    OUT_DELTA,
+    OUT_FORWARD,
+    OUT_MULTIPLIER,
+    OUT_PERIOD,
+    OUT_SPEED,
+    OUT_STATUS,
+    OUT_VELOCITY,
+)
 from study.model import lift_off_acceleration, thresholds
 from study.model.status import INVALID_STATUSES, Status
 from study.model.structure import Structure, tilt_warnings
@@ -114,18 +126,19 @@ def test_floquet_multiplier_at_the_fixed_point_is_the_reference_one():
         s, f, a = p["structure"], p["f"], p["a"]
         vector = structure_vector(s, "two-way")
         omega = 2.0 * math.pi * f
-        out = np.empty(_orbit.N_OUT)
-        _orbit.solve_point(vector, omega, a, False, 10_000, 5_000, 0.0, 1.0, out)
-        table = np.zeros((3, _orbit.N_MODE))
-        _orbit.mode_table(vector, omega, a, table)
-        z = out[8:11].copy()
+        out = np.empty(points.N_OUT)
+        points.solve_point(vector, omega, a, False, Budget(10_000, 5_000), 0.0, 1.0, out)
+        table = np.zeros((3, modes.N_MODE))
+        modes.mode_table(vector, omega, a, table)
+        z = out[OUT_DELTA:OUT_SPEED + 1].copy()
         jac = np.eye(3)
-        acc = np.zeros(_orbit.N_ACC)
+        acc = np.zeros(orbit.N_ACC)
         grad = np.zeros((3, 3))
-        flag = _orbit.run(vector, table, omega, a, z, 0.0, int(out[6]) * 2 * math.pi / omega,
-                          jac, True, -1.0, 10_000, acc, grad)
-        assert flag == _orbit.RUN_OK
-        assert abs(_orbit.spectral_radius(jac) - p["floquet"]) <= 1e-13
+        flag = orbit.run(modes.DrivePoint(vector, table, omega, a), z, 0.0,
+                         int(out[OUT_PERIOD]) * 2 * math.pi / omega,
+                         orbit.PassRecord(acc, jac, grad), True, -1.0, 10_000)
+        assert flag == orbit.RUN_OK
+        assert abs(newton.spectral_radius(jac) - p["floquet"]) <= 1e-13
 
 
 # --- the kernel's one-way mode against the exact one-way solver ----------------------
@@ -133,10 +146,10 @@ def test_floquet_multiplier_at_the_fixed_point_is_the_reference_one():
 
 def _kernel_point(structure: Structure, f: float, a: float, coupling: str) -> np.ndarray:
     """The orbit kernel's output row at one point (see ``orbit.solve_point``)."""
-    out = np.empty(_orbit.N_OUT)
+    out = np.empty(points.N_OUT)
     lifted = bool(a > lift_off_acceleration(structure, f))
-    _orbit.solve_point(structure_vector(structure, coupling), 2.0 * math.pi * f, a, lifted,
-                       10_000, 5_000, 0.0, 1.0, out)
+    points.solve_point(structure_vector(structure, coupling), 2.0 * math.pi * f, a, lifted,
+                       Budget(10_000, 5_000), 0.0, 1.0, out)
     return out
 
 
@@ -167,7 +180,7 @@ def _random_point(rng: np.random.Generator, q_max: float = 1e3):
 # (scaled), which leaves the state up to FINAL_TOLERANCE / (1 - rho) off and the
 # velocity about as far off in units of a / w. Observed ratio error / allowance <= 1.
 def _kernel_allowance(rho: float) -> float:
-    return _orbit.NEWTON_TOLERANCE / max(1.0 - rho, 1e-6)
+    return newton.NEWTON_TOLERANCE / max(1.0 - rho, 1e-6)
 
 
 def test_one_way_mode_of_the_kernel_is_the_exact_one_way_solver():
@@ -181,11 +194,11 @@ def test_one_way_mode_of_the_kernel_is_the_exact_one_way_solver():
         s, f, a = _random_point(rng)
         exact = steady_state(s, f, a, coupling="one-way", parallel=False)
         out = _kernel_point(s, f, a, "one-way")
-        st_exact, st_kernel = Status(int(exact.status)), Status(int(out[0]))
+        st_exact, st_kernel = Status(int(exact.status)), Status(int(out[OUT_STATUS]))
         where = (s, f, a)
         assert st_kernel == st_exact, (where, st_exact, st_kernel)
         seen.add(st_exact)
-        v_exact, v_kernel = float(exact.velocity), out[2]
+        v_exact, v_kernel = float(exact.velocity), out[OUT_VELOCITY]
         if st_exact in INVALID_STATUSES:
             assert math.isnan(v_exact) and math.isnan(v_kernel), where
             continue
@@ -195,7 +208,8 @@ def test_one_way_mode_of_the_kernel_is_the_exact_one_way_solver():
         if err > tight:
             needed_allowance += 1
             assert st_exact == Status.CONTINUOUS_SLIDING, (where, err / scale)
-            assert err <= tight + _kernel_allowance(out[7]) * scale, (where, err / scale, out[7])
+            rho = out[OUT_MULTIPLIER]
+            assert err <= tight + _kernel_allowance(rho) * scale, (where, err / scale, rho)
     assert {Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING} <= seen
     assert needed_allowance <= 8  # observed: 12 of 10 000 points on other seeds
 
@@ -218,8 +232,8 @@ def test_one_way_kernel_sliding_to_float_accuracy(params, f, a, v_reference):
     orbits (multiplier 0.99) are as accurate as the others."""
     s = Structure(f0=14.44, **params)
     out = _kernel_point(s, f, a, "one-way")
-    assert Status(int(out[0])) == Status.CONTINUOUS_SLIDING
-    assert abs(out[2] - v_reference) <= 1e-13 * abs(v_reference) + 1e-14 * _scale(f, a)
+    assert Status(int(out[OUT_STATUS])) == Status.CONTINUOUS_SLIDING
+    assert abs(out[OUT_VELOCITY] - v_reference) <= 1e-13 * abs(v_reference) + 1e-14 * _scale(f, a)
 
 
 # --- mirror symmetry -----------------------------------------------------------------
@@ -339,14 +353,16 @@ def test_every_start_reaches_the_same_orbit_near_a_kink_of_the_period_map():
     vector = structure_vector(s, "two-way")
     omega = 2.0 * math.pi * f
     canonical = _kernel_point(s, f, a, "two-way")
-    out = np.empty(_orbit.N_OUT)
-    for phase in _orbit.START_PHASES:
-        for factor in _orbit.START_FACTORS:
-            _orbit.solve_point(vector, omega, a, False, 10_000, 5_000, phase / f, factor, out)
-            assert Status(int(out[0])) == Status.STICK_SLIP
+    out = np.empty(points.N_OUT)
+    for phase in attractor_kernel.START_PHASES:
+        for factor in attractor_kernel.START_FACTORS:
+            points.solve_point(vector, omega, a, False, Budget(10_000, 5_000), phase / f, factor,
+                               out)
+            assert Status(int(out[OUT_STATUS])) == Status.STICK_SLIP
             # v is 3.7e-6 a/w here: ill-conditioned, so compare in units of a/w (the
             # bad start was 3.3e-9 a/w off).
-            assert abs(out[2] - canonical[2]) <= 1e-13 * _scale(f, a), (phase, factor)
+            gap = abs(out[OUT_VELOCITY] - canonical[OUT_VELOCITY])
+            assert gap <= 1e-13 * _scale(f, a), (phase, factor)
     assert int(attractors(s, f, a, coupling="two-way").count) == 1
 
 
@@ -365,22 +381,22 @@ def test_an_orbit_crossing_phase_zero_in_a_sliver_of_slip_is_found():
     s = Structure(f0=14.44, Q=17.5, alpha=64.0, M=1.0, cs=0.25)
     f, a = 13.9, 4.4
     out = _kernel_point(s, f, a, "two-way")
-    assert Status(int(out[0])) == Status.STICK_SLIP and out[6] == 1
+    assert Status(int(out[OUT_STATUS])) == Status.STICK_SLIP and out[OUT_PERIOD] == 1
     assert out[10] < 0.0  # the state reported at phase 0 is in a backward slip
-    assert out[7] < 0.5  # strongly attracting, as its neighbours
+    assert out[OUT_MULTIPLIER] < 0.5  # strongly attracting, as its neighbours
     with mp.workdps(30):
         model = TwoWayModel(s, f, a)
-        z = tuple(mpf(float(x)) for x in out[8:11])
+        z = tuple(mpf(float(x)) for x in out[OUT_DELTA:OUT_SPEED + 1])
         image = period_map(model, z)
         residual = [float((image.state[i] - z[i]) / model.scale[i]) for i in range(3)]
         velocity = float(image.dx * f)
         forward = float(image.forward_time * f)
         backward = float(image.backward_time * f)
     assert_allclose(residual, 0.0, atol=1e-12)
-    assert_allclose(out[2], velocity, rtol=1e-12, atol=0.0)
-    assert_allclose(out[4:6], [forward, backward], rtol=1e-10, atol=0.0)
+    assert_allclose(out[OUT_VELOCITY], velocity, rtol=1e-12, atol=0.0)
+    assert_allclose(out[OUT_FORWARD:OUT_BACKWARD + 1], [forward, backward], rtol=1e-10, atol=0.0)
     found = attractors(s, f, a, coupling="two-way")
     assert int(found.count) == 1
     state = steady_state(s, f, a, coupling="two-way")
     assert Status(int(state.status)) == Status.STICK_SLIP
-    assert float(state.velocity) == out[2]
+    assert float(state.velocity) == out[OUT_VELOCITY]

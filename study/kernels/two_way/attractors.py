@@ -1,0 +1,131 @@
+"""The multistability check: the distinct stable orbits reached from several starts.
+
+:func:`attractors_point` fills one row of :data:`ATTRACTOR_COLUMNS`;
+:func:`attractors_points` (in parallel) and :func:`attractors_points_serial` fill a
+table of them for the validating wrapper :func:`study.solvers.exact.attractors`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from study.kernels.structure_vector import COS_ALPHA, GRAVITY, MASS_RATIO
+from study.kernels.two_way.modes import N_MODE, TWO_PI, mode_table
+from study.kernels.two_way.points import (
+    N_OUT,
+    OUT_PERIOD,
+    OUT_STATUS,
+    OUT_VELOCITY,
+    solve_point,
+    start_state,
+)
+from study.kernels.two_way.propagation import stick_releases
+from study.model.codes import FRICTION_PARADOX, LIFT_OFF, NOT_CONVERGED, STATIC
+
+# Starting states of the multistability check: rest at these drive phases [periods]
+# with the mode on these multiples of its steady response.
+START_PHASES = (0.0, 0.25, 0.5, 0.75)
+START_FACTORS = (1.0, 0.0, 2.0)
+# Two orbits are the same attractor when their periods agree and their mean velocities
+# agree to this fraction of the velocity scale a / w.
+SAME_ORBIT = 1e-9
+
+#: The columns of :func:`attractors_point`'s output row, in order, with their units.
+ATTRACTOR_COLUMNS = (
+    ("count", "1", "distinct outcomes: stable orbits, lift-off, friction paradox"),
+    ("spread", "m s-1", "largest minus smallest mean velocity of the orbits found"),
+    ("starts_converged", "1", "starting states that reached an outcome"),
+)
+_NAMES = tuple(name for name, _, _ in ATTRACTOR_COLUMNS)
+
+# Numba reads module-level integers as compile-time constants.
+OUT_COUNT = _NAMES.index("count")
+OUT_SPREAD = _NAMES.index("spread")
+OUT_STARTS_CONVERGED = _NAMES.index("starts_converged")
+#: Length of an output row.
+N_ATTRACTOR_OUT = len(ATTRACTOR_COLUMNS)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def attractors_point(structure, omega, a, lifted, budget, out):
+    """Distinct stable orbits reached from the starting states above (arguments as
+    :func:`~study.kernels.two_way.points.solve_point`).
+
+    ``out`` receives one row of :data:`ATTRACTOR_COLUMNS`: the number of distinct
+    orbits (LIFT_OFF or FRICTION_PARADOX outcomes count as one outcome each), the
+    spread of their mean velocities [m s-1], and how many starts reached an outcome.
+    Starts off the table (``n < 0``) are skipped.
+    """
+    row = np.empty(N_OUT)
+    n_starts = len(START_PHASES) * len(START_FACTORS)
+    velocities = np.empty(n_starts)
+    periods = np.empty(n_starts)
+    count = 0
+    converged = 0
+    others = 0  # bit 1: lift-off seen, bit 2: paradox seen
+    scale = a / omega
+    table = np.zeros((3, N_MODE))
+    mode_table(structure, omega, a, table)
+    start = np.empty(3)
+    for phase in START_PHASES:
+        for factor in START_FACTORS:
+            t_start = phase * TWO_PI / omega
+            start_state(table, omega, t_start, start, factor)
+            _, _, acc0 = stick_releases(structure, a, math.cos(omega * t_start), start[0],
+                                        start[1])
+            if (structure[GRAVITY] - a * math.cos(omega * t_start)
+                    + structure[MASS_RATIO] * structure[COS_ALPHA] * acc0) < 0.0:
+                # A start off the table is no state of the model.
+                continue
+            solve_point(structure, omega, a, lifted, budget, t_start, factor, row)
+            status = int(row[OUT_STATUS])
+            if status == STATIC:
+                out[OUT_COUNT] = 1.0
+                out[OUT_SPREAD] = 0.0
+                out[OUT_STARTS_CONVERGED] = n_starts
+                return
+            if status == NOT_CONVERGED:
+                continue
+            converged += 1
+            if status == LIFT_OFF:
+                others |= 1
+                continue
+            if status == FRICTION_PARADOX:
+                others |= 2
+                continue
+            new = True
+            for i in range(count):
+                if periods[i] == row[OUT_PERIOD] and (
+                        abs(velocities[i] - row[OUT_VELOCITY]) <= SAME_ORBIT * scale):
+                    new = False
+                    break
+            if new:
+                velocities[count] = row[OUT_VELOCITY]
+                periods[count] = row[OUT_PERIOD]
+                count += 1
+    spread = 0.0
+    if count > 0:
+        spread = np.max(velocities[:count]) - np.min(velocities[:count])
+    out[OUT_COUNT] = count + (others & 1) + ((others >> 1) & 1)
+    out[OUT_SPREAD] = spread
+    out[OUT_STARTS_CONVERGED] = converged
+
+
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+def attractors_points(structure, omega, a, lifted, budget, out):
+    """Fill ``out`` (n x ``N_ATTRACTOR_OUT``) in parallel over points."""
+    n = omega.shape[0]
+    lanes = min(n, 256)
+    for lane in prange(lanes):
+        for i in range(lane, n, lanes):
+            attractors_point(structure, omega[i], a[i], lifted[i], budget, out[i])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def attractors_points_serial(structure, omega, a, lifted, budget, out):
+    """Same as :func:`attractors_points` on one thread."""
+    for i in range(omega.shape[0]):
+        attractors_point(structure, omega[i], a[i], lifted[i], budget, out[i])

@@ -1,0 +1,174 @@
+"""The periodic orbit reached from a state: Newton on the period map, then a search
+of the map's iterates for a cycle of up to ``MAX_PERIOD`` drive periods."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from study.kernels.two_way.modes import TWO_PI
+from study.kernels.two_way.newton import newton, spectral_radius
+from study.kernels.two_way.orbit import (
+    N_ACC,
+    RUN_BUDGET,
+    RUN_LIFT_OFF,
+    RUN_OK,
+    RUN_PARADOX,
+    PassRecord,
+    run,
+)
+from study.model.codes import (
+    FRICTION_PARADOX,
+    LIFT_OFF,
+    NOT_CONVERGED,
+    REASON_EVENT_BUDGET,
+    REASON_NO_PERIODIC_ORBIT,
+    REASON_NONE,
+    STICK_SLIP,
+)
+
+# Period-map iterates closing to this (scaled) start a Newton search for that period.
+CYCLE_DETECTION = 1e-3
+# Periods of the map's iteration before its iterates are watched for lift-off.
+BURN_IN = 8
+# Longest orbit searched for, in drive periods.
+MAX_PERIOD = 16
+# Where the second Poincare section lies, in drive periods after phase 0 (1 - 1/golden
+# ratio: no simple fraction, so an orbit's events do not sit on both sections).
+SECTION_SHIFT = 0.3819660112501051
+# An orbit is stable when its largest Floquet multiplier is below 1 + this.
+STABILITY_MARGIN = 1e-6
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _cycle(point, z, periods, section, scales, max_events, record, work):
+    """Newton's method for a stable cycle of ``periods`` drive periods from ``z``, the state
+    at time ``section`` [s], with the cycle's own (minimal) period (arguments as
+    :func:`~study.kernels.two_way.newton.newton`).
+
+    Returns
+    -------
+    int
+        The cycle's minimal period when it is found (``z`` its state at ``section``,
+        ``record`` of one pass around it); 0 when not; -1 when an iterate near it leaves
+        the table (lift-off).
+    """
+    flag, converged = newton(point, z, periods, section, scales, max_events, record, work)
+    if flag == RUN_LIFT_OFF:
+        return -1
+    if not converged or spectral_radius(record.jac) >= 1.0 + STABILITY_MARGIN:
+        return 0
+    period = TWO_PI / point.omega
+    # Report the orbit's own period, not a multiple that closed first.
+    for shorter in range(1, periods):
+        if periods % shorter:
+            continue
+        for i in range(3):
+            work[i] = z[i]
+        flag = run(point, work, section, section + shorter * period, record, False, -1.0,
+                   max_events)
+        gap = 0.0
+        for i in range(3):
+            gap = max(gap, abs(work[i] - z[i]) / scales[i])
+        if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
+            flag, converged = newton(point, z, shorter, section, scales, max_events, record,
+                                     work)
+            if flag == RUN_LIFT_OFF:
+                return -1
+            if converged:
+                return shorter
+    # Statistics of the full cycle (the checks above overwrote them).
+    flag, converged = newton(point, z, periods, section, scales, max_events, record, work)
+    if flag == RUN_LIFT_OFF:
+        return -1
+    return periods
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def find_orbit(point, z, t_start, scales, budget, record, work, history):
+    """Periodic orbit reached from state ``z`` at ``t_start`` [s] (in the first period) at
+    the drive point ``point``, within ``budget`` (a :data:`~study.kernels.budget.Budget`);
+    ``scales`` the natural sizes of the state, ``work`` (3) and ``history``
+    (``MAX_PERIOD`` x 3) scratch space.
+
+    Returns
+    -------
+    status, reason, periods
+        ``periods`` > 0 and ``z`` the orbit's state at phase 0 when found; ``record``
+        then belongs to one pass around it.
+    """
+    max_events = budget.max_events
+    period = TWO_PI / point.omega
+    record.acc[:] = 0.0
+    flag = RUN_OK
+    if t_start != 0.0:
+        flag = run(point, z, t_start, period, record, False, -1.0, max_events)
+    if flag == RUN_PARADOX:
+        return FRICTION_PARADOX, REASON_NONE, 0
+    if flag == RUN_BUDGET:
+        return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
+    guess = z.copy()
+    flag, converged = newton(point, z, 1, 0.0, scales, max_events, record, work)
+    if flag == RUN_LIFT_OFF:
+        return LIFT_OFF, REASON_NONE, 0
+    if converged and spectral_radius(record.jac) < 1.0 + STABILITY_MARGIN:
+        return STICK_SLIP, REASON_NONE, 1
+    if flag == RUN_PARADOX:
+        return FRICTION_PARADOX, REASON_NONE, 0
+    # No stable fixed point near: iterate the map from the start and look for a cycle
+    # of up to MAX_PERIOD periods, then solve for it by Newton.
+    for i in range(3):
+        z[i] = guess[i]
+    tried = np.full(MAX_PERIOD + 1, np.inf)
+    candidate = np.empty(3)
+    for iteration in range(budget.max_map_iterations):
+        slot = iteration % MAX_PERIOD
+        for i in range(3):
+            history[slot, i] = z[i]
+        # Past a burn-in the iterates trace the attractor: one that leaves the table is
+        # outside the model (LIFT_OFF), converged or not.
+        flag = run(point, z, 0.0, period, record, False,
+                   0.0 if iteration >= BURN_IN else -1.0, max_events)
+        if flag == RUN_PARADOX:
+            return FRICTION_PARADOX, REASON_NONE, 0
+        if flag == RUN_LIFT_OFF:
+            return LIFT_OFF, REASON_NONE, 0
+        if flag != RUN_OK:
+            return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
+        for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
+            back = (iteration - periods + 1) % MAX_PERIOD
+            gap = 0.0
+            for i in range(3):
+                gap = max(gap, abs(z[i] - history[back, i]) / scales[i])
+            if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
+                tried[periods] = gap
+                for shifted in range(2):
+                    for i in range(3):
+                        candidate[i] = history[back, i]
+                    section = 0.0
+                    if shifted:
+                        # An orbit can cross phase 0 in a sliver of slip: the phase-0 map
+                        # then has a kink at the fixed point, which Newton cannot cross (it
+                        # takes the sliver for an approach to a stick). Another section of
+                        # the same orbit has no such kink.
+                        section = SECTION_SHIFT * period
+                        flag = run(point, candidate, 0.0, section, record, False, -1.0,
+                                   max_events)
+                        if flag != RUN_OK:
+                            break
+                    found = _cycle(point, candidate, periods, section, scales, max_events,
+                                   record, work)
+                    if found < 0:
+                        return LIFT_OFF, REASON_NONE, 0
+                    if found > 0:
+                        if section != 0.0:
+                            # The orbit's state at phase 0, what is reported (the statistics
+                            # of a whole number of periods do not depend on the section).
+                            spare = PassRecord(np.zeros(N_ACC), record.jac, record.grad)
+                            run(point, candidate, section, period, spare, False, -1.0,
+                                max_events)
+                        for i in range(3):
+                            z[i] = candidate[i]
+                        return STICK_SLIP, REASON_NONE, found
+                break
+    return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0

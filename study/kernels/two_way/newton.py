@@ -1,0 +1,197 @@
+"""Newton's method on the period map, with the exact Jacobian of a run.
+
+The period map's Jacobian is the product of the flow's matrix exponentials between
+events and the saltation matrices at events (:func:`~study.kernels.two_way.orbit.run`);
+the Floquet multipliers are its eigenvalues at the fixed point.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from study.kernels.two_way.modes import TWO_PI
+from study.kernels.two_way.orbit import (
+    A_BACKWARD,
+    A_DISPLACEMENT,
+    A_EVENTS,
+    A_FORWARD,
+    A_SHORTEST,
+    A_SLIPS,
+    A_START_SLIVER,
+    RUN_LIFT_OFF,
+    RUN_OK,
+    SLIVER,
+    run,
+)
+
+# Newton iterations on the period map before falling back to the map's iteration.
+MAX_NEWTON = 24
+# A Newton iterate is a fixed point when the scaled residual is below this, or below
+# LOOSE_TOLERANCE and no longer decreasing (the rounding floor of the map).
+NEWTON_TOLERANCE = 1e-13
+LOOSE_TOLERANCE = 1e-11
+# A Newton step this small (scaled) ends the iteration: its own error is ~ its square.
+NEWTON_STEP = 1e-7
+# Newton iterates after a step and residual below this (scaled), with the events of the
+# pass unchanged, are watched for lift-off.
+LIFT_WATCH = 1e-3
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _solve3(m, r, out):
+    """Solve ``m x = r`` (3x3, partial pivoting) into ``out``; False when singular."""
+    a = m.copy()
+    b = r.copy()
+    for col in range(3):
+        piv = col
+        for i in range(col + 1, 3):
+            if abs(a[i, col]) > abs(a[piv, col]):
+                piv = i
+        if a[piv, col] == 0.0 or not math.isfinite(a[piv, col]):
+            return False
+        if piv != col:
+            for jj in range(3):
+                a[col, jj], a[piv, jj] = a[piv, jj], a[col, jj]
+            b[col], b[piv] = b[piv], b[col]
+        for i in range(col + 1, 3):
+            f = a[i, col] / a[col, col]
+            for jj in range(col, 3):
+                a[i, jj] -= f * a[col, jj]
+            b[i] -= f * b[col]
+    for i in range(2, -1, -1):
+        x = b[i]
+        for jj in range(i + 1, 3):
+            x -= a[i, jj] * out[jj]
+        out[i] = x / a[i, i]
+    return True
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def spectral_radius(jac):
+    """Largest modulus of the eigenvalues of the 3x3 ``jac`` (the Floquet multipliers)."""
+    if not np.all(np.isfinite(jac)):
+        return np.inf
+    if jac[2, 0] == 0.0 and jac[2, 1] == 0.0:
+        # A stick on the orbit: v is reset, one multiplier is jac[2, 2] (0).
+        half = 0.5 * (jac[0, 0] + jac[1, 1])
+        det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
+        disc = half * half - det
+        if disc < 0.0:
+            rho = math.sqrt(max(det, 0.0))
+        else:
+            root = math.sqrt(disc)
+            rho = max(abs(half + root), abs(half - root))
+        return max(rho, abs(jac[2, 2]))
+    values = np.linalg.eigvals(jac.astype(np.complex128))
+    return np.max(np.abs(values))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def newton(point, z, periods, section, scales, max_events, record, work):
+    """Newton's method on ``P^periods(z) - z`` from ``z`` (updated in place), ``P`` the
+    period map of the Poincare section at time ``section`` [s] (``z`` is the state there)
+    at the drive point ``point``; residuals and steps are measured in ``scales`` (the
+    natural sizes of the state), each pass follows at most ``max_events`` events, and
+    ``work`` (3) holds the pass's end state.
+
+    Iterates within ~1e-6 of the orbit (their previous Newton step and residual were
+    below ``LIFT_WATCH`` with an unchanged sequence of events; Newton converges
+    quadratically) are watched for lift-off.
+
+    Returns
+    -------
+    flag, converged
+        ``RUN_LIFT_OFF`` when a watched iterate leaves the table; else the last
+        stretch's flag and whether ``z`` is the fixed point. ``record.jac`` then holds
+        the Jacobian of ``P^periods`` at the last iterate and ``record.acc`` the orbit's
+        statistics, moved to the fixed point along their gradients (``record.grad``) by
+        the last Newton step: what is left is of the order of the step's square.
+    """
+    acc = record.acc
+    jac = record.jac
+    grad = record.grad
+    span = periods * TWO_PI / point.omega
+    previous = np.inf
+    # Watch the next pass for lift-off: the last step and residual were small and the
+    # events unchanged, so the iterate is within ~1e-6 of the orbit.
+    watch = False
+    # Events and slips of the previous pass: a step is only trusted as the last one
+    # when the pass it came from has the same sequence of events.
+    last_events = -1.0
+    last_slips = -1.0
+    step = np.empty(3)
+    residual = np.empty(3)
+    for _ in range(MAX_NEWTON):
+        for i in range(3):
+            work[i] = z[i]
+            for jj in range(3):
+                jac[i, jj] = 1.0 if i == jj else 0.0
+                grad[i, jj] = 0.0
+        acc[:] = 0.0
+        margin = 0.0 if watch else -1.0
+        flag = run(point, work, section, section + span, record, True, margin, max_events)
+        if flag == RUN_LIFT_OFF:
+            return RUN_LIFT_OFF, False
+        if flag != RUN_OK:
+            return flag, False
+        res = 0.0
+        for i in range(3):
+            residual[i] = z[i] - work[i]
+            res = max(res, abs(residual[i]) / scales[i])
+        if res > previous and res > NEWTON_TOLERANCE:
+            # Diverging (an event appeared or vanished): take the map's step instead.
+            for i in range(3):
+                z[i] = work[i]
+            previous = np.inf
+            watch = False
+            last_events = -1.0
+            continue
+        for i in range(3):
+            jac[i, i] -= 1.0
+        solved = _solve3(jac, residual, step)
+        for i in range(3):
+            jac[i, i] += 1.0
+        if not solved:
+            for i in range(3):
+                z[i] = work[i]
+            watch = False
+            last_events = -1.0
+            continue
+        size = 0.0
+        for i in range(3):
+            size = max(size, abs(step[i]) / scales[i])
+        # A sliver of slip (far shorter than a period) means a kink of the map is near:
+        # its linearization does not reach across, so no step is trusted as the last.
+        sliver = 0.0 < acc[A_SHORTEST] < SLIVER * span
+        same_events = (acc[A_EVENTS] == last_events and acc[A_SLIPS] == last_slips
+                       and not sliver)
+        last_events = acc[A_EVENTS]
+        last_slips = acc[A_SLIPS]
+        done = res <= NEWTON_TOLERANCE or (
+            same_events and (size <= NEWTON_STEP
+                             or (res <= LOOSE_TOLERANCE and res >= 0.5 * previous)))
+        again = done and margin < 0.0
+        if again:
+            # Converged before any pass was watched for lift-off: one more.
+            done = False
+        for i in range(3):
+            z[i] += step[i]
+        if acc[A_START_SLIVER] != 0.0 and not done:
+            # The pass began with a sliver of slip: the orbit sticks across phase 0 and
+            # Newton approaches it through states just off the stick (the map has a
+            # kink at v = 0, which its linearization does not reach across): stick.
+            z[2] = 0.0
+        if done:
+            # Move the statistics to the fixed point along their gradients.
+            for i in range(3):
+                acc[A_DISPLACEMENT] += grad[0, i] * step[i]
+                acc[A_FORWARD] += grad[1, i] * step[i]
+                acc[A_BACKWARD] += grad[2, i] * step[i]
+            return RUN_OK, True
+        previous = res
+        watch = again or (same_events and size <= LIFT_WATCH and res <= LIFT_WATCH)
+    return RUN_OK, False
+

@@ -1,0 +1,212 @@
+"""One drive point's steady orbit, its output row, and the drivers over many points.
+
+:func:`solve_point` fills one row of :data:`OUTPUT_COLUMNS`; :func:`solve_points` (in
+parallel) and :func:`solve_points_serial` fill a table of them for the validating
+wrapper :func:`study.solvers.exact.steady_state`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from study.kernels.structure_vector import (
+    COS_ALPHA,
+    GRAVITY,
+    MASS_RATIO,
+    SIN_ALPHA,
+    STATIC_FRICTION,
+    STIFFNESS,
+)
+from study.kernels.two_way.cycles import MAX_PERIOD, find_orbit
+from study.kernels.two_way.modes import (
+    EPS,
+    M_PIM,
+    M_PRE,
+    N_MODE,
+    TWO_PI,
+    DrivePoint,
+    mode_row,
+)
+from study.kernels.two_way.newton import spectral_radius
+from study.kernels.two_way.orbit import (
+    A_BACKWARD,
+    A_DISPLACEMENT,
+    A_FORWARD,
+    A_SLIPS,
+    A_STICK,
+    N_ACC,
+    PassRecord,
+)
+from study.kernels.two_way.propagation import homogeneous, particular
+from study.model.codes import (
+    CONTINUOUS_SLIDING,
+    LIFT_OFF,
+    REASON_NONE,
+    STATIC,
+    STICK_SLIP,
+)
+
+#: The columns of :func:`solve_point`'s output row, in order, with their units.
+OUTPUT_COLUMNS = (
+    ("status", "1", "study.model.status.Status code"),
+    ("reason", "1", "study.model.status.NonConvergence code"),
+    ("velocity", "m s-1", "mean velocity over the orbit"),
+    ("slips", "1", "slip events per drive period"),
+    ("forward", "1", "fraction of the drive period spent slipping forward"),
+    ("backward", "1", "fraction of the drive period spent slipping backward"),
+    ("period", "1", "the orbit's period in drive periods (0: no orbit)"),
+    ("multiplier", "1", "largest modulus of the orbit's Floquet multipliers"),
+    ("delta", "m", "the mode's displacement on the orbit at phase 0"),
+    ("delta_rate", "m s-1", "the mode's velocity on the orbit at phase 0"),
+    ("speed", "m s-1", "the sliding speed on the orbit at phase 0"),
+)
+_NAMES = tuple(name for name, _, _ in OUTPUT_COLUMNS)
+
+# Numba reads module-level integers as compile-time constants.
+OUT_STATUS = _NAMES.index("status")
+OUT_REASON = _NAMES.index("reason")
+OUT_VELOCITY = _NAMES.index("velocity")
+OUT_SLIPS = _NAMES.index("slips")
+OUT_FORWARD = _NAMES.index("forward")
+OUT_BACKWARD = _NAMES.index("backward")
+OUT_PERIOD = _NAMES.index("period")
+OUT_MULTIPLIER = _NAMES.index("multiplier")
+OUT_DELTA = _NAMES.index("delta")
+OUT_DELTA_RATE = _NAMES.index("delta_rate")
+OUT_SPEED = _NAMES.index("speed")
+#: Length of an output row.
+N_OUT = len(OUTPUT_COLUMNS)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _scales(point):
+    """Natural sizes of ``(delta, delta', v)`` for residuals [m, m s-1, m s-1]."""
+    table = point.table
+    omega = point.omega
+    a = point.a
+    amp = math.hypot(table[0, M_PRE], table[0, M_PIM])
+    k = point.structure[STIFFNESS]
+    size = max(amp, a / (k + omega * omega), 1e-300)
+    return size, size * max(omega, math.sqrt(k)), max(a / omega, 1e-300)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def start_state(table, omega, t, z, factor):
+    """``z`` at rest at ``t`` [s] with the mode on ``factor`` times its steady stick
+    response (``table`` the mode table, ``omega`` [rad s-1])."""
+    cw = math.cos(omega * t)
+    sw = math.sin(omega * t)
+    dp, dpd, _, _ = particular(table[0], omega, cw, sw)
+    z[0] = factor * dp
+    z[1] = factor * dpd
+    z[2] = 0.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _is_static(point):
+    """Neither release can happen with the mode on its steady response."""
+    structure = point.structure
+    table = point.table
+    omega = point.omega
+    a = point.a
+    w2 = omega * omega
+    m = structure[MASS_RATIO]
+    ca = structure[COS_ALPHA]
+    sa = structure[SIN_ALPHA]
+    cs = structure[STATIC_FRICTION]
+    pr = table[0, M_PRE]
+    pi = table[0, M_PIM]
+    level = cs * structure[GRAVITY] * (1.0 + 8.0 * EPS)
+    for sign in (1.0, -1.0):
+        kappa = -m * (sign * sa + cs * ca)
+        if math.hypot(-kappa * w2 * pr + cs * a, -kappa * w2 * pi) > level:
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
+    """Steady orbit at one drive point: ``structure`` (the structure vector), ``omega``
+    [rad s-1], ``a`` [m s-2], ``lifted`` (the point is past lift-off), within ``budget``
+    (a :data:`~study.kernels.budget.Budget`); ``out`` receives one row of
+    :data:`OUTPUT_COLUMNS`.
+
+    ``t_start`` [s] and ``factor`` choose the starting state (rest, mode on ``factor``
+    times its steady response).
+    """
+    table = np.zeros((3, N_MODE))
+    point = DrivePoint(structure, table, omega, a)
+    # The stick's row decides a static point; the slips' rows are needed only beyond.
+    mode_row(structure, omega, a, table, 0)
+    out[:] = np.nan
+    out[OUT_REASON] = REASON_NONE
+    out[OUT_PERIOD] = 0.0
+    if _is_static(point):
+        out[OUT_STATUS] = LIFT_OFF if lifted else STATIC
+        if not lifted:
+            out[OUT_VELOCITY] = 0.0
+            out[OUT_SLIPS] = 0.0
+            out[OUT_FORWARD] = 0.0
+            out[OUT_BACKWARD] = 0.0
+            # The orbit is the mode's steady response: perturbations decay with it.
+            _, _, e11, e12, e21, e22 = homogeneous(table[0], TWO_PI / omega, 0.0, 0.0)
+            free = np.zeros((3, 3))
+            free[0, 0] = e11
+            free[0, 1] = e12
+            free[1, 0] = e21
+            free[1, 1] = e22
+            out[OUT_MULTIPLIER] = spectral_radius(free)
+        return
+    mode_row(structure, omega, a, table, 1)
+    mode_row(structure, omega, a, table, 2)
+    scales = np.empty(3)
+    scales[0], scales[1], scales[2] = _scales(point)
+    z = np.empty(3)
+    start_state(table, omega, t_start, z, factor)
+    record = PassRecord(np.zeros(N_ACC), np.empty((3, 3)), np.empty((3, 3)))
+    work = np.empty(3)
+    history = np.empty((MAX_PERIOD, 3))
+    status, reason, periods = find_orbit(point, z, t_start, scales, budget, record, work,
+                                         history)
+    out[OUT_STATUS] = status
+    out[OUT_REASON] = reason
+    if periods == 0:
+        return
+    acc = record.acc
+    span = periods * TWO_PI / omega
+    out[OUT_STATUS] = STICK_SLIP if acc[A_STICK] > 0.0 else CONTINUOUS_SLIDING
+    out[OUT_VELOCITY] = acc[A_DISPLACEMENT] / span
+    out[OUT_SLIPS] = acc[A_SLIPS] / periods
+    out[OUT_FORWARD] = acc[A_FORWARD] / span
+    out[OUT_BACKWARD] = acc[A_BACKWARD] / span
+    out[OUT_PERIOD] = periods
+    out[OUT_MULTIPLIER] = spectral_radius(record.jac)
+    out[OUT_DELTA] = z[0]
+    out[OUT_DELTA_RATE] = z[1]
+    out[OUT_SPEED] = z[2]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _solve_into(i, structure, omega, a, lifted, budget, out):
+    solve_point(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, out[i])
+
+
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+def solve_points(structure, omega, a, lifted, budget, out):
+    """Fill ``out`` (n x ``N_OUT``) at the points ``omega`` [rad s-1], ``a`` [m s-2]
+    (``lifted``: past lift-off) in parallel, the points interleaved over the lanes."""
+    n = omega.shape[0]
+    lanes = min(n, 256)
+    for lane in prange(lanes):
+        for i in range(lane, n, lanes):
+            _solve_into(i, structure, omega, a, lifted, budget, out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_points_serial(structure, omega, a, lifted, budget, out):
+    """Same as :func:`solve_points` on one thread."""
+    for i in range(omega.shape[0]):
+        _solve_into(i, structure, omega, a, lifted, budget, out)
