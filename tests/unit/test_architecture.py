@@ -65,19 +65,9 @@ KERNEL_IMPORTS = ("study.model.codes",)
 #: Climbs up the stages being removed by other parts of issue 20, with the reason; the
 #: list is deleted once those parts are merged (an entry that no longer climbs fails).
 KNOWN_CLIMBS = {
-    ("study.model.drive", "study.engine.spec_files"):
-        "drive-array checks read the spec schema (parameter table part)",
-    ("study.engine.runner", "study.scenes.scene_kind"):
-        "runner dispatches on the scene kind (kind registry part)",
-    ("study.engine.validation", "study.scenes.scene_kind"):
-        "validation parses scene files (kind registry part)",
-    ("study.engine.validation", "study.analyses.design"):
-        "validation checks design files (kind registry part)",
-    ("study.engine.validation", "study.analyses.fit"):
-        "validation checks fit files (kind registry part)",
     ("study.solvers.integrator", "study.engine.spec_files"):
-        "the integrator's budget limits are read from the spec schema (parameter table "
-        "part: the limits belong in the model, the schema derived from them)",
+        "the integrator's budget limits are read from the spec schema (the limits belong "
+        "in the solver, the schema derived from them)",
 }
 
 
