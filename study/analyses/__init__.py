@@ -1,0 +1,2 @@
+"""The analyses stage: frontiers, threshold minima, coupling effects, fits, designs,
+measurements, selection and export."""

@@ -1,4 +1,8 @@
-"""Closed-form physics of the single-plate model, pure numpy (docs/theory/model.md)."""
+"""The model stage: the parameter table, the structure, closed-form physics in plain numpy,
+contact laws, status codes, units and the paper's values (docs/theory/model.md).
+
+This face re-exports the closed-form physics of the single-plate model.
+"""
 
 from study.model.drive import as_acceleration, as_frequency
 from study.model.forces import (

@@ -1,0 +1,1 @@
+"""The scenes stage: the planar steering model, the planner and the scene result kind."""
