@@ -49,6 +49,7 @@ from study.engine.spec_files import (
     parse_toml,
     read_spec_text,
 )
+from study.model.contact import DEFAULT_FRICTION, LAWS, Friction, check_friction
 from study.model.structure import Structure, tilt_warnings
 from study.model.units import DEGREE, DIMENSIONLESS, HERTZ, KILOGRAM, METRE_PER_SECOND_SQUARED
 from study.solvers.exact import DEFAULT_COUPLING, MAX_SOLVER_BUDGET, SolverSettings
@@ -195,6 +196,7 @@ class StudySpec:
     method: str = "exact"
     coupling: str = DEFAULT_COUPLING
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
+    friction: Friction = field(default_factory=Friction)
 
     @property
     def sha256(self) -> str:
@@ -256,7 +258,40 @@ def spec_schema() -> dict[str, Any]:
     solver = schema["properties"]["solver"]["properties"]
     for name, largest in MAX_SOLVER_BUDGET.items():
         solver[name]["maximum"] = largest
+    solver["friction"] = _friction_schema()
     return schema
+
+
+def _friction_schema() -> dict[str, Any]:
+    """``[solver] friction`` from the friction laws' declarations
+    (:data:`study.model.contact.LAWS`): a law's name, or a table of the law and its
+    parameters."""
+    laws = LAWS["friction"]
+    forms: list[dict[str, Any]] = [
+        {"enum": [name for name, law in laws.items() if not law.parameters]}]
+    for name, law in laws.items():
+        if law.parameters:
+            forms.append({
+                "type": "object",
+                "additionalProperties": False,
+                "required": ["law", *(p.name for p in law.parameters)],
+                "properties": {
+                    "law": {"const": name},
+                    **{p.name: {"type": "number", "exclusiveMinimum": p.lower,
+                                "description": f"{p.long_name} [{p.units}]"}
+                       for p in law.parameters},
+                },
+            })
+    return {
+        "default": DEFAULT_FRICTION,
+        "oneOf": forms,
+        "description": "friction law: " + "; ".join(
+            f"{name}{' (default)' if name == DEFAULT_FRICTION else ''}: {law.description}"
+            + (f" (solvers: {', '.join(law.solvers)}; give "
+               f"{{ law = \"{name}\", {', '.join(p.name + ' = ...' for p in law.parameters)} }})"
+               if law.parameters else "")
+            for name, law in laws.items()),
+    }
 
 
 def export_spec_schema() -> str:
@@ -503,6 +538,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             _check_bounds(axis, path)
 
     coupling = solver_table.get("coupling", DEFAULT_COUPLING)
+    raw_friction = solver_table.get("friction", DEFAULT_FRICTION)
     # The exact solver covers both couplings (closed form between events; with two-way
     # coupling the mode is a state of the orbit, found by Newton on the period map).
     method = solver_table.get("method", "exact")
@@ -533,6 +569,10 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
             f"{path}: [solver] {', '.join(wrong)} do not apply to method = \"{method}\"; "
             f"its settings are: {', '.join(EXACT_KEYS if method == 'exact' else INTEGRATOR_KEYS)}"
         )
+    try:
+        friction = check_friction(raw_friction, method)
+    except ValueError as err:
+        raise SpecError(f"{path}: [solver] friction: {err}") from None
     try:
         solver = SolverSettings(**{k: v for k, v in solver_table.items() if k in EXACT_KEYS})
         integrator = IntegratorSettings(
@@ -582,6 +622,10 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
                 }
             ),
             **({"frontier_tolerance": frontier_tolerance} if "frontier" in observables else {}),
+            # Coulomb friction, the default, is left out: specs written before friction
+            # laws were named keep their fingerprints.
+            **({"friction": friction.canonical()}
+               if friction.law != DEFAULT_FRICTION else {}),
         },
     }
     spec = StudySpec(
@@ -601,6 +645,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         method=method,
         coupling=coupling,
         integrator=integrator,
+        friction=friction,
     )
     _check_structures(spec, path)
     # After the structure's own checks: they have the better words where they apply.
