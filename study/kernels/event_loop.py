@@ -1,12 +1,15 @@
 """The event loop shared by the time integrators: Dormand-Prince steps with event location.
 
-:func:`integrate` advances a model from ``state.clock[0]`` to ``t_stop`` through a drive
-schedule, one Dormand-Prince step (:mod:`study.kernels.dopri`) at a time, locates the
-first event of each step on its dense output (:mod:`study.kernels.events`), writes the
-requested output samples, and lets the model decide what an event does. What is
-model-specific comes in as :class:`Hooks`, numba functions the caller names (a module-level
-tuple built inside the caller's compiled function, so the loop is compiled with them and
-cached): the single-plate model (:mod:`study.kernels.integrator`) and the planar disk
+The loop made by :func:`make_loop` advances a model from ``state.clock[0]`` to
+``t_stop`` through a drive schedule, one Dormand-Prince step (:mod:`study.kernels.dopri`)
+at a time, locates the first event of each step on its dense output
+(:mod:`study.kernels.events`), writes the requested output samples, and lets the model
+decide what an event does. What is model-specific comes in as :class:`Hooks`, numba
+functions the model names. :func:`make_loop` makes the loop for them: a closure that is
+inlined into the model's cached entry function, so the loop is compiled with the hooks
+inlined, as one function (numba's cache holds the entry; a cached function that takes
+the hooks as arguments, or is itself a closure, would be compiled again in every
+process). The single-plate model (:mod:`study.kernels.integrator`) and the planar disk
 (:mod:`study.kernels.planar_integrator`) each give theirs.
 
 The loop's arguments are named records (namedtuples of arrays and numbers):
@@ -93,7 +96,7 @@ EventLog = namedtuple("EventLog", "t kind y count")
 #:     Whether the state has no slip velocity (a slip from it is fresh).
 #:
 #: ``events`` is the number of event functions and ``lift_off`` the index of the normal
-#: force among them.
+#: force among them. Small hooks are best declared ``inline="always"``.
 Hooks = namedtuple(
     "Hooks",
     "restart prepare step values_at hold account accepted transition at_rest events lift_off",
@@ -108,124 +111,142 @@ def _stop(state, mode, t, code):
     return code
 
 
-@njit(cache=True, nogil=True, inline="always")
-def integrate(hooks, model, segments, state, t_stop, control, samples, events, stats):
-    """Integrate from ``state.clock[0]`` to ``t_stop`` (within the segments), in place.
+def make_loop(hooks):
+    """The event loop for a model's :class:`Hooks`: a numba function
+    ``loop(model, segments, state, t_stop, control, samples, events, stats)``, to be
+    called from the model's module-level compiled function (it is inlined there)."""
+    restart = hooks.restart
+    prepare = hooks.prepare
+    step = hooks.step
+    values_at = hooks.values_at
+    hold = hooks.hold
+    account = hooks.account
+    accepted = hooks.accepted
+    transition = hooks.transition
+    at_rest = hooks.at_rest
+    count = hooks.events
+    lift_off = hooks.lift_off
 
-    With ``control.fixed_step > 0`` steps end on the grid ``t_start + k fixed_step`` (and
-    at events); otherwise the step is adapted to the tolerances. ``state`` carries the
-    state in and out (a run can be continued by another call). ``stats`` accumulates
-    ``steps`` (entry 0), ``rejected`` steps (1) and what the hooks add.
+    @njit(nogil=True, inline="always")
+    def loop(model, segments, state, t_stop, control, samples, events, stats):
+        """Integrate from ``state.clock[0]`` to ``t_stop`` (within the segments), in place.
 
-    Returns a ``RUN_*`` code.
-    """
-    y = state.y
-    seg_end = segments.end
-    fixed_step = control.fixed_step
-    max_step = control.max_step
-    n = y.shape[0]
-    k, y_new, err, dense, tmp, ystate = step_workspace(n)
-    values, rates, prev_values, prev_rates = event_workspace(hooks.events)
-    mode = state.mode[0]
-    t = state.clock[0]
-    t_origin = t
-    h = state.clock[1]
-    seg = 0
-    while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
-        seg += 1
-    need_rhs = True
-    fresh = mode != STICK and hooks.at_rest(y)
-    steps = 0
-    while t < t_stop:
-        if steps >= control.max_steps:
-            return _stop(state, mode, t, RUN_BUDGET)
+        With ``control.fixed_step > 0`` steps end on the grid ``t_start + k fixed_step`` (and
+        at events); otherwise the step is adapted to the tolerances. ``state`` carries the
+        state in and out (a run can be continued by another call). ``stats`` accumulates
+        ``steps`` (entry 0), ``rejected`` steps (1) and what the hooks add.
+
+        Returns a ``RUN_*`` code.
+        """
+        # The records' fields as locals, once: read in the loop they would be taken out
+        # of their tuples (and their reference counts touched) on every step.
+        y = state.y
+        seg_t0, seg_omega, seg_a, seg_phase0, seg_end = segments
+        rtol, atol, scale, fixed_step, max_step, xtol_time, n_samples, max_steps = control
+        out_t, out_y, out_mode, out_count = samples
+        n = y.shape[0]
+        k, y_new, err, dense, tmp, ystate = step_workspace(n)
+        values, rates, prev_values, prev_rates = event_workspace(count)
+        mode = state.mode[0]
+        t = state.clock[0]
+        t_origin = t
+        h = state.clock[1]
+        seg = 0
         while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
             seg += 1
-            need_rhs = True
-        drive_args = (seg, segments.t0, segments.omega, segments.amplitude, segments.phase0)
-        if need_rhs:
-            drive, rate = table_drive(t, seg, segments.t0, segments.omega, segments.amplitude,
-                                  segments.phase0)
-            mode, fresh, code = hooks.restart(model, mode, fresh, t, drive, rate, y, k[0],
-                                              values, rates, events, stats)
+        need_rhs = True
+        fresh = mode != STICK and at_rest(y)
+        steps = 0
+        while t < t_stop:
+            if steps >= max_steps:
+                return _stop(state, mode, t, RUN_BUDGET)
+            while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
+                seg += 1
+                need_rhs = True
+            drive_args = (seg, seg_t0, seg_omega, seg_a, seg_phase0)
+            if need_rhs:
+                drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+                mode, fresh, code = restart(model, mode, fresh, t, drive, rate, y, k[0],
+                                                  values, rates, events, stats)
+                if code != RUN_DONE:
+                    return _stop(state, mode, t, code)
+                if values[lift_off] < 0.0:
+                    record(events, t, EVENT_LIFT_OFF, y)
+                    return _stop(state, mode, t, RUN_LIFT_OFF)
+                need_rhs = False
+            # Steps end on segment ends, the stop time and never exceed the cap.
+            limit = min(t_stop, seg_end[seg])
+            if fixed_step > 0.0:
+                # Fixed steps stay on a grid anchored at the call's start time: after an
+                # event the step ends on the next grid point, so every drive period is cut
+                # the same way and a periodic orbit repeats exactly.
+                grid = math.floor((t - t_origin) / fixed_step * (1.0 + 1e-12)) + 1.0
+                h = t_origin + grid * fixed_step - t
+                if h < 1e-9 * fixed_step:
+                    h += fixed_step
+            h = min(h, max_step)
+            last = False
+            if t + 1.01 * h >= limit:
+                h = limit - t
+                last = True
+            if h <= 0.0:
+                t = limit
+                continue
+            code = prepare(model, mode, t, drive_args, y, k[0], events)
             if code != RUN_DONE:
                 return _stop(state, mode, t, code)
-            if values[hooks.lift_off] < 0.0:
+            step(model, mode, t, h, y, k, drive_args, y_new, err, dense, tmp)
+            steps += 1
+            stats[0] += 1.0
+            if fixed_step <= 0.0:
+                norm = error_norm(err, y, y_new, scale, rtol, atol)
+                if not norm <= 1.0:
+                    stats[1] += 1.0
+                    h *= shrink_factor(norm)
+                    if h < 1e-14 * max(abs(t), max_step):
+                        return _stop(state, mode, t, RUN_BUDGET)
+                    continue
+                factor = growth_factor(norm)
+            else:
+                factor = 1.0
+            which, theta = first_event(
+                values_at, model, mode, t, h, dense, drive_args, n_samples, xtol_time / h,
+                fresh, ystate, values, rates, prev_values, prev_rates,
+            )
+            t_end = t + theta * h if which >= 0 else t + h
+            if last and which < 0:
+                t_end = limit
+            # Output samples inside the accepted part of the step.
+            while out_count[0] < out_t.shape[0] and out_t[out_count[0]] <= t_end:
+                j = out_count[0]
+                dense_output((out_t[j] - t) / h, h, dense, ystate)
+                hold(model, mode, y, ystate)
+                for i in range(n):
+                    out_y[j, i] = ystate[i]
+                out_mode[j] = mode
+                out_count[0] += 1
+            account(mode, t_end - t, stats)
+            if which < 0:
+                for i in range(n):
+                    y[i] = y_new[i]
+                    k[0, i] = k[6, i]
+                t = t_end
+                h *= factor
+                fresh = False
+                mode = accepted(model, mode, y)
+                continue
+            dense_output(theta, h, dense, ystate)
+            hold(model, mode, y, ystate)
+            for i in range(n):
+                y[i] = ystate[i]
+            t = t_end
+            need_rhs = True
+            drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+            if which == lift_off:
                 record(events, t, EVENT_LIFT_OFF, y)
                 return _stop(state, mode, t, RUN_LIFT_OFF)
-            need_rhs = False
-        # Steps end on segment ends, the stop time and never exceed the cap.
-        limit = min(t_stop, seg_end[seg])
-        if fixed_step > 0.0:
-            # Fixed steps stay on a grid anchored at the call's start time: after an
-            # event the step ends on the next grid point, so every drive period is cut
-            # the same way and a periodic orbit repeats exactly.
-            grid = math.floor((t - t_origin) / fixed_step * (1.0 + 1e-12)) + 1.0
-            h = t_origin + grid * fixed_step - t
-            if h < 1e-9 * fixed_step:
-                h += fixed_step
-        h = min(h, max_step)
-        last = False
-        if t + 1.01 * h >= limit:
-            h = limit - t
-            last = True
-        if h <= 0.0:
-            t = limit
-            continue
-        code = hooks.prepare(model, mode, t, drive_args, y, k[0], events)
-        if code != RUN_DONE:
-            return _stop(state, mode, t, code)
-        hooks.step(model, mode, t, h, y, k, drive_args, y_new, err, dense, tmp)
-        steps += 1
-        stats[0] += 1.0
-        if fixed_step <= 0.0:
-            norm = error_norm(err, y, y_new, control.scale, control.rtol, control.atol)
-            if not norm <= 1.0:
-                stats[1] += 1.0
-                h *= shrink_factor(norm)
-                if h < 1e-14 * max(abs(t), max_step):
-                    return _stop(state, mode, t, RUN_BUDGET)
-                continue
-            factor = growth_factor(norm)
-        else:
-            factor = 1.0
-        which, theta = first_event(
-            hooks.values_at, model, mode, t, h, dense, drive_args, control.samples,
-            control.xtol_time / h, fresh, ystate, values, rates, prev_values, prev_rates,
-        )
-        t_end = t + theta * h if which >= 0 else t + h
-        if last and which < 0:
-            t_end = limit
-        # Output samples inside the accepted part of the step.
-        while samples.count[0] < samples.t.shape[0] and samples.t[samples.count[0]] <= t_end:
-            j = samples.count[0]
-            dense_output((samples.t[j] - t) / h, h, dense, ystate)
-            hooks.hold(model, mode, y, ystate)
-            for i in range(n):
-                samples.y[j, i] = ystate[i]
-            samples.mode[j] = mode
-            samples.count[0] += 1
-        hooks.account(mode, t_end - t, stats)
-        if which < 0:
-            for i in range(n):
-                y[i] = y_new[i]
-                k[0, i] = k[6, i]
-            t = t_end
-            h *= factor
-            fresh = False
-            mode = hooks.accepted(model, mode, y)
-            continue
-        dense_output(theta, h, dense, ystate)
-        hooks.hold(model, mode, y, ystate)
-        for i in range(n):
-            y[i] = ystate[i]
-        t = t_end
-        need_rhs = True
-        drive, rate = table_drive(t, seg, segments.t0, segments.omega, segments.amplitude,
-                                  segments.phase0)
-        if which == hooks.lift_off:
-            record(events, t, EVENT_LIFT_OFF, y)
-            return _stop(state, mode, t, RUN_LIFT_OFF)
-        mode, fresh = hooks.transition(model, mode, which, t, drive, y, events, stats)
-    state.clock[1] = h
-    return _stop(state, mode, t, RUN_DONE)
+            mode, fresh = transition(model, mode, which, t, drive, y, events, stats)
+        state.clock[1] = h
+        return _stop(state, mode, t, RUN_DONE)
+
+    return loop

@@ -20,7 +20,7 @@ STRIBECK = LAWS["friction"]["stribeck"].code
 STRIBECK_SPEED = index("stribeck_speed")
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def kinetic_coefficient(p, speed):
     """Kinetic friction coefficient [1] of a slip at ``speed`` [m s-1] under the law
     ``p[FRICTION_LAW]``.

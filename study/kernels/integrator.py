@@ -24,7 +24,7 @@ derivative, computed from the model, changes sign), then bracketed and refined b
 the Illinois method to the event tolerance (:mod:`study.kernels.events`). The
 Dormand-Prince step, its error norm and dense output are :mod:`study.kernels.dopri`'s.
 
-The loop itself is :func:`study.kernels.event_loop.integrate`; this module gives it the
+The loop itself is :func:`study.kernels.event_loop.make_loop`; this module gives it the
 single-plate model as hooks. The kinetic coefficient is the chosen friction law's
 (:func:`study.kernels.friction.kinetic_coefficient`, Coulomb's ``ck`` by default);
 with a speed-dependent law the force rates that watch for dips between event samples
@@ -44,8 +44,15 @@ import numpy as np
 from numba import njit, prange
 
 from study.kernels.dopri import dense_output, step, table_drive
-from study.kernels.event_loop import EventLog, Hooks, Samples, Segments, State, StepControl
-from study.kernels.event_loop import integrate as event_loop
+from study.kernels.event_loop import (
+    EventLog,
+    Hooks,
+    Samples,
+    Segments,
+    State,
+    StepControl,
+    make_loop,
+)
 from study.kernels.events import record
 from study.kernels.friction import kinetic_coefficient
 from study.kernels.structure_vector import (
@@ -239,12 +246,12 @@ def _paradox(p, mode, y):
     return 1.0 - p[MASS_RATIO] * sa * (sa + s * ck * p[COS_ALPHA]) <= 0.0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _release_event(mode):
     return EVENT_RELEASE_FORWARD if mode > 0 else EVENT_RELEASE_BACKWARD
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _restart(p, mode, fresh, t, drive, rate, y, k0, values, rates, events, stats):
     """The event loop's ``restart`` hook (:data:`study.kernels.event_loop.Hooks`)."""
     if mode == STICK:
@@ -263,13 +270,13 @@ def _restart(p, mode, fresh, t, drive, rate, y, k0, values, rates, events, stats
     return mode, fresh, RUN_DONE
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _prepare(p, mode, t, drive_args, y, k0, events):
     """The ``prepare`` hook: nothing to do before a step."""
     return RUN_DONE
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _hold(p, mode, before, state):
     """The ``hold`` hook: x and v are constant while stuck."""
     if mode == STICK:
@@ -277,7 +284,7 @@ def _hold(p, mode, before, state):
         state[X] = before[X]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _account(mode, duration, stats):
     if mode == STICK:
         stats[STUCK_TIME] += duration
@@ -287,12 +294,12 @@ def _account(mode, duration, stats):
         stats[BACKWARD_TIME] += duration
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _accepted(p, mode, y):
     return mode
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _transition(p, mode, which, t, drive, y, events, stats):
     """The ``transition`` hook: a release starts a slip; a slip end sticks, or reverses
     the slip when the stick forces already exceed the static limit the other way."""
@@ -311,22 +318,24 @@ def _transition(p, mode, which, t, drive, y, events, stats):
     return after, after == -mode
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _at_rest(y):
     return y[V] == 0.0
+
+
+_loop = make_loop(Hooks(_restart, _prepare, _step, _values_at, _hold, _account, _accepted,
+                        _transition, _at_rest, EVENTS, LIFT))
 
 
 @njit(cache=True, nogil=True)
 def integrate(p, segments, state, t_stop, control, samples, events, stats):
     """Integrate the single-plate model with structure vector ``p`` from
-    ``state.clock[0]`` to ``t_stop``, in place (:func:`study.kernels.event_loop.integrate`).
+    ``state.clock[0]`` to ``t_stop``, in place (:func:`study.kernels.event_loop.make_loop`).
 
     ``stats`` (:data:`STATS_SIZE` entries) accumulates steps, rejected steps, slips and
     the time stuck, slipping forward and slipping backward [s]. Returns a ``RUN_*`` code.
     """
-    hooks = Hooks(_restart, _prepare, _step, _values_at, _hold, _account, _accepted,
-                  _transition, _at_rest, EVENTS, LIFT)
-    return event_loop(hooks, p, segments, state, t_stop, control, samples, events, stats)
+    return _loop(p, segments, state, t_stop, control, samples, events, stats)
 
 
 #: The points of :func:`periodic_points`, one entry (or row) each: drive ``omega``

@@ -33,7 +33,7 @@ zero of ``u . d`` with ``d`` the twist direction at the start of the step (near 
 end a slip's twist shrinks to zero along a converging direction, so the projection
 changes sign there).
 
-The loop is :func:`study.kernels.event_loop.integrate` (shared with the single plate):
+The loop is :func:`study.kernels.event_loop.make_loop` (shared with the single plate):
 steps are :mod:`study.kernels.dopri`'s; events are located by
 :mod:`study.kernels.events`: sampled on the dense output, watched at their minima,
 refined by the Illinois method. This module gives the loop the disk as hooks;
@@ -48,8 +48,7 @@ import numpy as np
 from numba import njit
 
 from study.kernels.dopri import dense_output, step, table_drive
-from study.kernels.event_loop import Hooks
-from study.kernels.event_loop import integrate as event_loop
+from study.kernels.event_loop import Hooks, make_loop
 from study.kernels.events import record
 from study.model.codes import (
     EVENT_PARADOX,
@@ -499,7 +498,7 @@ def _mode_after_rest(plates, disk, drive, y, work):
     return STICK
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _restart(model, mode, fresh, t, drive, rate, y, k0, values, rates, events, stats):
     """The event loop's ``restart`` hook (:data:`study.kernels.event_loop.Hooks`)."""
     plates, disk, reference, work = model
@@ -517,7 +516,7 @@ def _restart(model, mode, fresh, t, drive, rate, y, k0, values, rates, events, s
     return mode, fresh, RUN_DONE
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _prepare(model, mode, t, drive_args, y, k0, events):
     """The ``prepare`` hook: in a slip, the direction along which this step watches the
     slip end, and Painleve's paradox of a two-way slip."""
@@ -550,12 +549,12 @@ def _prepare(model, mode, t, drive_args, y, k0, events):
     return RUN_DONE
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _hold(model, mode, before, state):
     """The ``hold`` hook: nothing to restore (a stuck step's dense output is frozen)."""
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _account(mode, duration, stats):
     if mode == STICK:
         stats[STUCK_TIME] += duration
@@ -563,7 +562,7 @@ def _account(mode, duration, stats):
         stats[SLIPPING_TIME] += duration
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _accepted(model, mode, y):
     """The ``accepted`` hook: a slip's onset ends once its twist exceeds the slaving
     threshold."""
@@ -576,7 +575,7 @@ def _accepted(model, mode, y):
     return mode
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _transition(model, mode, which, t, drive, y, events, stats):
     """The ``transition`` hook: a release starts a slip's onset; a slip end sticks, or
     starts a new slip when the wrench at rest exceeds the static limit surface."""
@@ -597,21 +596,23 @@ def _transition(model, mode, which, t, drive, y, events, stats):
     return mode, fresh
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _at_rest(y):
     return y[VX] == 0.0 and y[VY] == 0.0 and y[SPIN] == 0.0
+
+
+_loop = make_loop(Hooks(_restart, _prepare, _step, _values_at, _hold, _account, _accepted,
+                        _transition, _at_rest, EVENTS, LIFT))
 
 
 @njit(cache=True, nogil=True)
 def integrate(plates, disk, segments, state, t_stop, control, samples, events, stats):
     """Integrate the disk from ``state.clock[0]`` to ``t_stop`` in place
-    (:func:`study.kernels.event_loop.integrate`; ``control.fixed_step`` must be 0).
+    (:func:`study.kernels.event_loop.make_loop`; ``control.fixed_step`` must be 0).
 
     ``state`` carries the state in and out, so a run can be continued by another call.
     ``stats`` (:data:`STATS_SIZE` entries) accumulates steps, rejected steps, slips and
     the time stuck and slipping [s]. Returns a ``RUN_*`` code.
     """
     model = (plates, disk, np.zeros(3), np.empty(WORK_SIZE))
-    hooks = Hooks(_restart, _prepare, _step, _values_at, _hold, _account, _accepted,
-                  _transition, _at_rest, EVENTS, LIFT)
-    return event_loop(hooks, model, segments, state, t_stop, control, samples, events, stats)
+    return _loop(model, segments, state, t_stop, control, samples, events, stats)
