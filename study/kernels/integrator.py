@@ -129,7 +129,7 @@ def _accelerations(p, mode, drive, y):
     m = p[MASS_RATIO]
     ca = p[COS_ALPHA]
     sa = p[SIN_ALPHA]
-    ck = kinetic_coefficient(p, y[V])
+    ck = kinetic_coefficient(p, y, V)
     if p[TWO_WAY] != 0.0:
         denominator = 1.0 - m * sa * (sa + s * ck * ca)
         xdd = (-m * sa * forcing - s * ck * (p[GRAVITY] - drive + m * ca * forcing)) / denominator
@@ -161,7 +161,7 @@ def _forces(p, mode, drive, drive_rate_neg, y):
     dddd = forcing_rate
     if mode != STICK and p[TWO_WAY] != 0.0:
         s = float(mode)
-        ck = kinetic_coefficient(p, y[V])
+        ck = kinetic_coefficient(p, y, V)
         denominator = 1.0 - m * sa * (sa + s * ck * ca)
         dddd = (forcing_rate + s * ck * sa * drive_rate_neg) / denominator
     n = p[GRAVITY] - drive + m * ca * ddd
@@ -242,7 +242,7 @@ def _paradox(p, mode, y):
         return False
     s = float(mode)
     sa = p[SIN_ALPHA]
-    ck = kinetic_coefficient(p, y[V])
+    ck = kinetic_coefficient(p, y, V)
     return 1.0 - p[MASS_RATIO] * sa * (sa + s * ck * p[COS_ALPHA]) <= 0.0
 
 
