@@ -5,7 +5,10 @@ coupling (docs/theory/two-way.md). This module integrates the whole
 model in time with an event-driven Dormand-Prince 5(4) scheme
 (:mod:`study.kernels.integrator`): any initial state, a drive given as a schedule of
 segments with continuous phase, and optionally the two-way coupling in which the
-sliding base's acceleration also forces the mode (``-x'' sin(alpha)``).
+sliding base's acceleration also forces the mode (``-x'' sin(alpha)``). The
+friction law is chosen by name (``friction=``, :mod:`study.model.contact`): Coulomb
+friction, the exact solver's, or velocity-weakening Stribeck friction, which only this
+solver implements.
 
 Two entry points:
 
