@@ -5,11 +5,11 @@ The loop made by :func:`make_loop` advances a model from ``state.clock[0]`` to
 at a time, locates the first event of each step on its dense output
 (:mod:`study.kernels.events`), writes the requested output samples, and lets the model
 decide what an event does. What is model-specific comes in as :class:`Hooks`, numba
-functions the model names. :func:`make_loop` makes the loop for them: a closure that is
-inlined into the model's cached entry function, so the loop is compiled with the hooks
-inlined, as one function (numba's cache holds the entry; a cached function that takes
-the hooks as arguments, or is itself a closure, would be compiled again in every
-process). The single-plate model (:mod:`study.kernels.integrator`) and the planar disk
+functions the model names. :func:`make_loop` makes the loop for them: a closure that calls
+them directly, compiled as a callee of the model's cached entry function (numba's cache
+holds the entry with the loop; a cached function that takes the hooks as arguments, or
+that builds a tuple holding them, or is itself a closure, would be compiled again in
+every process). The single-plate model (:mod:`study.kernels.integrator`) and the planar disk
 (:mod:`study.kernels.planar_integrator`) each give theirs.
 
 The loop's arguments are named records (namedtuples of arrays and numbers):
@@ -96,7 +96,7 @@ EventLog = namedtuple("EventLog", "t kind y count")
 #:     Whether the state has no slip velocity (a slip from it is fresh).
 #:
 #: ``events`` is the number of event functions and ``lift_off`` the index of the normal
-#: force among them. Small hooks are best declared ``inline="always"``.
+#: force among them.
 Hooks = namedtuple(
     "Hooks",
     "restart prepare step values_at hold account accepted transition at_rest events lift_off",
@@ -114,7 +114,7 @@ def _stop(state, mode, t, code):
 def make_loop(hooks):
     """The event loop for a model's :class:`Hooks`: a numba function
     ``loop(model, segments, state, t_stop, control, samples, events, stats)``, to be
-    called from the model's module-level compiled function (it is inlined there)."""
+    called from the model's module-level cached function."""
     restart = hooks.restart
     prepare = hooks.prepare
     step = hooks.step
@@ -127,7 +127,7 @@ def make_loop(hooks):
     count = hooks.events
     lift_off = hooks.lift_off
 
-    @njit(nogil=True, inline="always")
+    @njit(nogil=True)
     def loop(model, segments, state, t_stop, control, samples, events, stats):
         """Integrate from ``state.clock[0]`` to ``t_stop`` (within the segments), in place.
 

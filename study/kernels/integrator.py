@@ -246,12 +246,12 @@ def _paradox(p, mode, y):
     return 1.0 - p[MASS_RATIO] * sa * (sa + s * ck * p[COS_ALPHA]) <= 0.0
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _release_event(mode):
     return EVENT_RELEASE_FORWARD if mode > 0 else EVENT_RELEASE_BACKWARD
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _restart(p, mode, fresh, t, drive, rate, y, k0, values, rates, events, stats):
     """The event loop's ``restart`` hook (:data:`study.kernels.event_loop.Hooks`)."""
     if mode == STICK:
@@ -270,13 +270,13 @@ def _restart(p, mode, fresh, t, drive, rate, y, k0, values, rates, events, stats
     return mode, fresh, RUN_DONE
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _prepare(p, mode, t, drive_args, y, k0, events):
     """The ``prepare`` hook: nothing to do before a step."""
     return RUN_DONE
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _hold(p, mode, before, state):
     """The ``hold`` hook: x and v are constant while stuck."""
     if mode == STICK:
@@ -284,7 +284,7 @@ def _hold(p, mode, before, state):
         state[X] = before[X]
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _account(mode, duration, stats):
     if mode == STICK:
         stats[STUCK_TIME] += duration
@@ -294,12 +294,12 @@ def _account(mode, duration, stats):
         stats[BACKWARD_TIME] += duration
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _accepted(p, mode, y):
     return mode
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _transition(p, mode, which, t, drive, y, events, stats):
     """The ``transition`` hook: a release starts a slip; a slip end sticks, or reverses
     the slip when the stick forces already exceed the static limit the other way."""
@@ -318,7 +318,7 @@ def _transition(p, mode, which, t, drive, y, events, stats):
     return after, after == -mode
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _at_rest(y):
     return y[V] == 0.0
 

@@ -498,7 +498,7 @@ def _mode_after_rest(plates, disk, drive, y, work):
     return STICK
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _restart(model, mode, fresh, t, drive, rate, y, k0, values, rates, events, stats):
     """The event loop's ``restart`` hook (:data:`study.kernels.event_loop.Hooks`)."""
     plates, disk, reference, work = model
@@ -516,7 +516,7 @@ def _restart(model, mode, fresh, t, drive, rate, y, k0, values, rates, events, s
     return mode, fresh, RUN_DONE
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _prepare(model, mode, t, drive_args, y, k0, events):
     """The ``prepare`` hook: in a slip, the direction along which this step watches the
     slip end, and Painleve's paradox of a two-way slip."""
@@ -549,12 +549,12 @@ def _prepare(model, mode, t, drive_args, y, k0, events):
     return RUN_DONE
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _hold(model, mode, before, state):
     """The ``hold`` hook: nothing to restore (a stuck step's dense output is frozen)."""
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _account(mode, duration, stats):
     if mode == STICK:
         stats[STUCK_TIME] += duration
@@ -562,7 +562,7 @@ def _account(mode, duration, stats):
         stats[SLIPPING_TIME] += duration
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _accepted(model, mode, y):
     """The ``accepted`` hook: a slip's onset ends once its twist exceeds the slaving
     threshold."""
@@ -575,7 +575,7 @@ def _accepted(model, mode, y):
     return mode
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _transition(model, mode, which, t, drive, y, events, stats):
     """The ``transition`` hook: a release starts a slip's onset; a slip end sticks, or
     starts a new slip when the wrench at rest exceeds the static limit surface."""
@@ -596,7 +596,7 @@ def _transition(model, mode, which, t, drive, y, events, stats):
     return mode, fresh
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _at_rest(y):
     return y[VX] == 0.0 and y[VY] == 0.0 and y[SPIN] == 0.0
 
