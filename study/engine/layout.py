@@ -133,7 +133,7 @@ def pad_branches(values: NDArray[Any], branches: int, dtype: str) -> NDArray[Any
 
 def method_of(spec: StudySpec) -> Method:
     """How the study computes velocities (solver, coupling and settings)."""
-    return Method(spec.method, spec.coupling, spec.solver, spec.integrator)
+    return Method(spec.method, spec.coupling, spec.solver, spec.integrator, spec.friction)
 
 
 def method_description(spec: StudySpec) -> str:

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from study.engine.variables import VARIABLES, Variable
 from study.model import lift_off_acceleration, mode_response, thresholds
+from study.model.contact import DEFAULT_FRICTION, Friction, check_friction
 from study.model.structure import Structure
 from study.solvers.exact import (
     DEFAULT_COUPLING,
@@ -61,12 +62,18 @@ class Method:
         Budgets of the exact solver.
     integrator : IntegratorSettings
         Accuracy and budgets of the time integrator.
+    friction : Friction
+        The friction law (:mod:`study.model.contact`); the solver must implement it.
     """
 
     name: str = "exact"
     coupling: str = DEFAULT_COUPLING
     solver: SolverSettings = field(default_factory=SolverSettings)
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
+    friction: Friction = field(default_factory=Friction)
+
+    def __post_init__(self) -> None:
+        check_friction(self.friction, self.name)
 
     def canonical(self) -> dict[str, Any]:
         """The settings that decide the numbers, as plain JSON data."""
@@ -81,6 +88,8 @@ class Method:
                 "max_orbit_period": self.integrator.max_orbit_period,
                 "period_tolerance": self.integrator.resolved_period_tolerance,
             }
+        if self.friction.law != DEFAULT_FRICTION:
+            settings["friction"] = self.friction.canonical()
         return {"method": self.name, "coupling": self.coupling, **settings}
 
     def solve(self, structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
@@ -88,7 +97,8 @@ class Method:
         """Steady state at ``(f, a)`` (broadcast) [Hz, m s-2] by this method."""
         if self.name == "integrator":
             return integrated_steady_state(structure, f, a, coupling=self.coupling,
-                                           settings=self.integrator, parallel=parallel)
+                                           friction=self.friction, settings=self.integrator,
+                                           parallel=parallel)
         return steady_state(structure, f, a, self.solver, coupling=self.coupling,
                             parallel=parallel)
 

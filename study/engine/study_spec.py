@@ -49,6 +49,7 @@ from study.engine.spec_files import (
     parse_toml,
     read_spec_text,
 )
+from study.model.contact import DEFAULT_FRICTION, LAWS, Friction, check_friction
 from study.model.parameters import (
     DRIVE,
     MASS,
@@ -189,6 +190,7 @@ class StudySpec:
     method: str = "exact"
     coupling: str = DEFAULT_COUPLING
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
+    friction: Friction = field(default_factory=Friction)
 
     @property
     def sha256(self) -> str:
@@ -260,7 +262,40 @@ def spec_schema() -> dict[str, Any]:
     solver = schema["properties"]["solver"]["properties"]
     for name, largest in MAX_SOLVER_BUDGET.items():
         solver[name]["maximum"] = largest
+    solver["friction"] = _friction_schema()
     return schema
+
+
+def _friction_schema() -> dict[str, Any]:
+    """``[solver] friction`` from the friction laws' declarations
+    (:data:`study.model.contact.LAWS`): a law's name, or a table of the law and its
+    parameters."""
+    laws = LAWS["friction"]
+    forms: list[dict[str, Any]] = [
+        {"enum": [name for name, law in laws.items() if not law.parameters]}]
+    for name, law in laws.items():
+        if law.parameters:
+            forms.append({
+                "type": "object",
+                "additionalProperties": False,
+                "required": ["law", *(p.name for p in law.parameters)],
+                "properties": {
+                    "law": {"const": name},
+                    **{p.name: {"type": "number", "exclusiveMinimum": p.lower,
+                                "description": f"{p.long_name} [{p.units}]"}
+                       for p in law.parameters},
+                },
+            })
+    return {
+        "default": DEFAULT_FRICTION,
+        "oneOf": forms,
+        "description": "friction law: " + "; ".join(
+            f"{name}{' (default)' if name == DEFAULT_FRICTION else ''}: {law.description}"
+            + (f" (solvers: {', '.join(law.solvers)}; give "
+               f"{{ law = \"{name}\", {', '.join(p.name + ' = ...' for p in law.parameters)} }})"
+               if law.parameters else "")
+            for name, law in laws.items()),
+    }
 
 
 def export_spec_schema() -> str:
@@ -438,10 +473,10 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     observables = tuple(o for o in OBSERVABLES if o in study["observables"])
     fixed, mass = _fixed_structure(structure, mass_table, sweep, path)
     axes, chunk_points = _sweep_axes(sweep, observables, solver_table, path)
-    method, coupling, solver, integrator, frontier_tolerance = _solver(
+    method, coupling, friction, solver, integrator, frontier_tolerance = _solver(
         solver_table, observables, axes, path)
     canonical = _canonical(study, observables, fixed, mass, sweep, axes, method, coupling,
-                           solver, integrator, frontier_tolerance)
+                           friction, solver, integrator, frontier_tolerance)
     spec = StudySpec(
         name=study["name"],
         title=study.get("title", study["name"]),
@@ -459,6 +494,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         method=method,
         coupling=coupling,
         integrator=integrator,
+        friction=friction,
     )
     _check_structures(spec, path)
     # After the structure's own checks: they have the better words where they apply.
@@ -553,10 +589,12 @@ def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
 
 
 def _solver(solver_table: dict[str, Any], observables: tuple[str, ...], axes: list[Axis],
-            path: str) -> tuple[str, str, SolverSettings, IntegratorSettings, float]:
-    """Method, coupling, the settings of both solvers and the frontier tolerance, with
-    what each observable needs of them."""
+            path: str) -> tuple[str, str, Friction, SolverSettings, IntegratorSettings,
+                                float]:
+    """Method, coupling, friction law, the settings of both solvers and the frontier
+    tolerance, with what each observable needs of them."""
     coupling = solver_table.get("coupling", DEFAULT_COUPLING)
+    raw_friction = solver_table.get("friction", DEFAULT_FRICTION)
     # The exact solver covers both couplings (closed form between events; with two-way
     # coupling the mode is a state of the orbit, found by Newton on the period map).
     method = solver_table.get("method", "exact")
@@ -588,6 +626,10 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...], axes: li
             f"its settings are: {', '.join(EXACT_KEYS if method == 'exact' else INTEGRATOR_KEYS)}"
         )
     try:
+        friction = check_friction(raw_friction, method)
+    except ValueError as err:
+        raise SpecError(f"{path}: [solver] friction: {err}") from None
+    try:
         solver = SolverSettings(**{k: v for k, v in solver_table.items() if k in EXACT_KEYS})
         integrator = IntegratorSettings(
             **{k: v for k, v in solver_table.items() if k in INTEGRATOR_KEYS}
@@ -604,17 +646,17 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...], axes: li
             f"{path}: [solver] frontier_tolerance = {frontier_tolerance!r} Hz is finer than "
             f"doubles resolve near the largest f; allowed: >= {finest:.3g} Hz"
         )
-    return method, coupling, solver, integrator, frontier_tolerance
+    return method, coupling, friction, solver, integrator, frontier_tolerance
 
 
 def _canonical(study: dict[str, Any], observables: tuple[str, ...], fixed: dict[str, float],
                mass: MassModel | None, sweep: dict[str, Any], axes: list[Axis], method: str,
-               coupling: str, solver: SolverSettings, integrator: IntegratorSettings,
-               frontier_tolerance: float) -> dict[str, Any]:
+               coupling: str, friction: Friction, solver: SolverSettings,
+               integrator: IntegratorSettings, frontier_tolerance: float) -> dict[str, Any]:
     """What the numbers depend on, in a canonical form (hashed); defaults written out,
     so a spec that spells them out is the same study.
 
-    Eleven arguments: the parts of a spec, each computed and checked by its own step
+    Twelve arguments: the parts of a spec, each computed and checked by its own step
     of :func:`_build`; gathering them into an object would only rename them.
     """
     structure_canonical = dict(fixed)
@@ -647,6 +689,10 @@ def _canonical(study: dict[str, Any], observables: tuple[str, ...], fixed: dict[
                 }
             ),
             **({"frontier_tolerance": frontier_tolerance} if "frontier" in observables else {}),
+            # Coulomb friction, the default, is left out: specs written before friction
+            # laws were named keep their fingerprints.
+            **({"friction": friction.canonical()}
+               if friction.law != DEFAULT_FRICTION else {}),
         },
     }
     return canonical

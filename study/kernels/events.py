@@ -147,16 +147,17 @@ def first_event(values_at, model, mode, t, h, dense, drive_args, samples, xtol, 
 
 
 @njit(cache=True, nogil=True)
-def record(ev_t, ev_kind, ev_y, ev_box, t, kind, y):
-    """Append event ``kind`` at ``t`` [s] with state ``y`` while ``ev_box[0]`` is below
-    the capacity of ``ev_t``; ``ev_box[0]`` counts every event, recorded or not."""
-    j = ev_box[0]
-    if j < ev_t.shape[0]:
-        ev_t[j] = t
-        ev_kind[j] = kind
+def record(log, t, kind, y):
+    """Append event ``kind`` at ``t`` [s] with state ``y`` to ``log`` (an
+    :class:`study.kernels.event_loop.EventLog`) while ``log.count[0]`` is below its
+    capacity; ``log.count[0]`` counts every event, recorded or not."""
+    j = log.count[0]
+    if j < log.t.shape[0]:
+        log.t[j] = t
+        log.kind[j] = kind
         for i in range(y.shape[0]):
-            ev_y[j, i] = y[i]
-    ev_box[0] = j + 1
+            log.y[j, i] = y[i]
+    log.count[0] = j + 1
 
 
 @njit(cache=True, nogil=True)

@@ -24,32 +24,41 @@ derivative, computed from the model, changes sign), then bracketed and refined b
 the Illinois method to the event tolerance (:mod:`study.kernels.events`). The
 Dormand-Prince step, its error norm and dense output are :mod:`study.kernels.dopri`'s.
 
-Everything here is private: :mod:`study.solvers.integrator` validates, allocates and calls.
+The loop itself is :func:`study.kernels.event_loop.make_loop`; this module gives it the
+single-plate model as hooks. The kinetic coefficient is the chosen friction law's
+(:func:`study.kernels.friction.kinetic_coefficient`, Coulomb's ``ck`` by default);
+with a speed-dependent law the force rates that watch for dips between event samples
+leave out the coefficient's own rate, and Painleve's paradox is checked with the
+coefficient at the slip's speed where the slip (re)starts.
+
+:mod:`study.solvers.integrator` validates, allocates and calls :func:`integrate`,
+:func:`periodic_points` and :func:`periodic_points_serial`.
 """
 
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit, prange
 
-from study.kernels.dopri import (
-    dense_output,
-    error_norm,
-    growth_factor,
-    shrink_factor,
-    step,
-    table_drive,
+from study.kernels.dopri import dense_output, step, table_drive
+from study.kernels.event_loop import (
+    EventLog,
+    Hooks,
+    Samples,
+    Segments,
+    State,
+    StepControl,
+    make_loop,
 )
-from study.kernels.dopri import workspace as step_workspace
-from study.kernels.events import first_event, record
-from study.kernels.events import workspace as event_workspace
+from study.kernels.events import record
+from study.kernels.friction import kinetic_coefficient
 from study.kernels.structure_vector import (
     COS_ALPHA,
     DAMPING,
     GRAVITY,
-    KINETIC_FRICTION,
     MASS_RATIO,
     SIN_ALPHA,
     STATIC_FRICTION,
@@ -58,7 +67,6 @@ from study.kernels.structure_vector import (
 )
 from study.model.codes import (
     CONTINUOUS_SLIDING,
-    EVENT_LIFT_OFF,
     EVENT_PARADOX,
     EVENT_RELEASE_BACKWARD,
     EVENT_RELEASE_FORWARD,
@@ -68,7 +76,6 @@ from study.model.codes import (
     NOT_CONVERGED,
     REASON_EVENT_BUDGET,
     REASON_NO_PERIODIC_ORBIT,
-    RUN_BUDGET,
     RUN_DONE,
     RUN_LIFT_OFF,
     RUN_PARADOX,
@@ -77,18 +84,52 @@ from study.model.codes import (
     STICK_SLIP,
 )
 
+# State layout: deflection [m], its rate [m s-1], base position [m] and velocity [m s-1].
+DELTA = 0
+DELTA_RATE = 1
+X = 2
+V = 3
+STATE_SIZE = 4
+
+# Event functions: forward release (stick) or slip end (slip), backward release (stick),
+# lift-off (always).
+EVENTS = 3
+RELEASE_OR_SLIP_END = 0
+LIFT = 2
+
+# Entries of the run statistics.
+STEPS = 0
+REJECTED = 1
+SLIPS = 2
+STUCK_TIME = 3
+FORWARD_TIME = 4
+BACKWARD_TIME = 5
+STATS_SIZE = 6
+
+# Entries of a periodic point's result.
+R_STATUS = 0
+R_REASON = 1
+R_VELOCITY = 2
+R_SLIPS = 3
+R_FORWARD = 4
+R_BACKWARD = 5
+R_ORBIT_PERIOD = 6
+R_PERIODS = 7
+R_STEPS = 8
+RESULT_SIZE = 9
+
 
 @njit(cache=True, nogil=True)
 def _accelerations(p, mode, drive, y):
     """``(delta'', x'')`` in contact mode ``mode`` with drive acceleration ``drive``."""
-    forcing = drive * p[COS_ALPHA] - p[DAMPING] * y[1] - p[STIFFNESS] * y[0]
+    forcing = drive * p[COS_ALPHA] - p[DAMPING] * y[DELTA_RATE] - p[STIFFNESS] * y[DELTA]
     if mode == STICK:
         return forcing, 0.0
     s = float(mode)
     m = p[MASS_RATIO]
     ca = p[COS_ALPHA]
     sa = p[SIN_ALPHA]
-    ck = p[KINETIC_FRICTION]
+    ck = kinetic_coefficient(p, y, V)
     if p[TWO_WAY] != 0.0:
         denominator = 1.0 - m * sa * (sa + s * ck * ca)
         xdd = (-m * sa * forcing - s * ck * (p[GRAVITY] - drive + m * ca * forcing)) / denominator
@@ -100,10 +141,10 @@ def _accelerations(p, mode, drive, y):
 @njit(cache=True, nogil=True)
 def _rhs(p, mode, drive, y, out):
     ddd, xdd = _accelerations(p, mode, drive, y)
-    out[0] = y[1]
-    out[1] = ddd
-    out[2] = y[3]
-    out[3] = xdd
+    out[DELTA] = y[DELTA_RATE]
+    out[DELTA_RATE] = ddd
+    out[X] = y[V]
+    out[V] = xdd
 
 
 @njit(cache=True, nogil=True)
@@ -116,11 +157,11 @@ def _forces(p, mode, drive, drive_rate_neg, y):
     ca = p[COS_ALPHA]
     sa = p[SIN_ALPHA]
     m = p[MASS_RATIO]
-    forcing_rate = -drive_rate_neg * ca - p[DAMPING] * ddd - p[STIFFNESS] * y[1]
+    forcing_rate = -drive_rate_neg * ca - p[DAMPING] * ddd - p[STIFFNESS] * y[DELTA_RATE]
     dddd = forcing_rate
     if mode != STICK and p[TWO_WAY] != 0.0:
         s = float(mode)
-        ck = p[KINETIC_FRICTION]
+        ck = kinetic_coefficient(p, y, V)
         denominator = 1.0 - m * sa * (sa + s * ck * ca)
         dddd = (forcing_rate + s * ck * sa * drive_rate_neg) / denominator
     n = p[GRAVITY] - drive + m * ca * ddd
@@ -146,12 +187,12 @@ def _event_values(p, mode, drive, drive_rate_neg, y, values, rates):
         rates[1] = cs * n_rate + tau_rate
     else:
         s = float(mode)
-        values[0] = s * y[3]
+        values[0] = s * y[V]
         rates[0] = s * xdd
         values[1] = 1.0
         rates[1] = 0.0
-    values[2] = n
-    rates[2] = n_rate
+    values[LIFT] = n
+    rates[LIFT] = n_rate
 
 
 @njit(cache=True, nogil=True)
@@ -164,10 +205,10 @@ def _step(p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp):
     step(_rhs, p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp)
     if mode == STICK:
         # x and v are exactly constant while stuck.
-        y_new[2] = y[2]
-        y_new[3] = 0.0
-        err[2] = 0.0
-        err[3] = 0.0
+        y_new[X] = y[X]
+        y_new[V] = 0.0
+        err[X] = 0.0
+        err[V] = 0.0
 
 
 @njit(cache=True, nogil=True)
@@ -175,7 +216,7 @@ def _values_at(theta, p, mode, t, h, dense, drive_args, ystate, values, rates):
     seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
     dense_output(theta, h, dense, ystate)
     if mode == STICK:
-        ystate[3] = 0.0
+        ystate[V] = 0.0
     drive, rate = table_drive(t + theta * h, seg, seg_t0, seg_omega, seg_a, seg_phase0)
     _event_values(p, mode, drive, rate, ystate, values, rates)
 
@@ -196,190 +237,122 @@ def _mode_after_rest(p, drive, y):
 
 
 @njit(cache=True, nogil=True)
-def _paradox(p, mode):
+def _paradox(p, mode, y):
     if mode == STICK or p[TWO_WAY] == 0.0:
         return False
     s = float(mode)
     sa = p[SIN_ALPHA]
-    return 1.0 - p[MASS_RATIO] * sa * (sa + s * p[KINETIC_FRICTION] * p[COS_ALPHA]) <= 0.0
+    ck = kinetic_coefficient(p, y, V)
+    return 1.0 - p[MASS_RATIO] * sa * (sa + s * ck * p[COS_ALPHA]) <= 0.0
 
 
 @njit(cache=True, nogil=True)
-def integrate(
-    p, seg_t0, seg_omega, seg_a, seg_phase0, seg_end,
-    y, mode_box, t_box, t_stop,
-    rtol, atol, scale, fixed_step, max_step, xtol_time, samples, max_steps,
-    out_t, out_y, out_mode, out_box,
-    ev_t, ev_kind, ev_y, ev_box,
-    stats,
-):
-    """Integrate from ``t_box[0]`` to ``t_stop`` (within the segments), in place.
+def _release_event(mode):
+    return EVENT_RELEASE_FORWARD if mode > 0 else EVENT_RELEASE_BACKWARD
 
-    With ``fixed_step > 0`` steps end on the grid ``t_box[0] + k fixed_step`` (and at
-    events); otherwise the step is adapted to ``rtol``/``atol``.
 
-    ``y``, ``mode_box[0]``, ``t_box[0]`` carry the state in and out; ``t_box[1]`` is the
-    step size to try first (updated). Output samples at ``out_t`` (sorted) are written
-    from index ``out_box[0]`` on; events are recorded in ``ev_*`` while ``ev_box[0]``
-    is below their capacity. ``stats`` accumulates ``[steps, rejected, slips,
-    stuck time, forward slip time, backward slip time]``.
-
-    Returns a ``RUN_*`` code.
-    """
-    n = y.shape[0]
-    k, y_new, err, dense, tmp, ystate = step_workspace(n)
-    values, rates, prev_values, prev_rates = event_workspace(3)
-    mode = mode_box[0]
-    t = t_box[0]
-    t_origin = t
-    h = t_box[1]
-    seg = 0
-    while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
-        seg += 1
-    need_rhs = True
-    fresh = mode != STICK and y[3] == 0.0
-    steps = 0
-    while t < t_stop:
-        if steps >= max_steps:
-            mode_box[0] = mode
-            t_box[0] = t
-            return RUN_BUDGET
-        while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
-            seg += 1
-            need_rhs = True
-        drive_args = (seg, seg_t0, seg_omega, seg_a, seg_phase0)
-        if need_rhs:
-            drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-            if mode == STICK:
-                y[3] = 0.0
-                new_mode = _mode_after_rest(p, drive, y)
-                if new_mode != STICK:
-                    mode = new_mode
-                    fresh = True
-                    stats[2] += 1.0
-                    record(ev_t, ev_kind, ev_y, ev_box, t,
-                            EVENT_RELEASE_FORWARD if mode > 0 else EVENT_RELEASE_BACKWARD, y)
-            if _paradox(p, mode):
-                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_PARADOX, y)
-                mode_box[0] = mode
-                t_box[0] = t
-                return RUN_PARADOX
-            _event_values(p, mode, drive, rate, y, values, rates)
-            if values[2] < 0.0:
-                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
-                mode_box[0] = mode
-                t_box[0] = t
-                return RUN_LIFT_OFF
-            _rhs(p, mode, drive, y, k[0])
-            need_rhs = False
-        # Steps end on segment ends, the stop time and never exceed the cap.
-        limit = min(t_stop, seg_end[seg])
-        if fixed_step > 0.0:
-            # Fixed steps stay on a grid anchored at the call's start time: after an
-            # event the step ends on the next grid point, so every drive period is cut
-            # the same way and a periodic orbit repeats exactly.
-            grid = math.floor((t - t_origin) / fixed_step * (1.0 + 1e-12)) + 1.0
-            h = t_origin + grid * fixed_step - t
-            if h < 1e-9 * fixed_step:
-                h += fixed_step
-        h = min(h, max_step)
-        last = False
-        if t + 1.01 * h >= limit:
-            h = limit - t
-            last = True
-        if h <= 0.0:
-            t = limit
-            continue
-        _step(p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp)
-        steps += 1
-        stats[0] += 1.0
-        if fixed_step <= 0.0:
-            norm = error_norm(err, y, y_new, scale, rtol, atol)
-            if not norm <= 1.0:
-                stats[1] += 1.0
-                h *= shrink_factor(norm)
-                if h < 1e-14 * max(abs(t), max_step):
-                    mode_box[0] = mode
-                    t_box[0] = t
-                    return RUN_BUDGET
-                continue
-            factor = growth_factor(norm)
-        else:
-            factor = 1.0
-        which, theta = first_event(
-            _values_at, p, mode, t, h, dense, drive_args, samples, xtol_time / h, fresh,
-            ystate, values, rates, prev_values, prev_rates,
-        )
-        t_end = t + theta * h if which >= 0 else t + h
-        if last and which < 0:
-            t_end = limit
-        # Output samples inside the accepted part of the step.
-        while out_box[0] < out_t.shape[0] and out_t[out_box[0]] <= t_end:
-            j = out_box[0]
-            dense_output((out_t[j] - t) / h, h, dense, ystate)
-            if mode == STICK:
-                ystate[3] = 0.0
-                ystate[2] = y[2]
-            for i in range(n):
-                out_y[j, i] = ystate[i]
-            out_mode[j] = mode
-            out_box[0] += 1
-        duration = t_end - t
-        if mode == STICK:
-            stats[3] += duration
-        elif mode > 0:
-            stats[4] += duration
-        else:
-            stats[5] += duration
-        if which < 0:
-            for i in range(n):
-                y[i] = y_new[i]
-                k[0, i] = k[6, i]
-            t = t_end
-            h *= factor
-            fresh = False
-            continue
-        dense_output(theta, h, dense, ystate)
-        for i in range(n):
-            y[i] = ystate[i]
-        if mode == STICK:
-            y[3] = 0.0
-        t = t_end
-        need_rhs = True
-        drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-        if which == 2:
-            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
-            mode_box[0] = mode
-            t_box[0] = t
-            return RUN_LIFT_OFF
-        if mode == STICK:
-            mode = 1 if which == 0 else -1
+@njit(cache=True, nogil=True)
+def _restart(p, mode, fresh, t, drive, rate, y, k0, values, rates, events, stats):
+    """The event loop's ``restart`` hook (:data:`study.kernels.event_loop.Hooks`)."""
+    if mode == STICK:
+        y[V] = 0.0
+        new_mode = _mode_after_rest(p, drive, y)
+        if new_mode != STICK:
+            mode = new_mode
             fresh = True
-            stats[2] += 1.0
-            record(ev_t, ev_kind, ev_y, ev_box, t,
-                    EVENT_RELEASE_FORWARD if mode > 0 else EVENT_RELEASE_BACKWARD, y)
-        else:
-            y[3] = 0.0
-            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_SLIP_END, y)
-            after = _mode_after_rest(p, drive, y)
-            if after == -mode:
-                stats[2] += 1.0
-                record(ev_t, ev_kind, ev_y, ev_box, t,
-                        EVENT_RELEASE_FORWARD if after > 0 else EVENT_RELEASE_BACKWARD, y)
-            # A reversal starts a fresh slip; a tangential touch continues the old one.
-            fresh = after == -mode
-            mode = after
-    mode_box[0] = mode
-    t_box[0] = t
-    t_box[1] = h
+            stats[SLIPS] += 1.0
+            record(events, t, _release_event(mode), y)
+    if _paradox(p, mode, y):
+        record(events, t, EVENT_PARADOX, y)
+        return mode, fresh, RUN_PARADOX
+    _event_values(p, mode, drive, rate, y, values, rates)
+    _rhs(p, mode, drive, y, k0)
+    return mode, fresh, RUN_DONE
+
+
+@njit(cache=True, nogil=True)
+def _prepare(p, mode, t, drive_args, y, k0, events):
+    """The ``prepare`` hook: nothing to do before a step."""
     return RUN_DONE
 
 
 @njit(cache=True, nogil=True)
-def _periodic_point(
-    p, omega, amplitude, y0, rtol, atol, scale, fixed_step, max_step, xtol_time, samples,
-    max_steps, max_periods, max_orbit, period_tolerance, result,
-):
+def _hold(p, mode, before, state):
+    """The ``hold`` hook: x and v are constant while stuck."""
+    if mode == STICK:
+        state[V] = 0.0
+        state[X] = before[X]
+
+
+@njit(cache=True, nogil=True)
+def _account(mode, duration, stats):
+    if mode == STICK:
+        stats[STUCK_TIME] += duration
+    elif mode > 0:
+        stats[FORWARD_TIME] += duration
+    else:
+        stats[BACKWARD_TIME] += duration
+
+
+@njit(cache=True, nogil=True)
+def _accepted(p, mode, y):
+    return mode
+
+
+@njit(cache=True, nogil=True)
+def _transition(p, mode, which, t, drive, y, events, stats):
+    """The ``transition`` hook: a release starts a slip; a slip end sticks, or reverses
+    the slip when the stick forces already exceed the static limit the other way."""
+    if mode == STICK:
+        mode = 1 if which == RELEASE_OR_SLIP_END else -1
+        stats[SLIPS] += 1.0
+        record(events, t, _release_event(mode), y)
+        return mode, True
+    y[V] = 0.0
+    record(events, t, EVENT_SLIP_END, y)
+    after = _mode_after_rest(p, drive, y)
+    if after == -mode:
+        stats[SLIPS] += 1.0
+        record(events, t, _release_event(after), y)
+    # A reversal starts a fresh slip; a tangential touch continues the old one.
+    return after, after == -mode
+
+
+@njit(cache=True, nogil=True)
+def _at_rest(y):
+    return y[V] == 0.0
+
+
+_loop = make_loop(Hooks(_restart, _prepare, _step, _values_at, _hold, _account, _accepted,
+                        _transition, _at_rest, EVENTS, LIFT))
+
+
+@njit(cache=True, nogil=True)
+def integrate(p, segments, state, t_stop, control, samples, events, stats):
+    """Integrate the single-plate model with structure vector ``p`` from
+    ``state.clock[0]`` to ``t_stop``, in place (:func:`study.kernels.event_loop.make_loop`).
+
+    ``stats`` (:data:`STATS_SIZE` entries) accumulates steps, rejected steps, slips and
+    the time stuck, slipping forward and slipping backward [s]. Returns a ``RUN_*`` code.
+    """
+    return _loop(p, segments, state, t_stop, control, samples, events, stats)
+
+
+#: The points of :func:`periodic_points`, one entry (or row) each: drive ``omega``
+#: [rad s-1] and ``amplitude`` [m s-2], start state ``y0`` (rows), tolerance ``scale``
+#: (rows), ``fixed_step``, ``max_step`` and ``xtol_time`` [s].
+Points = namedtuple("Points", "omega amplitude y0 scale fixed_step max_step xtol_time")
+
+#: Settings shared by every point: tolerances ``rtol``, ``atol`` [1], event ``samples``
+#: per step, ``max_steps`` per period, ``max_periods``, ``max_orbit`` (longest orbit
+#: period looked for [periods]) and ``period_tolerance`` [1].
+PeriodicSearch = namedtuple(
+    "PeriodicSearch", "rtol atol samples max_steps max_periods max_orbit period_tolerance")
+
+
+@njit(cache=True, nogil=True)
+def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_time, search,
+                    result):
     """Integrate whole drive periods until the state repeats; mean velocity of the orbit.
 
     The state at each period boundary (``delta``, ``delta'``, ``v``, contact mode) and
@@ -389,73 +362,66 @@ def _periodic_point(
     Time restarts at zero each period (phase ``2 pi k`` is phase 0), so the phase
     keeps full precision however many periods are needed.
 
-    ``result`` receives ``[status, reason, velocity, slips per period, forward
-    fraction, backward fraction, orbit period, periods integrated, steps]``.
+    ``result`` (:data:`RESULT_SIZE` entries, named ``R_*``) receives ``[status, reason,
+    velocity, slips per period, forward fraction, backward fraction, orbit period,
+    periods integrated, steps]``.
     """
     period = 2.0 * math.pi / omega
-    seg_t0 = np.zeros(1)
-    seg_omega = np.full(1, omega)
-    seg_a = np.full(1, amplitude)
-    seg_phase0 = np.zeros(1)
-    seg_end = np.full(1, np.inf)
+    segments = Segments(np.zeros(1), np.full(1, omega), np.full(1, amplitude), np.zeros(1),
+                        np.full(1, np.inf))
     n = y0.shape[0]
     y = y0.copy()
     mode_box = np.zeros(1, dtype=np.int64)
-    if y[3] > 0.0:
+    if y[V] > 0.0:
         mode_box[0] = 1
-    elif y[3] < 0.0:
+    elif y[V] < 0.0:
         mode_box[0] = -1
-    t_box = np.array([0.0, max_step])
-    out_t = np.empty(0)
-    out_y = np.empty((0, n))
-    out_mode = np.empty(0, dtype=np.int64)
-    out_box = np.zeros(1, dtype=np.int64)
-    ev_t = np.empty(0)
-    ev_kind = np.empty(0, dtype=np.int64)
-    ev_y = np.empty((0, n))
-    ev_box = np.zeros(1, dtype=np.int64)
+    state = State(y, mode_box, np.array([0.0, max_step]))
+    control = StepControl(search.rtol, search.atol, scale, fixed_step, max_step, xtol_time,
+                          search.samples, search.max_steps)
+    samples = Samples(np.empty(0), np.empty((0, n)), np.empty(0, dtype=np.int64),
+                      np.zeros(1, dtype=np.int64))
+    events = EventLog(np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, n)),
+                      np.zeros(1, dtype=np.int64))
+    max_orbit = search.max_orbit
     ring = max_orbit + 1
     hist_state = np.empty((ring, 3))
     hist_mode = np.empty(ring, dtype=np.int64)
     hist_disp = np.empty(ring)
-    hist_stats = np.empty((ring, 6))
-    stats = np.zeros(6)
+    hist_stats = np.empty((ring, STATS_SIZE))
+    stats = np.zeros(STATS_SIZE)
     steps_total = 0.0
-    for i in range(9):
+    for i in range(RESULT_SIZE):
         result[i] = 0.0
-    for k in range(max_periods):
-        y[2] = 0.0
-        t_box[0] = 0.0
-        for i in range(6):
+    for k in range(search.max_periods):
+        y[X] = 0.0
+        state.clock[0] = 0.0
+        for i in range(STATS_SIZE):
             stats[i] = 0.0
-        code = integrate(
-            p, seg_t0, seg_omega, seg_a, seg_phase0, seg_end, y, mode_box, t_box, period,
-            rtol, atol, scale, fixed_step, max_step, xtol_time, samples, max_steps,
-            out_t, out_y, out_mode, out_box, ev_t, ev_kind, ev_y, ev_box, stats,
-        )
-        steps_total += stats[0]
-        result[7] = k + 1
-        result[8] = steps_total
+        code = integrate(p, segments, state, period, control, samples, events, stats)
+        steps_total += stats[STEPS]
+        result[R_PERIODS] = k + 1
+        result[R_STEPS] = steps_total
         if code != RUN_DONE:
-            result[2] = np.nan
-            result[3] = np.nan
-            result[4] = np.nan
-            result[5] = np.nan
+            result[R_VELOCITY] = np.nan
+            result[R_SLIPS] = np.nan
+            result[R_FORWARD] = np.nan
+            result[R_BACKWARD] = np.nan
             if code == RUN_LIFT_OFF:
-                result[0] = LIFT_OFF
+                result[R_STATUS] = LIFT_OFF
             elif code == RUN_PARADOX:
-                result[0] = FRICTION_PARADOX
+                result[R_STATUS] = FRICTION_PARADOX
             else:
-                result[0] = NOT_CONVERGED
-                result[1] = REASON_EVENT_BUDGET
+                result[R_STATUS] = NOT_CONVERGED
+                result[R_REASON] = REASON_EVENT_BUDGET
             return
         slot = k % ring
-        hist_state[slot, 0] = y[0]
-        hist_state[slot, 1] = y[1]
-        hist_state[slot, 2] = y[3]
+        hist_state[slot, 0] = y[DELTA]
+        hist_state[slot, 1] = y[DELTA_RATE]
+        hist_state[slot, 2] = y[V]
         hist_mode[slot] = mode_box[0]
-        hist_disp[slot] = y[2]
-        for i in range(6):
+        hist_disp[slot] = y[X]
+        for i in range(STATS_SIZE):
             hist_stats[slot, i] = stats[i]
         for q in range(1, max_orbit + 1):
             if k < q:
@@ -464,12 +430,12 @@ def _periodic_point(
             if hist_mode[other] != hist_mode[slot]:
                 continue
             gap = max(
-                abs(hist_state[slot, 0] - hist_state[other, 0]) / scale[0],
-                abs(hist_state[slot, 1] - hist_state[other, 1]) / scale[1],
-                abs(hist_state[slot, 2] - hist_state[other, 2]) / scale[3],
-                abs(hist_disp[slot] - hist_disp[other]) / scale[2],
+                abs(hist_state[slot, 0] - hist_state[other, 0]) / scale[DELTA],
+                abs(hist_state[slot, 1] - hist_state[other, 1]) / scale[DELTA_RATE],
+                abs(hist_state[slot, 2] - hist_state[other, 2]) / scale[V],
+                abs(hist_disp[slot] - hist_disp[other]) / scale[X],
             )
-            if not gap <= period_tolerance:
+            if not gap <= search.period_tolerance:
                 continue
             distance = 0.0
             slips = 0.0
@@ -479,61 +445,52 @@ def _periodic_point(
             for back in range(q):
                 r = (k - back) % ring
                 distance += hist_disp[r]
-                slips += hist_stats[r, 2]
-                stuck += hist_stats[r, 3]
-                forward += hist_stats[r, 4]
-                backward += hist_stats[r, 5]
+                slips += hist_stats[r, SLIPS]
+                stuck += hist_stats[r, STUCK_TIME]
+                forward += hist_stats[r, FORWARD_TIME]
+                backward += hist_stats[r, BACKWARD_TIME]
             span = q * period
             if slips == 0.0 and forward == 0.0 and backward == 0.0:
-                result[0] = STATIC
-                result[2] = 0.0
+                result[R_STATUS] = STATIC
+                result[R_VELOCITY] = 0.0
             else:
                 # A stick counts when it lasts longer than the event tolerance.
-                result[0] = STICK_SLIP if stuck > q * xtol_time else CONTINUOUS_SLIDING
-                result[2] = distance / span
-            result[3] = slips / q
-            result[4] = forward / span
-            result[5] = backward / span
-            result[6] = q
+                result[R_STATUS] = STICK_SLIP if stuck > q * xtol_time else CONTINUOUS_SLIDING
+                result[R_VELOCITY] = distance / span
+            result[R_SLIPS] = slips / q
+            result[R_FORWARD] = forward / span
+            result[R_BACKWARD] = backward / span
+            result[R_ORBIT_PERIOD] = q
             return
-    result[0] = NOT_CONVERGED
-    result[1] = REASON_NO_PERIODIC_ORBIT
-    result[2] = np.nan
-    result[3] = np.nan
-    result[4] = np.nan
-    result[5] = np.nan
+    result[R_STATUS] = NOT_CONVERGED
+    result[R_REASON] = REASON_NO_PERIODIC_ORBIT
+    result[R_VELOCITY] = np.nan
+    result[R_SLIPS] = np.nan
+    result[R_FORWARD] = np.nan
+    result[R_BACKWARD] = np.nan
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def periodic_points(
-    p, omega, amplitude, y0, rtol, atol, scale, fixed_step, max_step, xtol_time, samples,
-    max_steps, max_periods, max_orbit, period_tolerance, results,
-):
-    """:func:`_periodic_point` for every point, in parallel (interleaved lanes).
-
-    Per-point arrays: ``omega``, ``amplitude``, ``y0`` (rows), ``scale`` (rows),
-    ``fixed_step``, ``max_step``, ``xtol_time``; ``results`` has one row per point.
-    """
-    n = omega.shape[0]
+def periodic_points(p, points, search, results):
+    """:func:`_periodic_point` for every point of ``points`` (:data:`Points`), in
+    parallel (interleaved lanes); ``results`` has one row per point."""
+    n = points.omega.shape[0]
     lanes = min(n, 256)
     for lane in prange(lanes):
         for i in range(lane, n, lanes):
             _periodic_point(
-                p, omega[i], amplitude[i], y0[i], rtol, atol, scale[i], fixed_step[i],
-                max_step[i], xtol_time[i], samples, max_steps, max_periods, max_orbit,
-                period_tolerance, results[i],
+                p, points.omega[i], points.amplitude[i], points.y0[i], points.scale[i],
+                points.fixed_step[i], points.max_step[i], points.xtol_time[i], search,
+                results[i],
             )
 
 
 @njit(cache=True, nogil=True)
-def periodic_points_serial(
-    p, omega, amplitude, y0, rtol, atol, scale, fixed_step, max_step, xtol_time, samples,
-    max_steps, max_periods, max_orbit, period_tolerance, results,
-):
+def periodic_points_serial(p, points, search, results):
     """Same as :func:`periodic_points` on the calling thread."""
-    for i in range(omega.shape[0]):
+    for i in range(points.omega.shape[0]):
         _periodic_point(
-            p, omega[i], amplitude[i], y0[i], rtol, atol, scale[i], fixed_step[i],
-            max_step[i], xtol_time[i], samples, max_steps, max_periods, max_orbit,
-            period_tolerance, results[i],
+            p, points.omega[i], points.amplitude[i], points.y0[i], points.scale[i],
+            points.fixed_step[i], points.max_step[i], points.xtol_time[i], search,
+            results[i],
         )

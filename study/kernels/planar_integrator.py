@@ -33,10 +33,11 @@ zero of ``u . d`` with ``d`` the twist direction at the start of the step (near 
 end a slip's twist shrinks to zero along a converging direction, so the projection
 changes sign there).
 
-Steps are :mod:`study.kernels.dopri`'s; events are located by
+The loop is :func:`study.kernels.event_loop.make_loop` (shared with the single plate):
+steps are :mod:`study.kernels.dopri`'s; events are located by
 :mod:`study.kernels.events`: sampled on the dense output, watched at their minima,
-refined by the Illinois method. Everything here is private:
-:mod:`study.scenes.planar_model` validates, allocates and calls.
+refined by the Illinois method. This module gives the loop the disk as hooks;
+:mod:`study.scenes.planar_model` validates, allocates and calls :func:`integrate`.
 """
 
 from __future__ import annotations
@@ -46,25 +47,14 @@ import math
 import numpy as np
 from numba import njit
 
-from study.kernels.dopri import (
-    dense_output,
-    error_norm,
-    growth_factor,
-    shrink_factor,
-    step,
-    table_drive,
-)
-from study.kernels.dopri import workspace as step_workspace
-from study.kernels.events import first_event, record
-from study.kernels.events import workspace as event_workspace
+from study.kernels.dopri import dense_output, step, table_drive
+from study.kernels.event_loop import Hooks, make_loop
+from study.kernels.events import record
 from study.model.codes import (
-    EVENT_LIFT_OFF,
     EVENT_PARADOX,
     EVENT_RELEASE,
     EVENT_SLIP_END,
-    RUN_BUDGET,
     RUN_DONE,
-    RUN_LIFT_OFF,
     RUN_PARADOX,
     STICK,
 )
@@ -106,6 +96,21 @@ DK_GYRATION2 = 4  # rho^2 [m^2]
 DK_SLAVED = 5  # twist below which its direction is the slaved one [m s-1]
 DK_TWO_WAY = 6  # 1.0 for two-way coupling of the plates
 N_DISK_PARAMETERS = 7
+
+# Event functions: release (stick) or slip end (slip), lift-off (always).
+EVENTS = 2
+LIFT = 1
+
+# Entries of the run statistics.
+STEPS = 0
+REJECTED = 1
+SLIPS = 2
+STUCK_TIME = 3
+SLIPPING_TIME = 4
+STATS_SIZE = 5
+
+# Length of the scratch array of the model's functions.
+WORK_SIZE = 23
 
 # Safeguarded Newton iterations of the slaved-direction equation (converges in a few).
 SLAVED_ITERATIONS = 100
@@ -451,10 +456,10 @@ def _model_rhs(model, mode, drive, y, out):
 
 
 @njit(cache=True, nogil=True)
-def _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, dense, tmp, work):
-    """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL)."""
-    step(_model_rhs, (plates, disk, reference, work), mode, t, h, y, k, drive_args, y_new,
-         err, dense, tmp)
+def _step(model, mode, t, h, y, k, drive_args, y_new, err, dense, tmp):
+    """One Dormand-Prince step from ``(t, y)`` with ``k[0] = f(t, y)`` (FSAL),
+    ``model = (plates, disk, reference, work)``."""
+    step(_model_rhs, model, mode, t, h, y, k, drive_args, y_new, err, dense, tmp)
     if mode == STICK:
         # The pose is exactly frozen while stuck.
         for i in range(MODES):
@@ -494,167 +499,120 @@ def _mode_after_rest(plates, disk, drive, y, work):
 
 
 @njit(cache=True, nogil=True)
-def integrate(
-    plates, disk, seg_t0, seg_omega, seg_a, seg_phase0, seg_end,
-    y, mode_box, t_box, t_stop,
-    rtol, atol, scale, max_step, xtol_time, samples, max_steps,
-    out_t, out_y, out_mode, out_box,
-    ev_t, ev_kind, ev_y, ev_box,
-    stats,
-):
-    """Integrate from ``t_box[0]`` to ``t_stop`` in place; returns a ``RUN_*`` code.
-
-    ``y``, ``mode_box[0]`` and ``t_box = (t, next step size)`` carry the state in and
-    out, so a run can be continued by another call. Output samples at ``out_t`` are written from
-    ``out_box[0]`` on, events while ``ev_box[0]`` is below their capacity. ``stats``
-    accumulates ``[steps, rejected, slips, stuck time, slipping time]``.
-    """
-    n = y.shape[0]
-    k, y_new, err, dense, tmp, ystate = step_workspace(n)
-    values, rates, prev_values, prev_rates = event_workspace(2)
-    work = np.empty(23)
-    reference = np.zeros(3)
-    mode = mode_box[0]
-    t = t_box[0]
-    h = t_box[1]
-    seg = 0
-    while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
-        seg += 1
-    need_rhs = True
-    length = disk[DK_LENGTH]
-    fresh = mode != STICK and y[VX] == 0.0 and y[VY] == 0.0 and y[SPIN] == 0.0
-    steps = 0
-    while t < t_stop:
-        if steps >= max_steps:
-            mode_box[0] = mode
-            t_box[0] = t
-            return RUN_BUDGET
-        while seg < seg_end.shape[0] - 1 and t >= seg_end[seg]:
-            seg += 1
-            need_rhs = True
-        drive_args = (seg, seg_t0, seg_omega, seg_a, seg_phase0)
-        if need_rhs:
-            drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-            if mode == STICK:
-                y[VX] = 0.0
-                y[VY] = 0.0
-                y[SPIN] = 0.0
-                if _mode_after_rest(plates, disk, drive, y, work) == ONSET:
-                    mode = ONSET
-                    fresh = True
-                    stats[2] += 1.0
-                    record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
-            _event_values(plates, disk, mode, reference, drive, rate, y, values, rates, work)
-            if values[1] < 0.0:
-                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
-                mode_box[0] = mode
-                t_box[0] = t
-                return RUN_LIFT_OFF
-            _rhs(plates, disk, mode, reference, drive, y, k[0], work)
-            need_rhs = False
-        limit = min(t_stop, seg_end[seg])
-        h = min(h, max_step)
-        last = False
-        if t + 1.01 * h >= limit:
-            h = limit - t
-            last = True
-        if h <= 0.0:
-            t = limit
-            continue
-        if mode != STICK:
-            # The slip end is watched along the friction direction at the step start.
-            drive, _ = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-            loads = work[0:8]
-            wrench = work[8:14]
-            _loads(plates, disk, drive, 0.0, y, loads)
-            _world_wrench(disk, y[HEADING], loads, wrench)
-            size = math.sqrt(y[VX] ** 2 + y[VY] ** 2 + (length * y[SPIN]) ** 2)
-            if size > 0.0 and (mode == SLIP or size > disk[DK_SLAVED]):
-                reference[0] = y[VX] / size
-                reference[1] = y[VY] / size
-                reference[2] = length * y[SPIN] / size
-            else:
-                _slaved_direction(disk, loads[0], wrench, reference)
-            if disk[DK_TWO_WAY] != 0.0:
-                _, det = _two_way(plates, disk, y, loads, reference, work[17:23])
-                if not det > 0.0:
-                    record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_PARADOX, y)
-                    mode_box[0] = mode
-                    t_box[0] = t
-                    return RUN_PARADOX
-            if mode == SLIP and size <= disk[DK_SLAVED]:
-                # The frozen direction of this step differs from the last step's.
-                _rhs(plates, disk, mode, reference, drive, y, k[0], work)
-        _step(plates, disk, mode, reference, t, h, y, k, drive_args, y_new, err, dense, tmp, work)
-        steps += 1
-        stats[0] += 1.0
-        norm = error_norm(err, y, y_new, scale, rtol, atol)
-        if not norm <= 1.0:
-            stats[1] += 1.0
-            h *= shrink_factor(norm)
-            if h < 1e-14 * max(abs(t), max_step):
-                mode_box[0] = mode
-                t_box[0] = t
-                return RUN_BUDGET
-            continue
-        factor = growth_factor(norm)
-        which, theta = first_event(
-            _values_at, (plates, disk, reference, work), mode, t, h, dense, drive_args,
-            samples, xtol_time / h, fresh, ystate, values, rates, prev_values, prev_rates,
-        )
-        t_end = t + theta * h if which >= 0 else t + h
-        if last and which < 0:
-            t_end = limit
-        while out_box[0] < out_t.shape[0] and out_t[out_box[0]] <= t_end:
-            j = out_box[0]
-            dense_output((out_t[j] - t) / h, h, dense, ystate)
-            for i in range(n):
-                out_y[j, i] = ystate[i]
-            out_mode[j] = mode
-            out_box[0] += 1
-        if mode == STICK:
-            stats[3] += t_end - t
-        else:
-            stats[4] += t_end - t
-        if which < 0:
-            for i in range(n):
-                y[i] = y_new[i]
-                k[0, i] = k[6, i]
-            t = t_end
-            h *= factor
-            fresh = False
-            if mode == ONSET:
-                twist = math.sqrt(y[VX] ** 2 + y[VY] ** 2 + (length * y[SPIN]) ** 2)
-                if twist > disk[DK_SLAVED]:
-                    mode = SLIP
-            continue
-        dense_output(theta, h, dense, ystate)
-        for i in range(n):
-            y[i] = ystate[i]
-        t = t_end
-        need_rhs = True
-        drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
-        if which == 1:
-            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_LIFT_OFF, y)
-            mode_box[0] = mode
-            t_box[0] = t
-            return RUN_LIFT_OFF
-        if mode == STICK:
+def _restart(model, mode, fresh, t, drive, rate, y, k0, values, rates, events, stats):
+    """The event loop's ``restart`` hook (:data:`study.kernels.event_loop.Hooks`)."""
+    plates, disk, reference, work = model
+    if mode == STICK:
+        y[VX] = 0.0
+        y[VY] = 0.0
+        y[SPIN] = 0.0
+        if _mode_after_rest(plates, disk, drive, y, work) == ONSET:
             mode = ONSET
             fresh = True
-            stats[2] += 1.0
-            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
-        else:
-            y[VX] = 0.0
-            y[VY] = 0.0
-            y[SPIN] = 0.0
-            record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_SLIP_END, y)
-            mode = _mode_after_rest(plates, disk, drive, y, work)
-            fresh = mode == ONSET
-            if fresh:
-                stats[2] += 1.0
-                record(ev_t, ev_kind, ev_y, ev_box, t, EVENT_RELEASE, y)
-    mode_box[0] = mode
-    t_box[0] = t
-    t_box[1] = h
+            stats[SLIPS] += 1.0
+            record(events, t, EVENT_RELEASE, y)
+    _event_values(plates, disk, mode, reference, drive, rate, y, values, rates, work)
+    _rhs(plates, disk, mode, reference, drive, y, k0, work)
+    return mode, fresh, RUN_DONE
+
+
+@njit(cache=True, nogil=True)
+def _prepare(model, mode, t, drive_args, y, k0, events):
+    """The ``prepare`` hook: in a slip, the direction along which this step watches the
+    slip end, and Painleve's paradox of a two-way slip."""
+    if mode == STICK:
+        return RUN_DONE
+    plates, disk, reference, work = model
+    length = disk[DK_LENGTH]
+    # The slip end is watched along the friction direction at the step start.
+    seg, seg_t0, seg_omega, seg_a, seg_phase0 = drive_args
+    drive, _ = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
+    loads = work[0:8]
+    wrench = work[8:14]
+    _loads(plates, disk, drive, 0.0, y, loads)
+    _world_wrench(disk, y[HEADING], loads, wrench)
+    size = math.sqrt(y[VX] ** 2 + y[VY] ** 2 + (length * y[SPIN]) ** 2)
+    if size > 0.0 and (mode == SLIP or size > disk[DK_SLAVED]):
+        reference[0] = y[VX] / size
+        reference[1] = y[VY] / size
+        reference[2] = length * y[SPIN] / size
+    else:
+        _slaved_direction(disk, loads[0], wrench, reference)
+    if disk[DK_TWO_WAY] != 0.0:
+        _, det = _two_way(plates, disk, y, loads, reference, work[17:23])
+        if not det > 0.0:
+            record(events, t, EVENT_PARADOX, y)
+            return RUN_PARADOX
+    if mode == SLIP and size <= disk[DK_SLAVED]:
+        # The frozen direction of this step differs from the last step's.
+        _rhs(plates, disk, mode, reference, drive, y, k0, work)
     return RUN_DONE
+
+
+@njit(cache=True, nogil=True)
+def _hold(model, mode, before, state):
+    """The ``hold`` hook: nothing to restore (a stuck step's dense output is frozen)."""
+
+
+@njit(cache=True, nogil=True)
+def _account(mode, duration, stats):
+    if mode == STICK:
+        stats[STUCK_TIME] += duration
+    else:
+        stats[SLIPPING_TIME] += duration
+
+
+@njit(cache=True, nogil=True)
+def _accepted(model, mode, y):
+    """The ``accepted`` hook: a slip's onset ends once its twist exceeds the slaving
+    threshold."""
+    if mode == ONSET:
+        disk = model[1]
+        length = disk[DK_LENGTH]
+        twist = math.sqrt(y[VX] ** 2 + y[VY] ** 2 + (length * y[SPIN]) ** 2)
+        if twist > disk[DK_SLAVED]:
+            return SLIP
+    return mode
+
+
+@njit(cache=True, nogil=True)
+def _transition(model, mode, which, t, drive, y, events, stats):
+    """The ``transition`` hook: a release starts a slip's onset; a slip end sticks, or
+    starts a new slip when the wrench at rest exceeds the static limit surface."""
+    if mode == STICK:
+        stats[SLIPS] += 1.0
+        record(events, t, EVENT_RELEASE, y)
+        return ONSET, True
+    plates, disk, _, work = model
+    y[VX] = 0.0
+    y[VY] = 0.0
+    y[SPIN] = 0.0
+    record(events, t, EVENT_SLIP_END, y)
+    mode = _mode_after_rest(plates, disk, drive, y, work)
+    fresh = mode == ONSET
+    if fresh:
+        stats[SLIPS] += 1.0
+        record(events, t, EVENT_RELEASE, y)
+    return mode, fresh
+
+
+@njit(cache=True, nogil=True)
+def _at_rest(y):
+    return y[VX] == 0.0 and y[VY] == 0.0 and y[SPIN] == 0.0
+
+
+_loop = make_loop(Hooks(_restart, _prepare, _step, _values_at, _hold, _account, _accepted,
+                        _transition, _at_rest, EVENTS, LIFT))
+
+
+@njit(cache=True, nogil=True)
+def integrate(plates, disk, segments, state, t_stop, control, samples, events, stats):
+    """Integrate the disk from ``state.clock[0]`` to ``t_stop`` in place
+    (:func:`study.kernels.event_loop.make_loop`; ``control.fixed_step`` must be 0).
+
+    ``state`` carries the state in and out, so a run can be continued by another call.
+    ``stats`` (:data:`STATS_SIZE` entries) accumulates steps, rejected steps, slips and
+    the time stuck and slipping [s]. Returns a ``RUN_*`` code.
+    """
+    model = (plates, disk, np.zeros(3), np.empty(WORK_SIZE))
+    return _loop(model, segments, state, t_stop, control, samples, events, stats)

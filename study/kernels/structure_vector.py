@@ -2,8 +2,13 @@
 
 The exact two-way orbit kernel and the integrators take a structure as one float64
 array (numba compiles one signature for every structure). The solvers fill it from a
-:class:`study.model.structure.Structure`; the kernels read it by these names.
+:class:`study.model.structure.Structure` and the chosen contact laws; the kernels read
+it by these names. The contact laws' entries come last: the friction law's code and
+every parameter a declared law needs (:data:`study.model.contact.LAWS`), so a new law's
+parameter gets its entry from its declaration.
 """
+
+from study.model.contact import LAWS
 
 #: The entries of the structure vector, in order, with their units.
 ENTRIES = (
@@ -16,8 +21,20 @@ ENTRIES = (
     ("kinetic_friction", "1", "ck"),
     ("gravity", "m s-2", "g"),
     ("two_way", "1", "1.0 for two-way coupling, 0.0 for one-way"),
+    ("friction_law", "1", "code of the friction law (study.model.contact.LAWS)"),
+    *(
+        (parameter.name, parameter.units, parameter.long_name)
+        for law in LAWS["friction"].values()
+        for parameter in law.parameters
+    ),
 )
 _NAMES = tuple(name for name, _, _ in ENTRIES)
+
+
+def index(name: str) -> int:
+    """Position of entry ``name`` in the structure vector."""
+    return _NAMES.index(name)
+
 
 # Numba reads module-level integers as compile-time constants.
 DAMPING = _NAMES.index("damping")
@@ -29,5 +46,6 @@ STATIC_FRICTION = _NAMES.index("static_friction")
 KINETIC_FRICTION = _NAMES.index("kinetic_friction")
 GRAVITY = _NAMES.index("gravity")
 TWO_WAY = _NAMES.index("two_way")
+FRICTION_LAW = _NAMES.index("friction_law")
 #: Length of the structure vector.
 SIZE = len(ENTRIES)

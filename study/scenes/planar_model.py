@@ -33,7 +33,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.engine.spec_files import load_schema
 from study.kernels import planar_integrator as _kernel
-from study.model import mode_response
+from study.kernels.event_loop import EventLog, Samples, Segments, State, StepControl
+from study.model import codes, mode_response
 from study.model.inputs import (
     InputTypeError,
     as_real_array,
@@ -95,18 +96,18 @@ PLANAR_VERSION = "2"
 
 #: How a run ended, by kernel return code.
 OUTCOMES = {
-    _kernel.RUN_DONE: "completed",
-    _kernel.RUN_LIFT_OFF: "lift_off",
-    _kernel.RUN_BUDGET: "step_budget",
-    _kernel.RUN_PARADOX: "friction_paradox",
+    codes.RUN_DONE: "completed",
+    codes.RUN_LIFT_OFF: "lift_off",
+    codes.RUN_BUDGET: "step_budget",
+    codes.RUN_PARADOX: "friction_paradox",
 }
 
 #: Event kinds recorded in trajectories.
 EVENT_KINDS = {
-    _kernel.EVENT_RELEASE: "release",
-    _kernel.EVENT_SLIP_END: "slip_end",
-    _kernel.EVENT_LIFT_OFF: "lift_off",
-    _kernel.EVENT_PARADOX: "friction_paradox",
+    codes.EVENT_RELEASE: "release",
+    codes.EVENT_SLIP_END: "slip_end",
+    codes.EVENT_LIFT_OFF: "lift_off",
+    codes.EVENT_PARADOX: "friction_paradox",
 }
 
 #: Default slaving threshold of a slip's onset, in units of ``ck g / w`` [1].
@@ -622,42 +623,38 @@ def simulate_planar(
     disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / float(
         np.max(omega))
     moving = bool(np.any(y[[_kernel.VX, _kernel.VY, _kernel.SPIN]] != 0.0))
-    mode_box = np.array([_kernel.SLIP if moving else _kernel.STICK], dtype=np.int64)
-    t_box = np.array([0.0, settings.max_step * shortest])
-    out_y = np.empty((out_t.size, size))
-    out_mode = np.empty(out_t.size, dtype=np.int64)
-    out_box = np.zeros(1, dtype=np.int64)
+    state = State(y, np.array([_kernel.SLIP if moving else _kernel.STICK], dtype=np.int64),
+                  np.array([0.0, settings.max_step * shortest]))
+    segments = Segments(schedule.starts, omega, schedule.acceleration,
+                        schedule.start_phases_rad, schedule.ends)
+    control = StepControl(settings.tolerance, settings.tolerance, scale, 0.0,
+                          settings.max_step * shortest, settings.event_tolerance * shortest,
+                          settings.samples_per_step, settings.max_steps)
+    samples = Samples(out_t, np.empty((out_t.size, size)), np.empty(out_t.size, dtype=np.int64),
+                      np.zeros(1, dtype=np.int64))
     capacity = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
-    ev_t = np.empty(capacity)
-    ev_kind = np.empty(capacity, dtype=np.int64)
-    ev_y = np.empty((capacity, size))
-    ev_box = np.zeros(1, dtype=np.int64)
-    stats = np.zeros(5)
+    events = EventLog(np.empty(capacity), np.empty(capacity, dtype=np.int64),
+                      np.empty((capacity, size)), np.zeros(1, dtype=np.int64))
+    stats = np.zeros(_kernel.STATS_SIZE)
     stops = _kick_times(schedule) if noise > 0.0 else np.array([end])
     kicks = np.zeros(stops.size)
     generator = np.random.default_rng(rng) if noise > 0.0 else None
-    code = _kernel.RUN_DONE
+    code = codes.RUN_DONE
     for j, stop in enumerate(stops):
         path_before = y[_kernel.PATH]
-        code = _kernel.integrate(
-            plates, disk_vector, schedule.starts, omega, schedule.acceleration,
-            schedule.start_phases_rad, schedule.ends, y, mode_box, t_box, float(stop),
-            settings.tolerance, settings.tolerance, scale, settings.max_step * shortest,
-            settings.event_tolerance * shortest, settings.samples_per_step,
-            settings.max_steps, out_t, out_y, out_mode, out_box, ev_t, ev_kind, ev_y,
-            ev_box, stats,
-        )
+        code = _kernel.integrate(plates, disk_vector, segments, state, float(stop), control,
+                                 samples, events, stats)
         if on_progress is not None:
-            on_progress(float(t_box[0]))
-        if code != _kernel.RUN_DONE:
+            on_progress(float(state.clock[0]))
+        if code != codes.RUN_DONE:
             break
         if generator is not None:
             slid = y[_kernel.PATH] - path_before
             kicks[j] = noise * math.sqrt(slid) * generator.standard_normal()
             y[_kernel.HEADING] += kicks[j]
-    m = int(out_box[0])
-    e = min(int(ev_box[0]), capacity)
-    states = out_y[:m]
+    m = int(samples.count[0])
+    e = min(int(events.count[0]), capacity)
+    states = samples.y[:m]
     angles = [_kernel.HEADING, _kernel.SPIN]
     states[:, angles] = np.degrees(states[:, angles])
     return PlanarTrajectory(
@@ -670,14 +667,14 @@ def simulate_planar(
         spin=states[:, _kernel.SPIN].copy(),
         path=states[:, _kernel.PATH].copy(),
         plate_states=states[:, _kernel.MODES:].reshape(m, len(disk.plates), 2).copy(),
-        slipping=out_mode[:m] != _kernel.STICK,
-        event_time=ev_t[:e].copy(),
-        event_kind=ev_kind[:e].astype(np.int8),
+        slipping=samples.mode[:m] != _kernel.STICK,
+        event_time=events.t[:e].copy(),
+        event_kind=events.kind[:e].astype(np.int8),
         outcome=OUTCOMES[int(code)],
-        end_time=float(t_box[0]),
-        steps=int(stats[0]),
-        rejected_steps=int(stats[1]),
-        slips=int(stats[2]),
+        end_time=float(state.clock[0]),
+        steps=int(stats[_kernel.STEPS]),
+        rejected_steps=int(stats[_kernel.REJECTED]),
+        slips=int(stats[_kernel.SLIPS]),
         final_state=_from_kernel(y),
         heading_kicks=np.degrees(kicks),
     )
@@ -810,13 +807,16 @@ def periodic_motion(
     scale = _scales(disk, omega)
     size = scale.size
     y = _to_kernel(rest_state(disk, drive=(f, a)))
-    seg = (np.zeros(1), np.full(1, omega), np.full(1, float(a)), np.zeros(1), np.full(1, np.inf))
-    mode_box = np.zeros(1, dtype=np.int64)
-    t_box = np.array([0.0, settings.max_step * period])
-    empty_t = np.empty(0)
-    empty_y = np.empty((0, size))
-    empty_i = np.empty(0, dtype=np.int64)
-    box = np.zeros(1, dtype=np.int64)
+    segments = Segments(np.zeros(1), np.full(1, omega), np.full(1, float(a)), np.zeros(1),
+                        np.full(1, np.inf))
+    state = State(y, np.zeros(1, dtype=np.int64), np.array([0.0, settings.max_step * period]))
+    control = StepControl(settings.tolerance, settings.tolerance, scale, 0.0,
+                          settings.max_step * period, settings.event_tolerance * period,
+                          settings.samples_per_step, settings.max_steps)
+    # Nothing is sampled or recorded: one count serves both empty logs.
+    count = np.zeros(1, dtype=np.int64)
+    samples = Samples(np.empty(0), np.empty((0, size)), np.empty(0, dtype=np.int64), count)
+    events = EventLog(np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, size)), count)
     history: list[tuple[Any, ...]] = []
     if repeat_tolerance is None:
         repeat_tolerance = max(100.0 * settings.tolerance, 1e-12)
@@ -828,22 +828,18 @@ def periodic_motion(
     ])
     for count in range(1, max_periods + 1):
         start = y.copy()
-        stats = np.zeros(5)
+        stats = np.zeros(_kernel.STATS_SIZE)
         # Time restarts each period (phase 2 pi k is phase 0): no loss of precision.
-        t_box[0] = 0.0
-        code = _kernel.integrate(
-            plates, disk_vector, *seg, y, mode_box, t_box, period,
-            settings.tolerance, settings.tolerance, scale, settings.max_step * period,
-            settings.event_tolerance * period, settings.samples_per_step, settings.max_steps,
-            empty_t, empty_y, empty_i, box, empty_t, empty_i, empty_y, box, stats,
-        )
-        if code == _kernel.RUN_LIFT_OFF:
+        state.clock[0] = 0.0
+        code = _kernel.integrate(plates, disk_vector, segments, state, period, control,
+                                 samples, events, stats)
+        if code == codes.RUN_LIFT_OFF:
             return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.LIFT_OFF),
                                   int(Reason.NONE), count, math.nan, math.nan, 0)
-        if code == _kernel.RUN_PARADOX:
+        if code == codes.RUN_PARADOX:
             return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.FRICTION_PARADOX),
                                   int(Reason.NONE), count, math.nan, math.nan, 0)
-        if code != _kernel.RUN_DONE:
+        if code != codes.RUN_DONE:
             return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
                                   int(Reason.EVENT_BUDGET), count, math.nan, math.nan, 0)
         heading = start[_kernel.HEADING]

@@ -29,6 +29,7 @@ from study.model import (
     release_amplitudes,
     slip_amplitudes,
 )
+from study.model.contact import DEFAULT_FRICTION, Friction, check_friction
 from study.model.inputs import InputTypeError, instance_of
 from study.model.structure import Structure, check_structure
 
@@ -296,6 +297,7 @@ def steady_state(
     settings: SolverSettings | None = None,
     *,
     coupling: str = DEFAULT_COUPLING,
+    friction: str | Friction = DEFAULT_FRICTION,
     parallel: bool | None = None,
 ) -> SteadyState:
     """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
@@ -322,6 +324,9 @@ def steady_state(
     coupling : {"one-way", "two-way"}, default "one-way"
         The paper's model (mode driven by the table only) or the physical one
         (:data:`DEFAULT_COUPLING` is the default).
+    friction : str or Friction, default "coulomb"
+        The friction law (:data:`study.model.contact.LAWS`); this solver implements
+        Coulomb friction only and refuses any other law, naming the allowed ones.
     parallel : bool, optional
         Spread points over all cores (numba threads). By default only inputs of
         at least ``PARALLEL_THRESHOLD`` points do; pass ``False`` when the caller
@@ -348,6 +353,7 @@ def steady_state(
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
+    check_friction(friction, "exact")
     settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape

@@ -5,7 +5,10 @@ coupling (docs/theory/two-way.md). This module integrates the whole
 model in time with an event-driven Dormand-Prince 5(4) scheme
 (:mod:`study.kernels.integrator`): any initial state, a drive given as a schedule of
 segments with continuous phase, and optionally the two-way coupling in which the
-sliding base's acceleration also forces the mode (``-x'' sin(alpha)``).
+sliding base's acceleration also forces the mode (``-x'' sin(alpha)``). The
+friction law is chosen by name (``friction=``, :mod:`study.model.contact`): Coulomb
+friction, the exact solver's, or velocity-weakening Stribeck friction, which only this
+solver implements.
 
 Two entry points:
 
@@ -27,7 +30,9 @@ from numpy.typing import ArrayLike, NDArray
 from study.engine.spec_files import load_schema
 from study.kernels import integrator as _kernel
 from study.kernels import structure_vector as sv
-from study.model import as_acceleration, as_frequency, mode_response
+from study.kernels.event_loop import EventLog, Samples, Segments, State, StepControl
+from study.model import as_acceleration, as_frequency, codes, mode_response
+from study.model.contact import DEFAULT_FRICTION, Friction, check_friction
 from study.model.inputs import as_real_array, bounded_integer, instance_of, real_number
 from study.model.structure import Structure
 from study.model.units import DEGREE, SECOND
@@ -65,19 +70,19 @@ INTEGRATOR_VERSION = "1"
 
 #: Contact event kinds in a :class:`Trajectory`, by code.
 EVENT_KINDS = {
-    _kernel.EVENT_RELEASE_FORWARD: "release_forward",
-    _kernel.EVENT_RELEASE_BACKWARD: "release_backward",
-    _kernel.EVENT_SLIP_END: "slip_end",
-    _kernel.EVENT_LIFT_OFF: "lift_off",
-    _kernel.EVENT_PARADOX: "friction_paradox",
+    codes.EVENT_RELEASE_FORWARD: "release_forward",
+    codes.EVENT_RELEASE_BACKWARD: "release_backward",
+    codes.EVENT_SLIP_END: "slip_end",
+    codes.EVENT_LIFT_OFF: "lift_off",
+    codes.EVENT_PARADOX: "friction_paradox",
 }
 
 #: How a :func:`simulate` run ended, by kernel return code.
 OUTCOMES = {
-    _kernel.RUN_DONE: "completed",
-    _kernel.RUN_LIFT_OFF: "lift_off",
-    _kernel.RUN_BUDGET: "step_budget",
-    _kernel.RUN_PARADOX: "friction_paradox",
+    codes.RUN_DONE: "completed",
+    codes.RUN_LIFT_OFF: "lift_off",
+    codes.RUN_BUDGET: "step_budget",
+    codes.RUN_PARADOX: "friction_paradox",
 }
 
 
@@ -340,11 +345,13 @@ class Trajectory:
     events_dropped: int = field(default=0)
 
 
-def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING
-                     ) -> NDArray[np.float64]:
-    """Parameter vector of the integrator kernel for ``structure`` and ``coupling``."""
+def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING,
+                     friction: str | Friction = DEFAULT_FRICTION) -> NDArray[np.float64]:
+    """Parameter vector of the integrator kernel for ``structure``, ``coupling`` and
+    ``friction`` (:mod:`study.kernels.structure_vector`)."""
     structure = check_structure(structure)
     two_way = check_coupling(coupling) == "two-way"
+    friction = check_friction(friction, "integrator")
     p = np.empty(sv.SIZE)
     w0 = structure.omega0
     p[sv.DAMPING] = w0 / structure.Q
@@ -356,6 +363,10 @@ def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING
     p[sv.KINETIC_FRICTION] = structure.ck
     p[sv.GRAVITY] = structure.g
     p[sv.TWO_WAY] = 1.0 if two_way else 0.0
+    # Parameters of laws not chosen are never read: NaN says so.
+    p[sv.FRICTION_LAW + 1:] = np.nan
+    for name, value in friction.vector_entries().items():
+        p[sv.index(name)] = value
     return p
 
 
@@ -373,6 +384,7 @@ def simulate(
     schedule: Schedule,
     *,
     coupling: str = DEFAULT_COUPLING,
+    friction: str | Friction = DEFAULT_FRICTION,
     initial_state: ArrayLike | None = None,
     output_times: ArrayLike | None = None,
     settings: IntegratorSettings | None = None,
@@ -389,6 +401,10 @@ def simulate(
     coupling : {"one-way", "two-way"}
         ``"one-way"`` is the paper's model (the mode does not feel the sliding);
         ``"two-way"`` adds the base's acceleration to the mode's forcing.
+    friction : str or Friction
+        The friction law (:data:`study.model.contact.LAWS`): ``"coulomb"`` (the
+        default) or a :class:`study.model.contact.Friction` with its parameters, e.g.
+        ``Friction("stribeck", stribeck_speed=1e-3)`` (speed in m s-1).
     initial_state : array_like, optional
         ``(delta [m], delta' [m s-1], x [m], v [m s-1])`` at ``t = 0``; default all
         zero (at rest on the table, the mode at rest). With ``v != 0`` the run starts
@@ -414,7 +430,7 @@ def simulate(
                         f"got {type(schedule)}")
     settings = check_integrator_settings(settings)
     max_events = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
-    p = model_parameters(structure, coupling)
+    p = model_parameters(structure, coupling, friction)
     y = np.zeros(4) if initial_state is None else np.array(initial_state, dtype=float)
     if y.shape != (4,) or not np.all(np.isfinite(y)):
         raise ValueError(
@@ -437,40 +453,38 @@ def simulate(
     omega = 2.0 * np.pi * schedule.frequency
     scale = _scales(structure, np.array([np.max(omega)]))[0]
     fixed = shortest / settings.steps_per_period if settings.steps_per_period else 0.0
-    mode_box = np.array([int(np.sign(y[3]))], dtype=np.int64)
-    t_box = np.array([0.0, settings.max_step * shortest])
-    out_y = np.empty((out_t.size, 4))
-    out_mode = np.empty(out_t.size, dtype=np.int64)
-    out_box = np.zeros(1, dtype=np.int64)
-    ev_t = np.empty(max_events)
-    ev_kind = np.empty(max_events, dtype=np.int64)
-    ev_y = np.empty((max_events, 4))
-    ev_box = np.zeros(1, dtype=np.int64)
-    stats = np.zeros(6)
-    code = _kernel.integrate(
-        p, schedule.starts, omega, schedule.acceleration, schedule.start_phases_rad,
-        schedule.ends, y, mode_box, t_box, end,
-        settings.tolerance, settings.tolerance, scale, fixed, settings.max_step * shortest,
-        settings.event_tolerance * shortest, settings.samples_per_step, settings.max_steps,
-        out_t, out_y, out_mode, out_box, ev_t, ev_kind, ev_y, ev_box, stats,
-    )
-    m = int(out_box[0])
-    e = min(int(ev_box[0]), max_events)
+    state = State(y, np.array([int(np.sign(y[_kernel.V]))], dtype=np.int64),
+                  np.array([0.0, settings.max_step * shortest]))
+    segments = Segments(schedule.starts, omega, schedule.acceleration,
+                        schedule.start_phases_rad, schedule.ends)
+    control = StepControl(settings.tolerance, settings.tolerance, scale, fixed,
+                          settings.max_step * shortest, settings.event_tolerance * shortest,
+                          settings.samples_per_step, settings.max_steps)
+    size = _kernel.STATE_SIZE
+    samples = Samples(out_t, np.empty((out_t.size, size)), np.empty(out_t.size, dtype=np.int64),
+                      np.zeros(1, dtype=np.int64))
+    events = EventLog(np.empty(max_events), np.empty(max_events, dtype=np.int64),
+                      np.empty((max_events, size)), np.zeros(1, dtype=np.int64))
+    stats = np.zeros(_kernel.STATS_SIZE)
+    code = _kernel.integrate(p, segments, state, end, control, samples, events, stats)
+    m = int(samples.count[0])
+    e = min(int(events.count[0]), max_events)
+    out_y = samples.y
     return Trajectory(
         time=out_t[:m],
-        delta=out_y[:m, 0].copy(),
-        delta_rate=out_y[:m, 1].copy(),
-        x=out_y[:m, 2].copy(),
-        v=out_y[:m, 3].copy(),
-        mode=out_mode[:m].astype(np.int8),
-        event_time=ev_t[:e].copy(),
-        event_kind=ev_kind[:e].astype(np.int8),
-        event_state=ev_y[:e].copy(),
+        delta=out_y[:m, _kernel.DELTA].copy(),
+        delta_rate=out_y[:m, _kernel.DELTA_RATE].copy(),
+        x=out_y[:m, _kernel.X].copy(),
+        v=out_y[:m, _kernel.V].copy(),
+        mode=samples.mode[:m].astype(np.int8),
+        event_time=events.t[:e].copy(),
+        event_kind=events.kind[:e].astype(np.int8),
+        event_state=events.y[:e].copy(),
         outcome=OUTCOMES[int(code)],
-        end_time=float(t_box[0]),
-        steps=int(stats[0]),
-        rejected_steps=int(stats[1]),
-        events_dropped=int(ev_box[0]) - e,
+        end_time=float(state.clock[0]),
+        steps=int(stats[_kernel.STEPS]),
+        rejected_steps=int(stats[_kernel.REJECTED]),
+        events_dropped=int(events.count[0]) - e,
     )
 
 
@@ -499,6 +513,7 @@ def integrated_steady_state(
     a: ArrayLike,
     *,
     coupling: str = DEFAULT_COUPLING,
+    friction: str | Friction = DEFAULT_FRICTION,
     settings: IntegratorSettings | None = None,
     parallel: bool | None = None,
 ) -> SteadyState:
@@ -520,6 +535,8 @@ def integrated_steady_state(
         Drive acceleration amplitude [m s-2], >= 0.
     coupling : {"one-way", "two-way"}
         See :func:`simulate`.
+    friction : str or Friction
+        The friction law; see :func:`simulate`.
     settings : IntegratorSettings, optional
         Accuracy and budgets.
     parallel : bool, optional
@@ -535,7 +552,7 @@ def integrated_steady_state(
     """
     structure = check_structure(structure)
     settings = check_integrator_settings(settings)
-    p = model_parameters(structure, coupling)
+    p = model_parameters(structure, coupling, friction)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape
     # Copies: numba is never handed a broadcast view (numpy warns of its write flag).
@@ -550,23 +567,25 @@ def integrated_steady_state(
         fixed = period / settings.steps_per_period
     else:
         fixed = np.zeros(n)
-    results = np.zeros((n, 9))
+    results = np.zeros((n, _kernel.RESULT_SIZE))
     if parallel is None:
         parallel = n >= PARALLEL_THRESHOLD // 64
+    points = _kernel.Points(omega, a_flat, y0, scale, np.ascontiguousarray(fixed),
+                            settings.max_step * period, settings.event_tolerance * period)
+    search = _kernel.PeriodicSearch(
+        settings.tolerance, settings.tolerance, settings.samples_per_step, settings.max_steps,
+        settings.max_periods, settings.max_orbit_period, settings.resolved_period_tolerance)
     kernel = _kernel.periodic_points if parallel else _kernel.periodic_points_serial
-    kernel(
-        p, omega, a_flat, y0, settings.tolerance, settings.tolerance, scale,
-        np.ascontiguousarray(fixed), settings.max_step * period,
-        settings.event_tolerance * period, settings.samples_per_step, settings.max_steps,
-        settings.max_periods, settings.max_orbit_period, settings.resolved_period_tolerance,
-        results,
-    )
+    kernel(p, points, search, results)
+    column = {name: results[:, getattr(_kernel, "R_" + name.upper())]
+              for name in ("status", "reason", "velocity", "slips", "forward", "backward",
+                           "orbit_period")}
     return SteadyState(
-        velocity=scalar_if_0d(results[:, 2].reshape(shape)),
-        status=scalar_if_0d(results[:, 0].astype(np.int8).reshape(shape)),
-        reason=scalar_if_0d(results[:, 1].astype(np.int8).reshape(shape)),
-        slips_per_period=scalar_if_0d(results[:, 3].reshape(shape)),
-        forward_fraction=scalar_if_0d(results[:, 4].reshape(shape)),
-        backward_fraction=scalar_if_0d(results[:, 5].reshape(shape)),
-        orbit_period=scalar_if_0d(results[:, 6].astype(np.int32).reshape(shape)),
+        velocity=scalar_if_0d(column["velocity"].reshape(shape)),
+        status=scalar_if_0d(column["status"].astype(np.int8).reshape(shape)),
+        reason=scalar_if_0d(column["reason"].astype(np.int8).reshape(shape)),
+        slips_per_period=scalar_if_0d(column["slips"].reshape(shape)),
+        forward_fraction=scalar_if_0d(column["forward"].reshape(shape)),
+        backward_fraction=scalar_if_0d(column["backward"].reshape(shape)),
+        orbit_period=scalar_if_0d(column["orbit_period"].astype(np.int32).reshape(shape)),
     )

@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 
 from study import Structure
 from study.kernels import integrator as kernel
-from study.model import lift_off_acceleration, mode_response, release_amplitudes, thresholds
+from study.model import codes, lift_off_acceleration, mode_response, release_amplitudes, thresholds
 from study.model.status import NonConvergence, Status
 from study.solvers.exact import steady_state
 from study.solvers.integrator import (
@@ -196,7 +196,7 @@ def test_lift_off_is_flagged_not_computed():
     assert run.status[0] != Status.LIFT_OFF and np.isfinite(run.velocity[0])
     trajectory = simulate(PAPER, Schedule.constant(f, 1.2 * a_lift, 2 / f))
     assert trajectory.outcome == "lift_off"
-    assert trajectory.event_kind[-1] == kernel.EVENT_LIFT_OFF
+    assert trajectory.event_kind[-1] == codes.EVENT_LIFT_OFF
     assert trajectory.end_time < 2 / f
 
 

@@ -1,0 +1,277 @@
+"""Contact laws as named pieces: friction, coupling and what a vanishing normal force does.
+
+Each law is declared once here (:data:`LAWS`): its name, what it says, the parameters it
+needs (with units and allowed range) and the solvers that implement it. Solvers and
+specs choose laws by name, as PySDM picks its formulae and PyBaMM its submodels; a
+solver asked for a law it does not implement refuses it with one message naming the
+law, the solver and the allowed values (:func:`check_law`).
+
+The kernels read a chosen law through the structure vector
+(:mod:`study.kernels.structure_vector`): a law's ``code`` and its parameters' values
+(:meth:`Friction.vector_entries`). The numba form of each friction law is one branch of
+:func:`study.kernels.friction.kinetic_coefficient`.
+
+Laws
+----
+friction
+    ``coulomb``: static coefficient ``cs`` holds a stick, kinetic ``ck`` opposes a slip.
+    ``stribeck``: as Coulomb, but the kinetic coefficient falls with the slip speed
+    ``|v|`` from ``cs`` to ``ck`` over the Stribeck speed ``v_s``:
+    ``mu(v) = ck + (cs - ck) exp(-|v| / v_s)``. ``ck = cs`` is Coulomb exactly, and so
+    is ``v_s -> 0`` away from rest.
+coupling
+    ``one-way``: the paper's model, the mode is driven by the table only. ``two-way``:
+    the sliding base's acceleration also forces the mode.
+lift_off
+    ``stop``: a run ends with ``LIFT_OFF`` where the normal force would turn negative
+    (the model of contact stops holding there).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = [
+    "COUPLINGS",
+    "DEFAULT_FRICTION",
+    "FRICTION_LAWS",
+    "KINDS",
+    "LAWS",
+    "LIFT_OFF_LAWS",
+    "SOLVERS",
+    "ContactLaw",
+    "Friction",
+    "LawParameter",
+    "check_friction",
+    "check_law",
+    "supported",
+]
+
+#: The solvers that implement contact laws: the exact steady-state solver
+#: (:mod:`study.solvers.exact`), the single-plate time integrator
+#: (:mod:`study.solvers.integrator`) and the planar integrator
+#: (:mod:`study.scenes.planar_model`).
+SOLVERS = {
+    "exact": "the exact steady-state solver",
+    "integrator": "the time integrator",
+    "planar": "the planar integrator",
+}
+
+#: The kinds of contact law, with what each decides.
+KINDS = {
+    "friction": "the friction coefficient a stick holds and a slip feels",
+    "coupling": "whether the sliding base also forces the mode",
+    "lift_off": "what happens where the normal force vanishes",
+}
+
+
+@dataclass(frozen=True)
+class LawParameter:
+    """A parameter a contact law needs.
+
+    Attributes
+    ----------
+    name : str
+        Its key in the API and in specs.
+    units : str
+        CF units.
+    long_name : str
+        What it is.
+    lower : float
+        Values must be greater than this (exclusive).
+    upper : float
+        Values must be less than this (exclusive).
+    reason : str
+        Why the range is what it is.
+    """
+
+    name: str
+    units: str
+    long_name: str
+    lower: float = 0.0
+    upper: float = math.inf
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """One contact law, declared once.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    name : str
+        The name a spec or an API call chooses it by.
+    code : int
+        Its number in the structure vector (the kernels branch on it).
+    description : str
+        What it says.
+    parameters : tuple of LawParameter
+        The parameters it needs besides the structure's, in structure-vector order.
+    solvers : tuple of str
+        The solvers (keys of :data:`SOLVERS`) that implement it.
+    """
+
+    kind: str
+    name: str
+    code: int
+    description: str
+    parameters: tuple[LawParameter, ...] = ()
+    solvers: tuple[str, ...] = tuple(SOLVERS)
+
+
+#: Every contact law, by kind and name.
+LAWS: dict[str, dict[str, ContactLaw]] = {
+    "friction": {
+        "coulomb": ContactLaw(
+            "friction", "coulomb", 0,
+            "Coulomb friction: cs holds a stick, ck opposes a slip"),
+        "stribeck": ContactLaw(
+            "friction", "stribeck", 1,
+            "velocity-weakening (Stribeck) friction: the kinetic coefficient falls "
+            "from cs at rest to ck with the slip speed, mu(v) = ck + (cs - ck) "
+            "exp(-|v| / stribeck_speed)",
+            parameters=(LawParameter(
+                "stribeck_speed", "m s-1", "Stribeck speed, over which mu falls from cs to ck",
+                reason="a speed scale: > 0 (the limit 0 is Coulomb friction)"),),
+            solvers=("integrator",)),
+    },
+    "coupling": {
+        "one-way": ContactLaw(
+            "coupling", "one-way", 0,
+            "the paper's model: the mode is driven by the table only"),
+        "two-way": ContactLaw(
+            "coupling", "two-way", 1,
+            "the sliding base's acceleration also forces the mode"),
+    },
+    "lift_off": {
+        "stop": ContactLaw(
+            "lift_off", "stop", 0,
+            "the run ends with LIFT_OFF where the normal force would turn negative"),
+    },
+}
+
+#: Names of each kind's laws.
+FRICTION_LAWS = tuple(LAWS["friction"])
+COUPLINGS = tuple(LAWS["coupling"])
+LIFT_OFF_LAWS = tuple(LAWS["lift_off"])
+#: The friction law of every solver by default (the paper's).
+DEFAULT_FRICTION = "coulomb"
+
+
+def supported(kind: str, solver: str) -> tuple[str, ...]:
+    """Names of the ``kind`` laws that ``solver`` implements."""
+    return tuple(name for name, law in LAWS[kind].items() if solver in law.solvers)
+
+
+def check_law(kind: str, name: object, solver: str) -> ContactLaw:
+    """The declared ``kind`` law ``name`` if ``solver`` implements it.
+
+    Raises
+    ------
+    ValueError
+        ``name`` is not a declared law of that kind, or ``solver`` does not implement
+        it; the message names the law, the solver and the allowed values.
+    """
+    allowed = supported(kind, solver)
+    listed = ", ".join(map(repr, allowed))
+    if not isinstance(name, str) or name not in LAWS[kind]:
+        known = ", ".join(map(repr, LAWS[kind]))
+        raise ValueError(f"{kind} law {name!r} is unknown; {kind} laws are {known} "
+                         f"({SOLVERS[solver]} allows {listed})")
+    if name not in allowed:
+        raise ValueError(f"{kind} law {name!r} is not implemented by {SOLVERS[solver]} "
+                         f"({solver!r}); allowed: {listed}")
+    return LAWS[kind][name]
+
+
+@dataclass(frozen=True)
+class Friction:
+    """A chosen friction law and the values of its parameters.
+
+    ``Friction("stribeck", stribeck_speed=1e-3)``; ``Friction()`` is Coulomb friction.
+    Solvers take a law's name where it needs no parameters (``friction="coulomb"``).
+
+    Attributes
+    ----------
+    law : str
+        A name of :data:`FRICTION_LAWS`.
+    values : dict
+        The law's parameters (SI, units as declared in :data:`LAWS`).
+    """
+
+    law: str = DEFAULT_FRICTION
+    values: Mapping[str, float] = field(default_factory=dict)
+
+    def __init__(self, law: str = DEFAULT_FRICTION, **values: float) -> None:
+        declared = LAWS["friction"].get(law) if isinstance(law, str) else None
+        if declared is None:
+            raise ValueError(f"friction law {law!r} is unknown; friction laws are "
+                             f"{', '.join(map(repr, FRICTION_LAWS))}")
+        names = [p.name for p in declared.parameters]
+        missing = [n for n in names if n not in values]
+        extra = sorted(set(values) - set(names))
+        if missing or extra:
+            raise ValueError(
+                f"friction law {law!r} needs the parameters {names or 'none'}; "
+                + (f"missing {missing}" if missing else f"unknown {extra}"))
+        checked = {}
+        for parameter in declared.parameters:
+            value = values[parameter.name]
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ValueError(f"friction law {law!r}: {parameter.name} must be a number "
+                                 f"[{parameter.units}], got {value!r}")
+            if not parameter.lower < float(value) < parameter.upper:
+                raise ValueError(
+                    f"friction law {law!r}: {parameter.name} = {value!r} is out of range; "
+                    f"allowed: {parameter.lower} < {parameter.name} < {parameter.upper} "
+                    f"[{parameter.units}] ({parameter.reason})")
+            checked[parameter.name] = float(value)
+        object.__setattr__(self, "law", law)
+        object.__setattr__(self, "values", checked)
+
+    @property
+    def declaration(self) -> ContactLaw:
+        """The law's declaration in :data:`LAWS`."""
+        return LAWS["friction"][self.law]
+
+    def vector_entries(self) -> dict[str, float]:
+        """The structure-vector entries of this choice: ``friction_law`` (the law's
+        code) and each of its parameters by name."""
+        return {"friction_law": float(self.declaration.code), **self.values}
+
+    def canonical(self) -> dict[str, Any]:
+        """The choice as plain JSON data: ``{"law": name, parameter: value, ...}``."""
+        return {"law": self.law, **self.values}
+
+
+def check_friction(friction: object, solver: str) -> Friction:
+    """``friction`` (a law's name, a mapping ``{"law": name, parameter: value}`` as in
+    a spec, or a :class:`Friction`) as a :class:`Friction` that ``solver`` implements.
+
+    Raises
+    ------
+    ValueError
+        An unknown law, its parameters missing, unknown or out of range, or a law
+        ``solver`` does not implement (the message names the allowed values).
+    TypeError
+        ``friction`` is none of the three forms.
+    """
+    if isinstance(friction, str):
+        check_law("friction", friction, solver)
+        friction = Friction(friction)
+    elif isinstance(friction, Mapping):
+        values = dict(friction)
+        law = values.pop("law", None)
+        check_law("friction", law, solver)
+        friction = Friction(law, **values)
+    elif not isinstance(friction, Friction):
+        raise TypeError("friction must be a law's name, a mapping {'law': name, "
+                        "parameter: value} or a study.model.contact.Friction, got "
+                        f"{type(friction).__name__}")
+    check_law("friction", friction.law, solver)
+    return friction
