@@ -60,7 +60,7 @@ from study.model.parameters import (
 from study.model.structure import Structure, tilt_warnings
 from study.solvers.exact import DEFAULT_COUPLING, MAX_SOLVER_BUDGET, SolverSettings
 from study.solvers.frontier import finest_tolerance
-from study.solvers.integrator import IntegratorSettings
+from study.solvers.integrator import MAX_INTEGRATOR_BUDGET, IntegratorSettings
 
 __all__ = [
     "METHODS",
@@ -239,8 +239,9 @@ def spec_schema() -> dict[str, Any]:
 
     The parameters' ranges and descriptions come from :mod:`study.model.parameters`, the
     observables allowed and their descriptions from :mod:`study.engine.observables`,
-    the solver's budgets' maxima from :data:`study.solvers.exact.MAX_SOLVER_BUDGET` (the file
-    on disk is their export, see :func:`export_spec_schema`).
+    the solvers' budgets' maxima from :data:`study.solvers.exact.MAX_SOLVER_BUDGET` and
+    :data:`study.solvers.integrator.MAX_INTEGRATOR_BUDGET` (the file on disk is their
+    export, see :func:`export_spec_schema`).
     """
     schema = load_schema(SPEC_SCHEMA)
     schema["$defs"]["parameter"] = {name: schema_definition(name) for name in SWEEPABLE}
@@ -260,7 +261,7 @@ def spec_schema() -> dict[str, Any]:
     items["description"] = "; ".join(
         f"{name}: {o.summary}" for name, o in OBSERVABLE_REGISTRY.items())
     solver = schema["properties"]["solver"]["properties"]
-    for name, largest in MAX_SOLVER_BUDGET.items():
+    for name, largest in {**MAX_SOLVER_BUDGET, **MAX_INTEGRATOR_BUDGET}.items():
         solver[name]["maximum"] = largest
     solver["friction"] = _friction_schema()
     return schema

@@ -4,8 +4,8 @@ Numba's on-disk cache (``cache=True``) checks only the source file of the functi
 compiled, not the kernels that function calls in other files: after an edit of
 ``two_way/event_search.py`` alone, the cached ``two_way/orbit.py`` would go on running
 the old search. Every kernel's cache entry is therefore stamped with a hash of all the
-kernel sources (and of the status codes they read), so an edit of any of them compiles
-every kernel afresh, wherever numba keeps its cache (beside the sources, in
+kernel sources (and of the status codes and contact-law codes they read), so an edit of
+any of them compiles every kernel afresh, wherever numba keeps its cache (beside the sources, in
 ``NUMBA_CACHE_DIR`` or in the user-wide folder).
 """
 
@@ -19,10 +19,12 @@ from numba.core import caching
 
 KERNELS_DIR = Path(__file__).resolve().parent
 
-#: The sources whose code the compiled kernels hold: every module of this folder, and
-#: the status codes (plain ints numba bakes in as constants).
+#: The sources whose code the compiled kernels hold: every module of this folder, the
+#: status codes and the contact laws' codes (numba bakes module-level ints in as
+#: constants).
 KERNEL_SOURCES = (*sorted(KERNELS_DIR.rglob("*.py")),
-                  KERNELS_DIR.parent / "model" / "codes.py")
+                  KERNELS_DIR.parent / "model" / "codes.py",
+                  KERNELS_DIR.parent / "model" / "contact.py")
 
 
 def kernel_sources_sha256(sources: tuple[Path, ...] = KERNEL_SOURCES) -> str:

@@ -27,7 +27,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from study.engine.spec_files import load_schema
 from study.kernels import integrator as _kernel
 from study.kernels import structure_vector as sv
 from study.kernels.event_loop import EventLog, Samples, Segments, State, StepControl
@@ -48,6 +47,7 @@ from study.solvers.exact import (
 __all__ = [
     "EVENT_KINDS",
     "INTEGRATOR_VERSION",
+    "MAX_INTEGRATOR_BUDGET",
     "MAX_INTEGRATOR_STEPS",
     "MAX_OUTPUT_SAMPLES",
     "MAX_RECORDED_EVENTS",
@@ -91,18 +91,17 @@ OUTCOMES = {
 #: minutes of one core.
 MAX_INTEGRATOR_STEPS = 1_000_000_000
 
-#: The spec schema whose ``[solver]`` maxima bound the integrator's budgets (a study
-#: spec's [solver] table is held to them): ``steps_per_period`` 1e4, ``max_periods``
-#: 1e5, ``max_orbit_period`` 1e3.
-BUDGET_SCHEMA = "study-spec-v1"
+#: The largest value of the integer budgets of :class:`IntegratorSettings` a study spec
+#: may set (its ``[solver]`` table; the spec schema takes these maxima from here): steps
+#: of 1e-4 drive periods at the finest, 1e5 periods to reach a steady state, orbits of up
+#: to 1e3 drive periods.
+MAX_INTEGRATOR_BUDGET = {"steps_per_period": 10_000, "max_periods": 100_000,
+                         "max_orbit_period": 1_000}
 
 
 def integrator_budget_maxima() -> dict[str, int]:
     """The largest value of each integer budget of :class:`IntegratorSettings`."""
-    solver = load_schema(BUDGET_SCHEMA)["properties"]["solver"]["properties"]
-    maxima = {name: int(solver[name]["maximum"])
-              for name in ("steps_per_period", "max_periods", "max_orbit_period")}
-    return {**maxima, "max_steps": MAX_INTEGRATOR_STEPS}
+    return {**MAX_INTEGRATOR_BUDGET, "max_steps": MAX_INTEGRATOR_STEPS}
 
 
 #: Events :func:`simulate` (and :func:`study.scenes.planar_model.simulate_planar`) record at most:
