@@ -24,6 +24,7 @@ from study.model import (
     tangential_force,
     thresholds,
 )
+from study.model.contact import Friction
 from study.model.inputs import StudyWarning, SuspectInputWarning
 from study.model.status import NonConvergence, Status
 from study.model.structure import Structure
@@ -41,6 +42,7 @@ _import_module("study.analyses.fit")
 _import_module("study.analyses.design")
 
 __all__ = [
+    "Friction",
     "NonConvergence",
     "ResultError",
     "SolverSettings",

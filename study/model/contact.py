@@ -36,6 +36,7 @@ from typing import Any
 
 __all__ = [
     "COUPLINGS",
+    "DEFAULT_COUPLING",
     "DEFAULT_FRICTION",
     "FRICTION_LAWS",
     "KINDS",
@@ -158,6 +159,10 @@ LAWS: dict[str, dict[str, ContactLaw]] = {
 #: Names of each kind's laws.
 FRICTION_LAWS = tuple(LAWS["friction"])
 COUPLINGS = tuple(LAWS["coupling"])
+#: The coupling of every function, spec, fit and design that does not name one: the
+#: paper's model, the one every workflow uses. Declared here only; everything else
+#: (signatures, spec readers, schemas' descriptions) derives from it.
+DEFAULT_COUPLING = "one-way"
 LIFT_OFF_LAWS = tuple(LAWS["lift_off"])
 #: The friction law of every solver by default (the paper's).
 DEFAULT_FRICTION = "coulomb"

@@ -29,7 +29,13 @@ from study.model import (
     release_amplitudes,
     slip_amplitudes,
 )
-from study.model.contact import DEFAULT_FRICTION, Friction, check_friction
+from study.model.contact import (
+    COUPLINGS,
+    DEFAULT_COUPLING,
+    DEFAULT_FRICTION,
+    Friction,
+    check_friction,
+)
 from study.model.inputs import InputTypeError, instance_of
 from study.model.structure import Structure, check_structure
 
@@ -49,15 +55,6 @@ __all__ = [
 
 #: Version of the steady-state algorithm; changes whenever its results may change.
 SOLVER_VERSION = "4"
-
-#: How the sliding base and the mode interact: the paper's model, or the physical one
-#: in which the base's sliding acceleration also forces the mode.
-COUPLINGS = ("one-way", "two-way")
-
-#: The coupling of every function, spec, fit and design that does not name one: the
-#: paper's model, the one every workflow uses. Declared here only; everything else
-#: (signatures, spec readers, schemas' descriptions) derives from it.
-DEFAULT_COUPLING = "one-way"
 
 #: Largest budget of each :class:`SolverSettings` field: 100 times the default slip
 #: events (a budget only bounds pathological points; at about 1 us an event, 1e6 events
