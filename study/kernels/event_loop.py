@@ -114,7 +114,12 @@ def _stop(state, mode, t, code):
 def make_loop(hooks):
     """The event loop for a model's :class:`Hooks`: a numba function
     ``loop(model, segments, state, t_stop, control, samples, events, stats)``, to be
-    called from the model's module-level cached function."""
+    called from the model's module-level cached function.
+
+    The factory is long because the loop it returns is: one compiled loop of steps,
+    event location and mode changes whose dozen local values carry from one step to the
+    next; cut into functions, they would travel as arguments through every call.
+    """
     restart = hooks.restart
     prepare = hooks.prepare
     step = hooks.step

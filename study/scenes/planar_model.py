@@ -42,6 +42,7 @@ from study.model.inputs import (
     bounded_number,
     instance_of,
 )
+from study.model.status import NonConvergence, Status
 from study.model.structure import require_finite
 from study.model.units import (
     DEGREE,
@@ -607,17 +608,7 @@ def simulate_planar(
     y = _to_kernel(y)
     end = float(schedule.ends[-1])
     shortest = float(1.0 / np.max(schedule.frequency))
-    if output_times is None:
-        count = max(2, math.ceil(end / shortest * 16) + 1)
-        check_samples(count, "the default output_times (16 a period of the schedule)")
-        out_t = np.linspace(0.0, end, count)
-    else:
-        out_t = as_real_array("output_times", output_times, SECOND).ravel()
-        check_samples(out_t.size, "output_times")
-        if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
-            raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
-        if np.any(np.diff(out_t) < 0):
-            raise ValueError("output_times must be sorted")
+    out_t = _output_times(output_times, end, shortest)
     omega = 2.0 * np.pi * schedule.frequency
     scale = _scales(disk, float(np.max(omega)))
     disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / float(
@@ -652,6 +643,32 @@ def simulate_planar(
             slid = y[_kernel.PATH] - path_before
             kicks[j] = noise * math.sqrt(slid) * generator.standard_normal()
             y[_kernel.HEADING] += kicks[j]
+    return _trajectory(disk, samples, events, capacity, stats, code, state, kicks)
+
+
+
+def _output_times(output_times: ArrayLike | None, end: float, shortest: float
+                  ) -> NDArray[np.float64]:
+    """The sampling times [s]: ``output_times`` checked, or 16 a shortest drive period."""
+    if output_times is None:
+        count = max(2, math.ceil(end / shortest * 16) + 1)
+        check_samples(count, "the default output_times (16 a period of the schedule)")
+        return np.linspace(0.0, end, count)
+    out_t = as_real_array("output_times", output_times, SECOND).ravel()
+    check_samples(out_t.size, "output_times")
+    if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
+        raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
+    if np.any(np.diff(out_t) < 0):
+        raise ValueError("output_times must be sorted")
+    return out_t
+
+
+def _trajectory(disk: Disk, samples: Samples, events: EventLog, capacity: int,
+                stats: NDArray[np.float64], code: int, state: State,
+                kicks: NDArray[np.float64]) -> PlanarTrajectory:
+    """The run's samples and events as a :class:`PlanarTrajectory` (angles in degree)."""
+    out_t = samples.t
+    y = state.y
     m = int(samples.count[0])
     e = min(int(events.count[0]), capacity)
     states = samples.y[:m]
@@ -725,7 +742,7 @@ class PeriodicMotion:
     status : int
         A :class:`study.model.status.Status` code.
     reason : int
-        A :class:`study.model.status.Reason` code (why not converged).
+        A :class:`study.model.status.NonConvergence` code (why not converged).
     periods : int
         Drive periods integrated.
     slips_per_period : float
@@ -789,9 +806,6 @@ def periodic_motion(
     -------
     PeriodicMotion
     """
-    from study.model.status import NonConvergence as Reason
-    from study.model.status import Status
-
     plates, disk_vector = disk_parameters(disk)
     settings = check_integrator_settings(settings)
     f, a = check_drive(f, a)
@@ -833,49 +847,69 @@ def periodic_motion(
         state.clock[0] = 0.0
         code = _kernel.integrate(plates, disk_vector, segments, state, period, control,
                                  samples, events, stats)
-        if code == codes.RUN_LIFT_OFF:
-            return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.LIFT_OFF),
-                                  int(Reason.NONE), count, math.nan, math.nan, 0)
-        if code == codes.RUN_PARADOX:
-            return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.FRICTION_PARADOX),
-                                  int(Reason.NONE), count, math.nan, math.nan, 0)
         if code != codes.RUN_DONE:
-            return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
-                                  int(Reason.EVENT_BUDGET), count, math.nan, math.nan, 0)
-        heading = start[_kernel.HEADING]
-        c, s = math.cos(heading), math.sin(heading)
-        dx = y[_kernel.X] - start[_kernel.X]
-        dy = y[_kernel.Y] - start[_kernel.Y]
-        body = np.array([
-            c * dx + s * dy, -s * dx + c * dy, y[_kernel.HEADING] - heading,
-            c * y[_kernel.VX] + s * y[_kernel.VY], -s * y[_kernel.VX] + c * y[_kernel.VY],
-            y[_kernel.SPIN],
-        ])
-        history.append((body, start[:3].copy(), y[:3].copy(), stats.copy()))
+            return _ended_early(code, count)
+        history.append((_body_frame_change(start, y), start[:3].copy(), y[:3].copy(),
+                        stats.copy()))
         del history[:-2 * max_orbit_period]
         orbit = _orbit_period(history, tolerance, max_orbit_period)
         if orbit:
-            window = history[-orbit:]
-            stuck = sum(h[3][3] for h in window) / (orbit * period)
-            slips = sum(h[3][2] for h in window) / orbit
-            first, last = window[0][1], window[-1][2]
-            c, s = math.cos(first[2]), math.sin(first[2])
-            dx, dy = last[0] - first[0], last[1] - first[1]
-            rate = f / orbit
-            if slips == 0 and dx == 0.0 and dy == 0.0 and last[2] == first[2]:
-                status = Status.STATIC
-            elif stuck > 0.0:
-                status = Status.STICK_SLIP
-            else:
-                status = Status.CONTINUOUS_SLIDING
-            return PeriodicMotion(
-                float((c * dx + s * dy) * rate), float((-s * dx + c * dy) * rate),
-                math.degrees((last[2] - first[2]) * rate), int(status), int(Reason.NONE),
-                count,
-                float(slips), float(stuck), orbit,
-            )
+            return _motion_of_orbit(history[-orbit:], f, period, count)
     return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
-                          int(Reason.NO_PERIODIC_ORBIT), max_periods, math.nan, math.nan, 0)
+                          int(NonConvergence.NO_PERIODIC_ORBIT), max_periods, math.nan,
+                          math.nan, 0)
+
+
+def _ended_early(code: int, count: int) -> PeriodicMotion:
+    """The motion of a search whose period ``count`` ended before its end: lift-off, a
+    friction paradox, or the step budget spent."""
+    if code == codes.RUN_LIFT_OFF:
+        status, reason = Status.LIFT_OFF, NonConvergence.NONE
+    elif code == codes.RUN_PARADOX:
+        status, reason = Status.FRICTION_PARADOX, NonConvergence.NONE
+    else:
+        status, reason = Status.NOT_CONVERGED, NonConvergence.EVENT_BUDGET
+    return PeriodicMotion(math.nan, math.nan, math.nan, int(status), int(reason), count,
+                          math.nan, math.nan, 0)
+
+
+def _body_frame_change(start: NDArray[np.float64], y: NDArray[np.float64]
+                       ) -> NDArray[np.float64]:
+    """One period's displacement, twist and end velocities in the body frame of its start
+    (what repeats on a periodic orbit whatever the heading)."""
+    heading = start[_kernel.HEADING]
+    c, s = math.cos(heading), math.sin(heading)
+    dx = y[_kernel.X] - start[_kernel.X]
+    dy = y[_kernel.Y] - start[_kernel.Y]
+    return np.array([
+        c * dx + s * dy, -s * dx + c * dy, y[_kernel.HEADING] - heading,
+        c * y[_kernel.VX] + s * y[_kernel.VY], -s * y[_kernel.VX] + c * y[_kernel.VY],
+        y[_kernel.SPIN],
+    ])
+
+
+def _motion_of_orbit(window: list[tuple[Any, ...]], f: float, period: float, count: int
+                     ) -> PeriodicMotion:
+    """The mean motion over the periods of one orbit (``window``: each period's body-frame
+    change, start and end pose, statistics)."""
+    orbit = len(window)
+    stuck = sum(h[3][3] for h in window) / (orbit * period)
+    slips = sum(h[3][2] for h in window) / orbit
+    first, last = window[0][1], window[-1][2]
+    c, s = math.cos(first[2]), math.sin(first[2])
+    dx, dy = last[0] - first[0], last[1] - first[1]
+    rate = f / orbit
+    if slips == 0 and dx == 0.0 and dy == 0.0 and last[2] == first[2]:
+        status = Status.STATIC
+    elif stuck > 0.0:
+        status = Status.STICK_SLIP
+    else:
+        status = Status.CONTINUOUS_SLIDING
+    return PeriodicMotion(
+        float((c * dx + s * dy) * rate), float((-s * dx + c * dy) * rate),
+        math.degrees((last[2] - first[2]) * rate), int(status), int(NonConvergence.NONE),
+        count, float(slips), float(stuck), orbit,
+    )
 
 
 def _orbit_period(history: list[tuple[Any, ...]], tolerance: NDArray[np.float64],

@@ -459,6 +459,9 @@ def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[n
              route: list[list[Leg]] | None = None) -> PlanRun:
     """Simulate a route flown by one of three strategies.
 
+    Its twelve parameters are a public signature (scene specs, the API): the disk, the
+    route and the strategy, then keyword-only options with defaults, each read by name.
+
     ``"calibration"``: the legs planned from the calibration alone
     (:func:`plan_route`), flown blind. ``"open_loop"``: the legs corrected in the
     noise-free model (:func:`refined_route`), flown blind. ``"closed_loop"``: each leg
