@@ -84,11 +84,11 @@ def _documented_at_top() -> list[str]:
     import pkgutil
 
     found = []
-    for info in pkgutil.iter_modules(study.__path__):
-        module = importlib.import_module(f"study.{info.name}")
+    for info in pkgutil.walk_packages(study.__path__, prefix="study."):
+        module = importlib.import_module(info.name)
         for name in getattr(module, "__all__", ()):
             if name in study.__all__ and getattr(study, name) is getattr(module, name):
-                found.append(f"study.{info.name}.{name}")
+                found.append(f"{info.name}.{name}")
     return found
 
 
