@@ -698,6 +698,16 @@ def _lift_off(f, a, constants):
 
 
 @njit(cache=True, nogil=True)
+def lift_off_decisions(f, a, constants, out):
+    """``out[i]`` (int8): 1 where ``a[i]`` [m s-2] is past lift-off at ``f[i]`` [Hz], 0
+    where it is not, ``LIFT_UNDECIDED`` within 1e-13 of the threshold, as numpy decides
+    ``a > study.model.lift_off_acceleration`` (see :func:`_lift_off`; ``constants`` the
+    :data:`ForceConstants`)."""
+    for i in range(f.shape[0]):
+        out[i] = _lift_off(f[i], a[i], constants)[0]
+
+
+@njit(cache=True, nogil=True)
 def _forces(a, k_re, k_im, one_re, one_im, sin_a, cs, ck):
     """Release and slip amplitudes ``A_s``, ``B_s`` at one point, bit-identical to
     ``study.model``' ``release_amplitudes`` and ``slip_amplitudes`` there."""

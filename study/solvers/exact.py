@@ -11,6 +11,7 @@ names they declare.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -106,6 +107,10 @@ class SolverSettings:
                     f"{value!r}")
 
 
+#: The settings of ``settings=None``: frozen, so one instance serves every call.
+DEFAULT_SETTINGS = SolverSettings()
+
+
 @dataclass(frozen=True)
 class SteadyState:
     """Steady periodic orbit at each drive point, arrays of the broadcast shape.
@@ -156,7 +161,7 @@ def check_settings(settings: object) -> SolverSettings:
     """``settings``, or the defaults for None; a TypeError naming the argument for
     anything but a :class:`SolverSettings`."""
     if settings is None:
-        return SolverSettings()
+        return DEFAULT_SETTINGS
     return instance_of("settings", settings, SolverSettings, "a study.SolverSettings")
 
 
@@ -184,9 +189,36 @@ def structure_vector(structure: Structure, coupling: str) -> NDArray[np.float64]
     return vector
 
 
+@functools.lru_cache(maxsize=64)
 def kernel_budget(settings: SolverSettings) -> Budget:
-    """The kernels' :class:`~study.kernels.budget.Budget` of ``settings``."""
+    """The kernels' :class:`~study.kernels.budget.Budget` of ``settings`` (frozen and
+    hashable: a call with the same settings reuses it)."""
     return Budget(int(settings.max_events), int(settings.max_map_iterations))
+
+
+def _force_constants(structure: Structure) -> Any:
+    """The one-way kernel's :data:`~study.kernels.one_way.ForceConstants`."""
+    return one_way_kernel.ForceConstants(
+        float(structure.omega0), 1.0 / structure.Q, float(structure.M),
+        float(np.cos(structure.alpha_rad)), float(np.sin(structure.alpha_rad)),
+        float(structure.cs), float(structure.ck), float(structure.g),
+    )
+
+
+def _lifted(
+    structure: Structure, f_flat: NDArray[np.float64], a_flat: NDArray[np.float64],
+) -> NDArray[np.bool_]:
+    """``a > lift_off_acceleration(structure, f)`` on flat arrays: decided by the kernel
+    (the same operations, without numpy's temporaries, which cost a small call more
+    than its solve), and by numpy where it is within 1e-13 of the threshold."""
+    decisions = np.empty(f_flat.size, dtype=np.int8)
+    one_way_kernel.lift_off_decisions(f_flat, a_flat, _force_constants(structure), decisions)
+    lifted = decisions == 1
+    undecided = np.flatnonzero(decisions == one_way_kernel.LIFT_UNDECIDED)
+    if undecided.size:
+        lifted[undecided] = a_flat[undecided] > lift_off_acceleration(structure,
+                                                                      f_flat[undecided])
+    return lifted
 
 
 def _orbit_table(
@@ -199,7 +231,7 @@ def _orbit_table(
 ) -> NDArray[np.float64]:
     """Rows of the orbit kernel (:data:`study.kernels.two_way.points.OUTPUT_COLUMNS`)
     at each point."""
-    lifted = a_flat > lift_off_acceleration(structure, f_flat)
+    lifted = _lifted(structure, f_flat, a_flat)
     omega = 2.0 * np.pi * f_flat
     out = np.empty((f_flat.size, orbit_kernel.N_OUT))
     if parallel is None:
@@ -507,12 +539,18 @@ def steady_velocity(
     >>> v.shape, status.dtype
     ((3, 2), dtype('int8'))
     """
-    if check_coupling(coupling) != "one-way":
-        result = steady_state(structure, f, a, settings, coupling=coupling)
-        return result.velocity, result.status
+    coupling = check_coupling(coupling)
     structure = check_structure(structure)
     settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    if coupling != "one-way":
+        # The orbit kernel's table, read for the two columns returned (as steady_state).
+        shape = f_arr.shape
+        out = _orbit_table(structure, np.ascontiguousarray(f_arr, dtype=float).ravel(),
+                           np.ascontiguousarray(a_arr, dtype=float).ravel(), coupling,
+                           settings, None)
+        return (scalar_if_0d(out[:, orbit_kernel.OUT_VELOCITY].reshape(shape)),
+                scalar_if_0d(out[:, orbit_kernel.OUT_STATUS].astype(np.int8).reshape(shape)))
     if f_arr.size == 0:  # nothing to solve (numba would be handed a broadcast view)
         return np.empty(f_arr.shape), np.empty(f_arr.shape, dtype=np.int8)
     velocity, status = _velocity_only(
@@ -536,11 +574,7 @@ def _velocity_only(
     out = one_way_kernel.VelocityOutputs(np.empty(n), np.empty(n, dtype=np.int8))
     kernel = (one_way_kernel.velocity_points if n >= PARALLEL_THRESHOLD
               else one_way_kernel.velocity_points_serial)
-    constants = one_way_kernel.ForceConstants(
-        float(structure.omega0), 1.0 / structure.Q, float(structure.M),
-        float(np.cos(structure.alpha_rad)), float(np.sin(structure.alpha_rad)),
-        float(structure.cs), float(structure.ck), float(structure.g),
-    )
+    constants = _force_constants(structure)
     levels = _friction_levels(structure)
     budget = kernel_budget(settings)
     kernel(f, a, constants, levels, budget, out)

@@ -83,6 +83,21 @@ def mode_table(structure, omega, a, table):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def stick_response(structure, omega, a):
+    """The stick's steady response ``(M_PRE, M_PIM)`` [m] at ``omega`` [rad s-1], ``a``
+    [m s-2], operation for operation as :func:`mode_row` writes it in row 0 (``D = 1``),
+    without the table."""
+    d = 1.0
+    c = structure[DAMPING]
+    k = structure[STIFFNESS]
+    force = a * structure[COS_ALPHA]
+    re = k - d * omega * omega
+    im = c * omega
+    den = re * re + im * im
+    return force * re / den, -force * im / den
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def mode_row(structure, omega, a, table, row):
     """Fill one row of :func:`mode_table`: the stick (0), forward (1) or backward (2)."""
     c = structure[DAMPING]

@@ -70,21 +70,28 @@ def _solve3(m, r, out):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def stuck_radius(j00, j01, j10, j11, j22):
+    """Largest modulus of the eigenvalues of the finite 3x3 Jacobian ``[[j00, j01, *],
+    [j10, j11, *], [0, 0, j22]]`` of an orbit with a stick (``v`` reset)."""
+    half = 0.5 * (j00 + j11)
+    det = j00 * j11 - j01 * j10
+    disc = half * half - det
+    if disc < 0.0:
+        rho = math.sqrt(max(det, 0.0))
+    else:
+        root = math.sqrt(disc)
+        rho = max(abs(half + root), abs(half - root))
+    return max(rho, abs(j22))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def spectral_radius(jac):
     """Largest modulus of the eigenvalues of the 3x3 ``jac`` (the Floquet multipliers)."""
     if not np.all(np.isfinite(jac)):
         return np.inf
     if jac[2, 0] == 0.0 and jac[2, 1] == 0.0:
         # A stick on the orbit: v is reset, one multiplier is jac[2, 2] (0).
-        half = 0.5 * (jac[0, 0] + jac[1, 1])
-        det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
-        disc = half * half - det
-        if disc < 0.0:
-            rho = math.sqrt(max(det, 0.0))
-        else:
-            root = math.sqrt(disc)
-            rho = max(abs(half + root), abs(half - root))
-        return max(rho, abs(jac[2, 2]))
+        return stuck_radius(jac[0, 0], jac[0, 1], jac[1, 0], jac[1, 1], jac[2, 2])
     values = np.linalg.eigvals(jac.astype(np.complex128))
     return np.max(np.abs(values))
 

@@ -29,8 +29,9 @@ from study.kernels.two_way.modes import (
     TWO_PI,
     DrivePoint,
     mode_row,
+    stick_response,
 )
-from study.kernels.two_way.newton import spectral_radius
+from study.kernels.two_way.newton import spectral_radius, stuck_radius
 from study.kernels.two_way.orbit import (
     A_BACKWARD,
     A_DISPLACEMENT,
@@ -40,7 +41,7 @@ from study.kernels.two_way.orbit import (
     N_ACC,
     PassRecord,
 )
-from study.kernels.two_way.propagation import homogeneous, particular
+from study.kernels.two_way.propagation import particular, stick_propagator
 from study.model.codes import (
     CONTINUOUS_SLIDING,
     LIFT_OFF,
@@ -106,25 +107,44 @@ def start_state(table, omega, t, z, factor):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _is_static(point):
-    """Neither release can happen with the mode on its steady response."""
-    structure = point.structure
-    table = point.table
-    omega = point.omega
-    a = point.a
+def _is_static(structure, omega, a, pr, pi):
+    """Neither release can happen with the mode on its steady response ``(pr, pi)`` [m]
+    (:func:`~study.kernels.two_way.modes.stick_response`): the stuck structure's
+    release amplitudes ``|s tau - cs n|`` against ``cs g``, the motion thresholds of
+    :func:`study.model.forces.thresholds` (the two-way term vanishes in a stick)."""
     w2 = omega * omega
     m = structure[MASS_RATIO]
     ca = structure[COS_ALPHA]
     sa = structure[SIN_ALPHA]
     cs = structure[STATIC_FRICTION]
-    pr = table[0, M_PRE]
-    pi = table[0, M_PIM]
     level = cs * structure[GRAVITY] * (1.0 + 8.0 * EPS)
     for sign in (1.0, -1.0):
         kappa = -m * (sign * sa + cs * ca)
         if math.hypot(-kappa * w2 * pr + cs * a, -kappa * w2 * pi) > level:
             return False
     return True
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _static_row(structure, omega, lifted, out):
+    """``out`` (NaN, no reason, period 0) completed for a static point: ``LIFT_OFF``
+    when ``lifted``, else at rest, its multiplier the stick's free decay over a period
+    (as :func:`~study.kernels.two_way.newton.spectral_radius` gives it for that
+    propagator)."""
+    out[OUT_STATUS] = LIFT_OFF if lifted else STATIC
+    if lifted:
+        return
+    out[OUT_VELOCITY] = 0.0
+    out[OUT_SLIPS] = 0.0
+    out[OUT_FORWARD] = 0.0
+    out[OUT_BACKWARD] = 0.0
+    # The orbit is the mode's steady response: perturbations decay with it.
+    e11, e12, e21, e22 = stick_propagator(structure, TWO_PI / omega)
+    if (math.isfinite(e11) and math.isfinite(e12) and math.isfinite(e21)
+            and math.isfinite(e22)):
+        out[OUT_MULTIPLIER] = stuck_radius(e11, e12, e21, e22, 0.0)
+    else:
+        out[OUT_MULTIPLIER] = np.inf
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -137,29 +157,18 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
     ``t_start`` [s] and ``factor`` choose the starting state (rest, mode on ``factor``
     times its steady response).
     """
-    table = np.zeros((3, N_MODE))
-    point = DrivePoint(structure, table, omega, a)
-    # The stick's row decides a static point; the slips' rows are needed only beyond.
-    mode_row(structure, omega, a, table, 0)
     out[:] = np.nan
     out[OUT_REASON] = REASON_NONE
     out[OUT_PERIOD] = 0.0
-    if _is_static(point):
-        out[OUT_STATUS] = LIFT_OFF if lifted else STATIC
-        if not lifted:
-            out[OUT_VELOCITY] = 0.0
-            out[OUT_SLIPS] = 0.0
-            out[OUT_FORWARD] = 0.0
-            out[OUT_BACKWARD] = 0.0
-            # The orbit is the mode's steady response: perturbations decay with it.
-            _, _, e11, e12, e21, e22 = homogeneous(table[0], TWO_PI / omega, 0.0, 0.0)
-            free = np.zeros((3, 3))
-            free[0, 0] = e11
-            free[0, 1] = e12
-            free[1, 0] = e21
-            free[1, 1] = e22
-            out[OUT_MULTIPLIER] = spectral_radius(free)
+    # A static point is decided and written from the stick's response alone, in closed
+    # form, before any table or orbit (most points of a map never slip).
+    pr, pi = stick_response(structure, omega, a)
+    if _is_static(structure, omega, a, pr, pi):
+        _static_row(structure, omega, lifted, out)
         return
+    table = np.zeros((3, N_MODE))
+    point = DrivePoint(structure, table, omega, a)
+    mode_row(structure, omega, a, table, 0)
     mode_row(structure, omega, a, table, 1)
     mode_row(structure, omega, a, table, 2)
     scales = np.empty(3)

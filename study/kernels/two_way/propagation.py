@@ -76,6 +76,19 @@ def homogeneous(row, tau, h0, hd0):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def stick_propagator(structure, tau):
+    """The stick's 2x2 propagator ``(e11, e12, e21, e22)`` over ``tau`` [s], operation for
+    operation as :func:`homogeneous` computes it from the stick's row of the mode table
+    (``D = 1``), without the table."""
+    d = 1.0
+    c = structure[DAMPING]
+    k = structure[STIFFNESS]
+    sigma = 0.5 * c / d
+    ec, es = _propagator(sigma, k / d - sigma * sigma, tau)
+    return ec + es * sigma, es, -es * (k / d), ec - es * sigma
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def particular(row, omega, cw, sw):
     """Particular solution ``(delta, delta', delta'', delta''')`` of a mode at phase
     with ``cos = cw``, ``sin = sw``."""
