@@ -38,6 +38,7 @@ from study.model.inputs import (
     bounded_integer,
     tilt_looks_like_radians,
 )
+from study.model.parameters import STRUCTURE as STRUCTURE_TABLE
 from study.model.structure import Structure
 from study.solvers.exact import DEFAULT_COUPLING, SolverSettings, check_coupling, check_structure
 from study.version import VERSION
@@ -68,6 +69,9 @@ def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.fl
     fixed = structure.as_dict()
     if "cs" in sweep and "ck" not in sweep and structure.ck == structure.cs:
         del fixed["ck"]
+    # Read only past lift-off: at its default it stays out, as in a spec that omits it.
+    if structure.restitution == STRUCTURE_TABLE["restitution"].default:
+        del fixed["restitution"]
     lines = ["[study]", 'name = "map"',
              "observables = [" + ", ".join(f'"{o}"' for o in observables) + "]", "",
              "[structure]"]

@@ -21,6 +21,8 @@ ENTRIES = (
     ("kinetic_friction", "1", "ck"),
     ("gravity", "m s-2", "g"),
     ("two_way", "1", "1.0 for two-way coupling, 0.0 for one-way"),
+    ("restitution", "1", "normal coefficient of restitution e of impacts on the table"),
+    ("lift_off_law", "1", "code of the lift-off law: 0 stop (LIFT_OFF), 1 flight"),
     ("friction_law", "1", "code of the friction law (study.model.contact.LAWS)"),
     *(
         (parameter.name, parameter.units, parameter.long_name)
@@ -47,5 +49,7 @@ KINETIC_FRICTION = _NAMES.index("kinetic_friction")
 GRAVITY = _NAMES.index("gravity")
 TWO_WAY = _NAMES.index("two_way")
 FRICTION_LAW = _NAMES.index("friction_law")
+RESTITUTION = _NAMES.index("restitution")
+LIFT_OFF_LAW = _NAMES.index("lift_off_law")
 #: Length of the structure vector.
 SIZE = len(ENTRIES)

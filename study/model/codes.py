@@ -14,6 +14,7 @@ CONTINUOUS_SLIDING = 2
 LIFT_OFF = 3
 NOT_CONVERGED = 4
 FRICTION_PARADOX = 5
+BOUNCING = 6
 
 # Why a point did not converge (study.model.status.NonConvergence).
 REASON_NONE = 0
@@ -37,3 +38,10 @@ EVENT_RELEASE_BACKWARD = 2
 EVENT_SLIP_END = 3
 EVENT_LIFT_OFF = 4
 EVENT_PARADOX = 5
+# With flight: EVENT_LIFT_OFF is the take-off, EVENT_IMPACT a landing on the table.
+EVENT_IMPACT = 6
+
+# Outcome of an impact of the base on the table (the impact law, study.kernels.impact).
+IMPACT_STICK = 0  # the base ends the impact at rest on the table
+IMPACT_SLIP = 1  # the base ends the impact sliding (either way) or rebounding
+IMPACT_PARADOX = 2  # the sliding effective normal mass is not positive: no solution

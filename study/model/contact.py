@@ -24,7 +24,9 @@ coupling
     the sliding base's acceleration also forces the mode.
 lift_off
     ``stop``: a run ends with ``LIFT_OFF`` where the normal force would turn negative
-    (the model of contact stops holding there).
+    (the model of contact stops holding there). ``flight``: the base takes off there,
+    flies and lands by an impact (restitution ``e``, friction during the impact);
+    ``flight=True`` in the API and specs (docs/theory/flight.md).
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ __all__ = [
     "COUPLINGS",
     "DEFAULT_COUPLING",
     "DEFAULT_FRICTION",
+    "DEFAULT_LIFT_OFF",
     "FRICTION_LAWS",
     "KINDS",
     "LAWS",
@@ -153,6 +156,12 @@ LAWS: dict[str, dict[str, ContactLaw]] = {
         "stop": ContactLaw(
             "lift_off", "stop", 0,
             "the run ends with LIFT_OFF where the normal force would turn negative"),
+        "flight": ContactLaw(
+            "lift_off", "flight", 1,
+            "the base takes off where the normal force vanishes, flies (free fall of "
+            "base and plate, the mode a free oscillator of the two bodies) and lands "
+            "by an impact with friction and the structure's restitution",
+            solvers=("exact", "integrator")),
     },
 }
 
@@ -164,6 +173,8 @@ COUPLINGS = tuple(LAWS["coupling"])
 #: (signatures, spec readers, schemas' descriptions) derives from it.
 DEFAULT_COUPLING = "one-way"
 LIFT_OFF_LAWS = tuple(LAWS["lift_off"])
+#: What every solver does at lift-off unless told ``flight=True``: stop with LIFT_OFF.
+DEFAULT_LIFT_OFF = "stop"
 #: The friction law of every solver by default (the paper's).
 DEFAULT_FRICTION = "coulomb"
 

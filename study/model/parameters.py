@@ -175,6 +175,12 @@ STRUCTURE: dict[str, Parameter] = _by_name(
               upper_open=False, symbol="g",
               reason="gravity presses the base on the table; 1000 m s-2 is 100 Earths",
               default=9.8, paper="9.8"),
+    Parameter("restitution", DIMENSIONLESS,
+              "normal coefficient of restitution of the base's impacts on the table", 0.0, 1.0,
+              lower_open=False, upper_open=False, symbol="e",
+              reason=("Newton's law h'+ = -e h'-: 0 is a plastic landing, 1 an elastic "
+                      "one; read only where the structure flies (flight = true)"),
+              default=0.0),
 )
 #: The mass model's parameters (the ``[structure.mass]`` table of specs:
 #: ``M = m1 / (m0 + m_add)``).

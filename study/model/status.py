@@ -33,6 +33,9 @@ class Status(IntEnum):
         Two-way coupling only: a slip's equations have no unique solution (Painleve's
         paradox, ``1 - M sin(alpha) (sin(alpha) + s ck cos(alpha)) <= 0``), as can happen
         for ``M`` close to 1 at steep tilt. Outside the model; no velocity (NaN).
+    BOUNCING
+        With flight only: a periodic orbit that leaves the table and lands again in every
+        period (flight phases and impacts); its mean velocity is given.
     """
 
     STATIC = codes.STATIC
@@ -41,6 +44,7 @@ class Status(IntEnum):
     LIFT_OFF = codes.LIFT_OFF
     NOT_CONVERGED = codes.NOT_CONVERGED
     FRICTION_PARADOX = codes.FRICTION_PARADOX
+    BOUNCING = codes.BOUNCING
 
 
 class NonConvergence(IntEnum):

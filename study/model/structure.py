@@ -80,6 +80,10 @@ class Structure:
     g : float, optional
         Gravitational acceleration [m s-2], ``0 < g <= 1000``; default 9.8 as in the
         paper.
+    restitution : float, optional
+        Normal coefficient of restitution of the base's impacts on the table [1],
+        ``0 <= restitution <= 1``; default 0 (plastic). Read only by solvers that follow
+        the structure past lift-off (``flight=True``).
 
     The ranges, units and defaults are declared in :mod:`study.model.parameters`, with
     the reason for each range.
@@ -109,6 +113,7 @@ class Structure:
     cs: float
     ck: float | None = STRUCTURE["ck"].default
     g: float = STRUCTURE["g"].default  # type: ignore[assignment]
+    restitution: float = STRUCTURE["restitution"].default  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         values = {}

@@ -186,6 +186,8 @@ def structure_vector(structure: Structure, coupling: str) -> NDArray[np.float64]
     vector[sv.KINETIC_FRICTION] = structure.ck
     vector[sv.GRAVITY] = structure.g
     vector[sv.TWO_WAY] = 1.0 if check_coupling(coupling) == "two-way" else 0.0
+    vector[sv.RESTITUTION] = structure.restitution
+    vector[sv.LIFT_OFF_LAW] = 0.0  # stop with LIFT_OFF
     return vector
 
 

@@ -362,6 +362,8 @@ def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING,
     p[sv.KINETIC_FRICTION] = structure.ck
     p[sv.GRAVITY] = structure.g
     p[sv.TWO_WAY] = 1.0 if two_way else 0.0
+    p[sv.RESTITUTION] = structure.restitution
+    p[sv.LIFT_OFF_LAW] = 0.0  # stop with LIFT_OFF
     # Parameters of laws not chosen are never read: NaN says so.
     p[sv.FRICTION_LAW + 1:] = np.nan
     for name, value in friction.vector_entries().items():
