@@ -23,6 +23,16 @@ a slide that stops cannot restart forwards, since ``s W_xz < ck W_xx <= cs W_xx`
 The impulse path is therefore piecewise linear with at most one switch, and the impact
 ends when ``h' = -e h'_minus`` (Newton's law; ``e`` the restitution, 0 plastic).
 
+Only the first slide can meet the paradox: a slide from rest arises when
+``|W_xz| > cs W_xx``, and then ``D_s' / (1 - M) = W_zz - ck |W_xz| > W_zz - |W_xz|^2 /
+W_xx = det W / W_xx > 0``. A plastic impact never gains kinetic energy (the normal
+impulse works on ``h' < 0``, friction against the slip). With ``e > 0`` and a switch
+(the slide stops during the impact) Newton's law can give back more than compression
+took (Kane's paradox of kinematic restitution): on random impacts about 1 in 100, up to
+several times the kinetic energy, at large M. Without a switch no ``e`` gains energy.
+IMPACT_STICK means at rest tangentially (``v = 0`` after); with ``e > 0`` the base
+still rebounds (``h' > 0``).
+
 Every rate is written with the factor ``1 - M`` taken out, so nothing grows like
 ``1 / (1 - M)`` near ``M = 1`` except the impulses' own scale: the normal impulse of a
 plastic impact is about ``(1 - M) |h'_minus|`` there (the base's own mass).
