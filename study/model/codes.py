@@ -42,6 +42,6 @@ EVENT_PARADOX = 5
 EVENT_IMPACT = 6
 
 # Outcome of an impact of the base on the table (the impact law, study.kernels.impact).
-IMPACT_STICK = 0  # the base ends the impact at rest on the table
-IMPACT_SLIP = 1  # the base ends the impact sliding (either way) or rebounding
+IMPACT_STICK = 0  # the base ends the impact at rest tangentially (v = 0; e > 0 rebounds)
+IMPACT_SLIP = 1  # the base ends the impact sliding, either way
 IMPACT_PARADOX = 2  # the sliding effective normal mass is not positive: no solution
