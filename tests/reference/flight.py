@@ -120,11 +120,13 @@ RTOL = 1e-12
 #: A rebound slower than ``CHATTER_SPEED * a / w`` [m s-1] lands plastically.
 CHATTER_SPEED = 1e-9
 #: Steps per shortest period (drive, mode in contact, mode in flight) at most.
-STEPS_PER_PERIOD = 48
+STEPS_PER_PERIOD = 32
 #: Segments allowed in one drive period before the motion is declared not periodic.
 MAX_SEGMENTS = 2000
 #: Longest orbit looked for [drive periods].
 MAX_ORBIT = 8
+#: Phase-0 states closer than this (natural units) belong to the same point of the orbit.
+LOOSE = 1e-5
 
 _STATE_NAMES = ("delta", "delta_rate", "velocity", "gap", "gap_rate")
 
@@ -173,11 +175,20 @@ class FlightModel:
         Drive frequency [Hz] and acceleration amplitude [m s-2].
     restitution : float, optional
         Overrides the structure's restitution [1].
+    rtol : float
+        Relative tolerance of the time integration [1]; the absolute tolerances are
+        ``rtol`` times the natural scales ``g / W^2`` [m] and ``g / W`` [m s-1],
+        ``W = max(w, w0 / sqrt(1 - M))``.
+    steps_per_period : int
+        Steps at least per period of the drive and of the mode in the current contact
+        mode (``max_step``): no event function turns twice within a step.
     """
 
     def __init__(self, structure: Any, f: float, a: float,
-                 restitution: float | None = None) -> None:
+                 restitution: float | None = None, rtol: float = RTOL,
+                 steps_per_period: int = STEPS_PER_PERIOD) -> None:
         p = _params(structure, restitution)
+        self.rtol = float(rtol)
         self.params = p
         self.f, self.a = float(f), float(a)
         self.w = 2.0 * math.pi * self.f
@@ -193,13 +204,13 @@ class FlightModel:
         ev = np.array([self.sa, self.ca])
         self.W = np.eye(2) + self.mu * np.outer(ev, ev)
         big = max(self.w, self.w0 / math.sqrt(1.0 - self.M))
-        self.max_step = 2.0 * math.pi / big / STEPS_PER_PERIOD
         # natural scales of (delta, delta', x, v, h, h')
         length, speed = self.g / big**2, self.g / big
         self.scale = np.array([length, speed, length, speed, length, speed])
-        self.atol = RTOL * self.scale
+        self.atol = self.rtol * self.scale
         self._coef = {}
         self.paradox = {}
+        self.max_step = {}
         for mode in (STICK, 1, -1, FLIGHT):
             matrix = self._matrix(mode, self.ck)
             inv = np.linalg.inv(matrix)
@@ -207,6 +218,9 @@ class FlightModel:
             self._coef[mode] = tuple(
                 (-self.g * inv[i, 1], inv[i, 2], inv[i, 4]) for i in range(5)
             )
+            # delta'' = ... + (1 / D) (-c delta' - k delta): the mode's frequency here
+            rate = math.sqrt(self.k * abs(inv[2, 2]))
+            self.max_step[mode] = 2.0 * math.pi / max(self.w, rate) / steps_per_period
             if mode in (1, -1):
                 frictionless = np.linalg.det(self._matrix(mode, 0.0))
                 self.paradox[mode] = np.linalg.det(matrix) * frictionless <= 0.0
@@ -544,8 +558,8 @@ def _advance(model: FlightModel, motion: _Motion, t_a: float, t_b: float,
         kinds, funcs = zip(*_events(model, mode, motion.start, motion.order), strict=True)
         if t_b - t <= 0.0:
             break
-        sol = solve_ivp(model.rhs(mode), (t, t_b), motion.y, method="DOP853", rtol=RTOL,
-                        atol=model.atol, events=list(funcs), max_step=model.max_step)
+        sol = solve_ivp(model.rhs(mode), (t, t_b), motion.y, method="DOP853", rtol=model.rtol,
+                        atol=model.atol, events=list(funcs), max_step=model.max_step[mode])
         if sol.status < 0:
             raise ModelBreakdown("not-periodic", f"solve_ivp failed: {sol.message}")
         if rec is not None:
@@ -650,7 +664,8 @@ class Simulation:
 
 
 def simulate(structure: Any, f: float, a: float, t_end: float, state0: Any,
-             phase0: float = 0.0, restitution: float | None = None) -> Simulation:
+             phase0: float = 0.0, restitution: float | None = None,
+             rtol: float = RTOL, steps_per_period: int = STEPS_PER_PERIOD) -> Simulation:
     """Follow the two-way model with flight and impacts from a given state.
 
     Parameters
@@ -672,12 +687,16 @@ def simulate(structure: Any, f: float, a: float, t_end: float, state0: Any,
         Drive phase at ``t = 0`` [rad].
     restitution : float, optional
         Overrides the structure's restitution [1].
+    rtol : float
+        Relative tolerance of the time integration [1].
+    steps_per_period : int
+        Steps at least per period of the drive and of the mode (see :class:`FlightModel`).
 
     Returns
     -------
     Simulation
     """
-    model = FlightModel(structure, f, a, restitution)
+    model = FlightModel(structure, f, a, restitution, rtol, steps_per_period)
     if isinstance(state0, Mapping):
         state0 = [state0[name] for name in _STATE_NAMES]
     t_local = (float(phase0) % (2.0 * math.pi)) / model.w
@@ -771,21 +790,23 @@ def _distance(model: FlightModel, m1: _Motion, m2: _Motion) -> float:
 
 def _start(model: FlightModel, start: Any) -> _Motion:
     if start == "rest":
-        y = model.stick_start()
-        return _contact(model, 0.0, y)
+        return _contact(model, 0.0, model.stick_start())
+    if start == "still":
+        return _contact(model, 0.0, np.zeros(6))
     if isinstance(start, Sequence) and len(start) == 2 and start[0] == "drop":
         height = float(start[1])
         if not height > 0.0:
             raise ValueError(f"the drop height must be > 0 [m], got {height}")
         y = np.array([model.g * model.ca / model.k, 0.0, 0.0, 0.0, height, 0.0])
         return _Motion(y, FLIGHT, 0.0, 0)
-    raise ValueError(f"start must be 'rest' or ('drop', height [m]), got {start!r}")
+    raise ValueError(f"start must be 'rest', 'still' or ('drop', height [m]), got {start!r}")
 
 
 def steady_motion(structure: Any, f: float, a: float, *, start: Any = "rest",
                   periods_transient: int = 20, periods_measure: int = 8,
                   restitution: float | None = None, tol: float = 1e-10,
-                  max_periods: int = 1500) -> SteadyMotion:
+                  max_periods: int = 1500, rtol: float = RTOL,
+                  steps_per_period: int = STEPS_PER_PERIOD) -> SteadyMotion:
     """Steady motion of the two-way model with flight, reached from a start.
 
     Parameters
@@ -795,9 +816,11 @@ def steady_motion(structure: Any, f: float, a: float, *, start: Any = "rest",
         ``restitution [1]``.
     f, a : float
         Drive frequency [Hz] and amplitude [m s-2].
-    start : "rest" or ("drop", height)
+    start : "rest", "still" or ("drop", height)
         ``"rest"``: at phase 0 on the table, ``v = 0``, mode on its steady stick
-        response (the exact solver's start); ``("drop", height [m])``: the base released
+        response (the exact solver's start); ``"still"``: at phase 0 on the table,
+        ``v = 0``, the mode at rest at its contact equilibrium (``delta = delta' = 0``:
+        the drive switched on at ``t = 0``); ``("drop", height [m])``: the base released
         at phase 0 at rest ``height`` above the table, mode at its flight equilibrium.
     periods_transient : int
         Drive periods followed at least before the orbit may be accepted.
@@ -811,12 +834,16 @@ def steady_motion(structure: Any, f: float, a: float, *, start: Any = "rest",
         ``W = max(w, w0 / sqrt(1 - M))``) [1].
     max_periods : int
         Drive periods followed at most before ``"not-periodic"``.
+    rtol : float
+        Relative tolerance of the time integration [1].
+    steps_per_period : int
+        Steps at least per period of the drive and of the mode (see :class:`FlightModel`).
 
     Returns
     -------
     SteadyMotion
     """
-    model = FlightModel(structure, f, a, restitution)
+    model = FlightModel(structure, f, a, restitution, rtol, steps_per_period)
     nan = float("nan")
     try:
         motion = _start(model, start)
@@ -829,12 +856,14 @@ def steady_motion(structure: Any, f: float, a: float, *, start: Any = "rest",
             history.append(motion)
             if k < periods_transient:
                 continue
-            for n in range(1, MAX_ORBIT + 1):
-                d = _distance(model, history[-1], history[-1 - n])
-                if d < tol:
-                    found, residual = n, d
-                    break
-            if found:
+            # The orbit's period is the first N whose distance is below a loose bound:
+            # a slowly decaying transient that turns by about 2 pi / N per period brings
+            # the distance over N periods below tol before the distance over one.
+            distances = [_distance(model, history[-1], history[-1 - n])
+                         for n in range(1, min(MAX_ORBIT, len(history) - 1) + 1)]
+            near = [n for n, d in enumerate(distances, 1) if d < LOOSE]
+            if near and distances[near[0] - 1] < tol:
+                found, residual = near[0], distances[near[0] - 1]
                 break
         periods = k
         n_measure = max(found, 1) * math.ceil(periods_measure / max(found, 1))
