@@ -182,17 +182,21 @@ class FlightModel:
     steps_per_period : int
         Steps at least per period of the drive and of the mode in the current contact
         mode (``max_step``): no event function turns twice within a step.
+    chatter_speed : float
+        Rebounds slower than ``chatter_speed * a / w`` land plastically [1].
     """
 
     def __init__(self, structure: Any, f: float, a: float,
-                 restitution: float | None = None, rtol: float = RTOL,
-                 steps_per_period: int = STEPS_PER_PERIOD) -> None:
+                 restitution: float | None = None, *, rtol: float = RTOL,
+                 steps_per_period: int = STEPS_PER_PERIOD,
+                 chatter_speed: float = CHATTER_SPEED) -> None:
         p = _params(structure, restitution)
         self.rtol = float(rtol)
         self.params = p
         self.f, self.a = float(f), float(a)
         self.w = 2.0 * math.pi * self.f
         self.T = 1.0 / self.f
+        self.chatter_threshold = float(chatter_speed) * self.a / self.w
         self.w0 = 2.0 * math.pi * p["f0"]
         self.c = self.w0 / p["Q"]
         self.k = self.w0 * self.w0
@@ -527,7 +531,7 @@ def _land(model: FlightModel, t: float, y: np.ndarray, tally: _Tally, rec,
     hit = impact(model, y[1], y[3], y[5])
     if hit.paradox:
         raise ModelBreakdown("friction-paradox", f"impact at t = {t}")
-    threshold = CHATTER_SPEED * model.a / model.w
+    threshold = model.chatter_threshold
     if model.e > 0.0 and hit.gap_rate < threshold:
         hit = impact(model, y[1], y[3], y[5], restitution=0.0)
     if rec is not None:
@@ -665,7 +669,7 @@ class Simulation:
 
 def simulate(structure: Any, f: float, a: float, t_end: float, state0: Any,
              phase0: float = 0.0, restitution: float | None = None,
-             rtol: float = RTOL, steps_per_period: int = STEPS_PER_PERIOD) -> Simulation:
+             **options: Any) -> Simulation:
     """Follow the two-way model with flight and impacts from a given state.
 
     Parameters
@@ -687,16 +691,14 @@ def simulate(structure: Any, f: float, a: float, t_end: float, state0: Any,
         Drive phase at ``t = 0`` [rad].
     restitution : float, optional
         Overrides the structure's restitution [1].
-    rtol : float
-        Relative tolerance of the time integration [1].
-    steps_per_period : int
-        Steps at least per period of the drive and of the mode (see :class:`FlightModel`).
+    **options
+        ``rtol``, ``steps_per_period``, ``chatter_speed`` of :class:`FlightModel`.
 
     Returns
     -------
     Simulation
     """
-    model = FlightModel(structure, f, a, restitution, rtol, steps_per_period)
+    model = FlightModel(structure, f, a, restitution, **options)
     if isinstance(state0, Mapping):
         state0 = [state0[name] for name in _STATE_NAMES]
     t_local = (float(phase0) % (2.0 * math.pi)) / model.w
@@ -805,8 +807,7 @@ def _start(model: FlightModel, start: Any) -> _Motion:
 def steady_motion(structure: Any, f: float, a: float, *, start: Any = "rest",
                   periods_transient: int = 20, periods_measure: int = 8,
                   restitution: float | None = None, tol: float = 1e-10,
-                  max_periods: int = 1500, rtol: float = RTOL,
-                  steps_per_period: int = STEPS_PER_PERIOD) -> SteadyMotion:
+                  max_periods: int = 1500, **options: Any) -> SteadyMotion:
     """Steady motion of the two-way model with flight, reached from a start.
 
     Parameters
@@ -834,16 +835,14 @@ def steady_motion(structure: Any, f: float, a: float, *, start: Any = "rest",
         ``W = max(w, w0 / sqrt(1 - M))``) [1].
     max_periods : int
         Drive periods followed at most before ``"not-periodic"``.
-    rtol : float
-        Relative tolerance of the time integration [1].
-    steps_per_period : int
-        Steps at least per period of the drive and of the mode (see :class:`FlightModel`).
+    **options
+        ``rtol``, ``steps_per_period``, ``chatter_speed`` of :class:`FlightModel`.
 
     Returns
     -------
     SteadyMotion
     """
-    model = FlightModel(structure, f, a, restitution, rtol, steps_per_period)
+    model = FlightModel(structure, f, a, restitution, **options)
     nan = float("nan")
     try:
         motion = _start(model, start)
