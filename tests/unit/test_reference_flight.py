@@ -51,6 +51,16 @@ def test_below_lift_off_equals_the_exact_two_way_solver(paper_structure, changes
     assert_allclose(got.velocity, float(exact), rtol=1e-8, atol=1e-14)
 
 
+@pytest.mark.parametrize(("M", "f", "a"), [(0.08, 13.0, 8.5), (0.99, 16.0, 3.0)])
+def test_drop_lands_on_the_exact_two_way_motion(paper_structure, M, f, a):
+    """A 3 mm drop below lift-off: impact, then the contact rules reach the contact orbit."""
+    s = paper_structure.replace(M=M)
+    exact, _ = study.steady_velocity(s, f, a, coupling="two-way")
+    got = steady_motion(s, f, a, start=("drop", 3e-3))
+    assert got.status == "stick-slip" and got.airborne_fraction == 0.0
+    assert_allclose(got.velocity, float(exact), rtol=1e-8)
+
+
 # --- M -> 0: the rigid block ----------------------------------------------------------------
 
 
