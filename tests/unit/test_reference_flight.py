@@ -61,6 +61,25 @@ def test_drop_lands_on_the_exact_two_way_motion(paper_structure, M, f, a):
     assert_allclose(got.velocity, float(exact), rtol=1e-8)
 
 
+def test_grazing_take_off_just_above_the_lift_off_threshold(paper_structure):
+    """1e-7 m s-2 above the exact solver's lift-off threshold the normal force dips below 0
+    for about 3e-6 s, inside one step: the reference must still take off (a hop of
+    about 1e-18 m), and the velocity must join the contact velocity continuously."""
+    from study.model.status import Status
+
+    f = 14.5
+    lo, hi = 9.0, 9.8
+    for _ in range(48):
+        mid = 0.5 * (lo + hi)
+        _, status = study.steady_velocity(paper_structure, f, mid, coupling="two-way")
+        lo, hi = (lo, mid) if Status(int(status)) == Status.LIFT_OFF else (mid, hi)
+    below, _ = study.steady_velocity(paper_structure, f, lo, coupling="two-way")
+    got = steady_motion(paper_structure, f, hi + 1e-7)
+    assert got.status == "bouncing" and got.take_offs_per_period == 1.0
+    assert 0 < got.largest_hop < 1e-15 and 0 < got.airborne_fraction < 1e-3
+    assert_allclose(got.velocity, float(below), rtol=1e-7)
+
+
 # --- M -> 0: the rigid block ----------------------------------------------------------------
 
 
