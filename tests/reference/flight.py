@@ -136,7 +136,7 @@ __all__ = [
 ]
 
 #: Version of this reference's algorithm: bump whenever its results may change.
-CODE_VERSION = "2"
+CODE_VERSION = "3"
 
 #: Contact modes: stick, slip (+1 / -1: the sign of ``v``), flight.
 STICK = 0
@@ -597,31 +597,39 @@ class _Recorder:
         self.modes: list[np.ndarray] = []
 
 
-def _contact(model: FlightModel, t: float, y: np.ndarray, record=None) -> _Motion:
-    """The motion that starts on the table with ``h = h' = 0`` (after a landing, at rest)."""
+def _contact(model: FlightModel, t: float, y: np.ndarray) -> _Motion:
+    """The motion that starts on the table with ``h = h' = 0`` (after a landing, at rest).
+
+    The first consistent mode: with ``v != 0`` the slip in its sign when its ``Fz >= 0``;
+    with ``v = 0`` stick when ``Fz >= 0`` and ``|Fx| <= cs Fz``, else a slip of sign ``s``
+    with ``Fz >= 0`` that accelerates the base in its own direction (the one against the
+    stick friction first); otherwise flight, which needs ``h'' > 0`` (a contact force
+    with ``Fz < 0`` cannot simply be switched off: the stick friction that comes off with
+    it moves the base too). No consistent mode: the friction paradox (Painleve).
+    """
     y = y.copy()
     y[4] = y[5] = 0.0
-    v = y[3]
+    d, dr, v = y[0], y[1], y[3]
     if v != 0.0:
         s = 1 if v > 0 else -1
-        if model.unknowns(s, t, y[0], y[1])[4] < 0.0:
-            return _Motion(y, FLIGHT, t, 2)
-        if model.paradox[s]:
-            raise ModelBreakdown("friction-paradox", f"slip {s:+d} at t = {t}")
-        return _Motion(y, s, t, 0)
-    u = model.unknowns(STICK, t, y[0], y[1])
-    fx, fz = u[3], u[4]
-    if fz < 0.0:
-        return _Motion(y, FLIGHT, t, 2)
-    if -fx - model.cs * fz > 0.0:
-        s = 1
-    elif fx - model.cs * fz > 0.0:
-        s = -1
+        if model.unknown(s, 4, t, d, dr) >= 0.0:
+            if model.paradox[s]:
+                raise ModelBreakdown("friction-paradox", f"slip {s:+d} at t = {t}")
+            return _Motion(y, s, t, 0)
+        order = 2
     else:
-        return _Motion(y, STICK, t, 0)
-    if model.paradox[s]:
-        raise ModelBreakdown("friction-paradox", f"slip {s:+d} at t = {t}")
-    return _Motion(y, s, t, 1)
+        fx, fz = model.unknown(STICK, 3, t, d, dr), model.unknown(STICK, 4, t, d, dr)
+        if fz >= 0.0 and abs(fx) <= model.cs * fz:
+            return _Motion(y, STICK, t, 0)
+        for s in ((1, -1) if fx < 0.0 else (-1, 1)):
+            if model.unknown(s, 4, t, d, dr) >= 0.0 and s * model.unknown(s, 0, t, d, dr) > 0.0:
+                if model.paradox[s]:
+                    raise ModelBreakdown("friction-paradox", f"slip {s:+d} at t = {t}")
+                return _Motion(y, s, t, 1)
+        order = 2
+    if model.unknown(FLIGHT, 1, t, d, dr) + model.drive(t) > 0.0:
+        return _Motion(y, FLIGHT, t, order)
+    raise ModelBreakdown("friction-paradox", f"no consistent contact mode at t = {t}")
 
 
 def _initial(model: FlightModel, t: float, state: Sequence[float]) -> _Motion:

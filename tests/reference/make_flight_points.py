@@ -19,6 +19,8 @@ cs = 0.25``, ``M`` in ``{0.08, 0.5, 0.9, 0.99}``, restitution ``e`` in ``{0, 0.5
 * ``two-starts``: ``M`` in ``{0.9, 0.99}``, the same drive from ``"rest"`` (the exact
   solver's start), ``"still"`` (everything at rest, the drive switched on) and a 3 mm
   drop: where they differ the drive has several stable motions.
+* ``large-drive``: 20 and 36 m s-2 at 14.5 Hz (long flights, flights of a whole period,
+  subharmonic bouncing).
 * ``drop-onto-contact``: a 3 mm drop at drives below lift-off: the landing ends in the
   contact motion (the same as from rest).
 
@@ -93,6 +95,9 @@ def point_specs() -> list[dict]:
                 out.append(_spec("two-starts", M, f, a, 0.0, start))
     for start in ("rest", "still", ("drop", DROP)):
         out.append(_spec("two-starts", 0.99, 14.5, 10.0, 0.5, start))
+    for M in MASS_RATIOS:
+        for a in (20.0, 36.0):
+            out.append(_spec("large-drive", M, 14.5, a, 0.0, "rest"))
     for M, f, a in ((0.08, 13.0, 8.5), (0.08, 16.5, 8.5), (0.08, 13.0, 5.0),
                     (0.5, 14.5, 6.0), (0.9, 13.0, 4.0), (0.99, 16.0, 3.0)):
         out.append(_spec("drop-onto-contact", M, f, a, 0.0, ("drop", DROP)))
