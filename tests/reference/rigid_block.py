@@ -27,10 +27,12 @@ mean velocity is 0), the normal force per unit mass is ``n = g - A``, ``A = a co
   past ``phi_L``): the motion is periodic with period ``N`` drive periods, one flight
   and one impact per orbit. When it lands where ``n < 0`` (inside the take-off window)
   it leaves again at once, from another phase: the flights no longer start at
-  ``phi_0``, which is where the closed form stops (status ``"beyond"``; for the
-  completely inelastic block this first happens when the flight lasts exactly one
-  period: the period-doubling cascade of the bouncing block starts there, at
-  ``a = g sqrt(1 + pi^2)``, :func:`one_period_amplitude`).
+  ``phi_0``. For the completely inelastic block this first happens when the flight
+  lasts exactly one period, at ``a = g sqrt(1 + pi^2)`` (:func:`one_period_amplitude`);
+  above it the block flies one whole period at a time, taking off again where it
+  lands, at ``sin(phi) = -pi g / a`` (status ``"one-period-flight"``, airborne fraction
+  1), a motion stable up to ``a = g sqrt(4 + pi^2)`` (:func:`period_doubling_amplitude`),
+  where the period doubles and the closed form stops (status ``"beyond"``).
 * **Largest hop**: the largest ``h`` at a root of ``h'`` in ``(0, tau_L)`` (roots bracketed
   the same way, ``|h'''| <= a w``).
 """
@@ -48,6 +50,7 @@ __all__ = [
     "gap_rate",
     "landing_time",
     "one_period_amplitude",
+    "period_doubling_amplitude",
     "rigid_block",
 ]
 
@@ -130,10 +133,14 @@ class RigidBlock:
     Attributes
     ----------
     status : str
-        ``"static"`` (``a <= g``: never leaves), ``"bouncing"`` (closed form), or
-        ``"beyond"`` (lands inside the take-off window: the closed form stops).
+        ``"static"`` (``a <= g``: never leaves), ``"bouncing"`` (lands where ``n >= 0``,
+        rides the table until the next take-off phase), ``"one-period-flight"``
+        (``g sqrt(1 + pi^2) < a < g sqrt(4 + pi^2)``: lands and leaves again at once,
+        each flight one period long), or ``"beyond"`` (period doubling: the closed form
+        stops; only the first flight from ``phi_0`` is given).
     take_off_phase, landing_phase : float
-        ``phi_0`` in ``(-pi, 0]`` and ``phi_L = phi_0 + w tau_L`` [rad].
+        Take-off phase in ``(-pi, 0]`` (``-arccos(g / a)``, or ``-arcsin(pi g / a)`` for
+        one-period flights) and the landing phase, take-off phase ``+ w tau_L`` [rad].
     flight_time : float
         ``tau_L`` [s].
     period : int
@@ -182,27 +189,63 @@ def rigid_block(f: float, a: float, g: float = 9.8) -> RigidBlock:
     phi0 = -math.acos(g / a)
     tau = landing_time(phi0, g, a, w)
     phi_l = phi0 + w * tau
-    # apexes: roots of h' in (0, tau); h' > 0 just after take-off, |h'''| <= a w
+    if a * math.cos(phi_l) <= g:
+        n_periods = math.floor((phi_l - phi0) / (2 * math.pi)) + 1
+        return RigidBlock("bouncing", phi0, phi_l, tau, n_periods, tau * f / n_periods,
+                          _largest_hop(phi0, tau, g, a, w), 1.0 / n_periods)
+    if a < period_doubling_amplitude(g):
+        # flights of exactly one period, each starting where the last one landed
+        phi1 = -math.asin(math.pi * g / a)
+        tau1 = landing_time(phi1, g, a, w)
+        return RigidBlock("one-period-flight", phi1, phi1 + w * tau1, tau1, 1, tau1 * f,
+                          _largest_hop(phi1, tau1, g, a, w), 1.0)
+    return RigidBlock("beyond", phi0, phi_l, tau, 0, nan, _largest_hop(phi0, tau, g, a, w),
+                      nan)
+
+
+def _largest_hop(phi0: float, tau: float, g: float, a: float, w: float) -> float:
+    """Largest gap at a root of the gap rate in ``(0, tau)`` (its second derivative is
+    bounded by ``a w``)."""
     hop = 0.0
-    lo = 2.0 * abs(math.sin(phi0)) / w  # h' >= h''' t^2/2 - a w^2 t^3/6 > 0 before 3|s0|/w
-    rate = lambda t: gap_rate(t, phi0, g, a, w)  # noqa: E731
-    accel = lambda t: -g + a * math.cos(phi0 + w * t)  # noqa: E731
+    # h' >= h'' t + h''' t^2 / 2 - a w^2 t^3 / 6 > 0 before 3 |sin(phi0)| / w (h'' >= 0)
+    lo = 2.0 * abs(math.sin(phi0)) / w
+    period = 2 * math.pi / w
+
+    def rate(t):
+        return gap_rate(t, phi0, g, a, w)
+
+    def accel(t):
+        return -g + a * math.cos(phi0 + w * t)
     while lo < tau:
-        root = _first_root(rate, accel, a * w, lo, tau, 2 * math.pi / w)
+        root = _first_root(rate, accel, a * w, lo, tau, period)
         if root is None:
             break
         hop = max(hop, gap(root, phi0, g, a, w))
-        # skip past the local extremum: h' turns back positive only after its minimum
+        # past a maximum, h' turns positive again only after a minimum of h
         nxt = _first_root(lambda t: -rate(t), lambda t: -accel(t), a * w,
-                          root + 1e-12 * tau, tau, 2 * math.pi / w)
+                          root + 1e-12 * tau, tau, period)
         if nxt is None:
             break
         lo = nxt + 1e-12 * tau
-    if a * math.cos(phi_l) > g:
-        return RigidBlock("beyond", phi0, phi_l, tau, 0, nan, hop, nan)
-    n_periods = math.floor((phi_l - phi0) / (2 * math.pi)) + 1
-    return RigidBlock("bouncing", phi0, phi_l, tau, n_periods,
-                      tau * f / n_periods, hop, 1.0 / n_periods)
+    return hop
+
+
+def period_doubling_amplitude(g: float = 9.8) -> float:
+    """Drive amplitude [m s-2] above which the one-period flights lose their stability.
+
+    A flight from ``phi`` with ``h = h' = 0`` lasting one period needs
+    ``sin(phi) = -pi g / a``; the landing map ``phi -> phi + w tau_L(phi)`` has there the
+    derivative ``1 - a cos(phi) / g`` (implicit differentiation of ``h(tau_L, phi) = 0``:
+    ``dh/dtau = -g T``, ``dh/dphi = -(a / w) cos(phi) T``), inside ``(-1, 1)`` while
+    ``a cos(phi) < 2 g``, i.e. ``a < g sqrt(4 + pi^2)`` (``3.7242 g``). Above it the
+    bouncing doubles its period (and cascades), where the closed form stops.
+
+    Parameters
+    ----------
+    g : float
+        Gravitational acceleration [m s-2].
+    """
+    return g * math.sqrt(4.0 + math.pi**2)
 
 
 def one_period_amplitude(g: float = 9.8) -> float:
@@ -211,9 +254,8 @@ def one_period_amplitude(g: float = 9.8) -> float:
     Landing at ``tau = T`` (``w T = 2 pi``) in :func:`gap` leaves
     ``-g T^2 / 2 - (a / w) sin(phi_0) T = 0``, so ``sin(phi_0) = -pi g / a``; with
     ``cos(phi_0) = g / a``, ``a = g sqrt(1 + pi^2)`` (``3.2969 g``), for every frequency.
-    Above it the block lands inside the take-off window and the closed form stops
-    (:func:`rigid_block` returns ``"beyond"``) until the flight is long enough to land
-    past the window, in a later period.
+    Above it the block lands inside the take-off window and leaves again at once
+    (:func:`rigid_block` returns ``"one-period-flight"``).
 
     Parameters
     ----------

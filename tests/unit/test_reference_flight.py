@@ -28,7 +28,11 @@ from numpy.testing import assert_allclose
 import study
 from tests.reference import flight
 from tests.reference.flight import FlightModel, impact, simulate, steady_motion
-from tests.reference.rigid_block import one_period_amplitude, rigid_block
+from tests.reference.rigid_block import (
+    one_period_amplitude,
+    period_doubling_amplitude,
+    rigid_block,
+)
 
 # --- below lift-off: the exact two-way solver ---------------------------------------------
 
@@ -89,8 +93,10 @@ def test_rigid_block_flight_lasts_one_period_at_its_threshold():
     a_star = one_period_amplitude(9.8)
     below, above = rigid_block(f, a_star * (1 - 1e-9)), rigid_block(f, a_star * (1 + 1e-9))
     assert below.status == "bouncing" and below.period == 1
-    assert above.status == "beyond"
+    assert above.status == "one-period-flight" and above.airborne_fraction == 1.0
     assert_allclose(below.airborne_fraction, 1.0, atol=1e-7)
+    # the one-period flight starts where the last one landed, and lands one period later
+    assert_allclose(above.landing_phase - above.take_off_phase, 2 * math.pi, rtol=1e-12)
     assert rigid_block(f, 9.7).status == "static"
 
 
@@ -104,6 +110,21 @@ def test_tiny_mass_ratio_is_the_rigid_block(paper_structure, f, a):
     assert_allclose(got.largest_hop, block.largest_hop, rtol=1e-8)
     assert got.impacts_per_period == block.impacts_per_period
     assert abs(got.velocity) < 1e-9
+
+
+def test_tiny_mass_ratio_flies_whole_periods_then_doubles(paper_structure):
+    """Past ``g sqrt(1 + pi^2)`` the block lands inside the take-off window and flies one
+    whole period at a time; past ``g sqrt(4 + pi^2)`` that motion doubles its period."""
+    s = paper_structure.replace(M=1e-10)
+    assert one_period_amplitude() < 36.0 < period_doubling_amplitude() < 38.0
+    block = rigid_block(14.5, 36.0)
+    assert block.status == "one-period-flight"
+    got = steady_motion(s, 14.5, 36.0)
+    assert got.status == "bouncing" and got.period == 1
+    assert_allclose(got.airborne_fraction, 1.0, rtol=0, atol=1e-12)
+    assert_allclose(got.largest_hop, block.largest_hop, rtol=1e-8)
+    assert rigid_block(14.5, 38.0).status == "beyond"
+    assert steady_motion(s, 14.5, 38.0).period == 2
 
 
 # --- a flight against its closed form -----------------------------------------------------
