@@ -175,6 +175,29 @@ def test_first_flight_and_impact_match_the_closed_form(paper_structure, M, f, a)
                     atol=1e-9 * hop)
 
 
+def test_flight_is_ballistic(paper_structure):
+    """In flight no force but gravity acts: the horizontal momentum (base + plate)
+    ``v + M sa delta'`` is constant and the vertical one falls at ``g``."""
+    s = paper_structure.replace(M=0.5)
+    f, a = 14.0, 11.0
+    model = FlightModel(s, f, a)
+    run = simulate(s, f, a, 4 / f, model.stick_start()[[0, 1, 3, 4, 5]])
+    flying = run.modes == flight.FLIGHT
+    assert flying.sum() > 50
+    t, y = run.t, run.states
+    px = y[:, 3] + model.M * model.sa * y[:, 1]
+    table_rate = -(a / model.w) * np.sin(model.w * t)
+    pz = y[:, 5] + table_rate + model.M * model.ca * y[:, 1] + model.g * t
+    starts = np.flatnonzero(np.diff(flying.astype(int)) == 1) + 1
+    assert starts.size >= 3
+    for i in starts:
+        j = i
+        while j + 1 < t.size and flying[j + 1]:
+            j += 1
+        assert_allclose(px[i:j + 1], px[i], rtol=0, atol=1e-12)
+        assert_allclose(pz[i:j + 1], pz[i], rtol=0, atol=1e-12)
+
+
 # --- symmetry -------------------------------------------------------------------------------
 
 
