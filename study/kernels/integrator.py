@@ -143,11 +143,13 @@ IMPACT = 1
 LIFT = 2
 
 #: A rebound slower than this, in units of g / w0, lands plastically: chattering's
-#: accumulation of ever shorter hops (the k-th rebound e^k times the first) ends there.
-#: The rebound's hop is then below (CHATTER_SPEED g / w0)^2 / (2 g), 5e-16 m at the
-#: paper's f0; the landing's tangential impulse differs from that of the full sequence by
-#: at most about ck times the rebound speed.
-CHATTER_SPEED = 1e-6
+#: accumulation of ever shorter hops (the k-th rebound about e^k times the first) ends
+#: there, after about log(CHATTER_SPEED g / (w0 u1)) / log(e) rebounds from a first one
+#: of u1 (about 30 at e = 0.5, 200 at e = 0.9). The cut-off hop is below
+#: (CHATTER_SPEED g / w0)^2 / (2 g), about 1e-21 m at the paper's f0, and the landing's
+#: tangential impulse differs from that of the whole sequence by at most about ck times
+#: the rebound speed, 1e-10 m s-1 (the mean velocity by less).
+CHATTER_SPEED = 1e-9
 
 # Entries of the run statistics.
 STEPS = 0
