@@ -487,7 +487,7 @@ def simulate(
                             "[m s-1])" if flight else "") + f", got {initial_state!r}"
         )
     if flight and y[_kernel.GAP] < 0.0:
-        raise ValueError(f"initial_state: the gap h = {y[_kernel.GAP]!r} m must be >= 0 "
+        raise ValueError(f"initial_state: the gap h = {float(y[_kernel.GAP])!r} m must be >= 0 "
                          "(the base cannot start below the table)")
     end = float(schedule.ends[-1])
     shortest = float(1.0 / np.max(schedule.frequency))
