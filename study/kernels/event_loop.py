@@ -44,6 +44,12 @@ from study.kernels.events import first_event, record
 from study.kernels.events import workspace as event_workspace
 from study.model.codes import EVENT_LIFT_OFF, RUN_BUDGET, RUN_DONE, RUN_LIFT_OFF, STICK
 
+#: After a take-off the next step is tried at this fraction of the last one: a flight
+#: starts on a triple zero of the gap (``h = h' = h'' = 0``), and a short first step
+#: resolves a short hop (near a grazing take-off, one of 1e-18 m); the controller
+#: regrows the step five-fold a step.
+TAKE_OFF_STEP = 1e-3
+
 #: The drive schedule: segment ``j`` starts at ``t0[j]`` [s] with phase ``phase0[j]``
 #: [rad] and drives ``amplitude[j] cos(phase)`` [m s-2] at ``omega[j]`` [rad s-1]
 #: until ``end[j]`` [s].
@@ -196,6 +202,7 @@ def make_loop(hooks):
                     mode, fresh, code = take_off(model, mode, t, drive, y, events, stats)
                     if code != RUN_DONE:
                         return _stop(state, mode, t, code)
+                    h *= TAKE_OFF_STEP
                     # The new mode's event functions and first stage.
                     mode, fresh, code = restart(model, mode, fresh, t, drive, rate, y, k[0],
                                                 values, rates, events, stats)
@@ -274,6 +281,7 @@ def make_loop(hooks):
                 mode, fresh, code = take_off(model, mode, t, drive, y, events, stats)
                 if code != RUN_DONE:
                     return _stop(state, mode, t, code)
+                h *= TAKE_OFF_STEP
                 continue
             mode, fresh = transition(model, mode, which, t, drive, y, events, stats)
         state.clock[1] = h

@@ -166,7 +166,9 @@ AIRBORNE_TIME = 6
 IMPACTS = 7
 LARGEST_HOP = 8
 TAKE_OFFS = 9
-STATS_SIZE = 10
+GRAZINGS = 10
+GRAZED_AT = 11
+STATS_SIZE = 12
 
 # Entries of a periodic point's result.
 R_STATUS = 0
@@ -405,7 +407,7 @@ def _transition(p, mode, which, t, drive, y, events, stats):
         if which == APEX:
             stats[LARGEST_HOP] = max(stats[LARGEST_HOP], y[GAP])
             return FLIGHT, False
-        return _land(p, t, y, events, stats)
+        return _land(p, t, drive, y, events, stats)
     if mode == STICK:
         mode = 1 if which == RELEASE_OR_SLIP_END else -1
         stats[SLIPS] += 1.0
@@ -422,11 +424,18 @@ def _transition(p, mode, which, t, drive, y, events, stats):
 
 
 @njit(cache=True, nogil=True)
-def _land(p, t, y, events, stats):
+def _land(p, t, drive, y, events, stats):
     """An impact at ``t`` (``h`` reached 0 with ``h' < 0``): the impact law on
     ``(delta', v, h')``, then flight again (a rebound faster than :data:`CHATTER_SPEED`)
-    or contact, in the slip of ``v``'s sign or stuck. Returns ``(mode, fresh)``."""
+    or contact, in the slip of ``v``'s sign or stuck. Returns ``(mode, fresh)``.
+
+    A landing slower than the cut-off where ``n < 0`` (the base would take off again at
+    once) is a grazing contact: a hop below the integrator's resolution, whose take-off
+    and landing would otherwise repeat at the rounding of ``t``. It is counted
+    (``GRAZINGS``) and the base stays on the table, in the mode it lands in, until ``n``
+    crosses zero again (:func:`_take_off` refuses the take-off at ``t``)."""
     stats[IMPACTS] += 1.0
+    speed = -y[GAP_RATE]
     y[GAP] = 0.0
     ended = IMPACT_STICK if y[V] == 0.0 else IMPACT_SLIP
     if y[GAP_RATE] < 0.0:
@@ -445,20 +454,30 @@ def _land(p, t, y, events, stats):
     if ended == IMPACT_STICK:
         y[V] = 0.0
     record(events, t, EVENT_IMPACT, y)
+    mode = STICK
     if y[V] > 0.0:
-        return 1, False
-    if y[V] < 0.0:
-        return -1, False
-    return STICK, False
+        mode = 1
+    elif y[V] < 0.0:
+        mode = -1
+    if speed < CHATTER_SPEED * p[GRAVITY] / math.sqrt(p[STIFFNESS]):
+        n, _, _, _, _ = _forces(p, mode, drive, 0.0, y)
+        if n < 0.0:
+            stats[GRAZINGS] += 1.0
+            stats[GRAZED_AT] = t
+    return mode, False
 
 
 @njit(cache=True, nogil=True)
 def _take_off(p, mode, t, drive, y, events, stats):
     """The ``take_off`` hook: with the lift-off law ``stop`` the run ends with
-    ``RUN_LIFT_OFF``; with ``flight`` the base leaves the table (``h = h' = 0``)."""
-    record(events, t, EVENT_LIFT_OFF, y)
+    ``RUN_LIFT_OFF``; with ``flight`` the base leaves the table (``h = h' = 0``), unless
+    it has just made a grazing landing at ``t`` (:func:`_land`)."""
     if p[LIFT_OFF_LAW] == 0.0 or y.shape[0] < FLIGHT_STATE_SIZE:
+        record(events, t, EVENT_LIFT_OFF, y)
         return mode, False, RUN_LIFT_OFF
+    if stats[GRAZINGS] > 0.0 and t == stats[GRAZED_AT]:
+        return mode, mode != STICK and y[V] == 0.0, RUN_DONE
+    record(events, t, EVENT_LIFT_OFF, y)
     if mode == STICK:
         y[V] = 0.0
     y[GAP] = 0.0

@@ -16,7 +16,9 @@ Each test compares against something the integrator does not share code with:
   a frequency switch that passes through flight;
 * the mirror ``alpha -> -alpha`` (velocity reversed, the rest unchanged);
 * one event sample per step (impacts then found only by the watch of the gap's minima)
-  against four.
+  against four;
+* a grazing take-off just above the lift-off threshold: a hop of the size the dip of
+  the normal force allows, and the contact velocity.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from study import Structure
 from study.kernels import integrator as kernel
 from study.model.status import Status
 from study.scenes.planar_model import Disk, Plate
+from study.solvers.exact import steady_state
 from study.solvers.integrator import (
     EVENT_KINDS,
     IntegratorSettings,
@@ -180,6 +183,35 @@ def test_a_drop_on_a_still_table_is_the_bouncing_ball(e):
     assert run.v[-1] == 0.0
     assert_allclose(run.largest_hop, h0, rtol=0, atol=1e-12)
     assert_allclose(run.airborne_time, times[-1], rtol=1e-9)
+
+
+# ---------------------------------------------------------------- grazing take-off
+
+
+def test_a_grazing_take_off_hops_and_joins_the_contact_velocity():
+    # Just above the two-way lift-off threshold (found by bisection on the exact solver)
+    # the normal force dips below 0 for microseconds: a hop of order da^2 (the dip's
+    # depth times its duration squared), 6e-19 m at 1e-7 m s-2 above, 8e-15 m at 1e-5
+    # (the reference's grazing test: a hop of about 1e-18 m). The take-off, the landing
+    # and no Zeno loop between them; the velocity joins the contact velocity.
+    s = _structure(0.08)
+    f = 14.5
+    lo, hi = 9.0, 9.8
+    for _ in range(48):
+        mid = 0.5 * (lo + hi)
+        status = steady_state(s, f, mid, coupling="two-way").status
+        lo, hi = (lo, mid) if status == Status.LIFT_OFF else (mid, hi)
+    below = steady_state(s, f, lo, coupling="two-way").velocity
+    hops = []
+    for above in (1e-7, 1e-5):
+        ours = integrated_steady_state(s, f, hi + above, coupling="two-way", flight=True,
+                                       settings=SETTINGS)
+        assert ours.status == Status.BOUNCING and ours.impacts_per_period == 1.0
+        assert 0.0 < ours.airborne_fraction < 1e-2
+        assert_allclose(ours.velocity, below, rtol=1e-5)
+        hops.append(ours.largest_hop)
+    assert 1e-19 < hops[0] < 1e-17
+    assert_allclose(hops[1] / hops[0], 1e4, rtol=0.5)
 
 
 # ---------------------------------------------------------------- the rigid block
