@@ -23,12 +23,17 @@ The event functions in flight are ``h'`` (the apex, where the hop's height is re
 ``h`` (the impact, ``EVENT_IMPACT``). At take-off ``h = h' = h'' = 0`` and the third
 derivative of ``h`` is ``-n' > 0``: ``h'' = -n`` in flight is the contact's normal force
 times ``D_s / (1 - M) > 0`` and the take-off is located where ``n < 0``, so ``h`` starts
-convex upward and cannot cross zero at once; a grazing impact (``h`` dipping below zero
-between two samples) is caught by the watch of its minima (where ``h'`` changes sign).
-The impact law is :func:`study.kernels.impact.impact`; a rebound slower than
+convex upward and cannot cross zero at once; the first step after a take-off is short
+(:data:`study.kernels.event_loop.TAKE_OFF_STEP`), so that the short hops near a grazing
+take-off are resolved (down to about 1e-19 m). A grazing impact (``h`` dipping below
+zero between two samples) is caught by the watch of its minima (where ``h'`` changes
+sign). The impact law is :func:`study.kernels.impact.impact` (an impact without a
+solution stops the run with ``RUN_PARADOX``); a rebound slower than
 :data:`CHATTER_SPEED` ``g / w0`` lands plastically (the accumulation of ever shorter
 hops of chattering ends there), and the base continues in contact by the rules below,
-or takes off again at once where ``n < 0``.
+or takes off again at once where ``n < 0`` -- unless it landed slower than the cut-off:
+that hop was below the integrator's resolution, and the base stays on the table until
+``n`` crosses zero again (a grazing contact, :func:`_land`).
 
 Two-way coupling (the sliding base's acceleration also forces the mode) solved for
 the two accelerations gives ``x'' = (-M sin(alpha) F - s ck (g - A + M cos(alpha) F))
