@@ -166,7 +166,8 @@ class IntegratorSettings:
         Relative and absolute local error tolerance of the adaptive steps [1]. The
         absolute part is scaled per component by the drive's natural units
         (``g / W^2`` for ``delta``, ``g / W`` for its rate, ``W = max(w, w0)``;
-        ``g / w^2`` for ``x``, ``g / w`` for ``v``). Ignored with ``steps_per_period``.
+        ``g / w^2`` for ``x`` and, with flight, the gap ``h``, ``g / w`` for ``v`` and
+        ``h'``). Ignored with ``steps_per_period``.
     steps_per_period : int, optional
         Fixed step of ``1 / steps_per_period`` drive periods (no error control);
         steps still end exactly at events.
