@@ -16,7 +16,8 @@ Each test compares against something the integrator does not share code with:
   a frequency switch that passes through flight;
 * the reference's 77 cached steady motions from rest (``tests/reference/data/
   flight_points.json``: stick-slip then bouncing, static then bouncing, M up to 0.99,
-  large drives with subharmonic and chaotic bouncing);
+  large drives with subharmonic and chaotic bouncing), and its 24 from a drop or from
+  stillness (two stable motions near M = 1, drops onto contact), by transients;
 * the mirror ``alpha -> -alpha`` (velocity reversed, the rest unchanged);
 * one event sample per step (impacts then found only by the watch of the gap's minima)
   against four;
@@ -317,6 +318,38 @@ def test_every_cached_reference_motion_from_rest():
                 assert ours.impacts_per_period[i] == point["impacts_per_period"]
             compared += 1
     assert compared >= 70
+
+
+def test_cached_reference_motions_from_a_drop_or_from_stillness():
+    # Transients from the other starts of the reference's file: a 3 mm drop (the mode
+    # at its flight equilibrium) and everything still; 600 periods, then the mean
+    # velocity over 40. Near M = 1 they reach different motions (at M = 0.99, 14.5 Hz,
+    # 10 m s-2: +0.043 m/s from stillness, -0.116 m/s from the drop), and a drop below
+    # lift-off lands in the contact motion.
+    points = [p for p in json.loads(POINTS.read_text(encoding="utf-8"))["points"]
+              if p["start"] != "rest" and p["settled"]]
+    assert len(points) >= 20
+    velocities = {}
+    for point in points:
+        s = Structure(**point["structure"])
+        f, a = point["f"], point["a"]
+        if point["start"] == "still":
+            start = np.zeros(kernel.FLIGHT_STATE_SIZE)
+        else:
+            kind, height = point["start"]
+            assert kind == "drop"
+            rest = s.g * math.cos(s.alpha_rad) / s.omega0**2
+            start = np.array([rest, 0.0, 0.0, 0.0, height, 0.0])
+        run = simulate(s, Schedule.constant(f, a, 600 / f), coupling="two-way", flight=True,
+                       initial_state=start, output_times=np.array([560 / f, 600 / f]),
+                       max_events=0, settings=SETTINGS)
+        assert run.outcome == "completed"
+        velocity = (run.x[1] - run.x[0]) * f / 40
+        assert abs(velocity - point["velocity"]) <= GLOBAL * s.g / (2 * math.pi * f), (
+            point["name"])
+        velocities[point["name"]] = velocity
+    assert velocities["two-starts/M0.99/f14.5/a10/e0/still"] > 0.04
+    assert velocities["two-starts/M0.99/f14.5/a10/e0/drop3mm"] < -0.11
 
 
 def test_mirrored_tilt_reverses_the_velocity_only():
