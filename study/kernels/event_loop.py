@@ -17,9 +17,10 @@ The loop's arguments are named records (namedtuples of arrays and numbers):
 :class:`StepControl` (accuracy and budgets), :class:`Samples` (output) and
 :class:`EventLog` (recorded events). ``model`` is whatever the hooks need (a tuple).
 
-What a vanishing normal force does is the lift-off law ``stop``
-(:data:`study.model.contact.LAWS`): the event ``lift_off`` of :class:`Hooks` ends the
-run with ``RUN_LIFT_OFF``.
+What a vanishing normal force does is the model's ``take_off`` hook (:class:`Hooks`):
+by default the lift-off law ``stop`` (:data:`study.model.contact.LAWS`, the planar
+model's), which records the event and ends the run with ``RUN_LIFT_OFF``; the single
+plate's hook follows the law ``flight`` too (it switches to a flight mode and goes on).
 
 Times in s; state components in the model's units.
 """
@@ -42,6 +43,12 @@ from study.kernels.dopri import workspace as step_workspace
 from study.kernels.events import first_event, record
 from study.kernels.events import workspace as event_workspace
 from study.model.codes import EVENT_LIFT_OFF, RUN_BUDGET, RUN_DONE, RUN_LIFT_OFF, STICK
+
+#: After a take-off the next step is tried at this fraction of the last one: a flight
+#: starts on a triple zero of the gap (``h = h' = h'' = 0``), and a short first step
+#: resolves a short hop (near a grazing take-off, one of 1e-18 m); the controller
+#: regrows the step five-fold a step.
+TAKE_OFF_STEP = 1e-3
 
 #: The drive schedule: segment ``j`` starts at ``t0[j]`` [s] with phase ``phase0[j]``
 #: [rad] and drives ``amplitude[j] cos(phase)`` [m s-2] at ``omega[j]`` [rad s-1]
@@ -67,6 +74,15 @@ Samples = namedtuple("Samples", "t y mode count")
 #: Recorded events: time ``t`` [s], ``kind`` (an ``EVENT_*`` code) and state ``y``;
 #: ``count`` (1 entry) counts every event, recorded or beyond the capacity.
 EventLog = namedtuple("EventLog", "t kind y count")
+
+
+@njit(cache=True, nogil=True)
+def stop_at_lift_off(model, mode, t, drive, y, events, stats):
+    """The default ``take_off`` hook, the lift-off law ``stop``: record the event and end
+    the run with ``RUN_LIFT_OFF``."""
+    record(events, t, EVENT_LIFT_OFF, y)
+    return mode, False, RUN_LIFT_OFF
+
 
 #: What is model-specific, as numba functions (``model`` is the caller's tuple, ``mode``
 #: the contact mode, ``drive`` the table's acceleration [m s-2] and ``rate`` ``-dA/dt``):
@@ -94,12 +110,18 @@ EventLog = namedtuple("EventLog", "t kind y count")
 #:     What event ``which`` (not lift-off) does at ``t`` to the state ``y``.
 #: ``at_rest(y) -> bool``
 #:     Whether the state has no slip velocity (a slip from it is fresh).
+#: ``take_off(model, mode, t, drive, y, events, stats) -> (mode, fresh, code)``
+#:     Where the normal force turns negative (the event ``lift_off``, or a restart with a
+#:     negative normal force): records the event and returns ``RUN_LIFT_OFF`` to stop
+#:     (:func:`stop_at_lift_off`, the default), or a mode that goes on and ``RUN_DONE``.
 #:
 #: ``events`` is the number of event functions and ``lift_off`` the index of the normal
 #: force among them.
 Hooks = namedtuple(
     "Hooks",
-    "restart prepare step values_at hold account accepted transition at_rest events lift_off",
+    "restart prepare step values_at hold account accepted transition at_rest events lift_off "
+    "take_off",
+    defaults=(stop_at_lift_off,),
 )
 
 
@@ -131,6 +153,7 @@ def make_loop(hooks):
     at_rest = hooks.at_rest
     count = hooks.events
     lift_off = hooks.lift_off
+    take_off = hooks.take_off
 
     @njit(nogil=True)
     def loop(model, segments, state, t_stop, control, samples, events, stats):
@@ -176,8 +199,15 @@ def make_loop(hooks):
                 if code != RUN_DONE:
                     return _stop(state, mode, t, code)
                 if values[lift_off] < 0.0:
-                    record(events, t, EVENT_LIFT_OFF, y)
-                    return _stop(state, mode, t, RUN_LIFT_OFF)
+                    mode, fresh, code = take_off(model, mode, t, drive, y, events, stats)
+                    if code != RUN_DONE:
+                        return _stop(state, mode, t, code)
+                    h *= TAKE_OFF_STEP
+                    # The new mode's event functions and first stage.
+                    mode, fresh, code = restart(model, mode, fresh, t, drive, rate, y, k[0],
+                                                values, rates, events, stats)
+                    if code != RUN_DONE:
+                        return _stop(state, mode, t, code)
                 need_rhs = False
             # Steps end on segment ends, the stop time and never exceed the cap.
             limit = min(t_stop, seg_end[seg])
@@ -248,8 +278,11 @@ def make_loop(hooks):
             need_rhs = True
             drive, rate = table_drive(t, seg, seg_t0, seg_omega, seg_a, seg_phase0)
             if which == lift_off:
-                record(events, t, EVENT_LIFT_OFF, y)
-                return _stop(state, mode, t, RUN_LIFT_OFF)
+                mode, fresh, code = take_off(model, mode, t, drive, y, events, stats)
+                if code != RUN_DONE:
+                    return _stop(state, mode, t, code)
+                h *= TAKE_OFF_STEP
+                continue
             mode, fresh = transition(model, mode, which, t, drive, y, events, stats)
         state.clock[1] = h
         return _stop(state, mode, t, RUN_DONE)

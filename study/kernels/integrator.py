@@ -10,6 +10,31 @@ forward slip (+1) or backward slip (-1). Per unit total mass, table frame::
     slip s, two-way:   delta'' = F - x'' sin(alpha),        x'' = tau - s ck n
     n = g - A + M cos(alpha) delta'',   tau = -M sin(alpha) delta''
 
+Flight (the lift-off law ``flight``, two-way coupling only): the state gains the gap
+``h`` between base and table and its rate ``h'`` (:data:`FLIGHT_STATE_SIZE` entries)
+and the mode ``FLIGHT`` (2). Where ``n`` turns negative the base takes off
+(``EVENT_LIFT_OFF``) with ``h = h' = 0``; in flight, per unit total mass::
+
+    (1 - M) delta'' = g cos(alpha) - (w0/Q) delta' - w0^2 delta
+    v'  = -M sin(alpha) delta''
+    h'' = A - g - M cos(alpha) delta''
+
+The event functions in flight are ``h'`` (the apex, where the hop's height is read) and
+``h`` (the impact, ``EVENT_IMPACT``). At take-off ``h = h' = h'' = 0`` and the third
+derivative of ``h`` is ``-n' > 0``: ``h'' = -n`` in flight is the contact's normal force
+times ``D_s / (1 - M) > 0`` and the take-off is located where ``n < 0``, so ``h`` starts
+convex upward and cannot cross zero at once; the first step after a take-off is short
+(:data:`study.kernels.event_loop.TAKE_OFF_STEP`), so that the short hops near a grazing
+take-off are resolved (down to about 1e-19 m). A grazing impact (``h`` dipping below
+zero between two samples) is caught by the watch of its minima (where ``h'`` changes
+sign). The impact law is :func:`study.kernels.impact.impact` (an impact without a
+solution stops the run with ``RUN_PARADOX``); a rebound slower than
+:data:`CHATTER_SPEED` ``g / w0`` lands plastically (the accumulation of ever shorter
+hops of chattering ends there), and the base continues in contact by the rules below,
+or takes off again at once where ``n < 0`` -- unless it landed slower than the cut-off:
+that hop was below the integrator's resolution, and the base stays on the table until
+``n`` crosses zero again (a grazing contact, :func:`_land`).
+
 Two-way coupling (the sliding base's acceleration also forces the mode) solved for
 the two accelerations gives ``x'' = (-M sin(alpha) F - s ck (g - A + M cos(alpha) F))
 / D_s`` with ``D_s = 1 - M sin(alpha) (sin(alpha) + s ck cos(alpha))``. ``D_s <= 0``
@@ -55,10 +80,18 @@ from study.kernels.event_loop import (
 )
 from study.kernels.events import record
 from study.kernels.friction import kinetic_coefficient
+from study.kernels.impact import (
+    IMPACT_DELTA_RATE,
+    IMPACT_GAP_RATE,
+    IMPACT_SIZE,
+    IMPACT_VELOCITY,
+    impact,
+)
 from study.kernels.structure_vector import (
     COS_ALPHA,
     DAMPING,
     GRAVITY,
+    LIFT_OFF_LAW,
     MASS_RATIO,
     SIN_ALPHA,
     STATIC_FRICTION,
@@ -66,12 +99,18 @@ from study.kernels.structure_vector import (
     TWO_WAY,
 )
 from study.model.codes import (
+    BOUNCING,
     CONTINUOUS_SLIDING,
+    EVENT_IMPACT,
+    EVENT_LIFT_OFF,
     EVENT_PARADOX,
     EVENT_RELEASE_BACKWARD,
     EVENT_RELEASE_FORWARD,
     EVENT_SLIP_END,
     FRICTION_PARADOX,
+    IMPACT_PARADOX,
+    IMPACT_SLIP,
+    IMPACT_STICK,
     LIFT_OFF,
     NOT_CONVERGED,
     REASON_EVENT_BUDGET,
@@ -84,18 +123,42 @@ from study.model.codes import (
     STICK_SLIP,
 )
 
-# State layout: deflection [m], its rate [m s-1], base position [m] and velocity [m s-1].
+# State layout: deflection [m], its rate [m s-1], base position [m] and velocity [m s-1];
+# with flight also the gap between base and table [m] and its rate [m s-1].
 DELTA = 0
 DELTA_RATE = 1
 X = 2
 V = 3
+GAP = 4
+GAP_RATE = 5
 STATE_SIZE = 4
+FLIGHT_STATE_SIZE = 6
 
-# Event functions: forward release (stick) or slip end (slip), backward release (stick),
-# lift-off (always).
+# Modes besides STICK and the slips +1 / -1: the base in the air, and an impact without
+# a solution (the run stops with RUN_PARADOX at the restart after it).
+FLIGHT = 2
+FAILED_IMPACT = 3
+
+# Event functions: forward release (stick), slip end (slip) or apex (flight); backward
+# release (stick) or impact (flight); lift-off (in contact).
 EVENTS = 3
 RELEASE_OR_SLIP_END = 0
+APEX = 0
+IMPACT = 1
 LIFT = 2
+
+#: A rebound slower than this, in units of g / w0, lands plastically: chattering's
+#: accumulation of ever shorter hops (the k-th rebound about e^k times the first) ends
+#: there, after about log(CHATTER_SPEED g / (w0 u1)) / log(e) rebounds from a first one
+#: of u1 (about 30 at e = 0.5, 200 at e = 0.9). The cut-off hop is below
+#: (CHATTER_SPEED g / w0)^2 / (2 g), about 1e-21 m at the paper's f0, and the landing's
+#: tangential impulse differs from that of the whole sequence by at most about ck times
+#: the rebound speed, 1e-10 m s-1 (the mean velocity by less).
+CHATTER_SPEED = 1e-9
+
+# sqrt(FLIGHT_STATE_SIZE / STATE_SIZE): turns the error norm over the flight state of a
+# run on the table into the norm over its contact state.
+CONTACT_NORM = math.sqrt(FLIGHT_STATE_SIZE / STATE_SIZE)
 
 # Entries of the run statistics.
 STEPS = 0
@@ -104,7 +167,13 @@ SLIPS = 2
 STUCK_TIME = 3
 FORWARD_TIME = 4
 BACKWARD_TIME = 5
-STATS_SIZE = 6
+AIRBORNE_TIME = 6
+IMPACTS = 7
+LARGEST_HOP = 8
+TAKE_OFFS = 9
+GRAZINGS = 10
+GRAZED_AT = 11
+STATS_SIZE = 12
 
 # Entries of a periodic point's result.
 R_STATUS = 0
@@ -116,12 +185,21 @@ R_BACKWARD = 5
 R_ORBIT_PERIOD = 6
 R_PERIODS = 7
 R_STEPS = 8
-RESULT_SIZE = 9
+R_AIRBORNE = 9
+R_HOP = 10
+R_IMPACTS = 11
+RESULT_SIZE = 12
 
 
 @njit(cache=True, nogil=True)
 def _accelerations(p, mode, drive, y):
-    """``(delta'', x'')`` in contact mode ``mode`` with drive acceleration ``drive``."""
+    """``(delta'', x'')`` in contact mode ``mode`` (or in flight) with drive acceleration
+    ``drive``."""
+    if mode == FLIGHT:
+        m = p[MASS_RATIO]
+        free = (p[GRAVITY] * p[COS_ALPHA] - p[DAMPING] * y[DELTA_RATE]
+                - p[STIFFNESS] * y[DELTA]) / (1.0 - m)
+        return free, -m * p[SIN_ALPHA] * free
     forcing = drive * p[COS_ALPHA] - p[DAMPING] * y[DELTA_RATE] - p[STIFFNESS] * y[DELTA]
     if mode == STICK:
         return forcing, 0.0
@@ -145,6 +223,13 @@ def _rhs(p, mode, drive, y, out):
     out[DELTA_RATE] = ddd
     out[X] = y[V]
     out[V] = xdd
+    if y.shape[0] > STATE_SIZE:
+        if mode == FLIGHT:
+            out[GAP] = y[GAP_RATE]
+            out[GAP_RATE] = drive - p[GRAVITY] - p[MASS_RATIO] * p[COS_ALPHA] * ddd
+        else:
+            out[GAP] = 0.0
+            out[GAP_RATE] = 0.0
 
 
 @njit(cache=True, nogil=True)
@@ -176,8 +261,18 @@ def _event_values(p, mode, drive, drive_rate_neg, y, values, rates):
     """Event functions of the current mode, each positive while nothing happens.
 
     stick: ``cs n - tau`` (forward release), ``cs n + tau`` (backward release);
-    slip s: ``s v`` (slip end); always: ``n`` (lift-off).
+    slip s: ``s v`` (slip end); in contact: ``n`` (lift-off); flight: ``h'`` (apex),
+    ``h`` (impact).
     """
+    if mode == FLIGHT:
+        ddd, _ = _accelerations(p, mode, drive, y)
+        values[APEX] = y[GAP_RATE]
+        rates[APEX] = drive - p[GRAVITY] - p[MASS_RATIO] * p[COS_ALPHA] * ddd
+        values[IMPACT] = y[GAP]
+        rates[IMPACT] = y[GAP_RATE]
+        values[LIFT] = 1.0
+        rates[LIFT] = 0.0
+        return
     n, tau, n_rate, tau_rate, xdd = _forces(p, mode, drive, drive_rate_neg, y)
     cs = p[STATIC_FRICTION]
     if mode == STICK:
@@ -209,6 +304,11 @@ def _step(p, mode, t, h, y, k, drive_args, y_new, err, dense, tmp):
         y_new[V] = 0.0
         err[X] = 0.0
         err[V] = 0.0
+    if y.shape[0] > STATE_SIZE and mode != FLIGHT:
+        # On the table the gap and its rate are exactly 0: the error norm (an RMS over
+        # the state) is taken as over the contact state, as without flight.
+        for i in range(STATE_SIZE):
+            err[i] *= CONTACT_NORM
 
 
 @njit(cache=True, nogil=True)
@@ -238,7 +338,7 @@ def _mode_after_rest(p, drive, y):
 
 @njit(cache=True, nogil=True)
 def _paradox(p, mode, y):
-    if mode == STICK or p[TWO_WAY] == 0.0:
+    if mode == STICK or mode == FLIGHT or p[TWO_WAY] == 0.0:
         return False
     s = float(mode)
     sa = p[SIN_ALPHA]
@@ -254,6 +354,8 @@ def _release_event(mode):
 @njit(cache=True, nogil=True)
 def _restart(p, mode, fresh, t, drive, rate, y, k0, values, rates, events, stats):
     """The event loop's ``restart`` hook (:data:`study.kernels.event_loop.Hooks`)."""
+    if mode == FAILED_IMPACT:
+        return mode, fresh, RUN_PARADOX
     if mode == STICK:
         y[V] = 0.0
         new_mode = _mode_after_rest(p, drive, y)
@@ -286,7 +388,9 @@ def _hold(p, mode, before, state):
 
 @njit(cache=True, nogil=True)
 def _account(mode, duration, stats):
-    if mode == STICK:
+    if mode == FLIGHT:
+        stats[AIRBORNE_TIME] += duration
+    elif mode == STICK:
         stats[STUCK_TIME] += duration
     elif mode > 0:
         stats[FORWARD_TIME] += duration
@@ -302,7 +406,13 @@ def _accepted(p, mode, y):
 @njit(cache=True, nogil=True)
 def _transition(p, mode, which, t, drive, y, events, stats):
     """The ``transition`` hook: a release starts a slip; a slip end sticks, or reverses
-    the slip when the stick forces already exceed the static limit the other way."""
+    the slip when the stick forces already exceed the static limit the other way. In
+    flight: the apex records the hop; an impact lands (:func:`_land`)."""
+    if mode == FLIGHT:
+        if which == APEX:
+            stats[LARGEST_HOP] = max(stats[LARGEST_HOP], y[GAP])
+            return FLIGHT, False
+        return _land(p, t, drive, y, events, stats)
     if mode == STICK:
         mode = 1 if which == RELEASE_OR_SLIP_END else -1
         stats[SLIPS] += 1.0
@@ -319,12 +429,78 @@ def _transition(p, mode, which, t, drive, y, events, stats):
 
 
 @njit(cache=True, nogil=True)
+def _land(p, t, drive, y, events, stats):
+    """An impact at ``t`` (``h`` reached 0 with ``h' < 0``): the impact law on
+    ``(delta', v, h')``, then flight again (a rebound faster than :data:`CHATTER_SPEED`)
+    or contact, in the slip of ``v``'s sign or stuck. Returns ``(mode, fresh)``.
+
+    A landing slower than the cut-off where ``n < 0`` (the base would take off again at
+    once) is a grazing contact: a hop below the integrator's resolution, whose take-off
+    and landing would otherwise repeat at the rounding of ``t``. It is counted
+    (``GRAZINGS``) and the base stays on the table, in the mode it lands in, until ``n``
+    crosses zero again (:func:`_take_off` refuses the take-off at ``t``)."""
+    stats[IMPACTS] += 1.0
+    speed = -y[GAP_RATE]
+    y[GAP] = 0.0
+    ended = IMPACT_STICK if y[V] == 0.0 else IMPACT_SLIP
+    if y[GAP_RATE] < 0.0:
+        out = np.empty(IMPACT_SIZE)
+        ended = impact(p, y[DELTA_RATE], y[V], y[GAP_RATE], out)
+        if ended == IMPACT_PARADOX:
+            record(events, t, EVENT_PARADOX, y)
+            return FAILED_IMPACT, False
+        y[DELTA_RATE] = out[IMPACT_DELTA_RATE]
+        y[V] = out[IMPACT_VELOCITY]
+        y[GAP_RATE] = out[IMPACT_GAP_RATE]
+    if y[GAP_RATE] > CHATTER_SPEED * p[GRAVITY] / math.sqrt(p[STIFFNESS]):
+        record(events, t, EVENT_IMPACT, y)
+        return FLIGHT, False
+    y[GAP_RATE] = 0.0
+    if ended == IMPACT_STICK:
+        y[V] = 0.0
+    record(events, t, EVENT_IMPACT, y)
+    mode = STICK
+    if y[V] > 0.0:
+        mode = 1
+    elif y[V] < 0.0:
+        mode = -1
+    if speed < CHATTER_SPEED * p[GRAVITY] / math.sqrt(p[STIFFNESS]):
+        n, _, _, _, _ = _forces(p, mode, drive, 0.0, y)
+        if n < 0.0:
+            stats[GRAZINGS] += 1.0
+            stats[GRAZED_AT] = t
+    return mode, False
+
+
+@njit(cache=True, nogil=True)
+def _take_off(p, mode, t, drive, y, events, stats):
+    """The ``take_off`` hook: with the lift-off law ``stop`` the run ends with
+    ``RUN_LIFT_OFF``; with ``flight`` the base leaves the table (``h = h' = 0``), unless
+    it has just made a grazing landing at ``t`` (:func:`_land`)."""
+    if p[LIFT_OFF_LAW] == 0.0 or y.shape[0] < FLIGHT_STATE_SIZE:
+        record(events, t, EVENT_LIFT_OFF, y)
+        return mode, False, RUN_LIFT_OFF
+    if stats[GRAZINGS] > 0.0 and t == stats[GRAZED_AT]:
+        return mode, mode != STICK and y[V] == 0.0, RUN_DONE
+    record(events, t, EVENT_LIFT_OFF, y)
+    if mode == STICK:
+        y[V] = 0.0
+    y[GAP] = 0.0
+    y[GAP_RATE] = 0.0
+    stats[TAKE_OFFS] += 1.0
+    # Fresh: the apex function h' starts at 0 and rises.
+    return FLIGHT, True, RUN_DONE
+
+
+@njit(cache=True, nogil=True)
 def _at_rest(y):
+    if y.shape[0] > STATE_SIZE and (y[GAP] != 0.0 or y[GAP_RATE] != 0.0):
+        return False
     return y[V] == 0.0
 
 
 _loop = make_loop(Hooks(_restart, _prepare, _step, _values_at, _hold, _account, _accepted,
-                        _transition, _at_rest, EVENTS, LIFT))
+                        _transition, _at_rest, EVENTS, LIFT, _take_off))
 
 
 @njit(cache=True, nogil=True)
@@ -332,8 +508,11 @@ def integrate(p, segments, state, t_stop, control, samples, events, stats):
     """Integrate the single-plate model with structure vector ``p`` from
     ``state.clock[0]`` to ``t_stop``, in place (:func:`study.kernels.event_loop.make_loop`).
 
-    ``stats`` (:data:`STATS_SIZE` entries) accumulates steps, rejected steps, slips and
-    the time stuck, slipping forward and slipping backward [s]. Returns a ``RUN_*`` code.
+    ``state.y`` has :data:`STATE_SIZE` entries, or :data:`FLIGHT_STATE_SIZE` with the
+    lift-off law ``flight`` (``p[LIFT_OFF_LAW] = 1``). ``stats`` (:data:`STATS_SIZE`
+    entries) accumulates steps, rejected steps, slips, the time stuck, slipping forward
+    and slipping backward [s], and with flight the time airborne [s], impacts, the
+    largest hop [m] (the highest apex) and take-offs. Returns a ``RUN_*`` code.
     """
     return _loop(p, segments, state, t_stop, control, samples, events, stats)
 
@@ -355,7 +534,8 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
                     result):
     """Integrate whole drive periods until the state repeats; mean velocity of the orbit.
 
-    The state at each period boundary (``delta``, ``delta'``, ``v``, contact mode) and
+    The state at each period boundary (``delta``, ``delta'``, ``v``, with flight (``y0``
+    of :data:`FLIGHT_STATE_SIZE` entries) also ``h`` and ``h'``, and the mode) and
     the displacement over the period are kept for the last ``max_orbit`` periods; the
     orbit is periodic with period ``q`` once the boundary state and the displacement
     repeat after ``q`` periods within ``period_tolerance`` (in units of ``scale``).
@@ -364,15 +544,19 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
 
     ``result`` (:data:`RESULT_SIZE` entries, named ``R_*``) receives ``[status, reason,
     velocity, slips per period, forward fraction, backward fraction, orbit period,
-    periods integrated, steps]``.
+    periods integrated, steps, airborne fraction, largest hop [m], impacts per period]``
+    (the last three 0 without flight). An orbit with flight is ``BOUNCING``.
     """
     period = 2.0 * math.pi / omega
     segments = Segments(np.zeros(1), np.full(1, omega), np.full(1, amplitude), np.zeros(1),
                         np.full(1, np.inf))
     n = y0.shape[0]
+    compared = 5 if n > STATE_SIZE else 3
     y = y0.copy()
     mode_box = np.zeros(1, dtype=np.int64)
-    if y[V] > 0.0:
+    if n > STATE_SIZE and (y[GAP] > 0.0 or y[GAP_RATE] != 0.0):
+        mode_box[0] = FLIGHT
+    elif y[V] > 0.0:
         mode_box[0] = 1
     elif y[V] < 0.0:
         mode_box[0] = -1
@@ -385,7 +569,7 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
                       np.zeros(1, dtype=np.int64))
     max_orbit = search.max_orbit
     ring = max_orbit + 1
-    hist_state = np.empty((ring, 3))
+    hist_state = np.empty((ring, compared))
     hist_mode = np.empty(ring, dtype=np.int64)
     hist_disp = np.empty(ring)
     hist_stats = np.empty((ring, STATS_SIZE))
@@ -407,6 +591,9 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
             result[R_SLIPS] = np.nan
             result[R_FORWARD] = np.nan
             result[R_BACKWARD] = np.nan
+            result[R_AIRBORNE] = np.nan
+            result[R_HOP] = np.nan
+            result[R_IMPACTS] = np.nan
             if code == RUN_LIFT_OFF:
                 result[R_STATUS] = LIFT_OFF
             elif code == RUN_PARADOX:
@@ -419,6 +606,9 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
         hist_state[slot, 0] = y[DELTA]
         hist_state[slot, 1] = y[DELTA_RATE]
         hist_state[slot, 2] = y[V]
+        if compared > 3:
+            hist_state[slot, 3] = y[GAP]
+            hist_state[slot, 4] = y[GAP_RATE]
         hist_mode[slot] = mode_box[0]
         hist_disp[slot] = y[X]
         for i in range(STATS_SIZE):
@@ -435,6 +625,10 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
                 abs(hist_state[slot, 2] - hist_state[other, 2]) / scale[V],
                 abs(hist_disp[slot] - hist_disp[other]) / scale[X],
             )
+            if compared > 3:
+                gap = max(gap,
+                          abs(hist_state[slot, 3] - hist_state[other, 3]) / scale[GAP],
+                          abs(hist_state[slot, 4] - hist_state[other, 4]) / scale[GAP_RATE])
             if not gap <= search.period_tolerance:
                 continue
             distance = 0.0
@@ -442,6 +636,9 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
             stuck = 0.0
             forward = 0.0
             backward = 0.0
+            airborne = 0.0
+            hop = 0.0
+            impacts = 0.0
             for back in range(q):
                 r = (k - back) % ring
                 distance += hist_disp[r]
@@ -449,8 +646,14 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
                 stuck += hist_stats[r, STUCK_TIME]
                 forward += hist_stats[r, FORWARD_TIME]
                 backward += hist_stats[r, BACKWARD_TIME]
+                airborne += hist_stats[r, AIRBORNE_TIME]
+                hop = max(hop, hist_stats[r, LARGEST_HOP])
+                impacts += hist_stats[r, IMPACTS]
             span = q * period
-            if slips == 0.0 and forward == 0.0 and backward == 0.0:
+            if airborne > 0.0:
+                result[R_STATUS] = BOUNCING
+                result[R_VELOCITY] = distance / span
+            elif slips == 0.0 and forward == 0.0 and backward == 0.0:
                 result[R_STATUS] = STATIC
                 result[R_VELOCITY] = 0.0
             else:
@@ -460,6 +663,9 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
             result[R_SLIPS] = slips / q
             result[R_FORWARD] = forward / span
             result[R_BACKWARD] = backward / span
+            result[R_AIRBORNE] = airborne / span
+            result[R_HOP] = hop
+            result[R_IMPACTS] = impacts / q
             result[R_ORBIT_PERIOD] = q
             return
     result[R_STATUS] = NOT_CONVERGED
@@ -468,6 +674,9 @@ def _periodic_point(p, omega, amplitude, y0, scale, fixed_step, max_step, xtol_t
     result[R_SLIPS] = np.nan
     result[R_FORWARD] = np.nan
     result[R_BACKWARD] = np.nan
+    result[R_AIRBORNE] = np.nan
+    result[R_HOP] = np.nan
+    result[R_IMPACTS] = np.nan
 
 
 @njit(cache=True, nogil=True, parallel=True)

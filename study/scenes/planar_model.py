@@ -8,7 +8,11 @@ plate's attachment, projected on its direction, forces the plate too), mounted a
 point of the disk along a direction in its body frame. The disk's contact is planar
 Coulomb friction with an ellipsoidal limit surface (the friction force and torque at
 sliding lie on the ellipsoid ``|f|^2 / (mu n)^2 + tau^2 / (mu n c)^2 = 1``; the twist
-is normal to it), with stick and slip for force and torque together. See
+is normal to it), with stick and slip for force and torque together. Where the normal
+force would turn negative the model stops holding and a run ends with outcome
+``lift_off`` (the lift-off law ``stop``, the only one the planar model implements): the
+disk does not fly (``Disk(flight=True)`` is refused; the single plate's integrator and
+the exact solver model flight). See
 :mod:`study.kernels.planar_integrator` for the equations and docs/user-guide/steering.md
 for the choices.
 
@@ -35,6 +39,7 @@ from study.engine.spec_files import load_schema
 from study.kernels import planar_integrator as _kernel
 from study.kernels.event_loop import EventLog, Samples, Segments, State, StepControl
 from study.model import codes, mode_response
+from study.model.contact import check_law
 from study.model.inputs import (
     InputTypeError,
     as_real_array,
@@ -257,6 +262,10 @@ class Disk:
         ``delta_i'' = F_i - sin(alpha_i) b_i`` (as :func:`study.solvers.integrator.simulate`'s
         two-way model); a slip whose coupled equations have no unique solution
         (Painleve's paradox) stops a run with outcome ``friction_paradox``.
+    flight : bool
+        The lift-off law: False (the only value allowed) ends a run with outcome
+        ``lift_off`` where the normal force would turn negative; True (flight and
+        impacts) is refused: the planar model does not implement it.
     """
 
     radius: float
@@ -267,6 +276,7 @@ class Disk:
     gyration_radius: float | None = None
     friction_length: float | None = None
     coupling: str = DEFAULT_COUPLING
+    flight: bool = False
     _names: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -301,6 +311,16 @@ class Disk:
             require_finite("Disk.friction_length", self.friction_length))
         if self.coupling not in COUPLINGS:
             raise ValueError(f"Disk: coupling = {self.coupling!r} must be one of {COUPLINGS}")
+        if not isinstance(self.flight, bool):
+            raise ValueError(f"Disk: flight must be true or false, got {self.flight!r}")
+        try:
+            check_law("lift_off", "flight" if self.flight else "stop", "planar")
+        except ValueError as err:
+            raise ValueError(
+                f"Disk: flight = {self.flight!r}: {err} (the planar model ends a run with "
+                "outcome 'lift_off' where the normal force would turn negative; flight is "
+                "modelled for the single plate by the exact solver and the time "
+                "integrator)") from None
         for name, value in (("gyration_radius", gyration), ("friction_length", length)):
             if value <= 0.0:
                 raise ValueError(f"Disk: {name} = {value!r} [m] must be > 0")

@@ -8,7 +8,10 @@ segments with continuous phase, and optionally the two-way coupling in which the
 sliding base's acceleration also forces the mode (``-x'' sin(alpha)``). The
 friction law is chosen by name (``friction=``, :mod:`study.model.contact`): Coulomb
 friction, the exact solver's, or velocity-weakening Stribeck friction, which only this
-solver implements.
+solver implements. Where the normal force vanishes a run stops with ``lift_off`` (the
+lift-off law ``stop``), or with ``flight=True`` (two-way coupling, ``M < 1``) the base
+takes off, flies and lands by an impact (:mod:`study.kernels.impact`): the state gains
+the gap ``h`` and its rate, and a steady orbit with flight is ``BOUNCING``.
 
 Two entry points:
 
@@ -31,7 +34,7 @@ from study.kernels import integrator as _kernel
 from study.kernels import structure_vector as sv
 from study.kernels.event_loop import EventLog, Samples, Segments, State, StepControl
 from study.model import as_acceleration, as_frequency, codes, mode_response
-from study.model.contact import DEFAULT_FRICTION, Friction, check_friction
+from study.model.contact import DEFAULT_FRICTION, LAWS, Friction, check_friction
 from study.model.inputs import as_real_array, bounded_integer, instance_of, real_number
 from study.model.structure import Structure
 from study.model.units import DEGREE, SECOND
@@ -40,6 +43,7 @@ from study.solvers.exact import (
     PARALLEL_THRESHOLD,
     SteadyState,
     check_coupling,
+    check_flight,
     check_structure,
     scalar_if_0d,
 )
@@ -75,6 +79,7 @@ EVENT_KINDS = {
     codes.EVENT_SLIP_END: "slip_end",
     codes.EVENT_LIFT_OFF: "lift_off",
     codes.EVENT_PARADOX: "friction_paradox",
+    codes.EVENT_IMPACT: "impact",
 }
 
 #: How a :func:`simulate` run ended, by kernel return code.
@@ -161,7 +166,8 @@ class IntegratorSettings:
         Relative and absolute local error tolerance of the adaptive steps [1]. The
         absolute part is scaled per component by the drive's natural units
         (``g / W^2`` for ``delta``, ``g / W`` for its rate, ``W = max(w, w0)``;
-        ``g / w^2`` for ``x``, ``g / w`` for ``v``). Ignored with ``steps_per_period``.
+        ``g / w^2`` for ``x`` and, with flight, the gap ``h``, ``g / w`` for ``v`` and
+        ``h'``). Ignored with ``steps_per_period``.
     steps_per_period : int, optional
         Fixed step of ``1 / steps_per_period`` drive periods (no error control);
         steps still end exactly at events.
@@ -310,22 +316,35 @@ class Trajectory:
         Plate deflection [m], its rate [m s-1], base position [m] and velocity
         [m s-1] at the sample times.
     mode : numpy.ndarray of int8
-        Contact mode at the sample times: 0 stick, +1 forward slip, -1 backward slip.
+        Contact mode at the sample times: 0 stick, +1 forward slip, -1 backward slip,
+        2 flight.
     event_time : numpy.ndarray
         Event times [s].
     event_kind : numpy.ndarray of int8
         Event codes, named by :data:`EVENT_KINDS`.
     event_state : numpy.ndarray
-        State ``(delta, delta', x, v)`` at each event, shape ``(events, 4)``.
+        State ``(delta, delta', x, v)`` at each event, shape ``(events, 4)``; with
+        flight ``(delta, delta', x, v, h, h')``, shape ``(events, 6)``, after the event
+        (an impact's state is the one it leaves, ``h' = 0`` on landing).
     outcome : str
-        How the run ended: one of :data:`OUTCOMES` values. ``lift_off`` and
-        ``friction_paradox`` stop the run where the model stops holding.
+        How the run ended: one of :data:`OUTCOMES` values. ``lift_off`` (without
+        flight) and ``friction_paradox`` stop the run where the model stops holding.
     end_time : float
         Time the run reached [s].
     steps, rejected_steps : int
         Accepted and rejected steps.
     events_dropped : int
         Events beyond ``max_events`` that were not recorded.
+    gap, gap_rate : numpy.ndarray or None
+        With flight: the gap between base and table [m] and its rate [m s-1] at the
+        sample times (0 in contact); None without.
+    airborne_time : float
+        Time spent in the air [s] (0 without flight).
+    largest_hop : float
+        Highest gap reached [m] (the highest apex, or the starting gap; 0 without
+        flight).
+    impacts : int
+        Impacts on the table, rebounds included (0 without flight).
     """
 
     time: NDArray[np.float64]
@@ -342,14 +361,24 @@ class Trajectory:
     steps: int
     rejected_steps: int
     events_dropped: int = field(default=0)
+    gap: NDArray[np.float64] | None = None
+    gap_rate: NDArray[np.float64] | None = None
+    airborne_time: float = 0.0
+    largest_hop: float = 0.0
+    impacts: int = 0
 
 
 def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING,
-                     friction: str | Friction = DEFAULT_FRICTION) -> NDArray[np.float64]:
-    """Parameter vector of the integrator kernel for ``structure``, ``coupling`` and
-    ``friction`` (:mod:`study.kernels.structure_vector`)."""
+                     friction: str | Friction = DEFAULT_FRICTION,
+                     flight: bool = False) -> NDArray[np.float64]:
+    """Parameter vector of the integrator kernel for ``structure``, ``coupling``,
+    ``friction`` and the lift-off law (``flight``, :func:`study.solvers.exact.check_flight`:
+    two-way coupling and ``M < 1`` only)
+    (:mod:`study.kernels.structure_vector`)."""
     structure = check_structure(structure)
-    two_way = check_coupling(coupling) == "two-way"
+    coupling = check_coupling(coupling)
+    two_way = coupling == "two-way"
+    flight = check_flight(flight, coupling, structure)
     friction = check_friction(friction, "integrator")
     p = np.empty(sv.SIZE)
     w0 = structure.omega0
@@ -363,7 +392,7 @@ def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING,
     p[sv.GRAVITY] = structure.g
     p[sv.TWO_WAY] = 1.0 if two_way else 0.0
     p[sv.RESTITUTION] = structure.restitution
-    p[sv.LIFT_OFF_LAW] = 0.0  # stop with LIFT_OFF
+    p[sv.LIFT_OFF_LAW] = float(LAWS["lift_off"]["flight" if flight else "stop"].code)
     # Parameters of laws not chosen are never read: NaN says so.
     p[sv.FRICTION_LAW + 1:] = np.nan
     for name, value in friction.vector_entries().items():
@@ -371,13 +400,20 @@ def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING,
     return p
 
 
-def _scales(structure: Structure, omega: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Per-component scales of the absolute tolerance, one row per drive frequency."""
+def _scales(structure: Structure, omega: NDArray[np.float64],
+            flight: bool = False) -> NDArray[np.float64]:
+    """Per-component scales of the absolute tolerance, one row per drive frequency (with
+    flight also those of the gap and its rate, as of ``x`` and ``v``)."""
     fastest = np.maximum(omega, structure.omega0)
     g = structure.g
-    return np.stack(
-        [g / fastest**2, g / fastest, g / omega**2, g / omega], axis=-1
-    ).astype(float)
+    columns = [g / fastest**2, g / fastest, g / omega**2, g / omega]
+    if flight:
+        columns += [g / omega**2, g / omega]
+    return np.stack(columns, axis=-1).astype(float)
+
+
+def _state_size(flight: bool) -> int:
+    return _kernel.FLIGHT_STATE_SIZE if flight else _kernel.STATE_SIZE
 
 
 def simulate(
@@ -390,6 +426,7 @@ def simulate(
     output_times: ArrayLike | None = None,
     settings: IntegratorSettings | None = None,
     max_events: int = 100_000,
+    flight: bool = False,
 ) -> Trajectory:
     """Integrate the full model through a drive schedule.
 
@@ -410,7 +447,9 @@ def simulate(
         ``(delta [m], delta' [m s-1], x [m], v [m s-1])`` at ``t = 0``; default all
         zero (at rest on the table, the mode at rest). With ``v != 0`` the run starts
         sliding that way; with ``v = 0`` it sticks unless the forces already exceed the
-        static friction.
+        static friction. With flight, optionally two more, the gap ``h >= 0`` [m] and its
+        rate [m s-1] (a run from a drop: ``h > 0``); the run starts in the air when
+        either is not 0.
     output_times : array_like, optional
         Times at which to sample the state [s], sorted, within the schedule; default
         64 per shortest drive period of the schedule, from start to end.
@@ -420,6 +459,11 @@ def simulate(
     max_events : int
         Events recorded (later ones are counted in ``events_dropped``), 0 to
         :data:`MAX_RECORDED_EVENTS`.
+    flight : bool
+        The lift-off law: False (default) stops the run with outcome ``lift_off`` where
+        the normal force would turn negative; True (two-way coupling, ``M < 1``) lets
+        the base take off, fly and land by an impact (restitution
+        ``structure.restitution``), events ``lift_off`` and ``impact``.
 
     Returns
     -------
@@ -431,13 +475,21 @@ def simulate(
                         f"got {type(schedule)}")
     settings = check_integrator_settings(settings)
     max_events = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
-    p = model_parameters(structure, coupling, friction)
-    y = np.zeros(4) if initial_state is None else np.array(initial_state, dtype=float)
-    if y.shape != (4,) or not np.all(np.isfinite(y)):
+    p = model_parameters(structure, coupling, friction, flight)
+    flight = bool(p[sv.LIFT_OFF_LAW] == LAWS["lift_off"]["flight"].code)
+    size = _state_size(flight)
+    y = np.zeros(size) if initial_state is None else np.array(initial_state, dtype=float)
+    if flight and y.shape == (_kernel.STATE_SIZE,):
+        y = np.concatenate((y, np.zeros(2)))
+    if y.shape != (size,) or not np.all(np.isfinite(y)):
         raise ValueError(
             "initial_state must be 4 finite numbers (delta [m], delta' [m s-1], x [m], "
-            f"v [m s-1]), got {initial_state!r}"
+            "v [m s-1])" + (", or 6 with flight (and the gap h [m] >= 0 and its rate "
+                            "[m s-1])" if flight else "") + f", got {initial_state!r}"
         )
+    if flight and y[_kernel.GAP] < 0.0:
+        raise ValueError(f"initial_state: the gap h = {float(y[_kernel.GAP])!r} m must be >= 0 "
+                         "(the base cannot start below the table)")
     end = float(schedule.ends[-1])
     shortest = float(1.0 / np.max(schedule.frequency))
     if output_times is None:
@@ -452,16 +504,18 @@ def simulate(
         if np.any(np.diff(out_t) < 0):
             raise ValueError("output_times must be sorted")
     omega = 2.0 * np.pi * schedule.frequency
-    scale = _scales(structure, np.array([np.max(omega)]))[0]
+    scale = _scales(structure, np.array([np.max(omega)]), flight)[0]
     fixed = shortest / settings.steps_per_period if settings.steps_per_period else 0.0
-    state = State(y, np.array([int(np.sign(y[_kernel.V]))], dtype=np.int64),
+    airborne = flight and (y[_kernel.GAP] != 0.0 or y[_kernel.GAP_RATE] != 0.0)
+    mode = _kernel.FLIGHT if airborne else int(np.sign(y[_kernel.V]))
+    state = State(y, np.array([mode], dtype=np.int64),
                   np.array([0.0, settings.max_step * shortest]))
     segments = Segments(schedule.starts, omega, schedule.acceleration,
                         schedule.start_phases_rad, schedule.ends)
     control = StepControl(settings.tolerance, settings.tolerance, scale, fixed,
                           settings.max_step * shortest, settings.event_tolerance * shortest,
                           settings.samples_per_step, settings.max_steps)
-    size = _kernel.STATE_SIZE
+    start_gap = float(y[_kernel.GAP]) if flight else 0.0
     samples = Samples(out_t, np.empty((out_t.size, size)), np.empty(out_t.size, dtype=np.int64),
                       np.zeros(1, dtype=np.int64))
     events = EventLog(np.empty(max_events), np.empty(max_events, dtype=np.int64),
@@ -486,6 +540,11 @@ def simulate(
         steps=int(stats[_kernel.STEPS]),
         rejected_steps=int(stats[_kernel.REJECTED]),
         events_dropped=int(events.count[0]) - e,
+        gap=out_y[:m, _kernel.GAP].copy() if flight else None,
+        gap_rate=out_y[:m, _kernel.GAP_RATE].copy() if flight else None,
+        airborne_time=float(stats[_kernel.AIRBORNE_TIME]),
+        largest_hop=max(float(stats[_kernel.LARGEST_HOP]), start_gap),
+        impacts=int(stats[_kernel.IMPACTS]),
     )
 
 
@@ -517,6 +576,7 @@ def integrated_steady_state(
     friction: str | Friction = DEFAULT_FRICTION,
     settings: IntegratorSettings | None = None,
     parallel: bool | None = None,
+    flight: bool = False,
 ) -> SteadyState:
     """Steady orbit at each ``(f, a)`` by time integration until the motion repeats.
 
@@ -543,17 +603,24 @@ def integrated_steady_state(
     parallel : bool, optional
         Spread points over all cores; default for inputs of at least
         ``PARALLEL_THRESHOLD`` points.
+    flight : bool
+        The lift-off law (see :func:`simulate`): with True (two-way coupling, ``M < 1``)
+        an orbit with flight is ``BOUNCING``, with its velocity.
 
     Returns
     -------
     SteadyState
         As :func:`study.solvers.exact.steady_state`; ``LIFT_OFF`` when ``n < 0`` is met on the
-        way (with two-way coupling it can come from the sliding itself),
-        ``FRICTION_PARADOX`` when a two-way slip has no unique solution.
+        way without flight (with two-way coupling it can come from the sliding itself),
+        ``FRICTION_PARADOX`` when a two-way slip (or an impact) has no unique solution.
+        With flight also ``airborne_fraction`` [1], ``largest_hop`` [m] (the highest
+        apex of the orbit) and ``impacts_per_period`` [1] (rebounds included).
     """
     structure = check_structure(structure)
     settings = check_integrator_settings(settings)
-    p = model_parameters(structure, coupling, friction)
+    p = model_parameters(structure, coupling, friction, flight)
+    flight = bool(p[sv.LIFT_OFF_LAW] == LAWS["lift_off"]["flight"].code)
+    size = _state_size(flight)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape
     # Copies: numba is never handed a broadcast view (numpy warns of its write flag).
@@ -562,8 +629,9 @@ def integrated_steady_state(
     n = f_flat.size
     omega = 2.0 * np.pi * f_flat
     period = 1.0 / f_flat  # f > 0, checked by as_frequency
-    y0 = np.ascontiguousarray(steady_mode_state(structure, f_flat, a_flat).reshape(n, 4))
-    scale = np.ascontiguousarray(_scales(structure, omega).reshape(n, 4))
+    y0 = np.zeros((n, size))
+    y0[:, :_kernel.STATE_SIZE] = steady_mode_state(structure, f_flat, a_flat).reshape(n, 4)
+    scale = np.ascontiguousarray(_scales(structure, omega, flight).reshape(n, size))
     if settings.steps_per_period:
         fixed = period / settings.steps_per_period
     else:
@@ -580,7 +648,12 @@ def integrated_steady_state(
     kernel(p, points, search, results)
     column = {name: results[:, getattr(_kernel, "R_" + name.upper())]
               for name in ("status", "reason", "velocity", "slips", "forward", "backward",
-                           "orbit_period")}
+                           "orbit_period", "airborne", "hop", "impacts")}
+    flown = {
+        "airborne_fraction": scalar_if_0d(column["airborne"].reshape(shape)),
+        "largest_hop": scalar_if_0d(column["hop"].reshape(shape)),
+        "impacts_per_period": scalar_if_0d(column["impacts"].reshape(shape)),
+    } if flight else {}
     return SteadyState(
         velocity=scalar_if_0d(column["velocity"].reshape(shape)),
         status=scalar_if_0d(column["status"].astype(np.int8).reshape(shape)),
@@ -589,4 +662,5 @@ def integrated_steady_state(
         forward_fraction=scalar_if_0d(column["forward"].reshape(shape)),
         backward_fraction=scalar_if_0d(column["backward"].reshape(shape)),
         orbit_period=scalar_if_0d(column["orbit_period"].astype(np.int32).reshape(shape)),
+        **flown,
     )

@@ -106,6 +106,14 @@ REFUSALS = [
                  id="calibration-friction-length-1e-300"),
     pytest.param(TRAJECTORY, "M = 0.08", "M = 0.98",
                  ["[disk]", "mass ratios sum to 1.06 > 1"], id="plates-heavier-than-disk"),
+    # the planar model stops at lift-off: flight is refused naming the law, the solver and
+    # what is allowed
+    pytest.param(TRAJECTORY, "cs = 0.25 ", "cs = 0.25\nflight = true\n#",
+                 ["[disk]: Disk: flight = True: lift_off law 'flight' is not implemented by "
+                  "the planar integrator ('planar'); allowed: 'stop'", "outcome 'lift_off'"],
+                 id="planar-flight"),
+    pytest.param(CALIBRATION, "[disk]", "[disk]\nflight = 1",
+                 ["[disk] flight: 1 has the wrong type; expected boolean"], id="flight-number"),
     # sizes
     pytest.param(TRAJECTORY, "sample_interval = 0.05", "sample_interval = 1e-12",
                  ["[trajectory] sample_interval = 1e-12 s", "3.6e+13 samples",
