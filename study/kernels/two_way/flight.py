@@ -564,7 +564,8 @@ def fly(point, z, t_begin, t_stop, record, want_jac, want_hop, max_events):
                 z[1] = impact_out[IMPACT_DELTA_RATE]
                 z[2] = 0.0 if code == IMPACT_STICK else impact_out[IMPACT_VELOCITY]
             else:
-                # Touching with no speed (grazing): no impulse.
+                # Touching down with no speed (grazing): a landing without impulse.
+                acc[A_IMPACTS] += 1.0
                 rebound = 0.0
                 if want_jac:
                     for i in range(3):

@@ -75,7 +75,7 @@ STABILITY_MARGIN = 1e-6
 # Periods of the map followed from the start before Newton's method: the first take-off
 # from rest is often a large hop that the orbit does not repeat, and a section chosen
 # on it lies where the orbit has an event.
-FIRST_PERIODS = 3
+FIRST_PERIODS = 2
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
