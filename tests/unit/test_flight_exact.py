@@ -160,7 +160,7 @@ def drive_point(structure, f, a):
 def period_map(point, z, t0, span, want_jac=False):
     """The state ``span`` [s] after ``z`` at ``t0`` [s], and the run's record."""
     record = flight.FlightRecord(np.zeros(flight.N_FLIGHT_ACC), np.eye(flight.N_STATE),
-                                 np.empty((5, 5)), np.empty((5, 5)))
+                                 np.empty((5, 5)), np.empty((5, 5)), np.zeros(2))
     end = z.copy()
     assert flight.fly(point, end, t0, t0 + span, record, want_jac, False, 100_000) == 0
     return end, record

@@ -161,8 +161,9 @@ N_FLIGHT_ACC = N_ACC + 8
 
 #: What a run with flight records: ``acc`` (``N_FLIGHT_ACC`` accumulators), ``jac``
 #: (5x5, multiplied on the left by the flow's Jacobian), ``step`` and ``scratch`` (5x5
-#: work space).
-FlightRecord = namedtuple("FlightRecord", ("acc", "jac", "step", "scratch"))
+#: work space), ``passes`` (2: the orbit search's passes with the Jacobian and without,
+#: counted by :mod:`~study.kernels.two_way.flight_orbit`).
+FlightRecord = namedtuple("FlightRecord", ("acc", "jac", "step", "scratch", "passes"))
 
 #: The start of a flight piece: time ``t0`` [s], cosine and sine of the drive phase,
 #: the mode's homogeneous state ``(h0, hd0)`` [m, m s-1] about its offset, ``delta'``
@@ -303,8 +304,12 @@ def largest_gap(structure, row, omega, a, start, t_end):
     best = max(start.gap0, flight_at(structure, row, omega, a, start, t_end)[9])
     if tau_end <= 0.0:
         return best
+    # Samples: 8 per drive period, and 8 per period of the mode while its part of the
+    # gap has not decayed (5 decay times).
     nu = math.sqrt(max(row[M_NU2], 0.0))
-    pieces = max(16, math.ceil(8.0 * tau_end * max(nu, omega) / TWO_PI))
+    sigma = row[M_SIGMA]
+    ringing = tau_end if sigma <= 0.0 else min(tau_end, 5.0 / sigma)
+    pieces = 16 + math.ceil(8.0 * (tau_end * omega + ringing * nu) / TWO_PI)
     pieces = min(pieces, 4096)
     dt = tau_end / pieces
     left = start.t0
