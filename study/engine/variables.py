@@ -17,6 +17,7 @@ from study.model.units import (
     DEGREE,
     DIMENSIONLESS,
     HERTZ,
+    METRE,
     METRE_PER_SECOND,
     METRE_PER_SECOND_SQUARED,
 )
@@ -131,6 +132,21 @@ _DECLARED = (
              "not_converged or friction_paradox", invalid_where="status"),
     Variable("status", "point", "int8", DIMENSIONLESS, "outcome of the steady-state solver",
              flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("airborne_fraction", "point", "float64", DIMENSIONLESS,
+             "fraction of the steady orbit's period the base spends off the table",
+             comment="with flight only; 0 where the orbit never leaves the table, NaN "
+             "(missing) where status is lift_off, not_converged or friction_paradox",
+             invalid_where="status"),
+    Variable("largest_hop", "point", "float64", METRE,
+             "largest height of the base above the table over the steady orbit",
+             comment="with flight only; 0 where the orbit never leaves the table, NaN "
+             "(missing) where status is lift_off, not_converged or friction_paradox",
+             invalid_where="status"),
+    Variable("impacts_per_period", "point", "float64", DIMENSIONLESS,
+             "impacts of the base on the table per drive period on the steady orbit",
+             comment="with flight only; 0 where the orbit never leaves the table, NaN "
+             "(missing) where status is lift_off, not_converged or friction_paradox",
+             invalid_where="status"),
     Variable("slips_per_period", "point", "float64", DIMENSIONLESS,
              "slip events per drive period on the periodic orbit"),
     Variable("forward_slip_fraction", "point", "float64", DIMENSIONLESS,
