@@ -166,6 +166,11 @@ class PointWork:
         """Steady state of the paper's one-way model by the exact solver."""
         return steady_state(self.structure, self.f, self.a, self.method.solver, parallel=False)
 
+    @_solved_once
+    def without_flight(self) -> SteadyState:
+        """Steady state by the study's method with the run stopped at lift-off."""
+        return replace(self.method, flight=False).solve(self.structure, self.f, self.a)
+
 
 @dataclass(frozen=True)
 class Observable:
@@ -267,6 +272,13 @@ def _paper_model(work: PointWork) -> dict[str, NDArray[Any]]:
     return {"velocity_one_way": work.one_way.velocity, "status_one_way": work.one_way.status}
 
 
+def _without_flight(work: PointWork) -> dict[str, NDArray[Any]]:
+    if not work.method.flight:  # the spec refuses it; a direct caller gets this message
+        raise ValueError("without_flight needs a study with flight")
+    s = work.without_flight
+    return {"velocity_without_flight": s.velocity, "status_without_flight": s.status}
+
+
 def _frontier(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
               velocity: NDArray[np.float64], status: NDArray[np.int8], method: Method,
               tolerance: float) -> dict[str, NDArray[Any]]:
@@ -302,6 +314,10 @@ _DECLARED = (
     Observable("paper_model", "the paper's one-way velocity beside a two-way study", "point",
                ("velocity_one_way", "status_one_way"), _paper_model, requires=("velocity",),
                cached=True),
+    Observable("without_flight", "the same method's velocity where the run stops at lift-off, "
+               "beside a study with flight", "point",
+               ("velocity_without_flight", "status_without_flight"), _without_flight,
+               requires=("velocity",), cached=True),
     Observable("frontier", "zero-velocity frontier f*(a), refined by bisection", "frontier",
                ("frontier_frequency", "frontier_kind", "frontier_direction",
                 "frontier_bracket"), _frontier, requires=("velocity",)),

@@ -513,7 +513,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     axes, chunk_points = _sweep_axes(sweep, observables, solver_table, path)
     method, coupling, friction, solver, integrator, frontier_tolerance = _solver(
         solver_table, observables, axes, path)
-    flight = _flight(solver_table, method, coupling, path)
+    flight = _flight(solver_table, observables, method, coupling, path)
     canonical = _canonical(study, observables, fixed, mass, sweep, axes, method, coupling,
                            friction, solver, integrator, frontier_tolerance, flight)
     spec = StudySpec(
@@ -699,11 +699,19 @@ FLIGHT_NEEDS_BASE_MASS = (
     "M = 1 is a massless base: the impact matrix W = I + M/(1 - M) e e^T is unbounded")
 
 
-def _flight(solver_table: dict[str, Any], method: str, coupling: str, path: str) -> bool:
+def _flight(solver_table: dict[str, Any], observables: tuple[str, ...], method: str,
+            coupling: str, path: str) -> bool:
     """``[solver] flight``, refused where it cannot apply (a method that does not
-    implement the lift-off law ``flight``, one-way coupling)."""
+    implement the lift-off law ``flight``, one-way coupling), and the observables that
+    need it."""
     flight = bool(solver_table.get("flight", False))
     if not flight:
+        if "without_flight" in observables:
+            raise SpecError(
+                f'{path}: [study] observable "without_flight" (the velocity without flight '
+                "beside a study with flight) needs [solver] flight = true; without it the "
+                'study\'s velocity already stops at lift-off (allowed: flight = true with '
+                'coupling = "two-way")')
         return False
     try:
         check_law("lift_off", "flight", method)

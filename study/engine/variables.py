@@ -186,6 +186,15 @@ _DECLARED = (
     Variable("status_one_way", "point", "int8", DIMENSIONLESS,
              "outcome of the exact solver for the paper's one-way model",
              flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("velocity_without_flight", "point", "float64", METRE_PER_SECOND,
+             "mean steady velocity at the same point by the same method without flight "
+             "(the run stops at lift-off), for comparison with the velocity with flight",
+             comment="exactly 0 when static; NaN (missing) where status_without_flight is "
+             "lift_off, not_converged or friction_paradox",
+             invalid_where="status_without_flight"),
+    Variable("status_without_flight", "point", "int8", DIMENSIONLESS,
+             "outcome of the same method without flight (lift_off where the base would "
+             "leave the table)", flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
     Variable("frontier_frequency", "frontier", "float64", HERTZ,
              "drive frequency f*(a) where the mean velocity changes sign",
              comment="NaN-padded where an acceleration has fewer branches"),
