@@ -233,3 +233,51 @@ def test_every_flight_workflow_is_listed_in_the_makefile():
     for path in (REPO / "workflows").glob("*-flight.toml"):
         assert re.search(rf"results/{re.escape(path.stem)}\.nc", makefile) or \
             "$(wildcard workflows/*.toml)" in makefile
+
+
+def test_without_flight_needs_flight():
+    with pytest.raises(SpecError) as err:
+        parse('coupling = "two-way"', observables='["velocity", "without_flight"]')
+    for word in (PATH, '"without_flight"', "[solver] flight = true"):
+        assert word in str(err.value)
+    spec = parse('coupling = "two-way"\nflight = true',
+                 observables='["velocity", "without_flight"]')
+    names = {v.name for v in variables_of(spec.observables, spec.flight)}
+    assert {"velocity_without_flight", "status_without_flight"} <= names
+    assert VARIABLES["status_without_flight"].flags == VARIABLES["status"].flags
+
+
+def test_the_without_flight_observable_refuses_a_study_that_does_not_fly():
+    work = type("Work", (), {"method": Method(coupling="two-way")})()
+    with pytest.raises(ValueError, match="without_flight needs a study with flight"):
+        OBSERVABLES["without_flight"].compute(work)
+
+
+def test_figures_draw_bouncing_velocities_and_lift_off_gaps():
+    from study.figures.common import VALID
+
+    assert Status.BOUNCING in VALID and Status.STICK_SLIP in VALID
+    assert not {Status.LIFT_OFF, Status.NOT_CONVERGED, Status.FRICTION_PARADOX} & set(VALID)
+
+
+def test_coupling_shares_count_bouncing_points_as_moving():
+    """Four points where the one-way model moves: two-way moves by as much, reverses,
+    bounces (counted as a change of more than 10 %) and lifts off."""
+    import xarray as xr
+
+    from study.analyses.coupling import coupling_effect
+
+    dims = ("f", "a")
+    v1 = np.array([[1e-3, 2e-3, 1e-3, 1e-3]])
+    v2 = np.array([[1e-3, -2e-3, 5e-3, np.nan]])
+    s1 = np.full((1, 4), int(Status.STICK_SLIP), dtype=np.int8)
+    s2 = np.array([[Status.STICK_SLIP, Status.STICK_SLIP, Status.BOUNCING, Status.LIFT_OFF]],
+                  dtype=np.int8)
+    data = xr.Dataset({"velocity": (dims, v2), "status": (dims, s2),
+                       "velocity_one_way": (dims, v1), "status_one_way": (dims, s1)})
+    effect = coupling_effect(data)
+    assert float(effect["bouncing"]) == 0.25
+    assert float(effect["lifted"]) == 0.25
+    assert float(effect["reversed"]) == 0.25
+    assert float(effect["changed"]) == 0.5  # reversed (300 %) and bouncing (400 %)
+    assert effect["bouncing"].attrs["units"] == "1"
