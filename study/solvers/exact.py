@@ -34,6 +34,8 @@ from study.model.contact import (
     COUPLINGS,
     DEFAULT_COUPLING,
     DEFAULT_FRICTION,
+    DEFAULT_LIFT_OFF,
+    LAWS,
     Friction,
     check_friction,
 )
@@ -49,6 +51,7 @@ __all__ = [
     "SteadyState",
     "attractors",
     "check_coupling",
+    "check_flight",
     "check_settings",
     "steady_state",
     "steady_velocity",
@@ -139,6 +142,25 @@ class SteadyState:
         ``STATIC`` the mode's free decay over a period; NaN without an orbit). Good to
         about 1e-7 relative (taken within the last Newton step of the orbit).
         Computed by the two-way solver; ``None`` from solvers that do not compute it.
+        With ``flight=True`` the Jacobian includes the flight's flow and the impacts'
+        saltation matrices, on the state ``(delta, delta', v, h, h')``.
+    airborne_fraction : numpy.ndarray or None
+        Fraction of the orbit's period the base spends off the table [1] (0 for an
+        orbit that never leaves it; NaN without an orbit). ``None`` unless
+        ``flight=True``.
+    largest_hop : numpy.ndarray or None
+        Largest gap between the base and the table over the orbit [m] (0 without a
+        flight; NaN without an orbit). ``None`` unless ``flight=True``.
+    impacts_per_period : numpy.ndarray or None
+        Impacts of the base on the table per drive period [1] (NaN without an orbit).
+        ``None`` unless ``flight=True``.
+
+    Notes
+    -----
+    With ``flight=True`` an orbit with a flight in it has the status
+    :attr:`~study.model.status.Status.BOUNCING` and its mean velocity;
+    ``STICK_SLIP`` and ``CONTINUOUS_SLIDING`` keep their meaning for orbits that stay
+    on the table.
     """
 
     velocity: NDArray[np.float64]
@@ -149,6 +171,9 @@ class SteadyState:
     backward_fraction: NDArray[np.float64]
     orbit_period: NDArray[np.int32]
     floquet_multiplier: NDArray[np.float64] | None = None
+    airborne_fraction: NDArray[np.float64] | None = None
+    largest_hop: NDArray[np.float64] | None = None
+    impacts_per_period: NDArray[np.float64] | None = None
 
 
 def scalar_if_0d(values: NDArray[Any]) -> Any:
@@ -173,8 +198,41 @@ def check_coupling(coupling: object) -> str:
     return str(coupling)
 
 
-def structure_vector(structure: Structure, coupling: str) -> NDArray[np.float64]:
-    """The orbit kernel's structure vector (SI) for ``structure`` and ``coupling``."""
+def check_flight(flight: object, coupling: str, structure: Structure) -> bool:
+    """``flight`` as a bool, where the exact solver can follow a flight.
+
+    Raises
+    ------
+    TypeError
+        ``flight`` is not a bool (:class:`study.model.inputs.InputTypeError`, also a
+        ValueError).
+    ValueError
+        ``flight=True`` with ``coupling="one-way"`` (the one-way model's mode is driven
+        by the table alone, which no longer holds once the base leaves the table) or
+        with ``M = 1`` (a massless base: the impact's mass matrix
+        ``W = I + M/(1 - M) e e^T`` is unbounded).
+    """
+    if not isinstance(flight, bool | np.bool_):
+        raise InputTypeError(f"flight must be True or False, got {type(flight).__name__}: "
+                             f"{flight!r}")
+    flight = bool(flight)
+    if flight and coupling != "two-way":
+        raise ValueError(
+            f"flight=True needs coupling='two-way', got coupling={coupling!r}: the "
+            "one-way model's mode is driven by the table alone, which does not hold once "
+            "the base leaves the table")
+    if flight and not structure.M < 1.0:
+        raise ValueError(
+            f"flight=True needs a mass ratio M < 1, got M={structure.M!r}: at M = 1 the "
+            "base is massless and the impact's mass matrix W = I + M/(1 - M) e e^T is "
+            "unbounded (use M <= 0.999)")
+    return flight
+
+
+def structure_vector(structure: Structure, coupling: str,
+                     flight: bool = False) -> NDArray[np.float64]:
+    """The orbit kernel's structure vector (SI) for ``structure``, ``coupling`` and the
+    lift-off law (``flight``: 1, else 0, stop with LIFT_OFF)."""
     vector = np.zeros(sv.SIZE)
     w0 = structure.omega0
     vector[sv.DAMPING] = w0 / structure.Q
@@ -187,7 +245,7 @@ def structure_vector(structure: Structure, coupling: str) -> NDArray[np.float64]
     vector[sv.GRAVITY] = structure.g
     vector[sv.TWO_WAY] = 1.0 if check_coupling(coupling) == "two-way" else 0.0
     vector[sv.RESTITUTION] = structure.restitution
-    vector[sv.LIFT_OFF_LAW] = 0.0  # stop with LIFT_OFF
+    vector[sv.LIFT_OFF_LAW] = LAWS["lift_off"]["flight" if flight else DEFAULT_LIFT_OFF].code
     return vector
 
 
@@ -230,16 +288,17 @@ def _orbit_table(
     coupling: str,
     settings: SolverSettings,
     parallel: bool | None,
+    flight: bool = False,
 ) -> NDArray[np.float64]:
     """Rows of the orbit kernel (:data:`study.kernels.two_way.points.OUTPUT_COLUMNS`)
-    at each point."""
+    at each point; ``flight`` follows the base off the table (else LIFT_OFF)."""
     lifted = _lifted(structure, f_flat, a_flat)
     omega = 2.0 * np.pi * f_flat
     out = np.empty((f_flat.size, orbit_kernel.N_OUT))
     if parallel is None:
         parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
     kernel = orbit_kernel.solve_points if parallel else orbit_kernel.solve_points_serial
-    kernel(structure_vector(structure, coupling), omega, a_flat, lifted,
+    kernel(structure_vector(structure, coupling, flight), omega, a_flat, lifted,
            kernel_budget(settings), out)
     return out
 
@@ -252,9 +311,10 @@ def _orbit_steady_state(
     coupling: str,
     settings: SolverSettings,
     parallel: bool | None,
+    flight: bool = False,
 ) -> SteadyState:
     """:func:`steady_state` by the orbit kernel (the mode as a state) on flat ``f``, ``a``."""
-    out = _orbit_table(structure, f_flat, a_flat, coupling, settings, parallel)
+    out = _orbit_table(structure, f_flat, a_flat, coupling, settings, parallel, flight)
 
     def column(index: int, dtype: type | None = None) -> Any:
         values = out[:, index] if dtype is None else out[:, index].astype(dtype)
@@ -269,6 +329,9 @@ def _orbit_steady_state(
         backward_fraction=column(orbit_kernel.OUT_BACKWARD),
         orbit_period=column(orbit_kernel.OUT_PERIOD, np.int32),
         floquet_multiplier=column(orbit_kernel.OUT_MULTIPLIER),
+        airborne_fraction=column(orbit_kernel.OUT_AIRBORNE) if flight else None,
+        largest_hop=column(orbit_kernel.OUT_HOP) if flight else None,
+        impacts_per_period=column(orbit_kernel.OUT_IMPACTS) if flight else None,
     )
 
 
@@ -330,6 +393,7 @@ def steady_state(
     coupling: str = DEFAULT_COUPLING,
     friction: str | Friction = DEFAULT_FRICTION,
     parallel: bool | None = None,
+    flight: bool = False,
 ) -> SteadyState:
     """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
 
@@ -362,6 +426,13 @@ def steady_state(
         Spread points over all cores (numba threads). By default only inputs of
         at least ``PARALLEL_THRESHOLD`` points do; pass ``False`` when the caller
         already runs one call per core (as the dask fan-out does).
+    flight : bool, default False
+        What happens where the normal force vanishes: ``False`` ends the orbit there
+        with ``LIFT_OFF`` (the contact model's limit); ``True`` lets the base take off,
+        fly and land by an impact (restitution ``structure.restitution``), and reports
+        a bouncing orbit with ``BOUNCING`` and its velocity, airborne fraction, largest
+        hop and impacts per period (docs/theory/flight.md). Needs
+        ``coupling="two-way"`` and ``M < 1``.
 
     Returns
     -------
@@ -376,7 +447,8 @@ def steady_state(
         numbers (strings, booleans, complex numbers, dates).
     ValueError
         ``f`` or ``a`` out of range or not finite (the message names the first offending
-        value and its index), shapes that do not broadcast, or an unknown coupling.
+        value and its index), shapes that do not broadcast, an unknown coupling, or
+        ``flight=True`` with one-way coupling or ``M = 1`` (:func:`check_flight`).
 
     See Also
     --------
@@ -384,6 +456,7 @@ def steady_state(
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
+    flight = check_flight(flight, coupling, structure)
     check_friction(friction, "exact")
     settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
@@ -392,7 +465,7 @@ def steady_state(
     a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
     if coupling == "two-way":
         return _orbit_steady_state(structure, f_flat, a_flat, shape, coupling, settings,
-                                   parallel)
+                                   parallel, flight)
     return _one_way_steady_state(structure, f_flat, a_flat, shape, settings, parallel)
 
 
@@ -421,6 +494,11 @@ class Attractors:
 #: mode on each multiple of its steady response.
 ATTRACTOR_STARTS = {"phases": attractor_kernel.START_PHASES,
                     "mode_factors": attractor_kernel.START_FACTORS}
+#: Further starts of :func:`attractors` with ``flight=True``: the base released at rest
+#: relative to the table from each height [m] at each drive phase [periods], the mode on
+#: its steady stick response.
+ATTRACTOR_DROPS = {"heights": attractor_kernel.DROP_HEIGHTS,
+                   "phases": attractor_kernel.DROP_PHASES}
 
 
 def attractors(
@@ -431,6 +509,7 @@ def attractors(
     *,
     coupling: str = DEFAULT_COUPLING,
     parallel: bool | None = None,
+    flight: bool = False,
 ) -> Attractors:
     """Multistability check: the distinct stable orbits reached from several starts.
 
@@ -455,14 +534,23 @@ def attractors(
         starts differ in the phase of the first release.
     parallel : bool, optional
         Spread points over all cores.
+    flight : bool, default False
+        Follow the base off the table (see :func:`steady_state`); the starts then also
+        include drops (:data:`ATTRACTOR_DROPS`), and bouncing orbits count as orbits.
 
     Returns
     -------
     Attractors
         Arrays of the broadcast shape of ``f`` and ``a`` (numpy scalars for scalars).
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`steady_state`.
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
+    flight = check_flight(flight, coupling, structure)
     settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     shape = f_arr.shape
@@ -472,7 +560,7 @@ def attractors(
     out = np.empty((f_flat.size, attractor_kernel.N_ATTRACTOR_OUT))
     if parallel is None:
         parallel = f_flat.size >= 16
-    vector = structure_vector(structure, coupling)
+    vector = structure_vector(structure, coupling, flight)
     omega = 2.0 * np.pi * f_flat
     kernel = (attractor_kernel.attractors_points if parallel
               else attractor_kernel.attractors_points_serial)
@@ -492,6 +580,7 @@ def steady_velocity(
     settings: SolverSettings | None = None,
     *,
     coupling: str = DEFAULT_COUPLING,
+    flight: bool = False,
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
     """Mean steady velocity and status at each ``(f, a)``.
 
@@ -507,14 +596,17 @@ def steady_velocity(
         Solver budgets.
     coupling : {"one-way", "two-way"}, default "one-way"
         See :func:`steady_state`.
+    flight : bool, default False
+        Follow the base off the table (see :func:`steady_state`): bouncing orbits get
+        the status ``BOUNCING`` and their velocity.
 
     Returns
     -------
     velocity : numpy.ndarray of float64
         Mean velocity [m s-1], positive forward, of the broadcast shape of ``f`` and
         ``a``; exactly 0 where static, NaN exactly where the status is ``LIFT_OFF``,
-        ``NOT_CONVERGED`` or ``FRICTION_PARADOX``. A ``numpy.float64`` when ``f`` and
-        ``a`` are both scalars.
+        ``NOT_CONVERGED`` or ``FRICTION_PARADOX`` (a ``BOUNCING`` orbit has its
+        velocity). A ``numpy.float64`` when ``f`` and ``a`` are both scalars.
     status : numpy.ndarray of int8
         :class:`~study.model.status.Status` codes [1], same shape (a ``numpy.int8`` for
         scalars); ``study.Status(int(code))`` names one, ``status ==
@@ -543,6 +635,7 @@ def steady_velocity(
     """
     coupling = check_coupling(coupling)
     structure = check_structure(structure)
+    flight = check_flight(flight, coupling, structure)
     settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     if coupling != "one-way":
@@ -550,7 +643,7 @@ def steady_velocity(
         shape = f_arr.shape
         out = _orbit_table(structure, np.ascontiguousarray(f_arr, dtype=float).ravel(),
                            np.ascontiguousarray(a_arr, dtype=float).ravel(), coupling,
-                           settings, None)
+                           settings, None, flight)
         return (scalar_if_0d(out[:, orbit_kernel.OUT_VELOCITY].reshape(shape)),
                 scalar_if_0d(out[:, orbit_kernel.OUT_STATUS].astype(np.int8).reshape(shape)))
     if f_arr.size == 0:  # nothing to solve (numba would be handed a broadcast view)

@@ -29,6 +29,10 @@ from study.model.codes import FRICTION_PARADOX, LIFT_OFF, NOT_CONVERGED, STATIC
 # with the mode on these multiples of its steady response.
 START_PHASES = (0.0, 0.25, 0.5, 0.75)
 START_FACTORS = (1.0, 0.0, 2.0)
+# With flight, also drops: the base released at rest relative to the table from these
+# heights [m] at these drive phases [periods], the mode on its steady stick response.
+DROP_HEIGHTS = (0.5e-3, 1e-3, 3e-3)
+DROP_PHASES = (0.0, 0.25, 0.5, 0.75)
 # Two orbits are the same attractor when their periods agree and their mean velocities
 # agree to this fraction of the velocity scale a / w.
 SAME_ORBIT = 1e-9

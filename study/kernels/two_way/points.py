@@ -63,6 +63,9 @@ OUTPUT_COLUMNS = (
     ("delta", "m", "the mode's displacement on the orbit at phase 0"),
     ("delta_rate", "m s-1", "the mode's velocity on the orbit at phase 0"),
     ("speed", "m s-1", "the sliding speed on the orbit at phase 0"),
+    ("airborne", "1", "fraction of the orbit's period the base spends off the table"),
+    ("hop", "m", "largest gap between the base and the table over the orbit"),
+    ("impacts", "1", "impacts of the base on the table per drive period"),
 )
 _NAMES = tuple(name for name, _, _ in OUTPUT_COLUMNS)
 
@@ -78,6 +81,9 @@ OUT_MULTIPLIER = _NAMES.index("multiplier")
 OUT_DELTA = _NAMES.index("delta")
 OUT_DELTA_RATE = _NAMES.index("delta_rate")
 OUT_SPEED = _NAMES.index("speed")
+OUT_AIRBORNE = _NAMES.index("airborne")
+OUT_HOP = _NAMES.index("hop")
+OUT_IMPACTS = _NAMES.index("impacts")
 #: Length of an output row.
 N_OUT = len(OUTPUT_COLUMNS)
 
@@ -138,6 +144,9 @@ def _static_row(structure, omega, lifted, out):
     out[OUT_SLIPS] = 0.0
     out[OUT_FORWARD] = 0.0
     out[OUT_BACKWARD] = 0.0
+    out[OUT_AIRBORNE] = 0.0
+    out[OUT_HOP] = 0.0
+    out[OUT_IMPACTS] = 0.0
     # The orbit is the mode's steady response: perturbations decay with it.
     e11, e12, e21, e22 = stick_propagator(structure, TWO_PI / omega)
     if (math.isfinite(e11) and math.isfinite(e12) and math.isfinite(e21)
@@ -196,6 +205,9 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
     out[OUT_DELTA] = z[0]
     out[OUT_DELTA_RATE] = z[1]
     out[OUT_SPEED] = z[2]
+    out[OUT_AIRBORNE] = 0.0
+    out[OUT_HOP] = 0.0
+    out[OUT_IMPACTS] = 0.0
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
