@@ -116,7 +116,7 @@ def data_variables(spec: StudySpec, observables: tuple[Observable, ...]
     structure_dims = tuple(axis.name for axis in spec.structure_axes)
     return tuple(
         DataVariable(name, VARIABLES[name].grid, VARIABLES[name].dims(structure_dims),
-                     VARIABLES[name].dtype, VARIABLES[name].attrs())
+                     VARIABLES[name].dtype, VARIABLES[name].attrs(spec.flight))
         for observable in observables for name in observable.variables
     )
 

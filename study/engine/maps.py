@@ -40,7 +40,13 @@ from study.model.inputs import (
 )
 from study.model.parameters import STRUCTURE as STRUCTURE_TABLE
 from study.model.structure import Structure
-from study.solvers.exact import DEFAULT_COUPLING, SolverSettings, check_coupling, check_structure
+from study.solvers.exact import (
+    DEFAULT_COUPLING,
+    SolverSettings,
+    check_coupling,
+    check_flight,
+    check_structure,
+)
 from study.version import VERSION
 
 __all__ = ["MAP_SPEC_SOURCE", "compute_map", "map_spec_text"]
@@ -205,8 +211,7 @@ def compute_map(
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
-    if not isinstance(flight, bool | np.bool_):
-        raise TypeError(f"flight must be True or False, got {flight!r}")
+    flight = check_flight(flight, coupling, structure)
     names = _observables(observables)
     settings = SolverSettings() if settings is None else settings
     if not isinstance(settings, SolverSettings):
@@ -227,7 +232,7 @@ def compute_map(
     f_values = _axis("f", f)
     a_values = _axis("a", a)
     text = map_spec_text(structure, f_values, a_values, names, coupling, swept, settings,
-                         bool(flight))
+                         flight)
     spec = parse_spec(text, MAP_SPEC_SOURCE)
     return _computed(spec, workers)
 

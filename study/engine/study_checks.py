@@ -131,10 +131,11 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any) -> list
                             f"({', '.join(dims)})")
         if var.type_name != declared.dtype:
             problems.append(f"{name} is {var.type_name}; declared {declared.dtype}")
-        for key in ("units", "long_name"):
-            if not same_text(var.attrs.get(key), getattr(declared, key)):
+        expected = {"units": declared.units, "long_name": declared.texts(spec.flight)[0]}
+        for key, value in expected.items():
+            if not same_text(var.attrs.get(key), value):
                 problems.append(f"{name}: {key} {short(repr(var.attrs.get(key)), 80)}; "
-                                f"declared {getattr(declared, key)!r}")
+                                f"declared {value!r}")
         if declared.is_flag:
             flag_values = np.atleast_1d(np.asarray(var.attrs.get("flag_values", [])))
             if (flag_values.dtype != np.dtype(declared.dtype)
