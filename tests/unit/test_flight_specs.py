@@ -281,3 +281,71 @@ def test_coupling_shares_count_bouncing_points_as_moving():
     assert float(effect["reversed"]) == 0.25
     assert float(effect["changed"]) == 0.5  # reversed (300 %) and bouncing (400 %)
     assert effect["bouncing"].attrs["units"] == "1"
+
+
+SMALL_FLIGHT = """\
+[study]
+name = "small-flight"
+observables = ["velocity", "floquet", "without_flight"]
+
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+M = 0.6
+cs = 0.25
+
+[sweep]
+f = { values = [12.0, 16.0] }
+a = { values = [2.0, 9.0, 11.0] }
+
+[solver]
+coupling = "two-way"
+flight = true
+"""
+
+
+@pytest.fixture(scope="module")
+def small_flight_file(tmp_path_factory):
+    from study.engine.runner import run_study
+
+    folder = tmp_path_factory.mktemp("flight")
+    (folder / "small-flight.toml").write_text(SMALL_FLIGHT)
+    run_study(folder / "small-flight.toml", folder / "small-flight.nc", progress=False,
+              workers=1)
+    return folder / "small-flight.nc"
+
+
+def test_a_study_with_flight_writes_and_validates_its_variables(small_flight_file):
+    from study.engine.validation import open_result, validate_file
+
+    assert validate_file(small_flight_file) == "study result"
+    dataset = open_result(small_flight_file)
+    assert dataset.attrs["study_lift_off"] == "flight"
+    for name in FLIGHT_VARIABLES:
+        assert dataset[name].dims == ("f", "a")
+        assert dataset[name].attrs["units"] == VARIABLES[name].units
+    assert dataset["floquet_multiplier"].attrs["long_name"] == \
+        VARIABLES["floquet_multiplier"].flight_long_name
+    # Below lift-off the two runs are the same computation: the same numbers.
+    contact = dataset["status_without_flight"].isin(
+        [int(Status.STATIC), int(Status.STICK_SLIP), int(Status.CONTINUOUS_SLIDING)])
+    assert contact.any()
+    assert np.array_equal(dataset["velocity"].where(contact).values,
+                          dataset["velocity_without_flight"].where(contact).values,
+                          equal_nan=True)
+
+
+def test_a_flight_file_without_its_lift_off_attribute_is_refused(small_flight_file, tmp_path):
+    import shutil
+
+    import netCDF4
+
+    from study.engine.validation import ResultError, validate_file
+
+    copy = tmp_path / "tampered.nc"
+    shutil.copy(small_flight_file, copy)
+    with netCDF4.Dataset(copy, "a") as nc:
+        nc.delncattr("study_lift_off")
+    with pytest.raises(ResultError, match="study_lift_off differs from the embedded spec"):
+        validate_file(copy)
