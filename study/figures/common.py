@@ -391,7 +391,7 @@ def coupling_label(dataset: xr.Dataset) -> str:
     else:
         text = "one-way coupling (the paper's model)"
     if is_flight(dataset):
-        text += " with flight (the base flies past lift-off and lands by impacts)"
+        text += ", flight past lift-off"
     return text + (", time integration" if method == "integrator" else "")
 
 
