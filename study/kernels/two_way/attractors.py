@@ -12,13 +12,14 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from study.kernels.structure_vector import COS_ALPHA, GRAVITY, MASS_RATIO
+from study.kernels.structure_vector import COS_ALPHA, GRAVITY, LIFT_OFF_LAW, MASS_RATIO
 from study.kernels.two_way.modes import N_MODE, TWO_PI, mode_table
 from study.kernels.two_way.points import (
     N_OUT,
     OUT_PERIOD,
     OUT_STATUS,
     OUT_VELOCITY,
+    solve_drop,
     solve_point,
     start_state,
 )
@@ -54,6 +55,28 @@ N_ATTRACTOR_OUT = len(ATTRACTOR_COLUMNS)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _tally(row, velocities, periods, count, converged, others, scale):
+    """Add the outcome ``row`` (of :func:`solve_point`) to the distinct orbits found so
+    far: ``(count, converged, others)`` updated."""
+    status = int(row[OUT_STATUS])
+    if status == NOT_CONVERGED:
+        return count, converged, others
+    converged += 1
+    if status == LIFT_OFF:
+        return count, converged, others | 1
+    if status == FRICTION_PARADOX:
+        return count, converged, others | 2
+    period = 0.0 if status == STATIC else row[OUT_PERIOD]
+    for i in range(count):
+        if periods[i] == period and (
+                abs(velocities[i] - row[OUT_VELOCITY]) <= SAME_ORBIT * scale):
+            return count, converged, others
+    velocities[count] = row[OUT_VELOCITY]
+    periods[count] = period
+    return count + 1, converged, others
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def attractors_point(structure, omega, a, lifted, budget, out):
     """Distinct stable orbits reached from the starting states above (arguments as
     :func:`~study.kernels.two_way.points.solve_point`).
@@ -61,12 +84,17 @@ def attractors_point(structure, omega, a, lifted, budget, out):
     ``out`` receives one row of :data:`ATTRACTOR_COLUMNS`: the number of distinct
     orbits (LIFT_OFF or FRICTION_PARADOX outcomes count as one outcome each), the
     spread of their mean velocities [m s-1], and how many starts reached an outcome.
-    Starts off the table (``n < 0``) are skipped.
+    Starts off the table (``n < 0``) are skipped. With the lift-off law ``flight``
+    the drops of :data:`DROP_HEIGHTS` at :data:`DROP_PHASES` are further starts, a
+    bouncing orbit is an orbit, and a static outcome is one orbit among the others
+    (velocity 0, period 0) rather than the answer for every start.
     """
     row = np.empty(N_OUT)
+    flying = structure[LIFT_OFF_LAW] != 0.0
     n_starts = len(START_PHASES) * len(START_FACTORS)
-    velocities = np.empty(n_starts)
-    periods = np.empty(n_starts)
+    n_drops = len(DROP_HEIGHTS) * len(DROP_PHASES) if flying else 0
+    velocities = np.empty(n_starts + n_drops)
+    periods = np.empty(n_starts + n_drops)
     count = 0
     converged = 0
     others = 0  # bit 1: lift-off seen, bit 2: paradox seen
@@ -86,30 +114,19 @@ def attractors_point(structure, omega, a, lifted, budget, out):
                 continue
             solve_point(structure, omega, a, lifted, budget, t_start, factor, row)
             status = int(row[OUT_STATUS])
-            if status == STATIC:
+            if status == STATIC and not flying:
                 out[OUT_COUNT] = 1.0
                 out[OUT_SPREAD] = 0.0
                 out[OUT_STARTS_CONVERGED] = n_starts
                 return
-            if status == NOT_CONVERGED:
-                continue
-            converged += 1
-            if status == LIFT_OFF:
-                others |= 1
-                continue
-            if status == FRICTION_PARADOX:
-                others |= 2
-                continue
-            new = True
-            for i in range(count):
-                if periods[i] == row[OUT_PERIOD] and (
-                        abs(velocities[i] - row[OUT_VELOCITY]) <= SAME_ORBIT * scale):
-                    new = False
-                    break
-            if new:
-                velocities[count] = row[OUT_VELOCITY]
-                periods[count] = row[OUT_PERIOD]
-                count += 1
+            count, converged, others = _tally(row, velocities, periods, count, converged,
+                                              others, scale)
+    if flying:
+        for height in DROP_HEIGHTS:
+            for phase in DROP_PHASES:
+                solve_drop(structure, omega, a, budget, phase * TWO_PI / omega, height, row)
+                count, converged, others = _tally(row, velocities, periods, count,
+                                                  converged, others, scale)
     spread = 0.0
     if count > 0:
         spread = np.max(velocities[:count]) - np.min(velocities[:count])

@@ -210,7 +210,7 @@ def _jet(row, omega, k, t, start):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _bounded_step(phi, dphi, d2phi, bound, bound3):
+def bounded_step(phi, dphi, d2phi, bound, bound3):
     """Longest safe step of an event function ``phi < 0`` with derivatives ``dphi``,
     ``d2phi``, given bounds ``bound`` and ``bound3`` of its second and third derivatives
     on the rest of the piece: the larger of the quadratic's and the cubic's."""
@@ -232,7 +232,7 @@ def _release_look(jet, kappa, cs, g, a, omega, bound, bound3):
     if phi > 0.0 or (phi == 0.0 and dphi > 0.0):
         return True, 0.0
     d2phi = kappa * jet.ddddd - cs * drive * (omega * omega)
-    return False, _bounded_step(phi, dphi, d2phi, bound, bound3)
+    return False, bounded_step(phi, dphi, d2phi, bound, bound3)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
@@ -250,7 +250,7 @@ def _lift_off_look(jet, row, structure, a, omega, lift_level):
     d2phi = -(drive * (omega * omega) + m * ca * jet.ddddd)
     bound = row[M_SIN_N] + row[M_HOM2_N] * jet.energy
     bound3 = omega * row[M_SIN_N] + row[M_HOM3_N] * jet.energy
-    return False, _bounded_step(phi, dphi, d2phi, bound, bound3)
+    return False, bounded_step(phi, dphi, d2phi, bound, bound3)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -404,7 +404,7 @@ def search(structure, row, omega, a, start, mask, limits):
             if phi > 0.0 or (phi == 0.0 and dphi > 0.0):
                 return EV_SLIP_END, t, steps
             d2phi = s * kk * jet.dddd + ck * a * omega * jet.sw
-            h_step = _bounded_step(phi, dphi, d2phi, sin_v + hom_v * energy,
+            h_step = bounded_step(phi, dphi, d2phi, sin_v + hom_v * energy,
                                    omega * sin_v + hom3_v * energy)
             if h_step < step:
                 step = h_step

@@ -161,28 +161,28 @@ def _event_bounds(structure, row, omega, a):
         cr = -kappa * w2 * pr + cs * a
         ci = -kappa * w2 * pi
         row[col] = w2 * math.hypot(cr, ci)
-        row[col + 1] = abs(kappa) * _functional_bound(row, -kd, -cd, k, 0)
-        row[col + 2] = abs(kappa) * _functional_bound(row, -kd, -cd, k, 2)
-        row[col + 3] = abs(kappa) * _functional_bound(row, -kd, -cd, k, 3)
+        row[col + 1] = abs(kappa) * functional_bound(row, -kd, -cd, k, 0)
+        row[col + 2] = abs(kappa) * functional_bound(row, -kd, -cd, k, 2)
+        row[col + 3] = abs(kappa) * functional_bound(row, -kd, -cd, k, 3)
         row[col + 4] = math.hypot(cr, ci)
         row[col + 5] = math.atan2(ci, cr)
     # s v: sinusoid -s K delta_p' + ck a sin(wt) / w; homogeneous -s K h'.
     row[M_SIN_V] = w2 * math.hypot(kk * omega * pi, kk * omega * pr + s * ck * a / omega)
-    row[M_HOM2_V] = _functional_bound(row, 0.0, kk, k, 2)
-    row[M_HOM3_V] = _functional_bound(row, 0.0, kk, k, 3)
+    row[M_HOM2_V] = functional_bound(row, 0.0, kk, k, 2)
+    row[M_HOM3_V] = functional_bound(row, 0.0, kk, k, 3)
     # -n = A - g - M cos(alpha) delta''.
     cr = a + m * ca * w2 * pr
     ci = m * ca * w2 * pi
     row[M_SIN_N] = w2 * math.hypot(cr, ci)
-    row[M_HOM0_N] = m * ca * _functional_bound(row, kd, cd, k, 0)
-    row[M_HOM2_N] = m * ca * _functional_bound(row, kd, cd, k, 2)
-    row[M_HOM3_N] = m * ca * _functional_bound(row, kd, cd, k, 3)
+    row[M_HOM0_N] = m * ca * functional_bound(row, kd, cd, k, 0)
+    row[M_HOM2_N] = m * ca * functional_bound(row, kd, cd, k, 2)
+    row[M_HOM3_N] = m * ca * functional_bound(row, kd, cd, k, 3)
     row[M_AMP_N] = math.hypot(cr, ci)
     row[M_ARG_N] = math.atan2(ci, cr)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _functional_bound(row, l1, l2, k, power):
+def functional_bound(row, l1, l2, k, power):
     """``||l A^power||`` in the dual of the energy norm ``sqrt(k h^2 + D h'^2)``:
     bounds the ``power``-th derivative of ``l . (h, h')`` per unit energy norm."""
     kd = row[M_KD]

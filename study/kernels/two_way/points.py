@@ -15,14 +15,18 @@ from numba import njit, prange
 from study.kernels.structure_vector import (
     COS_ALPHA,
     GRAVITY,
+    LIFT_OFF_LAW,
     MASS_RATIO,
     SIN_ALPHA,
     STATIC_FRICTION,
     STIFFNESS,
 )
 from study.kernels.two_way.cycles import MAX_PERIOD, find_orbit
+from study.kernels.two_way.flight import FLIGHT_ROW, N_ROWS, N_STATE, Z_GAP, flight_row
+from study.kernels.two_way.flight_orbit import solve_flight
 from study.kernels.two_way.modes import (
     EPS,
+    M_OFFSET,
     M_PIM,
     M_PRE,
     N_MODE,
@@ -86,6 +90,11 @@ OUT_HOP = _NAMES.index("hop")
 OUT_IMPACTS = _NAMES.index("impacts")
 #: Length of an output row.
 N_OUT = len(OUTPUT_COLUMNS)
+# The columns :func:`~study.kernels.two_way.flight_orbit.solve_flight` writes, in its
+# order.
+FLIGHT_COLUMNS = (OUT_STATUS, OUT_REASON, OUT_VELOCITY, OUT_SLIPS, OUT_FORWARD,
+                  OUT_BACKWARD, OUT_PERIOD, OUT_MULTIPLIER, OUT_DELTA, OUT_DELTA_RATE,
+                  OUT_SPEED, OUT_AIRBORNE, OUT_HOP, OUT_IMPACTS)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -165,21 +174,32 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
 
     ``t_start`` [s] and ``factor`` choose the starting state (rest, mode on ``factor``
     times its steady response).
+
+    With the lift-off law ``flight`` (the structure vector's ``LIFT_OFF_LAW``) a point
+    the contact model ends with ``LIFT_OFF`` is solved again, from the same start, by
+    the orbit with flight (:func:`~study.kernels.two_way.flight_orbit.solve_flight`);
+    every other point is solved exactly as without flight, so it keeps every bit.
     """
     out[:] = np.nan
     out[OUT_REASON] = REASON_NONE
     out[OUT_PERIOD] = 0.0
+    flying = structure[LIFT_OFF_LAW] != 0.0
     # A static point is decided and written from the stick's response alone, in closed
     # form, before any table or orbit (most points of a map never slip).
     pr, pi = stick_response(structure, omega, a)
-    if _is_static(structure, omega, a, pr, pi):
+    static = _is_static(structure, omega, a, pr, pi)
+    if static and not (lifted and flying):
         _static_row(structure, omega, lifted, out)
         return
-    table = np.zeros((3, N_MODE))
+    table = np.zeros((N_ROWS if flying else 3, N_MODE))
     point = DrivePoint(structure, table, omega, a)
     mode_row(structure, omega, a, table, 0)
     mode_row(structure, omega, a, table, 1)
     mode_row(structure, omega, a, table, 2)
+    if static:
+        # Stuck on its steady response yet past lift-off: it takes off.
+        _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
+        return
     scales = np.empty(3)
     scales[0], scales[1], scales[2] = _scales(point)
     z = np.empty(3)
@@ -189,6 +209,9 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
     history = np.empty((MAX_PERIOD, 3))
     status, reason, periods = find_orbit(point, z, t_start, scales, budget, record, work,
                                          history)
+    if flying and status == LIFT_OFF:
+        _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
+        return
     out[OUT_STATUS] = status
     out[OUT_REASON] = reason
     if periods == 0:
@@ -208,6 +231,35 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
     out[OUT_AIRBORNE] = 0.0
     out[OUT_HOP] = 0.0
     out[OUT_IMPACTS] = 0.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _solve_flying(structure, table, omega, a, budget, t_start, factor, out):
+    """The orbit with flight from rest on the table at ``t_start`` [s], the mode on
+    ``factor`` times its steady response; ``table`` has its contact rows filled."""
+    flight_row(structure, table)
+    z = np.zeros(N_STATE)
+    start_state(table, omega, t_start, z, factor)
+    solve_flight(structure, table, omega, a, budget, z, t_start, out, FLIGHT_COLUMNS)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_drop(structure, omega, a, budget, t_start, height, out):
+    """The orbit with flight reached from a drop: the base released ``height`` [m] above
+    the table at ``t_start`` [s], at rest relative to it, the mode at rest at its flight
+    equilibrium ``g cos(alpha) / k`` (arguments as :func:`solve_point`)."""
+    out[:] = np.nan
+    out[OUT_REASON] = REASON_NONE
+    out[OUT_PERIOD] = 0.0
+    table = np.zeros((N_ROWS, N_MODE))
+    mode_row(structure, omega, a, table, 0)
+    mode_row(structure, omega, a, table, 1)
+    mode_row(structure, omega, a, table, 2)
+    flight_row(structure, table)
+    z = np.zeros(N_STATE)
+    z[0] = table[FLIGHT_ROW, M_OFFSET]
+    z[Z_GAP] = height
+    solve_flight(structure, table, omega, a, budget, z, t_start, out, FLIGHT_COLUMNS)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

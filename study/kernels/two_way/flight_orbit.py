@@ -1,0 +1,360 @@
+"""The periodic orbit with flight: Newton on the period map of the 5-state, then a
+search of the map's iterates for a cycle of up to ``MAX_PERIOD`` drive periods, and
+one drive point's output row.
+
+The same method as :mod:`~study.kernels.two_way.newton` and
+:mod:`~study.kernels.two_way.cycles` on the state ``(delta, delta', v, h, h')`` with
+the run of :mod:`~study.kernels.two_way.flight`: Newton's method on ``P^N(z) - z`` with
+the exact Jacobian (flows, contact saltations, the identity at take-off and the
+impacts' saltation matrices), stopped on a pass whose residual is at the map's
+rounding floor, so that the statistics (mean velocity, airborne fraction, largest hop,
+impacts) are those of a pass around the fixed point itself.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from study.kernels.structure_vector import GRAVITY, STIFFNESS
+from study.kernels.two_way.cycles import CYCLE_DETECTION, MAX_PERIOD, SECTION_SHIFT
+from study.kernels.two_way.flight import (
+    A_AIRBORNE,
+    A_HOP,
+    A_IMPACTS,
+    N_FLIGHT_ACC,
+    N_STATE,
+    FlightRecord,
+    fly,
+)
+from study.kernels.two_way.modes import M_PIM, M_PRE, TWO_PI, DrivePoint
+from study.kernels.two_way.orbit import (
+    A_BACKWARD,
+    A_DISPLACEMENT,
+    A_EVENTS,
+    A_FORWARD,
+    A_SHORTEST,
+    A_SLIPS,
+    A_START_SLIVER,
+    A_STICK,
+    RUN_OK,
+    RUN_PARADOX,
+    SLIVER,
+)
+from study.model.codes import (
+    BOUNCING,
+    CONTINUOUS_SLIDING,
+    FRICTION_PARADOX,
+    NOT_CONVERGED,
+    REASON_EVENT_BUDGET,
+    REASON_NO_PERIODIC_ORBIT,
+    REASON_NONE,
+    STICK_SLIP,
+)
+
+# Newton iterations on the period map before falling back to the map's iteration.
+MAX_NEWTON = 30
+# A pass is at the fixed point when its scaled residual is below this, or below
+# LOOSE_TOLERANCE after a step below NEWTON_STEP with the same events as the pass
+# before (the rounding floor of the map).
+NEWTON_TOLERANCE = 1e-12
+LOOSE_TOLERANCE = 1e-9
+NEWTON_STEP = 1e-7
+# Passes after a residual below this compute the largest gap (expected to be the last).
+HOP_WATCH = 1e-5
+# An orbit is stable when its largest Floquet multiplier is below 1 + this.
+STABILITY_MARGIN = 1e-6
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def flight_scales(point):
+    """Natural sizes of ``(delta, delta', v, h, h')`` [m, m s-1, m s-1, m, m s-1]."""
+    table = point.table
+    omega = point.omega
+    a = point.a
+    amp = math.hypot(table[0, M_PRE], table[0, M_PIM])
+    k = point.structure[STIFFNESS]
+    size = max(amp, a / (k + omega * omega), 1e-300)
+    lift = (point.structure[GRAVITY] + a) / omega
+    scales = np.empty(N_STATE)
+    scales[0] = size
+    scales[1] = size * max(omega, math.sqrt(k))
+    scales[2] = max(a / omega, 1e-300)
+    scales[3] = lift / omega
+    scales[4] = lift
+    return scales
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_linear(m, r, out):
+    """Solve ``m x = r`` (n x n, partial pivoting) into ``out``; False when singular."""
+    n = r.shape[0]
+    a = m.copy()
+    b = r.copy()
+    for col in range(n):
+        piv = col
+        for i in range(col + 1, n):
+            if abs(a[i, col]) > abs(a[piv, col]):
+                piv = i
+        if a[piv, col] == 0.0 or not math.isfinite(a[piv, col]):
+            return False
+        if piv != col:
+            for jj in range(n):
+                a[col, jj], a[piv, jj] = a[piv, jj], a[col, jj]
+            b[col], b[piv] = b[piv], b[col]
+        for i in range(col + 1, n):
+            f = a[i, col] / a[col, col]
+            for jj in range(col, n):
+                a[i, jj] -= f * a[col, jj]
+            b[i] -= f * b[col]
+    for i in range(n - 1, -1, -1):
+        x = b[i]
+        for jj in range(i + 1, n):
+            x -= a[i, jj] * out[jj]
+        out[i] = x / a[i, i]
+    return True
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def flight_radius(jac):
+    """Largest modulus of the eigenvalues of the 5x5 ``jac`` (the Floquet multipliers)."""
+    if not np.all(np.isfinite(jac)):
+        return np.inf
+    values = np.linalg.eigvals(jac.astype(np.complex128))
+    return np.max(np.abs(values))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _pass(point, z, work, section, span, record, want_jac, want_hop, max_events):
+    """One run from ``z`` (copied to ``work``) over ``span`` [s] from ``section``."""
+    acc = record.acc
+    jac = record.jac
+    for i in range(N_STATE):
+        work[i] = z[i]
+        for jj in range(N_STATE):
+            jac[i, jj] = 1.0 if i == jj else 0.0
+    acc[:] = 0.0
+    return fly(point, work, section, section + span, record, want_jac, want_hop, max_events)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def flight_newton(point, z, periods, section, scales, max_events, record, work):
+    """Newton's method on ``P^periods(z) - z`` for the 5-state ``z`` (updated in place) on
+    the section at ``section`` [s] (arguments as
+    :func:`~study.kernels.two_way.newton.newton`).
+
+    Returns
+    -------
+    flag, converged
+        The last run's flag and whether ``z`` is the fixed point; ``record`` then holds
+        the pass around it: the Jacobian of ``P^periods`` and the statistics, with the
+        largest gap.
+    """
+    acc = record.acc
+    jac = record.jac
+    span = periods * TWO_PI / point.omega
+    previous = np.inf
+    last_events = -1.0
+    last_slips = -1.0
+    last_impacts = -1.0
+    small_step = False
+    step = np.empty(N_STATE)
+    residual = np.empty(N_STATE)
+    for _ in range(MAX_NEWTON):
+        want_hop = previous <= HOP_WATCH
+        flag = _pass(point, z, work, section, span, record, True, want_hop, max_events)
+        if flag != RUN_OK:
+            return flag, False
+        res = 0.0
+        for i in range(N_STATE):
+            residual[i] = z[i] - work[i]
+            res = max(res, abs(residual[i]) / scales[i])
+        sliver = 0.0 < acc[A_SHORTEST] < SLIVER * span
+        same_events = (acc[A_EVENTS] == last_events and acc[A_SLIPS] == last_slips
+                       and acc[A_IMPACTS] == last_impacts and not sliver)
+        if res <= NEWTON_TOLERANCE or (small_step and same_events
+                                       and res <= LOOSE_TOLERANCE):
+            if not want_hop:
+                # The largest gap of this pass (the statistics are the same).
+                _pass(point, z, work, section, span, record, True, True, max_events)
+            return RUN_OK, True
+        last_events = acc[A_EVENTS]
+        last_slips = acc[A_SLIPS]
+        last_impacts = acc[A_IMPACTS]
+        if res > previous:
+            # Diverging (an event appeared or vanished): take the map's step instead.
+            for i in range(N_STATE):
+                z[i] = work[i]
+            previous = np.inf
+            small_step = False
+            last_events = -1.0
+            continue
+        for i in range(N_STATE):
+            jac[i, i] -= 1.0
+        solved = solve_linear(jac, residual, step)
+        for i in range(N_STATE):
+            jac[i, i] += 1.0
+        if not solved:
+            for i in range(N_STATE):
+                z[i] = work[i]
+            small_step = False
+            last_events = -1.0
+            continue
+        size = 0.0
+        for i in range(N_STATE):
+            size = max(size, abs(step[i]) / scales[i])
+            z[i] += step[i]
+        if acc[A_START_SLIVER] != 0.0:
+            # The orbit sticks across the section (see newton): stick.
+            z[2] = 0.0
+        small_step = size <= NEWTON_STEP
+        previous = res
+    return RUN_OK, False
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _flight_cycle(point, z, periods, section, scales, max_events, record, work):
+    """A stable cycle of ``periods`` drive periods from ``z`` (as
+    :func:`~study.kernels.two_way.cycles`'s): its minimal period, 0 when not found,
+    -1 on the paradox."""
+    flag, converged = flight_newton(point, z, periods, section, scales, max_events, record,
+                                    work)
+    if flag == RUN_PARADOX:
+        return -1
+    if not converged or flight_radius(record.jac) >= 1.0 + STABILITY_MARGIN:
+        return 0
+    period = TWO_PI / point.omega
+    for shorter in range(1, periods):
+        if periods % shorter:
+            continue
+        flag = _pass(point, z, work, section, shorter * period, record, False, False,
+                     max_events)
+        gap = 0.0
+        for i in range(N_STATE):
+            gap = max(gap, abs(work[i] - z[i]) / scales[i])
+        if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
+            flag, converged = flight_newton(point, z, shorter, section, scales, max_events,
+                                            record, work)
+            if converged:
+                return shorter
+    flag, converged = flight_newton(point, z, periods, section, scales, max_events, record,
+                                    work)
+    return periods if converged else 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
+    """Periodic orbit with flight reached from the 5-state ``z`` at ``t_start`` [s] (in
+    the first period), as :func:`~study.kernels.two_way.cycles.find_orbit`.
+
+    Returns
+    -------
+    status, reason, periods
+        ``periods`` > 0 and ``z`` the orbit's state at phase 0 when found (``record``
+        then belongs to one pass around it); status STICK_SLIP for any orbit found (the
+        caller names it from its statistics), FRICTION_PARADOX or NOT_CONVERGED.
+    """
+    max_events = budget.max_events
+    period = TWO_PI / point.omega
+    record.acc[:] = 0.0
+    flag = RUN_OK
+    if t_start != 0.0:
+        flag = fly(point, z, t_start, period, record, False, False, max_events)
+    if flag == RUN_PARADOX:
+        return FRICTION_PARADOX, REASON_NONE, 0
+    if flag != RUN_OK:
+        return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
+    guess = z.copy()
+    flag, converged = flight_newton(point, z, 1, 0.0, scales, max_events, record, work)
+    if converged and flight_radius(record.jac) < 1.0 + STABILITY_MARGIN:
+        return STICK_SLIP, REASON_NONE, 1
+    if flag == RUN_PARADOX:
+        return FRICTION_PARADOX, REASON_NONE, 0
+    for i in range(N_STATE):
+        z[i] = guess[i]
+    tried = np.full(MAX_PERIOD + 1, np.inf)
+    candidate = np.empty(N_STATE)
+    for iteration in range(budget.max_map_iterations):
+        slot = iteration % MAX_PERIOD
+        for i in range(N_STATE):
+            history[slot, i] = z[i]
+        flag = fly(point, z, 0.0, period, record, False, False, max_events)
+        if flag == RUN_PARADOX:
+            return FRICTION_PARADOX, REASON_NONE, 0
+        if flag != RUN_OK:
+            return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
+        for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
+            back = (iteration - periods + 1) % MAX_PERIOD
+            gap = 0.0
+            for i in range(N_STATE):
+                gap = max(gap, abs(z[i] - history[back, i]) / scales[i])
+            if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
+                tried[periods] = gap
+                for shifted in range(2):
+                    for i in range(N_STATE):
+                        candidate[i] = history[back, i]
+                    section = 0.0
+                    if shifted:
+                        section = SECTION_SHIFT * period
+                        flag = fly(point, candidate, 0.0, section, record, False, False,
+                                   max_events)
+                        if flag != RUN_OK:
+                            break
+                    found = _flight_cycle(point, candidate, periods, section, scales,
+                                          max_events, record, work)
+                    if found < 0:
+                        return FRICTION_PARADOX, REASON_NONE, 0
+                    if found > 0:
+                        if section != 0.0:
+                            spare = FlightRecord(np.zeros(N_FLIGHT_ACC), np.eye(N_STATE),
+                                                 np.empty((N_STATE, N_STATE)),
+                                                 np.empty((N_STATE, N_STATE)))
+                            fly(point, candidate, section, period, spare, False, False,
+                                max_events)
+                        for i in range(N_STATE):
+                            z[i] = candidate[i]
+                        return STICK_SLIP, REASON_NONE, found
+                break
+    return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
+    """The orbit with flight reached from the 5-state ``z`` at ``t_start`` [s], written
+    into ``out`` at the positions ``columns`` (status, reason, velocity, slips, forward,
+    backward, period, multiplier, delta, delta_rate, speed, airborne, hop, impacts);
+    ``table`` holds the contact rows and the flight row."""
+    point = DrivePoint(structure, table, omega, a)
+    scales = flight_scales(point)
+    record = FlightRecord(np.zeros(N_FLIGHT_ACC), np.empty((N_STATE, N_STATE)),
+                          np.empty((N_STATE, N_STATE)), np.empty((N_STATE, N_STATE)))
+    work = np.empty(N_STATE)
+    history = np.empty((MAX_PERIOD, N_STATE))
+    status, reason, periods = find_flight_orbit(point, z, t_start, scales, budget, record,
+                                                work, history)
+    (c_status, c_reason, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier,
+     c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts) = columns
+    out[c_status] = status
+    out[c_reason] = reason
+    if periods == 0:
+        return
+    acc = record.acc
+    span = periods * TWO_PI / omega
+    if acc[A_AIRBORNE] > 0.0:
+        out[c_status] = BOUNCING
+    else:
+        out[c_status] = STICK_SLIP if acc[A_STICK] > 0.0 else CONTINUOUS_SLIDING
+    out[c_velocity] = acc[A_DISPLACEMENT] / span
+    out[c_slips] = acc[A_SLIPS] / periods
+    out[c_forward] = acc[A_FORWARD] / span
+    out[c_backward] = acc[A_BACKWARD] / span
+    out[c_period] = periods
+    out[c_multiplier] = flight_radius(record.jac)
+    out[c_delta] = z[0]
+    out[c_rate] = z[1]
+    out[c_speed] = z[2]
+    out[c_airborne] = acc[A_AIRBORNE] / span
+    out[c_hop] = acc[A_HOP]
+    out[c_impacts] = acc[A_IMPACTS] / periods
