@@ -349,3 +349,23 @@ def test_a_flight_file_without_its_lift_off_attribute_is_refused(small_flight_fi
         nc.delncattr("study_lift_off")
     with pytest.raises(ResultError, match="study_lift_off differs from the embedded spec"):
         validate_file(copy)
+
+
+def test_compute_map_with_flight_holds_the_files_values(small_flight_file):
+    """The map in memory and the study file of the same spec: the same variables,
+    attributes and values, bit for bit."""
+    from study.engine.validation import open_result
+
+    s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.6, cs=0.25)
+    ours = study.compute_map(s, [12.0, 16.0], [2.0, 9.0, 11.0], coupling="two-way",
+                             flight=True,
+                             observables=["velocity", "floquet", "without_flight"])
+    assert ours.attrs["study_lift_off"] == "flight"
+    assert parse_spec(ours.attrs["study_spec"], "map").flight
+    stored = open_result(small_flight_file)
+    assert Status.BOUNCING in stored["status"].values  # the map reaches the bouncing region
+    for name in ("velocity", "status", *FLIGHT_VARIABLES, "floquet_multiplier",
+                 "velocity_without_flight", "status_without_flight"):
+        for key in ("units", "long_name"):
+            assert ours[name].attrs[key] == stored[name].attrs[key]
+        np.testing.assert_array_equal(ours[name].values, stored[name].values)
