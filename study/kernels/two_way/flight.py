@@ -18,8 +18,9 @@ from where the impact (the first zero of ``h``) is sought by the bound stepping 
 :mod:`~study.kernels.two_way.event_search` on ``-h``. An impact applies the impact law
 (:mod:`study.kernels.impact`); the base then lands in the contact mode the existing
 rules choose (or takes off again at once where that mode's ``n < 0``), or flies again
-when it rebounds (restitution ``e > 0``) faster than :data:`CHATTER` of its natural
-speed; a slower rebound lands plastically (the cut-off of chattering).
+when it rebounds (restitution ``e > 0``) faster than ``CHATTER (1 - e)`` of its natural
+speed ``(g + a) / w``; a slower rebound lands plastically (the cut-off of chattering,
+see :data:`CHATTER`).
 
 The run's Jacobian is the product of 5x5 flow matrices (the contact modes' with the
 gap rows zero, the flight's propagator with the linear maps of ``v``, ``h``, ``h'``),
@@ -51,6 +52,7 @@ from study.kernels.structure_vector import (
     GRAVITY,
     KINETIC_FRICTION,
     MASS_RATIO,
+    RESTITUTION,
     SIN_ALPHA,
     STATIC_FRICTION,
     STIFFNESS,
@@ -126,16 +128,28 @@ Z_GAP_RATE = 4
 F_HOM2 = 12
 F_HOM3 = 13
 F_HOM4 = 14
-# Rebounds slower than this fraction of the natural speed (g + a) / w land plastically:
-# the cut-off of chattering (the impacts of a rebounding base accumulate in finite
-# time). The bounces cut off would last at most 2 CHATTER (g + a) / (w g (1 - e)).
-CHATTER = 1e-6
+# Rebounds slower than CHATTER (1 - e) (g + a) / w land plastically: the cut-off of
+# chattering (the impacts of a rebounding base accumulate in finite time, like a
+# bouncing ball's). The bounces cut off would have lasted about 2 u / (g_eff (1 - e))
+# for a rebound speed u, at most ~2 CHATTER (g + a) / (w g_eff), 1e-7 of a period for
+# g_eff ~ g: over that time the base is on the table within the rebounds' heights
+# (~u^2 / g), so landing at once moves the orbit by about that fraction. The number of
+# impacts of one chatter grows like log(CHATTER (1 - e)) / log(e) (e = 0.5: ~25,
+# e = 0.9: ~170).
+CHATTER = 1e-7
 
 # Accumulator slots of a run with flight, after those of orbit.run.
 A_AIRBORNE = N_ACC  # time in flight [s]
 A_IMPACTS = N_ACC + 1
 A_HOP = N_ACC + 2  # largest gap [m] (only when asked)
-N_FLIGHT_ACC = N_ACC + 3
+# The events' times: how many, the first and the last [s], and the longest stretch
+# between two of them [s] with its midpoint [s] (see flight_orbit.quiet_section).
+A_EVENT_COUNT = N_ACC + 3
+A_FIRST_EVENT = N_ACC + 4
+A_LAST_EVENT = N_ACC + 5
+A_QUIET_GAP = N_ACC + 6
+A_QUIET_MID = N_ACC + 7
+N_FLIGHT_ACC = N_ACC + 8
 
 #: What a run with flight records: ``acc`` (``N_FLIGHT_ACC`` accumulators), ``jac``
 #: (5x5, multiplied on the left by the flow's Jacobian), ``step`` and ``scratch`` (5x5
@@ -315,6 +329,20 @@ def largest_gap(structure, row, omega, a, start, t_end):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _note_event(acc, te):
+    """Record an event at ``te`` [s] in the event-time slots of ``acc``."""
+    if acc[A_EVENT_COUNT] == 0.0:
+        acc[A_FIRST_EVENT] = te
+    else:
+        gap = te - acc[A_LAST_EVENT]
+        if gap > acc[A_QUIET_GAP]:
+            acc[A_QUIET_GAP] = gap
+            acc[A_QUIET_MID] = acc[A_LAST_EVENT] + 0.5 * gap
+    acc[A_LAST_EVENT] = te
+    acc[A_EVENT_COUNT] += 1.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _left(jac, r, scratch):
     """``jac <- r jac`` (5x5)."""
     for i in range(N_STATE):
@@ -423,7 +451,7 @@ def fly(point, z, t_begin, t_stop, record, want_jac, want_hop, max_events):
     ck = structure[KINETIC_FRICTION]
     frow = table[FLIGHT_ROW]
     horizon = max(abs(t_stop), TWO_PI / omega)
-    chatter = CHATTER * (g + a) / omega
+    chatter = CHATTER * (1.0 - structure[RESTITUTION]) * (g + a) / omega
     impact_out = np.empty(8)
     j3 = np.empty((3, 3))
     f_minus = np.empty(N_STATE)
@@ -497,6 +525,7 @@ def fly(point, z, t_begin, t_stop, record, want_jac, want_hop, max_events):
             sw = swe
             if kind == 0:
                 break
+            _note_event(acc, te)
             # The impact.
             z[Z_GAP] = 0.0
             gap_minus = min(gap_rate, 0.0)
@@ -641,6 +670,7 @@ def fly(point, z, t_begin, t_stop, record, want_jac, want_hop, max_events):
         sw = swe
         if kind == 0:
             break
+        _note_event(acc, te)
         t_from = t
         if kind == EV_LIFT_OFF:
             # Take-off: the contact force vanishes, the vector field is continuous

@@ -19,13 +19,19 @@ import numpy as np
 from numba import njit
 
 from study.kernels.structure_vector import GRAVITY, STIFFNESS
-from study.kernels.two_way.cycles import CYCLE_DETECTION, MAX_PERIOD, SECTION_SHIFT
+from study.kernels.two_way.cycles import CYCLE_DETECTION, MAX_PERIOD
 from study.kernels.two_way.flight import (
     A_AIRBORNE,
+    A_EVENT_COUNT,
+    A_FIRST_EVENT,
     A_HOP,
     A_IMPACTS,
+    A_LAST_EVENT,
+    A_QUIET_GAP,
+    A_QUIET_MID,
     N_FLIGHT_ACC,
     N_STATE,
+    Z_GAP,
     FlightRecord,
     fly,
 )
@@ -66,6 +72,10 @@ NEWTON_STEP = 1e-7
 HOP_WATCH = 1e-5
 # An orbit is stable when its largest Floquet multiplier is below 1 + this.
 STABILITY_MARGIN = 1e-6
+# Periods of the map followed from the start before Newton's method: the first take-off
+# from rest is often a large hop that the orbit does not repeat, and a section chosen
+# on it lies where the orbit has an event.
+FIRST_PERIODS = 3
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -205,6 +215,15 @@ def flight_newton(point, z, periods, section, scales, max_events, record, work):
         size = 0.0
         for i in range(N_STATE):
             size = max(size, abs(step[i]) / scales[i])
+        if z[Z_GAP] + step[Z_GAP] < 0.0:
+            # Below the table: no state of the model; the map's step instead.
+            for i in range(N_STATE):
+                z[i] = work[i]
+            previous = np.inf
+            small_step = False
+            last_events = -1.0
+            continue
+        for i in range(N_STATE):
             z[i] += step[i]
         if acc[A_START_SLIVER] != 0.0:
             # The orbit sticks across the section (see newton): stick.
@@ -215,39 +234,99 @@ def flight_newton(point, z, periods, section, scales, max_events, record, work):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _flight_cycle(point, z, periods, section, scales, max_events, record, work):
-    """A stable cycle of ``periods`` drive periods from ``z`` (as
-    :func:`~study.kernels.two_way.cycles`'s): its minimal period, 0 when not found,
-    -1 on the paradox."""
+def quiet_section(acc, t_begin, t_stop):
+    """The middle [s] of the longest stretch without events of the pass from ``t_begin``
+    to ``t_stop`` [s] whose event times ``acc`` holds (the stretch across the ends joined,
+    the pass being a period of the map), in ``[t_begin, t_stop)``; ``t_begin`` when the
+    pass had no event."""
+    if acc[A_EVENT_COUNT] == 0.0:
+        return t_begin
+    span = t_stop - t_begin
+    best = acc[A_QUIET_GAP]
+    middle = acc[A_QUIET_MID]
+    wrap = (acc[A_FIRST_EVENT] - t_begin) + (t_stop - acc[A_LAST_EVENT])
+    if wrap > best or acc[A_EVENT_COUNT] == 1.0:
+        middle = acc[A_LAST_EVENT] + 0.5 * wrap
+        if middle >= t_stop:
+            middle -= span
+    return min(max(middle, t_begin), t_stop)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _quiet_newton(point, z, periods, scales, max_events, record, work):
+    """Newton's method for an orbit of ``periods`` drive periods from ``z``, the state at
+    phase 0 (updated in place to the orbit's state at phase 0), on a section in the
+    middle of the longest stretch without events of a first pass: a section at an event
+    (a take-off just at phase 0, say) puts a kink of the period map at its fixed point.
+
+    Returns
+    -------
+    flag, converged
+        As :func:`flight_newton`; ``record`` then holds a pass around the orbit from the
+        section (its Jacobian and statistics).
+    """
+    span = periods * TWO_PI / point.omega
+    flag = _pass(point, z, work, 0.0, span, record, False, False, max_events)
+    if flag != RUN_OK:
+        return flag, False
+    section = quiet_section(record.acc, 0.0, span)
+    spare = FlightRecord(np.zeros(N_FLIGHT_ACC), np.empty((N_STATE, N_STATE)),
+                         np.empty((N_STATE, N_STATE)), np.empty((N_STATE, N_STATE)))
+    # From the pass's end (phase 0 again) to the section.
+    for i in range(N_STATE):
+        z[i] = work[i]
+    if section > 0.0:
+        flag = fly(point, z, 0.0, section, spare, False, False, max_events)
+        if flag != RUN_OK:
+            return flag, False
     flag, converged = flight_newton(point, z, periods, section, scales, max_events, record,
                                     work)
+    if not converged:
+        return flag, False
+    # The orbit's state at phase 0 (the end of its period from the section).
+    if section > 0.0:
+        spare.acc[:] = 0.0
+        fly(point, z, section, span, spare, False, False, max_events)
+    return flag, True
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _flight_cycle(point, z, periods, scales, max_events, record, work):
+    """A stable cycle of ``periods`` drive periods from ``z`` at phase 0 (as
+    :func:`~study.kernels.two_way.cycles`'s): its minimal period, 0 when not found,
+    -1 on the paradox."""
+    guess = z.copy()
+    flag, converged = _quiet_newton(point, z, periods, scales, max_events, record, work)
     if flag == RUN_PARADOX:
         return -1
     if not converged or flight_radius(record.jac) >= 1.0 + STABILITY_MARGIN:
+        for i in range(N_STATE):
+            z[i] = guess[i]
         return 0
     period = TWO_PI / point.omega
     for shorter in range(1, periods):
         if periods % shorter:
             continue
-        flag = _pass(point, z, work, section, shorter * period, record, False, False,
+        flag = _pass(point, z, work, 0.0, shorter * period, record, False, False,
                      max_events)
         gap = 0.0
         for i in range(N_STATE):
             gap = max(gap, abs(work[i] - z[i]) / scales[i])
         if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
-            flag, converged = flight_newton(point, z, shorter, section, scales, max_events,
-                                            record, work)
+            flag, converged = _quiet_newton(point, z, shorter, scales, max_events, record,
+                                            work)
             if converged:
                 return shorter
-    flag, converged = flight_newton(point, z, periods, section, scales, max_events, record,
-                                    work)
+    flag, converged = _quiet_newton(point, z, periods, scales, max_events, record, work)
     return periods if converged else 0
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
     """Periodic orbit with flight reached from the 5-state ``z`` at ``t_start`` [s] (in
-    the first period), as :func:`~study.kernels.two_way.cycles.find_orbit`.
+    the first period), as :func:`~study.kernels.two_way.cycles.find_orbit`: Newton's
+    method from the state a period later, then a search of the map's iterates for a
+    cycle of up to ``MAX_PERIOD`` periods.
 
     Returns
     -------
@@ -264,10 +343,16 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
         flag = fly(point, z, t_start, period, record, False, False, max_events)
     if flag == RUN_PARADOX:
         return FRICTION_PARADOX, REASON_NONE, 0
+    for _ in range(FIRST_PERIODS):
+        if flag != RUN_OK:
+            break
+        flag = fly(point, z, 0.0, period, record, False, False, max_events)
+    if flag == RUN_PARADOX:
+        return FRICTION_PARADOX, REASON_NONE, 0
     if flag != RUN_OK:
         return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
     guess = z.copy()
-    flag, converged = flight_newton(point, z, 1, 0.0, scales, max_events, record, work)
+    flag, converged = _quiet_newton(point, z, 1, scales, max_events, record, work)
     if converged and flight_radius(record.jac) < 1.0 + STABILITY_MARGIN:
         return STICK_SLIP, REASON_NONE, 1
     if flag == RUN_PARADOX:
@@ -280,6 +365,7 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
         slot = iteration % MAX_PERIOD
         for i in range(N_STATE):
             history[slot, i] = z[i]
+        record.acc[:] = 0.0
         flag = fly(point, z, 0.0, period, record, False, False, max_events)
         if flag == RUN_PARADOX:
             return FRICTION_PARADOX, REASON_NONE, 0
@@ -292,30 +378,16 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
                 gap = max(gap, abs(z[i] - history[back, i]) / scales[i])
             if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
                 tried[periods] = gap
-                for shifted in range(2):
+                for i in range(N_STATE):
+                    candidate[i] = history[back, i]
+                found = _flight_cycle(point, candidate, periods, scales, max_events,
+                                      record, work)
+                if found < 0:
+                    return FRICTION_PARADOX, REASON_NONE, 0
+                if found > 0:
                     for i in range(N_STATE):
-                        candidate[i] = history[back, i]
-                    section = 0.0
-                    if shifted:
-                        section = SECTION_SHIFT * period
-                        flag = fly(point, candidate, 0.0, section, record, False, False,
-                                   max_events)
-                        if flag != RUN_OK:
-                            break
-                    found = _flight_cycle(point, candidate, periods, section, scales,
-                                          max_events, record, work)
-                    if found < 0:
-                        return FRICTION_PARADOX, REASON_NONE, 0
-                    if found > 0:
-                        if section != 0.0:
-                            spare = FlightRecord(np.zeros(N_FLIGHT_ACC), np.eye(N_STATE),
-                                                 np.empty((N_STATE, N_STATE)),
-                                                 np.empty((N_STATE, N_STATE)))
-                            fly(point, candidate, section, period, spare, False, False,
-                                max_events)
-                        for i in range(N_STATE):
-                            z[i] = candidate[i]
-                        return STICK_SLIP, REASON_NONE, found
+                        z[i] = candidate[i]
+                    return STICK_SLIP, REASON_NONE, found
                 break
     return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0
 
