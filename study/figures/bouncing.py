@@ -3,11 +3,13 @@
 Drawn from a study with flight (``[solver] flight = true``: the ``mass-ratio-limit-flight``
 workflow) alone. One row per mass ratio (up to three, evenly spread over the file's,
 ends included), three maps over ``(f, a)`` in each: the steady mean velocity [mm s-1]
-(one diverging scale for every row), the largest hop of the base above the table [mm]
-and the fraction of the period it spends in the air [%]. On every map: the bouncing
-region's edge (status ``bouncing``), the closed-form lift-off acceleration of the base
-at rest, and the zero-velocity frontier ``f*(a)`` (black dots) where the file holds it:
-bouncing points have a velocity, so the frontier runs on through the region.
+(diverging, each row its own scale: speeds grow tenfold towards M = 1), the largest hop
+of the base above the table [mm] (logarithmic over three decades below the row's
+largest: hops vanish at the region's edge) and the fraction of the period it spends in
+the air [%]. On every map: the bouncing region's edge (status ``bouncing``), the
+closed-form lift-off acceleration of the base at rest, and the zero-velocity frontier
+``f*(a)`` (black dots) where the file holds it: bouncing points have a velocity, so the
+frontier runs on through the region.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-from matplotlib.colors import ListedColormap, Normalize, TwoSlopeNorm
+from matplotlib.colors import ListedColormap, LogNorm, Normalize, TwoSlopeNorm
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
@@ -63,6 +65,18 @@ def bouncing_share(status: np.ndarray) -> tuple[float, float]:
     moving = np.count_nonzero(np.isin(status, (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING,
                                                Status.BOUNCING)))
     return bouncing / max(status.size, 1), bouncing / max(moving, 1)
+
+
+#: Decades of hop height a row's scale spans below its largest hop.
+HOP_DECADES = 3
+
+
+def _hop_norm(hop: np.ma.MaskedArray) -> LogNorm:
+    """A logarithmic scale of the hops [mm] drawn: :data:`HOP_DECADES` decades up to
+    the largest (a hop vanishes at the edge of the region: lower ones get the lowest
+    colour)."""
+    high = float(hop.max()) if hop.count() else 1.0
+    return LogNorm(high * 10.0**-HOP_DECADES, high, clip=True)
 
 
 def _over_fa(dataset: xr.Dataset, name: str, at: dict) -> np.ndarray:
@@ -132,26 +146,22 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     f = dataset["f"].values
     a = dataset["a"].values
 
-    velocities = []
-    for at in ats:
-        status = _over_fa(dataset, "status", at)
-        v = 1e3 * _over_fa(dataset, "velocity", at)
-        velocities.append(np.ma.masked_where(~np.isin(status, VALID) | ~np.isfinite(v), v))
-    limit = max([float(np.max(np.abs(v))) for v in velocities if v.count()] or [1.0]) or 1.0
-    hops = [1e3 * _over_fa(dataset, "largest_hop", at) for at in ats]
-    hop_top = max([float(np.nanmax(h)) for h in hops if np.isfinite(h).any()] or [1.0]) or 1.0
-
-    fig, axes = plt.subplots(len(ats), 3, figsize=(15.0, 3.9 * len(ats) + 1.3),
+    fig, axes = plt.subplots(len(ats), 3, figsize=(15.5, 3.9 * len(ats) + 1.3),
                              layout="constrained", sharex=True, sharey=True, squeeze=False)
-    meshes = []
+    labels = ("v [mm s$^{-1}$] (> 0: forward)", "largest hop [mm]",
+              "time in the air [% of the period]")
     for row, at in enumerate(ats):
         status = _over_fa(dataset, "status", at)
-        airborne = 100 * _over_fa(dataset, "airborne_fraction", at)
         flying = status == Status.BOUNCING
+        v = 1e3 * _over_fa(dataset, "velocity", at)
+        velocity = np.ma.masked_where(~np.isin(status, VALID) | ~np.isfinite(v), v)
+        limit = float(np.max(np.abs(velocity))) if velocity.count() else 0.0
+        hop = 1e3 * _over_fa(dataset, "largest_hop", at)
+        hop = np.ma.masked_where(~flying | ~np.isfinite(hop) | (hop <= 0), hop)
+        airborne = 100 * _over_fa(dataset, "airborne_fraction", at)
         panels = (
-            (velocities[row], "RdBu", TwoSlopeNorm(0.0, -limit, limit)),
-            (np.ma.masked_where(~flying | ~np.isfinite(hops[row]), hops[row]), "viridis",
-             Normalize(0.0, hop_top)),
+            (velocity, "RdBu", TwoSlopeNorm(0.0, -(limit or 1.0), limit or 1.0)),
+            (hop, "viridis", _hop_norm(hop)),
             (np.ma.masked_where(~flying | ~np.isfinite(airborne), airborne), "magma_r",
              Normalize(0.0, 100.0)),
         )
@@ -161,8 +171,7 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
             ax = axes[row, column]
             mesh = ax.pcolormesh(f, a, values, cmap=cmap, norm=norm, shading="nearest",
                                  rasterized=True)
-            if row == 0:
-                meshes.append(mesh)
+            fig.colorbar(mesh, ax=ax, pad=0.01, label=labels[column])
             _layers(ax, f, a, status)
             _overlays(ax, dataset, at, status)
             if column == 0:
@@ -174,11 +183,6 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                                fontsize=9.5)
         axes[row, 1].set_title(f"M = {M:g}: largest hop of the base", fontsize=9.5)
         axes[row, 2].set_title(f"M = {M:g}: time in the air", fontsize=9.5)
-    labels = ("mean velocity v [mm s$^{-1}$] (> 0: forward)",
-              "largest hop [mm] (bouncing points)", "airborne fraction [% of the period]")
-    for column, (mesh, label) in enumerate(zip(meshes, labels, strict=True)):
-        fig.colorbar(mesh, ax=axes[:, column], shrink=0.9, pad=0.01, label=label,
-                     location="bottom" if len(ats) > 1 else "right")
 
     handles = [
         Line2D([], [], color=_EDGE["colors"], lw=_EDGE["linewidths"],
