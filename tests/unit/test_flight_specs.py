@@ -369,3 +369,12 @@ def test_compute_map_with_flight_holds_the_files_values(small_flight_file):
         for key in ("units", "long_name"):
             assert ours[name].attrs[key] == stored[name].attrs[key]
         np.testing.assert_array_equal(ours[name].values, stored[name].values)
+
+
+def test_flight_with_the_time_integrator_is_accepted_as_the_contact_laws_declare():
+    """The lift-off law 'flight' lists the integrator among its solvers: a spec may ask
+    for it (the Method passes flight=True to integrated_steady_state)."""
+    assert "integrator" in LAWS["lift_off"]["flight"].solvers
+    spec = parse('method = "integrator"\ncoupling = "two-way"\nflight = true')
+    assert spec.flight and method_of(spec).flight_keyword == {"flight": True}
+    assert method_of(spec).canonical()["flight"] is True
