@@ -150,10 +150,13 @@ class SteadyState:
         ``flight=True``.
     largest_hop : numpy.ndarray or None
         Largest gap between the base and the table over the orbit [m] (0 without a
-        flight; NaN without an orbit). ``None`` unless ``flight=True``.
+        flight; NaN without an orbit; the hops of a grazing take-off below the closed
+        form's rounding, ~1e-19 m, read 0). ``None`` unless ``flight=True``.
     impacts_per_period : numpy.ndarray or None
-        Impacts of the base on the table per drive period [1] (NaN without an orbit).
-        ``None`` unless ``flight=True``.
+        Landings of the base on the table per drive period [1], each rebound of a
+        chatter counted (rebounds below the chattering cut-off end it plastically; a
+        touch-down without speed counts as one); NaN without an orbit. ``None``
+        unless ``flight=True``.
 
     Notes
     -----

@@ -38,8 +38,16 @@ The modules, each importing only those above it:
 - :mod:`~study.kernels.two_way.orbit`: a run over events, with its Jacobian;
 - :mod:`~study.kernels.two_way.newton`: Newton's method on the period map;
 - :mod:`~study.kernels.two_way.cycles`: the periodic orbit reached from a state;
-- :mod:`~study.kernels.two_way.points`: one drive point's orbit, and its drivers;
-- :mod:`~study.kernels.two_way.attractors`: the multistability check, and its drivers.
+- :mod:`~study.kernels.two_way.flight`: with the lift-off law ``flight``, a run on the
+  state ``(delta, delta', v, h, h')``: the flight mode (the free oscillator of the two
+  bodies, the gap ``h`` in closed form), take-off past the gap's triple zero, the
+  impact's search and law (:mod:`study.kernels.impact`), and the 5x5 Jacobian;
+- :mod:`~study.kernels.two_way.flight_orbit`: Newton's method and the cycle search on
+  that state (a section in the middle of the longest stretch without events);
+- :mod:`~study.kernels.two_way.points`: one drive point's orbit, and its drivers (with
+  flight, a point the contact model ends with LIFT_OFF is solved again with flight);
+- :mod:`~study.kernels.two_way.attractors`: the multistability check, and its drivers
+  (with flight, drops among the starts).
 
 :mod:`study.solvers.exact` validates, allocates and calls the drivers.
 """

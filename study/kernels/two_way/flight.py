@@ -18,9 +18,10 @@ from where the impact (the first zero of ``h``) is sought by the bound stepping 
 :mod:`~study.kernels.two_way.event_search` on ``-h``. An impact applies the impact law
 (:mod:`study.kernels.impact`); the base then lands in the contact mode the existing
 rules choose (or takes off again at once where that mode's ``n < 0``), or flies again
-when it rebounds (restitution ``e > 0``) faster than ``CHATTER (1 - e)`` of its natural
-speed ``(g + a) / w``; a slower rebound lands plastically (the cut-off of chattering,
-see :data:`CHATTER`).
+when it rebounds (restitution ``e > 0``) faster than ``CHATTER max(1 - e, 0.01)`` of
+its natural speed ``(g + a) / w`` and not within ``CHATTER_TIME`` periods of its last
+rebound; otherwise the impact is redone plastically (the cut-off of chattering, see
+:data:`CHATTER`).
 
 The run's Jacobian is the product of 5x5 flow matrices (the contact modes' with the
 gap rows zero, the flight's propagator with the linear maps of ``v``, ``h``, ``h'``),
@@ -41,6 +42,7 @@ from numba import njit
 from study.kernels.impact import (
     IMPACT_DELTA_RATE,
     IMPACT_GAP_RATE,
+    IMPACT_SIZE,
     IMPACT_VELOCITY,
     impact,
     impact_jacobian,
@@ -128,7 +130,8 @@ Z_GAP_RATE = 4
 F_HOM2 = 12
 F_HOM3 = 13
 F_HOM4 = 14
-# Rebounds slower than CHATTER (1 - e) (g + a) / w land plastically: the cut-off of
+# Rebounds slower than CHATTER max(1 - e, 0.01) (g + a) / w land plastically (the impact
+# is redone with e = 0, friction included): the cut-off of
 # chattering (the impacts of a rebounding base accumulate in finite time, like a
 # bouncing ball's). The bounces cut off would have lasted about 2 u / (g_eff (1 - e))
 # for a rebound speed u, at most ~2 CHATTER (g + a) / (w g_eff), 1e-7 of a period for
@@ -137,6 +140,11 @@ F_HOM4 = 14
 # impacts of one chatter grows like log(CHATTER (1 - e)) / log(e) (e = 0.5: ~25,
 # e = 0.9: ~170).
 CHATTER = 1e-7
+# A rebound that lands again within this fraction of a drive period lands plastically
+# too: with friction, Newton's restitution law can feed a chatter (each rebound as fast
+# as the last, flights of ~1e-9 periods at M = 0.6, e = 0.9) whose impacts never reach
+# the speed cut-off; its hops are ~1e-19 m, the base is on the table.
+CHATTER_TIME = 1e-8
 
 # Accumulator slots of a run with flight, after those of orbit.run.
 A_AIRBORNE = N_ACC  # time in flight [s]
@@ -153,8 +161,9 @@ N_FLIGHT_ACC = N_ACC + 8
 
 #: What a run with flight records: ``acc`` (``N_FLIGHT_ACC`` accumulators), ``jac``
 #: (5x5, multiplied on the left by the flow's Jacobian), ``step`` and ``scratch`` (5x5
-#: work space).
-FlightRecord = namedtuple("FlightRecord", ("acc", "jac", "step", "scratch"))
+#: work space), ``passes`` (2: the orbit search's passes with the Jacobian and without,
+#: counted by :mod:`~study.kernels.two_way.flight_orbit`).
+FlightRecord = namedtuple("FlightRecord", ("acc", "jac", "step", "scratch", "passes"))
 
 #: The start of a flight piece: time ``t0`` [s], cosine and sine of the drive phase,
 #: the mode's homogeneous state ``(h0, hd0)`` [m, m s-1] about its offset, ``delta'``
@@ -295,8 +304,12 @@ def largest_gap(structure, row, omega, a, start, t_end):
     best = max(start.gap0, flight_at(structure, row, omega, a, start, t_end)[9])
     if tau_end <= 0.0:
         return best
+    # Samples: 8 per drive period, and 8 per period of the mode while its part of the
+    # gap has not decayed (5 decay times).
     nu = math.sqrt(max(row[M_NU2], 0.0))
-    pieces = max(16, math.ceil(8.0 * tau_end * max(nu, omega) / TWO_PI))
+    sigma = row[M_SIGMA]
+    ringing = tau_end if sigma <= 0.0 else min(tau_end, 5.0 / sigma)
+    pieces = 16 + math.ceil(8.0 * (tau_end * omega + ringing * nu) / TWO_PI)
     pieces = min(pieces, 4096)
     dt = tau_end / pieces
     left = start.t0
@@ -451,8 +464,12 @@ def fly(point, z, t_begin, t_stop, record, want_jac, want_hop, max_events):
     ck = structure[KINETIC_FRICTION]
     frow = table[FLIGHT_ROW]
     horizon = max(abs(t_stop), TWO_PI / omega)
-    chatter = CHATTER * (1.0 - structure[RESTITUTION]) * (g + a) / omega
-    impact_out = np.empty(8)
+    chatter = CHATTER * max(1.0 - structure[RESTITUTION], 0.01) * (g + a) / omega
+    impact_out = np.empty(IMPACT_SIZE)
+    # The structure with a plastic impact law: a rebound below the cut-offs is redone
+    # with e = 0 (the whole impact, friction included).
+    plastic = structure.copy()
+    plastic[RESTITUTION] = 0.0
     j3 = np.empty((3, 3))
     f_minus = np.empty(N_STATE)
     f_plus = np.empty(N_STATE)
@@ -462,6 +479,8 @@ def fly(point, z, t_begin, t_stop, record, want_jac, want_hop, max_events):
     # Where a piece's search starts looking: after a safe start of a flight, or past a
     # slip that could not move.
     t_from = t
+    # The time of the last rebound (for CHATTER_TIME).
+    last_rebound = -np.inf
     if z[Z_GAP] != 0.0 or z[Z_GAP_RATE] != 0.0:
         mode = FLY
     else:
@@ -532,35 +551,37 @@ def fly(point, z, t_begin, t_stop, record, want_jac, want_hop, max_events):
             _field(structure, table, a, cw, FLY, z, f_minus)
             f_minus[3] = gap_minus
             if gap_minus < 0.0:
-                code = impact(structure, z[1], z[2], gap_minus, impact_out)
+                law = structure
+                code = impact(law, z[1], z[2], gap_minus, impact_out)
+                rebound = impact_out[IMPACT_GAP_RATE]
+                if code != IMPACT_PARADOX and not (
+                        rebound > chatter
+                        and t - last_rebound > CHATTER_TIME * TWO_PI / omega):
+                    law = plastic
+                    code = impact(law, z[1], z[2], gap_minus, impact_out)
+                    rebound = 0.0
                 if code == IMPACT_PARADOX:
                     acc[A_EVENTS] += events
                     return RUN_PARADOX
                 acc[A_IMPACTS] += 1.0
                 if want_jac:
-                    impact_jacobian(structure, z[1], z[2], gap_minus, j3)
+                    impact_jacobian(law, z[1], z[2], gap_minus, j3)
                 z[1] = impact_out[IMPACT_DELTA_RATE]
                 z[2] = 0.0 if code == IMPACT_STICK else impact_out[IMPACT_VELOCITY]
-                rebound = impact_out[IMPACT_GAP_RATE]
             else:
-                # Touching with no speed (grazing): no impulse.
+                # Touching down with no speed (grazing): a landing without impulse.
+                acc[A_IMPACTS] += 1.0
                 rebound = 0.0
                 if want_jac:
                     for i in range(3):
                         for j in range(3):
                             j3[i, j] = 1.0 if i == j else 0.0
-            if rebound > chatter:
+            if rebound > 0.0:
+                last_rebound = t
                 new = FLY
                 z[Z_GAP_RATE] = rebound
             else:
-                # Landed plastically; a rebound below the cut-off is taken away by a normal
-                # impulse on the base, the mode's momentum kept: d(delta') = cos(alpha) h'.
-                z[1] += ca * rebound
                 z[Z_GAP_RATE] = 0.0
-                if want_jac:
-                    for j in range(3):
-                        j3[0, j] += ca * j3[2, j]
-                        j3[2, j] = 0.0
                 new = landing_mode(structure, table, a, cw, z)
                 if new == -3:
                     acc[A_EVENTS] += events

@@ -68,14 +68,12 @@ MAX_NEWTON = 30
 NEWTON_TOLERANCE = 1e-12
 LOOSE_TOLERANCE = 1e-9
 NEWTON_STEP = 1e-7
-# Passes after a residual below this compute the largest gap (expected to be the last).
-HOP_WATCH = 1e-5
 # An orbit is stable when its largest Floquet multiplier is below 1 + this.
 STABILITY_MARGIN = 1e-6
 # Periods of the map followed from the start before Newton's method: the first take-off
 # from rest is often a large hop that the orbit does not repeat, and a section chosen
 # on it lies where the orbit has an event.
-FIRST_PERIODS = 3
+FIRST_PERIODS = 2
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -146,6 +144,7 @@ def _pass(point, z, work, section, span, record, want_jac, want_hop, max_events)
         for jj in range(N_STATE):
             jac[i, jj] = 1.0 if i == jj else 0.0
     acc[:] = 0.0
+    record.passes[0 if want_jac else 1] += 1.0
     return fly(point, work, section, section + span, record, want_jac, want_hop, max_events)
 
 
@@ -173,8 +172,7 @@ def flight_newton(point, z, periods, section, scales, max_events, record, work):
     step = np.empty(N_STATE)
     residual = np.empty(N_STATE)
     for _ in range(MAX_NEWTON):
-        want_hop = previous <= HOP_WATCH
-        flag = _pass(point, z, work, section, span, record, True, want_hop, max_events)
+        flag = _pass(point, z, work, section, span, record, True, False, max_events)
         if flag != RUN_OK:
             return flag, False
         res = 0.0
@@ -186,9 +184,13 @@ def flight_newton(point, z, periods, section, scales, max_events, record, work):
                        and acc[A_IMPACTS] == last_impacts and not sliver)
         if res <= NEWTON_TOLERANCE or (small_step and same_events
                                        and res <= LOOSE_TOLERANCE):
-            if not want_hop:
-                # The largest gap of this pass (the statistics are the same).
-                _pass(point, z, work, section, span, record, True, True, max_events)
+            # The largest gap of this pass, by a pass of its own (the closed form's
+            # maxima cost more than the pass).
+            spare = FlightRecord(np.zeros(N_FLIGHT_ACC), np.eye(N_STATE),
+                                 np.empty((N_STATE, N_STATE)), np.empty((N_STATE, N_STATE)),
+                                 record.passes)
+            _pass(point, z, work, section, span, spare, False, True, max_events)
+            acc[A_HOP] = spare.acc[A_HOP]
             return RUN_OK, True
         last_events = acc[A_EVENTS]
         last_slips = acc[A_SLIPS]
@@ -271,7 +273,8 @@ def _quiet_newton(point, z, periods, scales, max_events, record, work):
         return flag, False
     section = quiet_section(record.acc, 0.0, span)
     spare = FlightRecord(np.zeros(N_FLIGHT_ACC), np.empty((N_STATE, N_STATE)),
-                         np.empty((N_STATE, N_STATE)), np.empty((N_STATE, N_STATE)))
+                         np.empty((N_STATE, N_STATE)), np.empty((N_STATE, N_STATE)),
+                         np.zeros(2))
     # From the pass's end (phase 0 again) to the section.
     for i in range(N_STATE):
         z[i] = work[i]
@@ -366,6 +369,7 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
         for i in range(N_STATE):
             history[slot, i] = z[i]
         record.acc[:] = 0.0
+        record.passes[1] += 1.0
         flag = fly(point, z, 0.0, period, record, False, False, max_events)
         if flag == RUN_PARADOX:
             return FRICTION_PARADOX, REASON_NONE, 0
@@ -397,21 +401,30 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     """The orbit with flight reached from the 5-state ``z`` at ``t_start`` [s], written
     into ``out`` at the positions ``columns`` (status, reason, velocity, slips, forward,
     backward, period, multiplier, delta, delta_rate, speed, airborne, hop, impacts);
-    ``table`` holds the contact rows and the flight row."""
+    ``table`` holds the contact rows and the flight row.
+
+    Returns
+    -------
+    float, float
+        The passes over the period map with its Jacobian (Newton's) and without it (the
+        map's iterates, the cycle checks): the work the point took.
+    """
     point = DrivePoint(structure, table, omega, a)
     scales = flight_scales(point)
     record = FlightRecord(np.zeros(N_FLIGHT_ACC), np.empty((N_STATE, N_STATE)),
-                          np.empty((N_STATE, N_STATE)), np.empty((N_STATE, N_STATE)))
+                          np.empty((N_STATE, N_STATE)), np.empty((N_STATE, N_STATE)),
+                          np.zeros(2))
     work = np.empty(N_STATE)
     history = np.empty((MAX_PERIOD, N_STATE))
     status, reason, periods = find_flight_orbit(point, z, t_start, scales, budget, record,
                                                 work, history)
+    passes = record.passes
     (c_status, c_reason, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier,
      c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts) = columns
     out[c_status] = status
     out[c_reason] = reason
     if periods == 0:
-        return
+        return passes[0], passes[1]
     acc = record.acc
     span = periods * TWO_PI / omega
     if acc[A_AIRBORNE] > 0.0:
@@ -430,3 +443,4 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     out[c_airborne] = acc[A_AIRBORNE] / span
     out[c_hop] = acc[A_HOP]
     out[c_impacts] = acc[A_IMPACTS] / periods
+    return passes[0], passes[1]
