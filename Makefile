@@ -88,6 +88,11 @@ FIGURES := thresholds velocity-curves regime-map force-traces mass-ratio \
 # NAME of a *-two-way result (each figure's title says which coupling its file holds).
 TWO_WAY_FIGURES := regime-map velocity-curves force-traces mass-ratio-limit
 FIGURES += $(addsuffix -two-way,$(TWO_WAY_FIGURES))
+# The same figures drawn from the studies with flight (two-way coupling, the base flies
+# past lift-off): figures/NAME-flight.png is figure NAME of a *-flight result; bouncing
+# shows the bouncing region of mass-ratio-limit-flight.
+FLIGHT_FIGURES := regime-map velocity-curves mass-ratio-limit coupling
+FIGURES += $(addsuffix -flight,$(FLIGHT_FIGURES)) bouncing
 figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 
 figures/thresholds.png: results/thresholds.nc
@@ -105,6 +110,11 @@ figures/regime-map-two-way.png: results/regime-map-two-way.nc
 figures/force-traces-two-way.png: results/regime-map-two-way.nc
 figures/velocity-curves-two-way.png: results/velocity-curves-two-way.nc
 figures/mass-ratio-limit-two-way.png: results/mass-ratio-limit-two-way.nc
+figures/regime-map-flight.png: results/regime-map-flight.nc
+figures/velocity-curves-flight.png: results/velocity-curves-flight.nc
+figures/mass-ratio-limit-flight.png: results/mass-ratio-limit-flight.nc
+figures/coupling-flight.png: results/coupling-flight.nc
+figures/bouncing.png: results/mass-ratio-limit-flight.nc
 # A figure's date says nothing of what it was drawn from (a figure of another file drawn
 # to the same name is newer than its result): `study figure --if-changed` is asked every
 # time and redraws unless the PNG records this result's checksum, these options and
@@ -114,6 +124,8 @@ figures/%.png: $(PACKAGE) FORCE | $(STAMP)
 # The shorter stem wins: NAME-two-way.png is figure NAME.
 figures/%-two-way.png: $(PACKAGE) FORCE | $(STAMP)
 	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-two-way --if-changed
+figures/%-flight.png: $(PACKAGE) FORCE | $(STAMP)
+	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-flight --if-changed
 
 FORCE:
 

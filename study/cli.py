@@ -98,7 +98,8 @@ def _cache(args: argparse.Namespace) -> int:
             method = method if isinstance(method, dict) else {}
             print(
                 f"{entry.key[:12]}  {content.get('observable', '?'):<12} "
-                f"{method.get('method', '?')}/{method.get('coupling', '?')}  "
+                f"{method.get('method', '?')}/{method.get('coupling', '?')}"
+                f"{'/flight' if method.get('flight') else ''}  "
                 f"{entry.points:>10d} pts {entry.blocks:>5d} blocks {entry.size / 1e6:9.2f} MB "
                 f"{(now - entry.modified) / 86400:7.1f} d  code {code[:12]}"
                 f"{'' if code == current else ' (stale code)'}  {structure}"

@@ -10,7 +10,9 @@ from study.model.units import DIMENSIONLESS
 
 __all__ = ["coupling_effect"]
 
-_MOVING = (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
+#: Statuses of a moving structure (the one-way model never bounces: flight needs
+#: two-way coupling).
+_MOVING = (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING, Status.BOUNCING)
 
 
 def coupling_effect(dataset: xr.Dataset, threshold: float = 0.1) -> xr.Dataset:
@@ -29,10 +31,12 @@ def coupling_effect(dataset: xr.Dataset, threshold: float = 0.1) -> xr.Dataset:
     xarray.Dataset
         Over the structure axes (the drive axes reduced), each a fraction [1] of the
         points where the one-way model moves (stick-slip or continuous sliding):
-        ``changed`` (two-way also moves and ``|v2 - v1| > threshold |v1|``),
-        ``reversed`` (opposite direction), ``lifted`` (two-way leaves the table),
-        ``paradox`` (two-way friction paradox), and ``median_change`` (median
-        ``|v2 - v1| / |v1|`` over the points where both move) and ``moving_points``.
+        ``changed`` (two-way also moves, bouncing included, and
+        ``|v2 - v1| > threshold |v1|``), ``reversed`` (opposite direction), ``lifted``
+        (two-way leaves the table and stops: lift-off), ``bouncing`` (two-way leaves the
+        table and lands again: a study with flight), ``paradox`` (two-way friction
+        paradox), and ``median_change`` (median ``|v2 - v1| / |v1|`` over the points
+        where both move) and ``moving_points``.
     """
     missing = [v for v in ("velocity", "status", "velocity_one_way", "status_one_way")
                if v not in dataset]
@@ -59,12 +63,13 @@ def coupling_effect(dataset: xr.Dataset, threshold: float = 0.1) -> xr.Dataset:
             "changed": share(both & (relative > threshold)),
             "reversed": share(both & (np.sign(v2) * np.sign(v1) < 0)),
             "lifted": share(dataset["status"] == Status.LIFT_OFF),
+            "bouncing": share(dataset["status"] == Status.BOUNCING),
             "paradox": share(dataset["status"] == Status.FRICTION_PARADOX),
             "median_change": relative.median(drive),
             "moving_points": count,
         }
     )
-    for name in ("changed", "reversed", "lifted", "paradox", "median_change"):
+    for name in ("changed", "reversed", "lifted", "bouncing", "paradox", "median_change"):
         out[name].attrs["units"] = DIMENSIONLESS
     out["moving_points"].attrs["units"] = DIMENSIONLESS
     out.attrs["threshold"] = threshold

@@ -46,6 +46,7 @@ def frontier(
     tolerance: float = 1e-9,
     settings: SolverSettings | None = None,
     coupling: str = DEFAULT_COUPLING,
+    flight: bool = False,
 ) -> xr.Dataset:
     """Zero-velocity frontier f*(a): every frequency where the velocity changes sign.
 
@@ -76,6 +77,10 @@ def frontier(
     coupling : {"one-way", "two-way"}, default "one-way"
         The paper's model or the mode also forced by the sliding base
         (:data:`study.solvers.exact.DEFAULT_COUPLING`).
+    flight : bool, default False
+        Past lift-off the base flies and lands by impacts (two-way coupling, ``M < 1``):
+        bouncing points have a velocity, so the frontier runs on through the bouncing
+        region; default: lift-off points have none and a frontier stops at them.
 
     Returns
     -------
@@ -85,14 +90,15 @@ def frontier(
         ``(a, branch)``, NaN-padded (kind 0) where an acceleration has fewer branches;
         attributes and variables as in a study file. Global attributes:
         ``study_coupling``, ``structure``, ``f_range`` [Hz], ``scan_points``,
-        ``tolerance_Hz``.
+        ``tolerance_Hz`` (with flight also ``study_lift_off = "flight"``).
 
     Raises
     ------
     ValueError
         For an empty, reversed or non-positive ``f_range``, ``num`` out of range, a
         ``tolerance`` finer than doubles resolve, a bad ``coupling``; each names the
-        argument and what is allowed.
+        argument and what is allowed; ``flight`` with one-way coupling or ``M = 1``
+        (the solver's message).
     TypeError
         For a structure that is not a :class:`study.Structure`, settings that are not
         :class:`study.SolverSettings`, or ``a``, ``f_range``, ``num``, ``tolerance``
@@ -115,17 +121,22 @@ def frontier(
     def two_way(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64]
                 ) -> SteadyState:
         # As the study's frontier observable solves (Method.solve).
-        return steady_state(structure, f, a, settings, coupling=coupling, parallel=False)
+        return steady_state(structure, f, a, settings, coupling=coupling, parallel=False,
+                            **flying)
 
-    result = steady_state(structure, f[:, None], a[None, :], settings, coupling=coupling)
+    # The solver's default unless flying: its call stays the one before flight existed.
+    flying = {"flight": True} if flight else {}
+    result = steady_state(structure, f[:, None], a[None, :], settings, coupling=coupling,
+                          **flying)
     found = frontier_from_grid(structure, f, a, result.velocity, result.status,
                                tolerance=tolerance, settings=settings,
                                solve=two_way if coupling == "two-way" else None)
-    return frontier_dataset(found, a, structure, (f_min, f_max), num, tolerance, coupling)
+    return frontier_dataset(found, a, structure, (f_min, f_max), num, tolerance, coupling,
+                            flight)
 
 
 def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tolerance,
-                     coupling: str = DEFAULT_COUPLING) -> xr.Dataset:
+                     coupling: str = DEFAULT_COUPLING, flight: bool = False) -> xr.Dataset:
     """Frontier points as a labelled dataset (dims ``a``, ``branch``)."""
     from study.engine.provenance import code_sha256, package_version, utc_now
 
@@ -143,8 +154,10 @@ def frontier_dataset(found: Frontier, a, structure: Structure, f_range, num, tol
                        "long_name": "drive acceleration amplitude"})},
     )
     dataset.attrs.update({
-        "title": f"Zero-velocity frontier f*(a), {coupling} coupling",
+        "title": f"Zero-velocity frontier f*(a), {coupling} coupling"
+                 + (", flight" if flight else ""),
         "study_coupling": coupling,
+        **({"study_lift_off": "flight"} if flight else {}),
         "structure": repr(structure),
         "f_range": np.asarray(f_range, dtype=np.float64),
         "scan_points": int(num),

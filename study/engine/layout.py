@@ -103,7 +103,7 @@ def observables_by_grid(spec: StudySpec) -> tuple[tuple[Observable, ...],
                                                  tuple[Observable, ...], Observable | None]:
     """The study's observables (with those they require): closed-form rows, solver
     points, and the frontier if asked for."""
-    observables = resolve(spec.observables)
+    observables = resolve(spec.observables, spec.flight)
     return (tuple(o for o in observables if o.grid == "row"),
             tuple(o for o in observables if o.grid == "point"),
             next((o for o in observables if o.grid == "frontier"), None))
@@ -116,7 +116,7 @@ def data_variables(spec: StudySpec, observables: tuple[Observable, ...]
     structure_dims = tuple(axis.name for axis in spec.structure_axes)
     return tuple(
         DataVariable(name, VARIABLES[name].grid, VARIABLES[name].dims(structure_dims),
-                     VARIABLES[name].dtype, VARIABLES[name].attrs())
+                     VARIABLES[name].dtype, VARIABLES[name].attrs(spec.flight))
         for observable in observables for name in observable.variables
     )
 
@@ -133,7 +133,8 @@ def pad_branches(values: NDArray[Any], branches: int, dtype: str) -> NDArray[Any
 
 def method_of(spec: StudySpec) -> Method:
     """How the study computes velocities (solver, coupling and settings)."""
-    return Method(spec.method, spec.coupling, spec.solver, spec.integrator, spec.friction)
+    return Method(spec.method, spec.coupling, spec.solver, spec.integrator, spec.friction,
+                  spec.flight)
 
 
 def method_description(spec: StudySpec) -> str:
@@ -142,7 +143,9 @@ def method_description(spec: StudySpec) -> str:
         return (
             "the exact event-driven steady-state solver (closed form between events; "
             "two-way coupling: the sliding base also forces the mode, the orbit is the "
-            "fixed point of the period map found by Newton's method)"
+            "fixed point of the period map found by Newton's method"
+            + ("; flight: past lift-off the base flies and lands by impacts)"
+               if spec.flight else ")")
         )
     if spec.method == "exact":
         return (
@@ -152,5 +155,7 @@ def method_description(spec: StudySpec) -> str:
     return (
         "Dormand-Prince 5(4) time integration with events located on the dense output, "
         f"until the orbit repeats ({spec.coupling} coupling"
-        + ("; the sliding base also forces the mode)" if spec.coupling == "two-way" else ")")
+        + ("; the sliding base also forces the mode" if spec.coupling == "two-way" else "")
+        + ("; flight: past lift-off the base flies and lands by impacts" if spec.flight
+           else "") + ")"
     )

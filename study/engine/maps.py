@@ -40,7 +40,13 @@ from study.model.inputs import (
 )
 from study.model.parameters import STRUCTURE as STRUCTURE_TABLE
 from study.model.structure import Structure
-from study.solvers.exact import DEFAULT_COUPLING, SolverSettings, check_coupling, check_structure
+from study.solvers.exact import (
+    DEFAULT_COUPLING,
+    SolverSettings,
+    check_coupling,
+    check_flight,
+    check_structure,
+)
 from study.version import VERSION
 
 __all__ = ["MAP_SPEC_SOURCE", "compute_map", "map_spec_text"]
@@ -60,7 +66,7 @@ def _toml_values(values: NDArray[np.float64]) -> str:
 def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
                   observables: tuple[str, ...], coupling: str,
                   sweep: Mapping[str, NDArray[np.float64]],
-                  settings: SolverSettings) -> str:
+                  settings: SolverSettings, flight: bool = False) -> str:
     """The study spec (TOML) of a :func:`compute_map` call.
 
     The structure's parameters are fixed in ``[structure]`` except those swept; a
@@ -82,8 +88,10 @@ def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.fl
     lines += [f"f = {_toml_values(f)}", f"a = {_toml_values(a)}", "",
               "[solver]", f'coupling = "{coupling}"',
               f"max_events = {int(settings.max_events)}",
-              f"max_map_iterations = {int(settings.max_map_iterations)}", ""]
-    return "\n".join(lines)
+              f"max_map_iterations = {int(settings.max_map_iterations)}"]
+    # Only when on, as in a spec that omits it: the text of a map without flight stays.
+    lines += ["flight = true"] if flight else []
+    return "\n".join([*lines, ""])
 
 
 def _axis(name: str, values: ArrayLike) -> NDArray[np.float64]:
@@ -113,6 +121,7 @@ def compute_map(
     *,
     observables: Iterable[str] = ("thresholds", "velocity"),
     coupling: str = DEFAULT_COUPLING,
+    flight: bool = False,
     sweep: Mapping[str, ArrayLike] | None = None,
     settings: SolverSettings | None = None,
     workers: int | None = None,
@@ -141,6 +150,12 @@ def compute_map(
     coupling : {"one-way", "two-way"}, default "one-way"
         The paper's model, or the mode also forced by the sliding base
         (:data:`study.solvers.exact.DEFAULT_COUPLING` is the default).
+    flight : bool, default False
+        Past lift-off the base flies and lands by impacts (``[solver] flight = true``
+        of a spec; needs ``coupling="two-way"`` and ``M < 1``); the velocity
+        observable then also gives ``airborne_fraction`` [1], ``largest_hop`` [m] and
+        ``impacts_per_period`` [1], and ``status`` may be ``bouncing``. Default: the
+        solver stops with ``lift_off`` where the normal force vanishes.
     sweep : dict of str to array_like, optional
         Structure parameters to sweep, ``{"Q": [10, 17.5, 30], "alpha": [...]}``, each
         1-D in the parameter's units (``f0`` [Hz], ``alpha`` [degree], ``g`` [m s-2];
@@ -158,7 +173,8 @@ def compute_map(
         ``a_star_minus``, ...), ``(*sweep, f, a)`` for solver variables (``velocity``
         [m s-1], ``status``, ...), ``(*sweep, a, branch)`` for the frontier; the
         fixed structure parameters are scalar coordinates. Global attributes name the
-        coupling (``study_coupling``) and the solver (``source``), and hold the
+        coupling (``study_coupling``), with flight the lift-off law
+        (``study_lift_off = "flight"``), and the solver (``source``), and hold the
         equivalent spec file (``study_spec``): ``study run`` on it writes this
         dataset's variables to a file.
 
@@ -172,10 +188,11 @@ def compute_map(
     ------
     TypeError
         ``structure`` is not a :class:`study.Structure`; ``f``, ``a`` or a swept
-        parameter is not real numbers (strings, booleans, complex, dates).
+        parameter is not real numbers (strings, booleans, complex, dates); ``flight``
+        is not a bool.
     ValueError
         An unknown coupling or observable, or values out of range (as a spec's,
-        the message names the key).
+        the message names the key); ``flight`` with one-way coupling or ``M = 1``.
 
     See Also
     --------
@@ -194,6 +211,7 @@ def compute_map(
     """
     structure = check_structure(structure)
     coupling = check_coupling(coupling)
+    flight = check_flight(flight, coupling, structure)
     names = _observables(observables)
     settings = SolverSettings() if settings is None else settings
     if not isinstance(settings, SolverSettings):
@@ -213,7 +231,8 @@ def compute_map(
             "is in degree", SuspectInputWarning, stacklevel=2)
     f_values = _axis("f", f)
     a_values = _axis("a", a)
-    text = map_spec_text(structure, f_values, a_values, names, coupling, swept, settings)
+    text = map_spec_text(structure, f_values, a_values, names, coupling, swept, settings,
+                         flight)
     spec = parse_spec(text, MAP_SPEC_SOURCE)
     return _computed(spec, workers)
 
@@ -261,6 +280,7 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
         "title": f"study.compute_map: {', '.join(spec.observables)}",
         "source": f"study: {method_description(spec)}",
         "study_coupling": spec.coupling,
+        **({"study_lift_off": spec.lift_off} if spec.flight else {}),
         "study_solver_method": spec.method,
         "study_version": VERSION,
         "study_spec": spec.text,

@@ -32,6 +32,7 @@ from study.engine.validation.header import (
 )
 from study.engine.validation.reading import StoredFile
 from study.engine.variables import RESULT_FORMAT, STALE_RESULT_FORMATS, VARIABLES
+from study.model.contact import DEFAULT_LIFT_OFF
 
 __all__ = ["study_problems"]
 
@@ -77,6 +78,10 @@ def study_problems(nc: Any, meta: StoredFile, source: str) -> list[str]:
                            ("study_coupling", spec.coupling)):
             if not same_text(attrs.get(key), value):
                 problems.append(f"{key} differs from the embedded spec ({value!r})")
+        # Written only with flight: a file without it stops at lift-off.
+        if not same_text(attrs.get("study_lift_off", DEFAULT_LIFT_OFF), spec.lift_off):
+            problems.append(f"study_lift_off differs from the embedded spec "
+                            f"({spec.lift_off!r})")
         problems += _study_content_problems(check, meta, spec)
     problems += checksum_problems(nc, meta)
     return problems
@@ -107,7 +112,7 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any) -> list
         elif not check.equals(name, np.array([value], dtype=np.float64)):
             problems.append(f"{name} differs from the embedded spec's {value!r}")
     structure_dims = tuple(axis.name for axis in spec.axes if axis.name not in ("f", "a"))
-    wanted = variables_of(spec.observables)
+    wanted = variables_of(spec.observables, spec.flight)
     wanted_names = {v.name for v in wanted}
     for name in variables:
         if name in VARIABLES and name not in wanted_names:
@@ -126,10 +131,11 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any) -> list
                             f"({', '.join(dims)})")
         if var.type_name != declared.dtype:
             problems.append(f"{name} is {var.type_name}; declared {declared.dtype}")
-        for key in ("units", "long_name"):
-            if not same_text(var.attrs.get(key), getattr(declared, key)):
+        expected = {"units": declared.units, "long_name": declared.texts(spec.flight)[0]}
+        for key, value in expected.items():
+            if not same_text(var.attrs.get(key), value):
                 problems.append(f"{name}: {key} {short(repr(var.attrs.get(key)), 80)}; "
-                                f"declared {getattr(declared, key)!r}")
+                                f"declared {value!r}")
         if declared.is_flag:
             flag_values = np.atleast_1d(np.asarray(var.attrs.get("flag_values", [])))
             if (flag_values.dtype != np.dtype(declared.dtype)

@@ -138,6 +138,9 @@ def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
         "source": f"study: {method_description(spec)}",
         "study_solver_method": spec.method,
         "study_coupling": spec.coupling,
+        # Only with flight: the files of studies that stop at lift-off keep their
+        # attributes (a file without it stops there, the default law).
+        **({"study_lift_off": spec.lift_off} if spec.flight else {}),
         "processing_level": "model output",
         "references": PAPER_REFERENCE,
         "standard_name_vocabulary": "CF Standard Name Table v85",

@@ -49,7 +49,14 @@ from study.engine.spec_files import (
     parse_toml,
     read_spec_text,
 )
-from study.model.contact import DEFAULT_FRICTION, LAWS, Friction, check_friction
+from study.model.contact import (
+    DEFAULT_FRICTION,
+    DEFAULT_LIFT_OFF,
+    LAWS,
+    Friction,
+    check_friction,
+    check_law,
+)
 from study.model.parameters import (
     DRIVE,
     MASS,
@@ -163,6 +170,12 @@ class StudySpec:
         :data:`study.solvers.exact.DEFAULT_COUPLING`.
     integrator : IntegratorSettings
         Accuracy and budgets of the time integrator (used with ``method = "integrator"``).
+    friction : Friction
+        The friction law (``[solver] friction``).
+    flight : bool
+        ``[solver] flight = true``: past lift-off the base flies and lands by impacts
+        (the lift-off law ``flight`` of :mod:`study.model.contact`); default false, the
+        run stops with ``LIFT_OFF`` there. Needs two-way coupling and ``M < 1``.
     chunk_points : int
         Target number of grid points per parallel task (default
         :func:`default_chunk_points`).
@@ -191,6 +204,12 @@ class StudySpec:
     coupling: str = DEFAULT_COUPLING
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
     friction: Friction = field(default_factory=Friction)
+    flight: bool = False
+
+    @property
+    def lift_off(self) -> str:
+        """The lift-off law's name (:data:`study.model.contact.LIFT_OFF_LAWS`)."""
+        return "flight" if self.flight else DEFAULT_LIFT_OFF
 
     @property
     def sha256(self) -> str:
@@ -264,7 +283,23 @@ def spec_schema() -> dict[str, Any]:
     for name, largest in {**MAX_SOLVER_BUDGET, **MAX_INTEGRATOR_BUDGET}.items():
         solver[name]["maximum"] = largest
     solver["friction"] = _friction_schema()
+    solver["flight"] = _flight_schema()
     return schema
+
+
+def _flight_schema() -> dict[str, Any]:
+    """``[solver] flight`` from the lift-off laws' declarations
+    (:data:`study.model.contact.LAWS`)."""
+    law = LAWS["lift_off"]["flight"]
+    stop = LAWS["lift_off"][DEFAULT_LIFT_OFF]
+    return {
+        "type": "boolean",
+        "default": False,
+        "description": (
+            f"true: the lift-off law 'flight': {law.description} (methods: "
+            f"{', '.join(law.solvers)}; needs coupling = \"two-way\" and M < 1); false "
+            f"(default): '{stop.name}', {stop.description}"),
+    }
 
 
 def _friction_schema() -> dict[str, Any]:
@@ -392,7 +427,7 @@ def _size(n: float) -> str:
 
 
 def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_points: int,
-               path: str) -> None:
+               path: str, flight: bool = False) -> None:
     """Refuse a study whose output or memory would be absurd, before any work.
 
     Parameters
@@ -406,6 +441,8 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
         ``[solver] chunk_points``.
     path : str
         The spec file, for messages.
+    flight : bool
+        ``[solver] flight``: the velocity observable writes its flight variables too.
 
     Raises
     ------
@@ -420,7 +457,7 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
     n_f = lengths.get("f", 1)
     n_a = lengths.get("a", 1) if needs_solver else 1
     # What each variable holds per point, from its declaration.
-    variables = variables_of(observables)
+    variables = variables_of(observables, flight)
     per_f_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "row")
     per_point_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "point")
     swept = [name for name in lengths if needs_solver or name != "a"]
@@ -476,8 +513,9 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     axes, chunk_points = _sweep_axes(sweep, observables, solver_table, path)
     method, coupling, friction, solver, integrator, frontier_tolerance = _solver(
         solver_table, observables, axes, path)
+    flight = _flight(solver_table, observables, method, coupling, path)
     canonical = _canonical(study, observables, fixed, mass, sweep, axes, method, coupling,
-                           friction, solver, integrator, frontier_tolerance)
+                           friction, solver, integrator, frontier_tolerance, flight)
     spec = StudySpec(
         name=study["name"],
         title=study.get("title", study["name"]),
@@ -496,6 +534,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         coupling=coupling,
         integrator=integrator,
         friction=friction,
+        flight=flight,
     )
     _check_structures(spec, path)
     # After the structure's own checks: they have the better words where they apply.
@@ -570,7 +609,8 @@ def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
     lengths = {name: axis_length(sweep[name]) for name in order}
     chunk_points = int(solver_table.get("chunk_points",
                                         default_chunk_points(math.prod(lengths.values()))))
-    check_size(lengths, observables, chunk_points, path)
+    check_size(lengths, observables, chunk_points, path,
+               bool(solver_table.get("flight", False)))
     axes = []
     for name in order:
         units, long_name = SWEEPABLE[name]
@@ -650,14 +690,51 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...], axes: li
     return method, coupling, friction, solver, integrator, frontier_tolerance
 
 
+#: Why flight needs two-way coupling (the decision of issue 21).
+FLIGHT_NEEDS_TWO_WAY = (
+    "the one-way model's mode is driven by the table alone, which does not hold once the "
+    "base leaves the table")
+#: Why flight needs M < 1.
+FLIGHT_NEEDS_BASE_MASS = (
+    "M = 1 is a massless base: the impact matrix W = I + M/(1 - M) e e^T is unbounded")
+
+
+def _flight(solver_table: dict[str, Any], observables: tuple[str, ...], method: str,
+            coupling: str, path: str) -> bool:
+    """``[solver] flight``, refused where it cannot apply (a method that does not
+    implement the lift-off law ``flight``, one-way coupling), and the observables that
+    need it."""
+    flight = bool(solver_table.get("flight", False))
+    if not flight:
+        if "without_flight" in observables:
+            raise SpecError(
+                f'{path}: [study] observable "without_flight" (the velocity without flight '
+                "beside a study with flight) needs [solver] flight = true; without it the "
+                'study\'s velocity already stops at lift-off (allowed: flight = true with '
+                'coupling = "two-way")')
+        return False
+    try:
+        check_law("lift_off", "flight", method)
+    except ValueError as err:
+        raise SpecError(f'{path}: [solver] flight = true with method = "{method}": {err} '
+                        "(allowed: flight = false)") from None
+    if coupling != "two-way":
+        raise SpecError(
+            f'{path}: [solver] flight = true needs coupling = "two-way", got coupling = '
+            f'"{coupling}": {FLIGHT_NEEDS_TWO_WAY} (allowed: coupling = "two-way", or '
+            "flight = false)")
+    return True
+
+
 def _canonical(study: dict[str, Any], observables: tuple[str, ...], fixed: dict[str, float],
                mass: MassModel | None, sweep: dict[str, Any], axes: list[Axis], method: str,
                coupling: str, friction: Friction, solver: SolverSettings,
-               integrator: IntegratorSettings, frontier_tolerance: float) -> dict[str, Any]:
+               integrator: IntegratorSettings, frontier_tolerance: float,
+               flight: bool = False) -> dict[str, Any]:
     """What the numbers depend on, in a canonical form (hashed); defaults written out,
     so a spec that spells them out is the same study.
 
-    Twelve arguments: the parts of a spec, each computed and checked by its own step
+    Thirteen arguments: the parts of a spec, each computed and checked by its own step
     of :func:`_build`; gathering them into an object would only rename them.
     """
     structure_canonical = dict(fixed)
@@ -694,6 +771,8 @@ def _canonical(study: dict[str, Any], observables: tuple[str, ...], fixed: dict[
             # laws were named keep their fingerprints.
             **({"friction": friction.canonical()}
                if friction.law != DEFAULT_FRICTION else {}),
+            # Likewise flight only when on: specs without it keep their fingerprints.
+            **({"flight": True} if flight else {}),
         },
     }
     return canonical
@@ -711,15 +790,26 @@ def _check_bounds(axis: Axis, path: str) -> None:
 
 
 def _check_structures(spec: StudySpec, path: str) -> None:
-    """Build every structure of the study now, so a bad one is refused before work."""
+    """Build every structure of the study now, so a bad one is refused before work
+    (with flight, also one without a base mass)."""
     ranges = [range(len(axis)) for axis in spec.structure_axes]
     for index in itertools.product(*ranges):
         try:
-            spec.structure_at(index)
+            structure = spec.structure_at(index)
         except ValueError as err:
-            at = ", ".join(
-                f"{axis.name} = {float(axis.values[i])!r}"
-                for axis, i in zip(spec.structure_axes, index, strict=True)
-            )
-            where = f"[sweep] point {at}" if at else "[structure]"
-            raise SpecError(f"{path}: invalid structure at {where}: {err}") from None
+            raise SpecError(f"{path}: invalid structure at {_where(spec, index)}: "
+                            f"{err}") from None
+        if spec.flight and structure.M >= 1:
+            raise SpecError(
+                f"{path}: M = {structure.M!r} at {_where(spec, index)} with [solver] "
+                f"flight = true: flight needs M < 1 ({FLIGHT_NEEDS_BASE_MASS}); allowed: "
+                "M < 1, or flight = false")
+
+
+def _where(spec: StudySpec, index: tuple[int, ...]) -> str:
+    """A structure of the study as the spec gives it: the swept values at ``index``."""
+    at = ", ".join(
+        f"{axis.name} = {float(axis.values[i])!r}"
+        for axis, i in zip(spec.structure_axes, index, strict=True)
+    )
+    return f"[sweep] point {at}" if at else "[structure]"

@@ -17,9 +17,11 @@ from study.model.units import (
     DEGREE,
     DIMENSIONLESS,
     HERTZ,
+    METRE,
     METRE_PER_SECOND,
     METRE_PER_SECOND_SQUARED,
 )
+from study.solvers.exact import ATTRACTOR_DROPS, ATTRACTOR_STARTS
 
 __all__ = ["FRONTIER_KINDS", "GRIDS", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "VARIABLES",
            "Variable"]
@@ -69,6 +71,9 @@ class Variable:
         ``zero_when_static``) 0 where it is static.
     zero_when_static : bool
         Whether the value must be 0 where the status is static.
+    flight_long_name, flight_comment : str
+        ``long_name`` and ``comment`` in a study with flight, where they differ
+        (default: the same as without).
     """
 
     name: str
@@ -81,6 +86,8 @@ class Variable:
     comment: str = ""
     invalid_where: str = ""
     zero_when_static: bool = True
+    flight_long_name: str = ""
+    flight_comment: str = ""
 
     def __post_init__(self) -> None:
         if self.grid not in GRIDS:
@@ -97,19 +104,33 @@ class Variable:
         """Dimensions of the variable in a study with these structure axes."""
         return (*structure_dims, *GRIDS[self.grid])
 
-    def attrs(self) -> dict[str, Any]:
-        """CF/ACDD attributes as written to the file."""
-        attrs: dict[str, Any] = {"units": self.units, "long_name": self.long_name}
+    def texts(self, flight: bool = False) -> tuple[str, str]:
+        """``long_name`` and ``comment`` in a study without or with flight."""
+        if not flight:
+            return self.long_name, self.comment
+        return (self.flight_long_name or self.long_name, self.flight_comment or self.comment)
+
+    def attrs(self, flight: bool = False) -> dict[str, Any]:
+        """CF/ACDD attributes as written to the file (of a study with ``flight``)."""
+        long_name, comment = self.texts(flight)
+        attrs: dict[str, Any] = {"units": self.units, "long_name": long_name}
         if self.flags:
             attrs["flag_values"] = np.array(self.flag_values, dtype=self.dtype)
             attrs["flag_meanings"] = " ".join(self.flags)
             attrs["coverage_content_type"] = "qualityInformation"
         else:
             attrs["coverage_content_type"] = "modelResult"
-        if self.comment:
-            attrs["comment"] = self.comment
+        if comment:
+            attrs["comment"] = comment
         return attrs
 
+
+#: Starts of the attractors observable: in contact, and with flight also drops.
+_CONTACT_STARTS = len(ATTRACTOR_STARTS["phases"]) * len(ATTRACTOR_STARTS["mode_factors"])
+_DROP_STARTS = len(ATTRACTOR_DROPS["heights"]) * len(ATTRACTOR_DROPS["phases"])
+_DROPS = (f"the base dropped from "
+          f"{', '.join(f'{1e3 * h:g}' for h in ATTRACTOR_DROPS['heights'])} mm at "
+          f"{len(ATTRACTOR_DROPS['phases'])} drive phases")
 
 _STATUS_FLAGS = tuple(s.name.lower() for s in Status)
 _STATUS_VALUES = tuple(int(s) for s in Status)
@@ -131,6 +152,21 @@ _DECLARED = (
              "not_converged or friction_paradox", invalid_where="status"),
     Variable("status", "point", "int8", DIMENSIONLESS, "outcome of the steady-state solver",
              flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("airborne_fraction", "point", "float64", DIMENSIONLESS,
+             "fraction of the steady orbit's period the base spends off the table",
+             comment="with flight only; 0 where the orbit never leaves the table, NaN "
+             "(missing) where status is lift_off, not_converged or friction_paradox",
+             invalid_where="status"),
+    Variable("largest_hop", "point", "float64", METRE,
+             "largest height of the base above the table over the steady orbit",
+             comment="with flight only; 0 where the orbit never leaves the table, NaN "
+             "(missing) where status is lift_off, not_converged or friction_paradox",
+             invalid_where="status"),
+    Variable("impacts_per_period", "point", "float64", DIMENSIONLESS,
+             "impacts of the base on the table per drive period on the steady orbit",
+             comment="with flight only; 0 where the orbit never leaves the table, NaN "
+             "(missing) where status is lift_off, not_converged or friction_paradox",
+             invalid_where="status"),
     Variable("slips_per_period", "point", "float64", DIMENSIONLESS,
              "slip events per drive period on the periodic orbit"),
     Variable("forward_slip_fraction", "point", "float64", DIMENSIONLESS,
@@ -149,19 +185,31 @@ _DECLARED = (
              comment="below 1: the orbit attracts nearby states; where static, the mode's "
              "free decay over one drive period; NaN (missing) where status is lift_off, "
              "not_converged or friction_paradox", invalid_where="status",
-             zero_when_static=False),
+             zero_when_static=False,
+             flight_long_name="largest modulus of the Floquet multipliers of the steady "
+             "orbit on the state (plate deflection, its rate, sliding velocity, height of "
+             "the base above the table, its rate), flights and impacts included"),
     Variable("attractor_count", "point", "int32", DIMENSIONLESS,
              "distinct stable outcomes reached from 12 starting states (rest at four drive "
              "phases, the mode at 0, 1 and 2 times its steady response)",
              comment="stable orbits told apart by period and mean velocity, lift-off and "
              "the friction paradox one outcome each; 1 where static; > 1: multistable; "
-             "0: no start converged"),
+             "0: no start converged",
+             flight_long_name=f"distinct stable outcomes reached from "
+             f"{_CONTACT_STARTS + _DROP_STARTS} starting states (rest at four drive "
+             f"phases, the mode at 0, 1 and 2 times its steady response; {_DROPS})",
+             flight_comment="stable orbits (bouncing ones included) told apart by period "
+             "and mean velocity, the friction paradox one outcome; 1 where static; > 1: "
+             "multistable (the motion depends on how the structure is put down); 0: no "
+             "start converged"),
     Variable("attractor_velocity_spread", "point", "float64", METRE_PER_SECOND,
              "largest minus smallest mean velocity among the stable orbits found",
              comment="0 with a single orbit or none"),
     Variable("attractor_starts_converged", "point", "int32", DIMENSIONLESS,
              "starting states (of 12) that reached a stable orbit, lift-off or the "
-             "friction paradox"),
+             "friction paradox",
+             flight_long_name=f"starting states (of {_CONTACT_STARTS + _DROP_STARTS}) "
+             "that reached a stable orbit or the friction paradox"),
     Variable("velocity_one_way", "point", "float64", METRE_PER_SECOND,
              "mean steady velocity of the paper's one-way model at the same point "
              "(exact solver), for comparison with the two-way velocity",
@@ -170,6 +218,15 @@ _DECLARED = (
     Variable("status_one_way", "point", "int8", DIMENSIONLESS,
              "outcome of the exact solver for the paper's one-way model",
              flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("velocity_without_flight", "point", "float64", METRE_PER_SECOND,
+             "mean steady velocity at the same point by the same method without flight "
+             "(the run stops at lift-off), for comparison with the velocity with flight",
+             comment="exactly 0 when static; NaN (missing) where status_without_flight is "
+             "lift_off, not_converged or friction_paradox",
+             invalid_where="status_without_flight"),
+    Variable("status_without_flight", "point", "int8", DIMENSIONLESS,
+             "outcome of the same method without flight (lift_off where the base would "
+             "leave the table)", flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
     Variable("frontier_frequency", "frontier", "float64", HERTZ,
              "drive frequency f*(a) where the mean velocity changes sign",
              comment="NaN-padded where an acceleration has fewer branches"),

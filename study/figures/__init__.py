@@ -88,6 +88,12 @@ FIGURES: dict[str, Figure] = {
         ("velocity", "status", "frontier_frequency"),
         "The limit M -> 1: regime maps and frontier branches from M = 0.08 to 1",
     ),
+    "bouncing": Figure(
+        "study.figures.bouncing", "mass-ratio-limit-flight",
+        ("velocity", "status", "largest_hop", "airborne_fraction"),
+        "With flight: velocity, largest hop and time in the air over (f, a) per M, the "
+        "bouncing region's edge and the frontier f*(a) through it",
+    ),
     "coupling": Figure(
         "study.figures.coupling", "coupling",
         ("velocity", "status", "velocity_one_way", "status_one_way", "M"),
@@ -128,6 +134,11 @@ def _missing_message(name: str, dataset: xr.Dataset, missing: Sequence[str]) -> 
     figure = FIGURES[name]
     message = (f"figure {name!r} needs {', '.join(missing)}, which this file does not hold "
                f"(study {dataset.attrs.get('study_name')!r})")
+    flight_only = {v for o in OBSERVABLES.values() for v in o.flight_variables}
+    if set(missing) & flight_only and dataset.attrs.get("study_result_schema") == RESULT_SCHEMA:
+        return (f"{message}: they are written only by a study with flight; add [solver] "
+                f'flight = true (with coupling = "two-way") to the spec and run it again, '
+                f"or draw it from {figure.source}")
     writers = [o.name for o in OBSERVABLES.values() if set(o.variables) & set(missing)]
     if writers and dataset.attrs.get("study_result_schema") == RESULT_SCHEMA:
         held = {o.name for o in OBSERVABLES.values()

@@ -17,8 +17,9 @@ import xarray as xr
 
 from study.analyses.selection import available
 from study.figures.record import DRAWN_FROM
+from study.model.contact import DEFAULT_LIFT_OFF
 from study.model.paper import PAPER_POINTS, is_paper_structure
-from study.model.status import Status
+from study.model.status import INVALID_STATUSES, Status
 
 __all__ = [
     "MAX_LEGEND_ENTRIES",
@@ -27,6 +28,7 @@ __all__ = [
     "coupling_label",
     "disk_text",
     "grid_minimum",
+    "is_flight",
     "is_paper_file",
     "lift_off_label",
     "one_way_velocity",
@@ -156,8 +158,8 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
         return Structure(**params)
 
 
-#: Statuses with a valid velocity (0 when static).
-VALID = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
+#: Statuses with a valid velocity (0 when static; bouncing with flight).
+VALID = tuple(s for s in Status if s not in INVALID_STATUSES)
 
 
 def selected_keys(dataset: xr.Dataset) -> set[str]:
@@ -388,7 +390,14 @@ def coupling_label(dataset: xr.Dataset) -> str:
         text = "two-way coupling (the sliding base also forces the mode)"
     else:
         text = "one-way coupling (the paper's model)"
+    if is_flight(dataset):
+        text += ", flight past lift-off"
     return text + (", time integration" if method == "integrator" else "")
+
+
+def is_flight(dataset: xr.Dataset) -> bool:
+    """Whether the file's solver followed the base past lift-off (``study_lift_off``)."""
+    return str(dataset.attrs.get("study_lift_off", DEFAULT_LIFT_OFF)) == "flight"
 
 
 def one_way_velocity(dataset: xr.Dataset, *order: str) -> np.ndarray | None:
@@ -405,7 +414,7 @@ def one_way_velocity(dataset: xr.Dataset, *order: str) -> np.ndarray | None:
 #: The structure parameters every figure of a study names, in order: (TeX, plain) names.
 STRUCTURE_SYMBOLS = {"f0": ("$f_0$", "f0"), "Q": ("Q", "Q"), "alpha": ("$\\alpha$", "alpha"),
                      "M": ("M", "M"), "cs": ("$c_s$", "cs"), "ck": ("$c_k$", "ck"),
-                     "g": ("g", "g")}
+                     "g": ("g", "g"), "restitution": ("e", "e")}
 
 #: Units as titles write them, TeX and plain, from the file's CF spelling.
 _UNIT_TEXT = {"degree": ("°", " degree"),

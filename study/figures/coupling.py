@@ -108,6 +108,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                   label="direction reversed")
     left.semilogx(m, 100 * effect["lifted"], "v-", color="0.5",
                   label="two-way lifts off (one-way moves)")
+    if float(effect["bouncing"].max()) > 0:
+        left.semilogx(m, 100 * effect["bouncing"], "D-", color="tab:green",
+                      label="two-way bounces (flight; one-way moves)")
     if float(effect["paradox"].max()) > 0:
         left.semilogx(m, 100 * effect["paradox"], "x-", color="tab:orange",
                       label="friction paradox")

@@ -26,6 +26,7 @@ from matplotlib.patches import Patch
 from study.figures.common import (
     VALID,
     coupling_label,
+    is_flight,
     lift_off_label,
     require_axis,
     require_dims,
@@ -43,6 +44,7 @@ __all__ = ["draw", "panel_indices", "valid_velocity_mm_s"]
 MAX_PANELS = 6
 _STROKE = [patheffects.withStroke(linewidth=3.0, foreground="white")]
 _LIFT_OFF_GREY = "0.72"
+_BOUNCING_EDGE = "darkgreen"
 
 
 def valid_velocity_mm_s(velocity: np.ndarray, status: np.ndarray) -> np.ma.MaskedArray:
@@ -112,6 +114,9 @@ def _panel(ax, dataset: xr.Dataset, at: dict, norm: TwoSlopeNorm):
     if sliding.any():
         ax.contourf(f, a, sliding.T, levels=[0.5, 1.5], colors="none", hatches=["////"])
         ax.contour(f, a, sliding.T, levels=[0.5], colors="k", linewidths=0.7)
+    bouncing = (status == Status.BOUNCING).astype(float)
+    if bouncing.any() and min(bouncing.shape) > 1:  # with flight: the region's edge
+        ax.contour(f, a, bouncing.T, levels=[0.5], colors=_BOUNCING_EDGE, linewidths=1.1)
 
     a_plus = _closed(dataset, "a_star_plus", at, structure, f)
     a_minus = _closed(dataset, "a_star_minus", at, structure, f)
@@ -139,6 +144,8 @@ def _panel(ax, dataset: xr.Dataset, at: dict, norm: TwoSlopeNorm):
     not_converged = int(np.count_nonzero(status == Status.NOT_CONVERGED))
     title = (f"M = {structure.M:g}: {branches} frontier branch"
              f"{'' if branches == 1 else 'es'}, CS {100 * cs_share:.0f} %")
+    if is_flight(dataset):
+        title += f", bouncing {100 * np.count_nonzero(bouncing) / status.size:.0f} %"
     if not_converged:
         title += f", {not_converged} not converged"
     ax.set_title(title, fontsize=10)
@@ -183,7 +190,10 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                label="$a^*_-$ (backward slips start)"),
         Line2D([], [], color="0.3", lw=0.8, ls=":", label="$a^*_\\pm$ above lift-off (invalid)"),
         Line2D([], [], color="k", lw=0.9, ls="--", label=lift_off_label(dataset)),
-        Patch(facecolor=_LIFT_OFF_GREY, label="lift-off: outside the model, no velocity"),
+        Patch(facecolor=_LIFT_OFF_GREY, label="lift-off: outside the model, no velocity")
+        if not is_flight(dataset) else
+        Line2D([], [], color=_BOUNCING_EDGE, lw=1.1,
+               label="edge of the bouncing region (flight)"),
         Patch(facecolor="none", edgecolor="k", hatch="////", label="continuous sliding (CS)"),
         Patch(facecolor="k", label="not converged"),
         Line2D([], [], ls="none", marker="o", color="k", ms=3, label="frontier $f^*(a)$"),

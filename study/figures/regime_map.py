@@ -33,6 +33,8 @@ __all__ = ["draw"]
 
 #: A white outline that keeps thin lines readable over the colour map.
 OUTLINE = [path_effects.withStroke(linewidth=3.2, foreground="white")]
+#: The edge of the bouncing region (a study with flight).
+BOUNCING_EDGE = "darkgreen"
 
 
 def _layer(ax, f, a, mask, color, alpha=1.0):
@@ -75,8 +77,13 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     fig, ax = plt.subplots(figsize=(8.0, 6.0), layout="constrained")
     sliding, stuck = _velocity_map(fig, ax, dataset)
     handles = _curves(ax, dataset)
-    handles.append(Patch(facecolor="0.62", edgecolor="0.3", lw=0.5,
-                         label="lift-off: model invalid, no velocity"))
+    status = dataset["status"].values
+    if not common.is_flight(dataset) or np.any(status == Status.LIFT_OFF):
+        handles.append(Patch(facecolor="0.62", edgecolor="0.3", lw=0.5,
+                             label="lift-off: model invalid, no velocity"))
+    if np.any(status == Status.BOUNCING):
+        handles.append(Line2D([], [], color=BOUNCING_EDGE, lw=1.3,
+                              label="edge of the bouncing region (flight)"))
     # The paper's points belong to the paper's structure: drawn on its maps only.
     points = PAPER_POINTS if is_paper_file(dataset) else {}
     if any(f[0] <= fp <= f[-1] and a[0] <= ap <= a[-1] for fp, ap in points.values()):
@@ -127,6 +134,10 @@ def _velocity_map(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset
     if np.any(sliding):
         ax.contourf(f, a, sliding.astype(float), levels=[0.5, 1.5], colors="none",
                     hatches=["////"])
+    bouncing = status == Status.BOUNCING
+    if np.any(bouncing) and min(bouncing.shape) > 1:  # with flight: the region's edge
+        ax.contour(f, a, bouncing.astype(float), levels=[0.5], colors=BOUNCING_EDGE,
+                   linewidths=1.3, zorder=3)
     return sliding, stuck
 
 

@@ -2,7 +2,10 @@
 
 Drawn from a ``velocity-curves`` result file alone (``study figure velocity-curves FILE``).
 Each curve stops at the first lift-off point of its frequency: beyond it the model
-does not apply. Points that did not converge leave gaps and are marked on the axis.
+does not apply. With flight (``velocity-curves-flight``) the curves go on past lift-off:
+their bouncing points are drawn over a wide pale band, and the same curves without
+flight (``without_flight``) dotted, ending where they lift off. Points that did not
+converge leave gaps and are marked on the axis.
 Up to 8 curves get a legend entry each; more get a colour bar of the frequency. With
 ``--measurements lab.csv`` the measured velocities are drawn with their error bars, each
 in the colour of the curve of the nearest frequency (:mod:`study.figures.measured`).
@@ -51,7 +54,8 @@ FREQUENCY_COLORS = ListedColormap(
 
 #: The variables drawn over (f, a) and those over f, which keep one frequency selected.
 _ALONG_F = ("velocity", "status", "velocity_one_way", "status_one_way", "a_star_plus",
-            "a_star_minus", "lift_off_acceleration")
+            "a_star_minus", "lift_off_acceleration", "velocity_without_flight",
+            "status_without_flight")
 
 
 def frequency_position(f: np.ndarray, f0: float) -> np.ndarray:
@@ -117,6 +121,10 @@ def draw(dataset: xr.Dataset, output: Path,
     velocity = 1e3 * dataset["velocity"].transpose("f", "a").values  # mm s-1
     status = dataset["status"].transpose("f", "a").values
     paper = one_way_velocity(dataset, "f", "a")  # beside a two-way study
+    without = None  # beside a study with flight: the curves stopped at lift-off
+    if "velocity_without_flight" in dataset and "status_without_flight" in dataset:
+        without = (1e3 * dataset["velocity_without_flight"].transpose("f", "a").values,
+                   dataset["status_without_flight"].transpose("f", "a").values)
     # The colours run over the frequency, centred on f0 (blue below, red above); many
     # curves share one colour bar instead of a legend entry each.
     fine = np.linspace(float(f.min()), float(f.max()), 256) if f.size > 1 else f
@@ -139,6 +147,7 @@ def draw(dataset: xr.Dataset, output: Path,
     ax.axhline(0.0, color="black", lw=0.8)
     handles, any_lift, any_stuck = _curves(ax, a, f, velocity, status, paper, colours,
                                            colour_bar)
+    any_bounce, without_lift = _flight(ax, a, velocity, status, without, colours)
     xlim = (float(a[0]), float(a[-1]))
     if rows is not None:
         measured.draw_rows(ax, data, rows, "a", scale=1e3,
@@ -153,6 +162,14 @@ def draw(dataset: xr.Dataset, output: Path,
     if any_lift:
         handles.append(Line2D([], [], ls="none", marker="o", ms=5.5, mfc="white", mec="0.3",
                               mew=1.6, label="curve ends: lift-off\nabove (model invalid)"))
+    if any_bounce:
+        handles.append(Line2D([], [], color="0.3", lw=6, alpha=0.3, solid_capstyle="butt",
+                              label="bouncing: flights and\nimpacts (with flight)"))
+    if without is not None:
+        handles.append(Line2D([], [], color="k", lw=0.9, ls=":", marker="o", mfc="white",
+                              mec="k", ms=4.5, markevery=[1],
+                              label="without flight (same\ncoupling): ends at lift-off"
+                              if without_lift else "without flight (same\ncoupling)"))
     if any_stuck:
         handles.append(Line2D([], [], ls="none", marker="x", ms=5, color="0.3",
                               label="not converged at this a\n(no velocity; gap)"))
@@ -201,6 +218,36 @@ def _curves(ax: plt.Axes, a: np.ndarray, f: np.ndarray, velocity: np.ndarray,
             ax.plot(a[stuck], np.full(stuck.size, 0.03), ls="none", marker="x", ms=5,
                     color=color, transform=ax.get_xaxis_transform(), clip_on=False)
     return handles, any_lift, any_stuck
+
+
+def _flight(ax: plt.Axes, a: np.ndarray, velocity: np.ndarray, status: np.ndarray,
+            without: tuple[np.ndarray, np.ndarray] | None, colours: list
+            ) -> tuple[bool, bool]:
+    """Over a study with flight: a pale band under the bouncing points of each curve,
+    and (``without``, [mm s-1] and statuses) the curves without flight, dotted, each
+    ending with an open circle at its last point before lift-off. Returns whether any
+    point bounces and whether any curve without flight lifts off."""
+    any_bounce = any_lift = False
+    for i, colour in enumerate(colours):
+        bouncing = status[i] == Status.BOUNCING
+        if bouncing.any():
+            any_bounce = True
+            # The band also spans the step into the region: its edge is the lift-off.
+            band = bouncing | np.append(bouncing[1:], False)
+            ax.plot(a, np.where(band, velocity[i], np.nan), color=colour, lw=6, alpha=0.3,
+                    solid_capstyle="butt", zorder=1)
+        if without is None:
+            continue
+        v_without, s_without = without
+        lifted = np.flatnonzero(s_without[i] == Status.LIFT_OFF)
+        end = int(lifted[0]) if lifted.size else a.size
+        shown = np.where(np.isin(s_without[i, :end], VALID), v_without[i, :end], np.nan)
+        ax.plot(a[:end], shown, color="k", lw=0.9, ls=":", zorder=3)
+        if lifted.size and end > 0 and np.isfinite(shown[-1]):
+            any_lift = True
+            ax.plot(a[end - 1], shown[-1], ls="none", marker="o", ms=4.5, mfc="white",
+                    mec="k", zorder=4)
+    return any_bounce, any_lift
 
 
 def _legend(fig: plt.Figure, ax: plt.Axes, handles: list, colour_bar: bool,

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.model import as_acceleration, as_frequency
 from study.model.inputs import InputTypeError, bounded_number, real_number
-from study.model.status import Status
+from study.model.status import INVALID_STATUSES, Status
 from study.model.structure import Structure
 from study.model.units import HERTZ
 from study.solvers.exact import (
@@ -44,7 +44,9 @@ FRONTIER_CROSSING = 1
 #: Frontier point where the velocity jumps across zero (a regime boundary).
 FRONTIER_JUMP = 2
 
-_MOVING = (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING)
+#: Statuses of a structure that moves: every status with a velocity but STATIC (with
+#: flight BOUNCING too, so that a frontier runs on through the bouncing region).
+_MOVING = tuple(s for s in Status if s not in INVALID_STATUSES and s != Status.STATIC)
 
 #: The bisection of :func:`frontier` and the golden-section search of
 #: :func:`minimum_threshold` shrink a bracket of frequencies until it is narrower than

@@ -113,6 +113,20 @@ a = {{ start = 0.0, stop = 12.0, num = 7 }}
 [solver]
 coupling = "two-way"
 """,
+    "flight": f"""\
+[study]
+name = "flight-small"
+observables = ["lift_off", "velocity", "frontier"]
+[structure]
+{PAPER}
+[sweep]
+M = {{ values = [0.08, 0.99] }}
+f = {{ start = 5.0, stop = 30.0, num = 11 }}
+a = {{ start = 0.0, stop = 12.0, num = 7 }}
+[solver]
+coupling = "two-way"
+flight = true
+""",
 }
 
 LAB = """\
@@ -471,6 +485,7 @@ SOURCES = {
     "threshold-collapse": ("collapse", ["alpha=64"]),
     "mass-ratio-limit": ("limit", []),
     "coupling": ("coupling", []),
+    "bouncing": ("flight", []),
     "steering": ("trajectory", []),
     "steering-calibration": ("calibration", []),
     "steering-plan": ("plan", []),
@@ -481,7 +496,8 @@ SOURCES = {
 def _cases():
     dims = {"paper": ("f", "a", "branch"), "loads": ("m_add", "f", "a"),
             "collapse": ("Q", "M", "f"), "limit": ("M", "f", "a", "branch"),
-            "coupling": ("M", "f", "a"), "trajectory": ("t", "segment"),
+            "coupling": ("M", "f", "a"), "flight": ("M", "f", "a", "branch"),
+            "trajectory": ("t", "segment"),
             "calibration": ("f", "a"), "fit": ("measurement", "parameter", "profile_point"),
             "plan": ("strategy", "realisation", "t", "waypoint", "segment")}
     for figure, (source, base) in SOURCES.items():

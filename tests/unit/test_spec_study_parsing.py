@@ -191,13 +191,14 @@ def test_minimal_spec_has_one_structure_the_papers():
 
 
 def test_observables_are_kept_in_canonical_order():
-    spec = parse({"study": {"observables": ["frontier", "paper_model", "diagnostics",
-                                            "velocity", "thresholds", "resonance",
-                                            "floquet", "attractors", "lift_off"]},
-                  "solver": {"coupling": "two-way"}})
+    spec = parse({"study": {"observables": ["frontier", "without_flight", "paper_model",
+                                            "diagnostics", "velocity", "thresholds",
+                                            "resonance", "floquet", "attractors",
+                                            "lift_off"]},
+                  "solver": {"coupling": "two-way", "flight": True}})
     assert spec.observables == OBSERVABLES == (
         "resonance", "thresholds", "lift_off", "velocity", "diagnostics", "floquet",
-        "attractors", "paper_model", "frontier",
+        "attractors", "paper_model", "without_flight", "frontier",
     )
 
 
@@ -211,9 +212,10 @@ def test_example_workflow_is_valid():
     path = REPO / "workflows" / "regime-map.toml"
     spec = load_spec(path)
     # Every observable of a one-way study but the multistability check (paper_model and
-    # floquet belong to two-way ones).
-    assert spec.observables == tuple(o for o in OBSERVABLES
-                                     if o not in ("paper_model", "floquet", "attractors"))
+    # floquet belong to two-way ones, without_flight to studies with flight).
+    assert spec.observables == tuple(
+        o for o in OBSERVABLES
+        if o not in ("paper_model", "floquet", "attractors", "without_flight"))
     assert spec.title == "Regime map of the paper's structure (Fig. 2)"
     assert axis_names(spec) == ["f", "a"]
     assert [len(axis) for axis in spec.axes] == [401, 241]
@@ -497,7 +499,7 @@ def _mass(**keys: Any) -> dict[str, Any]:
 
 _OBS_ALLOWED = (
     "'resonance', 'thresholds', 'lift_off', 'velocity', 'diagnostics', 'floquet', "
-    "'attractors', 'paper_model', 'frontier'"
+    "'attractors', 'paper_model', 'without_flight', 'frontier'"
 )
 _FORMS = "allowed forms: { start = x, stop = y, num = n }"
 
@@ -531,7 +533,7 @@ REFUSALS = [
     pytest.param(
         {"solver": {"max_event": 10}},
         ["[solver]", "unknown key 'max_event'",
-         "allowed keys: chunk_points, coupling, friction, frontier_tolerance, max_events, "
+         "allowed keys: chunk_points, coupling, flight, friction, frontier_tolerance, max_events, "
          "max_map_iterations, max_orbit_period, max_periods, method, period_tolerance, "
          "steps_per_period, tolerance"],
         id="unknown-key-solver",

@@ -71,9 +71,12 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
         result_kind and result_kind.variant_attribute) else None
     kind = variant if isinstance(variant, str) else ""
     coupling = attrs.get("study_coupling")
+    lift_off = attrs.get("study_lift_off")
     lines.append(f"  {what} {name!r}"
                  f"{f' ({kind})' if kind else ''}"
-                 f"{f', {coupling} coupling' if isinstance(coupling, str) else ''}, spec sha256 "
+                 f"{f', {coupling} coupling' if isinstance(coupling, str) else ''}"
+                 f"{f', lift-off law {lift_off}' if isinstance(lift_off, str) else ''}, "
+                 "spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
     try:

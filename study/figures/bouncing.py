@@ -1,0 +1,204 @@
+"""The bouncing region: where the base leaves the table, how fast, how high and how long.
+
+Drawn from a study with flight (``[solver] flight = true``: the ``mass-ratio-limit-flight``
+workflow) alone. One row per mass ratio (up to three, evenly spread over the file's,
+ends included), three maps over ``(f, a)`` in each: the steady mean velocity [mm s-1]
+(diverging, each row its own scale: speeds grow tenfold towards M = 1), the largest hop
+of the base above the table [mm] (logarithmic over three decades below the row's
+largest: hops vanish at the region's edge) and the fraction of the period it spends in
+the air [%]. On every map: the bouncing region's edge (status ``bouncing``), the
+closed-form lift-off acceleration of the base at rest, and the zero-velocity frontier
+``f*(a)`` (black dots) where the file holds it: bouncing points have a velocity, so the
+frontier runs on through the region.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.colors import ListedColormap, LogNorm, Normalize, TwoSlopeNorm
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from study.figures import FigureError
+from study.figures.common import (
+    VALID,
+    coupling_label,
+    is_flight,
+    lift_off_label,
+    require_axis,
+    require_dims,
+    restore_dim,
+    save,
+    selection_text,
+    structure_from_dataset,
+    structure_text,
+)
+from study.model import lift_off_acceleration
+from study.model.status import Status
+
+__all__ = ["MAX_ROWS", "bouncing_share", "draw", "row_indices"]
+
+#: Mass ratios drawn at most (one row of three maps each).
+MAX_ROWS = 3
+#: The edge of the bouncing region.
+_EDGE = {"colors": "darkgreen", "linewidths": 1.1, "linestyles": "-"}
+_NOT_CONVERGED = "k"
+_LIFT_OFF_GREY = "0.72"
+
+
+def row_indices(n: int, limit: int = MAX_ROWS) -> list[int]:
+    """Indices of at most ``limit`` of ``n`` mass ratios, evenly spread, ends included."""
+    if n <= limit:
+        return list(range(n))
+    return sorted(set(np.rint(np.linspace(0, n - 1, limit)).astype(int).tolist()))
+
+
+def bouncing_share(status: np.ndarray) -> tuple[float, float]:
+    """Share [1] of the points that bounce, of all points and of the moving ones
+    (stick-slip, continuous sliding or bouncing)."""
+    status = np.asarray(status)
+    bouncing = np.count_nonzero(status == Status.BOUNCING)
+    moving = np.count_nonzero(np.isin(status, (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING,
+                                               Status.BOUNCING)))
+    return bouncing / max(status.size, 1), bouncing / max(moving, 1)
+
+
+#: Decades of hop height a row's scale spans below its largest hop.
+HOP_DECADES = 3
+
+
+def _hop_norm(hop: np.ma.MaskedArray) -> LogNorm:
+    """A logarithmic scale of the hops [mm] drawn: :data:`HOP_DECADES` decades up to
+    the largest (a hop vanishes at the edge of the region: lower ones get the lowest
+    colour)."""
+    high = float(hop.max()) if hop.count() else 1.0
+    return LogNorm(high * 10.0**-HOP_DECADES, high, clip=True)
+
+
+def _over_fa(dataset: xr.Dataset, name: str, at: dict) -> np.ndarray:
+    return dataset[name].isel(at).transpose("a", "f").values
+
+
+def _layers(ax, f, a, status) -> None:
+    """Flat layers where the solver gives no value: lift-off, not converged."""
+    for flag, colour in ((Status.LIFT_OFF, _LIFT_OFF_GREY),
+                         (Status.NOT_CONVERGED, _NOT_CONVERGED),
+                         (Status.FRICTION_PARADOX, "tab:orange")):
+        region = status == flag
+        if region.any():
+            ax.pcolormesh(f, a, np.ma.masked_where(~region, np.ones(region.shape)),
+                          cmap=ListedColormap([colour]), vmin=0, vmax=1, shading="nearest",
+                          rasterized=True)
+
+
+def _overlays(ax, dataset: xr.Dataset, at: dict, status: np.ndarray) -> None:
+    """The bouncing region's edge, the lift-off of the base at rest and the frontier."""
+    f = dataset["f"].values
+    a = dataset["a"].values
+    bouncing = (status == Status.BOUNCING).astype(float)
+    if bouncing.any() and min(bouncing.shape) > 1:
+        ax.contour(f, a, bouncing, levels=[0.5], **_EDGE)
+    if "lift_off_acceleration" in dataset:
+        lift = dataset["lift_off_acceleration"].isel(at).values
+    else:
+        lift = lift_off_acceleration(structure_from_dataset(dataset, **at), f)
+    ax.plot(f, lift, color="k", lw=0.9, ls="--")
+    if "frontier_frequency" in dataset:
+        frontier = dataset["frontier_frequency"].isel(at).transpose("a", "branch").values
+        rows, _ = np.nonzero(np.isfinite(frontier))
+        ax.plot(frontier[np.isfinite(frontier)], a[rows], "o", color="k", ms=2.0, zorder=5)
+    ax.set(xlim=(f[0], f[-1]), ylim=(a[0], a[-1]))
+
+
+def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+    """Draw the bouncing region of a study with flight; returns the PNG and the PDF.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A result with flight holding ``velocity``, ``status``, ``largest_hop`` and
+        ``airborne_fraction`` over ``(f, a)``, of one structure or sweeping ``M``
+        (other structure axes selected with ``--sel``).
+    output : pathlib.Path
+        File stem.
+
+    Raises
+    ------
+    FigureError
+        A file without flight, or with more axes than ``M``, ``f`` and ``a``.
+    """
+    if not is_flight(dataset):
+        raise FigureError(
+            "figure 'bouncing' draws the bouncing region of a study with flight; this "
+            f"file (study {dataset.attrs.get('study_name')!r}) stops at lift-off: run a "
+            "spec with [solver] flight = true (e.g. workflows/mass-ratio-limit-flight.toml)")
+    dataset = require_dims(dataset, "bouncing", ("M", "f", "a"),
+                           "one row of maps over (f, a) per M", variable="velocity")
+    for axis in ("f", "a"):
+        require_axis(dataset, "bouncing", axis, "maps over (f, a)")
+    dataset = restore_dim(dataset, "branch", ("frontier_frequency",))
+    swept = "M" in dataset["velocity"].dims
+    ats = [{"M": i} for i in row_indices(dataset.sizes["M"])] if swept else [{}]
+    f = dataset["f"].values
+    a = dataset["a"].values
+
+    fig, axes = plt.subplots(len(ats), 3, figsize=(15.5, 3.9 * len(ats) + 1.3),
+                             layout="constrained", sharex=True, sharey=True, squeeze=False)
+    labels = ("v [mm s$^{-1}$] (> 0: forward)", "largest hop [mm]",
+              "time in the air [% of the period]")
+    for row, at in enumerate(ats):
+        status = _over_fa(dataset, "status", at)
+        flying = status == Status.BOUNCING
+        v = 1e3 * _over_fa(dataset, "velocity", at)
+        velocity = np.ma.masked_where(~np.isin(status, VALID) | ~np.isfinite(v), v)
+        limit = float(np.max(np.abs(velocity))) if velocity.count() else 0.0
+        hop = 1e3 * _over_fa(dataset, "largest_hop", at)
+        hop = np.ma.masked_where(~flying | ~np.isfinite(hop) | (hop <= 0), hop)
+        airborne = 100 * _over_fa(dataset, "airborne_fraction", at)
+        panels = (
+            (velocity, "RdBu", TwoSlopeNorm(0.0, -(limit or 1.0), limit or 1.0)),
+            (hop, "viridis", _hop_norm(hop)),
+            (np.ma.masked_where(~flying | ~np.isfinite(airborne), airborne), "magma_r",
+             Normalize(0.0, 100.0)),
+        )
+        share, of_moving = bouncing_share(status)
+        M = float(structure_from_dataset(dataset, **at).M)
+        for column, (values, cmap, norm) in enumerate(panels):
+            ax = axes[row, column]
+            mesh = ax.pcolormesh(f, a, values, cmap=cmap, norm=norm, shading="nearest",
+                                 rasterized=True)
+            fig.colorbar(mesh, ax=ax, pad=0.01, label=labels[column])
+            _layers(ax, f, a, status)
+            _overlays(ax, dataset, at, status)
+            if column == 0:
+                ax.set_ylabel("drive acceleration a [m s$^{-2}$]")
+            if row == len(ats) - 1:
+                ax.set_xlabel("drive frequency f [Hz]")
+        axes[row, 0].set_title(f"M = {M:g}: velocity; bouncing {100 * share:.0f} % of the "
+                               f"map ({100 * of_moving:.0f} % of the moving points)",
+                               fontsize=9.5)
+        axes[row, 1].set_title(f"M = {M:g}: largest hop of the base", fontsize=9.5)
+        axes[row, 2].set_title(f"M = {M:g}: time in the air", fontsize=9.5)
+
+    handles = [
+        Line2D([], [], color=_EDGE["colors"], lw=_EDGE["linewidths"],
+               label="edge of the bouncing region (flights and impacts)"),
+        Line2D([], [], color="k", lw=0.9, ls="--", label=lift_off_label(dataset)),
+        Line2D([], [], ls="none", marker="o", color="k", ms=3,
+               label="frontier $f^*(a)$: v changes sign"),
+        Patch(facecolor=_NOT_CONVERGED, label="not converged"),
+    ]
+    if any(np.any(_over_fa(dataset, "status", at) == Status.LIFT_OFF) for at in ats):
+        handles.append(Patch(facecolor=_LIFT_OFF_GREY, label="lift-off: no velocity"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
+    title = (f"The bouncing region: where the base flies and lands, {coupling_label(dataset)} "
+             f"({structure_text(dataset, tex=False)})")
+    selected = selection_text(dataset)
+    fig.suptitle(f"The bouncing region: where the base flies and lands\n"
+                 f"{coupling_label(dataset)}\n{structure_text(dataset)}"
+                 + (f"\n{selected}" if selected else ""), fontsize=11)
+    return save(fig, output, dataset, title)

@@ -1,0 +1,160 @@
+"""Figures of studies with flight: the bouncing region, and the velocity figures drawn
+from a flight file (bouncing points drawn as velocities, the region's edge, the curves
+without flight beside them), each saying in its title that the base flies."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from study.cli import main
+from study.engine.runner import run_study
+from study.engine.store import open_result
+from study.figures import FIGURES, FigureError, draw_figure
+from study.figures.bouncing import bouncing_share, row_indices
+from study.figures.common import VALID, coupling_label
+from study.model.status import Status
+
+SPEC = """\
+[study]
+name = "small-flight-maps"
+observables = ["thresholds", "lift_off", "velocity", "diagnostics", "paper_model",
+               "without_flight", "frontier"]
+
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+cs = 0.25
+
+[sweep]
+M = { values = [0.08, 0.6, 0.99] }
+f = { start = 10.0, stop = 20.0, num = 21 }
+a = { start = 0.0, stop = 12.0, num = 13 }
+
+[solver]
+coupling = "two-way"
+flight = true
+"""
+
+#: figure -> the --sel it needs on the small file.
+DRAWN = {
+    "bouncing": [],
+    "mass-ratio-limit": [],
+    "coupling": [],
+    "regime-map": ["M=0.99"],
+    "velocity-curves": ["M=0.99", "f=12,14,16"],
+}
+
+
+@pytest.fixture(scope="module")
+def flight_file(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("flight-figures")
+    (folder / "maps.toml").write_text(SPEC)
+    run_study(folder / "maps.toml", folder / "maps.nc", progress=False, workers=1)
+    return folder / "maps.nc"
+
+
+@pytest.fixture(scope="module")
+def bouncing_dataset(flight_file):
+    """The small file with every lift-off point of the run without flight made a
+    bouncing point with made-up values, so that the drawing of a bouncing region is
+    tested whatever the solver gives there."""
+    dataset = open_result(flight_file)
+    lifted = dataset["status_without_flight"] == int(Status.LIFT_OFF)
+    assert lifted.any()
+    hop = 1e-3 * (dataset["a"] / 12.0) * lifted
+    dataset["status"] = dataset["status"].where(~lifted, int(Status.BOUNCING)).astype("int8")
+    dataset["velocity"] = dataset["velocity"].where(~lifted, 1e-2 * (dataset["f"] - 15.0))
+    dataset["largest_hop"] = dataset["largest_hop"].where(~lifted, hop)
+    dataset["airborne_fraction"] = dataset["airborne_fraction"].where(~lifted, 0.4 * lifted)
+    return dataset
+
+
+def _drawn(figure, dataset, tmp_path, monkeypatch):
+    """Draw ``figure`` and return its title and legend labels."""
+    from study.figures import common
+
+    kept = []
+    close = common.plt.close
+    monkeypatch.setattr(common.plt, "close", lambda fig=None: kept.append(fig))
+    png, _ = draw_figure(figure, dataset, tmp_path / figure, sel=DRAWN[figure])
+    (fig,) = kept
+    labels = [t.get_text() for legend in fig.legends + [ax.get_legend() for ax in fig.axes]
+              if legend is not None for t in legend.get_texts()]
+    close(fig)
+    with Image.open(png) as image:
+        title = dict(image.text)["Title"]
+    return title, labels
+
+
+def test_the_bouncing_figure_is_registered_with_the_flight_workflow():
+    figure = FIGURES["bouncing"]
+    assert figure.workflow == "mass-ratio-limit-flight"
+    assert (Path(__file__).resolve().parents[2] / "workflows" /
+            f"{figure.workflow}.toml").exists()
+    assert {"largest_hop", "airborne_fraction"} <= set(figure.requires)
+
+
+@pytest.mark.parametrize("figure", sorted(DRAWN))
+def test_each_figure_of_a_flight_file_says_it_flies(figure, flight_file, tmp_path):
+    stem = tmp_path / figure
+    arguments = ["figure", figure, str(flight_file), "-o", str(stem)]
+    for selection in DRAWN[figure]:
+        arguments += ["--sel", selection]
+    assert main(arguments) == 0
+    png = stem.with_suffix(".png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert stem.with_suffix(".pdf").read_bytes()[:4] == b"%PDF"
+    with Image.open(png) as image:
+        title = dict(image.text)["Title"]
+    assert "flight past lift-off" in title, title
+    assert coupling_label(open_result(flight_file)) in title
+
+
+@pytest.mark.parametrize("figure", ["bouncing", "mass-ratio-limit", "regime-map"])
+def test_a_bouncing_region_gets_its_edge_in_the_legend(figure, bouncing_dataset, tmp_path,
+                                                       monkeypatch):
+    _, labels = _drawn(figure, bouncing_dataset, tmp_path, monkeypatch)
+    assert any(label.startswith("edge of the bouncing region") for label in labels), labels
+    # With flight no point lifts off: no lift-off patch in the legend.
+    assert not any(label.startswith("lift-off:") for label in labels), labels
+
+
+def test_velocity_curves_of_a_flight_file_show_bouncing_and_the_curves_without(
+        bouncing_dataset, tmp_path, monkeypatch):
+    _, labels = _drawn("velocity-curves", bouncing_dataset, tmp_path, monkeypatch)
+    assert any(label.startswith("bouncing: flights and") for label in labels), labels
+    assert any("without flight (same\ncoupling): ends at lift-off" == label
+               for label in labels), labels
+
+
+def test_the_bouncing_figure_refuses_a_file_that_does_not_fly(flight_file, tmp_path):
+    dataset = open_result(flight_file)
+    del dataset.attrs["study_lift_off"]
+    with pytest.raises(FigureError, match=r"stops at lift-off.*flight = true"):
+        draw_figure("bouncing", dataset, tmp_path / "bouncing")
+
+
+def test_a_missing_flight_variable_names_the_flight_key(flight_file, tmp_path):
+    dataset = open_result(flight_file).drop_vars("largest_hop")
+    with pytest.raises(FigureError, match=r"largest_hop.*with flight.*\[solver\] flight = "
+                       r"true"):
+        draw_figure("bouncing", dataset, tmp_path / "bouncing")
+
+
+def test_bouncing_share_counts_of_the_map_and_of_the_moving_points():
+    status = np.array([Status.STATIC, Status.STICK_SLIP, Status.BOUNCING, Status.BOUNCING,
+                       Status.NOT_CONVERGED, Status.CONTINUOUS_SLIDING], dtype=np.int8)
+    share, of_moving = bouncing_share(status)
+    assert share == pytest.approx(2 / 6) and of_moving == pytest.approx(2 / 4)
+    assert Status.BOUNCING in VALID
+
+
+def test_rows_spread_over_the_mass_ratios_ends_included():
+    assert row_indices(2) == [0, 1]
+    assert row_indices(6) == [0, 2, 5] or row_indices(6) == [0, 3, 5]
+    assert row_indices(10)[0] == 0 and row_indices(10)[-1] == 9 and len(row_indices(10)) == 3
