@@ -353,6 +353,18 @@ def test_attractors_with_drops():
     assert int(without.starts_converged) == 12
 
 
+def test_attractors_at_a_static_point_with_drops():
+    """Below both thresholds every drop lands and stays stuck: that is the static
+    outcome of the contact starts, one attractor, not a second one (a landing for good
+    was once counted as a stick-slip orbit of velocity 0)."""
+    s = study.Structure(**PAPER)
+    assert steady_state(s, 12.0, 2.0, coupling="two-way").status == Status.STATIC
+    found = attractors(s, 12.0, 2.0, coupling="two-way", flight=True)
+    assert int(found.count) == 1
+    assert float(found.velocity_spread) == 0.0
+    assert int(found.starts_converged) == 24
+
+
 def _regenerate():
     """Recompute the cached reference points (a few minutes on one core)."""
     from tests.reference.flight import steady_motion as motion

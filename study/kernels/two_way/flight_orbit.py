@@ -57,6 +57,7 @@ from study.model.codes import (
     REASON_EVENT_BUDGET,
     REASON_NO_PERIODIC_ORBIT,
     REASON_NONE,
+    STATIC,
     STICK_SLIP,
 )
 
@@ -429,6 +430,20 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     span = periods * TWO_PI / omega
     if acc[A_AIRBORNE] > 0.0:
         out[c_status] = BOUNCING
+    elif acc[A_SLIPS] == 0.0:
+        # Landed for good: a permanent stick is the static outcome (no orbit period), as
+        # a start in contact below the thresholds reports it.
+        out[c_status] = STATIC
+        out[c_velocity] = 0.0
+        out[c_slips] = 0.0
+        out[c_forward] = 0.0
+        out[c_backward] = 0.0
+        out[c_period] = 0.0
+        out[c_multiplier] = flight_radius(record.jac)
+        out[c_airborne] = 0.0
+        out[c_hop] = acc[A_HOP]
+        out[c_impacts] = 0.0
+        return passes[0], passes[1]
     else:
         out[c_status] = STICK_SLIP if acc[A_STICK] > 0.0 else CONTINUOUS_SLIDING
     out[c_velocity] = acc[A_DISPLACEMENT] / span
