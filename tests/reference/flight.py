@@ -136,7 +136,7 @@ __all__ = [
 ]
 
 #: Version of this reference's algorithm: bump whenever its results may change.
-CODE_VERSION = "3"
+CODE_VERSION = "4"
 
 #: Contact modes: stick, slip (+1 / -1: the sign of ``v``), flight.
 STICK = 0
@@ -151,6 +151,8 @@ STEPS_PER_PERIOD = 32
 MAX_SEGMENTS = 2000
 #: Longest orbit looked for [drive periods].
 MAX_ORBIT = 8
+#: Drive periods averaged over when no orbit was found.
+IRREGULAR_MEASURE = 64
 #: Phase-0 states closer than this (natural units) belong to the same point of the orbit.
 LOOSE = 1e-5
 
@@ -882,8 +884,10 @@ class SteadyMotion:
     Attributes
     ----------
     velocity : float
-        Mean velocity over the measured orbit [m s-1] (0 when static; over the last
-        measured periods when not periodic; NaN at a friction paradox).
+        Mean velocity over the measured orbit [m s-1] (0 when static; NaN at a
+        friction paradox). When not periodic, the mean over the ``IRREGULAR_MEASURE``
+        (64) drive periods that follow ``max_periods``, like the other averages: for an
+        irregular (chaotic) motion an estimate, not a converged number.
     period : int
         Orbit period [drive periods] (0 when not periodic).
     airborne_fraction : float
@@ -906,6 +910,8 @@ class SteadyMotion:
         apart when the orbit was accepted.
     periods : int
         Drive periods followed before the measurement.
+    detail : str
+        Why no orbit was found, or where the motion left the model.
     """
 
     velocity: float
@@ -1004,7 +1010,10 @@ def steady_motion(structure: Any, f: float, a: float, *, start: Any = "rest",
                 found, residual = near[0], distances[near[0] - 1]
                 break
         periods = k
-        n_measure = max(found, 1) * math.ceil(periods_measure / max(found, 1))
+        if found:
+            n_measure = found * math.ceil(periods_measure / found)
+        else:  # irregular motion (or a transient slower than max_periods): a long mean
+            n_measure = max(periods_measure, IRREGULAR_MEASURE)
         total = _Tally()
         for _ in range(n_measure):
             motion, tally = _advance(model, motion, 0.0, model.T)
@@ -1039,4 +1048,7 @@ def steady_motion(structure: Any, f: float, a: float, *, start: Any = "rest",
                int(history[-1].mode)),
         residual=residual,
         periods=periods,
+        detail="" if found else (
+            f"the phase-0 state did not repeat within {tol} over 1..{MAX_ORBIT} periods "
+            f"in {max_periods} periods"),
     )

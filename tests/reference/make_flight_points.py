@@ -57,7 +57,7 @@ LIFT_OFF = {
 }
 DROP = 3e-3
 #: Drive periods followed at most per run.
-MAX_PERIODS = 800
+MAX_PERIODS = 2000
 #: The refined run's settings.
 REFINED = {"rtol": 1e-13, "steps_per_period": 64, "tol": 1e-11}
 
