@@ -80,18 +80,45 @@ def check_closure(structure, f, a, repeats=2, airborne_tolerance=1e-9, **options
         # The chatter cut-offs differ: the exact solver lands plastically below CHATTER
         # (1e-7) of the natural speed, the reference below 1e-9 of a / w, so the exact
         # orbit counts fewer of the tiny last rebounds (24 against 31, say) and its
-        # airborne fraction is shorter by their duration, ~CHATTER of a period.
-        assert airborne_error < 3.0 * CHATTER
+        # airborne fraction is shorter by their duration, ~CHATTER of a period when the
+        # gap's effective gravity is ~g (more where it is small: see the Q test).
+        assert airborne_error < max(3.0 * CHATTER, airborne_tolerance)
         assert row["impacts"] <= sim.impacts / (repeats * periods)
     return row, state_error, velocity_error
 
 
+Q_POINTS = {
+    "M0.3": ({"M": 0.3}, 14.5, 12.0),
+    "M0.99": ({"M": 0.99}, 14.5, 10.0),
+    "M0.08": ({"M": 0.08}, 14.5, 12.0),
+    "M0.6-e0.5": ({"M": 0.6, "restitution": 0.5}, 15.0, 9.0),
+}
+
+
 @pytest.mark.parametrize("q", [0.5, 2.0, 17.5, 100.0, 1e3, 1e4])
-def test_q_half_to_ten_thousand_orbit_closes_in_reference(q):
-    """Q from 0.5 to 1e4 at one bouncing drive (M = 0.3, 14.5 Hz, 12 m s-2): the exact
-    orbit is an orbit of the reference, with the same velocity."""
-    s = study.Structure(**{**PAPER, "M": 0.3, "Q": q})
-    check_closure(s, 14.5, 12.0, repeats=3)
+@pytest.mark.parametrize("name", sorted(Q_POINTS))
+def test_q_half_to_ten_thousand_orbit_closes_in_reference(name, q):
+    """Q from 0.5 to 1e4 at four bouncing drives (M = 0.99, Q = 1e4: a period-4 orbit):
+    the exact orbit is an orbit of the reference, with the same velocity. Where the
+    exact solver does not bounce (M = 0.6, e = 0.5, Q = 0.5: stick-slip) the reference
+    from rest agrees on the status and the velocity.
+
+    The chatter at M = 0.6, e = 0.5, Q = 2 happens where the gap's effective gravity is
+    small (0.36 m s-2, from the reference's successive rebounds): the exact solver's
+    cut-off then shortens the airborne fraction by 6e-7 (of 0.059), more than the
+    ~CHATTER (1e-7) its comment states for g_eff ~ g (the skipped rebounds last
+    2 u / (g_eff (1 - e))); the velocity still agrees to 1e-13 a / w."""
+    changes, f, a = Q_POINTS[name]
+    s = study.Structure(**{**PAPER, **changes, "Q": q})
+    _, row = exact_orbit(s, f, a)
+    if Status(int(row["status"])) != Status.BOUNCING:
+        motion = steady_motion(s, f, a)
+        assert (Status(int(row["status"])), motion.status) == (Status.STICK_SLIP, "stick-slip")
+        assert abs(motion.velocity - row["velocity"]) < VELOCITY_TOLERANCE * a / (
+            2.0 * math.pi * f)
+        return
+    airborne = 1e-6 if s.restitution > 0.0 else 1e-9
+    check_closure(s, f, a, repeats=3, airborne_tolerance=airborne)
 
 
 def _random_points(count, seed):
