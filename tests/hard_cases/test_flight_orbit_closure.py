@@ -26,7 +26,7 @@ import study
 from study.kernels.two_way.flight import CHATTER
 from study.kernels.two_way.flight_orbit import solve_flight
 from study.kernels.two_way.points import FLIGHT_COLUMNS, OUTPUT_COLUMNS, start_state
-from study.model.status import Status
+from study.model.status import NonConvergence, Status
 from study.solvers.exact import DEFAULT_SETTINGS, kernel_budget, steady_state
 from tests.hard_cases.test_flight_hard_cases import _threshold
 from tests.reference.flight import FlightModel, simulate, steady_motion
@@ -171,3 +171,29 @@ def test_grazing_take_off_against_reference(M, f, lo, hi):
     assert motion.status == "bouncing" and motion.period == int(row["period"])
     assert abs(motion.velocity - row["velocity"]) < VELOCITY_TOLERANCE * a / (2 * math.pi * f)
     assert_allclose(motion.largest_hop, row["hop"], rtol=1e-3)
+
+
+#: Points where the exact solver finds no periodic orbit (NO_PERIODIC_ORBIT): four of the
+#: seeded sample above (e = 0.5) and e = 0.9 at M = 0.6, 15 Hz, 9 m s-2.
+IRREGULAR = [
+    ({"M": 0.4791, "restitution": 0.5}, 14.621, 17.737),
+    ({"M": 0.7509, "restitution": 0.5}, 23.214, 16.400),
+    ({"M": 0.7938, "restitution": 0.5}, 16.899, 19.066),
+    ({"M": 0.2533, "restitution": 0.5}, 24.451, 17.986),
+    ({"M": 0.6, "restitution": 0.9}, 15.0, 9.0),
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("changes", "f", "a"), IRREGULAR)
+def test_no_periodic_orbit_is_irregular_in_reference(changes, f, a):
+    """Where the exact solver reports NO_PERIODIC_ORBIT (no velocity), the reference
+    followed from rest finds no orbit of up to 8 periods in 400 periods either (5-16 s
+    each)."""
+    s = study.Structure(**{**PAPER, **changes})
+    r = steady_state(s, f, a, coupling="two-way", flight=True, parallel=False)
+    assert Status(int(r.status)) == Status.NOT_CONVERGED
+    assert NonConvergence(int(r.reason)) == NonConvergence.NO_PERIODIC_ORBIT
+    assert math.isnan(float(r.velocity))
+    motion = steady_motion(s, f, a, max_periods=400)
+    assert motion.status == "not-periodic" and motion.period == 0
