@@ -16,6 +16,7 @@ checked to equal ``steady_state``'s bit for bit.
 
 from __future__ import annotations
 
+import cmath
 import math
 
 import numpy as np
@@ -197,3 +198,48 @@ def test_no_periodic_orbit_is_irregular_in_reference(changes, f, a):
     assert math.isnan(float(r.velocity))
     motion = steady_motion(s, f, a, max_periods=400)
     assert motion.status == "not-periodic" and motion.period == 0
+
+
+def always_airborne_velocity(structure, f):
+    """Mean velocity [m s-1] of a period-1 orbit that never rests on the table and lands
+    once a period with the base stuck (``v+ = 0``), in closed form.
+
+    Over a period the normal impulse balances gravity, ``Pz = g T``; the horizontal
+    momentum ``v + M sa delta'`` is constant in flight and, the orbit being periodic, the
+    impact's tangential impulse is 0, so the mean velocity is that momentum, ``M sa
+    delta'+`` (the mean of ``delta'`` vanishes). In flight the mode is the free oscillator
+    ``(1 - M) delta'' + c delta' + k delta = g ca``, kicked at each impact by
+    ``d(delta') = -e.dV = -ca g T / (1 - M)`` (``dV = W (0, Pz)``): its periodic response
+    to that comb, just after a kick, is ``J Re[(1 + i b / W_d) / (1 - exp((-b + i W_d) T))]``
+    (``b = c / (2 (1 - M))``, ``W_d^2 = k / (1 - M) - b^2``). Independent of ``e`` and of
+    the drive amplitude."""
+    alpha = math.radians(structure.alpha)
+    sa, ca = math.sin(alpha), math.cos(alpha)
+    w0 = 2.0 * math.pi * structure.f0
+    m = structure.M
+    period = 1.0 / f
+    b = w0 / structure.Q / (2.0 * (1.0 - m))
+    wd = math.sqrt(w0 * w0 / (1.0 - m) - b * b)
+    kick = -ca * structure.g * period / (1.0 - m)
+    response = (1.0 + 1j * b / wd) / (1.0 - cmath.exp(complex(-b, wd) * period))
+    return m * sa * kick * response.real
+
+
+@pytest.mark.parametrize(("M", "e", "f", "a"),
+                         [(0.08, 0.6, 14.5, 16.0), (0.08, 0.8, 14.5, 12.0),
+                          (0.08, 0.9, 14.5, 12.0), (0.08, 0.95, 14.5, 10.0),
+                          (0.08, 0.95, 14.5, 12.0), (0.3, 0.6, 14.5, 16.0),
+                          (0.3, 0.8, 14.5, 16.0)])
+def test_always_airborne_orbit_closed_form(M, e, f, a):
+    """e -> 1: orbits always in the air with one stuck landing a period (found on a grid
+    of M, e, f, a) have the closed-form velocity to 1e-12 relative; the reference sees
+    one impact a period, ending stuck, with normal impulse g T."""
+    s = study.Structure(**{**PAPER, "M": M, "restitution": e})
+    row, _, _ = check_closure(s, f, a)
+    assert row["airborne"] == 1.0 and row["impacts"] == 1.0 and row["period"] == 1.0
+    assert_allclose(row["velocity"], always_airborne_velocity(s, f), rtol=1e-12)
+    z, _ = exact_orbit(s, f, a)
+    landings = simulate(s, f, a, 1.0 / f, z).events
+    assert [ev["kind"] for ev in landings] == ["impact"]
+    assert landings[0]["ended"] == "stick"
+    assert_allclose(landings[0]["normal_impulse"], s.g / f, rtol=1e-10)
