@@ -9,7 +9,10 @@ integrator, at the coincidence and on both sides of it:
   once);
 * a slip that ends exactly at take-off: ``v`` reaches 0 at the instant ``n`` does
   (M = 0.9, 10 Hz: below a* the base takes off while still sliding, above it its slip
-  ends first and it takes off from stick).
+  ends first and it takes off from stick);
+* a grazing impact: ``h`` and ``h'`` vanish together (M = 0.9, 8 Hz: two landings a
+  period below a*, one above);
+* a landing at the impact's own stick boundary ``|W_xz / W_xx| = cs``.
 
 The coincidence is located with the reference's own events: the drive amplitude is
 bisected on which of the two event orders the reference sees on the exact solver's
@@ -217,3 +220,29 @@ def test_reference_at_grazing_impact(grazing_impact):
     s, f, a_star = grazing_impact
     z, _ = exact_orbit(s, f, a_star)
     simulate(s, f, a_star, 1.0 / f, z)
+
+
+# --- a landing at the impact's own stick boundary -------------------------------------
+
+
+@pytest.mark.parametrize(("M", "f", "a"), [(0.3, 14.5, 20.0), (0.6, 10.0, 16.0),
+                                           (0.08, 14.5, 20.0)])
+def test_landing_at_impact_stick_boundary(M, f, a):
+    """A landing whose tangential velocity reaches 0 during the impact stays stuck when
+    ``|W_xz / W_xx| <= cs``: at ``cs* = mu sa ca / (1 + mu sa^2)`` (alpha = 64 degree) the
+    landing is at that boundary. At cs* (1 +- 1e-6) and (1 +- 1e-12) the exact orbit
+    closes in the reference, whose landing slides on below cs* and sticks above it, and
+    the velocity is continuous across cs*."""
+    alpha = math.radians(PAPER["alpha"])
+    sa, ca = math.sin(alpha), math.cos(alpha)
+    mu = M / (1.0 - M)
+    cs_star = mu * sa * ca / (1.0 + mu * sa * sa)
+    velocity = {}
+    for step in (-1e-6, -1e-12, 1e-12, 1e-6):
+        s = study.Structure(**{**PAPER, "M": M, "cs": cs_star * (1.0 + step)})
+        row, _, _ = check_closure(s, f, a)
+        velocity[step] = row["velocity"]
+        landings = [ev for kind, _, ev in orbit_events(s, f, a) if kind == "impact"]
+        assert [ev["ended"] for ev in landings] == ["slip" if step < 0 else "stick"]
+    slope = (velocity[1e-6] - velocity[-1e-6]) / 2e-6
+    assert abs(velocity[1e-12] - velocity[-1e-12]) <= 10.0 * abs(slope) * 2e-12 + 1e-15
