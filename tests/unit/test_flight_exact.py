@@ -385,3 +385,38 @@ def _regenerate():
 
 if __name__ == "__main__":
     _regenerate()
+
+
+@pytest.mark.parametrize("M", [0.08, 0.6, 0.99])
+def test_gap_bound_is_above_the_sampled_gap(M):
+    # flight.gap_below lets a run skip largest_gap on a piece: it must never put a piece
+    # below a level its gap reaches (dense samples of the closed form here), and it must
+    # skip pieces well below the level (else it saves nothing).
+    rng = np.random.default_rng(21)
+    s = study.Structure(**{**PAPER, "M": M})
+    vector = structure_vector(s, "two-way", True)
+    skipped = 0
+    for _ in range(40):
+        f = rng.uniform(8.0, 20.0)
+        a = rng.uniform(5.0, 30.0)
+        omega = 2.0 * np.pi * f
+        table = np.zeros((flight.N_ROWS, N_MODE))
+        for row in range(3):
+            mode_row(vector, omega, a, table, row)
+        flight.flight_row(vector, table)
+        frow = table[flight.FLIGHT_ROW]
+        t0 = rng.uniform(0.0, 1.0 / f)
+        scale = (9.81 + a) / omega
+        start = flight.FlightStart(
+            t0, math.cos(omega * t0), math.sin(omega * t0),
+            rng.normal() * 1e-4, rng.normal() * 1e-2, 0.0,
+            rng.uniform(0.0, 1.0) * scale / omega, rng.normal() * scale, 0.0)
+        tau_end = rng.uniform(0.01, 1.0) / f
+        gaps = [flight.flight_at(vector, frow, omega, a, start, t0 + tau)[9]
+                for tau in np.linspace(0.0, tau_end, 2001)]
+        top = max(gaps)
+        assert not flight.gap_below(vector, frow, a, start, tau_end, top)
+        assert not flight.gap_below(vector, frow, a, start, tau_end, 0.0)
+        skipped += flight.gap_below(vector, frow, a, start, tau_end,
+                                    top + 10.0 * scale / omega)
+    assert skipped > 20

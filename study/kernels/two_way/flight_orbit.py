@@ -69,6 +69,9 @@ MAX_NEWTON = 30
 NEWTON_TOLERANCE = 1e-12
 LOOSE_TOLERANCE = 1e-9
 NEWTON_STEP = 1e-7
+# A Newton pass after a step below this (scaled) also seeks the largest gap: it is
+# likely the last one, whose gap the orbit reports (else a pass of its own after it).
+HOP_STEP = 1e-6
 # An orbit is stable when its largest Floquet multiplier is below 1 + this.
 STABILITY_MARGIN = 1e-6
 # Periods of the map followed from the start before Newton's method: the first take-off
@@ -172,8 +175,11 @@ def flight_newton(point, z, periods, section, scales, max_events, record, work):
     small_step = False
     step = np.empty(N_STATE)
     residual = np.empty(N_STATE)
+    # This pass also seeks the largest gap: the last step was small enough that it is
+    # likely the last pass (the gap of a run does not depend on its Jacobian).
+    with_hop = False
     for _ in range(MAX_NEWTON):
-        flag = _pass(point, z, work, section, span, record, True, False, max_events)
+        flag = _pass(point, z, work, section, span, record, True, with_hop, max_events)
         if flag != RUN_OK:
             return flag, False
         res = 0.0
@@ -185,14 +191,16 @@ def flight_newton(point, z, periods, section, scales, max_events, record, work):
                        and acc[A_IMPACTS] == last_impacts and not sliver)
         if res <= NEWTON_TOLERANCE or (small_step and same_events
                                        and res <= LOOSE_TOLERANCE):
-            # The largest gap of this pass, by a pass of its own (the closed form's
-            # maxima cost more than the pass).
-            spare = FlightRecord(np.zeros(N_FLIGHT_ACC), np.eye(N_STATE),
-                                 np.empty((N_STATE, N_STATE)), np.empty((N_STATE, N_STATE)),
-                                 record.passes)
-            _pass(point, z, work, section, span, spare, False, True, max_events)
-            acc[A_HOP] = spare.acc[A_HOP]
+            if not with_hop:
+                # The largest gap of this pass, by a pass of its own (the closed form's
+                # maxima cost more than the pass): the same run from the same z.
+                spare = FlightRecord(np.zeros(N_FLIGHT_ACC), np.eye(N_STATE),
+                                     np.empty((N_STATE, N_STATE)),
+                                     np.empty((N_STATE, N_STATE)), record.passes)
+                _pass(point, z, work, section, span, spare, False, True, max_events)
+                acc[A_HOP] = spare.acc[A_HOP]
             return RUN_OK, True
+        with_hop = False
         last_events = acc[A_EVENTS]
         last_slips = acc[A_SLIPS]
         last_impacts = acc[A_IMPACTS]
@@ -232,6 +240,7 @@ def flight_newton(point, z, periods, section, scales, max_events, record, work):
             # The orbit sticks across the section (see newton): stick.
             z[2] = 0.0
         small_step = size <= NEWTON_STEP
+        with_hop = size <= HOP_STEP
         previous = res
     return RUN_OK, False
 
@@ -334,10 +343,12 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
 
     Returns
     -------
-    status, reason, periods
+    status, reason, periods, radius
         ``periods`` > 0 and ``z`` the orbit's state at phase 0 when found (``record``
         then belongs to one pass around it); status STICK_SLIP for any orbit found (the
-        caller names it from its statistics), FRICTION_PARADOX or NOT_CONVERGED.
+        caller names it from its statistics), FRICTION_PARADOX or NOT_CONVERGED;
+        ``radius`` the largest Floquet multiplier of ``record.jac`` when it was computed
+        (an eigenvalue problem costs about a pass), else NaN.
     """
     max_events = budget.max_events
     period = TWO_PI / point.omega
@@ -346,21 +357,23 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
     if t_start != 0.0:
         flag = fly(point, z, t_start, period, record, False, False, max_events)
     if flag == RUN_PARADOX:
-        return FRICTION_PARADOX, REASON_NONE, 0
+        return FRICTION_PARADOX, REASON_NONE, 0, np.nan
     for _ in range(FIRST_PERIODS):
         if flag != RUN_OK:
             break
         flag = fly(point, z, 0.0, period, record, False, False, max_events)
     if flag == RUN_PARADOX:
-        return FRICTION_PARADOX, REASON_NONE, 0
+        return FRICTION_PARADOX, REASON_NONE, 0, np.nan
     if flag != RUN_OK:
-        return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
+        return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, np.nan
     guess = z.copy()
     flag, converged = _quiet_newton(point, z, 1, scales, max_events, record, work)
-    if converged and flight_radius(record.jac) < 1.0 + STABILITY_MARGIN:
-        return STICK_SLIP, REASON_NONE, 1
+    if converged:
+        radius = flight_radius(record.jac)
+        if radius < 1.0 + STABILITY_MARGIN:
+            return STICK_SLIP, REASON_NONE, 1, radius
     if flag == RUN_PARADOX:
-        return FRICTION_PARADOX, REASON_NONE, 0
+        return FRICTION_PARADOX, REASON_NONE, 0, np.nan
     for i in range(N_STATE):
         z[i] = guess[i]
     tried = np.full(MAX_PERIOD + 1, np.inf)
@@ -373,9 +386,9 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
         record.passes[1] += 1.0
         flag = fly(point, z, 0.0, period, record, False, False, max_events)
         if flag == RUN_PARADOX:
-            return FRICTION_PARADOX, REASON_NONE, 0
+            return FRICTION_PARADOX, REASON_NONE, 0, np.nan
         if flag != RUN_OK:
-            return NOT_CONVERGED, REASON_EVENT_BUDGET, 0
+            return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, np.nan
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
             back = (iteration - periods + 1) % MAX_PERIOD
             gap = 0.0
@@ -388,13 +401,13 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
                 found = _flight_cycle(point, candidate, periods, scales, max_events,
                                       record, work)
                 if found < 0:
-                    return FRICTION_PARADOX, REASON_NONE, 0
+                    return FRICTION_PARADOX, REASON_NONE, 0, np.nan
                 if found > 0:
                     for i in range(N_STATE):
                         z[i] = candidate[i]
-                    return STICK_SLIP, REASON_NONE, found
+                    return STICK_SLIP, REASON_NONE, found, np.nan
                 break
-    return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0
+    return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0, np.nan
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -417,8 +430,10 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
                           np.zeros(2))
     work = np.empty(N_STATE)
     history = np.empty((MAX_PERIOD, N_STATE))
-    status, reason, periods = find_flight_orbit(point, z, t_start, scales, budget, record,
-                                                work, history)
+    status, reason, periods, radius = find_flight_orbit(point, z, t_start, scales, budget,
+                                                        record, work, history)
+    if math.isnan(radius):
+        radius = flight_radius(record.jac)
     passes = record.passes
     (c_status, c_reason, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier,
      c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts) = columns
@@ -439,7 +454,7 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
         out[c_forward] = 0.0
         out[c_backward] = 0.0
         out[c_period] = 0.0
-        out[c_multiplier] = flight_radius(record.jac)
+        out[c_multiplier] = radius
         out[c_airborne] = 0.0
         out[c_hop] = acc[A_HOP]
         out[c_impacts] = 0.0
@@ -451,7 +466,7 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     out[c_forward] = acc[A_FORWARD] / span
     out[c_backward] = acc[A_BACKWARD] / span
     out[c_period] = periods
-    out[c_multiplier] = flight_radius(record.jac)
+    out[c_multiplier] = radius
     out[c_delta] = z[0]
     out[c_rate] = z[1]
     out[c_speed] = z[2]
