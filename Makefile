@@ -15,6 +15,7 @@
 #                   one-thread map against a single-purpose floor -> results/bench-floor.md,
 #                   one-thread map, one-way against two-way -> results/bench-two-way-map.md,
 #                   exact two-way solver vs integrator -> results/bench-two-way-agreement.md,
+#                   flight: M -> 1 map with and without it, work-precision -> results/bench-flight.md,
 #                   reading a million-row measurement file (printed)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
@@ -189,6 +190,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_planar.py
 	$(PY) benchmarks/two_way_agreement.py
 	$(PY) benchmarks/bench_measurements.py
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_flight.py
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
 
