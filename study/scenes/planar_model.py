@@ -293,8 +293,8 @@ class Disk:
         total = sum(p.M for p in plates)
         if total > 1.0 + 1e-12:
             raise ValueError(
-                f"Disk: the plates' mass ratios sum to {total:g} > 1 (each M is a share of "
-                "the whole structure's mass)"
+                f"Disk: the plates' mass ratios sum to {total:g} > 1; allowed: a sum <= 1 "
+                "(each M is a share of the whole structure's mass)"
             )
         cs = require_finite("Disk.cs", self.cs)
         if cs <= 0.0:

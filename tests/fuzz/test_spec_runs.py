@@ -92,13 +92,18 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         "forward_slip_fraction": ("status", _INVALID),
         "backward_slip_fraction": ("status", _INVALID),
         "velocity_one_way": ("status_one_way", _INVALID),
+        # With flight: the same points stopped at lift-off, and the flight's statistics.
+        "velocity_without_flight": ("status_without_flight", _INVALID),
+        "airborne_fraction": ("status", _INVALID),
+        "largest_hop": ("status", _INVALID),
+        "impacts_per_period": ("status", _INVALID),
         "floquet_multiplier": ("status", _INVALID),
         "frontier_frequency": ("frontier_kind", (0,)),
         "frontier_bracket": ("frontier_kind", (0,)),
     },
-    # Scene flags: motion status lift_off (3) and not_converged (4); a segment
-    # not_reached (2); a plan run other than completed (0).
-    "calibration": {name: ("status", (3, 4)) for name in (
+    # Scene flags: motion status lift_off (3), not_converged (4) and friction_paradox
+    # (5); a segment not_reached (2); a plan run other than completed (0).
+    "calibration": {name: ("status", (3, 4, 5)) for name in (
         "forward_speed", "lateral_speed", "turn_rate", "slips_per_period", "stuck_fraction")},
     "trajectory": {name: ("segment_status", (2,)) for name in (
         "forward_displacement", "lateral_displacement", "heading_change",
@@ -455,8 +460,14 @@ def m_axis(rng, doc):
         return m_number(rng, doc)
     path = rng.choice(paths)
     axis = copy.deepcopy(_get(doc, path))
-    lo, hi = (axis["values"][0], axis["values"][-1]) if "values" in axis else (
-        axis["start"], axis["stop"])
+    # An earlier mutation of the same case may have removed a member already.
+    values = axis.get("values")
+    if isinstance(values, list) and values:
+        lo, hi = values[0], values[-1]
+    else:
+        lo, hi = axis.get("start", 1.0), axis.get("stop", 2.0)
+    if not all(isinstance(x, int | float) and not isinstance(x, bool) for x in (lo, hi)):
+        lo, hi = 1.0, 2.0
     hi = hi if hi != lo else lo + 1.0
     choice = rng.randrange(16)
     if choice == 0:
