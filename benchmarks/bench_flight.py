@@ -29,13 +29,11 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import argparse
 import math
-import platform
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
-import numba
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -43,7 +41,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from docs_tables import write_docs_table  # noqa: E402
+from docs_tables import load_average, machine, write_docs_table  # noqa: E402
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
@@ -55,26 +53,6 @@ STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
 GOAL_BOUNCING = 3.0
 #: The time integrator's tolerances of the work-precision part.
 TOLERANCES = (1e-6, 1e-8, 1e-10)
-
-
-def _machine() -> str:
-    cpu = platform.machine()
-    try:
-        with open("/proc/cpuinfo") as info:
-            cpu = next(line.split(":", 1)[1].strip() for line in info
-                       if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return (f"{cpu}, {os.cpu_count()} cores, numba {numba.__version__} "
-            f"({numba.config.NUMBA_NUM_THREADS} thread(s)), numpy {np.__version__}, "
-            f"Python {platform.python_version()}")
-
-
-def _load() -> str:
-    try:
-        return "{:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
-    except OSError:
-        return "unknown"
 
 
 def _calls() -> dict[str, Callable]:
@@ -178,7 +156,7 @@ def report(args: argparse.Namespace, part: dict, rows: list[dict], loads: str) -
     lines = [
         "# Flight and impacts: speed against error",
         "",
-        f"Machine: {_machine()}; shared, load average {loads} (1, 5, 15 min). "
+        f"Machine: {machine()}; shared, load average {loads} (1, 5, 15 min). "
         f"Commit {git['git_commit']}{' (dirty)' if git['git_dirty'] else ''}, {utc_now()}.",
         "",
         f"Map: M = {STRUCTURE.M} (f0 = 14.44 Hz, Q = 17.5, alpha = 64 deg, cs = ck = 0.25, "
@@ -239,10 +217,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--output", type=Path, default=ROOT / "results" / "bench-flight.md")
     args = parser.parse_args(argv)
-    load_start = _load()
-    print(f"machine: {_machine()}; load average {load_start}", flush=True)
+    load_start = load_average()
+    print(f"machine: {machine()}; load average {load_start}", flush=True)
     part = _map_part(args)
-    load_timed = _load()
+    load_timed = load_average()
     rows = _precision_part(part, args)
     text = report(args, part, rows, f"{load_start} (start), {load_timed} (after the map)")
     args.output.parent.mkdir(parents=True, exist_ok=True)
@@ -253,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
     table = text.split("\n\n", 3)[3].replace("## Work against error at bouncing points",
                                               "**Work against error at bouncing points.**")
     write_docs_table("flight", "bench_flight.py",
-                     f"{_machine()}; load average {load_timed} after the map", table)
+                     f"{machine()}; load average {load_timed} after the map", table)
     return 0
 
 

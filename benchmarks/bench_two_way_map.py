@@ -34,13 +34,11 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import argparse
 import math
-import platform
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
-import numba
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -48,7 +46,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from docs_tables import exponent, write_docs_table  # noqa: E402
+from docs_tables import exponent, load_average, machine, write_docs_table  # noqa: E402
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
@@ -60,26 +58,6 @@ WELL_CONDITIONED = 1e3
 #: The issue's goals.
 GOAL_RATIO = 10.0
 GOAL_ERROR = 1e-12
-
-
-def _machine() -> str:
-    cpu = platform.machine()
-    try:
-        with open("/proc/cpuinfo") as info:
-            cpu = next(line.split(":", 1)[1].strip() for line in info
-                       if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return (f"{cpu}, {os.cpu_count()} cores, numba {numba.__version__} "
-            f"({numba.config.NUMBA_NUM_THREADS} thread(s)), numpy {np.__version__}, "
-            f"Python {platform.python_version()}")
-
-
-def _load() -> str:
-    try:
-        return "{:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
-    except OSError:
-        return "unknown"
 
 
 def _calls() -> dict[str, Callable]:
@@ -174,8 +152,8 @@ def main(argv: list[str] | None = None) -> int:
                         default=ROOT / "results" / "bench-two-way-map.md")
     args = parser.parse_args(argv)
 
-    load_start = _load()
-    print(f"machine: {_machine()}; load average {load_start}", flush=True)
+    load_start = load_average()
+    print(f"machine: {machine()}; load average {load_start}", flush=True)
     f = np.linspace(10.0, 20.0, args.size)[:, None]
     a = np.linspace(0.0, 12.0, args.size)[None, :]
     f_all, a_all = (np.ascontiguousarray(x).ravel() for x in np.broadcast_arrays(f, a))
@@ -192,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
             wall[name], cpu[name] = min(wall[name], w), min(cpu[name], c)
             print(f"  round {round_ + 1}: {name:24s} {w:8.3f} s wall {c:8.3f} s CPU "
                   f"({w / n * 1e6:.3f} us per point)", flush=True)
-    load_timed = _load()
+    load_timed = load_average()
 
     velocity_2, status_2 = results["steady_velocity two-way"]
     velocity_2, status_2 = velocity_2.ravel(), status_2.ravel()
@@ -231,7 +209,7 @@ def main(argv: list[str] | None = None) -> int:
         accuracy = _accuracy(f_all, a_all, velocity_2, status_2, args.sample, args.seed)
         print(f"accuracy sample: {len(accuracy)} points in {time.perf_counter() - start:.0f} s",
               flush=True)
-    load_end = _load()
+    load_end = load_average()
 
     text = report(args, n, wall, cpu, by_status, accuracy, check,
                   f"{load_start} (start), {load_timed} (after the timed rounds), "
@@ -242,7 +220,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"wrote {args.output}")
     write_docs_table(
         "two-way-map", "bench_two_way_map.py",
-        f"{_machine()}; load average {load_timed} (1, 5, 15 min) after the timed rounds; "
+        f"{machine()}; load average {load_timed} (1, 5, 15 min) after the timed rounds; "
         f"CPU times, minimum of {args.repeats} rounds", docs_table(n, cpu))
     return 0
 
@@ -278,7 +256,7 @@ def report(args, n, wall, cpu, by_status, accuracy, check, loads) -> str:
     lines = [
         "# Two-way coupling: the velocity map, one thread",
         "",
-        f"Machine: {_machine()}; shared, load average {loads} (1, 5, 15 min). "
+        f"Machine: {machine()}; shared, load average {loads} (1, 5, 15 min). "
         f"Commit {git['git_commit']}{' (dirty)' if git['git_dirty'] else ''}, {utc_now()}.",
         "",
         f"Map: paper structure (f0 = 14.44 Hz, Q = 17.5, alpha = 64 deg, M = 0.08, "

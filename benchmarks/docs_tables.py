@@ -9,8 +9,13 @@ date. The files are committed: the documentation builds without running benchmar
 
 from __future__ import annotations
 
+import os
+import platform
 import time
 from pathlib import Path
+
+import numba
+import numpy as np
 
 #: Where the documentation's benchmark tables live.
 DOCS_SPEED = Path(__file__).resolve().parent.parent / "docs" / "speed"
@@ -77,3 +82,25 @@ def exponent(value: float) -> str:
     """A power of ten as people write it: ``1e-8``, not ``1e-08``."""
     mantissa, power = f"{value:.0e}".split("e")
     return f"{mantissa}e{int(power)}"
+
+
+def machine() -> str:
+    """The CPU, cores, numba threads and versions a benchmark ran on."""
+    cpu = platform.machine()
+    try:
+        with open("/proc/cpuinfo") as info:
+            cpu = next(line.split(":", 1)[1].strip() for line in info
+                       if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    return (f"{cpu}, {os.cpu_count()} cores, numba {numba.__version__} "
+            f"({numba.config.NUMBA_NUM_THREADS} thread(s)), numpy {np.__version__}, "
+            f"Python {platform.python_version()}")
+
+
+def load_average() -> str:
+    """The 1, 5 and 15 min load averages, or "unknown"."""
+    try:
+        return "{:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
+    except OSError:
+        return "unknown"
