@@ -41,7 +41,7 @@ LIFT_WATCH = 1e-3
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _solve3(m, r, out):
+def solve3(m, r, out):
     """Solve ``m x = r`` (3x3, partial pivoting) into ``out``; False when singular."""
     a = m.copy()
     b = r.copy()
@@ -85,15 +85,91 @@ def stuck_radius(j00, j01, j10, j11, j22):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _polished(x, c2, c1, c0):
+    """A root ``x`` of ``x^3 - c2 x^2 + c1 x - c0`` after up to two Newton steps that
+    lower the residual (the closed form's shift by ``c2 / 3`` costs digits when the roots
+    are small beside ``c2``)."""
+    value = ((x - c2) * x + c1) * x - c0
+    for _ in range(2):
+        slope = (3.0 * x - 2.0 * c2) * x + c1
+        if slope == 0.0:
+            break
+        trial = x - value / slope
+        trial_value = ((trial - c2) * trial + c1) * trial - c0
+        # Only a step that lowers the residual: near a cluster of roots Newton's step
+        # from the closed form's rounding can leave it.
+        if not abs(trial_value) < abs(value):
+            break
+        x = trial
+        value = trial_value
+    return x
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _pair_radius(b, c):
+    """Largest modulus of the roots of ``x^2 + b x + c``."""
+    half = 0.5 * b
+    disc = half * half - c
+    if disc < 0.0:
+        return math.sqrt(c)
+    return abs(half) + math.sqrt(disc)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def cubic_radius(c2, c1, c0):
+    """Largest modulus of the roots of ``x^3 - c2 x^2 + c1 x - c0`` (real coefficients).
+
+    Cardano's closed form on the cubic shifted by ``c2 / 3``: with one real root ``r``,
+    the complex pair from the quadratic left by dividing out ``x - r``; with three real
+    roots, the trigonometric form. Each real root is polished by Newton's method on the
+    unshifted cubic. The largest modulus is good to a few ulps of the largest root unless
+    two roots nearly coincide (then to about the square root of the rounding, as for any
+    eigenvalue method on a nearly defective matrix).
+    """
+    shift = c2 / 3.0
+    p = c1 - c2 * shift
+    q = (c1 * shift - c0) - 2.0 * shift * shift * shift
+    half = 0.5 * q
+    third = p / 3.0
+    disc = half * half + third * third * third
+    if disc > 0.0:
+        # One real root (u - third / u, u chosen away from cancellation), a complex pair.
+        u = -(half + math.copysign(math.sqrt(disc), half))
+        u = math.copysign(abs(u) ** (1.0 / 3.0), u)
+        t = u - third / u if u != 0.0 else 0.0
+        r = _polished(t + shift, c2, c1, c0)
+        b = r - c2
+        return max(abs(r), _pair_radius(b, c1 + r * b))
+    if third == 0.0:
+        return abs(_polished(shift, c2, c1, c0))
+    m = 2.0 * math.sqrt(-third)
+    cos3 = min(1.0, max(-1.0, -half / ((-third) * math.sqrt(-third))))
+    theta = math.acos(cos3) / 3.0
+    radius = 0.0
+    for k in range(3):
+        r = _polished(m * math.cos(theta - k * (2.0 * math.pi / 3.0)) + shift, c2, c1, c0)
+        radius = max(radius, abs(r))
+    return radius
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def spectral_radius(jac):
-    """Largest modulus of the eigenvalues of the 3x3 ``jac`` (the Floquet multipliers)."""
+    """Largest modulus of the eigenvalues of the 3x3 ``jac`` (the Floquet multipliers),
+    from its characteristic polynomial (:func:`cubic_radius`): a LAPACK eigenvalue call
+    costs more than a pass of the orbit."""
     if not np.all(np.isfinite(jac)):
         return np.inf
     if jac[2, 0] == 0.0 and jac[2, 1] == 0.0:
         # A stick on the orbit: v is reset, one multiplier is jac[2, 2] (0).
         return stuck_radius(jac[0, 0], jac[0, 1], jac[1, 0], jac[1, 1], jac[2, 2])
-    values = np.linalg.eigvals(jac.astype(np.complex128))
-    return np.max(np.abs(values))
+    j00, j01, j02 = jac[0, 0], jac[0, 1], jac[0, 2]
+    j10, j11, j12 = jac[1, 0], jac[1, 1], jac[1, 2]
+    j20, j21, j22 = jac[2, 0], jac[2, 1], jac[2, 2]
+    trace = j00 + j11 + j22
+    minors = (j00 * j11 - j01 * j10) + (j00 * j22 - j02 * j20) + (j11 * j22 - j12 * j21)
+    det = (j00 * (j11 * j22 - j12 * j21) - j01 * (j10 * j22 - j12 * j20)
+           + j02 * (j10 * j21 - j11 * j20))
+    return cubic_radius(trace, minors, det)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -158,7 +234,7 @@ def newton(point, z, periods, section, scales, max_events, record, work):
             continue
         for i in range(3):
             jac[i, i] -= 1.0
-        solved = _solve3(jac, residual, step)
+        solved = solve3(jac, residual, step)
         for i in range(3):
             jac[i, i] += 1.0
         if not solved:
