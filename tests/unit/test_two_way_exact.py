@@ -136,7 +136,7 @@ def test_floquet_multiplier_at_the_fixed_point_is_the_reference_one():
         grad = np.zeros((3, 3))
         flag = orbit.run(modes.DrivePoint(vector, table, omega, a), z, 0.0,
                          int(out[OUT_PERIOD]) * 2 * math.pi / omega,
-                         orbit.PassRecord(acc, jac, grad), True, -1.0, 10_000)
+                         orbit.PassRecord(acc, jac, grad, np.zeros(2)), True, -1.0, 10_000)
         assert flag == orbit.RUN_OK
         assert abs(newton.spectral_radius(jac) - p["floquet"]) <= 1e-13
 

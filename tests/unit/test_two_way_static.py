@@ -116,7 +116,8 @@ def test_static_row_is_the_full_construction_bit_for_bit():
 
 
 def test_lifted_static_row():
-    """A static point past lift-off: LIFT_OFF, everything but the reason and period NaN."""
+    """A static point past lift-off: LIFT_OFF, everything but the reason, period and the
+    work columns (no pass: 0) NaN."""
     structure = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
     vector = structure_vector(structure, "two-way")
     out = np.empty(points.N_OUT)
@@ -125,8 +126,10 @@ def test_lifted_static_row():
     assert out[points.OUT_REASON] == REASON_NONE
     assert out[points.OUT_PERIOD] == 0.0
     rest = [i for i in range(points.N_OUT)
-            if i not in (points.OUT_STATUS, points.OUT_REASON, points.OUT_PERIOD)]
+            if i not in (points.OUT_STATUS, points.OUT_REASON, points.OUT_PERIOD,
+                         *points.WORK_COLUMNS)]
     assert np.all(np.isnan(out[rest]))
+    assert np.all(out[list(points.WORK_COLUMNS)] == 0.0)
 
 
 @pytest.mark.parametrize("f", [5.0, 14.0, 40.0])

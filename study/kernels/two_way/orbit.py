@@ -63,13 +63,15 @@ A_EVENTS = 5
 A_STEPS = 6
 A_SHORTEST = 7  # shortest slip of the stretch that is not cut by its ends [s]
 A_START_SLIVER = 8  # 1: the stretch starts in a slip that is a sliver
-N_ACC = 9
+A_LIFTED = 9  # 1: the normal force fell below -lift_margin (a run that notes lift-off)
+N_ACC = 10
 
 #: What a run records: ``acc`` (``N_ACC`` accumulators, the ``A_*`` slots), ``jac``
-#: (3x3, multiplied on the left by the flow's Jacobian) and ``grad`` (3x3, rows: the
+#: (3x3, multiplied on the left by the flow's Jacobian), ``grad`` (3x3, rows: the
 #: gradients of the displacement and of the forward and backward slip times with
-#: respect to the state ``jac`` started from).
-PassRecord = namedtuple("PassRecord", ("acc", "jac", "grad"))
+#: respect to the state ``jac`` started from) and ``passes`` (2: the runs made with
+#: this record, with the Jacobian and without: the work a point took).
+PassRecord = namedtuple("PassRecord", ("acc", "jac", "grad", "passes"))
 # The state at an event: cosine and sine of the drive phase, delta [m], delta' [m s-1].
 EventState = namedtuple("EventState", ("cw", "sw", "dl", "dld"))
 
@@ -178,7 +180,8 @@ def _slip_tangent(structure, row, a, kind, tau, propagator, event, jac, grad, ds
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def run(point, z, t_begin, t_stop, record, want_jac, lift_margin, max_events):
+def run(point, z, t_begin, t_stop, record, want_jac, lift_margin, max_events,
+        note_lift_off=False):
     """Follow the state ``z`` (in place) at the drive point ``point`` (a
     :data:`~study.kernels.two_way.modes.DrivePoint`) from ``t_begin`` to ``t_stop`` [s].
 
@@ -187,7 +190,10 @@ def run(point, z, t_begin, t_stop, record, want_jac, lift_margin, max_events):
     left by the flow's Jacobian when ``want_jac``, and the rows of ``grad`` receive the
     gradients of the displacement and of the forward and backward slip times. Lift-off
     is watched when ``lift_margin >= 0``: ``n < -lift_margin`` [m s-2] ends the
-    stretch. At most ``max_events`` events are followed.
+    stretch, or, when ``note_lift_off``, sets ``acc[A_LIFTED]`` and the stretch goes on
+    as the contact model (Newton's method continued along a sweep wants the whole pass
+    and its residual: how near the orbit the state that lifted off was). At most
+    ``max_events`` events are followed.
 
     One loop over the pieces, kept whole: a piece's end state, its statistics and the
     event's decision share the piece's start, propagator and drive phase (the saltations
@@ -205,6 +211,7 @@ def run(point, z, t_begin, t_stop, record, want_jac, lift_margin, max_events):
     acc = record.acc
     jac = record.jac
     grad = record.grad
+    record.passes[0 if want_jac else 1] += 1.0
     horizon = max(abs(t_stop), TWO_PI / omega)
     t = t_begin
     mode = _initial_mode(structure, omega, a, t, z)
@@ -254,8 +261,16 @@ def run(point, z, t_begin, t_stop, record, want_jac, lift_margin, max_events):
             acc[A_EVENTS] += events
             return RUN_BUDGET
         if kind == EV_LIFT_OFF:
-            acc[A_EVENTS] += events
-            return RUN_LIFT_OFF
+            if not note_lift_off:
+                acc[A_EVENTS] += events
+                return RUN_LIFT_OFF
+            # Noted; the piece is searched on from te for its own events (none came
+            # before te), lift-off no longer watched.
+            acc[A_LIFTED] = 1.0
+            lift_margin = -1.0
+            t_from = te
+            events -= 1
+            continue
         tau = te - t
         h, hd, e11, e12, e21, e22 = homogeneous(row, tau, h0, hd0)
         ph = omega * te

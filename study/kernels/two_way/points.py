@@ -2,7 +2,14 @@
 
 :func:`solve_point` fills one row of :data:`OUTPUT_COLUMNS`; :func:`solve_points` (in
 parallel) and :func:`solve_points_serial` fill a table of them for the validating
-wrapper :func:`study.solvers.exact.steady_state`.
+wrapper :func:`study.solvers.exact.steady_state`, each point of a line of the sweep
+continued from the points before it (:mod:`~study.kernels.two_way.continuation`).
+
+The drivers cut the points into runs (:func:`sweep_runs`): consecutive points that
+share a frequency or an acceleration, at most :data:`RUN_LENGTH` of them. A run is
+solved in order on one thread, so a point's result depends on the points before it in
+its run only, whatever the threads: the parallel and the serial driver agree bit for
+bit.
 """
 
 from __future__ import annotations
@@ -21,7 +28,17 @@ from study.kernels.structure_vector import (
     STATIC_FRICTION,
     STIFFNESS,
 )
-from study.kernels.two_way.cycles import MAX_PERIOD, find_orbit
+from study.kernels.two_way.continuation import (
+    CONTINUED_LIFT_OFF,
+    CONTINUED_ORBIT,
+    FAILED_UNSTABLE,
+    continued_newton,
+    forget,
+    new_neighbours,
+    predict,
+    remember,
+)
+from study.kernels.two_way.cycles import MAX_PERIOD, STABILITY_MARGIN, find_orbit
 from study.kernels.two_way.flight import FLIGHT_ROW, N_ROWS, N_STATE, Z_GAP, flight_row
 from study.kernels.two_way.flight_orbit import solve_flight
 from study.kernels.two_way.modes import (
@@ -39,6 +56,7 @@ from study.kernels.two_way.newton import spectral_radius, stuck_radius
 from study.kernels.two_way.orbit import (
     A_BACKWARD,
     A_DISPLACEMENT,
+    A_EVENTS,
     A_FORWARD,
     A_SLIPS,
     A_STICK,
@@ -49,6 +67,7 @@ from study.kernels.two_way.propagation import particular, stick_propagator
 from study.model.codes import (
     CONTINUOUS_SLIDING,
     LIFT_OFF,
+    NOT_CONVERGED,
     REASON_NONE,
     STATIC,
     STICK_SLIP,
@@ -70,6 +89,11 @@ OUTPUT_COLUMNS = (
     ("airborne", "1", "fraction of the orbit's period the base spends off the table"),
     ("hop", "m", "largest gap between the base and the table over the orbit"),
     ("impacts", "1", "impacts of the base on the table per drive period"),
+    ("newton_passes", "1", "passes over the period map with its Jacobian the point took"),
+    ("map_passes", "1", "passes over the period map without its Jacobian the point took"),
+    ("continued", "1", "1: the contact orbit was continued from the sweep's last points; "
+     "0: solved cold, nothing to continue from; < 0: solved cold, the continuation's "
+     "FAILED_* code (study.kernels.two_way.continuation)"),
 )
 _NAMES = tuple(name for name, _, _ in OUTPUT_COLUMNS)
 
@@ -88,6 +112,11 @@ OUT_SPEED = _NAMES.index("speed")
 OUT_AIRBORNE = _NAMES.index("airborne")
 OUT_HOP = _NAMES.index("hop")
 OUT_IMPACTS = _NAMES.index("impacts")
+OUT_NEWTON_PASSES = _NAMES.index("newton_passes")
+OUT_MAP_PASSES = _NAMES.index("map_passes")
+OUT_CONTINUED = _NAMES.index("continued")
+#: The columns that record the work a point took, not its orbit.
+WORK_COLUMNS = (OUT_NEWTON_PASSES, OUT_MAP_PASSES, OUT_CONTINUED)
 #: Length of an output row.
 N_OUT = len(OUTPUT_COLUMNS)
 # The columns :func:`~study.kernels.two_way.flight_orbit.solve_flight` writes, in its
@@ -180,14 +209,31 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
     the orbit with flight (:func:`~study.kernels.two_way.flight_orbit.solve_flight`);
     every other point is solved exactly as without flight, so it keeps every bit.
     """
+    solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
+                      new_neighbours())
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
+                      neighbours):
+    """:func:`solve_point` for a point of a sweep: the contact orbit is continued from
+    ``neighbours`` (a :data:`~study.kernels.two_way.continuation.Neighbours` of the
+    points before it on its line, for the same start) when they hold an orbit, and
+    solved cold when they hold none or the continuation is not trusted; ``neighbours``
+    then remembers this point."""
     out[:] = np.nan
     out[OUT_REASON] = REASON_NONE
     out[OUT_PERIOD] = 0.0
+    out[OUT_NEWTON_PASSES] = 0.0
+    out[OUT_MAP_PASSES] = 0.0
+    out[OUT_CONTINUED] = 0.0
     flying = structure[LIFT_OFF_LAW] != 0.0
     # A static point is decided and written from the stick's response alone, in closed
     # form, before any table or orbit (most points of a map never slip).
     pr, pi = stick_response(structure, omega, a)
     static = _is_static(structure, omega, a, pr, pi)
+    if static:
+        forget(neighbours)
     if static and not (lifted and flying):
         _static_row(structure, omega, lifted, out)
         return
@@ -203,14 +249,48 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
     scales = np.empty(3)
     scales[0], scales[1], scales[2] = _scales(point)
     z = np.empty(3)
-    start_state(table, omega, t_start, z, factor)
-    record = PassRecord(np.zeros(N_ACC), np.empty((3, 3)), np.empty((3, 3)))
+    record = PassRecord(np.zeros(N_ACC), np.empty((3, 3)), np.empty((3, 3)), np.zeros(2))
     work = np.empty(3)
-    history = np.empty((MAX_PERIOD, 3))
-    status, reason, periods = find_orbit(point, z, t_start, scales, budget, record, work,
-                                         history)
+    status = NOT_CONVERGED
+    reason = REASON_NONE
+    periods = 0
+    solved = False
+    if predict(neighbours, omega, a, z):
+        outcome, events, slips = continued_newton(point, z, scales, budget.max_events,
+                                                  record, work)
+        if outcome == CONTINUED_LIFT_OFF:
+            status = LIFT_OFF
+            solved = True
+        elif outcome == CONTINUED_ORBIT:
+            if spectral_radius(record.jac) < 1.0 + STABILITY_MARGIN:
+                status = STICK_SLIP
+                periods = 1
+                solved = True
+            else:
+                outcome = FAILED_UNSTABLE
+        if solved:
+            out[OUT_CONTINUED] = 1.0
+            remember(neighbours, omega, a, z, events, slips)
+        else:
+            out[OUT_CONTINUED] = outcome
+    if not solved:
+        start_state(table, omega, t_start, z, factor)
+        history = np.empty((MAX_PERIOD, 3))
+        status, reason, periods, newton_found = find_orbit(
+            point, z, t_start, scales, budget, record, work, history)
+        if newton_found and status == STICK_SLIP:
+            remember(neighbours, omega, a, z, record.acc[A_EVENTS], record.acc[A_SLIPS])
+        elif newton_found and status == LIFT_OFF:
+            # The pass that left the table was cut short: its signature is unknown.
+            remember(neighbours, omega, a, z, -1.0, -1.0)
+        else:
+            forget(neighbours)
+    out[OUT_NEWTON_PASSES] = record.passes[0]
+    out[OUT_MAP_PASSES] = record.passes[1]
     if flying and status == LIFT_OFF:
         _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
+        out[OUT_NEWTON_PASSES] += record.passes[0]
+        out[OUT_MAP_PASSES] += record.passes[1]
         return
     out[OUT_STATUS] = status
     out[OUT_REASON] = reason
@@ -236,11 +316,15 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _solve_flying(structure, table, omega, a, budget, t_start, factor, out):
     """The orbit with flight from rest on the table at ``t_start`` [s], the mode on
-    ``factor`` times its steady response; ``table`` has its contact rows filled."""
+    ``factor`` times its steady response; ``table`` has its contact rows filled. The
+    flight search's passes are written to ``out`` (the caller adds its own)."""
     flight_row(structure, table)
     z = np.zeros(N_STATE)
     start_state(table, omega, t_start, z, factor)
-    solve_flight(structure, table, omega, a, budget, z, t_start, out, FLIGHT_COLUMNS)
+    with_jac, without = solve_flight(structure, table, omega, a, budget, z, t_start, out,
+                                     FLIGHT_COLUMNS)
+    out[OUT_NEWTON_PASSES] = with_jac
+    out[OUT_MAP_PASSES] = without
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -262,24 +346,65 @@ def solve_drop(structure, omega, a, budget, t_start, height, out):
     solve_flight(structure, table, omega, a, budget, z, t_start, out, FLIGHT_COLUMNS)
 
 
+#: Longest run of points continued one from the other (see :func:`sweep_runs`): a
+#: sweep along one line longer than this is cut, so that its runs can be spread over
+#: the threads.
+RUN_LENGTH = 4096
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
-def _solve_into(i, structure, omega, a, lifted, budget, out):
-    solve_point(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, out[i])
+def sweep_runs(omega, a):
+    """Where the runs of points start: a point opens a run unless it shares its
+    frequency ``omega`` [rad s-1] or its acceleration ``a`` [m s-2] with the point
+    before it (the next point of a line of the sweep), or the run already holds
+    :data:`RUN_LENGTH` points. Returns the starts and, last, the number of points."""
+    n = omega.shape[0]
+    starts = np.empty(n + 1, dtype=np.int64)
+    count = 0
+    length = 0
+    for i in range(n):
+        follows = i > 0 and (omega[i] == omega[i - 1] or a[i] == a[i - 1])
+        if not follows or length >= RUN_LENGTH:
+            starts[count] = i
+            count += 1
+            length = 0
+        length += 1
+    starts[count] = n
+    return starts[:count + 1]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _solve_run(structure, omega, a, lifted, budget, begin, end, out):
+    neighbours = new_neighbours()
+    for i in range(begin, end):
+        solve_point_along(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, out[i],
+                          neighbours)
 
 
 @njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 def solve_points(structure, omega, a, lifted, budget, out):
     """Fill ``out`` (n x ``N_OUT``) at the points ``omega`` [rad s-1], ``a`` [m s-2]
-    (``lifted``: past lift-off) in parallel, the points interleaved over the lanes."""
-    n = omega.shape[0]
-    lanes = min(n, 256)
+    (``lifted``: past lift-off) in parallel: the runs of :func:`sweep_runs`, each in
+    order on one thread, interleaved over the lanes."""
+    starts = sweep_runs(omega, a)
+    runs = starts.shape[0] - 1
+    lanes = min(runs, 256)
     for lane in prange(lanes):
-        for i in range(lane, n, lanes):
-            _solve_into(i, structure, omega, a, lifted, budget, out)
+        for r in range(lane, runs, lanes):
+            _solve_run(structure, omega, a, lifted, budget, starts[r], starts[r + 1], out)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def solve_points_serial(structure, omega, a, lifted, budget, out):
     """Same as :func:`solve_points` on one thread."""
+    starts = sweep_runs(omega, a)
+    for r in range(starts.shape[0] - 1):
+        _solve_run(structure, omega, a, lifted, budget, starts[r], starts[r + 1], out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_points_cold(structure, omega, a, lifted, budget, out):
+    """Same as :func:`solve_points_serial` with every point solved cold (no
+    continuation): the reference the continued sweep is checked and timed against."""
     for i in range(omega.shape[0]):
-        _solve_into(i, structure, omega, a, lifted, budget, out)
+        solve_point(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, out[i])
