@@ -306,6 +306,26 @@ def _orbit_table(
     return out
 
 
+def _orbit_velocity(
+    structure: Structure,
+    f_flat: NDArray[np.float64],
+    a_flat: NDArray[np.float64],
+    coupling: str,
+    settings: SolverSettings,
+    flight: bool,
+) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
+    """Velocity and status of :func:`_orbit_table` on flat ``f``, ``a``, from the orbit
+    kernel's velocity-only drivers."""
+    lifted = _lifted(structure, f_flat, a_flat)
+    velocity = np.empty(f_flat.size)
+    status = np.empty(f_flat.size, dtype=np.int8)
+    parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
+    kernel = orbit_kernel.velocity_points if parallel else orbit_kernel.velocity_points_serial
+    kernel(structure_vector(structure, coupling, flight), 2.0 * np.pi * f_flat, a_flat,
+           lifted, kernel_budget(settings), velocity, status)
+    return velocity, status
+
+
 def _orbit_steady_state(
     structure: Structure,
     f_flat: NDArray[np.float64],
@@ -642,13 +662,13 @@ def steady_velocity(
     settings = check_settings(settings)
     f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
     if coupling != "one-way":
-        # The orbit kernel's table, read for the two columns returned (as steady_state).
+        # The orbit kernel's velocity and status only (those of steady_state, bit for
+        # bit), without its table of every column.
         shape = f_arr.shape
-        out = _orbit_table(structure, np.ascontiguousarray(f_arr, dtype=float).ravel(),
-                           np.ascontiguousarray(a_arr, dtype=float).ravel(), coupling,
-                           settings, None, flight)
-        return (scalar_if_0d(out[:, orbit_kernel.OUT_VELOCITY].reshape(shape)),
-                scalar_if_0d(out[:, orbit_kernel.OUT_STATUS].astype(np.int8).reshape(shape)))
+        velocity, status = _orbit_velocity(
+            structure, np.ascontiguousarray(f_arr, dtype=float).ravel(),
+            np.ascontiguousarray(a_arr, dtype=float).ravel(), coupling, settings, flight)
+        return (scalar_if_0d(velocity.reshape(shape)), scalar_if_0d(status.reshape(shape)))
     if f_arr.size == 0:  # nothing to solve (numba would be handed a broadcast view)
         return np.empty(f_arr.shape), np.empty(f_arr.shape, dtype=np.int8)
     velocity, status = _velocity_only(

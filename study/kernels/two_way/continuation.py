@@ -167,11 +167,11 @@ def predict(neighbours, omega, a, z):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def continued_newton(point, z, scales, max_events, record, work):
+def continued_newton(point, z, scales, max_events, record, work, scratch):
     """Newton's method on the period map from the predicted state ``z`` (updated in
     place) at phase 0, every pass watched for lift-off and required to have the events
-    and slips of the first; arguments otherwise as
-    :func:`~study.kernels.two_way.newton.newton`.
+    and slips of the first; ``scratch`` (2 x 3) holds Newton's step and residual;
+    arguments otherwise as :func:`~study.kernels.two_way.newton.newton`.
 
     A pass that leaves the table is followed to its end as the contact model, for its
     residual and Newton step, unless the step before it was one the cold start would
@@ -192,8 +192,8 @@ def continued_newton(point, z, scales, max_events, record, work):
     grad = record.grad
     span = TWO_PI / point.omega
     previous = FIRST_RESIDUAL / CONTRACTION
-    step = np.empty(3)
-    residual = np.empty(3)
+    step = scratch[0]
+    residual = scratch[1]
     events = -1.0
     slips = -1.0
     watched = False

@@ -99,7 +99,9 @@ def stick_response(structure, omega, a):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def mode_row(structure, omega, a, table, row):
-    """Fill one row of :func:`mode_table`: the stick (0), forward (1) or backward (2)."""
+    """Fill one row of :func:`mode_table`: the stick (0), forward (1) or backward (2)
+    (every column: a table is reused from point to point)."""
+    table[row, :] = 0.0
     c = structure[DAMPING]
     k = structure[STIFFNESS]
     ca = structure[COS_ALPHA]

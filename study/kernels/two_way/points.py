@@ -15,6 +15,7 @@ bit.
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit, prange
@@ -170,7 +171,7 @@ def _is_static(structure, omega, a, pr, pi):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _static_row(structure, omega, lifted, out):
+def _static_row(structure, omega, lifted, out, diagnostics):
     """``out`` (NaN, no reason, period 0) completed for a static point: ``LIFT_OFF``
     when ``lifted``, else at rest, its multiplier the stick's free decay over a period
     (as :func:`~study.kernels.two_way.newton.spectral_radius` gives it for that
@@ -185,6 +186,8 @@ def _static_row(structure, omega, lifted, out):
     out[OUT_AIRBORNE] = 0.0
     out[OUT_HOP] = 0.0
     out[OUT_IMPACTS] = 0.0
+    if not diagnostics:
+        return
     # The orbit is the mode's steady response: perturbations decay with it.
     e11, e12, e21, e22 = stick_propagator(structure, TWO_PI / omega)
     if (math.isfinite(e11) and math.isfinite(e12) and math.isfinite(e21)
@@ -192,6 +195,44 @@ def _static_row(structure, omega, lifted, out):
         out[OUT_MULTIPLIER] = stuck_radius(e11, e12, e21, e22, 0.0)
     else:
         out[OUT_MULTIPLIER] = np.inf
+
+
+#: Scratch arrays a run of points reuses (an allocation costs about as much as an
+#: event of the orbit): the mode table (``N_ROWS`` x ``N_MODE``), the state's natural
+#: scales, the state, a pass's end state, Newton's step and residual (2 x 3), the pass
+#: record and the cycle search's history (``MAX_PERIOD`` x 3).
+Workspace = namedtuple("Workspace",
+                       ("table", "scales", "z", "work", "newton", "record", "history"))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def new_workspace():
+    """A fresh :data:`Workspace`."""
+    return Workspace(np.zeros((N_ROWS, N_MODE)), np.empty(3), np.empty(3), np.empty(3),
+                     np.empty((2, 3)),
+                     PassRecord(np.zeros(N_ACC), np.empty((3, 3)), np.empty((3, 3)),
+                                np.zeros(2)),
+                     np.empty((MAX_PERIOD, 3)))
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def static_point(structure, omega, a, lifted, out, diagnostics):
+    """Start ``out`` (NaN, no reason, period 0, no work) and decide whether the point is
+    static, from the stick's response alone, in closed form (most points of a map
+    never slip); a static point's row is then complete unless it is past lift-off with
+    the lift-off law ``flight`` (it takes off). Inlined into the drivers: a static point
+    costs the decision, not a call with the run's scratch arrays."""
+    out[:] = np.nan
+    out[OUT_REASON] = REASON_NONE
+    out[OUT_PERIOD] = 0.0
+    out[OUT_NEWTON_PASSES] = 0.0
+    out[OUT_MAP_PASSES] = 0.0
+    out[OUT_CONTINUED] = 0.0
+    pr, pi = stick_response(structure, omega, a)
+    static = _is_static(structure, omega, a, pr, pi)
+    if static and not (lifted and structure[LIFT_OFF_LAW] != 0.0):
+        _static_row(structure, omega, lifted, out, diagnostics)
+    return static
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -210,34 +251,26 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
     every other point is solved exactly as without flight, so it keeps every bit.
     """
     solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
-                      new_neighbours())
+                      new_neighbours(), new_workspace(), True)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
-                      neighbours):
+                      neighbours, workspace, diagnostics):
     """:func:`solve_point` for a point of a sweep: the contact orbit is continued from
     ``neighbours`` (a :data:`~study.kernels.two_way.continuation.Neighbours` of the
     points before it on its line, for the same start) when they hold an orbit, and
     solved cold when they hold none or the continuation is not trusted; ``neighbours``
-    then remembers this point."""
-    out[:] = np.nan
-    out[OUT_REASON] = REASON_NONE
-    out[OUT_PERIOD] = 0.0
-    out[OUT_NEWTON_PASSES] = 0.0
-    out[OUT_MAP_PASSES] = 0.0
-    out[OUT_CONTINUED] = 0.0
+    then remembers this point. ``workspace`` (a :data:`Workspace`) is scratch space;
+    without ``diagnostics`` only the status and velocity columns are sure to be right
+    (a static point's multiplier is not computed)."""
     flying = structure[LIFT_OFF_LAW] != 0.0
-    # A static point is decided and written from the stick's response alone, in closed
-    # form, before any table or orbit (most points of a map never slip).
-    pr, pi = stick_response(structure, omega, a)
-    static = _is_static(structure, omega, a, pr, pi)
+    static = static_point(structure, omega, a, lifted, out, diagnostics)
     if static:
         forget(neighbours)
-    if static and not (lifted and flying):
-        _static_row(structure, omega, lifted, out)
-        return
-    table = np.zeros((N_ROWS if flying else 3, N_MODE))
+        if not (lifted and flying):
+            return
+    table = workspace.table
     point = DrivePoint(structure, table, omega, a)
     mode_row(structure, omega, a, table, 0)
     mode_row(structure, omega, a, table, 1)
@@ -246,18 +279,19 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
         # Stuck on its steady response yet past lift-off: it takes off.
         _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
         return
-    scales = np.empty(3)
+    scales = workspace.scales
     scales[0], scales[1], scales[2] = _scales(point)
-    z = np.empty(3)
-    record = PassRecord(np.zeros(N_ACC), np.empty((3, 3)), np.empty((3, 3)), np.zeros(2))
-    work = np.empty(3)
+    z = workspace.z
+    record = workspace.record
+    record.passes[:] = 0.0
+    work = workspace.work
     status = NOT_CONVERGED
     reason = REASON_NONE
     periods = 0
     solved = False
     if predict(neighbours, omega, a, z):
         outcome, events, slips = continued_newton(point, z, scales, budget.max_events,
-                                                  record, work)
+                                                  record, work, workspace.newton)
         if outcome == CONTINUED_LIFT_OFF:
             status = LIFT_OFF
             solved = True
@@ -275,9 +309,8 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
             out[OUT_CONTINUED] = outcome
     if not solved:
         start_state(table, omega, t_start, z, factor)
-        history = np.empty((MAX_PERIOD, 3))
         status, reason, periods, newton_found = find_orbit(
-            point, z, t_start, scales, budget, record, work, history)
+            point, z, t_start, scales, budget, record, work, workspace.history)
         if newton_found and status == STICK_SLIP:
             remember(neighbours, omega, a, z, record.acc[A_EVENTS], record.acc[A_SLIPS])
         elif newton_found and status == LIFT_OFF:
@@ -376,9 +409,15 @@ def sweep_runs(omega, a):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _solve_run(structure, omega, a, lifted, budget, begin, end, out):
     neighbours = new_neighbours()
+    workspace = new_workspace()
+    flying = structure[LIFT_OFF_LAW] != 0.0
     for i in range(begin, end):
+        if static_point(structure, omega[i], a[i], lifted[i], out[i], True) and not (
+                lifted[i] and flying):
+            forget(neighbours)
+            continue
         solve_point_along(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, out[i],
-                          neighbours)
+                          neighbours, workspace, True)
 
 
 @njit(cache=True, nogil=True, parallel=True, error_model="numpy")
@@ -400,6 +439,46 @@ def solve_points_serial(structure, omega, a, lifted, budget, out):
     starts = sweep_runs(omega, a)
     for r in range(starts.shape[0] - 1):
         _solve_run(structure, omega, a, lifted, budget, starts[r], starts[r + 1], out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _velocity_run(structure, omega, a, lifted, budget, begin, end, velocity, status):
+    neighbours = new_neighbours()
+    workspace = new_workspace()
+    row = np.empty(N_OUT)
+    flying = structure[LIFT_OFF_LAW] != 0.0
+    for i in range(begin, end):
+        if not static_point(structure, omega[i], a[i], lifted[i], row, False) or (
+                lifted[i] and flying):
+            solve_point_along(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, row,
+                              neighbours, workspace, False)
+        else:
+            forget(neighbours)
+        velocity[i] = row[OUT_VELOCITY]
+        status[i] = np.int8(row[OUT_STATUS])
+
+
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+def velocity_points(structure, omega, a, lifted, budget, velocity, status):
+    """The velocity [m s-1] and the status (int8) of :func:`solve_points`, bit for bit,
+    into ``velocity`` and ``status``: no table of every column (136 bytes a point) and
+    no multiplier of the static points."""
+    starts = sweep_runs(omega, a)
+    runs = starts.shape[0] - 1
+    lanes = min(runs, 256)
+    for lane in prange(lanes):
+        for r in range(lane, runs, lanes):
+            _velocity_run(structure, omega, a, lifted, budget, starts[r], starts[r + 1],
+                          velocity, status)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def velocity_points_serial(structure, omega, a, lifted, budget, velocity, status):
+    """Same as :func:`velocity_points` on one thread."""
+    starts = sweep_runs(omega, a)
+    for r in range(starts.shape[0] - 1):
+        _velocity_run(structure, omega, a, lifted, budget, starts[r], starts[r + 1],
+                      velocity, status)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
