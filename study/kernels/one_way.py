@@ -14,9 +14,12 @@ which ``s tau - cs n > 0``).
 
 :mod:`study.solvers.exact` validates, allocates and calls the drivers
 :func:`solve_points` (all diagnostics) and :func:`velocity_points` (velocity and status
-only), with their arguments grouped in the named tuples below; :func:`sin_minus_x` is
-shared with the orbit kernel. Results are written to ``out`` arrays; nothing is
-allocated per point on the common (stick-slip) path.
+only), with their arguments grouped in the named tuples below; a small call calls
+:func:`steady_points_small`, :func:`velocity_points_small` and :func:`lift_off_small`,
+which take the named tuples' fields as plain tuples (numba's dispatch types those in
+C, named tuples in Python). :func:`sin_minus_x` is shared with the orbit kernel.
+Results are written to ``out`` arrays; nothing is allocated per point on the common
+(stick-slip) path.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit, prange
 
+from study.kernels.budget import Budget
 from study.model.codes import (
     CONTINUOUS_SLIDING,
     LIFT_OFF,
@@ -564,21 +568,22 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget):
 
 
 @njit(cache=True, nogil=True)
-def _solve_into(i, amplitudes, lifted, omega, levels, budget, out):
-    """Solve point ``i`` and write its results into the :data:`SteadyOutputs` ``out``."""
-    if lifted[i]:
-        out.velocity[i] = np.nan
-        out.status[i] = LIFT_OFF
-        out.reason[i] = REASON_NONE
-        out.slips[i] = np.nan
-        out.forward[i] = np.nan
-        out.backward[i] = np.nan
-        out.period[i] = 0
-        return
-    st, why, mean, per, fwd, bwd, n_period = _solve_point(
-        amplitudes.a_plus[i], amplitudes.a_minus[i], amplitudes.b_plus[i],
-        amplitudes.b_minus[i], levels, budget
-    )
+def _write_lifted(i, out):
+    """The row of a point past lift-off into the :data:`SteadyOutputs` ``out``."""
+    out.velocity[i] = np.nan
+    out.status[i] = LIFT_OFF
+    out.reason[i] = REASON_NONE
+    out.slips[i] = np.nan
+    out.forward[i] = np.nan
+    out.backward[i] = np.nan
+    out.period[i] = 0
+
+
+@njit(cache=True, nogil=True)
+def _write_orbit(i, orbit, omega, out):
+    """The row of ``orbit`` (what :func:`_solve_point` returns) at angular frequency
+    ``omega`` [rad s-1] into the :data:`SteadyOutputs` ``out``."""
+    st, why, mean, per, fwd, bwd, n_period = orbit
     out.status[i] = st
     out.reason[i] = why
     if st == NOT_CONVERGED:
@@ -587,11 +592,24 @@ def _solve_into(i, amplitudes, lifted, omega, levels, budget, out):
         out.forward[i] = np.nan
         out.backward[i] = np.nan
     else:
-        out.velocity[i] = mean / omega[i]
+        out.velocity[i] = mean / omega
         out.slips[i] = per
         out.forward[i] = fwd
         out.backward[i] = bwd
     out.period[i] = n_period
+
+
+@njit(cache=True, nogil=True)
+def _solve_into(i, amplitudes, lifted, omega, levels, budget, out):
+    """Solve point ``i`` and write its results into the :data:`SteadyOutputs` ``out``."""
+    if lifted[i]:
+        _write_lifted(i, out)
+        return
+    orbit = _solve_point(
+        amplitudes.a_plus[i], amplitudes.a_minus[i], amplitudes.b_plus[i],
+        amplitudes.b_minus[i], levels, budget
+    )
+    _write_orbit(i, orbit, omega[i], out)
 
 
 #: Points a thread takes at a time in the parallel kernels: whole cache lines of every
@@ -795,3 +813,79 @@ def velocity_points_given(f, a, lifted, constants, levels, budget, out):
     given."""
     for i in range(f.shape[0]):
         _velocity_into(i, f, a, constants, levels, budget, out, 1 if lifted[i] else 0)
+
+
+# Small calls (a fit's few velocity rows, thousands of times): numba types a plain tuple
+# of numbers in C but a named tuple in Python, about 2 us each, more than the solve of a
+# point. These drivers take the named tuples' fields as plain tuples (in their fields'
+# order) and the output arrays one by one, build the named tuples here and run the same
+# per-point code, and return how many points they left LIFT_UNDECIDED (no scan of the
+# status for the caller).
+
+
+@njit(cache=True, nogil=True)
+def velocity_points_small(f, a, constants, levels, budget, velocity, status):
+    """:func:`velocity_points_serial` with plain-tuple arguments: ``constants``, ``levels``
+    and ``budget`` the fields of :data:`ForceConstants`, :data:`FrictionLevels` and
+    :data:`~study.kernels.budget.Budget`, the outputs ``velocity`` and ``status`` of
+    :data:`VelocityOutputs`. Returns the number of points left ``LIFT_UNDECIDED``."""
+    out = VelocityOutputs(velocity, status)
+    force = ForceConstants(*constants)
+    friction = FrictionLevels(*levels)
+    limits = Budget(*budget)
+    undecided = 0
+    for i in range(f.shape[0]):
+        _velocity_into(i, f, a, force, friction, limits, out, LIFT_UNDECIDED)
+        if status[i] == LIFT_UNDECIDED:
+            undecided += 1
+    return undecided
+
+
+@njit(cache=True, nogil=True)
+def steady_points_small(f, a, constants, levels, budget, velocity, status, reason, slips,
+                        forward, backward, period):
+    """:func:`solve_points_serial` at ``f`` [Hz], ``a`` [m s-2], the force amplitudes
+    and the lift-off decision evaluated point by point as :func:`velocity_points`
+    does (bit-identical to ``study.model``'s arrays, without their temporaries), with
+    plain-tuple arguments as :func:`velocity_points_small` and the outputs of
+    :data:`SteadyOutputs` one by one.
+
+    A point within 1e-13 of the lift-off threshold gets the status ``LIFT_UNDECIDED``
+    (its other outputs unset), for the caller to solve with numpy's decision. Returns
+    the number of such points.
+    """
+    force = ForceConstants(*constants)
+    friction = FrictionLevels(*levels)
+    limits = Budget(*budget)
+    out = SteadyOutputs(velocity, status, reason, slips, forward, backward, period)
+    undecided = 0
+    for i in range(f.shape[0]):
+        lift, w, k_re, k_im, one_re, one_im = _lift_off(f[i], a[i], force)
+        if lift == LIFT_UNDECIDED:
+            status[i] = LIFT_UNDECIDED
+            undecided += 1
+        elif lift == 1:
+            _write_lifted(i, out)
+        else:
+            a_plus, a_minus, b_plus, b_minus = _forces(
+                a[i], k_re, k_im, one_re, one_im, force.sin_alpha, force.static_friction,
+                force.kinetic_friction)
+            orbit = _solve_point(a_plus, a_minus, b_plus, b_minus, friction, limits)
+            _write_orbit(i, orbit, w, out)
+    return undecided
+
+
+@njit(cache=True, nogil=True)
+def lift_off_small(f, a, constants, lifted):
+    """``lifted[i]`` (bool): whether ``a[i]`` is past lift-off at ``f[i]`` where
+    :func:`lift_off_decisions` decides it (``constants`` the fields of
+    :data:`ForceConstants` as a plain tuple); returns the number of points it leaves
+    undecided (``lifted`` False there), for the caller to decide with numpy."""
+    force = ForceConstants(*constants)
+    undecided = 0
+    for i in range(f.shape[0]):
+        decision = _lift_off(f[i], a[i], force)[0]
+        lifted[i] = decision == 1
+        if decision == LIFT_UNDECIDED:
+            undecided += 1
+    return undecided

@@ -193,16 +193,18 @@ def check_law(kind: str, name: object, solver: str) -> ContactLaw:
         ``name`` is not a declared law of that kind, or ``solver`` does not implement
         it; the message names the law, the solver and the allowed values.
     """
+    law = LAWS[kind].get(name) if isinstance(name, str) else None
+    if law is not None and solver in law.solvers:
+        return law
+    # The messages' lists are made only for a refusal (every solver call checks a law).
     allowed = supported(kind, solver)
     listed = ", ".join(map(repr, allowed))
-    if not isinstance(name, str) or name not in LAWS[kind]:
+    if law is None:
         known = ", ".join(map(repr, LAWS[kind]))
         raise ValueError(f"{kind} law {name!r} is unknown; {kind} laws are {known} "
                          f"({SOLVERS[solver]} allows {listed})")
-    if name not in allowed:
-        raise ValueError(f"{kind} law {name!r} is not implemented by {SOLVERS[solver]} "
-                         f"({solver!r}); allowed: {listed}")
-    return LAWS[kind][name]
+    raise ValueError(f"{kind} law {name!r} is not implemented by {SOLVERS[solver]} "
+                     f"({solver!r}); allowed: {listed}")
 
 
 @dataclass(frozen=True)
@@ -228,25 +230,28 @@ class Friction:
         if declared is None:
             raise ValueError(f"friction law {law!r} is unknown; friction laws are "
                              f"{', '.join(map(repr, FRICTION_LAWS))}")
-        names = [p.name for p in declared.parameters]
-        missing = [n for n in names if n not in values]
-        extra = sorted(set(values) - set(names))
-        if missing or extra:
-            raise ValueError(
-                f"friction law {law!r} needs the parameters {names or 'none'}; "
-                + (f"missing {missing}" if missing else f"unknown {extra}"))
-        checked = {}
-        for parameter in declared.parameters:
-            value = values[parameter.name]
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ValueError(f"friction law {law!r}: {parameter.name} must be a number "
-                                 f"[{parameter.units}], got {value!r}")
-            if not parameter.lower < float(value) < parameter.upper:
+        checked: dict[str, float] = {}
+        # Every solver call checks its law: one without parameters, given none (the
+        # default), has nothing more to check.
+        if declared.parameters or values:
+            names = [p.name for p in declared.parameters]
+            missing = [n for n in names if n not in values]
+            extra = sorted(set(values) - set(names))
+            if missing or extra:
                 raise ValueError(
-                    f"friction law {law!r}: {parameter.name} = {value!r} is out of range; "
-                    f"allowed: {parameter.lower} < {parameter.name} < {parameter.upper} "
-                    f"[{parameter.units}] ({parameter.reason})")
-            checked[parameter.name] = float(value)
+                    f"friction law {law!r} needs the parameters {names or 'none'}; "
+                    + (f"missing {missing}" if missing else f"unknown {extra}"))
+            for parameter in declared.parameters:
+                value = values[parameter.name]
+                if isinstance(value, bool) or not isinstance(value, int | float):
+                    raise ValueError(f"friction law {law!r}: {parameter.name} must be a number "
+                                     f"[{parameter.units}], got {value!r}")
+                if not parameter.lower < float(value) < parameter.upper:
+                    raise ValueError(
+                        f"friction law {law!r}: {parameter.name} = {value!r} is out of range; "
+                        f"allowed: {parameter.lower} < {parameter.name} < {parameter.upper} "
+                        f"[{parameter.units}] ({parameter.reason})")
+                checked[parameter.name] = float(value)
         object.__setattr__(self, "law", law)
         object.__setattr__(self, "values", checked)
 

@@ -123,6 +123,8 @@ def as_real_array(name: str, values: Any, units: str = "") -> NDArray[np.float64
         For strings, booleans, complex numbers, dates or times, ``None`` or other
         objects, alone or inside a sequence.
     """
+    if type(values) is float:  # the common scalar: nothing to inspect
+        return np.array(values)
     where = f" [{units}]" if units not in ("", DIMENSIONLESS) else ""
     try:
         array = np.asarray(values)

@@ -11,9 +11,12 @@ names they declare.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import operator
+import struct
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -185,6 +188,13 @@ def scalar_if_0d(values: NDArray[Any]) -> Any:
     return values[()]
 
 
+def _shaped(values: NDArray[Any], shape: tuple[int, ...]) -> Any:
+    """The flat ``values`` in ``shape``, as :func:`scalar_if_0d` returns them: the one
+    value's numpy scalar for ``shape == ()`` (read directly: a 0-d view costs a small
+    call about 0.4 us a variable)."""
+    return values[0] if shape == () else scalar_if_0d(values.reshape(shape))
+
+
 def check_settings(settings: object) -> SolverSettings:
     """``settings``, or the defaults for None; a TypeError naming the argument for
     anything but a :class:`SolverSettings`."""
@@ -232,10 +242,49 @@ def check_flight(flight: object, coupling: str, structure: Structure) -> bool:
     return flight
 
 
-def structure_vector(structure: Structure, coupling: str,
-                     flight: bool = False) -> NDArray[np.float64]:
-    """The orbit kernel's structure vector (SI) for ``structure``, ``coupling`` and the
-    lift-off law (``flight``: 1, else 0, stop with LIFT_OFF)."""
+#: Structures whose kernel constants are kept between calls, each a few hundred bytes:
+#: a fit or a design evaluates a few structures in turn, a bisection one.
+STRUCTURES_KEPT = 32
+
+# A structure's parameters in declaration order, packed as float64 bytes.
+_PARAMETERS = operator.attrgetter(*(field.name for field in dataclasses.fields(Structure)))
+_PACKED = struct.Struct(f"<{len(dataclasses.fields(Structure))}d")
+
+
+class _Kept(NamedTuple):
+    """What the kernels read of one structure, computed once and kept."""
+
+    #: The fields of :data:`~study.kernels.one_way.ForceConstants` (plain tuples are
+    #: what the small-call kernels take).
+    force: tuple[float, ...]
+    #: The fields of :data:`~study.kernels.one_way.FrictionLevels`.
+    levels: tuple[float, ...]
+    #: The structure vector but its coupling and lift-off entries (0); read-only.
+    vector: NDArray[np.float64]
+
+
+# The structure of the last call and what is kept of it, as one tuple (replaced whole,
+# so that a thread never reads one structure's constants with another's): a loop over
+# the points of one structure finds them by identity, without hashing.
+_LAST_KEPT: list[tuple[Structure | None, _Kept | None]] = [(None, None)]
+
+
+def _kept(structure: Structure) -> _Kept:
+    """The kernels' constants of ``structure``: those of the last call's structure if it
+    is the same object (a frozen Structure never changes), else those kept for its
+    parameters bit for bit (:data:`STRUCTURES_KEPT`)."""
+    last, kept = _LAST_KEPT[0]
+    if last is not structure or kept is None:
+        kept = _kept_by_value(structure, _PACKED.pack(*_PARAMETERS(structure)))
+        _LAST_KEPT[0] = (structure, kept)
+    return kept
+
+
+@functools.lru_cache(maxsize=STRUCTURES_KEPT)
+def _kept_by_value(structure: Structure, exact: bytes) -> _Kept:
+    """:func:`_kept`, computed once per key. ``exact`` is the parameters' bytes: equal
+    structures may differ in the sign of a zero (``alpha=-0.0 == 0.0``, and they hash
+    alike), which the constants keep (``np.sin(-0.0)`` is -0.0)."""
     vector = np.zeros(sv.SIZE)
     w0 = structure.omega0
     vector[sv.DAMPING] = w0 / structure.Q
@@ -246,8 +295,20 @@ def structure_vector(structure: Structure, coupling: str,
     vector[sv.STATIC_FRICTION] = structure.cs
     vector[sv.KINETIC_FRICTION] = structure.ck
     vector[sv.GRAVITY] = structure.g
-    vector[sv.TWO_WAY] = 1.0 if check_coupling(coupling) == "two-way" else 0.0
     vector[sv.RESTITUTION] = structure.restitution
+    vector.flags.writeable = False
+    return _Kept(tuple(_force_constants(structure)), tuple(_friction_levels(structure)),
+                 vector)
+
+
+def structure_vector(structure: Structure, coupling: str,
+                     flight: bool = False) -> NDArray[np.float64]:
+    """The orbit kernel's structure vector (SI) for ``structure``, ``coupling`` and the
+    lift-off law (``flight``: 1, else 0, stop with LIFT_OFF): a new array each call,
+    from the entries kept for the structure (a writable copy: numba would compile a
+    kernel again for a read-only array)."""
+    vector = _kept(structure).vector.copy()
+    vector[sv.TWO_WAY] = 1.0 if check_coupling(coupling) == "two-way" else 0.0
     vector[sv.LIFT_OFF_LAW] = LAWS["lift_off"]["flight" if flight else DEFAULT_LIFT_OFF].code
     return vector
 
@@ -274,11 +335,13 @@ def _lifted(
     """``a > lift_off_acceleration(structure, f)`` on flat arrays: decided by the kernel
     (the same operations, without numpy's temporaries, which cost a small call more
     than its solve), and by numpy where it is within 1e-13 of the threshold."""
-    decisions = np.empty(f_flat.size, dtype=np.int8)
-    one_way_kernel.lift_off_decisions(f_flat, a_flat, _force_constants(structure), decisions)
-    lifted = decisions == 1
-    undecided = np.flatnonzero(decisions == one_way_kernel.LIFT_UNDECIDED)
-    if undecided.size:
+    constants = _kept(structure).force
+    lifted = np.empty(f_flat.size, dtype=np.bool_)
+    if one_way_kernel.lift_off_small(f_flat, a_flat, constants, lifted):
+        decisions = np.empty(f_flat.size, dtype=np.int8)
+        one_way_kernel.lift_off_decisions(f_flat, a_flat,
+                                          one_way_kernel.ForceConstants(*constants), decisions)
+        undecided = np.flatnonzero(decisions == one_way_kernel.LIFT_UNDECIDED)
         lifted[undecided] = a_flat[undecided] > lift_off_acceleration(structure,
                                                                       f_flat[undecided])
     return lifted
@@ -341,7 +404,7 @@ def _orbit_steady_state(
 
     def column(index: int, dtype: type | None = None) -> Any:
         values = out[:, index] if dtype is None else out[:, index].astype(dtype)
-        return scalar_if_0d(values.reshape(shape))
+        return _shaped(values, shape)
 
     return SteadyState(
         velocity=column(orbit_kernel.OUT_VELOCITY),
@@ -373,10 +436,6 @@ def _one_way_steady_state(
     parallel: bool | None,
 ) -> SteadyState:
     """:func:`steady_state` by the one-way kernel on flat ``f``, ``a``."""
-    a_plus, a_minus = release_amplitudes(structure, f_flat, a_flat)
-    b_plus, b_minus = slip_amplitudes(structure, f_flat, a_flat)
-    lifted = a_flat > lift_off_acceleration(structure, f_flat)
-    omega = 2.0 * np.pi * f_flat
     n = f_flat.size
     out = one_way_kernel.SteadyOutputs(
         velocity=np.empty(n),
@@ -387,24 +446,58 @@ def _one_way_steady_state(
         backward=np.empty(n),
         period=np.empty(n, dtype=np.int32),
     )
-    amplitudes = one_way_kernel.Amplitudes(
-        *(np.ascontiguousarray(x, dtype=np.complex128)
-          for x in (a_plus, a_minus, b_plus, b_minus)))
     # Launching the thread pool costs milliseconds: small inputs run on this thread.
     if parallel is None:
         parallel = n >= PARALLEL_THRESHOLD
+    if parallel or n >= PARALLEL_THRESHOLD:
+        _solve_one_way(structure, f_flat, a_flat, settings, parallel, out)
+    else:
+        # The kernel evaluates the forces point by point, bit-identical to numpy's
+        # arrays, whose temporaries cost a small call ten times its solve.
+        kept = _kept(structure)
+        if one_way_kernel.steady_points_small(f_flat, a_flat, kept.force, kept.levels,
+                                              tuple(kernel_budget(settings)), *out):
+            # Points within 1e-13 of the lift-off threshold: solved the long way, where
+            # numpy decides their lift-off.
+            undecided = np.flatnonzero(out.status == one_way_kernel.LIFT_UNDECIDED)
+            rows = one_way_kernel.SteadyOutputs(*(x[undecided] for x in out))
+            _solve_one_way(structure, f_flat[undecided], a_flat[undecided], settings,
+                           False, rows)
+            for whole, part in zip(out, rows, strict=True):
+                whole[undecided] = part
+    return SteadyState(
+        velocity=_shaped(out.velocity, shape),
+        status=_shaped(out.status, shape),
+        reason=_shaped(out.reason, shape),
+        slips_per_period=_shaped(out.slips, shape),
+        forward_fraction=_shaped(out.forward, shape),
+        backward_fraction=_shaped(out.backward, shape),
+        orbit_period=_shaped(out.period, shape),
+    )
+
+
+def _solve_one_way(
+    structure: Structure,
+    f_flat: NDArray[np.float64],
+    a_flat: NDArray[np.float64],
+    settings: SolverSettings,
+    parallel: bool,
+    out: Any,
+) -> None:
+    """The one-way kernel at flat ``f``, ``a`` into the
+    :data:`~study.kernels.one_way.SteadyOutputs` ``out``, the forces and the lift-off
+    decisions computed by ``study.model`` (numpy)."""
+    a_plus, a_minus, b_plus, b_minus = (
+        *release_amplitudes(structure, f_flat, a_flat),
+        *slip_amplitudes(structure, f_flat, a_flat))
+    lifted = a_flat > lift_off_acceleration(structure, f_flat)
+    omega = 2.0 * np.pi * f_flat
+    amplitudes = one_way_kernel.Amplitudes(
+        *(np.ascontiguousarray(x, dtype=np.complex128)
+          for x in (a_plus, a_minus, b_plus, b_minus)))
     kernel = one_way_kernel.solve_points if parallel else one_way_kernel.solve_points_serial
     kernel(amplitudes, lifted, omega, _friction_levels(structure), kernel_budget(settings),
            out)
-    return SteadyState(
-        velocity=scalar_if_0d(out.velocity.reshape(shape)),
-        status=scalar_if_0d(out.status.reshape(shape)),
-        reason=scalar_if_0d(out.reason.reshape(shape)),
-        slips_per_period=scalar_if_0d(out.slips.reshape(shape)),
-        forward_fraction=scalar_if_0d(out.forward.reshape(shape)),
-        backward_fraction=scalar_if_0d(out.backward.reshape(shape)),
-        orbit_period=scalar_if_0d(out.period.reshape(shape)),
-    )
 
 
 def steady_state(
@@ -482,10 +575,7 @@ def steady_state(
     flight = check_flight(flight, coupling, structure)
     check_friction(friction, "exact")
     settings = check_settings(settings)
-    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
-    shape = f_arr.shape
-    f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
-    a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
+    shape, f_flat, a_flat = _flat_drive(f, a)
     if coupling == "two-way":
         return _orbit_steady_state(structure, f_flat, a_flat, shape, coupling, settings,
                                    parallel, flight)
@@ -575,10 +665,7 @@ def attractors(
     coupling = check_coupling(coupling)
     flight = check_flight(flight, coupling, structure)
     settings = check_settings(settings)
-    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
-    shape = f_arr.shape
-    f_flat = np.ascontiguousarray(f_arr, dtype=float).ravel()
-    a_flat = np.ascontiguousarray(a_arr, dtype=float).ravel()
+    shape, f_flat, a_flat = _flat_drive(f, a)
     lifted = a_flat > lift_off_acceleration(structure, f_flat)
     out = np.empty((f_flat.size, attractor_kernel.N_ATTRACTOR_OUT))
     if parallel is None:
@@ -660,22 +747,17 @@ def steady_velocity(
     structure = check_structure(structure)
     flight = check_flight(flight, coupling, structure)
     settings = check_settings(settings)
-    f_arr, a_arr = np.broadcast_arrays(as_frequency(f), as_acceleration(a))
+    shape, f_flat, a_flat = _flat_drive(f, a)
     if coupling != "one-way":
         # The orbit kernel's velocity and status only (those of steady_state, bit for
         # bit), without its table of every column.
-        shape = f_arr.shape
-        velocity, status = _orbit_velocity(
-            structure, np.ascontiguousarray(f_arr, dtype=float).ravel(),
-            np.ascontiguousarray(a_arr, dtype=float).ravel(), coupling, settings, flight)
-        return (scalar_if_0d(velocity.reshape(shape)), scalar_if_0d(status.reshape(shape)))
-    if f_arr.size == 0:  # nothing to solve (numba would be handed a broadcast view)
-        return np.empty(f_arr.shape), np.empty(f_arr.shape, dtype=np.int8)
-    velocity, status = _velocity_only(
-        structure, np.ascontiguousarray(f_arr).ravel(), np.ascontiguousarray(a_arr).ravel(),
-        settings,
-    )
-    return scalar_if_0d(velocity.reshape(f_arr.shape)), scalar_if_0d(status.reshape(f_arr.shape))
+        velocity, status = _orbit_velocity(structure, f_flat, a_flat, coupling, settings,
+                                           flight)
+        return _shaped(velocity, shape), _shaped(status, shape)
+    if f_flat.size == 0:  # nothing to solve
+        return np.empty(shape), np.empty(shape, dtype=np.int8)
+    velocity, status = _velocity_only(structure, f_flat, a_flat, settings)
+    return _shaped(velocity, shape), _shaped(status, shape)
 
 
 def _velocity_only(
@@ -690,22 +772,41 @@ def _velocity_only(
     """
     n = f.size
     out = one_way_kernel.VelocityOutputs(np.empty(n), np.empty(n, dtype=np.int8))
-    kernel = (one_way_kernel.velocity_points if n >= PARALLEL_THRESHOLD
-              else one_way_kernel.velocity_points_serial)
-    constants = _force_constants(structure)
-    levels = _friction_levels(structure)
+    constants, levels, _ = _kept(structure)
     budget = kernel_budget(settings)
-    kernel(f, a, constants, levels, budget, out)
+    if n >= PARALLEL_THRESHOLD:
+        one_way_kernel.velocity_points(f, a, one_way_kernel.ForceConstants(*constants),
+                                       one_way_kernel.FrictionLevels(*levels), budget, out)
+        undecided = np.flatnonzero(out.status == one_way_kernel.LIFT_UNDECIDED)
+    elif one_way_kernel.velocity_points_small(f, a, constants, levels, tuple(budget), *out):
+        undecided = np.flatnonzero(out.status == one_way_kernel.LIFT_UNDECIDED)
+    else:  # the small kernel counted no undecided point: no scan of the status
+        undecided = np.empty(0, dtype=np.intp)
     # Points within 1e-13 of the lift-off threshold: numpy's rounding of |z| decides,
     # as in steady_state.
-    undecided = np.flatnonzero(out.status == one_way_kernel.LIFT_UNDECIDED)
     if undecided.size:
         f_u, a_u = f[undecided], a[undecided]
         out_u = one_way_kernel.VelocityOutputs(np.empty(undecided.size),
                                                np.empty(undecided.size, dtype=np.int8))
         one_way_kernel.velocity_points_given(
-            f_u, a_u, a_u > lift_off_acceleration(structure, f_u), constants, levels, budget,
-            out_u)
+            f_u, a_u, a_u > lift_off_acceleration(structure, f_u),
+            one_way_kernel.ForceConstants(*constants), one_way_kernel.FrictionLevels(*levels),
+            budget, out_u)
         out.velocity[undecided] = out_u.velocity
         out.status[undecided] = out_u.status
     return out.velocity, out.status
+
+
+def _flat_drive(
+    f: ArrayLike, a: ArrayLike,
+) -> tuple[tuple[int, ...], NDArray[np.float64], NDArray[np.float64]]:
+    """The broadcast shape of the checked drive ``f``, ``a`` and both flattened
+    (float64, contiguous); a ValueError for shapes that do not broadcast."""
+    f_arr, a_arr = as_frequency(f), as_acceleration(a)
+    # Arrays of one shape (two scalars, a fit's rows) need no broadcast, whose views
+    # cost a small call more than its checks. Broadcast ones are copied: numba reading
+    # the flags of a broadcast view gets numpy's FutureWarning about its writeability.
+    if f_arr.shape != a_arr.shape:
+        f_arr, a_arr = (np.array(x, dtype=float) for x in np.broadcast_arrays(f_arr, a_arr))
+    return (f_arr.shape, np.ascontiguousarray(f_arr, dtype=float).ravel(),
+            np.ascontiguousarray(a_arr, dtype=float).ravel())
