@@ -16,6 +16,9 @@
 #                   one-thread map, one-way against two-way -> results/bench-two-way-map.md,
 #                   exact two-way solver vs integrator -> results/bench-two-way-agreement.md,
 #                   flight: M -> 1 map with and without it, work-precision -> results/bench-flight.md,
+#                   orbit sweeps, one thread: two-way continued and cold against one-way on the
+#                   paper, M = 1 and flight maps and one point, by status with passes, the
+#                   goals of issue 22 -> results/bench-orbit-sweeps.md,
 #                   reading a million-row measurement file (printed)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
@@ -191,6 +194,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/two_way_agreement.py
 	$(PY) benchmarks/bench_measurements.py
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_flight.py
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_orbit_sweeps.py
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
 

@@ -53,6 +53,29 @@ STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
 GOAL_BOUNCING = 3.0
 #: The time integrator's tolerances of the work-precision part.
 TOLERANCES = (1e-6, 1e-8, 1e-10)
+#: The map's frequencies [Hz] and accelerations [m s-2] (the grid of
+#: mass-ratio-limit-two-way), and its default points per axis.
+F_RANGE = (5.0, 30.0)
+A_RANGE = (0.0, 12.0)
+SIZE = 121
+
+
+def grid(size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The map's points, flat, frequency outer and acceleration inner.
+
+    Parameters
+    ----------
+    size : int
+        Points per axis.
+
+    Returns
+    -------
+    f, a : numpy.ndarray
+        Frequencies [Hz] and accelerations [m s-2], ``size**2`` each.
+    """
+    f = np.linspace(*F_RANGE, size)[:, None]
+    a = np.linspace(*A_RANGE, size)[None, :]
+    return tuple(np.ascontiguousarray(x).ravel() for x in np.broadcast_arrays(f, a))
 
 
 def _calls() -> dict[str, Callable]:
@@ -71,9 +94,7 @@ def _timed(call: Callable[[], object]) -> tuple[float, float]:
 
 
 def _map_part(args: argparse.Namespace) -> dict:
-    f = np.linspace(5.0, 30.0, args.size)[:, None]
-    a = np.linspace(0.0, 12.0, args.size)[None, :]
-    f_all, a_all = (np.ascontiguousarray(x).ravel() for x in np.broadcast_arrays(f, a))
+    f_all, a_all = grid(args.size)
     calls = _calls()
     start = time.perf_counter()
     for call in calls.values():  # the serial and the parallel kernels
@@ -160,7 +181,8 @@ def report(args: argparse.Namespace, part: dict, rows: list[dict], loads: str) -
         f"Commit {git['git_commit']}{' (dirty)' if git['git_dirty'] else ''}, {utc_now()}.",
         "",
         f"Map: M = {STRUCTURE.M} (f0 = 14.44 Hz, Q = 17.5, alpha = 64 deg, cs = ck = 0.25, "
-        f"e = {STRUCTURE.restitution}), f = 5..30 Hz x a = 0..12 m/s^2, {args.size} x "
+        f"e = {STRUCTURE.restitution}), f = {F_RANGE[0]:g}..{F_RANGE[1]:g} Hz x "
+        f"a = {A_RANGE[0]:g}..{A_RANGE[1]:g} m/s^2, {args.size} x "
         f"{args.size} = {n} points, one numba thread, CPU time, minimum of {args.repeats} "
         f"rounds back to back; warm-up {part['warm']:.1f} s excluded.",
         "",
@@ -210,7 +232,7 @@ def report(args: argparse.Namespace, part: dict, rows: list[dict], loads: str) -
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", type=int, default=121, help="points per axis")
+    parser.add_argument("--size", type=int, default=SIZE, help="points per axis")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--sample", type=int, default=8,
                         help="bouncing points checked against the reference (0: none)")
