@@ -101,6 +101,15 @@ def stick_response(structure, omega, a):
 def mode_row(structure, omega, a, table, row):
     """Fill one row of :func:`mode_table`: the stick (0), forward (1) or backward (2)
     (every column: a table is reused from point to point)."""
+    mode_constants(structure, table, row)
+    mode_drive(structure, omega, a, table, row)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def mode_constants(structure, table, row):
+    """Fill the columns of one row of :func:`mode_table` that depend on the structure
+    alone (the others 0): the mode's coefficients and the bounds of its homogeneous
+    functionals, the most of a row's cost, which a run of points computes once."""
     table[row, :] = 0.0
     c = structure[DAMPING]
     k = structure[STIFFNESS]
@@ -108,79 +117,93 @@ def mode_row(structure, omega, a, table, row):
     sa = structure[SIN_ALPHA]
     m = structure[MASS_RATIO]
     ck = structure[KINETIC_FRICTION]
+    cs = structure[STATIC_FRICTION]
     g = structure[GRAVITY]
     coupled = structure[TWO_WAY] != 0.0
     s = 0.0 if row == 0 else (1.0 if row == 1 else -1.0)
     if row == 0 or not coupled:
         d = 1.0
-        force = a * ca
         gconst = 0.0
     else:
         d = 1.0 - m * sa * (sa + s * ck * ca)
-        force = a * (ca - s * ck * sa)
         gconst = s * ck * g * sa
     table[row, M_SIGN] = s
-    table[row, M_K] = 0.0 if row == 0 else m * (sa + s * ck * ca)
+    kk = 0.0 if row == 0 else m * (sa + s * ck * ca)
+    table[row, M_K] = kk
     table[row, M_D] = d
-    table[row, M_FORCE] = force
     table[row, M_GCONST] = gconst
     if d <= 0.0:
         table[row, M_D] = 0.0
         return
     sigma = 0.5 * c / d
     table[row, M_SIGMA] = sigma
-    table[row, M_KD] = k / d
-    table[row, M_CD] = c / d
+    kd = k / d
+    cd = c / d
+    table[row, M_KD] = kd
+    table[row, M_CD] = cd
     table[row, M_NU2] = k / d - sigma * sigma
-    re = k - d * omega * omega
-    im = c * omega
-    den = re * re + im * im
-    table[row, M_PRE] = force * re / den
-    table[row, M_PIM] = -force * im / den
     table[row, M_OFFSET] = gconst / k
-    _event_bounds(structure, table[row], omega, a)
+    values = table[row]
+    for sign, col in ((1.0, M_SIN_P), (-1.0, M_SIN_M)):
+        kappa = -m * (sign * sa + cs * ca)
+        values[col + 1] = abs(kappa) * functional_bound(values, -kd, -cd, k, 0)
+        values[col + 2] = abs(kappa) * functional_bound(values, -kd, -cd, k, 2)
+        values[col + 3] = abs(kappa) * functional_bound(values, -kd, -cd, k, 3)
+    values[M_HOM2_V] = functional_bound(values, 0.0, kk, k, 2)
+    values[M_HOM3_V] = functional_bound(values, 0.0, kk, k, 3)
+    values[M_HOM0_N] = m * ca * functional_bound(values, kd, cd, k, 0)
+    values[M_HOM2_N] = m * ca * functional_bound(values, kd, cd, k, 2)
+    values[M_HOM3_N] = m * ca * functional_bound(values, kd, cd, k, 3)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _event_bounds(structure, row, omega, a):
-    """Fill the bound columns of one mode's row (see ``M_SIN_P``...)."""
+def mode_drive(structure, omega, a, table, row):
+    """Fill the columns of one row of :func:`mode_table` that depend on the drive
+    ``omega`` [rad s-1], ``a`` [m s-2] (the row's :func:`mode_constants` already in
+    place): the forcing, the particular response and the sinusoids of the event
+    functions."""
     k = structure[STIFFNESS]
+    c = structure[DAMPING]
     ca = structure[COS_ALPHA]
     sa = structure[SIN_ALPHA]
     m = structure[MASS_RATIO]
     cs = structure[STATIC_FRICTION]
     ck = structure[KINETIC_FRICTION]
-    kd = row[M_KD]
-    cd = row[M_CD]
-    s = row[M_SIGN]
-    kk = row[M_K]
-    pr = row[M_PRE]
-    pi = row[M_PIM]
+    values = table[row]
+    s = values[M_SIGN]
+    if row == 0 or structure[TWO_WAY] == 0.0:
+        force = a * ca
+    else:
+        force = a * (ca - s * ck * sa)
+    values[M_FORCE] = force
+    d = values[M_D]
+    if d <= 0.0:
+        return
+    re = k - d * omega * omega
+    im = c * omega
+    den = re * re + im * im
+    pr = force * re / den
+    pi = -force * im / den
+    values[M_PRE] = pr
+    values[M_PIM] = pi
+    kk = values[M_K]
     w2 = omega * omega
     for sign, col in ((1.0, M_SIN_P), (-1.0, M_SIN_M)):
         # Release s tau - cs n = kappa delta'' - cs g + cs A (a stick's delta'').
         kappa = -m * (sign * sa + cs * ca)
         cr = -kappa * w2 * pr + cs * a
         ci = -kappa * w2 * pi
-        row[col] = w2 * math.hypot(cr, ci)
-        row[col + 1] = abs(kappa) * functional_bound(row, -kd, -cd, k, 0)
-        row[col + 2] = abs(kappa) * functional_bound(row, -kd, -cd, k, 2)
-        row[col + 3] = abs(kappa) * functional_bound(row, -kd, -cd, k, 3)
-        row[col + 4] = math.hypot(cr, ci)
-        row[col + 5] = math.atan2(ci, cr)
+        values[col] = w2 * math.hypot(cr, ci)
+        values[col + 4] = math.hypot(cr, ci)
+        values[col + 5] = math.atan2(ci, cr)
     # s v: sinusoid -s K delta_p' + ck a sin(wt) / w; homogeneous -s K h'.
-    row[M_SIN_V] = w2 * math.hypot(kk * omega * pi, kk * omega * pr + s * ck * a / omega)
-    row[M_HOM2_V] = functional_bound(row, 0.0, kk, k, 2)
-    row[M_HOM3_V] = functional_bound(row, 0.0, kk, k, 3)
+    values[M_SIN_V] = w2 * math.hypot(kk * omega * pi, kk * omega * pr + s * ck * a / omega)
     # -n = A - g - M cos(alpha) delta''.
     cr = a + m * ca * w2 * pr
     ci = m * ca * w2 * pi
-    row[M_SIN_N] = w2 * math.hypot(cr, ci)
-    row[M_HOM0_N] = m * ca * functional_bound(row, kd, cd, k, 0)
-    row[M_HOM2_N] = m * ca * functional_bound(row, kd, cd, k, 2)
-    row[M_HOM3_N] = m * ca * functional_bound(row, kd, cd, k, 3)
-    row[M_AMP_N] = math.hypot(cr, ci)
-    row[M_ARG_N] = math.atan2(ci, cr)
+    values[M_SIN_N] = w2 * math.hypot(cr, ci)
+    values[M_AMP_N] = math.hypot(cr, ci)
+    values[M_ARG_N] = math.atan2(ci, cr)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

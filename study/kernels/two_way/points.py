@@ -50,6 +50,8 @@ from study.kernels.two_way.modes import (
     N_MODE,
     TWO_PI,
     DrivePoint,
+    mode_constants,
+    mode_drive,
     mode_row,
     stick_response,
 )
@@ -206,10 +208,14 @@ Workspace = namedtuple("Workspace",
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def new_workspace():
-    """A fresh :data:`Workspace`."""
-    return Workspace(np.zeros((N_ROWS, N_MODE)), np.empty(3), np.empty(3), np.empty(3),
-                     np.empty((2, 3)),
+def new_workspace(structure):
+    """A fresh :data:`Workspace` for ``structure``, its mode table's contact rows holding
+    their :func:`~study.kernels.two_way.modes.mode_constants` (each point adds its
+    drive's columns)."""
+    table = np.zeros((N_ROWS, N_MODE))
+    for row in range(3):
+        mode_constants(structure, table, row)
+    return Workspace(table, np.empty(3), np.empty(3), np.empty(3), np.empty((2, 3)),
                      PassRecord(np.zeros(N_ACC), np.empty((3, 3)), np.empty((3, 3)),
                                 np.zeros(2)),
                      np.empty((MAX_PERIOD, 3)))
@@ -251,7 +257,7 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
     every other point is solved exactly as without flight, so it keeps every bit.
     """
     solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
-                      new_neighbours(), new_workspace(), True)
+                      new_neighbours(), new_workspace(structure), True)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -261,7 +267,8 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
     ``neighbours`` (a :data:`~study.kernels.two_way.continuation.Neighbours` of the
     points before it on its line, for the same start) when they hold an orbit, and
     solved cold when they hold none or the continuation is not trusted; ``neighbours``
-    then remembers this point. ``workspace`` (a :data:`Workspace`) is scratch space;
+    then remembers this point. ``workspace`` (a :data:`Workspace` of ``structure``) is
+    scratch space;
     without ``diagnostics`` only the status and velocity columns are sure to be right
     (a static point's multiplier is not computed)."""
     flying = structure[LIFT_OFF_LAW] != 0.0
@@ -272,9 +279,9 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
             return
     table = workspace.table
     point = DrivePoint(structure, table, omega, a)
-    mode_row(structure, omega, a, table, 0)
-    mode_row(structure, omega, a, table, 1)
-    mode_row(structure, omega, a, table, 2)
+    mode_drive(structure, omega, a, table, 0)
+    mode_drive(structure, omega, a, table, 1)
+    mode_drive(structure, omega, a, table, 2)
     if static:
         # Stuck on its steady response yet past lift-off: it takes off.
         _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
@@ -409,7 +416,7 @@ def sweep_runs(omega, a):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _solve_run(structure, omega, a, lifted, budget, begin, end, out):
     neighbours = new_neighbours()
-    workspace = new_workspace()
+    workspace = new_workspace(structure)
     flying = structure[LIFT_OFF_LAW] != 0.0
     for i in range(begin, end):
         if static_point(structure, omega[i], a[i], lifted[i], out[i], True) and not (
@@ -444,7 +451,7 @@ def solve_points_serial(structure, omega, a, lifted, budget, out):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _velocity_run(structure, omega, a, lifted, budget, begin, end, velocity, status):
     neighbours = new_neighbours()
-    workspace = new_workspace()
+    workspace = new_workspace(structure)
     row = np.empty(N_OUT)
     flying = structure[LIFT_OFF_LAW] != 0.0
     for i in range(begin, end):
