@@ -538,6 +538,21 @@ def test_every_fallback_of_a_fine_run_is_the_cold_point_bit_for_bit():
                            cold[rows][:, PHYSICAL].view(np.int64))
 
 
+def test_an_orbit_turning_unstable_falls_back_to_the_cold_point():
+    """random_map(341, "f") (M = 0.48, rows of a along f): near lift-off the continued
+    stick-slip orbit is found unstable (multiplier above 1 + STABILITY_MARGIN), so the
+    point is solved cold (FAILED_UNSTABLE; the cold start: LIFT_OFF), its physical
+    columns the cold start's bits; the whole map is the cold one."""
+    structure, f, a = random_map(341, "f")
+    continued = solve(kernel.solve_points_serial, structure, f, a)
+    cold = solve(kernel.solve_points_cold, structure, f, a)
+    unstable = continued[:, kernel.OUT_CONTINUED] == continuation.FAILED_UNSTABLE
+    assert unstable.any()
+    assert_array_equal(continued[unstable][:, PHYSICAL].view(np.int64),
+                       cold[unstable][:, PHYSICAL].view(np.int64))
+    assert_same_orbits(structure, f, a, continued, cold)
+
+
 @pytest.mark.parametrize("how", ["far-state", "unstable-side"])
 def test_a_bad_prediction_falls_back_to_the_cold_point(how):
     """A line whose remembered state is far off the orbit (far-state: 100 times the
