@@ -47,7 +47,9 @@ strict ``xfail`` reproducer below, which passes once the solver is fixed):
   (``study.attractors`` counts two or three) the sweep follows the attractor of its
   neighbours while the cold start lands in another basin: other status (stick-slip
   against continuous sliding or lift-off), other period, or another stick-slip orbit
-  (velocities 20 % of ``a / w`` apart).
+  (velocities 2 % to 150 % of ``a / w`` apart); 30 of the 800 maps of the seeds here;
+* kept values of a two-way study whose axis was refined are not the fresh sweep's bits
+  (test_kept_two_way_values_are_the_fresh_sweeps).
 """
 
 from __future__ import annotations
@@ -56,6 +58,7 @@ import dataclasses
 import math
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
@@ -87,7 +90,7 @@ FLOQUET_TOLERANCE = 1e-6  # relative
 STATE_TOLERANCE = 1e-10  # of the state's natural sizes (measured <= 1.2e-12)
 FRACTION_TOLERANCE = 1e-8  # of the period (measured <= 6.7e-10)
 # The fast tier keeps about this many frequency rows of each structure of a workflow.
-FAST_ROWS = 10
+FAST_ROWS = 20
 
 PHYSICAL = tuple(c for c in range(kernel.N_OUT) if c not in kernel.WORK_COLUMNS)
 STATE = (kernel.OUT_DELTA, kernel.OUT_DELTA_RATE, kernel.OUT_SPEED)
@@ -96,10 +99,12 @@ FAILED_CODES = {continuation.FAILED_RUN, continuation.FAILED_SLIVER,
                 continuation.FAILED_SINGULAR, continuation.FAILED_PASSES,
                 continuation.FAILED_UNSTABLE}
 
-#: (M, f [Hz], a [m s-2]) of the paper's structure with mass ratio M where the
-#: continued sweep (along a) says STICK_SLIP and the cold start LIFT_OFF; see
-#: test_known_grazing_lift_off_departs_from_the_cold_start. Excluded from the grid
-#: comparisons (each workflow holding the point would otherwise fail on it alone).
+#: (M, f [Hz], a [m s-2], a_start [m s-2]) of the paper's structure with mass ratio M:
+#: at (f, a) the continued sweep along a says STICK_SLIP and the cold start LIFT_OFF
+#: (the sweep from a_start on, the workflow's step, is enough); see
+#: test_known_grazing_lift_off_departs_from_the_cold_start. The points of the full
+#: grids of mass-ratio-limit-two-way and -flight (M = 0.8) and coupling (M = 0.7);
+#: left out of the grid comparisons, which would otherwise fail on them alone.
 KNOWN_GRAZING = ((0.8, 14.3, 7.0, 6.3), (0.7, 14.625, 7.55, 7.25))
 
 
@@ -239,14 +244,14 @@ def two_way_workflows() -> list[str]:
 TWO_WAY_WORKFLOWS = two_way_workflows()
 
 
-def check_workflow(name: str, stride_rows: int | None) -> list[dict]:
-    """Continued against cold on the workflow's grid, every structure, every
-    acceleration of every ``stride``-th frequency row (all rows for None)."""
+def check_workflow(name: str, rows: int | None) -> list[dict]:
+    """Continued against cold on the workflow's grid, every structure: every
+    acceleration of about ``rows`` frequency rows evenly strided (all rows for None)."""
     spec = load_spec(WORKFLOWS / f"{name}.toml")
     f_axis = spec.axis("f").values
     a_axis = spec.axis("a").values
-    if stride_rows is not None:
-        f_axis = f_axis[::max(1, f_axis.size // stride_rows)]
+    if rows is not None:
+        f_axis = f_axis[::max(1, f_axis.size // rows)]
     budget = kernel_budget(spec.solver)
     measured = []
     for _, structure in spec.structures():
@@ -399,8 +404,8 @@ KNOWN_MULTISTABLE_SEEDS = {
     (381, "a"): "OS",
     (392, "a"): "S",
 }
-FAST_SEEDS = range(40)
-SLOW_SEEDS = range(40, 400)
+FAST_SEEDS = range(60)
+SLOW_SEEDS = range(60, 400)
 
 
 def seed_params(seeds):
@@ -434,7 +439,7 @@ def test_random_map_continues_to_the_cold_orbits(seed, along):
 @pytest.mark.slow
 @pytest.mark.parametrize(("seed", "along"), seed_params(SLOW_SEEDS))
 def test_more_random_maps_continue_to_the_cold_orbits(seed, along):
-    """As test_random_map_continues_to_the_cold_orbits, on 360 more seeds."""
+    """As test_random_map_continues_to_the_cold_orbits, on 340 more seeds."""
     check_random_map(seed, along)
 
 
@@ -640,14 +645,20 @@ def mixed_points():
 def test_parallel_and_serial_drivers_agree_bit_for_bit():
     """solve_points (each run on one thread, runs spread over the lanes) ==
     solve_points_serial, every column's bits, on a map of 4 + 3 line runs and 64
-    single points; twice in parallel, the same."""
+    single points; twice, on one thread and on all of numba's."""
     f, a = mixed_points()
     structure = paper_structure()
     assert kernel.sweep_runs(2.0 * math.pi * f, a).size - 1 == 4 + 3 + 64
     serial = solve(kernel.solve_points_serial, structure, f, a)
-    for _ in range(2):
-        parallel = solve(kernel.solve_points, structure, f, a)
-        assert_array_equal(parallel.view(np.int64), serial.view(np.int64))
+    threads = numba.get_num_threads()
+    try:
+        for count in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(count)
+            for _ in range(2):
+                parallel = solve(kernel.solve_points, structure, f, a)
+                assert_array_equal(parallel.view(np.int64), serial.view(np.int64))
+    finally:
+        numba.set_num_threads(threads)
     assert np.sum(serial[:, kernel.OUT_CONTINUED] == 1.0) > 200
 
 
@@ -813,3 +824,39 @@ def test_predict_is_false_when_empty_and_forget_empties():
     z[:] = 7.0
     assert not predict(neighbours, 91.0, 5.0, z)
     assert_array_equal(z, 7.0)
+
+
+# --- kept values of a study ----------------------------------------------------------
+
+
+def two_way_spec(a_count: int) -> str:
+    return ("[study]\nname = \"kept\"\nobservables = [\"velocity\"]\n[structure]\n"
+            "f0 = 14.44\nQ = 17.5\nalpha = 64.0\nM = 0.08\ncs = 0.25\n[sweep]\n"
+            "f = { start = 13.0, stop = 15.0, num = 3 }\n"
+            f"a = {{ start = 2.0, stop = 10.0, num = {a_count} }}\n"
+            "[solver]\ncoupling = \"two-way\"\nchunk_points = 10\n")
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="a refined a axis reuses values solved in other runs: kept "
+                          "two-way values differ from a fresh sweep in the last bits "
+                          "(reported)")
+def test_kept_two_way_values_are_the_fresh_sweeps(tmp_path):
+    """A two-way study on 5 accelerations, then on 9 (every other one kept): the file
+    should hold what the solver gives on the new grid, bit for bit, as it does one-way
+    (tests/unit/test_incremental.py). A point's result now depends on its run, and the
+    engine solves only the missing columns (a run of 4 points a row, the kept 5 from
+    runs of 5): measured, 10 of 27 values differ, by up to 43 ulps of the value (a few
+    ulps of a / w)."""
+    from study.engine.runner import run_study
+    from study.engine.store import open_result
+
+    spec = tmp_path / "kept.toml"
+    for a_count in (5, 9):
+        spec.write_text(two_way_spec(a_count))
+        report = run_study(spec, tmp_path / "kept.nc", progress=False)
+    assert report.points_reused == 15
+    ds = open_result(tmp_path / "kept.nc")
+    velocity, _ = study.steady_velocity(paper_structure(), ds["f"].values[:, None],
+                                        ds["a"].values[None, :], coupling="two-way")
+    assert_array_equal(ds["velocity"].values.view(np.int64), velocity.view(np.int64))
