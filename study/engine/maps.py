@@ -91,6 +91,7 @@ def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.fl
               f"max_map_iterations = {int(settings.max_map_iterations)}"]
     # Only when on, as in a spec that omits it: the text of a map without flight stays.
     lines += ["flight = true"] if flight else []
+    lines += ["continuation = true"] if settings.continuation else []
     return "\n".join([*lines, ""])
 
 

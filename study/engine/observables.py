@@ -84,6 +84,8 @@ class Method:
         if self.name == "exact":
             settings = {"max_events": self.solver.max_events,
                         "max_map_iterations": self.solver.max_map_iterations}
+            if self.solver.continuation:  # only when on, as flight below
+                settings["continuation"] = True
         else:
             settings = {
                 "tolerance": self.integrator.tolerance,

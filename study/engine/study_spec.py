@@ -95,7 +95,7 @@ SOLVER_OBSERVABLES = tuple(
     name for name, o in OBSERVABLE_REGISTRY.items() if o.needs_acceleration
 )
 #: ``[solver]`` keys of the exact solver and of the time integrator.
-EXACT_KEYS = ("max_events", "max_map_iterations")
+EXACT_KEYS = ("max_events", "max_map_iterations", "continuation")
 INTEGRATOR_KEYS = (
     "tolerance", "steps_per_period", "max_periods", "max_orbit_period", "period_tolerance",
 )
@@ -284,6 +284,16 @@ def spec_schema() -> dict[str, Any]:
         solver[name]["maximum"] = largest
     solver["friction"] = _friction_schema()
     solver["flight"] = _flight_schema()
+    solver["continuation"] = {
+        "type": "boolean",
+        "default": False,
+        "description": (
+            "exact solver, two-way coupling: true: each orbit's Newton search starts from "
+            "the fixed points of the points before it along its line of the sweep (2-4x "
+            "faster on fine maps; where several motions are stable it follows its "
+            "neighbours' branch, as a slowly swept drive, and a point's value depends on "
+            "its grid); false (default): every point from rest"),
+    }
     return schema
 
 
@@ -677,6 +687,12 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...], axes: li
         )
     except ValueError as err:
         raise SpecError(f"{path}: [solver] {err}") from None
+    if solver.continuation and coupling != "two-way":
+        raise SpecError(
+            f'{path}: [solver] continuation = true (each orbit continued from the points '
+            f'before it along the sweep) needs coupling = "two-way" with method = "exact": '
+            f'the one-way solver has no orbit to continue; got coupling = "{coupling}" '
+            '(allowed: coupling = "two-way", or continuation = false)')
     frontier_tolerance = float(solver_table.get("frontier_tolerance", 1e-9))
     # Bisection halves a bracket until it is narrower than the tolerance: below the
     # spacing of doubles near the largest f the midpoint stops moving and it never is.
@@ -773,6 +789,9 @@ def _canonical(study: dict[str, Any], observables: tuple[str, ...], fixed: dict[
                if friction.law != DEFAULT_FRICTION else {}),
             # Likewise flight only when on: specs without it keep their fingerprints.
             **({"flight": True} if flight else {}),
+            # And continuation.
+            **({"continuation": True} if method == "exact" and solver.continuation
+               else {}),
         },
     }
     return canonical

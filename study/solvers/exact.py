@@ -76,7 +76,8 @@ PARALLEL_THRESHOLD = 2048
 
 @dataclass(frozen=True)
 class SolverSettings:
-    """Budgets of the exact steady-state solver.
+    """Budgets of the exact steady-state solver, and whether two-way orbits are continued
+    along a sweep.
 
     Parameters
     ----------
@@ -88,18 +89,33 @@ class SolverSettings:
     max_map_iterations : int
         Iterations of the continuous-sliding circle map searched for an attracting
         cycle before ``NonConvergence.NO_PERIODIC_ORBIT``, 1 to 1e6.
+    continuation : bool
+        Two-way coupling only: start each orbit's Newton search from the fixed points of
+        the points before it along its line of the sweep (a column of accelerations at
+        one frequency, or a row of frequencies at one acceleration) instead of from rest.
+        Two to four times faster on a fine map, the same orbit as from rest wherever only
+        one is stable; where several are, the continued orbit follows its neighbours'
+        branch, as a slowly swept drive would (docs/theory/two-way.md), and a point's
+        value depends on the grid it is part of. Default False: every point from rest.
 
     Raises
     ------
     ValueError
         A budget that is not an integer (:class:`study.model.inputs.InputTypeError`, also
-        a TypeError) or is outside its range, naming the field.
+        a TypeError) or is outside its range, naming the field; ``continuation`` not a
+        bool (an InputTypeError).
     """
 
     max_events: int = 10_000
     max_map_iterations: int = 5_000
+    continuation: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.continuation, bool | np.bool_):
+            raise InputTypeError(
+                f"solver setting 'continuation' must be True or False, got "
+                f"{type(self.continuation).__name__}: {self.continuation!r}")
+        object.__setattr__(self, "continuation", bool(self.continuation))
         for name, largest in MAX_SOLVER_BUDGET.items():
             value = getattr(self, name)
             if isinstance(value, bool | np.timedelta64) or not isinstance(
@@ -195,12 +211,18 @@ def _shaped(values: NDArray[Any], shape: tuple[int, ...]) -> Any:
     return values[0] if shape == () else scalar_if_0d(values.reshape(shape))
 
 
-def check_settings(settings: object) -> SolverSettings:
+def check_settings(settings: object, coupling: str | None = None) -> SolverSettings:
     """``settings``, or the defaults for None; a TypeError naming the argument for
-    anything but a :class:`SolverSettings`."""
+    anything but a :class:`SolverSettings`, and a ValueError for ``continuation`` with
+    a ``coupling`` other than two-way (the one-way solver has no orbit to continue)."""
     if settings is None:
         return DEFAULT_SETTINGS
-    return instance_of("settings", settings, SolverSettings, "a study.SolverSettings")
+    settings = instance_of("settings", settings, SolverSettings, "a study.SolverSettings")
+    if settings.continuation and coupling is not None and coupling != "two-way":
+        raise ValueError(
+            f"SolverSettings(continuation=True) needs coupling='two-way', got "
+            f"coupling={coupling!r}: the one-way solver has no orbit to continue")
+    return settings
 
 
 def check_coupling(coupling: object) -> str:
@@ -365,7 +387,7 @@ def _orbit_table(
         parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
     kernel = orbit_kernel.solve_points if parallel else orbit_kernel.solve_points_serial
     kernel(structure_vector(structure, coupling, flight), omega, a_flat, lifted,
-           kernel_budget(settings), out)
+           kernel_budget(settings), settings.continuation, out)
     return out
 
 
@@ -385,7 +407,7 @@ def _orbit_velocity(
     parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
     kernel = orbit_kernel.velocity_points if parallel else orbit_kernel.velocity_points_serial
     kernel(structure_vector(structure, coupling, flight), 2.0 * np.pi * f_flat, a_flat,
-           lifted, kernel_budget(settings), velocity, status)
+           lifted, kernel_budget(settings), settings.continuation, velocity, status)
     return velocity, status
 
 
@@ -531,7 +553,10 @@ def steady_state(
     a : array_like
         Drive acceleration amplitude [m s-2], >= 0.
     settings : SolverSettings, optional
-        Solver budgets; defaults to ``SolverSettings()``.
+        Solver budgets, and whether two-way orbits are continued along the sweep
+        (``continuation``: faster; where several motions are stable it follows its
+        neighbours' branch, so a point's value depends on the grid); defaults to
+        ``SolverSettings()``, every point from rest.
     coupling : {"one-way", "two-way"}, default "one-way"
         The paper's model (mode driven by the table only) or the physical one
         (:data:`DEFAULT_COUPLING` is the default).
@@ -563,8 +588,9 @@ def steady_state(
         numbers (strings, booleans, complex numbers, dates).
     ValueError
         ``f`` or ``a`` out of range or not finite (the message names the first offending
-        value and its index), shapes that do not broadcast, an unknown coupling, or
-        ``flight=True`` with one-way coupling or ``M = 1`` (:func:`check_flight`).
+        value and its index), shapes that do not broadcast, an unknown coupling,
+        ``flight=True`` with one-way coupling or ``M = 1`` (:func:`check_flight`), or
+        continuation with one-way coupling.
 
     See Also
     --------
@@ -574,7 +600,7 @@ def steady_state(
     coupling = check_coupling(coupling)
     flight = check_flight(flight, coupling, structure)
     check_friction(friction, "exact")
-    settings = check_settings(settings)
+    settings = check_settings(settings, coupling)
     shape, f_flat, a_flat = _flat_drive(f, a)
     if coupling == "two-way":
         return _orbit_steady_state(structure, f_flat, a_flat, shape, coupling, settings,
@@ -641,7 +667,8 @@ def attractors(
     a : array_like
         Drive acceleration amplitude [m s-2], >= 0.
     settings : SolverSettings, optional
-        Solver budgets.
+        Solver budgets (``continuation`` does not apply: every start is solved from its
+        own state, which is what the check is for).
     coupling : {"one-way", "two-way"}, default "one-way"
         The model; with ``"one-way"`` the mode's transient decays on its own and the
         starts differ in the phase of the first release.
@@ -703,7 +730,7 @@ def steady_velocity(
     a : array_like
         Drive acceleration amplitude [m s-2], >= 0.
     settings : SolverSettings, optional
-        Solver budgets.
+        Solver budgets and continuation, as :func:`steady_state`.
     coupling : {"one-way", "two-way"}, default "one-way"
         See :func:`steady_state`.
     flight : bool, default False
@@ -746,7 +773,7 @@ def steady_velocity(
     coupling = check_coupling(coupling)
     structure = check_structure(structure)
     flight = check_flight(flight, coupling, structure)
-    settings = check_settings(settings)
+    settings = check_settings(settings, coupling)
     shape, f_flat, a_flat = _flat_drive(f, a)
     if coupling != "one-way":
         # The orbit kernel's velocity and status only (those of steady_state, bit for

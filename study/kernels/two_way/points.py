@@ -414,11 +414,13 @@ def sweep_runs(omega, a):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _solve_run(structure, omega, a, lifted, budget, begin, end, out):
+def _solve_run(structure, omega, a, lifted, budget, continued, begin, end, out):
     neighbours = new_neighbours()
     workspace = new_workspace(structure)
     flying = structure[LIFT_OFF_LAW] != 0.0
     for i in range(begin, end):
+        if not continued:
+            forget(neighbours)
         if static_point(structure, omega[i], a[i], lifted[i], out[i], True) and not (
                 lifted[i] and flying):
             forget(neighbours)
@@ -428,33 +430,40 @@ def _solve_run(structure, omega, a, lifted, budget, begin, end, out):
 
 
 @njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def solve_points(structure, omega, a, lifted, budget, out):
+def solve_points(structure, omega, a, lifted, budget, continued, out):
     """Fill ``out`` (n x ``N_OUT``) at the points ``omega`` [rad s-1], ``a`` [m s-2]
     (``lifted``: past lift-off) in parallel: the runs of :func:`sweep_runs`, each in
-    order on one thread, interleaved over the lanes."""
+    order on one thread, interleaved over the lanes. With ``continued`` each point of a
+    run is continued from the points before it; else each is solved from rest (the
+    runs only share their scratch space: the results do not depend on them)."""
     starts = sweep_runs(omega, a)
     runs = starts.shape[0] - 1
     lanes = min(runs, 256)
     for lane in prange(lanes):
         for r in range(lane, runs, lanes):
-            _solve_run(structure, omega, a, lifted, budget, starts[r], starts[r + 1], out)
+            _solve_run(structure, omega, a, lifted, budget, continued, starts[r],
+                       starts[r + 1], out)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def solve_points_serial(structure, omega, a, lifted, budget, out):
+def solve_points_serial(structure, omega, a, lifted, budget, continued, out):
     """Same as :func:`solve_points` on one thread."""
     starts = sweep_runs(omega, a)
     for r in range(starts.shape[0] - 1):
-        _solve_run(structure, omega, a, lifted, budget, starts[r], starts[r + 1], out)
+        _solve_run(structure, omega, a, lifted, budget, continued, starts[r], starts[r + 1],
+                   out)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _velocity_run(structure, omega, a, lifted, budget, begin, end, velocity, status):
+def _velocity_run(structure, omega, a, lifted, budget, continued, begin, end, velocity,
+                  status):
     neighbours = new_neighbours()
     workspace = new_workspace(structure)
     row = np.empty(N_OUT)
     flying = structure[LIFT_OFF_LAW] != 0.0
     for i in range(begin, end):
+        if not continued:
+            forget(neighbours)
         if not static_point(structure, omega[i], a[i], lifted[i], row, False) or (
                 lifted[i] and flying):
             solve_point_along(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, row,
@@ -466,7 +475,7 @@ def _velocity_run(structure, omega, a, lifted, budget, begin, end, velocity, sta
 
 
 @njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def velocity_points(structure, omega, a, lifted, budget, velocity, status):
+def velocity_points(structure, omega, a, lifted, budget, continued, velocity, status):
     """The velocity [m s-1] and the status (int8) of :func:`solve_points`, bit for bit,
     into ``velocity`` and ``status``: no table of every column (136 bytes a point) and
     no multiplier of the static points."""
@@ -475,22 +484,24 @@ def velocity_points(structure, omega, a, lifted, budget, velocity, status):
     lanes = min(runs, 256)
     for lane in prange(lanes):
         for r in range(lane, runs, lanes):
-            _velocity_run(structure, omega, a, lifted, budget, starts[r], starts[r + 1],
-                          velocity, status)
+            _velocity_run(structure, omega, a, lifted, budget, continued, starts[r],
+                          starts[r + 1], velocity, status)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def velocity_points_serial(structure, omega, a, lifted, budget, velocity, status):
+def velocity_points_serial(structure, omega, a, lifted, budget, continued, velocity,
+                           status):
     """Same as :func:`velocity_points` on one thread."""
     starts = sweep_runs(omega, a)
     for r in range(starts.shape[0] - 1):
-        _velocity_run(structure, omega, a, lifted, budget, starts[r], starts[r + 1],
-                      velocity, status)
+        _velocity_run(structure, omega, a, lifted, budget, continued, starts[r],
+                      starts[r + 1], velocity, status)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def solve_points_cold(structure, omega, a, lifted, budget, out):
-    """Same as :func:`solve_points_serial` with every point solved cold (no
-    continuation): the reference the continued sweep is checked and timed against."""
+    """Every point solved by :func:`solve_point`, alone: the reference that the drivers
+    without continuation reproduce bit for bit and the continued sweep is checked and
+    timed against."""
     for i in range(omega.shape[0]):
         solve_point(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, out[i])
