@@ -89,7 +89,7 @@ def _kernels(f: float, a: float, points: int) -> dict[str, Callable[[], object]]
         "one-way": lambda: one_way.velocity_points_small(f_flat, a_flat, constants, levels,
                                                          tuple(budget), velocity, status),
         "two-way": lambda: orbit_kernel.solve_points_serial(vector, omega, a_flat, lifted,
-                                                            budget, table),
+                                                            budget, False, table),
     }
 
 
