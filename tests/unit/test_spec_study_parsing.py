@@ -533,7 +533,8 @@ REFUSALS = [
     pytest.param(
         {"solver": {"max_event": 10}},
         ["[solver]", "unknown key 'max_event'",
-         "allowed keys: chunk_points, continuation, coupling, flight, friction, frontier_tolerance, max_events, "
+         "allowed keys: chunk_points, continuation, coupling, flight, friction, "
+         "frontier_tolerance, max_events, "
          "max_map_iterations, max_orbit_period, max_periods, method, period_tolerance, "
          "steps_per_period, tolerance"],
         id="unknown-key-solver",
