@@ -46,6 +46,10 @@ _REFRESH = 1.0
 #: are in flight before the run ends (a frozen worker; see :func:`executor`).
 TASK_TIMEOUT = 600.0
 
+#: Seconds by which a worker's last heartbeat may trail the newest before a stalled run
+#: names it as silent (heartbeats come about every second on a small cluster).
+SILENT_HEARTBEAT = 2.0
+
 # Sleep while no task has finished [s]: from the shortest, doubling up to the
 # longest, so that quick tasks are collected at once and an idle wait costs nothing.
 _POLL = (0.001, 0.02)
@@ -453,11 +457,32 @@ class _DaskExecutor(Executor):
             holders = []
         where = (f"tasks wait on {', '.join(holders)}" if holders
                  else "the scheduler does not say where they wait")
+        silent = self._silent_workers()
+        if silent and not set(silent) <= set(holders):
+            # A frozen worker stops its heartbeats before the scheduler knows what it
+            # holds (a task sent to it may not be listed as processing there yet).
+            where += (f"; no heartbeat for over {SILENT_HEARTBEAT:g} s from "
+                      f"{', '.join(silent)}")
         return ClusterError(
             f"no task finished on the workers of {self.name} for {self.task_timeout:g} s "
             f"({len(keys)} in flight; {where}): is a worker frozen or overloaded? The run "
             "stopped; finished work is kept and the next run resumes (--task-timeout "
             "sets the wait)")
+
+    def _silent_workers(self) -> list[str]:
+        """Workers whose last heartbeat is over ``SILENT_HEARTBEAT`` older than the
+        newest (times of the scheduler's clock alone: no skew with this machine's)."""
+        try:
+            workers = self.client.scheduler_info()["workers"]
+            seen = {address: float(worker["last_seen"])
+                    for address, worker in workers.items() if "last_seen" in worker}
+        except Exception:  # the scheduler itself may be the one not answering
+            return []
+        if len(seen) < 2:
+            return []
+        newest = max(seen.values())
+        return sorted(address for address, when in seen.items()
+                      if newest - when > SILENT_HEARTBEAT)
 
     def run_unordered(self, function, items, *, label):
         import cloudpickle
