@@ -281,8 +281,12 @@ def test_ctrl_c_keeps_finished_chunks_and_the_next_run_resumes(tmp_path):
 
     command = [str(Path(sys.executable).with_name("study")), "run", str(spec_path),
                "-o", str(output), "--no-progress", "--workers", "1"]
+    # A shell starts background jobs with SIGINT ignored, and an ignored signal stays
+    # ignored across exec (Python then installs no KeyboardInterrupt handler): the child
+    # gets the default disposition, as a command typed at a terminal has.
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True)
+                               text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 300
     while time.monotonic() < deadline and process.poll() is None:
         if kept_chunks() >= 2:
