@@ -157,17 +157,23 @@ lint: $(STAMP)
 
 # Every tier: unit, integration, paper, hard_cases, property (the fuzz tiers are marked
 # fuzz and run by `make fuzz`; slow tests by `make test-slow`).
+# The tests run in one process per core (pytest-xdist), at most 4 so that a shared
+# machine is not taken over; 2 cores: 5.6 min against 10.9 min in one process.
+# PYTEST_WORKERS=0 runs them in this process, in order.
+PYTEST_WORKERS ?= auto
+XDIST := --numprocesses=$(PYTEST_WORKERS) --maxprocesses=4
+
 test: $(STAMP) lint
-	$(PY) -m pytest -m "not slow and not fuzz"
+	$(PY) -m pytest $(XDIST) -m "not slow and not fuzz"
 
 test-unit: $(STAMP)
-	$(PY) -m pytest tests/unit -m "not slow and not fuzz"
+	$(PY) -m pytest $(XDIST) tests/unit -m "not slow and not fuzz"
 
 test-integration: $(STAMP)
-	$(PY) -m pytest tests/integration -m "not slow and not fuzz"
+	$(PY) -m pytest $(XDIST) tests/integration -m "not slow and not fuzz"
 
 test-slow: $(STAMP)
-	$(PY) -m pytest -m slow
+	$(PY) -m pytest $(XDIST) -m slow
 
 # Seeded fuzz tiers (corrupted result files, damaged caches, mutated specs, measurement
 # files, command lines): CI runs them. Each passed tier records what it tried; the
