@@ -572,6 +572,12 @@ def m_variation(rng, doc):
         if choice == 2:
             solver["coupling"] = rng.choice(["two-way", "one-way", "none"])
             solver.setdefault("max_periods", 200)
+            if rng.random() < 0.5:
+                # Continuation is refused with one-way coupling or the integrator.
+                solver["continuation"] = rng.choice([True, False, "yes", 1])
+                return (f"coupling = {solver['coupling']!r}, "
+                        f"continuation = {solver['continuation']!r}",
+                        {"coupling", "method", "max_periods", "continuation"})
             return f"coupling = {solver['coupling']!r}", {"coupling", "method", "max_periods"}
         if choice == 3:
             key = rng.choice(["max_events", "max_map_iterations", "chunk_points",
