@@ -19,6 +19,7 @@
 #                   orbit sweeps, one thread: two-way continued and cold against one-way on the
 #                   paper, M = 1 and flight maps and one point, by status with passes, the
 #                   goals of issue 22 -> results/bench-orbit-sweeps.md,
+#                   the cost of a call on a few points -> results/bench-small-calls.md,
 #                   reading a million-row measurement file (printed)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
@@ -201,6 +202,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_measurements.py
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_flight.py
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_orbit_sweeps.py
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_small_calls.py
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
 
