@@ -479,7 +479,7 @@ def test_more_random_maps_continue_to_the_cold_orbits(seed, along):
     check_random_map(seed, along)
 
 
-# --- known departures: reproducers (strict xfail: they pass once the solver is fixed) ---
+# --- multistable points: with continuation the sweep follows its branch (documented) ---
 
 
 @pytest.mark.parametrize(("m", "f", "a_end", "a_start"), KNOWN_GRAZING,
