@@ -421,6 +421,9 @@ def _solve_run(structure, omega, a, lifted, budget, continued, begin, end, out):
     for i in range(begin, end):
         if not continued:
             forget(neighbours)
+        # The static decision here, and again in solve_point_along for the others: a
+        # static point then costs no call (measured 0.11 us a point of a static map,
+        # against 0.19 us with solve_point_along deciding for the drivers).
         if static_point(structure, omega[i], a[i], lifted[i], out[i], True) and not (
                 lifted[i] and flying):
             forget(neighbours)
