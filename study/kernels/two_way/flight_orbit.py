@@ -18,6 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
+from study.kernels.eigenvalues import spectral_radius
 from study.kernels.structure_vector import GRAVITY, STIFFNESS
 from study.kernels.two_way.cycles import CYCLE_DETECTION, MAX_PERIOD
 from study.kernels.two_way.flight import (
@@ -131,11 +132,10 @@ def solve_linear(m, r, out):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def flight_radius(jac):
-    """Largest modulus of the eigenvalues of the 5x5 ``jac`` (the Floquet multipliers)."""
-    if not np.all(np.isfinite(jac)):
-        return np.inf
-    values = np.linalg.eigvals(jac.astype(np.complex128))
-    return np.max(np.abs(values))
+    """Largest modulus of the eigenvalues of the 5x5 ``jac`` (the Floquet multipliers),
+    ``inf`` when it is not finite: by :func:`study.kernels.eigenvalues.spectral_radius`
+    (a LAPACK call from numba costs as much as two passes of a bouncing orbit)."""
+    return spectral_radius(jac)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
