@@ -193,16 +193,18 @@ def mode_drive(structure, omega, a, table, row):
         kappa = -m * (sign * sa + cs * ca)
         cr = -kappa * w2 * pr + cs * a
         ci = -kappa * w2 * pi
-        values[col] = w2 * math.hypot(cr, ci)
-        values[col + 4] = math.hypot(cr, ci)
+        amplitude = math.hypot(cr, ci)
+        values[col] = w2 * amplitude
+        values[col + 4] = amplitude
         values[col + 5] = math.atan2(ci, cr)
     # s v: sinusoid -s K delta_p' + ck a sin(wt) / w; homogeneous -s K h'.
     values[M_SIN_V] = w2 * math.hypot(kk * omega * pi, kk * omega * pr + s * ck * a / omega)
     # -n = A - g - M cos(alpha) delta''.
     cr = a + m * ca * w2 * pr
     ci = m * ca * w2 * pi
-    values[M_SIN_N] = w2 * math.hypot(cr, ci)
-    values[M_AMP_N] = math.hypot(cr, ci)
+    amplitude = math.hypot(cr, ci)
+    values[M_SIN_N] = w2 * amplitude
+    values[M_AMP_N] = amplitude
     values[M_ARG_N] = math.atan2(ci, cr)
 
 
