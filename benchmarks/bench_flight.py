@@ -35,6 +35,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 ROOT = Path(__file__).resolve().parent.parent
 # The repo root, for tests.reference: the independent oracles are not installed.
@@ -45,12 +46,30 @@ from docs_tables import load_average, machine, write_docs_table  # noqa: E402
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
-from study.solvers.exact import steady_state, steady_velocity  # noqa: E402
+from study.kernels.two_way import flight, points  # noqa: E402
+from study.kernels.two_way.modes import TWO_PI, DrivePoint, mode_row  # noqa: E402
+from study.solvers.exact import (  # noqa: E402
+    DEFAULT_SETTINGS,
+    kernel_budget,
+    steady_state,
+    steady_velocity,
+    structure_vector,
+)
 
 #: The M -> 1 structure of the flight workflows (M = 1 is refused with flight).
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
 #: The issue's goal: a bouncing point costs at most this many stick-slip points.
 GOAL_BOUNCING = 3.0
+#: The fewest Newton passes with the Jacobian that find an orbit and check it: from a
+#: start ~1e-2 off (scaled), residuals 1e-4, 1e-8, 1e-16, and the pass that verifies.
+FEWEST_NEWTON_PASSES = 4
+#: Periods of a bouncing point's flight search besides its Newton passes: the two
+#: followed from the start before Newton (the first hop from rest is not the orbit's),
+#: the pass that places the section and the legs from phase 0 to the section and back.
+PERIODS_BESIDE_NEWTON = 4
+#: Passes of the flight pass's timing (the time of one: the difference of two counts
+#: over their difference, after the first periods' transient).
+PASS_COUNTS = (5, 15)
 #: The time integrator's tolerances of the work-precision part.
 TOLERANCES = (1e-6, 1e-8, 1e-10)
 #: The map's frequencies [Hz] and accelerations [m s-2] (the grid of
@@ -76,6 +95,113 @@ def grid(size: int) -> tuple[np.ndarray, np.ndarray]:
     f = np.linspace(*F_RANGE, size)[:, None]
     a = np.linspace(*A_RANGE, size)[None, :]
     return tuple(np.ascontiguousarray(x).ravel() for x in np.broadcast_arrays(f, a))
+
+
+@njit(error_model="numpy")
+def flight_passes(vector, omega, a, count, want_jac):
+    """``count`` passes of the period map with flight from rest at each point (``fly``
+    over a period, with or without the Jacobian), as the flight search runs them. Not
+    cached: it must follow the kernel it calls.
+
+    Parameters
+    ----------
+    vector : numpy.ndarray
+        The structure vector (two-way, flight).
+    omega, a : numpy.ndarray
+        The points [rad s-1], [m s-2].
+    count : int
+        Passes at each point.
+    want_jac : bool
+        With the Jacobian (a Newton pass) or without (a map pass).
+
+    Returns
+    -------
+    float
+        The events of the points' passes, summed.
+    """
+    events = 0.0
+    for i in range(omega.shape[0]):
+        table = np.zeros((flight.N_ROWS, points.N_MODE))
+        for row in range(3):
+            mode_row(vector, omega[i], a[i], table, row)
+        flight.flight_row(vector, table)
+        point = DrivePoint(vector, table, omega[i], a[i])
+        z = np.zeros(flight.N_STATE)
+        points.start_state(table, omega[i], 0.0, z, 1.0)
+        record = flight.FlightRecord(np.zeros(flight.N_FLIGHT_ACC),
+                                     np.eye(flight.N_STATE),
+                                     np.empty((flight.N_STATE, flight.N_STATE)),
+                                     np.empty((flight.N_STATE, flight.N_STATE)),
+                                     np.zeros(2))
+        for _ in range(count):
+            for j in range(flight.N_STATE):
+                for m in range(flight.N_STATE):
+                    record.jac[j, m] = 1.0 if j == m else 0.0
+            flight.fly(point, z, 0.0, TWO_PI / omega[i], record, want_jac, False, 1_000_000)
+        events += record.acc[flight.A_EVENT_COUNT]
+    return events
+
+
+def _work_table(f: np.ndarray, a: np.ndarray, with_flight: bool) -> np.ndarray:
+    """The orbit kernel's output table (with its work columns) at ``f``, ``a``, every
+    point from rest (no continuation), on one thread."""
+    vector = structure_vector(STRUCTURE, "two-way", with_flight)
+    out = np.empty((f.size, points.N_OUT))
+    lifted = a > study.lift_off_acceleration(STRUCTURE, f)
+    points.solve_points_serial(vector, 2.0 * np.pi * f, a, lifted,
+                               kernel_budget(DEFAULT_SETTINGS), False, out)
+    return out
+
+
+def _bouncing_part(part: dict, args: argparse.Namespace) -> dict:
+    """Where a bouncing point's time goes: the contact search every point takes first
+    (the same points without flight), the flight search's passes from the kernel's work
+    columns, split by how its orbit was found, and the time of a flight pass."""
+    state = part["state"]
+    index = np.flatnonzero(state.status == study.Status.BOUNCING)
+    if index.size == 0:
+        return {}
+    f, a = part["f"][index], part["a"][index]
+    with_flight = _work_table(f, a, True)
+    contact = _work_table(f, a, False)
+    newton = (with_flight[:, points.OUT_NEWTON_PASSES]
+              - contact[:, points.OUT_NEWTON_PASSES])
+    maps = with_flight[:, points.OUT_MAP_PASSES] - contact[:, points.OUT_MAP_PASSES]
+    # One map pass places the section of Newton's method from the start; more are the
+    # cycle search's iterates (and its sections).
+    direct = maps <= 1.0
+    calls = _calls()
+    times = {}
+    for name, chosen in (("all", np.ones(index.size, bool)), ("direct", direct),
+                         ("cycle", ~direct)):
+        if not chosen.any():
+            continue
+        x, y = f[chosen], a[chosen]
+        times[name] = {
+            key: min(_timed(lambda key=key, x=x, y=y: calls[key](x, y))[1]
+                     for _ in range(args.repeats)) / x.size
+            for key in ("two-way", "two-way, flight")}
+    vector = structure_vector(STRUCTURE, "two-way", True)
+    sample = index[:: max(1, index.size // 400)]
+    omega_s, a_s = 2.0 * np.pi * part["f"][sample], part["a"][sample]
+    flight_passes(vector, omega_s[:2], a_s[:2], 1, False)
+    flight_passes(vector, omega_s[:2], a_s[:2], 1, True)
+    pass_time = {}
+    for want_jac in (False, True):
+        spent = []
+        for count in PASS_COUNTS:
+            spent.append(min(_timed(lambda c=count, w=want_jac: flight_passes(
+                vector, omega_s, a_s, c, w))[1] for _ in range(args.repeats)))
+        pass_time[want_jac] = ((spent[1] - spent[0])
+                               / ((PASS_COUNTS[1] - PASS_COUNTS[0]) * sample.size))
+    return {"n": index.size, "direct": int(np.count_nonzero(direct)), "times": times,
+            "newton": (float(np.mean(newton[direct])) if direct.any() else math.nan,
+                       float(np.mean(newton[~direct])) if (~direct).any() else math.nan),
+            "maps": (float(np.mean(maps[direct])) if direct.any() else math.nan,
+                     float(np.mean(maps[~direct])) if (~direct).any() else math.nan),
+            "contact_passes": float(np.mean(contact[:, points.OUT_NEWTON_PASSES]
+                                            + contact[:, points.OUT_MAP_PASSES])),
+            "pass_time": pass_time}
 
 
 def _calls() -> dict[str, Callable]:
@@ -207,6 +333,8 @@ def report(args: argparse.Namespace, part: dict, rows: list[dict], loads: str) -
         lines += ["", f"A bouncing point costs {ratio:.1f}x a stick-slip point of the same "
                   f"call (goal <= {GOAL_BOUNCING:g}x: "
                   f"{'met' if ratio <= GOAL_BOUNCING else 'not met'})."]
+    if "STICK_SLIP" in per_point:
+        lines += _bouncing_text(part.get("bouncing", {}), per_point["STICK_SLIP"])
     counts = {name: count for name, count, _, _ in part["by_status"]}
     if "NOT_CONVERGED" in per_point:
         share = per_point["NOT_CONVERGED"] * counts["NOT_CONVERGED"] / cpu["two-way, flight"]
@@ -230,6 +358,62 @@ def report(args: argparse.Namespace, part: dict, rows: list[dict], loads: str) -
     return "\n".join(lines) + "\n"
 
 
+def _bouncing_text(bouncing: dict, stick_slip: float) -> list[str]:
+    """The paragraph on where a bouncing point's time goes and the method's floor,
+    against ``stick_slip`` [s], the time of a stick-slip point."""
+    if not bouncing:
+        return []
+    times = bouncing["times"]
+    n = bouncing["n"]
+    direct = bouncing["direct"]
+    pass_map, pass_jac = bouncing["pass_time"][False], bouncing["pass_time"][True]
+    every = times["all"]
+    text = (f"Where a bouncing point's time goes ({n} points as one call; the points "
+            f"found from the start and those that needed the cycle search each as one "
+            f"call): {every['two-way, flight'] * 1e6:.1f} us a point, of which "
+            f"{every['two-way'] * 1e6:.1f} us is the contact search every point takes "
+            f"first (the same points without flight, "
+            f"{bouncing['contact_passes']:.2f} passes: a point is solved with flight only "
+            f"when that search ends `LIFT_OFF`, so that every point below lift-off keeps "
+            f"every bit of its result) and "
+            f"{(every['two-way, flight'] - every['two-way']) * 1e6:.1f} us the flight "
+            f"search. A pass of the period map with flight takes {pass_map * 1e6:.2f} us "
+            f"({pass_jac * 1e6:.2f} us with its Jacobian).")
+    if "direct" in times:
+        found = times["direct"]
+        text += (f" {direct} points ({direct / n:.0%}) are found by Newton's method from "
+                 f"the start: {bouncing['newton'][0]:.2f} Newton passes, "
+                 f"{bouncing['maps'][0]:.2f} map pass (the section's) and "
+                 f"{PERIODS_BESIDE_NEWTON} periods beside them, "
+                 f"{(found['two-way, flight'] - found['two-way']) * 1e6:.1f} us of flight "
+                 f"search; such a point costs {found['two-way, flight'] * 1e6:.1f} us, "
+                 f"{found['two-way, flight'] / stick_slip:.1f}x a stick-slip point.")
+    if "cycle" in times:
+        cycle = times["cycle"]
+        share = cycle["two-way, flight"] * (n - direct) / (every["two-way, flight"] * n)
+        text += (f" The other {n - direct} ({(n - direct) / n:.0%}) need the cycle search "
+                 f"({bouncing['maps'][1]:.1f} map passes and {bouncing['newton'][1]:.1f} "
+                 f"Newton passes of up to 16 periods each) and take {share:.0%} of the "
+                 f"bouncing points' time.")
+    found = times.get("direct", every)
+    floor = (found["two-way"] + PERIODS_BESIDE_NEWTON * pass_map
+             + FEWEST_NEWTON_PASSES * pass_jac)
+    text += (f" The floor of the method: the contact search "
+             f"({found['two-way'] * 1e6:.1f} us), {PERIODS_BESIDE_NEWTON} periods beside "
+             f"Newton's method and its fewest {FEWEST_NEWTON_PASSES} passes (a start ~1e-2 "
+             f"off, quadratic convergence to the rounding and the pass that checks it) "
+             f"make {floor * 1e6:.1f} us, {floor / stick_slip:.1f}x a stick-slip point "
+             f"({stick_slip * 1e6:.1f} us)")
+    if floor > GOAL_BOUNCING * stick_slip:
+        text += (f": the goal of {GOAL_BOUNCING:g}x is below it as long as every bouncing "
+                 f"point is first solved as without flight, then from rest, with a pass "
+                 f"that checks the orbit.")
+    else:
+        text += (f", within the goal of {GOAL_BOUNCING:g}x: what is left above it is the "
+                 f"passes beyond the fewest and the cycle search's points.")
+    return ["", text]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=SIZE, help="points per axis")
@@ -242,6 +426,7 @@ def main(argv: list[str] | None = None) -> int:
     load_start = load_average()
     print(f"machine: {machine()}; load average {load_start}", flush=True)
     part = _map_part(args)
+    part["bouncing"] = _bouncing_part(part, args)
     load_timed = load_average()
     rows = _precision_part(part, args)
     text = report(args, part, rows, f"{load_start} (start), {load_timed} (after the map)")
