@@ -100,10 +100,10 @@ def hessenberg(a):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def hessenberg_eigenvalues(a, real, imag):
+def hessenberg_eigenvalues(a, real, imag, max_iterations):
     """Eigenvalues ``real + i imag`` of the upper Hessenberg ``a`` (destroyed) by the
     Francis double-shift QR iteration; False when an eigenvalue took more than
-    :data:`MAX_QR_ITERATIONS` iterations (``real`` and ``imag`` then incomplete)."""
+    ``max_iterations`` iterations (``real`` and ``imag`` then incomplete)."""
     n = a.shape[0]
     norm = 0.0
     for i in range(n):
@@ -156,7 +156,7 @@ def hessenberg_eigenvalues(a, real, imag):
                     imag[last] = z
                 last -= 2
                 break
-            if iterations == MAX_QR_ITERATIONS:
+            if iterations >= max_iterations:
                 return False
             if iterations == 10 or iterations == 20:
                 # An exceptional shift (breaks the rare cycles of the standard one).
@@ -236,20 +236,22 @@ def hessenberg_eigenvalues(a, real, imag):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def eigenvalues(matrix, real, imag):
+def eigenvalues(matrix, real, imag, max_iterations=MAX_QR_ITERATIONS):
     """Eigenvalues ``real + i imag`` of the real square ``matrix`` (left unchanged);
-    False when the QR iteration did not converge."""
+    False when the QR iteration did not converge within ``max_iterations`` iterations
+    per eigenvalue."""
     a = matrix.copy()
     balance(a)
     hessenberg(a)
-    return hessenberg_eigenvalues(a, real, imag)
+    return hessenberg_eigenvalues(a, real, imag, max_iterations)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def spectral_radius(matrix):
+def spectral_radius(matrix, max_iterations=MAX_QR_ITERATIONS):
     """Largest modulus of the eigenvalues of the real square ``matrix``: ``inf`` when it
     holds a non-finite entry (a run that did not end, say). The rare matrix on which the
-    QR iteration does not converge goes to LAPACK."""
+    QR iteration does not converge within ``max_iterations`` iterations per eigenvalue
+    goes to LAPACK."""
     n = matrix.shape[0]
     for i in range(n):
         for j in range(n):
@@ -257,7 +259,7 @@ def spectral_radius(matrix):
                 return np.inf
     real = np.empty(n)
     imag = np.empty(n)
-    if not eigenvalues(matrix, real, imag):
+    if not eigenvalues(matrix, real, imag, max_iterations):
         return np.max(np.abs(np.linalg.eigvals(matrix.astype(np.complex128))))
     radius = 0.0
     for i in range(n):

@@ -129,6 +129,20 @@ def test_a_jordan_block_is_found_to_its_conditioning():
     assert_allclose(eigenvalues.spectral_radius(matrix), 0.7, rtol=1e-6, atol=0.0)
 
 
+def test_a_qr_iteration_that_does_not_converge_goes_to_lapack():
+    """With no QR iteration allowed, a matrix that needs one is refused by
+    ``eigenvalues`` and its radius comes from LAPACK; a triangular one needs none."""
+    matrix = np.random.default_rng(9).normal(size=(5, 5))
+    real = np.empty(5)
+    imag = np.empty(5)
+    assert not eigenvalues.eigenvalues(matrix, real, imag, 0)
+    assert_allclose(eigenvalues.spectral_radius(matrix, 0),
+                    np.max(np.abs(np.linalg.eigvals(matrix))), rtol=1e-14, atol=0.0)
+    triangular = np.triu(matrix)
+    assert eigenvalues.eigenvalues(triangular, real, imag, 0)
+    assert_allclose(np.sort(real), np.sort(np.diag(triangular)), rtol=0.0, atol=0.0)
+
+
 def test_not_finite_is_infinite_and_the_matrix_is_kept():
     matrix = np.eye(5)
     matrix[2, 3] = np.inf
