@@ -159,8 +159,8 @@ lint: $(STAMP)
 # Every tier: unit, integration, paper, hard_cases, property (the fuzz tiers are marked
 # fuzz and run by `make fuzz`; slow tests by `make test-slow`).
 # The tests run in one process per core (pytest-xdist), at most 4 so that a shared
-# machine is not taken over; on 2 cores 5.6 min (8.4 in CI's fresh clone) against
-# 10.9-12.2 min in one process.
+# machine is not taken over; on 2 cores 5.6 min warm, 8.1-10.0 min in CI's fresh clone
+# on a shared machine (numba compiles), against 10.9-12.2 min in one process.
 # PYTEST_WORKERS=0 runs them in this process, in order.
 PYTEST_WORKERS ?= auto
 XDIST := --numprocesses=$(PYTEST_WORKERS) --maxprocesses=4

@@ -131,14 +131,6 @@ def solve_linear(m, r, out):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def flight_radius(jac):
-    """Largest modulus of the eigenvalues of the 5x5 ``jac`` (the Floquet multipliers),
-    ``inf`` when it is not finite: by :func:`study.kernels.eigenvalues.spectral_radius`
-    (a LAPACK call from numba costs as much as two passes of a bouncing orbit)."""
-    return spectral_radius(jac)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _pass(point, z, work, section, span, record, want_jac, want_hop, max_events):
     """One run from ``z`` (copied to ``work``) over ``span`` [s] from ``section``."""
     acc = record.acc
@@ -312,7 +304,7 @@ def _flight_cycle(point, z, periods, scales, max_events, record, work):
     flag, converged = _quiet_newton(point, z, periods, scales, max_events, record, work)
     if flag == RUN_PARADOX:
         return -1
-    if not converged or flight_radius(record.jac) >= 1.0 + STABILITY_MARGIN:
+    if not converged or spectral_radius(record.jac) >= 1.0 + STABILITY_MARGIN:
         for i in range(N_STATE):
             z[i] = guess[i]
         return 0
@@ -348,7 +340,7 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
         then belongs to one pass around it); status STICK_SLIP for any orbit found (the
         caller names it from its statistics), FRICTION_PARADOX or NOT_CONVERGED;
         ``radius`` the largest Floquet multiplier of ``record.jac`` when it was computed
-        (an eigenvalue problem costs about a pass), else NaN.
+        (so that it is not computed twice), else NaN.
     """
     max_events = budget.max_events
     period = TWO_PI / point.omega
@@ -369,7 +361,7 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
     guess = z.copy()
     flag, converged = _quiet_newton(point, z, 1, scales, max_events, record, work)
     if converged:
-        radius = flight_radius(record.jac)
+        radius = spectral_radius(record.jac)
         if radius < 1.0 + STABILITY_MARGIN:
             return STICK_SLIP, REASON_NONE, 1, radius
     if flag == RUN_PARADOX:
@@ -433,7 +425,7 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     status, reason, periods, radius = find_flight_orbit(point, z, t_start, scales, budget,
                                                         record, work, history)
     if math.isnan(radius):
-        radius = flight_radius(record.jac)
+        radius = spectral_radius(record.jac)
     passes = record.passes
     (c_status, c_reason, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier,
      c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts) = columns
