@@ -45,7 +45,8 @@ The modules, each importing only those above it:
 - :mod:`~study.kernels.two_way.flight_orbit`: Newton's method and the cycle search on
   that state (a section in the middle of the longest stretch without events);
 - :mod:`~study.kernels.two_way.points`: one drive point's orbit, and its drivers (with
-  flight, a point the contact model ends with LIFT_OFF is solved again with flight);
+  flight, a point past the stick's lift-off threshold is solved with flight first, any
+  other with the contact model first, and with flight where that ends LIFT_OFF);
 - :mod:`~study.kernels.two_way.attractors`: the multistability check, and its drivers
   (with flight, drops among the starts).
 

@@ -68,6 +68,7 @@ from study.kernels.two_way.orbit import (
 )
 from study.kernels.two_way.propagation import particular, stick_propagator
 from study.model.codes import (
+    BOUNCING,
     CONTINUOUS_SLIDING,
     LIFT_OFF,
     NOT_CONVERGED,
@@ -202,9 +203,11 @@ def _static_row(structure, omega, lifted, out, diagnostics):
 #: Scratch arrays a run of points reuses (an allocation costs about as much as an
 #: event of the orbit): the mode table (``N_ROWS`` x ``N_MODE``), the state's natural
 #: scales, the state, a pass's end state, Newton's step and residual (2 x 3), the pass
-#: record and the cycle search's history (``MAX_PERIOD`` x 3).
+#: record, the cycle search's history (``MAX_PERIOD`` x 3) and an output row kept
+#: aside (``N_OUT``).
 Workspace = namedtuple("Workspace",
-                       ("table", "scales", "z", "work", "newton", "record", "history"))
+                       ("table", "scales", "z", "work", "newton", "record", "history",
+                        "row"))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -218,7 +221,18 @@ def new_workspace(structure):
     return Workspace(table, np.empty(3), np.empty(3), np.empty(3), np.empty((2, 3)),
                      PassRecord(np.zeros(N_ACC), np.empty((3, 3)), np.empty((3, 3)),
                                 np.zeros(2)),
-                     np.empty((MAX_PERIOD, 3)))
+                     np.empty((MAX_PERIOD, 3)), np.empty(N_OUT))
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def start_row(out):
+    """``out`` as a point starts it: NaN, no reason, period 0, no work."""
+    out[:] = np.nan
+    out[OUT_REASON] = REASON_NONE
+    out[OUT_PERIOD] = 0.0
+    out[OUT_NEWTON_PASSES] = 0.0
+    out[OUT_MAP_PASSES] = 0.0
+    out[OUT_CONTINUED] = 0.0
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
@@ -228,12 +242,7 @@ def static_point(structure, omega, a, lifted, out, diagnostics):
     never slip); a static point's row is then complete unless it is past lift-off with
     the lift-off law ``flight`` (it takes off). Inlined into the drivers: a static point
     costs the decision, not a call with the run's scratch arrays."""
-    out[:] = np.nan
-    out[OUT_REASON] = REASON_NONE
-    out[OUT_PERIOD] = 0.0
-    out[OUT_NEWTON_PASSES] = 0.0
-    out[OUT_MAP_PASSES] = 0.0
-    out[OUT_CONTINUED] = 0.0
+    start_row(out)
     pr, pi = stick_response(structure, omega, a)
     static = _is_static(structure, omega, a, pr, pi)
     if static and not (lifted and structure[LIFT_OFF_LAW] != 0.0):
@@ -251,10 +260,22 @@ def solve_point(structure, omega, a, lifted, budget, t_start, factor, out):
     ``t_start`` [s] and ``factor`` choose the starting state (rest, mode on ``factor``
     times its steady response).
 
-    With the lift-off law ``flight`` (the structure vector's ``LIFT_OFF_LAW``) a point
-    the contact model ends with ``LIFT_OFF`` is solved again, from the same start, by
-    the orbit with flight (:func:`~study.kernels.two_way.flight_orbit.solve_flight`);
-    every other point is solved exactly as without flight, so it keeps every bit.
+    With the lift-off law ``flight`` (the structure vector's ``LIFT_OFF_LAW``):
+
+    * a point past the stick's lift-off threshold (``lifted``) is solved first by the
+      orbit with flight from the start
+      (:func:`~study.kernels.two_way.flight_orbit.solve_flight`), and a ``BOUNCING``
+      orbit found so is the answer;
+    * every other point, and a lifted point whose orbit with flight does not bounce, is
+      solved exactly as without flight, so it keeps every bit; where that ends
+      ``LIFT_OFF``, the answer is the orbit with flight from the same start.
+
+    This is the order "contact model first, flight where it ends ``LIFT_OFF``" except
+    where the contact solver finds an orbit on the table and the motion from the start,
+    followed with flight, settles on a bouncing one (two attractors): past the
+    threshold the bouncing orbit is reported. No point of the workflows' grids is such
+    a point; the order saves the contact search (about a stick-slip point's time) at
+    the bouncing points past the threshold.
     """
     solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
                       new_neighbours(), new_workspace(structure), True)
@@ -282,10 +303,19 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
     mode_drive(structure, omega, a, table, 0)
     mode_drive(structure, omega, a, table, 1)
     mode_drive(structure, omega, a, table, 2)
-    if static:
-        # Stuck on its steady response yet past lift-off: it takes off.
+    flown = lifted and flying
+    if flown:
+        # Past the stick's lift-off threshold the motion from the start usually leaves
+        # the table, and then the contact solver's search only ends in LIFT_OFF (about
+        # a stick-slip point's time): the orbit with flight is sought first. Only
+        # where it does not bounce is the contact solver's answer wanted (see
+        # solve_point), so the row is kept aside for the case that it ends LIFT_OFF.
         _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
-        return
+        if static or out[OUT_STATUS] == BOUNCING:
+            forget(neighbours)
+            return
+        workspace.row[:] = out
+        start_row(out)
     scales = workspace.scales
     scales[0], scales[1], scales[2] = _scales(point)
     z = workspace.z
@@ -328,10 +358,18 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
     out[OUT_NEWTON_PASSES] = record.passes[0]
     out[OUT_MAP_PASSES] = record.passes[1]
     if flying and status == LIFT_OFF:
-        _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
+        continued = out[OUT_CONTINUED]
+        if flown:
+            out[:] = workspace.row
+        else:
+            _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
         out[OUT_NEWTON_PASSES] += record.passes[0]
         out[OUT_MAP_PASSES] += record.passes[1]
+        out[OUT_CONTINUED] = continued
         return
+    if flown:
+        out[OUT_NEWTON_PASSES] += workspace.row[OUT_NEWTON_PASSES]
+        out[OUT_MAP_PASSES] += workspace.row[OUT_MAP_PASSES]
     out[OUT_STATUS] = status
     out[OUT_REASON] = reason
     if periods == 0:
