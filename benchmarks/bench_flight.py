@@ -154,26 +154,33 @@ def _work_table(f: np.ndarray, a: np.ndarray, with_flight: bool) -> np.ndarray:
 
 
 def _bouncing_part(part: dict, args: argparse.Namespace) -> dict:
-    """Where a bouncing point's time goes: the contact search every point takes first
-    (the same points without flight), the flight search's passes from the kernel's work
-    columns, split by how its orbit was found, and the time of a flight pass."""
+    """Where a bouncing point's time goes: the flight search's passes from the kernel's
+    work columns, split by how its orbit was found, the contact search that the points
+    below the stick's lift-off threshold take first (the same points without flight),
+    and the time of a flight pass."""
     state = part["state"]
     index = np.flatnonzero(state.status == study.Status.BOUNCING)
     if index.size == 0:
         return {}
     f, a = part["f"][index], part["a"][index]
+    # Past the stick's threshold the flight search comes first; below it only a contact
+    # search that ends LIFT_OFF leads to it.
+    lifted = a > study.lift_off_acceleration(STRUCTURE, f)
     with_flight = _work_table(f, a, True)
     contact = _work_table(f, a, False)
-    newton = (with_flight[:, points.OUT_NEWTON_PASSES]
-              - contact[:, points.OUT_NEWTON_PASSES])
-    maps = with_flight[:, points.OUT_MAP_PASSES] - contact[:, points.OUT_MAP_PASSES]
+    contact_passes = (contact[:, points.OUT_NEWTON_PASSES]
+                      + contact[:, points.OUT_MAP_PASSES])
+    newton = with_flight[:, points.OUT_NEWTON_PASSES] - np.where(
+        lifted, 0.0, contact[:, points.OUT_NEWTON_PASSES])
+    maps = with_flight[:, points.OUT_MAP_PASSES] - np.where(
+        lifted, 0.0, contact[:, points.OUT_MAP_PASSES])
     # One map pass places the section of Newton's method from the start; more are the
     # cycle search's iterates (and its sections).
     direct = maps <= 1.0
     calls = _calls()
     times = {}
-    for name, chosen in (("all", np.ones(index.size, bool)), ("direct", direct),
-                         ("cycle", ~direct)):
+    for name, chosen in (("all", np.ones(index.size, bool)), ("direct", direct & lifted),
+                         ("cycle", ~direct), ("below", direct & ~lifted)):
         if not chosen.any():
             continue
         x, y = f[chosen], a[chosen]
@@ -194,13 +201,17 @@ def _bouncing_part(part: dict, args: argparse.Namespace) -> dict:
                 vector, omega_s, a_s, c, w))[1] for _ in range(args.repeats)))
         pass_time[want_jac] = ((spent[1] - spent[0])
                                / ((PASS_COUNTS[1] - PASS_COUNTS[0]) * sample.size))
-    return {"n": index.size, "direct": int(np.count_nonzero(direct)), "times": times,
-            "newton": (float(np.mean(newton[direct])) if direct.any() else math.nan,
-                       float(np.mean(newton[~direct])) if (~direct).any() else math.nan),
-            "maps": (float(np.mean(maps[direct])) if direct.any() else math.nan,
-                     float(np.mean(maps[~direct])) if (~direct).any() else math.nan),
-            "contact_passes": float(np.mean(contact[:, points.OUT_NEWTON_PASSES]
-                                            + contact[:, points.OUT_MAP_PASSES])),
+
+    def mean(values: np.ndarray, chosen: np.ndarray) -> float:
+        return float(np.mean(values[chosen])) if chosen.any() else math.nan
+
+    return {"n": index.size, "direct": int(np.count_nonzero(direct & lifted)),
+            "cycle": int(np.count_nonzero(~direct)),
+            "below": int(np.count_nonzero(direct & ~lifted)), "times": times,
+            "newton": (mean(newton, direct & lifted), mean(newton, ~direct)),
+            "maps": (mean(maps, direct & lifted), mean(maps, ~direct)),
+            "contact_passes": mean(contact_passes, ~lifted),
+            "skipped_passes": mean(contact_passes, lifted),
             "pass_time": pass_time}
 
 
@@ -365,52 +376,48 @@ def _bouncing_text(bouncing: dict, stick_slip: float) -> list[str]:
         return []
     times = bouncing["times"]
     n = bouncing["n"]
-    direct = bouncing["direct"]
+    direct, cycle, below = bouncing["direct"], bouncing["cycle"], bouncing["below"]
     pass_map, pass_jac = bouncing["pass_time"][False], bouncing["pass_time"][True]
     every = times["all"]
-    text = (f"Where a bouncing point's time goes ({n} points as one call; the points "
-            f"found from the start and those that needed the cycle search each as one "
-            f"call): {every['two-way, flight'] * 1e6:.1f} us a point, of which "
-            f"{every['two-way'] * 1e6:.1f} us is the contact search every point takes "
-            f"first (the same points without flight, "
-            f"{bouncing['contact_passes']:.2f} passes: a point is solved with flight only "
-            f"when that search ends `LIFT_OFF`, so that every point below lift-off keeps "
-            f"every bit of its result) and "
-            f"{(every['two-way, flight'] - every['two-way']) * 1e6:.1f} us the flight "
-            f"search. A pass of the period map with flight takes {pass_map * 1e6:.2f} us "
-            f"({pass_jac * 1e6:.2f} us with its Jacobian).")
+    text = (f"Where a bouncing point's time goes ({n} points as one call; each kind "
+            f"below as one call): {every['two-way, flight'] * 1e6:.1f} us a point. A "
+            f"point past the stick's lift-off threshold is solved with flight first; "
+            f"the contact search that it no longer takes (the same points without "
+            f"flight, {bouncing['skipped_passes']:.2f} passes) would cost "
+            f"{every['two-way'] * 1e6:.1f} us a point of them all. A pass of the period "
+            f"map with flight takes {pass_map * 1e6:.2f} us ({pass_jac * 1e6:.2f} us "
+            f"with its Jacobian).")
     if "direct" in times:
         found = times["direct"]
-        text += (f" {direct} points ({direct / n:.0%}) are found by Newton's method from "
-                 f"the start: {bouncing['newton'][0]:.2f} Newton passes, "
+        text += (f" {direct} points ({direct / n:.0%}) are past the threshold and found "
+                 f"by Newton's method from the start: "
+                 f"{bouncing['newton'][0]:.2f} Newton passes, "
                  f"{bouncing['maps'][0]:.2f} map pass (the section's) and "
-                 f"{PERIODS_BESIDE_NEWTON} periods beside them, "
-                 f"{(found['two-way, flight'] - found['two-way']) * 1e6:.1f} us of flight "
-                 f"search; such a point costs {found['two-way, flight'] * 1e6:.1f} us, "
+                 f"{PERIODS_BESIDE_NEWTON} periods beside them; such a point costs "
+                 f"{found['two-way, flight'] * 1e6:.1f} us, "
                  f"{found['two-way, flight'] / stick_slip:.1f}x a stick-slip point.")
+    if "below" in times:
+        found = times["below"]
+        text += (f" {below} ({below / n:.0%}) are below the threshold: the contact "
+                 f"search ({bouncing['contact_passes']:.2f} passes, "
+                 f"{found['two-way'] * 1e6:.1f} us) ends `LIFT_OFF` before the flight "
+                 f"search, so that every point the contact solver keeps on the table "
+                 f"keeps every bit of its result; such a point costs "
+                 f"{found['two-way, flight'] * 1e6:.1f} us, "
+                 f"{found['two-way, flight'] / stick_slip:.1f}x.")
     if "cycle" in times:
-        cycle = times["cycle"]
-        share = cycle["two-way, flight"] * (n - direct) / (every["two-way, flight"] * n)
-        text += (f" The other {n - direct} ({(n - direct) / n:.0%}) need the cycle search "
+        found = times["cycle"]
+        share = found["two-way, flight"] * cycle / (every["two-way, flight"] * n)
+        text += (f" The other {cycle} ({cycle / n:.0%}) need the cycle search "
                  f"({bouncing['maps'][1]:.1f} map passes and {bouncing['newton'][1]:.1f} "
                  f"Newton passes of up to 16 periods each) and take {share:.0%} of the "
                  f"bouncing points' time.")
-    found = times.get("direct", every)
-    floor = (found["two-way"] + PERIODS_BESIDE_NEWTON * pass_map
-             + FEWEST_NEWTON_PASSES * pass_jac)
-    text += (f" The floor of the method: the contact search "
-             f"({found['two-way'] * 1e6:.1f} us), {PERIODS_BESIDE_NEWTON} periods beside "
-             f"Newton's method and its fewest {FEWEST_NEWTON_PASSES} passes (a start ~1e-2 "
-             f"off, quadratic convergence to the rounding and the pass that checks it) "
-             f"make {floor * 1e6:.1f} us, {floor / stick_slip:.1f}x a stick-slip point "
-             f"({stick_slip * 1e6:.1f} us)")
-    if floor > GOAL_BOUNCING * stick_slip:
-        text += (f": the goal of {GOAL_BOUNCING:g}x is below it as long as every bouncing "
-                 f"point is first solved as without flight, then from rest, with a pass "
-                 f"that checks the orbit.")
-    else:
-        text += (f", within the goal of {GOAL_BOUNCING:g}x: what is left above it is the "
-                 f"passes beyond the fewest and the cycle search's points.")
+    floor = PERIODS_BESIDE_NEWTON * pass_map + FEWEST_NEWTON_PASSES * pass_jac
+    text += (f" The floor of the method at a point past the threshold: "
+             f"{PERIODS_BESIDE_NEWTON} periods beside Newton's method and its fewest "
+             f"{FEWEST_NEWTON_PASSES} passes (a start ~1e-2 off, quadratic convergence to "
+             f"the rounding and the pass that checks it) make {floor * 1e6:.1f} us, "
+             f"{floor / stick_slip:.1f}x a stick-slip point ({stick_slip * 1e6:.1f} us).")
     return ["", text]
 
 
