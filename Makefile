@@ -161,12 +161,13 @@ lint: $(STAMP)
 # The tests run in one process per core (pytest-xdist), at most 4 so that a shared
 # machine is not taken over; on 2 cores 5.6 min warm, 8.1-10.0 min in CI's fresh clone
 # on a shared machine (numba compiles), against 10.9-12.2 min in one process.
-# PYTEST_WORKERS=0 runs them in this process, in order.
+# PYTEST_WORKERS=0 runs them in this process, in order. The 20 slowest tests are listed
+# at the end: what to move to `make test-slow` when the tier grows past 10 minutes.
 PYTEST_WORKERS ?= auto
 XDIST := --numprocesses=$(PYTEST_WORKERS) --maxprocesses=4
 
 test: $(STAMP) lint
-	$(PY) -m pytest $(XDIST) -m "not slow and not fuzz"
+	$(PY) -m pytest $(XDIST) -m "not slow and not fuzz" --durations=20
 
 test-unit: $(STAMP)
 	$(PY) -m pytest $(XDIST) tests/unit -m "not slow and not fuzz"
