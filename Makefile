@@ -160,7 +160,8 @@ lint: $(STAMP)
 # fuzz and run by `make fuzz`; slow tests by `make test-slow`).
 # The tests run in one process per core (pytest-xdist), at most 4 so that a shared
 # machine is not taken over; on 2 cores 5.6 min warm, 8.1-10.0 min in CI's fresh clone
-# on a shared machine (numba compiles), against 10.9-12.2 min in one process.
+# on a shared machine (numba compiles; 11.6 min while another job used a core), against
+# 10.9-12.2 min in one process.
 # PYTEST_WORKERS=0 runs them in this process, in order. The 20 slowest tests are listed
 # at the end: what to move to `make test-slow` when the tier grows past 10 minutes.
 PYTEST_WORKERS ?= auto
