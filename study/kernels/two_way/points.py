@@ -303,8 +303,8 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
     mode_drive(structure, omega, a, table, 0)
     mode_drive(structure, omega, a, table, 1)
     mode_drive(structure, omega, a, table, 2)
-    flown = lifted and flying
-    if flown:
+    flight_first = lifted and flying
+    if flight_first:
         # Past the stick's lift-off threshold the motion from the start usually leaves
         # the table, and then the contact solver's search only ends in LIFT_OFF (about
         # a stick-slip point's time): the orbit with flight is sought first. Only
@@ -359,7 +359,7 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
     out[OUT_MAP_PASSES] = record.passes[1]
     if flying and status == LIFT_OFF:
         continued = out[OUT_CONTINUED]
-        if flown:
+        if flight_first:
             out[:] = workspace.row
         else:
             _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
@@ -367,7 +367,7 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
         out[OUT_MAP_PASSES] += record.passes[1]
         out[OUT_CONTINUED] = continued
         return
-    if flown:
+    if flight_first:
         out[OUT_NEWTON_PASSES] += workspace.row[OUT_NEWTON_PASSES]
         out[OUT_MAP_PASSES] += workspace.row[OUT_MAP_PASSES]
     out[OUT_STATUS] = status
