@@ -358,14 +358,14 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
     out[OUT_NEWTON_PASSES] = record.passes[0]
     out[OUT_MAP_PASSES] = record.passes[1]
     if flying and status == LIFT_OFF:
-        continued = out[OUT_CONTINUED]
         if flight_first:
+            continued = out[OUT_CONTINUED]
             out[:] = workspace.row
+            out[OUT_CONTINUED] = continued
         else:
             _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
         out[OUT_NEWTON_PASSES] += record.passes[0]
         out[OUT_MAP_PASSES] += record.passes[1]
-        out[OUT_CONTINUED] = continued
         return
     if flight_first:
         out[OUT_NEWTON_PASSES] += workspace.row[OUT_NEWTON_PASSES]
