@@ -31,12 +31,13 @@ from numpy.testing import assert_allclose
 import study
 from study.kernels import structure_vector as sv
 from study.kernels.two_way import flight, flight_orbit
-from study.kernels.two_way.modes import N_MODE, DrivePoint, mode_row
+from study.kernels.two_way.modes import DrivePoint
 from study.kernels.two_way.points import start_state
 from study.model.status import Status
 from study.solvers.exact import attractors, steady_state, steady_velocity, structure_vector
 from tests.reference.flight import CODE_VERSION, steady_motion
 from tests.reference.rigid_block import rigid_block
+from tests.support.flight_points import flight_table
 
 PAPER = dict(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 FIELDS = ("velocity", "status", "reason", "slips_per_period", "forward_fraction",
@@ -150,11 +151,7 @@ def drive_point(structure, f, a):
     """The kernels' drive point with the flight row."""
     vector = structure_vector(structure, "two-way", True)
     omega = 2.0 * math.pi * f
-    table = np.zeros((flight.N_ROWS, N_MODE))
-    for row in range(3):
-        mode_row(vector, omega, a, table, row)
-    flight.flight_row(vector, table)
-    return DrivePoint(vector, table, omega, a)
+    return DrivePoint(vector, flight_table(vector, omega, a), omega, a)
 
 
 def period_map(point, z, t0, span, want_jac=False):
@@ -400,11 +397,7 @@ def test_gap_bound_is_above_the_sampled_gap(M):
         f = rng.uniform(8.0, 20.0)
         a = rng.uniform(5.0, 30.0)
         omega = 2.0 * np.pi * f
-        table = np.zeros((flight.N_ROWS, N_MODE))
-        for row in range(3):
-            mode_row(vector, omega, a, table, row)
-        flight.flight_row(vector, table)
-        frow = table[flight.FLIGHT_ROW]
+        frow = flight_table(vector, omega, a)[flight.FLIGHT_ROW]
         t0 = rng.uniform(0.0, 1.0 / f)
         scale = (9.81 + a) / omega
         start = flight.FlightStart(

@@ -17,9 +17,9 @@ import pytest
 
 import study
 from study.kernels.two_way import flight, flight_orbit, points
-from study.kernels.two_way.modes import N_MODE, mode_row
 from study.model.status import Status
 from study.solvers.exact import DEFAULT_SETTINGS, kernel_budget, structure_vector
+from tests.support.flight_points import flight_table
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
 BUDGET = kernel_budget(DEFAULT_SETTINGS)
@@ -39,10 +39,7 @@ def _flight_alone(f: float, a: float) -> tuple[np.ndarray, float]:
     """The flight search from the solver's start, alone: its row and its passes."""
     vector = structure_vector(STRUCTURE, "two-way", True)
     omega = 2.0 * np.pi * f
-    table = np.zeros((flight.N_ROWS, N_MODE))
-    for row in range(3):
-        mode_row(vector, omega, a, table, row)
-    flight.flight_row(vector, table)
+    table = flight_table(vector, omega, a)
     z = np.zeros(flight.N_STATE)
     points.start_state(table, omega, 0.0, z, 1.0)
     out = np.full(points.N_OUT, np.nan)
