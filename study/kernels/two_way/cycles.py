@@ -29,6 +29,13 @@ from study.model.codes import (
 
 # Period-map iterates closing to this (scaled) start a Newton search for that period.
 CYCLE_DETECTION = 1e-3
+# The cycle that search finds is the motion's only when it lies within this (scaled)
+# distance of the iterate it started from. From an iterate of a chaotic motion that
+# nearly closes, Newton's method can converge to a distant stable orbit that the
+# iterates never approach (with flight, a big-hop orbit 1.3 natural sizes away from a
+# small-hop chaotic motion); a cycle the iterates do approach is found again from a
+# later, closer iterate.
+CYCLE_REACH = 1e-2
 # Periods of the map's iteration before its iterates are watched for lift-off.
 BURN_IN = 8
 # Longest orbit searched for, in drive periods.
@@ -50,13 +57,19 @@ def _cycle(point, z, periods, section, scales, max_events, record, work):
     -------
     int
         The cycle's minimal period when it is found (``z`` its state at ``section``,
-        ``record`` of one pass around it); 0 when not; -1 when an iterate near it leaves
-        the table (lift-off).
+        ``record`` of one pass around it); 0 when not, or when the cycle Newton finds is
+        farther than :data:`CYCLE_REACH` from ``z`` (not the one the iterates approach);
+        -1 when an iterate near it leaves the table (lift-off).
     """
+    guess = z.copy()
     flag, converged = newton(point, z, periods, section, scales, max_events, record, work)
     if flag == RUN_LIFT_OFF:
         return -1
-    if not converged or spectral_radius(record.jac) >= 1.0 + STABILITY_MARGIN:
+    reach = 0.0
+    for i in range(3):
+        reach = max(reach, abs(z[i] - guess[i]) / scales[i])
+    if (not converged or spectral_radius(record.jac) >= 1.0 + STABILITY_MARGIN
+            or reach > CYCLE_REACH):
         return 0
     period = TWO_PI / point.omega
     # Report the orbit's own period, not a multiple that closed first.

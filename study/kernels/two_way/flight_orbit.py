@@ -20,7 +20,7 @@ from numba import njit
 
 from study.kernels.eigenvalues import spectral_radius
 from study.kernels.structure_vector import GRAVITY, STIFFNESS
-from study.kernels.two_way.cycles import CYCLE_DETECTION, MAX_PERIOD
+from study.kernels.two_way.cycles import CYCLE_DETECTION, CYCLE_REACH, MAX_PERIOD
 from study.kernels.two_way.flight import (
     A_AIRBORNE,
     A_EVENT_COUNT,
@@ -298,13 +298,18 @@ def _quiet_newton(point, z, periods, scales, max_events, record, work):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _flight_cycle(point, z, periods, scales, max_events, record, work):
     """A stable cycle of ``periods`` drive periods from ``z`` at phase 0 (as
-    :func:`~study.kernels.two_way.cycles`'s): its minimal period, 0 when not found,
-    -1 on the paradox."""
+    :func:`~study.kernels.two_way.cycles`'s): its minimal period, 0 when not found or
+    farther than :data:`~study.kernels.two_way.cycles.CYCLE_REACH` from ``z``, -1 on
+    the paradox."""
     guess = z.copy()
     flag, converged = _quiet_newton(point, z, periods, scales, max_events, record, work)
     if flag == RUN_PARADOX:
         return -1
-    if not converged or spectral_radius(record.jac) >= 1.0 + STABILITY_MARGIN:
+    reach = 0.0
+    for i in range(N_STATE):
+        reach = max(reach, abs(z[i] - guess[i]) / scales[i])
+    if (not converged or spectral_radius(record.jac) >= 1.0 + STABILITY_MARGIN
+            or reach > CYCLE_REACH):
         for i in range(N_STATE):
             z[i] = guess[i]
         return 0
