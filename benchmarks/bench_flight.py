@@ -174,9 +174,10 @@ def _bouncing_part(part: dict, args: argparse.Namespace) -> dict:
         lifted, 0.0, contact[:, points.OUT_NEWTON_PASSES])
     maps = with_flight[:, points.OUT_MAP_PASSES] - np.where(
         lifted, 0.0, contact[:, points.OUT_MAP_PASSES])
-    # One map pass places the section of Newton's method from the start; more are the
-    # cycle search's iterates (and its sections).
-    direct = maps <= 1.0
+    # Newton's method from the start takes one map pass to place its section and, when
+    # its last pass was not foreseen, one for the largest gap; the cycle search takes
+    # at least three (the first section, an iterate, its own section).
+    direct = maps <= 2.0
     calls = _calls()
     kinds = {name: (f[chosen], a[chosen]) for name, chosen in (
         ("all", np.ones(index.size, bool)), ("direct", direct & lifted),
@@ -414,7 +415,8 @@ def _bouncing_text(bouncing: dict) -> list[str]:
         text += (f" {direct} points ({direct / n:.0%}) are past the threshold and found "
                  f"by Newton's method from the start: "
                  f"{bouncing['newton'][0]:.2f} Newton passes, "
-                 f"{bouncing['maps'][0]:.2f} map pass (the section's) and "
+                 f"{bouncing['maps'][0]:.2f} map passes (the section's, and the "
+                 f"largest gap's where the last Newton pass was not foreseen) and "
                  f"{PERIODS_BESIDE_NEWTON} periods beside them; such a point costs "
                  f"{found['two-way, flight'] * 1e6:.1f} us, "
                  f"{found['two-way, flight'] / stick_slip:.1f}x a stick-slip point.")
