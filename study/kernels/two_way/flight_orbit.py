@@ -64,6 +64,12 @@ from study.model.codes import (
 
 # Newton iterations on the period map before falling back to the map's iteration.
 MAX_NEWTON = 30
+# Newton iterations for a cycle that the map's iterates close on (to CYCLE_DETECTION):
+# from so near, the 475 cycles found on the M = 0.99 flight map took at most 13, while
+# the attempts that fail (on chaotic motions, mostly) ran to MAX_NEWTON, with passes
+# of up to MAX_PERIOD periods: half the time of a chaotic point. (On every flight
+# workflow one cycle took more; it is found from a later iterate, 80 ulps of a/w off.)
+MAX_CYCLE_NEWTON = 15
 # A pass is at the fixed point when its scaled residual is below this, or below
 # LOOSE_TOLERANCE after a step below NEWTON_STEP with the same events as the pass
 # before (the rounding floor of the map).
@@ -145,9 +151,10 @@ def _pass(point, z, work, section, span, record, want_jac, want_hop, max_events)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def flight_newton(point, z, periods, section, scales, max_events, record, work):
+def flight_newton(point, z, periods, section, scales, max_events, record, work,
+                  max_passes):
     """Newton's method on ``P^periods(z) - z`` for the 5-state ``z`` (updated in place) on
-    the section at ``section`` [s] (arguments as
+    the section at ``section`` [s], at most ``max_passes`` passes (arguments otherwise as
     :func:`~study.kernels.two_way.newton.newton`).
 
     Returns
@@ -170,7 +177,7 @@ def flight_newton(point, z, periods, section, scales, max_events, record, work):
     # This pass also seeks the largest gap: the last step was small enough that it is
     # likely the last pass (the gap of a run does not depend on its Jacobian).
     with_hop = False
-    for _ in range(MAX_NEWTON):
+    for _ in range(max_passes):
         flag = _pass(point, z, work, section, span, record, True, with_hop, max_events)
         if flag != RUN_OK:
             return flag, False
@@ -257,11 +264,12 @@ def quiet_section(acc, t_begin, t_stop):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _quiet_newton(point, z, periods, scales, max_events, record, work):
+def _quiet_newton(point, z, periods, scales, max_events, record, work, max_passes):
     """Newton's method for an orbit of ``periods`` drive periods from ``z``, the state at
     phase 0 (updated in place to the orbit's state at phase 0), on a section in the
-    middle of the longest stretch without events of a first pass: a section at an event
-    (a take-off just at phase 0, say) puts a kink of the period map at its fixed point.
+    middle of the longest stretch without events of a first pass, in at most
+    ``max_passes`` Newton passes: a section at an event (a take-off just at phase 0,
+    say) puts a kink of the period map at its fixed point.
 
     Returns
     -------
@@ -285,7 +293,7 @@ def _quiet_newton(point, z, periods, scales, max_events, record, work):
         if flag != RUN_OK:
             return flag, False
     flag, converged = flight_newton(point, z, periods, section, scales, max_events, record,
-                                    work)
+                                    work, max_passes)
     if not converged:
         return flag, False
     # The orbit's state at phase 0 (the end of its period from the section).
@@ -302,7 +310,8 @@ def _flight_cycle(point, z, periods, scales, max_events, record, work):
     farther than :data:`~study.kernels.two_way.cycles.CYCLE_REACH` from ``z``, -1 on
     the paradox."""
     guess = z.copy()
-    flag, converged = _quiet_newton(point, z, periods, scales, max_events, record, work)
+    flag, converged = _quiet_newton(point, z, periods, scales, max_events, record, work,
+                                    MAX_CYCLE_NEWTON)
     if flag == RUN_PARADOX:
         return -1
     reach = 0.0
@@ -324,10 +333,11 @@ def _flight_cycle(point, z, periods, scales, max_events, record, work):
             gap = max(gap, abs(work[i] - z[i]) / scales[i])
         if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
             flag, converged = _quiet_newton(point, z, shorter, scales, max_events, record,
-                                            work)
+                                            work, MAX_CYCLE_NEWTON)
             if converged:
                 return shorter
-    flag, converged = _quiet_newton(point, z, periods, scales, max_events, record, work)
+    flag, converged = _quiet_newton(point, z, periods, scales, max_events, record, work,
+                                    MAX_CYCLE_NEWTON)
     return periods if converged else 0
 
 
@@ -364,7 +374,8 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
     if flag != RUN_OK:
         return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, np.nan
     guess = z.copy()
-    flag, converged = _quiet_newton(point, z, 1, scales, max_events, record, work)
+    flag, converged = _quiet_newton(point, z, 1, scales, max_events, record, work,
+                                    MAX_NEWTON)
     if converged:
         radius = spectral_radius(record.jac)
         if radius < 1.0 + STABILITY_MARGIN:
