@@ -174,13 +174,14 @@ def test_two_attractors_near_m_one():
     assert abs(float(many.velocity_spread) - (0.0433066 + 0.1163443)) < 1e-5
 
 
-@pytest.mark.parametrize(("f", "a"), [(5.625, 11.6), (7.5, 10.7)])
+@pytest.mark.parametrize(("f", "a"), [(5.6, 11.6), (7.5, 10.7)])
 def test_cycle_search_reports_only_a_cycle_the_motion_reaches(f, a):
-    """M = 0.99 at a drive where the motion from rest hops without settling (the flight
-    map's grid points): its iterates nearly close (1e-4 apart over 5-16 periods), and
-    Newton's method from such an iterate converges to a stable orbit that the motion
-    never approaches (at 5.625 Hz a big-hop orbit, -0.380 m s-1, 1.3 natural sizes
-    away). That orbit is not the motion's, so no periodic orbit is reported; the
+    """M = 0.99 at a drive where the motion from rest hops without settling (points of
+    `mass-ratio-limit-flight`): its iterates nearly close (1e-4 apart over 5-16
+    periods), and Newton's method from such an iterate converged to a stable orbit that
+    the motion never approaches (at 5.6 Hz a big-hop orbit, -0.382 m s-1, 1.3 natural
+    sizes away; at 7.5 Hz +0.0271 m s-1, a small hop the motion does not settle on).
+    That orbit is not the motion's, so no periodic orbit is reported; the
     integrator, an independent method, follows the motion from rest for 300 periods
     and finds it moving forward in small hops, at a mean velocity that stays within a
     few percent of its first 50 periods'."""
