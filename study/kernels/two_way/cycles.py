@@ -106,12 +106,14 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history):
 
     Returns
     -------
-    status, reason, periods, newton_found
+    status, reason, periods, newton_found, radius
         ``periods`` > 0 and ``z`` the orbit's state at phase 0 when found; ``record``
         then belongs to one pass around it. ``newton_found``: the outcome came from
         Newton's method from the start, so ``z`` is the orbit's fixed point at phase 0
         (``STICK_SLIP``) or the iterate near the orbit that left the table
-        (``LIFT_OFF``): a state to continue the next point of a sweep from.
+        (``LIFT_OFF``): a state to continue the next point of a sweep from. ``radius``
+        the largest Floquet multiplier of ``record.jac`` when it was computed (so that
+        it is not computed twice), else NaN.
     """
     max_events = budget.max_events
     period = TWO_PI / point.omega
@@ -120,17 +122,19 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history):
     if t_start != 0.0:
         flag = run(point, z, t_start, period, record, False, -1.0, max_events)
     if flag == RUN_PARADOX:
-        return FRICTION_PARADOX, REASON_NONE, 0, False
+        return FRICTION_PARADOX, REASON_NONE, 0, False, np.nan
     if flag == RUN_BUDGET:
-        return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, False
+        return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, False, np.nan
     guess = z.copy()
     flag, converged = newton(point, z, 1, 0.0, scales, max_events, record, work)
     if flag == RUN_LIFT_OFF:
-        return LIFT_OFF, REASON_NONE, 0, True
-    if converged and spectral_radius(record.jac) < 1.0 + STABILITY_MARGIN:
-        return STICK_SLIP, REASON_NONE, 1, True
+        return LIFT_OFF, REASON_NONE, 0, True, np.nan
+    if converged:
+        radius = spectral_radius(record.jac)
+        if radius < 1.0 + STABILITY_MARGIN:
+            return STICK_SLIP, REASON_NONE, 1, True, radius
     if flag == RUN_PARADOX:
-        return FRICTION_PARADOX, REASON_NONE, 0, False
+        return FRICTION_PARADOX, REASON_NONE, 0, False, np.nan
     # No stable fixed point near: iterate the map from the start and look for a cycle
     # of up to MAX_PERIOD periods, then solve for it by Newton.
     for i in range(3):
@@ -146,11 +150,11 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history):
         flag = run(point, z, 0.0, period, record, False,
                    0.0 if iteration >= BURN_IN else -1.0, max_events)
         if flag == RUN_PARADOX:
-            return FRICTION_PARADOX, REASON_NONE, 0, False
+            return FRICTION_PARADOX, REASON_NONE, 0, False, np.nan
         if flag == RUN_LIFT_OFF:
-            return LIFT_OFF, REASON_NONE, 0, False
+            return LIFT_OFF, REASON_NONE, 0, False, np.nan
         if flag != RUN_OK:
-            return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, False
+            return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, False, np.nan
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
             back = (iteration - periods + 1) % MAX_PERIOD
             gap = 0.0
@@ -175,7 +179,7 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history):
                     found = _cycle(point, candidate, periods, section, scales, max_events,
                                    record, work)
                     if found < 0:
-                        return LIFT_OFF, REASON_NONE, 0, False
+                        return LIFT_OFF, REASON_NONE, 0, False, np.nan
                     if found > 0:
                         if section != 0.0:
                             # The orbit's state at phase 0, what is reported (the statistics
@@ -186,6 +190,6 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history):
                                 max_events)
                         for i in range(3):
                             z[i] = candidate[i]
-                        return STICK_SLIP, REASON_NONE, found, False
+                        return STICK_SLIP, REASON_NONE, found, False, np.nan
                 break
-    return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0, False
+    return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0, False, np.nan

@@ -175,8 +175,11 @@ def spectral_radius(jac):
     """Largest modulus of the eigenvalues of the 3x3 ``jac`` (the Floquet multipliers),
     from its characteristic polynomial (:func:`cubic_radius`): a LAPACK eigenvalue call
     costs more than a pass of the orbit."""
-    if not np.all(np.isfinite(jac)):
-        return np.inf
+    # Element by element: np.isfinite(jac) would allocate a 3x3 array at every call.
+    for i in range(3):
+        for j in range(3):
+            if not math.isfinite(jac[i, j]):
+                return np.inf
     if jac[2, 0] == 0.0 and jac[2, 1] == 0.0:
         # A stick on the orbit: v is reset, one multiplier is jac[2, 2] (0).
         return stuck_radius(jac[0, 0], jac[0, 1], jac[1, 0], jac[1, 1], jac[2, 2])

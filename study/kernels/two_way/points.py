@@ -292,17 +292,28 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
     scratch space;
     without ``diagnostics`` only the status and velocity columns are sure to be right
     (a static point's multiplier is not computed)."""
-    flying = structure[LIFT_OFF_LAW] != 0.0
     static = static_point(structure, omega, a, lifted, out, diagnostics)
+    solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, out,
+                  neighbours, workspace, diagnostics)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, out,
+                  neighbours, workspace, diagnostics):
+    """:func:`solve_point_along` after :func:`static_point` started ``out`` and decided
+    ``static``: the drivers decide it first (a static point then costs no call) and
+    call this for the other points, so that it is not decided twice."""
+    flying = structure[LIFT_OFF_LAW] != 0.0
     if static:
         forget(neighbours)
         if not (lifted and flying):
             return
     table = workspace.table
     point = DrivePoint(structure, table, omega, a)
-    mode_drive(structure, omega, a, table, 0)
-    mode_drive(structure, omega, a, table, 1)
-    mode_drive(structure, omega, a, table, 2)
+    # Only the columns the rows' event searches read (see mode_drive).
+    mode_drive(structure, omega, a, table, 0, searched_only=True)
+    mode_drive(structure, omega, a, table, 1, searched_only=True)
+    mode_drive(structure, omega, a, table, 2, searched_only=True)
     flight_first = lifted and flying
     if flight_first:
         # Past the stick's lift-off threshold the motion from the start usually leaves
@@ -326,6 +337,10 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
     reason = REASON_NONE
     periods = 0
     solved = False
+    # The orbit's largest multiplier where the search computed it for its stability
+    # check (record.jac is then that of the orbit's pass, which the row reports), so
+    # that the row does not compute it again; NaN where it did not.
+    radius = np.nan
     if predict(neighbours, omega, a, z):
         outcome, events, slips = continued_newton(point, z, scales, budget.max_events,
                                                   record, work, workspace.newton)
@@ -333,7 +348,8 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
             status = LIFT_OFF
             solved = True
         elif outcome == CONTINUED_ORBIT:
-            if spectral_radius(record.jac) < 1.0 + STABILITY_MARGIN:
+            radius = spectral_radius(record.jac)
+            if radius < 1.0 + STABILITY_MARGIN:
                 status = STICK_SLIP
                 periods = 1
                 solved = True
@@ -346,7 +362,7 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
             out[OUT_CONTINUED] = outcome
     if not solved:
         start_state(table, omega, t_start, z, factor)
-        status, reason, periods, newton_found = find_orbit(
+        status, reason, periods, newton_found, radius = find_orbit(
             point, z, t_start, scales, budget, record, work, workspace.history)
         if newton_found and status == STICK_SLIP:
             remember(neighbours, omega, a, z, record.acc[A_EVENTS], record.acc[A_SLIPS])
@@ -382,7 +398,7 @@ def solve_point_along(structure, omega, a, lifted, budget, t_start, factor, out,
     out[OUT_FORWARD] = acc[A_FORWARD] / span
     out[OUT_BACKWARD] = acc[A_BACKWARD] / span
     out[OUT_PERIOD] = periods
-    out[OUT_MULTIPLIER] = spectral_radius(record.jac)
+    out[OUT_MULTIPLIER] = spectral_radius(record.jac) if math.isnan(radius) else radius
     out[OUT_DELTA] = z[0]
     out[OUT_DELTA_RATE] = z[1]
     out[OUT_SPEED] = z[2]
@@ -459,15 +475,16 @@ def _solve_run(structure, omega, a, lifted, budget, continued, begin, end, out):
     for i in range(begin, end):
         if not continued:
             forget(neighbours)
-        # The static decision here, and again in solve_point_along for the others: a
-        # static point then costs no call (measured 0.11 us a point of a static map,
-        # against 0.19 us with solve_point_along deciding for the drivers).
-        if static_point(structure, omega[i], a[i], lifted[i], out[i], True) and not (
-                lifted[i] and flying):
+        # The static decision here, and solve_decided for the others: a static point
+        # then costs no call (measured 0.11 us a point of a static map, against 0.19 us
+        # with solve_point_along deciding for the drivers), and no point is decided
+        # twice.
+        static = static_point(structure, omega[i], a[i], lifted[i], out[i], True)
+        if static and not (lifted[i] and flying):
             forget(neighbours)
             continue
-        solve_point_along(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, out[i],
-                          neighbours, workspace, True)
+        solve_decided(structure, omega[i], a[i], lifted[i], static, budget, 0.0, 1.0,
+                      out[i], neighbours, workspace, True)
 
 
 @njit(cache=True, nogil=True, parallel=True, error_model="numpy")
@@ -505,10 +522,10 @@ def _velocity_run(structure, omega, a, lifted, budget, continued, begin, end, ve
     for i in range(begin, end):
         if not continued:
             forget(neighbours)
-        if not static_point(structure, omega[i], a[i], lifted[i], row, False) or (
-                lifted[i] and flying):
-            solve_point_along(structure, omega[i], a[i], lifted[i], budget, 0.0, 1.0, row,
-                              neighbours, workspace, False)
+        static = static_point(structure, omega[i], a[i], lifted[i], row, False)
+        if not static or (lifted[i] and flying):
+            solve_decided(structure, omega[i], a[i], lifted[i], static, budget, 0.0, 1.0,
+                          row, neighbours, workspace, False)
         else:
             forget(neighbours)
         velocity[i] = row[OUT_VELOCITY]
