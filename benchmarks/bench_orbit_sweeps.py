@@ -34,9 +34,12 @@ its neighbours before it. Cold points depend on nothing: each status's points of
 cold map are timed as one call. **The time of a pass** is measured at a sample of
 each status's points (``--pass-sample``): the kernel's ``orbit.run`` over one period,
 with its Jacobian (a Newton pass) and without (a map pass), three passes against one,
-from the orbit's state for a moving point, from the cold start for any other, the
+from the state the continued map's first pass at that point starts from (the
+prediction from the points before it, or the cold start where there is none), the
 contact model followed through the period noting lift-off (as a continued pass runs).
 What a status costs beyond its passes times that time is its overhead outside passes.
+The rows timed alone are not scaled to the map timed whole: what the two differ by
+(the load of a shared machine between calls, either sign) is reported as such.
 The flight search's passes are not timed alone: the flight searches cost the flight
 map's time less the same map's without flight, net of the contact searches that they
 spare at bouncing points past the stick's lift-off threshold (solved with flight first).
@@ -87,6 +90,7 @@ from floor_one_way import F_RANGE as PAPER_F  # noqa: E402
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
 from study.engine.study_spec import load_spec  # noqa: E402
+from study.kernels.structure_vector import LIFT_OFF_LAW  # noqa: E402
 from study.kernels.two_way import continuation  # noqa: E402
 from study.kernels.two_way import points as orbit  # noqa: E402
 from study.kernels.two_way.modes import N_MODE, TWO_PI, DrivePoint, mode_row  # noqa: E402
@@ -285,6 +289,31 @@ def pass_work(vector, omega, a, z, count, want_jac, max_events):
     return events
 
 
+@njit(error_model="numpy")
+def first_states(vector, omega, a, lifted, budget, out, z):
+    """The continued map (the kernel's ``_solve_run``, every run in order) into ``out``,
+    and each point's prediction from the points before it into ``z`` (n x 3): the state
+    its first Newton pass starts from, NaN where the continuation has nothing to start
+    from (a static point, a line's start: the cold start). Not cached: it must follow
+    the kernel it calls, and ``out`` must be the map's bit for bit."""
+    starts = orbit.sweep_runs(omega, a)
+    flying = vector[LIFT_OFF_LAW] != 0.0
+    guess = np.empty(3)
+    for r in range(starts.shape[0] - 1):
+        neighbours = continuation.new_neighbours()
+        workspace = orbit.new_workspace(vector)
+        for i in range(starts[r], starts[r + 1]):
+            z[i, :] = np.nan
+            static = orbit.static_point(vector, omega[i], a[i], lifted[i], out[i], True)
+            if static and not (lifted[i] and flying):
+                continuation.forget(neighbours)
+                continue
+            if continuation.predict(neighbours, omega[i], a[i], guess):
+                z[i, :] = guess
+            orbit.solve_decided(vector, omega[i], a[i], lifted[i], static, budget, 0.0,
+                                1.0, out[i], neighbours, workspace, True)
+
+
 @dataclass
 class Variant:
     """The measurements of one two-way variant (flight or not) of a map: CPU seconds
@@ -313,6 +342,8 @@ class Variant:
     call: float = math.inf
     cold_status: dict = field(default_factory=dict)
     pass_time: dict = field(default_factory=dict)
+    first: np.ndarray | None = None
+    first_identical: bool = True
 
     @property
     def name(self) -> str:
@@ -332,13 +363,6 @@ class Variant:
                 begin, before = cut, seconds
         return times
 
-    def scaled_status_time(self, width: int) -> tuple[dict[int, float], float]:
-        """:meth:`status_time` scaled to the continued map measured whole, and the
-        factor (the rows are timed in other calls than the map)."""
-        times = self.status_time(width)
-        total = sum(times.values())
-        scale = self.kernel / total if total > 0 else math.nan
-        return {code: seconds * scale for code, seconds in times.items()}, scale
 
 
 @dataclass
@@ -498,14 +522,17 @@ def _time_passes(kernel: Kernel, f: np.ndarray, a: np.ndarray, variant: Variant,
     rounds; and the events of a pass."""
     out = variant.out
     status = out[:, orbit.OUT_STATUS]
+    if variant.first is None:
+        omega, a_, lifted, table = kernel.arguments(f, a)
+        variant.first = np.empty((f.size, 3))
+        first_states(kernel.vector, omega, a_, lifted, kernel.budget, table, variant.first)
+        variant.first_identical = bool(np.array_equal(table, out, equal_nan=True))
     rng = np.random.default_rng(seed)
     for code in np.unique(status[passes(out) > 0]).astype(int):
         index = np.flatnonzero((status == code) & (passes(out) > 0))
         index = np.sort(rng.choice(index, size=min(sample, index.size), replace=False))
         omega = 2.0 * np.pi * f[index]
-        z = np.full((index.size, 3), np.nan)
-        if code in MOVING:
-            z[:] = out[index][:, [orbit.OUT_DELTA, orbit.OUT_DELTA_RATE, orbit.OUT_SPEED]]
+        z = np.ascontiguousarray(variant.first[index])
         points = (kernel.vector, omega, a[index], z)
         best = variant.pass_time.get(code, {"newton": math.inf, "map": math.inf})
         for name, want_jac in (("newton", True), ("map", False)):
@@ -569,7 +596,7 @@ def status_rows(result: MapResult, variant: Variant) -> list[dict]:
     n = result.sweep.n
     status = out[:, orbit.OUT_STATUS]
     cold_status = cold[:, orbit.OUT_STATUS]
-    times, _ = variant.scaled_status_time(result.sweep.a.size)
+    times = variant.status_time(result.sweep.a.size)
     total = sum(times.values())
     contact = pass_seconds(result, variant)
     rows = []
@@ -729,9 +756,11 @@ def timing_text(result: MapResult, variant: Variant) -> str:
             f"{'yes' if variant.prefixes_identical else 'NO'}; a call on no point "
             f"{us(variant.call)} us, taken off each row; whole rows {prefixes:.3f} s "
             f"against the map's {variant.kernel:.3f} s); cold, each status as one call "
-            f"({cold:.3f} s against {variant.cold:.3f} s). The continued times by status "
-            f"are scaled by {variant.scaled_status_time(result.sweep.a.size)[1]:.3f} to the "
-            f"map measured whole. Time of a pass at {samples} points (see the method).")
+            f"({cold:.3f} s against {variant.cold:.3f} s). The times by status are the rows' "
+            f"as timed alone, not scaled to the map timed whole. Time of a pass at {samples} "
+            "points, from the state the continued map's first pass there starts from (the "
+            "continued map run so, bit-identical to the map: "
+            f"{'yes' if variant.first_identical else 'NO'}; see the method).")
 
 
 def static_text(variant: Variant) -> str:
@@ -768,7 +797,8 @@ def map_goal(result: MapResult) -> dict:
         return entry
     out = variant.out
     status = out[:, orbit.OUT_STATUS]
-    times, _ = variant.scaled_status_time(sweep.a.size)
+    times = variant.status_time(sweep.a.size)
+    rows_alone = sum(times.values())
     solved = passes(out) > 0
     n_solved = max(int(solved.sum()), 1)
     contact = pass_seconds(result, variant)  # measured directly: not scaled
@@ -776,7 +806,10 @@ def map_goal(result: MapResult) -> dict:
     static = times.get(STATIC, 0.0)
     pass_time = float(contact.sum())
     contact_passes = float(passes(result.base.out).sum())
-    outside = variant.kernel - static - pass_time - flight_search
+    # The rows timed alone, less static points, passes and flight searches; what the map
+    # timed whole differs from its rows timed alone is the load between calls.
+    outside = rows_alone - static - pass_time - flight_search
+    load = variant.kernel - rows_alone
     limit = goal * result.one_way / n
     spent = variant.public / n
     kind = "contact passes" if variant.flight else "passes"
@@ -793,12 +826,23 @@ def map_goal(result: MapResult) -> dict:
                      f"the lift-off threshold (the map's time less the map's without "
                      f"flight; {flying} points, {flight_passes / max(flying, 1):.1f} "
                      f"passes more each) {us(flight_search / n)}")
-    parts.append(f"the solved points' overhead outside passes ({us(outside / n_solved)} us "
-                 f"a solved point) {us(outside / n)}")
+    overhead = (f"the solved points' overhead outside passes ({us(outside / n_solved)} us "
+                f"a solved point) {us(outside / n)}")
+    if outside < 0.0:
+        # Passes at the measured time overstate the passes of a lift-off point: its last
+        # pass ends at the lift-off, and a cold start's passes before it do not watch for
+        # one (no lift-off event to seek), while the time of a pass is measured on whole
+        # passes that watch, as a continued pass does.
+        overhead += (" (negative: the passes of LIFT_OFF points cost less than the time "
+                     "of a pass measured, their last pass ending at the lift-off and a "
+                     "cold start's passes not watching for it)")
+    parts.append(overhead)
+    parts.append(f"the map timed whole less its rows timed alone (the load between calls, "
+                 f"either sign) {us(load / n)}")
     lines = [f"{us(spent)} us a point against a budget of {us(limit)} us ({goal:g}x one-way "
              f"{us(result.one_way / n)} us): {us(spent - limit)} us a point to go. Where "
              "the time goes, us per point of the map: " + "; ".join(parts) + "."]
-    # Shares of the kernel's time: exact for a status, estimated for scattered points.
+    # Shares of the rows' time: exact for a status, estimated for scattered points.
     per_status_outside = {code: (times.get(code, 0.0) - contact[status == code].sum())
                           / max(np.sum(status == code), 1)
                           for code in np.unique(status).astype(int)}
@@ -809,14 +853,14 @@ def map_goal(result: MapResult) -> dict:
                        ("line starts (nothing to continue from)", (continued == 0) & solved)):
         if mask.any():
             seconds = contact[mask].sum() + overhead[mask].sum()
-            shares.append(f"{name}, {int(mask.sum())} points: {seconds / variant.kernel:.0%}")
+            shares.append(f"{name}, {int(mask.sum())} points: {seconds / rows_alone:.0%}")
     if shares:
         shares[-1] += " (estimated from their passes and their status's overhead a point)"
     for code in np.unique(status).astype(int):
         if code not in (STATIC, *MOVING):
             shares.append(f"{study.Status(code).name}, {int(np.sum(status == code))} points: "
-                          f"{times.get(code, 0.0) / variant.kernel:.0%}")
-    lines.append("Shares of the kernel's time: " + "; ".join(shares) + ".")
+                          f"{times.get(code, 0.0) / rows_alone:.0%}")
+    lines.append("Shares of the rows' time (timed alone): " + "; ".join(shares) + ".")
     rest = spent - pass_time / n
     if rest >= limit:
         lines.append(f"Without any of its {kind} the rest ({us(rest)} us a point) is "
@@ -905,12 +949,13 @@ METHOD = (
     "points before it in its row only. The continued map's time by status: each row cut "
     "where the status changes, its prefixes up to each cut solved alone (bit-identical to "
     "the map), a stretch's time the difference of two prefixes (the first stretch less "
-    "the time of a call on no point), scaled so that the rows add up to the map measured "
-    "whole. The cold map's: each "
+    "the time of a call on no point), not scaled to the map timed whole (what the two "
+    "differ by, the load between calls, is reported). The cold map's: each "
     "status's points as one call (cold points are independent). The time of a pass: the "
     f"kernel's `orbit.run` over one period, {PASS_COUNT} passes against one at a sample "
-    "of each status's points, from the orbit for a moving point and from the cold start "
-    "for any other, following the contact model through the period as a continued pass "
+    "of each status's points, from the state the continued map's first pass there starts "
+    "from (the prediction from the points before it, else the cold start), following the "
+    "contact model through the period as a continued pass "
     "does; what a status costs beyond its passes at that time is its overhead outside "
     "passes. The flight searches: the flight map's time less the same map's without "
     "flight, net of the contact searches they spare (past the stick's lift-off threshold "
