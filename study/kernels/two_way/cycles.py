@@ -48,6 +48,17 @@ STABILITY_MARGIN = 1e-6
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def state_distance(z, other, scales):
+    """The distance of two states in the max-norm scaled by ``scales`` (their natural
+    sizes): how far a cycle is from the iterate it was found from, or how near an
+    iterate closes on an earlier one."""
+    distance = 0.0
+    for i in range(scales.shape[0]):
+        distance = max(distance, abs(z[i] - other[i]) / scales[i])
+    return distance
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _cycle(point, z, periods, section, scales, max_events, record, work):
     """Newton's method for a stable cycle of ``periods`` drive periods from ``z``, the state
     at time ``section`` [s], with the cycle's own (minimal) period (arguments as
@@ -65,9 +76,7 @@ def _cycle(point, z, periods, section, scales, max_events, record, work):
     flag, converged = newton(point, z, periods, section, scales, max_events, record, work)
     if flag == RUN_LIFT_OFF:
         return -1
-    reach = 0.0
-    for i in range(3):
-        reach = max(reach, abs(z[i] - guess[i]) / scales[i])
+    reach = state_distance(z, guess, scales)
     if (not converged or spectral_radius(record.jac) >= 1.0 + STABILITY_MARGIN
             or reach > CYCLE_REACH):
         return 0
@@ -80,9 +89,7 @@ def _cycle(point, z, periods, section, scales, max_events, record, work):
             work[i] = z[i]
         flag = run(point, work, section, section + shorter * period, record, False, -1.0,
                    max_events)
-        gap = 0.0
-        for i in range(3):
-            gap = max(gap, abs(work[i] - z[i]) / scales[i])
+        gap = state_distance(work, z, scales)
         if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
             flag, converged = newton(point, z, shorter, section, scales, max_events, record,
                                      work)
@@ -157,9 +164,7 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history):
             return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, False, np.nan
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
             back = (iteration - periods + 1) % MAX_PERIOD
-            gap = 0.0
-            for i in range(3):
-                gap = max(gap, abs(z[i] - history[back, i]) / scales[i])
+            gap = state_distance(z, history[back], scales)
             if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
                 tried[periods] = gap
                 for shifted in range(2):

@@ -20,7 +20,12 @@ from numba import njit
 
 from study.kernels.eigenvalues import spectral_radius
 from study.kernels.structure_vector import GRAVITY, STIFFNESS
-from study.kernels.two_way.cycles import CYCLE_DETECTION, CYCLE_REACH, MAX_PERIOD
+from study.kernels.two_way.cycles import (
+    CYCLE_DETECTION,
+    CYCLE_REACH,
+    MAX_PERIOD,
+    state_distance,
+)
 from study.kernels.two_way.flight import (
     A_AIRBORNE,
     A_EVENT_COUNT,
@@ -314,9 +319,7 @@ def _flight_cycle(point, z, periods, scales, max_events, record, work):
                                     MAX_CYCLE_NEWTON)
     if flag == RUN_PARADOX:
         return -1
-    reach = 0.0
-    for i in range(N_STATE):
-        reach = max(reach, abs(z[i] - guess[i]) / scales[i])
+    reach = state_distance(z, guess, scales)
     if (not converged or spectral_radius(record.jac) >= 1.0 + STABILITY_MARGIN
             or reach > CYCLE_REACH):
         for i in range(N_STATE):
@@ -328,9 +331,7 @@ def _flight_cycle(point, z, periods, scales, max_events, record, work):
             continue
         flag = _pass(point, z, work, 0.0, shorter * period, record, False, False,
                      max_events)
-        gap = 0.0
-        for i in range(N_STATE):
-            gap = max(gap, abs(work[i] - z[i]) / scales[i])
+        gap = state_distance(work, z, scales)
         if flag == RUN_OK and gap <= CYCLE_DETECTION * 1e-6:
             flag, converged = _quiet_newton(point, z, shorter, scales, max_events, record,
                                             work, MAX_CYCLE_NEWTON)
@@ -399,9 +400,7 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
             return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, np.nan
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
             back = (iteration - periods + 1) % MAX_PERIOD
-            gap = 0.0
-            for i in range(N_STATE):
-                gap = max(gap, abs(z[i] - history[back, i]) / scales[i])
+            gap = state_distance(z, history[back], scales)
             if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
                 tried[periods] = gap
                 for i in range(N_STATE):
