@@ -1,12 +1,15 @@
 """The package version, read from the installed distribution's metadata.
 
-The version is made from git tags by setuptools-scm when the package is built or
-installed (see ``[tool.setuptools_scm]`` in ``pyproject.toml``): ``0.1.0`` at tag
-``v0.1.0``, ``0.1.1.devN+g<hash>`` N commits later. It is not written into any file of
-the package, so making a tag changes no source file: the code fingerprint of results
-(:mod:`study.engine.fingerprint`, which hashes the package's sources) does not move with it.
-An editable install keeps the version it was installed with until it is reinstalled
-(``pip install -e .``); the provenance of every result also records the git commit.
+The version is declared once, as ``version`` in ``pyproject.toml``'s ``[project]`` table,
+and bumped together with the newest ``## X.Y.Z - date`` heading of ``CHANGELOG.md`` and
+the version of ``CITATION.cff``. Every tree of the repository builds as that version
+(a clone, an archive, a copy without ``.git``); no git tag is needed. The version is not
+written into any file of the package: the installer records it in the distribution's
+metadata, which :data:`VERSION` reads, so a bump changes no source file and the code
+fingerprint of results (:mod:`study.engine.fingerprint`, which hashes the package's
+sources) does not move with it. An editable install keeps the version it was installed
+with until it is reinstalled (``pip install -e .``; ``make`` reinstalls whenever
+``pyproject.toml`` changes); the provenance of every result also records the git commit.
 """
 
 from __future__ import annotations
@@ -21,8 +24,7 @@ __all__ = ["DISTRIBUTION", "UNKNOWN_VERSION", "VERSION", "installed_version"]
 DISTRIBUTION = "stickslip-study"
 
 #: The version of a ``study`` that runs without installed metadata (a source tree on
-#: ``PYTHONPATH``); the same as ``fallback_version`` in ``pyproject.toml``, the version
-#: of a build without git information. No release is 0.0: it means "unknown".
+#: ``PYTHONPATH``, never installed). No release is 0.0: it means "unknown".
 UNKNOWN_VERSION = "0.0"
 
 

@@ -32,7 +32,6 @@ copy either way); the runs that compile are ``slow``.
 from __future__ import annotations
 
 import importlib.metadata
-import importlib.util
 import json
 import os
 import shutil
@@ -172,22 +171,32 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     source = root / "source"
     source.mkdir()
     # What the wheel is built from: the top-level files (pyproject.toml, README.md,
-    # licence files, .git_archival.txt unprocessed) and the package; not results, caches
-    # or the venv, nor git's data (in a worktree ``.git`` is a file): a tree without git
-    # information, which setuptools-scm builds as its fallback version.
+    # licence files) and the package; not results, caches or the venv, nor git's data
+    # (in a worktree ``.git`` is a file): a tree without git information, which builds
+    # as the version pyproject.toml declares.
     for item in REPO.iterdir():
         if item.is_file() and item.name != ".git":
             shutil.copy2(item, source / item.name)
     shutil.copytree(REPO / "study", source / "study",
                     ignore=shutil.ignore_patterns("__pycache__", "*.py[co]", "*.nbi", "*.nbc"))
+    assert not (source / ".git").exists()
     dist = root / "dist"
     command = [sys.executable, "-m", "pip", "wheel", "--no-deps", "--disable-pip-version-check",
                "--quiet", "--wheel-dir", dist]
-    if _setuptools_major() >= 77 and importlib.util.find_spec("setuptools_scm") is not None:
+    if _setuptools_major() >= 77:
         command += ["--no-build-isolation", "--no-index"]
     _run([*command, source], cwd=root)
     (built,) = dist.glob(f"{DISTRIBUTION.replace('-', '_')}-*.whl")
     return built
+
+
+def _declared_version() -> str:
+    """``[project] version`` of pyproject.toml, where the version is declared."""
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    assert project["name"] == DISTRIBUTION
+    assert "version" not in project.get("dynamic", [])
+    assert project["version"] != UNKNOWN_VERSION
+    return project["version"]
 
 
 @pytest.fixture(scope="module")
@@ -253,22 +262,19 @@ print(json.dumps({{
 """
 
 
-def test_a_tree_without_git_information_installs_as_the_fallback_version(venv):
-    """The wheel was built from a copy without ``.git``: setuptools-scm gives it
-    ``fallback_version`` (pyproject.toml), which study reports as its own version, from
-    the metadata of the distribution named in pyproject.toml."""
-    declared = tomllib.loads((REPO / "pyproject.toml").read_text())
-    assert declared["project"]["name"] == DISTRIBUTION
-    assert "version" in declared["project"]["dynamic"]
-    fallback = declared["tool"]["setuptools_scm"]["fallback_version"]
-    assert fallback == UNKNOWN_VERSION
+def test_a_tree_without_git_information_installs_as_the_declared_version(wheel, venv):
+    """The wheel was built from a copy without ``.git``: it is the version pyproject.toml
+    declares, which study reports as its own version, from the metadata of the
+    distribution named in pyproject.toml."""
+    declared = _declared_version()
+    assert wheel.name.startswith(f"{DISTRIBUTION.replace('-', '_')}-{declared}-")
     found = json.loads(_run([venv["python"], "-c", VERSION_PROBE], cwd=venv["elsewhere"]).stdout)
-    assert found == {"metadata": fallback, "study": fallback, "provenance": fallback}
+    assert found == {"metadata": declared, "study": declared, "provenance": declared}
 
 
-def test_the_installed_command_reports_the_version(venv):
+def test_the_installed_command_reports_the_declared_version(venv):
     done = _run([venv["scripts"] / "study", "--version"], cwd=venv["elsewhere"])
-    assert UNKNOWN_VERSION in done.stdout
+    assert done.stdout.split() == ["study", _declared_version()]
 
 
 def _run_spec(venv: dict[str, Path], name: str, text: str) -> Path:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
@@ -166,16 +167,24 @@ def test_module_listing_for_humans(capsys: pytest.CaptureFixture[str]):
 
 def test_the_package_version_is_not_in_the_fingerprint(copy: Path,
                                                        monkeypatch: pytest.MonkeyPatch):
-    """A release tag changes the installed version, never a result's code hash: the
-    fingerprint reads no metadata of study's own distribution, and setuptools-scm writes
-    no version file into the package (whose sources the fingerprint hashes)."""
+    """A version bump changes the installed version, never a result's code hash: the
+    version is declared in pyproject.toml alone, not read from (or written into) a file
+    of the package, whose sources the fingerprint hashes; and the fingerprint reads no
+    metadata of study's own distribution."""
     import importlib.metadata
     import tomllib
 
     from study.version import DISTRIBUTION
 
     config = tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text())
-    assert not {"write_to", "version_file"} & set(config["tool"]["setuptools_scm"])
+    declared = config["project"]["version"]
+    assert "version" not in config["project"].get("dynamic", [])
+    assert "version" not in config["tool"].get("setuptools", {}).get("dynamic", {})
+    assert "setuptools_scm" not in config["tool"]  # it would write no file, but would compute
+    written = [path.relative_to(PACKAGE.parent) for path in sorted(PACKAGE.rglob("*"))
+               if path.is_file() and path.suffix in (".py", ".json", ".txt", ".toml")
+               and re.search(rf"""["']{re.escape(declared)}["']""", path.read_text())]
+    assert written == [], f"the version {declared} is written in {written}"
     before = {kind: code_fingerprint(entries, copy).sha256
               for kind, entries in RESULT_KIND_ENTRIES.items()}
     real = importlib.metadata.version
