@@ -3,13 +3,14 @@ the paper whose model it computes.
 
 The structure is checked against the fields CFF 1.2.0 requires (the file itself was
 validated with ``cffconvert --validate``, which pins an old jsonschema and so is not a
-test dependency); the release against the newest release tag git knows, if any.
+test dependency); the release against the version pyproject.toml declares and the newest
+release heading of CHANGELOG.md (tests/unit/test_version.py checks the same agreement,
+with the dates).
 """
 
 from __future__ import annotations
 
 import re
-import subprocess
 import tomllib
 from pathlib import Path
 
@@ -58,23 +59,21 @@ def test_names_the_paper_it_implements(citation):
     assert PAPER_TITLE in " ".join(citation["message"].split())
 
 
-def _newest_release_tag() -> str | None:
-    """The newest ``vX.Y.Z`` tag reachable from HEAD, if git and a tag are there."""
-    try:
-        done = subprocess.run(
-            ["git", "-C", str(REPO), "describe", "--tags", "--abbrev=0", "--match", "v[0-9]*"],
-            capture_output=True, text=True, timeout=30, check=False)
-    except OSError:
-        return None
-    return done.stdout.strip() if done.returncode == 0 else None
+def _newest_changelog_release() -> str:
+    """The version of the first ``## X.Y.Z`` heading of CHANGELOG.md (the newest release;
+    ``## Unreleased`` above it is not one)."""
+    for line in (REPO / "CHANGELOG.md").read_text(encoding="utf-8").splitlines():
+        match = re.match(r"## (\d+\.\d+\.\d+)\b", line)
+        if match:
+            return match[1]
+    pytest.fail("CHANGELOG.md has no `## X.Y.Z` release heading")
 
 
-def test_the_version_is_a_release_not_older_than_the_newest_tag(citation):
-    """The cited version is a release; once tagged, the file is not left behind (it may
-    already name the next release, written before its tag is made)."""
+def test_the_version_is_the_declared_release(citation):
+    """The cited version is a release, the one pyproject.toml declares and the newest
+    CHANGELOG.md lists: the three are bumped together."""
     version = Version(str(citation["version"]))
     assert not (version.is_devrelease or version.is_prerelease or version.local), version
     assert re.fullmatch(r"\d+\.\d+\.\d+", str(citation["version"]))
-    tag = _newest_release_tag()
-    if tag is not None:
-        assert version >= Version(tag.removeprefix("v")), (version, tag)
+    declared = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["version"]
+    assert str(citation["version"]) == declared == _newest_changelog_release()
