@@ -118,6 +118,10 @@ class ContactLaw:
         The parameters it needs besides the structure's, in structure-vector order.
     solvers : tuple of str
         The solvers (keys of :data:`SOLVERS`) that implement it.
+    structure_parameters : tuple of str
+        Parameters of the structure (:data:`study.model.parameters.STRUCTURE`) that only
+        this law reads (the restitution of the lift-off law ``flight``): a result
+        records them with the law (:func:`study.engine.layout.method_attributes`).
     """
 
     kind: str
@@ -126,6 +130,7 @@ class ContactLaw:
     description: str
     parameters: tuple[LawParameter, ...] = ()
     solvers: tuple[str, ...] = tuple(SOLVERS)
+    structure_parameters: tuple[str, ...] = ()
 
 
 #: Every contact law, by kind and name.
@@ -161,7 +166,7 @@ LAWS: dict[str, dict[str, ContactLaw]] = {
             "the base takes off where the normal force vanishes, flies (free fall of "
             "base and plate, the mode a free oscillator of the two bodies) and lands "
             "by an impact with friction and the structure's restitution",
-            solvers=("exact", "integrator")),
+            solvers=("exact", "integrator"), structure_parameters=("restitution",)),
     },
 }
 
