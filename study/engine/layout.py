@@ -4,11 +4,14 @@ What a study's dataset holds follows from its spec alone: one coordinate per swe
 axis, the fixed structure parameters as scalar coordinates, and the variables of the
 requested observables over the structure axes and the drive grid, each with the
 attributes :mod:`study.engine.variables` declares. The runner writes this layout into a file
-chunk by chunk; :func:`study.compute_map` fills the same layout in memory.
+chunk by chunk; :func:`study.compute_map` fills the same layout in memory. Both take
+the global attributes that say how the values were computed (solver, coupling, contact
+laws and their parameters) from :func:`method_attributes`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -18,6 +21,8 @@ from numpy.typing import NDArray
 from study.engine.observables import Method, Observable, resolve
 from study.engine.study_spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec
 from study.engine.variables import VARIABLES
+from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS
+from study.model.parameters import STRUCTURE
 from study.model.units import KILOGRAM
 
 __all__ = [
@@ -26,10 +31,13 @@ __all__ = [
     "coordinate_attrs",
     "coordinates",
     "data_variables",
+    "method_attributes",
     "method_description",
     "method_of",
+    "method_summary",
     "observables_by_grid",
     "pad_branches",
+    "protocol_attributes",
 ]
 
 
@@ -138,14 +146,19 @@ def method_of(spec: StudySpec) -> Method:
 
 
 def method_description(spec: StudySpec) -> str:
-    """How the velocities were computed, for a result's own description."""
+    """How the velocities were computed, for a result's own description: the solver and
+    its coupling, the friction law with its parameters and the lift-off law (with
+    flight, the restitution of its impacts)."""
+    return (f"{_solver_description(spec)}; {_friction_description(spec)}; "
+            f"{_lift_off_description(spec)}")
+
+
+def _solver_description(spec: StudySpec) -> str:
     if spec.method == "exact" and spec.coupling == "two-way":
         return (
             "the exact event-driven steady-state solver (closed form between events; "
             "two-way coupling: the sliding base also forces the mode, the orbit is the "
-            "fixed point of the period map found by Newton's method"
-            + ("; flight: past lift-off the base flies and lands by impacts)"
-               if spec.flight else ")")
+            "fixed point of the period map found by Newton's method)"
         )
     if spec.method == "exact":
         return (
@@ -156,6 +169,164 @@ def method_description(spec: StudySpec) -> str:
         "Dormand-Prince 5(4) time integration with events located on the dense output, "
         f"until the orbit repeats ({spec.coupling} coupling"
         + ("; the sliding base also forces the mode" if spec.coupling == "two-way" else "")
-        + ("; flight: past lift-off the base flies and lands by impacts" if spec.flight
-           else "") + ")"
+        + ")"
     )
+
+
+def _friction_description(spec: StudySpec) -> str:
+    law = spec.friction.declaration
+    values = "".join(f", {p.name} = {_number(spec.friction.values[p.name])} {p.units}"
+                     for p in law.parameters)
+    return f"friction law '{law.name}'{values} ({law.description})"
+
+
+def _lift_off_description(spec: StudySpec) -> str:
+    law = LAWS["lift_off"][spec.lift_off]
+    values = _lift_off_values(spec)
+    shown = "".join(
+        f", {name} {STRUCTURE[name].symbol} = {_number(values[name])}" if name in values
+        else f", {name} {STRUCTURE[name].symbol} swept (its coordinate)"
+        for name in law.structure_parameters)
+    return f"lift-off law '{law.name}'{shown} ({law.description})"
+
+
+def _number(value: float) -> str:
+    """A float as its shortest exact text (``0.01``, not ``np.float64(0.01)``)."""
+    return repr(float(value))
+
+
+def _lift_off_values(spec: StudySpec) -> dict[str, float]:
+    """The fixed values of the structure parameters the study's lift-off law reads
+    (a swept one is left out: its coordinate holds its values)."""
+    law = LAWS["lift_off"][spec.lift_off]
+    return {name: float(spec.fixed.get(name, STRUCTURE[name].default))
+            for name in law.structure_parameters if spec.axis(name) is None}
+
+
+def _law_attribute(kind: str, parameter: str) -> str:
+    """The global attribute of a contact law's parameter: ``study_<kind>_<parameter>``
+    (``study_friction_stribeck_speed``, ``study_lift_off_restitution``)."""
+    return f"study_{kind}_{parameter}"
+
+
+def protocol_attributes(spec: StudySpec) -> dict[str, str | float]:
+    """How each point's motion is started and how the sweep visits the grid.
+
+    None today. The place where a later issue (issue 33) adds the start protocol and
+    the sweep protocol: what this returns joins :func:`method_attributes`, and so is
+    written into every result and compared with the embedded spec by validation.
+    """
+    return {}
+
+
+def method_attributes(spec: StudySpec) -> dict[str, str | float]:
+    """The global attributes that say how a study's values were computed.
+
+    The one place they are made: the runner's file (:mod:`study.engine.study_kind`) and
+    :func:`study.compute_map`'s dataset both take them from here, and validation
+    (:func:`study.engine.study_checks.method_problems`) compares a file's with its
+    embedded spec's.
+
+    Returns
+    -------
+    dict
+        ``source`` (``"study: "`` and :func:`method_description`),
+        ``study_solver_method`` (``"exact"`` or ``"integrator"``), ``study_coupling``,
+        ``study_friction_law`` (its name in :data:`study.model.contact.LAWS`), one
+        float ``study_friction_<parameter>`` for each parameter the friction law
+        declares (``study_friction_stribeck_speed`` in m s-1), ``study_lift_off``
+        (``"stop"`` or ``"flight"``), and one float ``study_lift_off_<parameter>`` for
+        each fixed structure parameter the lift-off law reads
+        (``study_lift_off_restitution`` with flight; left out where it is swept, its
+        coordinate holds it), then :func:`protocol_attributes`.
+    """
+    friction = spec.friction
+    return {
+        "source": f"study: {method_description(spec)}",
+        "study_solver_method": spec.method,
+        "study_coupling": spec.coupling,
+        "study_friction_law": friction.law,
+        **{_law_attribute("friction", p.name): float(friction.values[p.name])
+           for p in friction.declaration.parameters},
+        "study_lift_off": spec.lift_off,
+        **{_law_attribute("lift_off", name): value
+           for name, value in _lift_off_values(spec).items()},
+        **protocol_attributes(spec),
+    }
+
+
+#: The words a method line uses for a contact law the attributes do not name.
+_NOT_RECORDED = "not recorded; the default"
+
+
+def method_summary(attrs: Mapping[str, Any], swept: Iterable[str] = ()) -> str:
+    """A result's method in one line, from its global attributes (those of
+    :func:`method_attributes`): ``exact solver, one-way coupling, friction stribeck
+    (stribeck_speed=0.01 m s-1), lift-off flight, restitution e=0.5``.
+
+    Files written before the method was recorded whole lack some attributes: the line
+    says what the file has, and a default it assumes as such (``friction coulomb (not
+    recorded; the default)``); a value of the wrong type is shown as it is.
+
+    Parameters
+    ----------
+    attrs : mapping
+        The result's global attributes.
+    swept : iterable of str
+        The result's dimensions: a law's structure parameter among them is said to be
+        swept.
+    """
+    swept = set(swept)
+    solver = attrs.get("study_solver_method")
+    coupling = attrs.get("study_coupling")
+    parts = [f"{solver} solver" if isinstance(solver, str) else "solver not recorded",
+             f"{coupling} coupling" if isinstance(coupling, str) else "coupling not recorded",
+             _friction_summary(attrs), _lift_off_summary(attrs, swept)]
+    return ", ".join(parts)
+
+
+def _shown(value: Any) -> str:
+    """An attribute's value: a number as its shortest exact text, anything else as it is."""
+    if isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+            value, bool | np.bool_):
+        return _number(value)
+    return repr(value)
+
+
+def _friction_summary(attrs: Mapping[str, Any]) -> str:
+    law = attrs.get("study_friction_law")
+    if law is None:
+        return f"friction {DEFAULT_FRICTION} ({_NOT_RECORDED})"
+    if not isinstance(law, str):
+        return f"friction {law!r}"
+    declared = LAWS["friction"].get(law)
+    units = {p.name: p.units for p in (declared.parameters if declared else ())}
+    prefix = _law_attribute("friction", "")
+    # The declared parameters, then any other the file holds (an unknown law's).
+    names = [*units, *(key[len(prefix):] for key in attrs
+                       if key.startswith(prefix) and key != "study_friction_law"
+                       and key[len(prefix):] not in units)]
+    shown = [f"{name}={_shown(attrs[prefix + name])}"
+             + (f" {units[name]}" if units.get(name, "1") != "1" else "")
+             if prefix + name in attrs else f"{name} not recorded" for name in names]
+    return f"friction {law}" + (f" ({', '.join(shown)})" if shown else "")
+
+
+def _lift_off_summary(attrs: Mapping[str, Any], swept: set[str]) -> str:
+    law = attrs.get("study_lift_off")
+    if law is None:
+        return f"lift-off {DEFAULT_LIFT_OFF} ({_NOT_RECORDED})"
+    if not isinstance(law, str):
+        return f"lift-off {law!r}"
+    declared = LAWS["lift_off"].get(law)
+    text = f"lift-off {law}"
+    for name in (declared.structure_parameters if declared else ()):
+        attribute = _law_attribute("lift_off", name)
+        symbol = STRUCTURE[name].symbol
+        if attribute in attrs:
+            text += f", {name} {symbol}={_shown(attrs[attribute])}"
+        elif name in swept:
+            text += f", {name} {symbol} swept"
+        else:
+            text += f", {name} not recorded"
+    return text

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from study.engine.layout import (
     coordinates,
     data_variables,
-    method_description,
+    method_attributes,
     method_of,
     observables_by_grid,
     pad_branches,
@@ -173,11 +173,13 @@ def compute_map(
         Dims ``(*sweep, f)`` for closed-form variables (``a_star_plus``,
         ``a_star_minus``, ...), ``(*sweep, f, a)`` for solver variables (``velocity``
         [m s-1], ``status``, ...), ``(*sweep, a, branch)`` for the frontier; the
-        fixed structure parameters are scalar coordinates. Global attributes name the
-        coupling (``study_coupling``), with flight the lift-off law
-        (``study_lift_off = "flight"``), and the solver (``source``), and hold the
-        equivalent spec file (``study_spec``): ``study run`` on it writes this
-        dataset's variables to a file.
+        fixed structure parameters are scalar coordinates. Global attributes say how
+        the values were computed, as a result file's do
+        (:func:`study.engine.layout.method_attributes`: ``study_solver_method``,
+        ``study_coupling``, ``study_friction_law``, ``study_lift_off``, with flight
+        ``study_lift_off_restitution``, and ``source``), and hold the equivalent spec
+        file (``study_spec``): ``study run`` on it writes this dataset's variables to a
+        file.
 
     Warns
     -----
@@ -279,10 +281,7 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
         data, coords={c.name: (c.dims, c.values, c.attrs) for c in coordinates(spec)})
     dataset.attrs = {
         "title": f"study.compute_map: {', '.join(spec.observables)}",
-        "source": f"study: {method_description(spec)}",
-        "study_coupling": spec.coupling,
-        **({"study_lift_off": spec.lift_off} if spec.flight else {}),
-        "study_solver_method": spec.method,
+        **method_attributes(spec),
         "study_version": VERSION,
         "study_spec": spec.text,
     }

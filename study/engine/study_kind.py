@@ -29,6 +29,7 @@ from study.engine.kinds import ResultKind, register
 from study.engine.layout import (
     coordinates,
     data_variables,
+    method_attributes,
     method_description,
     method_of,
     observables_by_grid,
@@ -135,12 +136,7 @@ def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
         **_metadata_attrs(spec),
         "keywords": "stick-slip, friction, locomotion, resonance, vibration, parameter study",
         "naming_authority": "study",
-        "source": f"study: {method_description(spec)}",
-        "study_solver_method": spec.method,
-        "study_coupling": spec.coupling,
-        # Only with flight: the files of studies that stop at lift-off keep their
-        # attributes (a file without it stops there, the default law).
-        **({"study_lift_off": spec.lift_off} if spec.flight else {}),
+        **method_attributes(spec),
         "processing_level": "model output",
         "references": PAPER_REFERENCE,
         "standard_name_vocabulary": "CF Standard Name Table v85",

@@ -139,13 +139,15 @@ def test_flight_variables_declare_units_and_are_nan_where_the_status_is_invalid(
     assert variable.invalid_where == "status" and variable.zero_when_static
 
 
-def test_a_study_without_flight_writes_no_flight_variable_nor_attribute():
+def test_a_study_without_flight_writes_no_flight_variable_and_says_it_stops():
     from study.engine.study_kind import _standard_attrs
 
     spec = parse('coupling = "two-way"')
     _, points, _ = observables_by_grid(spec)
     assert not set(FLIGHT_VARIABLES) & {v.name for v in data_variables(spec, points)}
-    assert "study_lift_off" not in _standard_attrs(spec)
+    # The lift-off law is written whatever it is (issue 33: the whole method).
+    assert _standard_attrs(spec)["study_lift_off"] == "stop"
+    assert "study_lift_off_restitution" not in _standard_attrs(spec)
     flying = parse('coupling = "two-way"\nflight = true')
     assert _standard_attrs(flying)["study_lift_off"] == "flight"
     assert "flight" in _standard_attrs(flying)["source"]

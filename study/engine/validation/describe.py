@@ -10,6 +10,7 @@ import numpy as np
 import xarray as xr
 
 from study.engine.kinds import kind_of_schema
+from study.engine.layout import method_summary
 from study.engine.validation.checks import is_number
 from study.engine.validation.reading import slabs, unreadable
 
@@ -71,7 +72,8 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
         result_kind and result_kind.variant_attribute) else None
     kind = variant if isinstance(variant, str) else ""
     coupling = attrs.get("study_coupling")
-    lift_off = attrs.get("study_lift_off")
+    # A study's lift-off law is on its method line, with the rest of the method.
+    lift_off = attrs.get("study_lift_off") if what != "study" else None
     lines.append(f"  {what} {name!r}"
                  f"{f' ({kind})' if kind else ''}"
                  f"{f', {coupling} coupling' if isinstance(coupling, str) else ''}"
@@ -79,6 +81,8 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
                  "spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
+    if what == "study":
+        lines.append(f"  method: {method_summary(attrs, dataset.dims)}")
     try:
         warnings = json.loads(str(attrs.get("study_warnings", "[]")))
     except ValueError:
