@@ -3,12 +3,14 @@ as its validator in :mod:`study.engine.study_kind`)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
+from study.engine.layout import method_attributes
 from study.engine.observables import variables_of
-from study.engine.study_spec import parse_spec
+from study.engine.study_spec import StudySpec, parse_spec
 from study.engine.validation.checks import (
     Checker,
     checksum_problems,
@@ -19,6 +21,7 @@ from study.engine.validation.checks import (
     parse_embedded,
     provenance_problems,
     provenance_spec_problems,
+    same_number,
     same_text,
     shown_format,
     size_problems,
@@ -34,7 +37,7 @@ from study.engine.validation.reading import StoredFile
 from study.engine.variables import RESULT_FORMAT, STALE_RESULT_FORMATS, VARIABLES
 from study.model.contact import DEFAULT_LIFT_OFF
 
-__all__ = ["study_problems"]
+__all__ = ["method_problems", "study_problems"]
 
 
 def _stale_format_problems(meta: StoredFile) -> list[str]:
@@ -56,6 +59,47 @@ def _stale_format_problems(meta: StoredFile) -> list[str]:
             f"this study reads format {RESULT_FORMAT} ({now}); rerun its spec"]
 
 
+#: Method attributes a file may lack and what their absence means: files written before
+#: every result recorded its lift-off law wrote ``study_lift_off`` only with flight.
+_ABSENT_MEANS = {"study_lift_off": DEFAULT_LIFT_OFF}
+
+
+def method_problems(attrs: Mapping[str, Any], spec: StudySpec) -> list[str]:
+    """The method attributes a file holds that differ from its embedded spec's.
+
+    Every key of :func:`study.engine.layout.method_attributes` that the file has is
+    compared with the spec's value (texts as texts, numbers exactly). A key the file
+    lacks is no problem here (files of older versions do not have them all; the result
+    schema decides which are required), except ``study_lift_off``, whose absence has
+    always meant the law ``stop``. ``source``, the prose that repeats the other
+    attributes, is not compared: its wording may change between versions.
+
+    Parameters
+    ----------
+    attrs : mapping
+        The file's global attributes.
+    spec : StudySpec
+        The spec embedded in the file.
+
+    Returns
+    -------
+    list of str
+        One message per attribute that differs, naming it and the spec's value.
+    """
+    problems = []
+    for key, expected in method_attributes(spec).items():
+        if key == "source":
+            continue
+        if key not in attrs and key not in _ABSENT_MEANS:
+            continue
+        value = attrs.get(key, _ABSENT_MEANS.get(key))
+        same = (same_text(value, expected) if isinstance(expected, str)
+                else same_number(value, expected))
+        if not same:
+            problems.append(f"{key} differs from the embedded spec ({expected!r})")
+    return problems
+
+
 def study_problems(nc: Any, meta: StoredFile, source: str) -> list[str]:
     attrs = meta.attrs
     stale = _stale_format_problems(meta)
@@ -74,14 +118,7 @@ def study_problems(nc: Any, meta: StoredFile, source: str) -> list[str]:
     if spec is not None:
         problems += identity_problems(attrs, spec)
         problems += provenance_spec_problems(attrs, spec, "study")
-        for key, value in (("study_solver_method", spec.method),
-                           ("study_coupling", spec.coupling)):
-            if not same_text(attrs.get(key), value):
-                problems.append(f"{key} differs from the embedded spec ({value!r})")
-        # Written only with flight: a file without it stops at lift-off.
-        if not same_text(attrs.get("study_lift_off", DEFAULT_LIFT_OFF), spec.lift_off):
-            problems.append(f"study_lift_off differs from the embedded spec "
-                            f"({spec.lift_off!r})")
+        problems += method_problems(attrs, spec)
         problems += _study_content_problems(check, meta, spec)
     problems += checksum_problems(nc, meta)
     return problems
