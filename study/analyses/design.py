@@ -82,7 +82,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
-from study.engine.kinds import ResultKind, register
+from study.engine.kinds import ResultFormat, ResultKind, register
 from study.engine.spec_files import (
     SpecError,
     canonical_sha256,
@@ -141,7 +141,12 @@ DESIGN_RESULT_SCHEMA = "study-design-v1"
 #: Layout of a design result (global attribute ``study_design_format``): 2 spells every
 #: unit in CF/UDUNITS (``parameter_units`` of alpha and direction: ``degree``). Files
 #: without it are format 1 (``deg``), refused as stale by validation.
-DESIGN_FORMAT = 2
+DESIGN_FORMATS = (
+    ResultFormat(1, "before 0.1.0", "units spelled deg", DESIGN_RESULT_SCHEMA),
+    ResultFormat(2, "0.1.0", "every unit in CF/UDUNITS spelling (degree)", DESIGN_RESULT_SCHEMA),
+)
+#: The format this version writes.
+DESIGN_FORMAT = DESIGN_FORMATS[-1].number
 
 #: Target behaviours, and which models know them.
 BEHAVIOURS = {
@@ -981,4 +986,5 @@ DESIGN_KIND = register(ResultKind(
     parse=parse_design_spec, validator="study.analyses.fit_checks:design_problems",
     name_attribute="study_design_name", compute=_design_for_runner, build=design_dataset,
     own_provenance=True,
+    formats=DESIGN_FORMATS, format_attribute="study_design_format",
 ))

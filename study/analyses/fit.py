@@ -61,7 +61,7 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from study.analyses.measurements import QUANTITIES, check_velocity_units, read_measurements
-from study.engine.kinds import ResultKind, register
+from study.engine.kinds import ResultFormat, ResultKind, register
 from study.engine.spec_files import (
     SpecError,
     canonical_sha256,
@@ -103,7 +103,12 @@ FIT_RESULT_SCHEMA = "study-fit-v1"
 #: Layout of a fit result (global attribute ``study_fit_format``): 2 spells every unit
 #: in CF/UDUNITS (``parameter_units`` of alpha: ``degree``). Files without it are format
 #: 1 (``deg``), refused as stale by validation.
-FIT_FORMAT = 2
+FIT_FORMATS = (
+    ResultFormat(1, "before 0.1.0", "units spelled deg", FIT_RESULT_SCHEMA),
+    ResultFormat(2, "0.1.0", "every unit in CF/UDUNITS spelling (degree)", FIT_RESULT_SCHEMA),
+)
+#: The format this version writes.
+FIT_FORMAT = FIT_FORMATS[-1].number
 
 #: A standard error above this fraction of the bounds' width flags a parameter.
 UNIDENTIFIABLE_FRACTION = 0.25
@@ -1103,4 +1108,5 @@ FIT_KIND = register(ResultKind(
     label="fit result", spec_type=FitSpec, load=load_fit_spec, parse=parse_fit_spec,
     validator="study.analyses.fit_checks:fit_problems", name_attribute="study_fit_name",
     compute=_fit_for_runner, build=fit_dataset, own_provenance=True, inputs=_fit_inputs,
+    formats=FIT_FORMATS, format_attribute="study_fit_format",
 ))

@@ -10,6 +10,7 @@ from typing import Any
 
 from study.analyses.design import DESIGN_FORMAT
 from study.analyses.fit import FIT_FORMAT
+from study.engine.kinds import ResultFormat
 from study.engine.validation.checks import (
     checksum_problems,
     is_number,
@@ -73,11 +74,13 @@ def _problems(nc: Any, meta: StoredFile, schema_path: Path) -> list[str]:
     return problems
 
 
-def fit_problems(nc: Any, meta: StoredFile, source: str) -> list[str]:
+def fit_problems(nc: Any, meta: StoredFile, source: str,
+                 written: ResultFormat) -> list[str]:
     """A fit result: its header against ``study-fit-v1``, sizes that agree, the checksum."""
     return _problems(nc, meta, FIT_SCHEMA_PATH)
 
 
-def design_problems(nc: Any, meta: StoredFile, source: str) -> list[str]:
+def design_problems(nc: Any, meta: StoredFile, source: str,
+                    written: ResultFormat) -> list[str]:
     """A design result: its header against ``study-design-v1``, the checksum."""
     return _problems(nc, meta, DESIGN_SCHEMA_PATH)

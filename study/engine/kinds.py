@@ -29,6 +29,7 @@ from typing import Any
 
 __all__ = [
     "RESULT_KINDS",
+    "ResultFormat",
     "ResultKind",
     "UnknownKind",
     "kind_named",
@@ -42,6 +43,49 @@ __all__ = [
 
 class UnknownKind(ValueError):
     """A kind, a spec object or a result schema that no registered kind has."""
+
+
+@dataclass(frozen=True)
+class ResultFormat:
+    """One version of the layout of a kind's files (global attribute
+    ``study_result_format``; a file without it is its kind's first format).
+
+    A format changes only by a deliberate act: a new :class:`ResultFormat` appended to
+    its kind's ``formats``, its header schema frozen in ``results_schema/`` and, for an
+    older format that can be rewritten without recomputation, an ``upgrade`` step. A
+    file of an older format is checked by the rules of the format it was written in;
+    one of a newer format than this version knows is refused with what to do.
+
+    Attributes
+    ----------
+    number : int
+        The value of ``study_result_format``: 1, 2, ...
+    release : str
+        The first release of ``stickslip-study`` that wrote it (``"0.1.0"``).
+    changes : str
+        What it changed from the format before (one line, for people).
+    schema : str
+        Stem of the JSON schema of its header in ``study/schemas/`` (and
+        ``results_schema/``): ``<result schema>.format-<number>`` for an older format,
+        the kind's own ``result_schema`` for the current one.
+    upgrade : str
+        ``"module:function"`` of ``upgrade(nc) -> None`` that rewrites, in place, an open
+        file (netCDF4, append mode) of the format before into this one without
+        recomputing a value; empty where the step needs nothing but the new
+        ``study_result_format``.
+    """
+
+    number: int
+    release: str
+    changes: str
+    schema: str
+    upgrade: str = ""
+
+    def upgrade_file(self, nc: Any) -> None:
+        """Rewrite an open file of the format before into this one (:attr:`upgrade`)."""
+        if self.upgrade:
+            module, function = self.upgrade.split(":")
+            getattr(importlib.import_module(module), function)(nc)
 
 
 def _no_inputs(spec: Any) -> list[str]:
@@ -80,7 +124,8 @@ class ResultKind:
     parse : callable
         ``parse(text, source) -> spec``: read a spec from its text (a file's embedded spec).
     validator : str
-        ``"module:function"`` of ``problems(nc, meta, source) -> list[str]``, imported on
+        ``"module:function"`` of ``problems(nc, meta, source, written) -> list[str]``
+        (``written``: the file's :class:`ResultFormat`, whose rules apply), imported on
         first use: the checks read netCDF through :mod:`study.engine.validation`, which the
         computing modules that register kinds must not import.
     name_attribute : str
@@ -110,6 +155,12 @@ class ResultKind:
         ``inputs(spec) -> list of str``: files a run reads (never replaced by its output).
     size : callable
         ``size(spec) -> int``: chunks a run of it counts (1 but for studies).
+    formats : tuple of ResultFormat
+        Every format its files were ever written in, oldest first; the last is the one
+        this version writes.
+    format_attribute : str
+        The global attribute that holds a file's format number (a file without it is
+        the first format).
     """
 
     name: str
@@ -134,11 +185,35 @@ class ResultKind:
     own_provenance: bool = False
     inputs: Callable[[Any], list[str]] = field(default=_no_inputs)
     size: Callable[[Any], int] = field(default=_one_unit)
+    formats: tuple[ResultFormat, ...] = ()
+    format_attribute: str = "study_result_format"
 
-    def problems(self, nc: Any, meta: Any, source: str) -> list[str]:
-        """What is wrong with a file of this kind (its registered validator)."""
+    def __post_init__(self) -> None:
+        if not self.formats:
+            object.__setattr__(self, "formats", (ResultFormat(
+                1, "0.1.0", "the first format", self.result_schema),))
+        numbers = [f.number for f in self.formats]
+        if numbers != list(range(numbers[0], numbers[0] + len(numbers))):
+            raise ValueError(f"result kind {self.name!r}: formats {numbers} must count up "
+                             "by one, oldest first")
+        if self.formats[-1].schema != self.result_schema:
+            raise ValueError(f"result kind {self.name!r}: its current format's schema is "
+                             f"{self.formats[-1].schema!r}, not {self.result_schema!r}")
+
+    @property
+    def current_format(self) -> ResultFormat:
+        """The format this version writes."""
+        return self.formats[-1]
+
+    def format_numbered(self, number: int) -> ResultFormat | None:
+        """The declared format ``number``, if any."""
+        return next((f for f in self.formats if f.number == number), None)
+
+    def problems(self, nc: Any, meta: Any, source: str, written: ResultFormat) -> list[str]:
+        """What is wrong with a file of this kind written in format ``written`` (its
+        registered validator, which checks it by that format's rules)."""
         module, function = self.validator.split(":")
-        return getattr(importlib.import_module(module), function)(nc, meta, source)
+        return getattr(importlib.import_module(module), function)(nc, meta, source, written)
 
 
 #: name -> ResultKind, in the order the kinds registered.

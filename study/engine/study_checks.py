@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from study.engine.kinds import ResultFormat
 from study.engine.layout import method_attributes
 from study.engine.observables import variables_of
 from study.engine.study_spec import StudySpec, parse_spec
@@ -23,12 +24,11 @@ from study.engine.validation.checks import (
     provenance_spec_problems,
     same_number,
     same_text,
-    shown_format,
     size_problems,
 )
+from study.engine.validation.formats import schema_path
 from study.engine.validation.header import (
     RESULT_SCHEMA,
-    RESULT_SCHEMA_PATH,
     file_header,
     schema_problems,
     short,
@@ -37,25 +37,19 @@ from study.engine.validation.reading import StoredFile
 from study.engine.variables import RESULT_FORMAT, STALE_RESULT_FORMATS, VARIABLES
 from study.model.contact import DEFAULT_LIFT_OFF
 
-__all__ = ["method_problems", "study_problems"]
+__all__ = ["declared_flag_problems", "method_problems", "study_problems"]
 
 
-def _stale_format_problems(meta: StoredFile) -> list[str]:
-    """A study file of an older ``study_result_format`` that holds a variable whose units
-    changed since: its numbers would be misread, so it is refused whole as stale."""
-    written = meta.attrs.get("study_result_format", 1)
-    if is_number(written) and written == RESULT_FORMAT:
-        return []
-    changed = STALE_RESULT_FORMATS.get(written if is_number(written) else None)
-    if changed is None:
-        return [f"study_result_format {shown_format(written)} is unknown: this study reads format "
-                f"{RESULT_FORMAT}; rerun its spec"]
+def _stale_format_problems(meta: StoredFile, written: ResultFormat) -> list[str]:
+    """A study file of a format before 0.1.0 that holds a variable whose units changed
+    since: its numbers would be misread, so it is refused whole as stale."""
+    changed = STALE_RESULT_FORMATS.get(written.number, {})
     held = [f"{name} in {units}" for name, units in changed.items() if name in meta.variables]
     if not held:
         return []  # nothing in it changed units
     now = ", ".join(f"{name} in {VARIABLES[name].units}" for name in changed
                     if name in meta.variables)
-    return [f"study result format {shown_format(written)} ({', '.join(held)}) is stale: "
+    return [f"study result format {written.number} ({', '.join(held)}) is stale: "
             f"this study reads format {RESULT_FORMAT} ({now}); rerun its spec"]
 
 
@@ -100,12 +94,14 @@ def method_problems(attrs: Mapping[str, Any], spec: StudySpec) -> list[str]:
     return problems
 
 
-def study_problems(nc: Any, meta: StoredFile, source: str) -> list[str]:
+def study_problems(nc: Any, meta: StoredFile, source: str,
+                   written: ResultFormat) -> list[str]:
     attrs = meta.attrs
-    stale = _stale_format_problems(meta)
+    stale = _stale_format_problems(meta, written)
     if stale:
         return stale
-    problems = [p for p in schema_problems(RESULT_SCHEMA_PATH, file_header(meta))
+    # The header by the schema of the format the file was written in.
+    problems = [p for p in schema_problems(schema_path(written), file_header(meta))
                 if not_required_checksum(p)]
     problems += fingerprint_problems(attrs)
     problems += provenance_problems(attrs, RESULT_SCHEMA)
@@ -119,13 +115,49 @@ def study_problems(nc: Any, meta: StoredFile, source: str) -> list[str]:
         problems += identity_problems(attrs, spec)
         problems += provenance_spec_problems(attrs, spec, "study")
         problems += method_problems(attrs, spec)
-        problems += _study_content_problems(check, meta, spec)
+        problems += _study_content_problems(check, meta, spec,
+                                            current=written.number == RESULT_FORMAT)
     problems += checksum_problems(nc, meta)
     return problems
 
 
-def _study_content_problems(check: Checker, meta: StoredFile, spec: Any) -> list[str]:
-    """Coordinates and variables against the spec and the declarations."""
+def declared_flag_problems(name: str, var: Any, declared: Any, exact: bool) -> list[str]:
+    """A flag variable's ``flag_values`` and ``flag_meanings`` against its declaration.
+
+    A file of the current format declares exactly today's flags. A file of an older
+    format may declare fewer (statuses are only ever added, never renumbered or given
+    another meaning): each of its codes must carry today's meaning of that code.
+    """
+    flag_values = np.atleast_1d(np.asarray(var.attrs.get("flag_values", [])))
+    meanings = var.attrs.get("flag_meanings")
+    if exact:
+        problems = []
+        if (flag_values.dtype != np.dtype(declared.dtype)
+                or flag_values.tolist() != list(declared.flag_values)):
+            problems.append(f"{name}: flag_values {flag_values.tolist()}; declared "
+                            f"{list(declared.flag_values)} ({declared.dtype})")
+        if not same_text(meanings, " ".join(declared.flags)):
+            problems.append(f"{name}: flag_meanings differ from the declared "
+                            f"{' '.join(declared.flags)!r}")
+        return problems
+    today = dict(zip(declared.flag_values, declared.flags, strict=True))
+    words = meanings.split() if isinstance(meanings, str) else []
+    if (flag_values.dtype != np.dtype(declared.dtype) or flag_values.ndim != 1
+            or len(words) != flag_values.size or not flag_values.size):
+        return [f"{name}: flag_values {flag_values.tolist()} and flag_meanings "
+                f"{meanings!r} must name each code once ({declared.dtype})"]
+    other = [f"{code} {word}" for code, word in zip(flag_values.tolist(), words, strict=True)
+             if today.get(code) != word]
+    if other or len(set(flag_values.tolist())) != flag_values.size:
+        return [f"{name}: flags {', '.join(other) or 'repeated'} differ from the declared "
+                f"codes ({', '.join(f'{c} {w}' for c, w in today.items())})"]
+    return []
+
+
+def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
+                            current: bool = True) -> list[str]:
+    """Coordinates and variables against the spec and the declarations (a file of an
+    older format may declare fewer flags: see :func:`declared_flag_problems`)."""
     problems = []
     variables = meta.variables
     for axis in spec.axes:
@@ -174,14 +206,7 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any) -> list
                 problems.append(f"{name}: {key} {short(repr(var.attrs.get(key)), 80)}; "
                                 f"declared {value!r}")
         if declared.is_flag:
-            flag_values = np.atleast_1d(np.asarray(var.attrs.get("flag_values", [])))
-            if (flag_values.dtype != np.dtype(declared.dtype)
-                    or flag_values.tolist() != list(declared.flag_values)):
-                problems.append(f"{name}: flag_values {flag_values.tolist()}; declared "
-                                f"{list(declared.flag_values)} ({declared.dtype})")
-            if not same_text(var.attrs.get("flag_meanings"), " ".join(declared.flags)):
-                problems.append(f"{name}: flag_meanings differ from the declared "
-                                f"{' '.join(declared.flags)!r}")
+            problems += declared_flag_problems(name, var, declared, exact=current)
         elif "flag_values" in var.attrs or "flag_meanings" in var.attrs:
             problems.append(f"{name} is not a flag variable but has flag attributes")
         if len(problems) == before:
@@ -190,8 +215,10 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any) -> list
         if declared.name not in good:
             continue  # its values cannot be checked against a wrong layout
         if declared.is_flag:
-            problems += check.flags_in_range(declared.name,
-                                             np.asarray(declared.flag_values))
+            # Within the flags the file declares (a subset of today's, for older files).
+            written_codes = np.atleast_1d(np.asarray(
+                meta.variables[declared.name].attrs["flag_values"]))
+            problems += check.flags_in_range(declared.name, written_codes)
         if declared.invalid_where and declared.invalid_where in good:
             problems += check.invalid_where(declared.name, declared.invalid_where,
                                             declared.zero_when_static)

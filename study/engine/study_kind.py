@@ -56,7 +56,7 @@ from study.engine.store import (
 )
 from study.engine.study_spec import SPEC_SCHEMA, StudySpec, load_spec, parse_spec
 from study.engine.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
-from study.engine.variables import RESULT_FORMAT, VARIABLES
+from study.engine.variables import RESULT_FORMAT, STUDY_FORMATS, VARIABLES
 from study.model.structure import Structure
 
 __all__ = ["STUDY_KIND", "default_cache", "stream_study"]
@@ -479,5 +479,5 @@ STUDY_KIND = register(ResultKind(
     summary="parameter study: observables over swept structure and drive parameters",
     label="study result", spec_type=StudySpec, load=load_spec, parse=parse_spec,
     validator="study.engine.study_checks:study_problems",
-    stream=stream_study, metadata=_metadata_attrs, size=_study_chunks,
+    stream=stream_study, metadata=_metadata_attrs, size=_study_chunks, formats=STUDY_FORMATS,
 ))

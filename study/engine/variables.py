@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from study.engine.kinds import ResultFormat
 from study.model.status import NonConvergence, Status
 from study.model.units import (
     DEGREE,
@@ -23,15 +24,26 @@ from study.model.units import (
 )
 from study.solvers.exact import ATTRACTOR_DROPS, ATTRACTOR_STARTS
 
-__all__ = ["FRONTIER_KINDS", "GRIDS", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "VARIABLES",
-           "Variable"]
+__all__ = ["FRONTIER_KINDS", "GRIDS", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "STUDY_FORMATS",
+           "VARIABLES", "Variable"]
 
-#: Layout of a study result's values (global attribute ``study_result_format``): 2 stores
-#: every angle in degree (``mode_phase`` too). Files without the attribute are format 1,
-#: whose ``mode_phase`` was in rad: one that holds ``mode_phase`` is refused as stale by
-#: validation (and so by ``info``, ``figure`` and ``export``) and rerun by ``study run``;
-#: its other variables never changed units.
-RESULT_FORMAT = 2
+#: Every layout study results were written in (global attribute ``study_result_format``),
+#: oldest first; the last is the one this version writes. Files without the attribute
+#: are format 1, whose ``mode_phase`` was in rad: one that holds ``mode_phase`` is refused
+#: as stale by validation (and so by ``info``, ``figure`` and ``export``) and rerun by
+#: ``study run``; its other variables never changed units. A file of format 2 or later is
+#: read by the rules of its own format; ``study upgrade`` rewrites it in the current one.
+STUDY_FORMATS = (
+    ResultFormat(1, "before 0.1.0", "mode_phase in rad", "study-result-v1.format-2"),
+    ResultFormat(2, "0.1.0", "every angle in degree (mode_phase too)",
+                 "study-result-v1.format-2"),
+    ResultFormat(3, "0.2.0", "the friction and lift-off laws with their parameters as "
+                 "attributes, and the status bouncing",
+                 "study-result-v1", upgrade="study.engine.study_upgrade:to_format_3"),
+)
+
+#: The format this version writes.
+RESULT_FORMAT = STUDY_FORMATS[-1].number
 
 #: Variables whose values a stale format stored in other units: format -> {name: units}.
 STALE_RESULT_FORMATS: dict[int, dict[str, str]] = {1: {"mode_phase": "rad"}}

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from study.engine.kinds import ResultFormat
 from study.engine.validation.checks import (
     Checker,
     checksum_problems,
@@ -55,7 +56,8 @@ def _scene_attribute_values(spec: Any) -> dict[str, float]:
     return expected
 
 
-def scene_problems(nc: Any, meta: StoredFile, source: str) -> list[str]:
+def scene_problems(nc: Any, meta: StoredFile, source: str,
+                   written: ResultFormat) -> list[str]:
     attrs = meta.attrs
     written = attrs.get("study_scene_format", 1)
     if not (is_number(written) and written == SCENE_FORMAT):

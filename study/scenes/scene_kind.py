@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from study.engine.kinds import ResultKind, register
+from study.engine.kinds import ResultFormat, ResultKind, register
 from study.engine.spec_files import (
     SpecError,
     axis_length,
@@ -132,8 +132,17 @@ SCENE_RESULT_SCHEMA = "study-scene-v1"
 #: degree (heading, heading_change, start_heading; turn rates in degree s-1; the plan's
 #: realisation_heading_drift in degree per diameter, its spec key heading_drift_deg).
 #: Files of format 1 (no attribute, angles in rad) and 2 (heading drift in rad per
-#: diameter, spec key heading_drift) are refused by validation and rerun by ``study run``.
-SCENE_FORMAT = 3
+#: diameter, spec key heading_drift), written before 0.1.0, are refused by validation and
+#: rerun by ``study run``.
+SCENE_FORMATS = (
+    ResultFormat(1, "before 0.1.0", "angles in rad", SCENE_RESULT_SCHEMA),
+    ResultFormat(2, "before 0.1.0", "every angle in degree but the heading drift (rad per "
+                 "diameter, spec key heading_drift)", SCENE_RESULT_SCHEMA),
+    ResultFormat(3, "0.1.0", "the heading drift in degree per diameter (spec key "
+                 "heading_drift_deg)", SCENE_RESULT_SCHEMA),
+)
+#: The format this version writes.
+SCENE_FORMAT = SCENE_FORMATS[-1].number
 
 #: Spec keys renamed when their unit changed: old key -> (new key, old unit, new unit,
 #: factor from old to new). An old key is refused with the conversion, never read.
@@ -956,5 +965,5 @@ SCENE_KIND = register(ResultKind(
     validator="study.scenes.scene_checks:scene_problems",
     compute=_compute_for_runner, build=scene_build, work=scene_work, variant=_variant,
     variant_attribute="study_scene_kind",
-    metadata=scene_metadata,
+    metadata=scene_metadata, formats=SCENE_FORMATS, format_attribute="study_scene_format",
 ))

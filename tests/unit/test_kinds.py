@@ -89,7 +89,8 @@ def test_the_schema_names_validation_exports_are_the_kinds():
 
 def test_a_second_kind_with_a_taken_table_is_refused_naming_both():
     twin = ResultKind(**{**{f: getattr(FIT_KIND, f) for f in FIT_KIND.__dataclass_fields__},
-                         "name": "twin", "result_schema": "study-twin-v1", "spec_type": dict})
+                         "name": "twin", "result_schema": "study-twin-v1", "spec_type": dict,
+                         "formats": ()})
     with pytest.raises(ValueError, match="its spec_table 'fit' is already kind 'fit'"):
         register(twin)
     assert "twin" not in RESULT_KINDS

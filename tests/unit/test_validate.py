@@ -381,7 +381,7 @@ def test_open_result_loads_a_validated_file(sealed) -> None:
 
 
 def test_mode_phase_is_in_degree_and_a_file_with_it_in_rad_is_stale(sealed, tmp_path) -> None:
-    """Format 2 stores the mode's phase lag in degree (90 at resonance); a file without
+    """Format 2 on stores the mode's phase lag in degree (90 at resonance); a file without
     ``study_result_format`` (format 1: mode_phase in rad) is refused as stale, while
     one that holds no changed variable stays valid."""
     from study.engine.runner import run_study
@@ -404,7 +404,7 @@ f = { values = [1.0, 14.44, 1000.0] }
     output = run_study(spec, tmp_path / "resonance.nc", progress=False, workers=1).output
     validate_file(output)
     with xr.open_dataset(output) as data:
-        assert data.attrs["study_result_format"] == RESULT_FORMAT == 2
+        assert data.attrs["study_result_format"] == RESULT_FORMAT == 3
         assert data.mode_phase.attrs["units"] == "degree"
         phase = data.mode_phase.values
     # Below, at and far above resonance: ~0, 90 and ~180 degree (not 0, pi/2, pi).
@@ -414,7 +414,7 @@ f = { values = [1.0, 14.44, 1000.0] }
         nc.delncattr("study_result_format")
         nc["mode_phase"].setncattr("units", "rad")
     message = _refusal(output)
-    assert ("study result format 1 (mode_phase in rad) is stale: this study reads format 2 "
+    assert ("study result format 1 (mode_phase in rad) is stale: this study reads format 3 "
             "(mode_phase in degree); rerun its spec") in message, message
     # No mode_phase in it: nothing changed units, the file is still valid.
     other = Path(shutil.copyfile(sealed["thresholds"], tmp_path / "thresholds.nc"))

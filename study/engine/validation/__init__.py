@@ -15,6 +15,9 @@ steering scene (``study-scene-v1``), a fit (``study-fit-v1``) or a design
   :class:`ResultError`; each kind's own checks are its registered validator, kept
   with the kind), :func:`seal` (record the checksum in a fresh file, then validate it:
   the writer calls it before the atomic rename) and :func:`open_result`;
+- :mod:`~study.engine.validation.formats`: which format a file was written in, the
+  refusal of a format newer than this version, and :func:`file_format_note` for an
+  older one;
 - :mod:`~study.engine.validation.describe`: :func:`describe` for people.
 
 The public names are importable from here.
@@ -23,6 +26,7 @@ The public names are importable from here.
 from study.engine.validation.checksums import CONTENT_ATTRIBUTE, content_sha256
 from study.engine.validation.describe import describe
 from study.engine.validation.files import open_result, seal, validate_file
+from study.engine.validation.formats import file_format_note
 from study.engine.validation.header import (
     DESIGN_SCHEMA,
     DESIGN_SCHEMA_PATH,
@@ -52,6 +56,7 @@ __all__ = [
     "ResultError",
     "content_sha256",
     "describe",
+    "file_format_note",
     "header",
     "open_result",
     "read_attributes",

@@ -9,6 +9,7 @@ import xarray as xr
 
 from study.engine.kinds import RESULT_KINDS, kind_of_schema
 from study.engine.validation.checksums import CONTENT_ATTRIBUTE, content_sha256
+from study.engine.validation.formats import newer_release_advice, written_format
 from study.engine.validation.header import short
 from study.engine.validation.reading import (
     LIBRARY_ERRORS,
@@ -18,6 +19,7 @@ from study.engine.validation.reading import (
     open_netcdf,
     unreadable,
 )
+from study.version import VERSION
 
 __all__ = ["open_result", "seal", "validate_file"]
 
@@ -69,14 +71,19 @@ def validate_file(path: str | Path) -> str:
         result_kind = kind_of_schema(kind) if isinstance(kind, str) else None
         if result_kind is None:
             schemas = [repr(k.result_schema) for k in RESULT_KINDS.values()]
+            known = f"{', '.join(schemas[:-1])} and {schemas[-1]}"
+            if _newer_release(attrs):
+                raise ResultError(f"{path}: result schema {short(repr(jsonable(kind)), 80)}, "
+                                  f"{newer_release_advice(attrs)} (this version reads "
+                                  f"{known})")
             raise ResultError(
                 f"{path}: written with result schema {short(repr(jsonable(kind)), 80)}; "
-                f"this version of study reads {', '.join(schemas[:-1])} and {schemas[-1]}. "
-                "Rerun its study to rewrite it.")
+                f"this version of study reads {known}. Rerun its study to rewrite it.")
+        written = written_format(result_kind, attrs, path)
         if meta.groups:
             problems = [f"groups {', '.join(meta.groups)}: study writes no groups"]
         else:
-            problems = result_kind.problems(nc, meta, str(path))
+            problems = result_kind.problems(nc, meta, str(path), written)
     finally:
         nc.close()
     what = result_kind.label
@@ -84,6 +91,17 @@ def validate_file(path: str | Path) -> str:
         problems = list(dict.fromkeys(problems))  # two schema branches may see one fault
         raise ResultError(f"{path}: invalid {what}:\n  " + "\n  ".join(problems))
     return what
+
+
+def _newer_release(attrs: dict) -> bool:
+    """Whether a file names a version of study later than this one."""
+    from packaging.version import InvalidVersion, Version
+
+    written = attrs.get("study_version")
+    try:
+        return isinstance(written, str) and Version(written) > Version(VERSION)
+    except InvalidVersion:
+        return False
 
 
 def open_result(path: str | Path) -> xr.Dataset:
