@@ -67,6 +67,9 @@ def _run(args: argparse.Namespace) -> int:
             f"({report.computed} computed, {report.reused} reused) in "
             f"{report.wall_seconds:.2f} s"
         )
+    if report.reason:
+        print(f"{report.output}: recomputed because {report.reason}; the file it replaces "
+              "was kept until the new one was sealed")
     return 0
 
 
@@ -181,7 +184,26 @@ def _validate(args: argparse.Namespace) -> int:
             status = 1
         else:
             print(f"{path}: valid {what}")
+            _note_format(path)
     return status
+
+
+def _note_format(path: Path) -> None:
+    """One line on stderr where a file is of an older format than this version writes."""
+    from study.engine.validation import file_format_note
+
+    note = file_format_note(path)
+    if note:
+        print(note, file=sys.stderr)
+
+
+def _upgrade(args: argparse.Namespace) -> int:
+    from study.engine.upgrade import upgrade_result
+
+    report = upgrade_result(args.file, args.output, command=_command(args),
+                            overwrite=args.overwrite)
+    print(report.summary)
+    return 0
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -199,6 +221,7 @@ def _figure(args: argparse.Namespace) -> int:
     from study.figures import draw_figure, figure_request, is_current
 
     dataset = open_result(args.file)
+    _note_format(args.file)
     output = args.output or default_figure_output(args.name, args.file)
     stem = Path(output)
     if stem.suffix in (".png", ".pdf"):
@@ -279,6 +302,7 @@ def _export(args: argparse.Namespace) -> int:
     from study.engine.validation import open_result
 
     dataset = open_result(args.file)
+    _note_format(args.file)
     if args.sel:
         dataset = select(dataset, args.sel, source=str(args.file))
         print(f"selected {dataset.attrs['study_selection']}")
@@ -398,6 +422,19 @@ def _parser() -> argparse.ArgumentParser:
     info = commands.add_parser("info", help="summary of a result file with its provenance")
     info.add_argument("file", type=Path, metavar="FILE")
     info.set_defaults(handler=_info)
+
+    upgrade = commands.add_parser(
+        "upgrade", help="rewrite a result file of an older format in today's format",
+        description="Rewrite a result file (study, scene, fit or design) written by an "
+        "earlier version of study in the format this version writes, without recomputing "
+        "it: its values, provenance and fingerprint are kept, its history says so, and its "
+        "content checksum is recomputed. FILE is checked by the rules of its own format "
+        "first and is never modified (docs/user-guide/result-files.md).")
+    upgrade.add_argument("file", type=Path, metavar="FILE", help="result file (netCDF)")
+    upgrade.add_argument("-o", "--output", type=_output_path, required=True, metavar="NEW",
+                         help="the upgraded file (never FILE itself)")
+    _overwrite_option(upgrade, "result")
+    upgrade.set_defaults(handler=_upgrade)
 
     _add_figure_command(commands)
     _add_export_command(commands)

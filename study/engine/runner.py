@@ -18,7 +18,7 @@ import os
 import shlex
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -88,6 +88,10 @@ class RunReport:
     kind : str
         Result kind (:mod:`study.engine.kinds`); for a scene, its scene kind follows:
         ``"scene:trajectory"``.
+    reason : str
+        Why an existing output was recomputed (its spec or code changed, it was
+        written by an older version in an older format, ``force``); empty where there
+        was none or nothing was recomputed.
     """
 
     output: Path
@@ -104,6 +108,8 @@ class RunReport:
 
     #: Computed in one piece (a scene, a fit, a design), not chunk by chunk.
     in_one_piece: bool = False
+    reason: str = ""
+
     #: What the kind computed (a fit's or a design's result object), for the CLI's
     #: summary; None for studies and scenes, and when nothing was computed.
     outcome: Any = field(default=None, compare=False)
@@ -184,6 +190,27 @@ def _state(kind: ResultKind, spec: Any, output: Path) -> str:
     return "current" if all(attrs.get(k) == v for k, v in wanted.items()) else "metadata"
 
 
+def _why_recomputed(kind: ResultKind, spec: Any, output: Path, force: bool) -> str:
+    """Why an existing ``output`` is computed again (``""`` if there is none)."""
+    attrs = file_attributes(output)
+    if attrs is None or attrs.get("study_result_schema") != kind.result_schema:
+        return ""
+    if force:
+        return "asked to (force)"
+    written_by = f"study {attrs.get('study_version', '?')}"
+    number = attrs.get(kind.format_attribute, kind.formats[0].number)
+    if number != kind.current_format.number:
+        return (f"it was written by {written_by} in {kind.label} format {number}; this "
+                f"study {package_version()} writes format {kind.current_format.number}")
+    if "study_content_sha256" not in attrs:
+        return "it was never finished (no content checksum)"
+    if kind.metadata is None:
+        return f"a {kind.name} is computed at every run"
+    if attrs.get("study_spec_sha256") != spec.sha256:
+        return "its spec changed"
+    return f"the code that computes it changed (it was written by {written_by})"
+
+
 def is_up_to_date(spec: Any, output: Path) -> bool:
     """Whether ``output`` holds this spec's numbers computed by this code (reads only
     the file's attributes; ``study validate`` checks the data)."""
@@ -248,9 +275,10 @@ def run_kind(kind: ResultKind, spec: Any, output: str | Path | None = None, *,
         if not force and _state(kind, spec, output) == "metadata":
             _update_metadata(job, spec)
             return job.report(True, size, 0, size, metadata_updated=True, kind=_tag(kind, spec))
-        if kind.stream is not None:
-            return kind.stream(spec, job)
-        return _compute_and_write(job, spec)
+        reason = _why_recomputed(kind, spec, output, force)
+        report = (kind.stream(spec, job) if kind.stream is not None
+                  else _compute_and_write(job, spec))
+        return replace(report, reason=reason)
 
 
 def _tag(kind: ResultKind, spec: Any) -> str:

@@ -1,0 +1,39 @@
+"""The study kind's format steps: rewrite an older study result in a newer format
+without recomputing a value (declared in :data:`study.engine.variables.STUDY_FORMATS`,
+run by :func:`study.engine.upgrade.upgrade_result`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from study.engine.layout import method_attributes
+from study.engine.study_spec import parse_spec
+from study.engine.variables import VARIABLES
+
+__all__ = ["to_format_3"]
+
+
+def to_format_3(nc: Any) -> None:
+    """Format 2 -> 3: the method attributes and today's status flags.
+
+    The method attributes (friction law and its parameters, lift-off law and its
+    restitution, ``source``) follow from the embedded spec, which decided the numbers;
+    each flag variable declares today's full set of flags, a superset of the one it was
+    written with whose codes keep their meanings. No value is read or written.
+
+    Parameters
+    ----------
+    nc : netCDF4.Dataset
+        A study result of format 2, open in append mode.
+    """
+    spec = parse_spec(str(nc.getncattr("study_spec")), "the embedded spec")
+    for name, value in method_attributes(spec).items():
+        nc.setncattr(name, value)
+    for name, variable in nc.variables.items():
+        declared = VARIABLES.get(name)
+        if declared is not None and declared.is_flag:
+            variable.setncattr("flag_values", np.array(declared.flag_values,
+                                                       dtype=declared.dtype))
+            variable.setncattr("flag_meanings", " ".join(declared.flags))
