@@ -12,6 +12,7 @@ import xarray as xr
 from study.engine.kinds import kind_of_schema
 from study.engine.layout import method_summary
 from study.engine.validation.checks import is_number
+from study.engine.validation.formats import format_note, written_by
 from study.engine.validation.reading import slabs, unreadable
 
 __all__ = ["describe"]
@@ -88,6 +89,9 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
     except ValueError:
         warnings = []
     lines += [f"  warning: {w}" for w in (warnings if isinstance(warnings, list) else [])]
+    if result_kind is not None:
+        note = format_note(result_kind, attrs, path or str(attrs.get("study_name")))
+        lines += [f"  {note}"] if note else []
     for name, size in dataset.sizes.items():
         if name not in dataset.coords:
             lines.append(f"  dim {name!s:>7}: {size:6d}")
@@ -119,15 +123,20 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
     for name, var in dataset.variables.items():
         if "flag_meanings" in var.attrs and var.dtype.kind in "iu" and var.size:
             lines.append(f"  {name}: {_flag_counts(var)}")
-    made = [f"  made by study {package.get('version')}"]
-    if "git_commit" in package:
-        made.append(f" (git {str(package.get('git_commit'))[:12]}"
-                    f"{', dirty' if package.get('git_dirty') is True else ''})")
+    made = [f"  made by study {written_by(attrs)}"]
+    # Fits and designs keep their provenance flat (git_commit, end_time, wall_seconds).
+    git = package if "git_commit" in package else provenance
+    if "git_commit" in git:
+        made.append(f" (git {str(git.get('git_commit'))[:12]}"
+                    f"{', dirty' if git.get('git_dirty') is True else ''})")
     host = run.get("host") or _section(provenance, "environment").get("host")
     if host:
         made.append(f" on {host}")
-    made.append(f", {run.get('started_utc')} .. {run.get('finished_utc')}")
-    wall = run.get("wall_seconds")
+    if run:
+        made.append(f", {run.get('started_utc')} .. {run.get('finished_utc')}")
+    elif "end_time" in provenance:
+        made.append(f", finished {provenance.get('end_time')}")
+    wall = run.get("wall_seconds", provenance.get("wall_seconds"))
     details = [f"{wall:.2f} s" if is_number(wall) else f"{wall} s"]
     if "scheduler" in run:
         details.append(f"scheduler {run.get('scheduler')}, {run.get('workers')} workers")
