@@ -41,6 +41,7 @@ extensions = [
     "sphinx.ext.mathjax",
     "sphinx_gallery.gen_gallery",
     "cli_reference",  # docs/_ext: the CLI reference from the argument parser
+    "result_formats",  # docs/_ext: the table of result formats from the kinds
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
