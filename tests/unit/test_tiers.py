@@ -11,7 +11,7 @@ import ast
 from pathlib import Path
 
 TESTS = Path(__file__).resolve().parents[1]
-TIERS = {"unit", "integration", "paper", "hard_cases", "property", "fuzz"}
+TIERS = {"unit", "integration", "paper", "hard_cases", "property", "fuzz", "golden"}
 #: Packages that hold no tests: the independent oracles and the shared helpers.
 HELPERS = {"reference", "support"}
 #: What a unit test may not import: processes, clusters, or another tier's tests.
