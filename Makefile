@@ -63,6 +63,9 @@ $(STAMP): pyproject.toml
 	@# record owns the `study` command, which the install writes again.
 	$(PY) -m pip uninstall --quiet --yes study 2>/dev/null || true
 	$(PY) -m pip install --quiet --upgrade pip
+	@# The metadata of an earlier install in the source tree would name its old version
+	@# to anything that imports study from here (pytest, sphinx): made anew below.
+	rm -rf stickslip_study.egg-info
 	$(PY) -m pip install --quiet -e '.[test,docs]'
 	touch $(STAMP)
 
@@ -156,7 +159,8 @@ list: $(STAMP)
 lint: $(STAMP)
 	$(PY) -m ruff check study tests benchmarks docs
 
-# Every tier: unit, integration, paper, hard_cases, property (the fuzz tiers are marked
+# Every tier: unit, integration, paper, hard_cases, property, golden (the result files of
+# every release, tests/golden/) (the fuzz tiers are marked
 # fuzz and run by `make fuzz`; slow tests by `make test-slow`).
 # The tests run in one process per core (pytest-xdist), at most 4 so that a shared
 # machine is not taken over; on 2 cores 5.6 min warm, 8.1-10.0 min in CI's fresh clone
