@@ -22,6 +22,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from study.engine.executors import TASK_TIMEOUT, Executor
 from study.engine.kinds import ResultKind, kind_named, kind_of_spec
 from study.engine.outputs import check_output
@@ -45,6 +47,8 @@ from study.engine.store import (
     rewrite_attributes,
     write_atomic,
 )
+from study.engine.validation.formats import newer_release_advice
+from study.engine.validation.reading import ResultError
 
 __all__ = [
     "PAPER_REFERENCE",
@@ -190,6 +194,20 @@ def _state(kind: ResultKind, spec: Any, output: Path) -> str:
     return "current" if all(attrs.get(k) == v for k, v in wanted.items()) else "metadata"
 
 
+def _refuse_newer(kind: ResultKind, output: Path) -> None:
+    """A result that a later version wrote in a newer format is not replaced by this
+    older one's (``force`` replaces it)."""
+    attrs = file_attributes(output)
+    if attrs is None or attrs.get("study_result_schema") != kind.result_schema:
+        return
+    number = attrs.get(kind.format_attribute, kind.formats[0].number)
+    if isinstance(number, int | np.integer) and number > kind.current_format.number:
+        raise ResultError(
+            f"{output}: {kind.label} format {number}, {newer_release_advice(attrs)}, or "
+            "write to another output; this older study replaces it only when forced "
+            "(--force)")
+
+
 def _why_recomputed(kind: ResultKind, spec: Any, output: Path, force: bool) -> str:
     """Why an existing ``output`` is computed again (``""`` if there is none)."""
     attrs = file_attributes(output)
@@ -264,6 +282,8 @@ def run_kind(kind: ResultKind, spec: Any, output: str | Path | None = None, *,
     spec = _spec_of(kind, spec)
     output = Path(output) if output is not None else default_output(spec)
     check_output(output, kind.result_schema, inputs=kind.inputs(spec), overwrite=overwrite)
+    if not force:
+        _refuse_newer(kind, output)
     command = command or f"study.run({shlex.quote(spec.path)})"
     job = RunJob(kind, output, started, started_utc, command, options)
     size = kind.size(spec)

@@ -277,3 +277,21 @@ def test_every_format_has_its_schema_and_old_ones_are_frozen():
             if result_format.schema != kind.result_schema:
                 assert frozen.get(name) == _digest(packaged), (
                     f"{name} is the frozen schema of an older format: never edit it")
+
+
+def test_an_older_study_does_not_replace_a_newer_versions_file(tmp_path: Path, capsys):
+    """Running a spec onto a file a later version wrote is refused in one line (the
+    file is kept), unless forced."""
+    spec = tmp_path / "own.toml"
+    shutil.copyfile(HERE / "specs" / "own.toml", spec)
+    path = HERE / RELEASES[-1] / "own.nc"
+    newer = _tampered(path, tmp_path, study_version="9.0.0",
+                      study_result_format=np.int32(_kind(path).current_format.number + 1))
+    before = _digest(newer)
+    assert main(["run", str(spec), "-o", str(newer), "--cache", str(tmp_path / "c")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "9.0.0" in err and "--force" in err
+    assert _digest(newer) == before
+    assert main(["run", str(spec), "-o", str(newer), "--cache", str(tmp_path / "c"),
+                 "--force"]) == 0
+    assert validate_file(newer) == "study result"
