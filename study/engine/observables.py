@@ -198,8 +198,8 @@ class Observable:
     compute : callable
         ``row``: ``compute(structure, f) -> {name: (n_f,)}``; ``point``:
         ``compute(work: PointWork) -> {name: array}``; ``frontier``:
-        ``compute(structure, f, a, velocity, status, method, tolerance)``, each array
-        ``(n_a, n_branch)``.
+        ``compute(structure, f, a, velocity, status, method, tolerance, progress=None)``,
+        each array ``(n_a, n_branch)`` (``progress(solves)`` after each bisection step).
     """
 
     name: str
@@ -283,9 +283,10 @@ def _without_flight(work: PointWork) -> dict[str, NDArray[Any]]:
 
 def _frontier(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
               velocity: NDArray[np.float64], status: NDArray[np.int8], method: Method,
-              tolerance: float) -> dict[str, NDArray[Any]]:
+              tolerance: float, progress: Callable[[int], None] | None = None
+              ) -> dict[str, NDArray[Any]]:
     found = frontier_from_grid(structure, f, a, velocity, status, tolerance=tolerance,
-                               settings=method.solver, solve=method.solve)
+                               settings=method.solver, solve=method.solve, progress=progress)
     return {"frontier_frequency": found.frequency, "frontier_kind": found.kind,
             "frontier_direction": found.direction, "frontier_bracket": found.width}
 

@@ -113,11 +113,17 @@ class Progress:
         What the work is counted in (``"pt"``: drive points).
     clock : callable, optional
         Seconds, monotonic (default :func:`time.perf_counter`; tests give a fake one).
+    finished : str
+        What is shown once the work is all done: ``"done"``, or what comes next where
+        this is one phase of a run (``"map done; frontier next"``), so that "done" is
+        said only when the result is.
     """
 
     def __init__(self, total: float, label: str, enabled: bool | None = None,
                  stream: TextIO | None = None, unit: str = "pt",
-                 clock: Callable[[], float] = time.perf_counter) -> None:
+                 clock: Callable[[], float] = time.perf_counter,
+                 finished: str = "done") -> None:
+        self.finished = finished
         self.stream = sys.stderr if stream is None else stream
         self.total = max(total, 0)
         self.label = label
@@ -185,7 +191,7 @@ class Progress:
 
     def _left(self, now: float) -> str:
         if self.done >= self.total:
-            return "done"
+            return self.finished
         seconds = self.time_left.seconds(now)
         if seconds is None:
             return "time left: estimating"

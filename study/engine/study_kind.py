@@ -58,6 +58,7 @@ from study.engine.study_spec import SPEC_SCHEMA, StudySpec, load_spec, parse_spe
 from study.engine.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
 from study.engine.variables import RESULT_FORMAT, STUDY_FORMATS, VARIABLES
 from study.model.structure import Structure
+from study.solvers.frontier import frontier_work
 
 __all__ = ["STUDY_KIND", "default_cache", "stream_study"]
 
@@ -357,7 +358,10 @@ class _Run:
             self.writer = self._open(temporary)
             total = len(self.f) * max(self.a.size, 1) * int(np.prod(
                 [len(axis) for axis in self.spec.structure_axes], dtype=np.int64))
-            self.progress = Progress(total, self.spec.name, progress)
+            # "done" is said only of the whole run: the map is one phase of it.
+            then = "frontier next" if self.frontier is not None else "sealing the file"
+            self.progress = Progress(total, self.spec.name, progress,
+                                     finished=f"map done; {then}")
             pending: dict[int, Any] = {}
             computed_chunks = 0
             try:
@@ -384,7 +388,7 @@ class _Run:
             finally:
                 self.progress.close()
             if self.frontier is not None:
-                self._write_frontier()
+                self._write_frontier(progress)
             gathering.join()
             self.writer.set_attributes(self._provenance_attrs())
             self.writer.close()
@@ -400,16 +404,29 @@ class _Run:
             self.points_computed, self.points_reused,
         )
 
-    def _write_frontier(self) -> None:
-        """Frontier f*(a) of every structure from its whole velocity rows."""
+    def _write_frontier(self, progress: bool | None) -> None:
+        """Frontier f*(a) of every structure from its whole velocity rows, with its own
+        progress (the points its bisections solve, counted beforehand)."""
         spec = self.spec
-        found = {}
-        for index, structure in self.structures.items():
+        rows = {}
+        for index in self.structures:
             where = (*index, slice(None), slice(None))
-            velocity = self.writer.read("velocity", where)
-            status = self.writer.read("status", where)
-            found[index] = self.frontier.compute(structure, self.f, self.a, velocity, status,
-                                                 self.method, spec.frontier_tolerance)
+            rows[index] = (self.writer.read("velocity", where),
+                           self.writer.read("status", where))
+        work = sum(frontier_work(self.f, velocity, status, spec.frontier_tolerance)
+                   for velocity, status in rows.values())
+        shown = Progress(work, f"{spec.name} frontier", progress, unit="solve",
+                         finished="frontier done; sealing the file")
+        found = {}
+        try:
+            with shown.running():
+                for index, structure in self.structures.items():
+                    velocity, status = rows[index]
+                    found[index] = self.frontier.compute(
+                        structure, self.f, self.a, velocity, status, self.method,
+                        spec.frontier_tolerance, progress=shown.update)
+        finally:
+            shown.close()
         branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
         self.writer.dimension("branch", branches)
         ones = (1,) * len(spec.structure_axes)

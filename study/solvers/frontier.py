@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -37,6 +38,7 @@ __all__ = [
     "check_tolerance",
     "finest_tolerance",
     "frontier_from_grid",
+    "frontier_work",
 ]
 
 #: Frontier point where the velocity passes continuously through zero.
@@ -132,6 +134,7 @@ def frontier_from_grid(
     settings: SolverSettings | None = None,
     solve: Callable[[Structure, NDArray[np.float64], NDArray[np.float64]], SteadyState]
     | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> Frontier:
     """Refine every sign change of the velocity along ``f`` into a frontier point.
 
@@ -154,6 +157,9 @@ def frontier_from_grid(
         ``solve(structure, f, a) -> SteadyState`` used for the refinement instead of the
         exact solver (e.g. the time integrator with two-way coupling): it must be the
         solver that computed ``velocity``.
+    progress : callable, optional
+        ``progress(solves)`` after each bisection step, with the number of points it
+        solved (:func:`frontier_work` counts them all beforehand).
 
     Returns
     -------
@@ -173,17 +179,14 @@ def frontier_from_grid(
         )
     settings = check_settings(settings)
     tolerance = check_tolerance(tolerance, float(np.max(f, initial=0.0)))
-    moving = np.isin(status, _MOVING) & (velocity != 0)
-    sign = np.sign(velocity)
-    change = moving[:-1] & moving[1:] & (sign[:-1] * sign[1:] < 0)
-    i_f, i_a = np.nonzero(change)
+    i_f, i_a = _sign_changes(velocity, status)
     lo = f[i_f].copy()
     hi = f[i_f + 1].copy()
     v_lo = velocity[i_f, i_a].copy()
     v_hi = velocity[i_f + 1, i_a].copy()
     scale = np.maximum(np.abs(v_lo), np.abs(v_hi))
     lo, hi, v_lo, v_hi = _bisect(structure, (lo, hi, v_lo, v_hi), a[i_a], tolerance, settings,
-                                 solve)
+                                 solve, progress)
     point = 0.5 * (lo + hi)
     jump = np.abs(v_hi - v_lo) > 1e-6 * scale
     direction = np.sign(v_hi).astype(np.int8)
@@ -198,6 +201,7 @@ def _bisect(
     settings: SolverSettings,
     solve: Callable[[Structure, NDArray[np.float64], NDArray[np.float64]], SteadyState]
     | None,
+    progress: Callable[[int], None] | None = None,
 ) -> tuple[NDArray[np.float64], ...]:
     """Bisect every bracket ``bracket = (lo, hi, v_lo, v_hi)`` of a sign change of the
     velocity (ends ``[lo, hi]`` [Hz], velocities there [m s-1], at ``a_points``
@@ -220,7 +224,45 @@ def _bisect(
         v_lo = np.where(take_lo, v_mid, v_lo)
         hi = np.where(take_hi, mid, hi)
         v_hi = np.where(take_hi, np.where(valid, v_mid, v_hi), v_hi)
+        if progress is not None:
+            progress(int(mid.size))
     return lo, hi, v_lo, v_hi
+
+
+def _sign_changes(velocity: NDArray[np.float64], status: NDArray[Any]
+                  ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``(i_f, i_a)`` of every pair of neighbouring moving grid points along ``f`` whose
+    velocities have opposite signs (the lower point's indices)."""
+    moving = np.isin(status, _MOVING) & (velocity != 0)
+    sign = np.sign(velocity)
+    change = moving[:-1] & moving[1:] & (sign[:-1] * sign[1:] < 0)
+    return np.nonzero(change)
+
+
+def frontier_work(f: ArrayLike, velocity: ArrayLike, status: ArrayLike,
+                  tolerance: float) -> int:
+    """How many points :func:`frontier_from_grid` will solve: brackets x bisection steps
+    (every bracket is bisected until the widest is narrower than ``tolerance``).
+
+    Parameters
+    ----------
+    f : array_like
+        ``(n_f,)`` ascending drive frequencies [Hz] of the grid.
+    velocity, status : array_like
+        ``(n_f, n_a)`` steady velocity [m s-1] and status on the grid.
+    tolerance : float
+        Bracket width at which bisection stops [Hz].
+    """
+    f = np.asarray(f, dtype=np.float64)
+    i_f, _ = _sign_changes(np.asarray(velocity, dtype=np.float64), np.asarray(status))
+    if not i_f.size:
+        return 0
+    width = float(np.max(f[i_f + 1] - f[i_f]))
+    steps = 0
+    while width > tolerance:
+        width *= 0.5
+        steps += 1
+    return int(i_f.size) * steps
 
 
 def _by_acceleration(

@@ -105,3 +105,34 @@ def test_off_means_silent() -> None:
         progress.update(10)
     progress.beat()
     assert stream.getvalue() == ""
+
+
+def test_a_phase_says_what_comes_next_not_done() -> None:
+    stream = io.StringIO()
+    shown = Progress(4, "own", enabled=True, stream=stream,
+                     finished="map done; frontier next")
+    shown.update(4)
+    assert stream.getvalue().rstrip().endswith("map done; frontier next")
+    assert " done\n" not in stream.getvalue().replace("map done", "")
+
+
+def test_frontier_work_counts_every_solve_of_the_bisection() -> None:
+    """The frontier phase's total is what the bisection then solves, exactly."""
+    import numpy as np
+
+    from study.model.paper import paper_structure
+    from study.solvers.exact import steady_velocity
+    from study.solvers.frontier import frontier_from_grid, frontier_work
+
+    f = np.linspace(13.5, 16.0, 11)
+    a = np.array([5.0, 7.0, 9.0])
+    velocity, status = steady_velocity(paper_structure(), f[:, None], a)
+    solved: list[int] = []
+    found = frontier_from_grid(paper_structure(), f, a, velocity, status, tolerance=1e-6,
+                               progress=solved.append)
+    expected = frontier_work(f, velocity, status, 1e-6)
+    assert np.isfinite(found.frequency).sum() >= 2  # brackets to bisect
+    assert sum(solved) == expected > 0
+    # No progress callback, the same frontier, bit for bit.
+    again = frontier_from_grid(paper_structure(), f, a, velocity, status, tolerance=1e-6)
+    assert np.array_equal(again.frequency, found.frequency, equal_nan=True)
