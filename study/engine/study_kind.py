@@ -12,6 +12,7 @@ commits the file; this module is what a run of a study does once it runs.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import threading
@@ -58,7 +59,7 @@ from study.engine.study_spec import SPEC_SCHEMA, StudySpec, load_spec, parse_spe
 from study.engine.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
 from study.engine.variables import RESULT_FORMAT, STUDY_FORMATS, VARIABLES
 from study.model.structure import Structure
-from study.solvers.frontier import frontier_work
+from study.solvers.frontier import frontier_branches, frontier_work
 
 __all__ = ["STUDY_KIND", "default_cache", "stream_study"]
 
@@ -418,13 +419,27 @@ class _Run:
         shown = Progress(work, f"{spec.name} frontier", progress, unit="solve",
                          finished="frontier done; sealing the file")
         found = {}
+        reused = 0
         try:
             with shown.running():
                 for index, structure in self.structures.items():
                     velocity, status = rows[index]
+                    key, content = self._frontier_key(index, velocity, status)
+                    slots = np.arange(frontier_branches(velocity, status), dtype=np.float64)
+                    kept = self._kept_frontier(key, slots)
+                    if kept is not None:
+                        found[index] = kept
+                        reused += 1
+                        shown.update(frontier_work(self.f, velocity, status,
+                                                   spec.frontier_tolerance), 0)
+                        continue
                     found[index] = self.frontier.compute(
                         structure, self.f, self.a, velocity, status, self.method,
                         spec.frontier_tolerance, progress=shown.update)
+                    self._keep_frontier(key, content, slots, found[index])
+            if reused:
+                shown.say(f"frontier of {reused} of {len(self.structures)} structures "
+                          "reused from the cache (same map, solver and tolerance)")
         finally:
             shown.close()
         branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
@@ -439,6 +454,44 @@ class _Run:
             for variable in variables:
                 self.writer.write(variable.name, (*index, slice(None), slice(None)),
                                   pad_branches(item[variable.name], branches, variable.dtype))
+
+    def _frontier_key(self, index: tuple[int, ...], velocity: np.ndarray,
+                      status: np.ndarray) -> tuple[str, dict[str, Any]]:
+        """Cache key of a structure's frontier: it follows from its velocity map (the
+        brackets), the solver that refines them and the tolerance, so a frontier is
+        kept like points and found again by a rerun onto any output or with force."""
+        velocity = np.ascontiguousarray(velocity, dtype=np.float64)
+        status = np.ascontiguousarray(status)
+        content = {
+            "observable": self.frontier.name,
+            "variables": {v: VARIABLES[v].dtype for v in self.frontier.variables},
+            "structure": _structure_content(self.structures[index]),
+            "method": self.method.canonical(),
+            "code_sha256": self.code,
+            "tolerance": float(self.spec.frontier_tolerance),
+            "f_sha256": hashlib.sha256(np.ascontiguousarray(self.f).tobytes()).hexdigest(),
+            "map_sha256": hashlib.sha256(velocity.tobytes() + status.tobytes()
+                                         + str(status.dtype).encode()).hexdigest(),
+        }
+        return entry_key(content), content
+
+    def _kept_frontier(self, key: str, slots: np.ndarray) -> dict[str, np.ndarray] | None:
+        """A structure's frontier kept by an earlier run (its branches stored as the
+        rows of a block over the accelerations), or None."""
+        if self.a.size == 0:
+            return None
+        dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in self.frontier.variables}
+        values, present = self.cache.lookup(key, slots, self.a, dtypes)
+        if not present.all():
+            return None
+        return {name: np.ascontiguousarray(array.T) for name, array in values.items()}
+
+    def _keep_frontier(self, key: str, content: dict[str, Any], slots: np.ndarray,
+                       found: dict[str, np.ndarray]) -> None:
+        if self.a.size == 0 or not self.keeping:
+            return
+        arrays = {name: np.ascontiguousarray(found[name].T) for name in self.frontier.variables}
+        self._keep(key, content, self.a, encode_block(key, slots, self.a, arrays))
 
     def _provenance_attrs(self) -> dict[str, Any]:
         spec = self.spec

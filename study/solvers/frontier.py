@@ -37,6 +37,7 @@ __all__ = [
     "check_f_range",
     "check_tolerance",
     "finest_tolerance",
+    "frontier_branches",
     "frontier_from_grid",
     "frontier_work",
 ]
@@ -237,6 +238,15 @@ def _sign_changes(velocity: NDArray[np.float64], status: NDArray[Any]
     sign = np.sign(velocity)
     change = moving[:-1] & moving[1:] & (sign[:-1] * sign[1:] < 0)
     return np.nonzero(change)
+
+
+def frontier_branches(velocity: ArrayLike, status: ArrayLike) -> int:
+    """How many branches (columns) :func:`frontier_from_grid` returns for this map: the
+    most sign changes at one acceleration, at least 1."""
+    _, i_a = _sign_changes(np.asarray(velocity, dtype=np.float64), np.asarray(status))
+    velocity = np.asarray(velocity)
+    counts = np.bincount(i_a, minlength=velocity.shape[1] if velocity.ndim == 2 else 0)
+    return max(1, int(counts.max(initial=0)))
 
 
 def frontier_work(f: ArrayLike, velocity: ArrayLike, status: ArrayLike,
