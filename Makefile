@@ -20,6 +20,8 @@
 #                   paper, M = 1 and flight maps and one point, by status with passes, the
 #                   goals of issue 22 -> results/bench-orbit-sweeps.md,
 #                   the cost of a call on a few points -> results/bench-small-calls.md,
+#                   a flight map with frontier run again onto another output and forced,
+#                   against the first run -> results/bench-frontier-reuse.md,
 #                   reading a million-row measurement file (printed)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
@@ -210,6 +212,7 @@ bench: $(STAMP)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_flight.py
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_orbit_sweeps.py
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_small_calls.py
+	$(PY) benchmarks/bench_frontier_reuse.py
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
 

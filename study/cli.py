@@ -68,8 +68,8 @@ def _run(args: argparse.Namespace) -> int:
             f"{report.wall_seconds:.2f} s"
         )
     if report.reason:
-        print(f"{report.output}: recomputed because {report.reason}; the file it replaces "
-              "was kept until the new one was sealed")
+        print(f"{report.output}: rewritten because {report.reason} (values the cache kept "
+              "were reused); the file it replaces was kept until the new one was sealed")
     return 0
 
 

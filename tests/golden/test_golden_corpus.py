@@ -256,7 +256,7 @@ def test_running_a_spec_onto_an_older_file_says_why_it_recomputes(tmp_path: Path
     assert main(["run", str(spec), "-o", str(output), "--cache",
                  str(tmp_path / "cache")]) == 0
     out = capsys.readouterr().out
-    assert "recomputed because it was written by study 0.1.0 in study result format 2" in out
+    assert "rewritten because it was written by study 0.1.0 in study result format 2" in out
     assert file_format_note(output) == ""
 
 
