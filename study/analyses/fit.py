@@ -715,7 +715,14 @@ def fit(spec: FitSpec, progress: Callable[[str], None] | None = None) -> FitResu
     data = spec.measurements
     problem = _Problem(spec.start, spec.free, data, spec.coupling)
     _check_start(spec, problem)
+    if progress is not None:
+        progress(f"least squares: {len(problem.names)} parameters to "
+                 f"{data.sizes['measurement']} measurements (at most "
+                 f"{spec.max_evaluations} model evaluations)")
     solution = _minimise(problem, spec.max_evaluations)
+    if progress is not None:
+        progress(f"least squares done after {problem.evaluations} model evaluations; "
+                 "uncertainties and chi^2 profiles next")
     x = solution.x
     names = problem.names
     p = problem.params(x)

@@ -136,3 +136,17 @@ def test_frontier_work_counts_every_solve_of_the_bisection() -> None:
     # No progress callback, the same frontier, bit for bit.
     again = frontier_from_grid(paper_structure(), f, a, velocity, status, tolerance=1e-6)
     assert np.array_equal(again.frequency, found.frequency, equal_nan=True)
+
+
+def test_a_fit_says_each_phase() -> None:
+    from pathlib import Path
+
+    from study.analyses.fit import fit, load_fit_spec
+
+    spec = load_fit_spec(Path(__file__).resolve().parents[1] / "golden" / "specs" / "fit.toml")
+    lines: list[str] = []
+    result = fit(spec, progress=lines.append)
+    assert lines[0].startswith("least squares: 2 parameters to 7 measurements")
+    assert lines[1] == (f"least squares done after {lines[1].split()[4]} model evaluations; "
+                        "uncertainties and chi^2 profiles next")
+    assert 0 < int(lines[1].split()[4]) <= result.evaluations
