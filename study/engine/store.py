@@ -165,6 +165,16 @@ def _store_error(target: Path, err: OSError | RuntimeError) -> StoreError:
 def exclusive(output: Path) -> Iterator[None]:
     """Hold an exclusive lock on ``output`` for the whole run (one writer per file).
 
+    The lock is the file ``.<name>.lock`` beside ``output``, flocked and holding the
+    holder's pid. It lasts only as long as the run: the holder removes it when the run
+    ends, successfully or not, while still holding the flock, so no lock file stays
+    behind. A second process may have opened the file just before it went; it then
+    locks a file no longer at that path, sees so (the path names another inode, or
+    none) and starts again on the path's current file: at any time at most one process
+    holds the lock on the file the path names. A run that was killed leaves its file,
+    but the kernel releases its flock: the next run takes it, and says on stderr that
+    it cleared the lock of a process no longer running.
+
     Raises
     ------
     StoreBusy
@@ -176,27 +186,84 @@ def exclusive(output: Path) -> Iterator[None]:
     try:
         # The lock lives beside the result, so the result's folder must exist first.
         output.parent.mkdir(parents=True, exist_ok=True)
-        lock = open(lock_path, "a+")
     except OSError as err:
         raise _store_error(output, err) from None
-    with lock:
+    while True:
+        try:
+            lock = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        except OSError as err:
+            raise _store_error(output, err) from None
         try:
             fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            lock.seek(0)
-            holder = lock.read().strip() or "another process"
+            holder = _read_lock(lock) or "another process"
+            os.close(lock)
             raise StoreBusy(
                 f"{output}: another run is writing this result ({holder}); wait for it "
                 "to finish, or stop it: its computed values are kept and reused"
             ) from None
-        lock.seek(0)
-        lock.truncate()
-        lock.write(f"pid {os.getpid()}")
-        lock.flush()
+        except BaseException:
+            os.close(lock)
+            raise
+        if _same_file(lock, lock_path):
+            break
+        # The holder removed this file as we opened it: take the one now at the path.
+        os.close(lock)
+    try:
+        _note_stale(lock_path, _read_lock(lock))
+        os.ftruncate(lock, 0)
+        os.pwrite(lock, f"pid {os.getpid()}".encode(), 0)
+        yield
+    finally:
+        # Removed while still held: whoever opened it meanwhile finds it gone (above).
         try:
-            yield
+            lock_path.unlink(missing_ok=True)
         finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
+            os.close(lock)  # releases the flock
+
+
+def _read_lock(lock: int) -> str:
+    """What a lock file says of its holder (``"pid 1234"``), '' if nothing readable."""
+    try:
+        return os.pread(lock, 256, 0).decode("utf-8", "replace").strip()
+    except OSError:
+        return ""
+
+
+def _same_file(lock: int, path: Path) -> bool:
+    """Whether ``path`` still names the file open as ``lock``."""
+    try:
+        named = os.stat(path, follow_symlinks=False)
+    except FileNotFoundError:
+        return False
+    held = os.fstat(lock)
+    return (named.st_dev, named.st_ino) == (held.st_dev, held.st_ino)
+
+
+def _note_stale(lock_path: Path, holder: str) -> None:
+    """Say on stderr that ``lock_path`` was left by a run that is no longer running
+    (killed: its flock went with it, its file stayed)."""
+    import sys
+
+    found = re.fullmatch(r"pid (\d+)", holder)
+    if found is None:
+        return
+    pid = int(found[1])
+    if pid == os.getpid() or _running(pid):
+        return
+    print(f"study: note: {lock_path}: cleared a lock left by pid {pid}, which is no "
+          "longer running", file=sys.stderr, flush=True)
+
+
+def _running(pid: int) -> bool:
+    """Whether process ``pid`` exists (on this machine)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):
+        return True  # another user's process, or not a pid at all: say nothing
+    return True
 
 
 class StoreBusy(RuntimeError):
