@@ -142,14 +142,17 @@ FORCE:
 # The documentation site. Its pictures (docs/images/) are the figures of a full run,
 # copied in by `make docs`; `make docs-html` builds the pages from the pictures as they
 # are (no results needed). Warnings are errors; the example gallery (docs/examples/)
-# runs at every build.
+# runs at every build. docs/images/ is tracked (the pages show their pictures on GitHub
+# too): docs/copy_images.py copies a figure only when its pixels differ from the
+# tracked picture's, so a figure that differs only in its metadata (version,
+# fingerprint, date) leaves the clone clean.
 # The figures the pages show: every images/NAME.png a page names that `make figures` draws
 # (the benchmark figures are copied by `make bench`).
 DOC_FIGURES := $(filter $(FIGURES),$(sort $(patsubst images/%.png,%,$(shell \
     grep -rhoE 'images/[a-z0-9-]+[.]png' README.md docs --include='*.md'))))
 
 docs: figures
-	mkdir -p docs/images && cp $(addprefix figures/,$(addsuffix .png,$(DOC_FIGURES))) docs/images/
+	$(PY) docs/copy_images.py $(addprefix figures/,$(addsuffix .png,$(DOC_FIGURES))) docs/images
 	$(MAKE) docs-html
 
 docs-html: | $(STAMP)
