@@ -6,8 +6,9 @@ is one the project takes, and the README's own-structure example runs as printed
   no longer exists or a value of the wrong form fails here, naming page and line.
 * Every ``make TARGET ...`` line names targets the Makefile has (``make -n``: nothing
   runs).
-* The README's "Your own structure" example, its spec block saved as ``own.toml`` and
-  its three commands, runs in a temporary folder and writes what it says.
+* The README's "Your own structure" example, its spec block saved where the README says
+  (``own/own.toml``) and its three commands, runs in a temporary folder and writes what
+  it says.
 
 Lines with placeholders a reader fills in (``NAME``, ``FILE``, ``HOST``, ``[...]``) are
 shown, not run; commands of other programs (``dask scheduler``) are the cluster page's.
@@ -90,8 +91,13 @@ def test_the_readme_own_structure_example_runs_as_printed(tmp_path: Path,
     section = text.split("## Your own structure", 1)[1].split("\n## ", 1)[0]
     (_, spec), = blocks(section, "toml")
     (_, commands), = blocks(section, "sh")
+    saved_as = re.search(r"Save this spec as `([^`]+)`", section)
+    assert saved_as is not None, "README: the own-structure section names no spec file"
+    assert saved_as[1].startswith("own/"), "README and own-structure.md keep specs in own/"
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "own.toml").write_text(spec, encoding="utf-8")
+    spec_path = tmp_path / saved_as[1]
+    spec_path.parent.mkdir(parents=True, exist_ok=True)
+    spec_path.write_text(spec, encoding="utf-8")
     for line in commands.splitlines():
         argv = shlex.split(line.split(" #", 1)[0])
         assert argv[0] == STUDY

@@ -1,0 +1,34 @@
+"""Where a user's own files go, the README and the docs agree, and git ignores it; what
+the install page says ``make`` installs is what the Makefile installs."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_the_readme_and_the_own_structure_page_keep_specs_in_own() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = readme.split("## Your own structure", 1)[1].split("\n## ", 1)[0]
+    assert "Save this spec as `own/own.toml`" in section
+    assert ".venv/bin/study run own/own.toml -o own/own.nc" in section
+    page = (ROOT / "docs" / "getting-started" / "own-structure.md").read_text(encoding="utf-8")
+    assert "`own/own.toml`:" in page
+    assert ".venv/bin/study run own/own.toml -o own/own.nc" in page
+
+
+def test_git_ignores_the_own_folder() -> None:
+    lines = [line.strip() for line in (ROOT / ".gitignore").read_text().splitlines()]
+    assert "/own/" in lines
+
+
+def test_the_install_page_names_the_extras_make_installs() -> None:
+    makefile = (ROOT / "Makefile").read_text()
+    extras = re.search(r"pip install --quiet -e '\.\[([a-z,]+)\]'", makefile)
+    assert extras is not None
+    page = (ROOT / "docs" / "getting-started" / "install.md").read_text(encoding="utf-8")
+    assert f"pip install -e '.[{extras[1]}]'" in page
+    named = set(re.findall(r"pip install -e '\.\[([a-z,]+)\]'", page))
+    assert named == {extras[1]}
