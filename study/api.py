@@ -39,9 +39,11 @@ def run(
     spec : str or pathlib.Path
         A study or scene spec file (TOML), e.g. ``"workflows/regime-map.toml"``.
     output : str or pathlib.Path, optional
-        The result file (netCDF). Default, as for ``study run``:
-        ``results/<spec file stem>.nc``, relative to the current working directory;
-        missing folders are created.
+        The result file (netCDF); missing folders are created. Default: beside the spec,
+        ``<spec folder>/<spec file stem>.nc`` (``own/small.toml`` writes
+        ``own/small.nc``), never ``results/``, the folder ``make`` owns (``study run``
+        without ``-o`` writes ``results/<spec file stem>.nc``, as ``make`` does:
+        :func:`study.engine.runner.default_output`).
     force : bool, default False
         Recompute and rewrite the result even if it is up to date (kept values are
         still reused).
@@ -90,17 +92,17 @@ def run(
     Examples
     --------
     >>> import study
-    >>> ds = study.run("workflows/regime-map.toml")          # doctest: +SKIP
+    >>> ds = study.run("own/regime-map.toml")                # doctest: +SKIP
     >>> ds["velocity"].sel(f=14.0, a=6.0, method="nearest")  # doctest: +SKIP
     """
-    from study.engine.runner import load_any
+    from study.engine.runner import default_output, load_any
     from study.engine.runner import run as run_any
     from study.engine.validation import open_result
 
     loaded = load_any(spec)
     report = run_any(
         loaded,
-        output,
+        default_output(loaded, beside_spec=True) if output is None else output,
         force=force,
         cache=cache,
         scheduler=scheduler,

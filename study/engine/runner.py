@@ -163,11 +163,21 @@ def load_any(path: str | Path) -> Any:
     return kind_named(detect_kind(Path(path))).load(path)
 
 
-def default_output(spec: Any) -> Path:
-    """``results/<spec file stem>.nc`` (what ``make`` and ``study list`` use), or
-    ``results/<study name>.nc`` for a spec that did not come from a file."""
+def default_output(spec: Any, *, beside_spec: bool = False) -> Path:
+    """Where a run without an output writes.
+
+    ``study run`` (the default): ``results/<spec file stem>.nc``, what ``make`` and
+    ``study list`` use for a workflow, or ``results/<study name>.nc`` for a spec that did
+    not come from a file. ``beside_spec=True`` (what :func:`study.run` uses): the spec's
+    own folder, ``<spec folder>/<spec file stem>.nc``, or ``<study name>.nc`` in the
+    current folder for a spec that did not come from a file; never ``results/``, the
+    folder ``make`` owns.
+    """
     source = Path(spec.path)
-    stem = source.stem if source.suffix == ".toml" else spec.name
+    from_file = source.suffix == ".toml"
+    stem = source.stem if from_file else spec.name
+    if beside_spec:
+        return source.with_name(f"{stem}.nc") if from_file else Path(f"{stem}.nc")
     return Path("results") / f"{stem}.nc"
 
 

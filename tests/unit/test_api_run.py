@@ -65,12 +65,16 @@ def test_run_is_the_command_line_run(spec_file: Path, tmp_path: Path) -> None:
     assert "study.run(" in ours.attrs["history"]
 
 
-def test_default_output_is_the_command_lines(spec_file: Path, tmp_path: Path,
-                                              monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.chdir(tmp_path)
-    ds = study.run(spec_file)  # results/ is created
-    assert Path(ds.encoding["source"]) == Path("results") / "api-small.nc"
-    assert (tmp_path / "results" / "api-small.nc").exists()
+def test_default_output_is_beside_the_spec(spec_file: Path, tmp_path: Path,
+                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """Not results/, the folder make owns (issue 34): <spec folder>/<stem>.nc."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    ds = study.run(spec_file, workers=1)
+    assert Path(ds.encoding["source"]) == tmp_path / "api-small.nc"
+    assert (tmp_path / "api-small.nc").exists()
+    assert not (elsewhere / "results").exists() and not (tmp_path / "results").exists()
 
 
 def test_a_second_run_is_up_to_date_and_force_recomputes(spec_file: Path,
