@@ -27,10 +27,31 @@ def _show_cluster(pool) -> None:
     print(line, file=sys.stderr, flush=True)
 
 
-def _run(args: argparse.Namespace) -> int:
-    from study.engine.runner import StudyInterrupted, load_any, run
+def _load_telling_warnings(path: Path) -> Any:
+    """Read a spec of any kind; what it allows but looks like a mistake (a tilt that
+    looks like radians: :class:`study.SuspectInputWarning`) is said on stderr, one
+    ``study: warning:`` line each, before any work."""
+    import warnings
 
-    spec = load_any(args.spec)
+    from study.engine.runner import load_any
+    from study.model.inputs import StudyWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", StudyWarning)
+        spec = load_any(path)
+    for warning in caught:
+        if issubclass(warning.category, StudyWarning):
+            print(f"study: warning: {warning.message}", file=sys.stderr, flush=True)
+        else:  # not ours: as it would have been
+            warnings.warn_explicit(warning.message, warning.category, warning.filename,
+                                   warning.lineno)
+    return spec
+
+
+def _run(args: argparse.Namespace) -> int:
+    from study.engine.runner import StudyInterrupted, run
+
+    spec = _load_telling_warnings(args.spec)
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
     try:
         report = run(

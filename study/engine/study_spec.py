@@ -21,13 +21,21 @@ grid, the observables wanted and optional solver settings::
 The machine-readable schema is ``study/schemas/study-spec-v1.schema.json``; the
 checks that a JSON schema cannot express (a parameter both fixed and swept, every
 swept structure being valid) are made here. Every refusal is a :class:`SpecError`
-naming the file, the key and what is allowed.
+naming the file, the key and what is allowed; the checks that do not depend on each
+other all run, and one :class:`SpecError` lists every problem they found, one a line.
+
+A parameter that the chosen model does not read is refused (``restitution`` without
+``[solver] flight = true``): which law reads which structure parameter is declared once,
+with the law (:attr:`study.model.contact.ContactLaw.structure_parameters`). A tilt that
+looks like radians is allowed but warned of (:func:`load_spec`, as :class:`study.Structure`
+does).
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -53,10 +61,12 @@ from study.model.contact import (
     DEFAULT_FRICTION,
     DEFAULT_LIFT_OFF,
     LAWS,
+    ContactLaw,
     Friction,
     check_friction,
     check_law,
 )
+from study.model.inputs import SuspectInputWarning, radian_tilt_note, tilt_looks_like_radians
 from study.model.parameters import (
     DRIVE,
     MASS,
@@ -185,6 +195,9 @@ class StudySpec:
         The spec file's text, kept verbatim for provenance.
     path : str
         Where it was read from.
+    warnings : tuple of str
+        What looks like a mistake but is allowed (a tilt that looks like radians), one
+        message each naming the file and the key; :func:`load_spec` warns of each.
     """
 
     name: str
@@ -205,6 +218,7 @@ class StudySpec:
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
     friction: Friction = field(default_factory=Friction)
     flight: bool = False
+    warnings: tuple[str, ...] = field(default=(), repr=False, compare=False)
 
     @property
     def lift_off(self) -> str:
@@ -363,10 +377,19 @@ def load_spec(path: str | Path) -> StudySpec:
     ------
     SpecError
         If the file cannot be read or parsed, or any key is unknown, mistyped or
-        out of range, or the study would be absurdly large; nothing has been
-        computed at that point.
+        out of range, or the study would be absurdly large, or a parameter is given
+        that the chosen laws do not read; every problem found, one a line. Nothing has
+        been computed at that point.
+
+    Warns
+    -----
+    study.SuspectInputWarning
+        For each of :attr:`StudySpec.warnings` (a tilt that looks like radians).
     """
-    return parse_spec(read_spec_text(path, "study spec"), str(path))
+    spec = parse_spec(read_spec_text(path, "study spec"), str(path))
+    for message in spec.warnings:
+        warnings.warn(message, SuspectInputWarning, stacklevel=2)
+    return spec
 
 
 #: Grid points per chunk without ``[solver] chunk_points``: at least ...
@@ -390,6 +413,11 @@ def default_chunk_points(points: int) -> int:
 def parse_spec(text: str, path: str = "<string>") -> StudySpec:
     """Validate a study spec given as TOML text (see :func:`load_spec`)."""
     raw = parse_toml(text, path)
+    # Before the schema, whose words for a parameter of another law are only "does not
+    # match any allowed form".
+    problems = _Problems(path)
+    _check_unread_friction(raw, path, problems)
+    problems.raise_any()
     check_schema(raw, spec_schema(), path, "study spec")
     return _build(raw, text, path)
 
@@ -509,21 +537,60 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
         )
 
 
+class _Problems:
+    """The problems of one spec, gathered so that one :class:`SpecError` names them all."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self.messages: list[str] = []
+
+    def add(self, message: str) -> None:
+        self.messages.append(message)
+
+    def collect(self, check: Any, *args: Any) -> Any:
+        """``check(*args)``, its :class:`SpecError` kept as a problem (then None)."""
+        try:
+            return check(*args)
+        except SpecError as err:
+            self.add(str(err))
+            return None
+
+    def raise_any(self) -> None:
+        """One :class:`SpecError`: a single problem's message as it is; several under a
+        first line naming the file, one a line."""
+        if len(self.messages) == 1:
+            raise SpecError(self.messages[0])
+        if self.messages:
+            raise SpecError(f"{self.path}: {len(self.messages)} problems, each to fix:\n"
+                            + "\n".join(f"  - {m}" for m in self.messages))
+
+
 def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
-    """A checked :class:`StudySpec` from a spec's tables, checked in the order its
-    messages assume: the structure, the sweep, the solver, then each structure."""
+    """A checked :class:`StudySpec` from a spec's tables. The structure, the sweep, the
+    solver settings, flight and the parameters the laws read are checked independently
+    and their problems reported together; each structure of the study is built once
+    those pass."""
     study = raw["study"]
     structure = dict(raw["structure"])
     mass_table = structure.pop("mass", None)
     sweep = raw.get("sweep", {})
     solver_table = dict(raw.get("solver", {}))
 
+    problems = _Problems(path)
     observables = tuple(o for o in OBSERVABLES if o in study["observables"])
-    fixed, mass = _fixed_structure(structure, mass_table, sweep, path)
-    axes, chunk_points = _sweep_axes(sweep, observables, solver_table, path)
-    method, coupling, friction, solver, integrator, frontier_tolerance = _solver(
-        solver_table, observables, axes, path)
-    flight = _flight(solver_table, observables, method, coupling, path)
+    fixed_mass = problems.collect(_fixed_structure, structure, mass_table, sweep, path)
+    swept = problems.collect(_sweep_axes, sweep, observables, solver_table, path)
+    settings = _solver(solver_table, observables, None if swept is None else swept[0],
+                       path, problems)
+    method, coupling, friction = settings[0], settings[1], settings[2]
+    flight = problems.collect(_flight, solver_table, observables, method, coupling, path)
+    # The law asked for, even where refused above: its parameters are not unread.
+    _check_unread(structure, sweep, friction, coupling,
+                  bool(solver_table.get("flight", False)), path, problems)
+    problems.raise_any()
+    fixed, mass = fixed_mass
+    axes, chunk_points = swept
+    _, _, friction, solver, integrator, frontier_tolerance = settings
     canonical = _canonical(study, observables, fixed, mass, sweep, axes, method, coupling,
                            friction, solver, integrator, frontier_tolerance, flight)
     spec = StudySpec(
@@ -545,12 +612,87 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         integrator=integrator,
         friction=friction,
         flight=flight,
+        warnings=_suspect_tilts(fixed, axes, path),
     )
     _check_structures(spec, path)
     # After the structure's own checks: they have the better words where they apply.
     for axis in spec.structure_axes:
         _check_bounds(axis, path)
     return spec
+
+
+def _suspect_tilts(fixed: dict[str, float], axes: list[Axis], path: str) -> tuple[str, ...]:
+    """A fixed tilt that looks like radians, or a swept one whose every nonzero value
+    does (:func:`study.model.inputs.tilt_looks_like_radians`, the check of
+    :class:`study.Structure`): a warning each, not a refusal."""
+    if "alpha" in fixed and tilt_looks_like_radians(fixed["alpha"]):
+        alpha = fixed["alpha"]
+        return (f"{path}: [structure] alpha = {alpha!r} degree: {radian_tilt_note(alpha)}",)
+    axis = next((axis for axis in axes if axis.name == "alpha"), None)
+    if axis is not None:
+        tilts = [float(v) for v in axis.values if v != 0]
+        if tilts and all(tilt_looks_like_radians(v) for v in tilts):
+            largest = max(tilts, key=abs)
+            return (f"{path}: [sweep] alpha: every tilt swept, up to {largest!r} degree, "
+                    f"looks like radians: {radian_tilt_note(largest)}",)
+    return ()
+
+
+def _choosing(law: ContactLaw) -> str:
+    """How a spec chooses ``law``: the ``[solver]`` setting, with what it needs."""
+    if law.kind == "lift_off":
+        return ('add [solver] flight = true (with coupling = "two-way")'
+                if law.name == "flight" else "add [solver] flight = false")
+    if law.kind == "coupling":
+        return f'add [solver] coupling = "{law.name}"'
+    given = ", ".join(f"{p.name} = ..." for p in law.parameters)
+    methods = " or ".join(f'"{m}"' for m in law.solvers if m != "planar")
+    return (f'give [solver] friction = {{ law = "{law.name}", {given} }} (method = '
+            f'{methods})' if given else f'give [solver] friction = "{law.name}"')
+
+
+def _check_unread(structure: dict[str, Any], sweep: dict[str, Any],
+                  friction: Friction | None, coupling: str, flight: bool, path: str,
+                  problems: _Problems) -> None:
+    """Refuse a structure parameter that only laws the spec does not choose read
+    (:attr:`study.model.contact.ContactLaw.structure_parameters`): it would have no
+    effect, and giving it, let alone sweeping it, is surely a mistake."""
+    chosen = {"friction": friction.law if friction is not None else None,
+              "coupling": coupling, "lift_off": "flight" if flight else DEFAULT_LIFT_OFF}
+    for kind, laws in LAWS.items():
+        if chosen[kind] is None:  # refused already
+            continue
+        read = set(laws[chosen[kind]].structure_parameters)
+        for law in laws.values():
+            for name in law.structure_parameters:
+                if name in read or (name not in structure and name not in sweep):
+                    continue
+                where = "[sweep]" if name in sweep else "[structure]"
+                problems.add(_unread(f"{path}: {where}", name, law, chosen[kind]))
+
+
+def _unread(where: str, name: str, law: ContactLaw, chosen: str) -> str:
+    """The refusal of parameter ``name``, read only by ``law`` where ``chosen`` is used."""
+    return (f"{where} {name} is read only by the {law.kind.replace('_', '-')} law "
+            f"'{law.name}', which this study does not use (it uses '{chosen}'): {name} "
+            f"would have no effect; allowed: {_choosing(law)}, or remove {name}")
+
+
+def _check_unread_friction(raw: dict[str, Any], path: str, problems: _Problems) -> None:
+    """Refuse a parameter of another friction law in ``[solver] friction``'s table
+    (``stribeck_speed`` with ``law = "coulomb"``): the parameters a law reads are
+    declared with it (:attr:`study.model.contact.ContactLaw.parameters`)."""
+    solver = raw.get("solver")
+    friction = solver.get("friction") if isinstance(solver, dict) else None
+    if not isinstance(friction, dict) or friction.get("law") not in LAWS["friction"]:
+        return  # the schema's to refuse
+    chosen = LAWS["friction"][friction["law"]]
+    own = {p.name for p in chosen.parameters}
+    for law in LAWS["friction"].values():
+        for parameter in law.parameters:
+            if parameter.name in friction and parameter.name not in own:
+                problems.add(_unread(f"{path}: [solver] friction", parameter.name, law,
+                                     chosen.name))
 
 
 def _fixed_structure(structure: dict[str, Any], mass_table: dict[str, Any] | None,
@@ -639,30 +781,33 @@ def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
     return axes, chunk_points
 
 
-def _solver(solver_table: dict[str, Any], observables: tuple[str, ...], axes: list[Axis],
-            path: str) -> tuple[str, str, Friction, SolverSettings, IntegratorSettings,
-                                float]:
+def _solver(solver_table: dict[str, Any], observables: tuple[str, ...],
+            axes: list[Axis] | None, path: str, problems: _Problems
+            ) -> tuple[str, str, Friction | None, SolverSettings | None,
+                       IntegratorSettings | None, float | None]:
     """Method, coupling, friction law, the settings of both solvers and the frontier
-    tolerance, with what each observable needs of them."""
+    tolerance, with what each observable needs of them; each problem is added to
+    ``problems`` (a setting it makes unknown is None; the frontier tolerance is not
+    checked without the sweep's f)."""
     coupling = solver_table.get("coupling", DEFAULT_COUPLING)
     raw_friction = solver_table.get("friction", DEFAULT_FRICTION)
     # The exact solver covers both couplings (closed form between events; with two-way
     # coupling the mode is a state of the orbit, found by Newton on the period map).
     method = solver_table.get("method", "exact")
     if "paper_model" in observables and coupling == "one-way":
-        raise SpecError(
+        problems.add(
             f'{path}: [study] observable "paper_model" (the one-way model beside a two-way '
             'study) needs [solver] coupling = "two-way"; a one-way study\'s velocity already '
             "is the paper's model"
         )
     if "attractors" in observables and method != "exact":
-        raise SpecError(
+        problems.add(
             f'{path}: [study] observable "attractors" (stable orbits from several starting '
             f'states) needs [solver] method = "exact" (the solver that computes it), got '
             f'method = "{method}" (allowed: method = "exact", with either coupling)'
         )
     if "floquet" in observables and (method, coupling) != ("exact", "two-way"):
-        raise SpecError(
+        problems.add(
             f'{path}: [study] observable "floquet" (the orbit\'s largest Floquet multiplier) '
             f'needs [solver] coupling = "two-way" with method = "exact" (the solver that '
             f'computes it); got coupling = "{coupling}", method = "{method}" (allowed: '
@@ -672,37 +817,39 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...], axes: li
         k for k in solver_table if k in (INTEGRATOR_KEYS if method == "exact" else EXACT_KEYS)
     )
     if wrong:
-        raise SpecError(
+        problems.add(
             f"{path}: [solver] {', '.join(wrong)} do not apply to method = \"{method}\"; "
             f"its settings are: {', '.join(EXACT_KEYS if method == 'exact' else INTEGRATOR_KEYS)}"
         )
+    friction = solver = integrator = None
     try:
         friction = check_friction(raw_friction, method)
     except ValueError as err:
-        raise SpecError(f"{path}: [solver] friction: {err}") from None
+        problems.add(f"{path}: [solver] friction: {err}")
     try:
         solver = SolverSettings(**{k: v for k, v in solver_table.items() if k in EXACT_KEYS})
         integrator = IntegratorSettings(
             **{k: v for k, v in solver_table.items() if k in INTEGRATOR_KEYS}
         )
     except ValueError as err:
-        raise SpecError(f"{path}: [solver] {err}") from None
-    if solver.continuation and coupling != "two-way":
-        raise SpecError(
+        problems.add(f"{path}: [solver] {err}")
+    if solver is not None and solver.continuation and coupling != "two-way":
+        problems.add(
             f'{path}: [solver] continuation = true (each orbit continued from the points '
             f'before it along the sweep) needs coupling = "two-way" with method = "exact": '
             f'the one-way solver has no orbit to continue; got coupling = "{coupling}" '
             '(allowed: coupling = "two-way", or continuation = false)')
     frontier_tolerance = float(solver_table.get("frontier_tolerance", 1e-9))
-    # Bisection halves a bracket until it is narrower than the tolerance: below the
-    # spacing of doubles near the largest f the midpoint stops moving and it never is.
-    f_values = next(axis for axis in axes if axis.name == "f").values
-    finest = finest_tolerance(np.max(f_values))
-    if frontier_tolerance < finest:
-        raise SpecError(
-            f"{path}: [solver] frontier_tolerance = {frontier_tolerance!r} Hz is finer than "
-            f"doubles resolve near the largest f; allowed: >= {finest:.3g} Hz"
-        )
+    if axes is not None:
+        # Bisection halves a bracket until it is narrower than the tolerance: below the
+        # spacing of doubles near the largest f the midpoint stops moving and it never is.
+        f_values = next(axis for axis in axes if axis.name == "f").values
+        finest = finest_tolerance(np.max(f_values))
+        if frontier_tolerance < finest:
+            problems.add(
+                f"{path}: [solver] frontier_tolerance = {frontier_tolerance!r} Hz is finer "
+                f"than doubles resolve near the largest f; allowed: >= {finest:.3g} Hz"
+            )
     return method, coupling, friction, solver, integrator, frontier_tolerance
 
 

@@ -27,6 +27,7 @@ __all__ = [
     "bounded_integer",
     "bounded_number",
     "instance_of",
+    "radian_tilt_note",
     "real_number",
     "tilt_looks_like_radians",
 ]
@@ -57,6 +58,15 @@ def tilt_looks_like_radians(alpha: float) -> bool:
     """Whether a tilt ``alpha`` [degree] lies in :data:`RADIAN_LIKE_TILT` (in magnitude)."""
     low, high = RADIAN_LIKE_TILT
     return low <= abs(alpha) < high
+
+
+def radian_tilt_note(alpha: float) -> str:
+    """Why a tilt ``alpha`` [degree] that :func:`tilt_looks_like_radians` is suspect, and
+    the value in degree it would be if it were radians: the one text of the warning of
+    :class:`study.Structure` and of a spec's tilt (:mod:`study.engine.study_spec`)."""
+    low, high = RADIAN_LIKE_TILT
+    return (f"a tilt between {low:g} and {high:.4g} degree looks like an angle in radians; "
+            f"alpha is in degree (for {alpha!r} rad give alpha = {math.degrees(alpha):.6g})")
 
 
 def _kind_name(value: Any) -> str:

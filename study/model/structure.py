@@ -10,9 +10,9 @@ from contextvars import ContextVar
 from dataclasses import dataclass
 
 from study.model.inputs import (
-    RADIAN_LIKE_TILT,
     SuspectInputWarning,
     instance_of,
+    radian_tilt_note,
     real_number,
     tilt_looks_like_radians,
 )
@@ -134,13 +134,9 @@ class Structure:
         for name, value in values.items():
             object.__setattr__(self, name, value)
         if tilt_looks_like_radians(values["alpha"]) and _WARN_OF_RADIANS.get():
-            low, high = RADIAN_LIKE_TILT
             warnings.warn(
-                f"Structure parameter 'alpha' = {values['alpha']!r} degree: a tilt between "
-                f"{low:g} and {high:.4g} degree looks like an angle in radians; alpha is "
-                f"in degree (for {values['alpha']!r} rad give alpha = "
-                f"{math.degrees(values['alpha']):.6g})",
-                SuspectInputWarning, stacklevel=3)
+                f"Structure parameter 'alpha' = {values['alpha']!r} degree: "
+                f"{radian_tilt_note(values['alpha'])}", SuspectInputWarning, stacklevel=3)
 
     @property
     def omega0(self) -> float:

@@ -69,7 +69,8 @@ def test_the_window_is_the_documented_one() -> None:
 
 
 def test_files_and_searches_build_small_tilts_quietly() -> None:
-    """A spec's tilts are in degree by its schema: a 1-degree spec loads silently."""
+    """A spec given as text (parse_spec, as compute_map gives its own) builds a 1-degree
+    tilt silently; a spec file warns of it (load_spec: tests/unit/test_spec_mistakes.py)."""
     text = ('[study]\nname = "flat"\nobservables = ["thresholds"]\n[structure]\n'
             "f0 = 14.44\nQ = 17.5\nalpha = 1.0\nM = 0.08\ncs = 0.25\n"
             "[sweep]\nf = { start = 12.0, stop = 17.0, num = 3 }\n")
