@@ -38,6 +38,7 @@ __all__ = [
     "observables_by_grid",
     "pad_branches",
     "protocol_attributes",
+    "study_summary",
 ]
 
 
@@ -143,6 +144,15 @@ def method_of(spec: StudySpec) -> Method:
     """How the study computes velocities (solver, coupling and settings)."""
     return Method(spec.method, spec.coupling, spec.solver, spec.integrator, spec.friction,
                   spec.flight)
+
+
+def study_summary(spec: StudySpec) -> str:
+    """The ``summary`` attribute of a study's result: the spec's description, else what
+    it computes and how (:func:`method_description`)."""
+    return spec.description or (
+        f"Parameter study '{spec.name}' of vibration-driven stick-slip locomotion: "
+        f"{', '.join(spec.observables)} of a soft structure with a resonant plate on a "
+        f"vertically shaken table, computed by {method_description(spec)}.")
 
 
 def method_description(spec: StudySpec) -> str:

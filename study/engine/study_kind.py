@@ -31,10 +31,10 @@ from study.engine.layout import (
     coordinates,
     data_variables,
     method_attributes,
-    method_description,
     method_of,
     observables_by_grid,
     pad_branches,
+    study_summary,
 )
 from study.engine.observables import Observable
 from study.engine.progress import Progress
@@ -68,11 +68,7 @@ def _metadata_attrs(spec: StudySpec) -> dict[str, Any]:
     """Attributes that follow the spec's text but not its numbers."""
     return {
         "title": spec.title,
-        "summary": spec.description or (
-            f"Parameter study '{spec.name}' of vibration-driven stick-slip locomotion: "
-            f"{', '.join(spec.observables)} of a soft structure with a resonant plate on a "
-            f"vertically shaken table, computed by {method_description(spec)}."
-        ),
+        "summary": study_summary(spec),
         "id": f"{spec.name}-{spec.sha256[:16]}",
         "study_name": spec.name,
         "study_spec": spec.text,

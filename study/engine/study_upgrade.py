@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from study.engine.layout import method_attributes
+from study.engine.layout import method_attributes, study_summary
 from study.engine.study_spec import parse_spec
 from study.engine.variables import VARIABLES
 
@@ -19,7 +19,8 @@ def to_format_3(nc: Any) -> None:
     """Format 2 -> 3: the method attributes and today's status flags.
 
     The method attributes (friction law and its parameters, lift-off law and its
-    restitution, ``source``) follow from the embedded spec, which decided the numbers;
+    restitution, ``source``, and the ``summary`` that names them) follow from the
+    embedded spec, which decided the numbers;
     each flag variable declares today's full set of flags, a superset of the one it was
     written with whose codes keep their meanings. No value is read or written.
 
@@ -31,6 +32,7 @@ def to_format_3(nc: Any) -> None:
     spec = parse_spec(str(nc.getncattr("study_spec")), "the embedded spec")
     for name, value in method_attributes(spec).items():
         nc.setncattr(name, value)
+    nc.setncattr("summary", study_summary(spec))  # it names the method too
     for name, variable in nc.variables.items():
         declared = VARIABLES.get(name)
         if declared is not None and declared.is_flag:

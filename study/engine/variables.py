@@ -38,7 +38,7 @@ STUDY_FORMATS = (
     ResultFormat(2, "0.1.0", "every angle in degree (mode_phase too)",
                  "study-result-v1.format-2"),
     ResultFormat(3, "0.2.0", "the friction and lift-off laws with their parameters as "
-                 "attributes, and the status bouncing",
+                 "attributes, and every status declared (bouncing included)",
                  "study-result-v1", upgrade="study.engine.study_upgrade:to_format_3"),
 )
 

@@ -180,6 +180,9 @@ def test_an_upgraded_study_records_its_method():
         assert attrs["study_friction_law"] == "coulomb"
         assert attrs["study_lift_off"] == "stop"
         assert attrs["study_coupling"] == "two-way"
+        # The prose that names the method follows it (it is generated from the spec).
+        assert "friction law 'coulomb'" in attrs["source"]
+        assert "friction law 'coulomb'" in attrs["summary"]
         assert "upgrade" in attrs["history"].splitlines()[-1]
         with netCDF4.Dataset(output) as nc:
             new_flags = nc["status"].getncattr("flag_meanings").split()
