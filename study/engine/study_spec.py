@@ -659,16 +659,19 @@ def _check_unread(structure: dict[str, Any], sweep: dict[str, Any],
     effect, and giving it, let alone sweeping it, is surely a mistake."""
     chosen = {"friction": friction.law if friction is not None else None,
               "coupling": coupling, "lift_off": "flight" if flight else DEFAULT_LIFT_OFF}
+    # What the chosen laws read (every law of a kind whose choice was refused above).
+    read = {name for kind, laws in LAWS.items() for law in laws.values()
+            if chosen[kind] in (None, law.name) for name in law.structure_parameters}
+    refused: set[str] = set()
     for kind, laws in LAWS.items():
-        if chosen[kind] is None:  # refused already
-            continue
-        read = set(laws[chosen[kind]].structure_parameters)
         for law in laws.values():
             for name in law.structure_parameters:
-                if name in read or (name not in structure and name not in sweep):
+                if name in read or name in refused or (name not in structure
+                                                       and name not in sweep):
                     continue
+                refused.add(name)
                 where = "[sweep]" if name in sweep else "[structure]"
-                problems.add(_unread(f"{path}: {where}", name, law, chosen[kind]))
+                problems.add(_unread(f"{path}: {where}", name, law, str(chosen[kind])))
 
 
 def _unread(where: str, name: str, law: ContactLaw, chosen: str) -> str:
