@@ -21,13 +21,14 @@ from numpy.typing import NDArray
 from study.engine.observables import Method, Observable, resolve
 from study.engine.study_spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec
 from study.engine.variables import VARIABLES
-from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS
+from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS, Friction
 from study.model.parameters import STRUCTURE
 from study.model.units import KILOGRAM
 
 __all__ = [
     "Coordinate",
     "DataVariable",
+    "contact_law_attributes",
     "coordinate_attrs",
     "coordinates",
     "data_variables",
@@ -229,6 +230,69 @@ def protocol_attributes(spec: StudySpec) -> dict[str, str | float]:
     return {}
 
 
+def contact_law_attributes(coupling: str, friction: Friction | str | None = None,
+                           lift_off: str = DEFAULT_LIFT_OFF,
+                           lift_off_values: Mapping[str, float] | None = None
+                           ) -> dict[str, str | float]:
+    """The global attributes that name a result's contact laws, made from their
+    declarations (:data:`study.model.contact.LAWS`).
+
+    The one place they are made for every kind of result: a study's
+    (:func:`method_attributes`), a fit's, a design's and a scene's.
+
+    Parameters
+    ----------
+    coupling : str
+        A name of :data:`study.model.contact.COUPLINGS`.
+    friction : Friction or str, optional
+        The friction law with its parameters' values, or the name of a law that needs
+        none; default :data:`study.model.contact.DEFAULT_FRICTION`.
+    lift_off : str
+        A name of :data:`study.model.contact.LIFT_OFF_LAWS`; default
+        :data:`study.model.contact.DEFAULT_LIFT_OFF`.
+    lift_off_values : mapping, optional
+        Fixed values of the structure parameters the lift-off law reads
+        (``restitution`` with ``flight``); one left out is not recorded (a study
+        leaves out a swept one: its coordinate holds it).
+
+    Returns
+    -------
+    dict
+        ``study_coupling``, ``study_friction_law``, one float
+        ``study_friction_<parameter>`` per parameter of the friction law,
+        ``study_lift_off`` and one float ``study_lift_off_<parameter>`` per value of
+        ``lift_off_values``, in that order.
+
+    Raises
+    ------
+    ValueError
+        A law that is not declared, or a value the lift-off law does not read.
+    """
+    if coupling not in LAWS["coupling"]:
+        raise ValueError(f"coupling {coupling!r} is unknown; couplings are "
+                         f"{', '.join(map(repr, LAWS['coupling']))}")
+    friction = Friction() if friction is None else (
+        Friction(friction) if isinstance(friction, str) else friction)
+    law = LAWS["lift_off"].get(lift_off)
+    if law is None:
+        raise ValueError(f"lift-off law {lift_off!r} is unknown; lift-off laws are "
+                         f"{', '.join(map(repr, LAWS['lift_off']))}")
+    values = dict(lift_off_values or {})
+    unread = sorted(set(values) - set(law.structure_parameters))
+    if unread:
+        raise ValueError(f"lift-off law {lift_off!r} reads "
+                         f"{list(law.structure_parameters) or 'no parameter'}, not {unread}")
+    return {
+        "study_coupling": coupling,
+        "study_friction_law": friction.law,
+        **{_law_attribute("friction", p.name): float(friction.values[p.name])
+           for p in friction.declaration.parameters},
+        "study_lift_off": lift_off,
+        **{_law_attribute("lift_off", name): float(values[name])
+           for name in law.structure_parameters if name in values},
+    }
+
+
 def method_attributes(spec: StudySpec) -> dict[str, str | float]:
     """The global attributes that say how a study's values were computed.
 
@@ -241,7 +305,8 @@ def method_attributes(spec: StudySpec) -> dict[str, str | float]:
     -------
     dict
         ``source`` (``"study: "`` and :func:`method_description`),
-        ``study_solver_method`` (``"exact"`` or ``"integrator"``), ``study_coupling``,
+        ``study_solver_method`` (``"exact"`` or ``"integrator"``), then the contact
+        laws' attributes (:func:`contact_law_attributes`): ``study_coupling``,
         ``study_friction_law`` (its name in :data:`study.model.contact.LAWS`), one
         float ``study_friction_<parameter>`` for each parameter the friction law
         declares (``study_friction_stribeck_speed`` in m s-1), ``study_lift_off``
@@ -250,17 +315,11 @@ def method_attributes(spec: StudySpec) -> dict[str, str | float]:
         (``study_lift_off_restitution`` with flight; left out where it is swept, its
         coordinate holds it), then :func:`protocol_attributes`.
     """
-    friction = spec.friction
     return {
         "source": f"study: {method_description(spec)}",
         "study_solver_method": spec.method,
-        "study_coupling": spec.coupling,
-        "study_friction_law": friction.law,
-        **{_law_attribute("friction", p.name): float(friction.values[p.name])
-           for p in friction.declaration.parameters},
-        "study_lift_off": spec.lift_off,
-        **{_law_attribute("lift_off", name): value
-           for name, value in _lift_off_values(spec).items()},
+        **contact_law_attributes(spec.coupling, spec.friction, spec.lift_off,
+                                 _lift_off_values(spec)),
         **protocol_attributes(spec),
     }
 
@@ -269,7 +328,8 @@ def method_attributes(spec: StudySpec) -> dict[str, str | float]:
 _NOT_RECORDED = "not recorded; the default"
 
 
-def method_summary(attrs: Mapping[str, Any], swept: Iterable[str] = ()) -> str:
+def method_summary(attrs: Mapping[str, Any], swept: Iterable[str] = (), *,
+                   solver: bool = True) -> str:
     """A result's method in one line, from its global attributes (those of
     :func:`method_attributes`): ``exact solver, one-way coupling, friction stribeck
     (stribeck_speed=0.01 m s-1), lift-off flight, restitution e=0.5``.
@@ -285,13 +345,18 @@ def method_summary(attrs: Mapping[str, Any], swept: Iterable[str] = ()) -> str:
     swept : iterable of str
         The result's dimensions: a law's structure parameter among them is said to be
         swept.
+    solver : bool
+        Whether the kind of result chooses a solver (``study_solver_method``): a study
+        does; a fit, a design and a scene do not (their model is fixed), and their
+        line starts with the coupling (those of :func:`contact_law_attributes`).
     """
     swept = set(swept)
-    solver = attrs.get("study_solver_method")
+    method = attrs.get("study_solver_method")
     coupling = attrs.get("study_coupling")
-    parts = [f"{solver} solver" if isinstance(solver, str) else "solver not recorded",
-             f"{coupling} coupling" if isinstance(coupling, str) else "coupling not recorded",
-             _friction_summary(attrs), _lift_off_summary(attrs, swept)]
+    parts = [f"{method} solver" if isinstance(method, str) else "solver not recorded"
+             ] if solver else []
+    parts += [f"{coupling} coupling" if isinstance(coupling, str) else "coupling not recorded",
+              _friction_summary(attrs), _lift_off_summary(attrs, swept)]
     return ", ".join(parts)
 
 
