@@ -83,6 +83,7 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from study.engine.kinds import ResultFormat, ResultKind, register
+from study.engine.layout import contact_law_attributes
 from study.engine.spec_files import (
     SpecError,
     canonical_sha256,
@@ -832,7 +833,11 @@ def design_dataset(spec: DesignSpec, result: DesignResult, command: str = "") ->
         "study_spec_sha256": spec.sha256,
         "study_code_sha256": code,
         "study_model": spec.model,
-        "study_coupling": spec.coupling,
+        # The model's contact laws (issue 33): the spec's coupling, and the friction
+        # and lift-off laws both models use unless told otherwise (Coulomb, stop at
+        # lift-off: steady_velocity and the disk's planar model), which a design spec
+        # cannot change.
+        **contact_law_attributes(spec.coupling),
         "study_weights": json.dumps(spec.weights),
         "study_designed_structure": json.dumps(designed),
         "study_feasible": int(result.feasible),

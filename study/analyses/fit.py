@@ -62,6 +62,7 @@ from numpy.typing import NDArray
 
 from study.analyses.measurements import QUANTITIES, check_velocity_units, read_measurements
 from study.engine.kinds import ResultFormat, ResultKind, register
+from study.engine.layout import contact_law_attributes
 from study.engine.spec_files import (
     SpecError,
     canonical_sha256,
@@ -948,7 +949,10 @@ def fit_dataset(spec: FitSpec, result: FitResult, command: str = "") -> xr.Datas
         "study_spec": spec.text,
         "study_spec_sha256": spec.sha256,
         "study_code_sha256": code,
-        "study_coupling": spec.coupling,
+        # The model's contact laws (issue 33): the spec's coupling, and the friction
+        # and lift-off laws the model's solvers use unless told otherwise (Coulomb, stop
+        # at lift-off), which a fit spec cannot change.
+        **contact_law_attributes(spec.coupling),
         "study_measurement_files": json.dumps(sorted(set(map(str, data["source"].values)))),
         "study_fitted_structure": json.dumps(
             {k: v for k, v in _fitted(spec, result).items() if v is not None}),
