@@ -32,7 +32,7 @@ from study.engine.validation.header import (
     schema_problems,
 )
 from study.engine.validation.reading import StoredFile
-from study.scenes.scene_kind import SCENE_FORMAT, parse_scene
+from study.scenes.scene_kind import SCENE_FORMAT, disk_method_attributes, parse_scene
 
 __all__ = ["scene_problems"]
 
@@ -84,6 +84,12 @@ def scene_problems(nc: Any, meta: StoredFile, source: str,
             problems.append("study_scene_kind does not match the embedded spec")
         for key, value in _scene_attribute_values(spec).items():
             if value is not None and not same_number(attrs.get(key), value):
+                problems.append(f"{key} differs from the embedded spec ({value!r})")
+        # The contact laws (issue 33): optional (files written before lack them), so
+        # compared only where present.
+        for key, value in disk_method_attributes(spec.disk).items():
+            if key in attrs and not (same_text(attrs[key], value) if isinstance(value, str)
+                                     else same_number(attrs[key], value)):
                 problems.append(f"{key} differs from the embedded spec ({value!r})")
     for key in ("study_end_time",):
         if key in attrs and not (is_number(attrs[key]) and math.isfinite(attrs[key])):

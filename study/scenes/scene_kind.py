@@ -54,6 +54,7 @@ import numpy as np
 import xarray as xr
 
 from study.engine.kinds import ResultFormat, ResultKind, register
+from study.engine.layout import contact_law_attributes
 from study.engine.spec_files import (
     SpecError,
     axis_length,
@@ -112,6 +113,7 @@ __all__ = [
     "SceneError",
     "SceneSpec",
     "disk_from_spec",
+    "disk_method_attributes",
     "is_scene_file",
     "load_scene",
     "parse_scene",
@@ -888,6 +890,22 @@ def scene_compute(spec: SceneSpec, report: Report | None = None
     return _RUNNERS[spec.kind](spec, report or _ignore)
 
 
+def disk_method_attributes(disk: Disk) -> dict[str, str | float]:
+    """The global attributes naming the contact laws of a scene's disk
+    (:func:`study.engine.layout.contact_law_attributes`, as every result's).
+
+    ``study_coupling`` is the disk's coupling of the plates' modes (one-way or two-way,
+    its ``[disk] coupling``); ``study_friction_law`` is ``coulomb``, the only friction
+    law of the planar model (its coefficients are ``disk_cs`` and ``disk_ck``; the
+    ellipsoidal limit surface's length is ``disk_friction_length``); ``study_lift_off``
+    is the disk's lift-off law, ``stop`` (a run ends with outcome ``lift_off``; the
+    planar model refuses flight). The planar model chooses no solver: it has no
+    ``study_solver_method``.
+    """
+    return contact_law_attributes(disk.coupling, "coulomb",
+                                  "flight" if disk.flight else "stop")
+
+
 def scene_build(spec: SceneSpec, computed: tuple[dict[str, xr.Variable], dict[str, Any]],
                 command: str = "") -> xr.Dataset:
     """The labelled dataset of a computed scene (:func:`scene_compute`), with the scene's
@@ -917,6 +935,7 @@ def scene_build(spec: SceneSpec, computed: tuple[dict[str, xr.Variable], dict[st
         "disk_friction_length": disk.friction_length,
         "integrator_tolerance": spec.settings.tolerance,
         "integrator_slaving": spec.slaving,
+        **disk_method_attributes(disk),
         **extra,
     }
     plate_vars = {
