@@ -73,17 +73,15 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
         result_kind and result_kind.variant_attribute) else None
     kind = variant if isinstance(variant, str) else ""
     coupling = attrs.get("study_coupling")
-    # A study's lift-off law is on its method line, with the rest of the method.
-    lift_off = attrs.get("study_lift_off") if what != "study" else None
     lines.append(f"  {what} {name!r}"
                  f"{f' ({kind})' if kind else ''}"
-                 f"{f', {coupling} coupling' if isinstance(coupling, str) else ''}"
-                 f"{f', lift-off law {lift_off}' if isinstance(lift_off, str) else ''}, "
+                 f"{f', {coupling} coupling' if isinstance(coupling, str) else ''}, "
                  "spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
-    if what == "study":
-        lines.append(f"  method: {method_summary(attrs, dataset.dims)}")
+    # Every kind's method: its contact laws (study.engine.layout.contact_law_attributes);
+    # only a study chooses a solver, the other kinds' models are fixed.
+    lines.append(f"  method: {method_summary(attrs, dataset.dims, solver=what == 'study')}")
     try:
         warnings = json.loads(str(attrs.get("study_warnings", "[]")))
     except ValueError:
