@@ -410,9 +410,9 @@ class _Run:
             where = (*index, slice(None), slice(None))
             rows[index] = (self.writer.read("velocity", where),
                            self.writer.read("status", where))
-        work = sum(frontier_work(self.f, velocity, status, spec.frontier_tolerance)
-                   for velocity, status in rows.values())
-        shown = Progress(work, f"{spec.name} frontier", progress, unit="solve",
+        work = {index: frontier_work(self.f, velocity, status, spec.frontier_tolerance)
+                for index, (velocity, status) in rows.items()}
+        shown = Progress(sum(work.values()), f"{spec.name} frontier", progress, unit="solve",
                          finished="frontier done; sealing the file")
         found = {}
         reused = 0
@@ -426,8 +426,7 @@ class _Run:
                     if kept is not None:
                         found[index] = kept
                         reused += 1
-                        shown.update(frontier_work(self.f, velocity, status,
-                                                   spec.frontier_tolerance), 0)
+                        shown.update(work[index], 0)
                         continue
                     found[index] = self.frontier.compute(
                         structure, self.f, self.a, velocity, status, self.method,

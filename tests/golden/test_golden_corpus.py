@@ -166,30 +166,27 @@ def test_upgrade_keeps_every_value(path: Path, tmp_path: Path):
                                   equal_nan=a[name].dtype.kind == "f"), name
 
 
-def test_an_upgraded_study_records_its_method():
+def test_an_upgraded_study_records_its_method(tmp_path: Path):
     """The upgrade of a 0.1.0 study adds the method attributes today's files carry,
     from its embedded spec, and today's flags (a superset whose codes kept meaning)."""
     path = HERE / "v0.1.0" / "mass-ratio-two-way.nc"
     with netCDF4.Dataset(path) as nc:
         assert "study_friction_law" not in nc.ncattrs()
         old_flags = nc["status"].getncattr("flag_meanings").split()
-    output = Path(pytest.importorskip("tempfile").mkdtemp()) / "up.nc"
-    try:
-        assert main(["upgrade", str(path), "-o", str(output)]) == 0
-        attrs = read_attributes(output)
-        assert attrs["study_friction_law"] == "coulomb"
-        assert attrs["study_lift_off"] == "stop"
-        assert attrs["study_coupling"] == "two-way"
-        # The prose that names the method follows it (it is generated from the spec).
-        assert "friction law 'coulomb'" in attrs["source"]
-        assert "friction law 'coulomb'" in attrs["summary"]
-        assert "upgrade" in attrs["history"].splitlines()[-1]
-        with netCDF4.Dataset(output) as nc:
-            new_flags = nc["status"].getncattr("flag_meanings").split()
-        assert new_flags == [s.name.lower() for s in Status]
-        assert new_flags[:len(old_flags)] == old_flags
-    finally:
-        shutil.rmtree(output.parent)
+    output = tmp_path / "up.nc"
+    assert main(["upgrade", str(path), "-o", str(output)]) == 0
+    attrs = read_attributes(output)
+    assert attrs["study_friction_law"] == "coulomb"
+    assert attrs["study_lift_off"] == "stop"
+    assert attrs["study_coupling"] == "two-way"
+    # The prose that names the method follows it (it is generated from the spec).
+    assert "friction law 'coulomb'" in attrs["source"]
+    assert "friction law 'coulomb'" in attrs["summary"]
+    assert "upgrade" in attrs["history"].splitlines()[-1]
+    with netCDF4.Dataset(output) as nc:
+        new_flags = nc["status"].getncattr("flag_meanings").split()
+    assert new_flags == [s.name.lower() for s in Status]
+    assert new_flags[:len(old_flags)] == old_flags
 
 
 def _tampered(path: Path, tmp_path: Path, **attrs) -> Path:
