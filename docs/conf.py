@@ -42,6 +42,7 @@ extensions = [
     "sphinx_gallery.gen_gallery",
     "cli_reference",  # docs/_ext: the CLI reference from the argument parser
     "result_formats",  # docs/_ext: the table of result formats from the kinds
+    "statuses",  # docs/_ext: the table of point statuses from study.model.status.Status
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}

@@ -19,9 +19,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-from matplotlib.colors import ListedColormap, LogNorm, Normalize, TwoSlopeNorm
+from matplotlib.colors import LogNorm, Normalize, TwoSlopeNorm
 from matplotlib.lines import Line2D
-from matplotlib.patches import Patch
 
 from study.figures import FigureError
 from study.figures.common import (
@@ -34,20 +33,20 @@ from study.figures.common import (
     restore_dim,
     save,
     selection_text,
+    status_handles,
+    status_layers,
     structure_from_dataset,
     structure_text,
 )
 from study.model import lift_off_acceleration
 from study.model.status import Status
 
-__all__ = ["MAX_ROWS", "bouncing_share", "draw", "row_indices"]
+__all__ = ["MAX_ROWS", "bouncing_share", "compose", "draw", "row_indices"]
 
 #: Mass ratios drawn at most (one row of three maps each).
 MAX_ROWS = 3
 #: The edge of the bouncing region.
 _EDGE = {"colors": "darkgreen", "linewidths": 1.1, "linestyles": "-"}
-_NOT_CONVERGED = "k"
-_LIFT_OFF_GREY = "0.72"
 
 
 def row_indices(n: int, limit: int = MAX_ROWS) -> list[int]:
@@ -81,18 +80,6 @@ def _hop_norm(hop: np.ma.MaskedArray) -> LogNorm:
 
 def _over_fa(dataset: xr.Dataset, name: str, at: dict) -> np.ndarray:
     return dataset[name].isel(at).transpose("a", "f").values
-
-
-def _layers(ax, f, a, status) -> None:
-    """Flat layers where the solver gives no value: lift-off, not converged."""
-    for flag, colour in ((Status.LIFT_OFF, _LIFT_OFF_GREY),
-                         (Status.NOT_CONVERGED, _NOT_CONVERGED),
-                         (Status.FRICTION_PARADOX, "tab:orange")):
-        region = status == flag
-        if region.any():
-            ax.pcolormesh(f, a, np.ma.masked_where(~region, np.ones(region.shape)),
-                          cmap=ListedColormap([colour]), vmin=0, vmax=1, shading="nearest",
-                          rasterized=True)
 
 
 def _overlays(ax, dataset: xr.Dataset, at: dict, status: np.ndarray) -> None:
@@ -131,6 +118,27 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     FigureError
         A file without flight, or with more axes than ``M``, ``f`` and ``a``.
     """
+    fig, title = compose(dataset)
+    return save(fig, output, dataset, title)
+
+
+def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
+    """The figure of :func:`draw`, not saved, and its title.
+
+    Each map's colour bar lies under its own map, its label below it: beside the map,
+    with the three maps of a row sharing their y axis, a bar's label would sit against
+    the next map's axis and read as that map's label.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        As :func:`draw`'s.
+
+    Returns
+    -------
+    matplotlib.figure.Figure, str
+        The figure and its one-line title.
+    """
     if not is_flight(dataset):
         raise FigureError(
             "figure 'bouncing' draws the bouncing region of a study with flight; this "
@@ -146,10 +154,11 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     f = dataset["f"].values
     a = dataset["a"].values
 
-    fig, axes = plt.subplots(len(ats), 3, figsize=(15.5, 3.9 * len(ats) + 1.3),
+    fig, axes = plt.subplots(len(ats), 3, figsize=(15.5, 4.6 * len(ats) + 1.3),
                              layout="constrained", sharex=True, sharey=True, squeeze=False)
-    labels = ("v [mm s$^{-1}$] (> 0: forward)", "largest hop [mm]",
+    labels = ("mean velocity v [mm s$^{-1}$] (> 0: forward)", "largest hop [mm]",
               "time in the air [% of the period]")
+    painted = []
     for row, at in enumerate(ats):
         status = _over_fa(dataset, "status", at)
         flying = status == Status.BOUNCING
@@ -171,13 +180,15 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
             ax = axes[row, column]
             mesh = ax.pcolormesh(f, a, values, cmap=cmap, norm=norm, shading="nearest",
                                  rasterized=True)
-            fig.colorbar(mesh, ax=ax, pad=0.01, label=labels[column])
-            _layers(ax, f, a, status)
+            fig.colorbar(mesh, ax=ax, location="bottom", shrink=0.85, aspect=30,
+                         label=labels[column])
+            painted += status_layers(ax, f, a, status)
             _overlays(ax, dataset, at, status)
             if column == 0:
                 ax.set_ylabel("drive acceleration a [m s$^{-2}$]")
-            if row == len(ats) - 1:
-                ax.set_xlabel("drive frequency f [Hz]")
+            # Under every map (its colour bar below): the frequency axis on each row.
+            ax.set_xlabel("drive frequency f [Hz]")
+            ax.xaxis.set_tick_params(labelbottom=True)
         axes[row, 0].set_title(f"M = {M:g}: velocity; bouncing {100 * share:.0f} % of the "
                                f"map ({100 * of_moving:.0f} % of the moving points)",
                                fontsize=9.5)
@@ -190,10 +201,8 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         Line2D([], [], color="k", lw=0.9, ls="--", label=lift_off_label(dataset)),
         Line2D([], [], ls="none", marker="o", color="k", ms=3,
                label="frontier $f^*(a)$: v changes sign"),
-        Patch(facecolor=_NOT_CONVERGED, label="not converged"),
+        *status_handles(painted),
     ]
-    if any(np.any(_over_fa(dataset, "status", at) == Status.LIFT_OFF) for at in ats):
-        handles.append(Patch(facecolor=_LIFT_OFF_GREY, label="lift-off: no velocity"))
     fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
     title = (f"The bouncing region: where the base flies and lands, {coupling_label(dataset)} "
              f"({structure_text(dataset, tex=False)})")
@@ -201,4 +210,4 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     fig.suptitle(f"The bouncing region: where the base flies and lands\n"
                  f"{coupling_label(dataset)}\n{structure_text(dataset)}"
                  + (f"\n{selected}" if selected else ""), fontsize=11)
-    return save(fig, output, dataset, title)
+    return fig, title

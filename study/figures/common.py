@@ -42,6 +42,8 @@ __all__ = [
     "selected_keys",
     "selection_text",
     "single_structure",
+    "status_handles",
+    "status_layers",
     "structure_from_dataset",
     "structure_text",
     "value_colours",
@@ -160,6 +162,34 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
 
 #: Statuses with a valid velocity (0 when static; bouncing with flight).
 VALID = tuple(s for s in Status if s not in INVALID_STATUSES)
+
+
+def status_layers(ax: plt.Axes, f: np.ndarray, a: np.ndarray, status: np.ndarray
+                  ) -> list[Status]:
+    """Paint each status declared with a flat colour (:attr:`Status.colour`: the points
+    without a velocity) where it holds; ``status`` over ``(a, f)``. Returns the
+    statuses painted, in code order, for :func:`status_handles`."""
+    from matplotlib.colors import ListedColormap
+
+    painted = []
+    for flag in Status:
+        region = status == flag
+        if flag.colour is None or not np.any(region):
+            continue
+        ax.pcolormesh(f, a, np.ma.masked_where(~region, np.ones(region.shape)),
+                      cmap=ListedColormap([flag.colour]), vmin=0, vmax=1,
+                      shading="nearest", rasterized=True)
+        painted.append(flag)
+    return painted
+
+
+def status_handles(statuses: Iterable[Status]) -> list:
+    """Legend entries of flat status layers: each status's declared colour and legend
+    text (:attr:`Status.legend`), once each, in code order."""
+    from matplotlib.patches import Patch
+
+    return [Patch(facecolor=flag.colour, edgecolor="0.3", lw=0.5, label=flag.legend)
+            for flag in sorted(set(statuses)) if flag.colour is not None]
 
 
 def selected_keys(dataset: xr.Dataset) -> set[str]:

@@ -19,7 +19,7 @@ import matplotlib.patheffects as patheffects
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-from matplotlib.colors import ListedColormap, TwoSlopeNorm
+from matplotlib.colors import TwoSlopeNorm
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
@@ -33,6 +33,8 @@ from study.figures.common import (
     restore_dim,
     save,
     selection_text,
+    status_handles,
+    status_layers,
     structure_from_dataset,
     structure_text,
 )
@@ -43,7 +45,6 @@ __all__ = ["draw", "panel_indices", "valid_velocity_mm_s"]
 
 MAX_PANELS = 6
 _STROKE = [patheffects.withStroke(linewidth=3.0, foreground="white")]
-_LIFT_OFF_GREY = "0.72"
 _BOUNCING_EDGE = "darkgreen"
 
 
@@ -105,11 +106,7 @@ def _panel(ax, dataset: xr.Dataset, at: dict, norm: TwoSlopeNorm):
     v = _velocity(dataset, at)
     mesh = ax.pcolormesh(f, a, v.T, cmap="RdBu", norm=norm, shading="nearest",
                          rasterized=True)
-    for flag, color in ((Status.LIFT_OFF, _LIFT_OFF_GREY), (Status.NOT_CONVERGED, "k")):
-        region = np.ma.masked_where(status != flag, np.ones(status.shape))
-        if region.count():
-            ax.pcolormesh(f, a, region.T, cmap=ListedColormap([color]), vmin=0, vmax=2,
-                          shading="nearest", rasterized=True)
+    status_layers(ax, f, a, status.T)
     sliding = (status == Status.CONTINUOUS_SLIDING).astype(float)
     if sliding.any():
         ax.contourf(f, a, sliding.T, levels=[0.5, 1.5], colors="none", hatches=["////"])
@@ -190,12 +187,14 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                label="$a^*_-$ (backward slips start)"),
         Line2D([], [], color="0.3", lw=0.8, ls=":", label="$a^*_\\pm$ above lift-off (invalid)"),
         Line2D([], [], color="k", lw=0.9, ls="--", label=lift_off_label(dataset)),
-        Patch(facecolor=_LIFT_OFF_GREY, label="lift-off: outside the model, no velocity")
-        if not is_flight(dataset) else
-        Line2D([], [], color=_BOUNCING_EDGE, lw=1.1,
-               label="edge of the bouncing region (flight)"),
-        Patch(facecolor="none", edgecolor="k", hatch="////", label="continuous sliding (CS)"),
-        Patch(facecolor="k", label="not converged"),
+        *(status_handles([Status.LIFT_OFF]) if not is_flight(dataset) else
+          [Line2D([], [], color=_BOUNCING_EDGE, lw=1.1,
+                  label="edge of the bouncing region (flight)")]),
+        Patch(facecolor="none", edgecolor="k", hatch="////",
+              label=f"{Status.CONTINUOUS_SLIDING.legend} (CS)"),
+        *status_handles(flag for flag in Status if flag.colour is not None
+                        and flag != Status.LIFT_OFF
+                        and np.any(dataset["status"].values == flag)),
         Line2D([], [], ls="none", marker="o", color="k", ms=3, label="frontier $f^*(a)$"),
     ]
     fig.colorbar(mesh, ax=[ax for ax in axes.flat if ax.get_visible()], pad=0.01, shrink=0.9,

@@ -11,7 +11,7 @@ import matplotlib.patheffects as path_effects
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-from matplotlib.colors import ListedColormap, TwoSlopeNorm
+from matplotlib.colors import TwoSlopeNorm
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
@@ -35,14 +35,6 @@ __all__ = ["draw"]
 OUTLINE = [path_effects.withStroke(linewidth=3.2, foreground="white")]
 #: The edge of the bouncing region (a study with flight).
 BOUNCING_EDGE = "darkgreen"
-
-
-def _layer(ax, f, a, mask, color, alpha=1.0):
-    """Paint the cells where ``mask`` (over (a, f)) holds in one flat colour."""
-    if np.any(mask):
-        ax.pcolormesh(f, a, np.ma.masked_where(~mask, np.ones(mask.shape)),
-                      cmap=ListedColormap([color]), vmin=0, vmax=1, shading="nearest",
-                      alpha=alpha, rasterized=True)
 
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
@@ -78,9 +70,11 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     sliding, stuck = _velocity_map(fig, ax, dataset)
     handles = _curves(ax, dataset)
     status = dataset["status"].values
-    if not common.is_flight(dataset) or np.any(status == Status.LIFT_OFF):
-        handles.append(Patch(facecolor="0.62", edgecolor="0.3", lw=0.5,
-                             label="lift-off: model invalid, no velocity"))
+    # The statuses without a velocity, each in its declared colour; lift-off always
+    # without flight (it explains where the map ends).
+    painted = set(Status(code) for code in np.unique(status)) | (
+        set() if common.is_flight(dataset) else {Status.LIFT_OFF})
+    handles += common.status_handles(flag for flag in painted if flag != Status.NOT_CONVERGED)
     if np.any(status == Status.BOUNCING):
         handles.append(Line2D([], [], color=BOUNCING_EDGE, lw=1.3,
                               label="edge of the bouncing region (flight)"))
@@ -91,9 +85,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                               label="the paper's points in regions S, P, N, PN"))
     if np.any(sliding):
         handles.append(Patch(facecolor="none", edgecolor="black", hatch="////",
-                             label="continuous sliding (no stick)"))
+                             label=Status.CONTINUOUS_SLIDING.legend))
     if np.any(stuck):
-        handles.append(Patch(facecolor="black", label="not converged: no velocity"))
+        handles += common.status_handles([Status.NOT_CONVERGED])
 
     ax.set(xlim=(f[0], f[-1]), ylim=(a[0], a[-1]), xlabel="drive frequency f [Hz]",
            ylabel="drive acceleration a [m s$^{-2}$]")
@@ -119,7 +113,6 @@ def _velocity_map(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset
     velocity = 1e3 * dataset["velocity"].transpose("a", "f").values  # mm s-1 over (a, f)
     status = dataset["status"].transpose("a", "f").values
     valid = np.isin(status, VALID)
-    lifted = status == Status.LIFT_OFF
     stuck = status == Status.NOT_CONVERGED
     sliding = status == Status.CONTINUOUS_SLIDING
     shown = np.ma.masked_where(~valid | ~np.isfinite(velocity), velocity)
@@ -129,8 +122,7 @@ def _velocity_map(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset
                          shading="nearest", rasterized=True)
     fig.colorbar(mesh, ax=ax, label="mean velocity v [mm s$^{-1}$]  (> 0: forward)",
                  shrink=0.9)
-    _layer(ax, f, a, lifted, "0.62")
-    _layer(ax, f, a, stuck, "black")
+    common.status_layers(ax, f, a, status)
     if np.any(sliding):
         ax.contourf(f, a, sliding.astype(float), levels=[0.5, 1.5], colors="none",
                     hatches=["////"])

@@ -164,7 +164,7 @@ def draw(dataset: xr.Dataset, output: Path,
                               mew=1.6, label="curve ends: lift-off\nabove (model invalid)"))
     if any_bounce:
         handles.append(Line2D([], [], color="0.3", lw=6, alpha=0.3, solid_capstyle="butt",
-                              label="bouncing: flights and\nimpacts (with flight)"))
+                              label=Status.BOUNCING.legend.replace(" and ", " and\n", 1)))
     if without is not None:
         handles.append(Line2D([], [], color="k", lw=0.9, ls=":", marker="o", mfc="white",
                               mec="k", ms=4.5, markevery=[1],
@@ -172,7 +172,7 @@ def draw(dataset: xr.Dataset, output: Path,
                               if without_lift else "without flight (same\ncoupling)"))
     if any_stuck:
         handles.append(Line2D([], [], ls="none", marker="x", ms=5, color="0.3",
-                              label="not converged at this a\n(no velocity; gap)"))
+                              label=f"{Status.NOT_CONVERGED.legend}\nat this a (a gap)"))
     ax.set(xlim=xlim, xlabel="drive acceleration a [m s$^{-2}$]",
            ylabel="mean velocity v [mm s$^{-1}$]  (> 0: forward)")
     title = ("Mean steady velocity against drive acceleration at fixed frequencies, "

@@ -1,6 +1,13 @@
-"""Status codes stored with every solved point (a CF flag variable on disk).
+"""Status codes stored with every solved point (a CF flag variable on disk), declared
+once: each status's code, its meaning, what its velocity is, and how figures show it.
 
 The values are :mod:`study.model.codes`' (the kernels return them as plain integers).
+Everything else follows from :class:`Status`: the ``flag_values``/``flag_meanings`` of
+the ``status`` variables, :data:`INVALID_STATUSES`, the statuses table of the
+documentation (:func:`markdown_table`) and the legend entries of the figures
+(:attr:`Status.legend`, :attr:`Status.colour`). A status added here appears in all of
+them by itself; a status is only ever added, never renumbered (files of older versions
+keep their meaning).
 """
 
 from __future__ import annotations
@@ -9,42 +16,92 @@ from enum import IntEnum
 
 from study.model import codes
 
-__all__ = ["INVALID_STATUSES", "NonConvergence", "Status"]
+__all__ = ["INVALID_STATUSES", "VELOCITY_KINDS", "NonConvergence", "Status",
+           "markdown_table"]
+
+#: What a status's ``velocity`` is: ``"zero"`` exactly 0, ``"mean"`` the mean velocity
+#: of the motion, ``"none"`` no velocity (NaN: outside the model or not found).
+VELOCITY_KINDS = {"zero": "exactly 0", "mean": "mean velocity", "none": "NaN"}
 
 
 class Status(IntEnum):
     """Outcome of the steady-state solver at one drive point.
 
-    Attributes
-    ----------
-    STATIC
-        Below both motion thresholds: the structure never slips, ``v = 0`` exactly.
-    STICK_SLIP
-        Periodic orbit with at least one stick phase in every period.
-    CONTINUOUS_SLIDING
-        Periodic orbit without any stick: slips reverse at ``v = 0`` (seen as ``M -> 1``).
-    LIFT_OFF
-        ``n(t) < 0`` during the cycle: the structure leaves the table, the model does
-        not apply and no velocity is given (NaN).
-    NOT_CONVERGED
-        No periodic orbit was found within the solver's budget; the reason is in
-        :class:`NonConvergence`. No velocity is given (NaN).
-    FRICTION_PARADOX
-        Two-way coupling only: a slip's equations have no unique solution (Painleve's
-        paradox, ``1 - M sin(alpha) (sin(alpha) + s ck cos(alpha)) <= 0``), as can happen
-        for ``M`` close to 1 at steep tilt. Outside the model; no velocity (NaN).
-    BOUNCING
-        With flight only: a periodic orbit that leaves the table and lands again in every
-        period (flight phases and impacts); its mean velocity is given.
+    Every member carries its declaration: :attr:`meaning` (one sentence),
+    :attr:`velocity` (a key of :data:`VELOCITY_KINDS`), :attr:`legend` (the label of
+    its class in a figure's legend) and :attr:`colour` (its flat colour in the maps, or
+    ``None`` where figures draw it otherwise).
     """
 
-    STATIC = codes.STATIC
-    STICK_SLIP = codes.STICK_SLIP
-    CONTINUOUS_SLIDING = codes.CONTINUOUS_SLIDING
-    LIFT_OFF = codes.LIFT_OFF
-    NOT_CONVERGED = codes.NOT_CONVERGED
-    FRICTION_PARADOX = codes.FRICTION_PARADOX
-    BOUNCING = codes.BOUNCING
+    meaning: str
+    velocity: str
+    legend: str
+    colour: str | None
+
+    def __new__(cls, code: int, meaning: str, velocity: str, legend: str,
+                colour: str | None = None) -> Status:
+        if velocity not in VELOCITY_KINDS:
+            raise ValueError(f"Status velocity {velocity!r}; allowed: "
+                             f"{', '.join(VELOCITY_KINDS)}")
+        member = int.__new__(cls, code)
+        member._value_ = code
+        member.meaning = meaning
+        member.velocity = velocity
+        member.legend = legend
+        member.colour = colour
+        return member
+
+    STATIC = (codes.STATIC,
+              "Below both motion thresholds: the structure never slips, ``v = 0`` exactly.",
+              "zero", "static: never slips")
+    STICK_SLIP = (codes.STICK_SLIP,
+                  "Periodic orbit with at least one stick phase in every period.",
+                  "mean", "stick-slip")
+    CONTINUOUS_SLIDING = (codes.CONTINUOUS_SLIDING,
+                          "Periodic orbit without any stick: slips reverse at ``v = 0`` "
+                          "(seen as ``M -> 1``).",
+                          "mean", "continuous sliding (no stick)")
+    LIFT_OFF = (codes.LIFT_OFF,
+                "``n(t) < 0`` during the cycle: the structure leaves the table, the model "
+                "without flight does not apply and no velocity is given.",
+                "none", "lift-off: outside the model, no velocity", "0.72")
+    NOT_CONVERGED = (codes.NOT_CONVERGED,
+                     "No periodic orbit was found within the solver's budget; the reason "
+                     "is in :class:`NonConvergence`. No velocity is given.",
+                     "none", "not converged: no velocity", "black")
+    FRICTION_PARADOX = (codes.FRICTION_PARADOX,
+                        "Two-way coupling only: a slip's equations have no unique solution "
+                        "(Painleve's paradox, ``1 - M sin(alpha) (sin(alpha) + s ck "
+                        "cos(alpha)) <= 0``), as can happen for ``M`` close to 1 at steep "
+                        "tilt. Outside the model; no velocity.",
+                        "none", "friction paradox: outside the model, no velocity",
+                        "tab:orange")
+    BOUNCING = (codes.BOUNCING,
+                "With flight only: a periodic orbit that leaves the table and lands again "
+                "in every period (flight phases and impacts); its mean velocity is given.",
+                "mean", "bouncing: flights and impacts (with flight)")
+
+    @property
+    def flag(self) -> str:
+        """The status's name in a file's ``flag_meanings`` (lower case)."""
+        return self.name.lower()
+
+    @property
+    def has_velocity(self) -> bool:
+        """Whether points of this status carry a velocity (not NaN)."""
+        return self.velocity != "none"
+
+
+def _attributes_section(enum: type[IntEnum], meanings: dict[str, str]) -> str:
+    """A numpydoc ``Attributes`` section naming each member with its meaning."""
+    lines = ["", "    Attributes", "    ----------"]
+    for member in enum:
+        lines += [f"    {member.name}", f"        {meanings[member.name]}"]
+    return "\n".join(lines) + "\n"
+
+
+Status.__doc__ = (Status.__doc__ or "") + _attributes_section(
+    Status, {s.name: f"{s.meaning} Velocity: {VELOCITY_KINDS[s.velocity]}." for s in Status})
 
 
 class NonConvergence(IntEnum):
@@ -67,5 +124,23 @@ class NonConvergence(IntEnum):
     EVENT_BUDGET = codes.REASON_EVENT_BUDGET
 
 
-#: Statuses outside the model's validity or without a solution: no velocity (NaN).
-INVALID_STATUSES = (Status.LIFT_OFF, Status.NOT_CONVERGED, Status.FRICTION_PARADOX)
+#: Statuses outside the model's validity or without a solution: no velocity (NaN),
+#: derived from each status's declared :attr:`Status.velocity`.
+INVALID_STATUSES = tuple(status for status in Status if not status.has_velocity)
+
+
+def markdown_table() -> str:
+    """The statuses as a Markdown table (code, name, meaning, velocity), for the docs.
+
+    Returns
+    -------
+    str
+        One row per :class:`Status`, in code order.
+    """
+    rows = ["| code | status | meaning | velocity |", "|---|---|---|---|"]
+    for status in Status:
+        meaning = status.meaning.replace("|", "\\|").replace(
+            ":class:`NonConvergence`", "`NonConvergence`")
+        rows.append(f"| {int(status)} | `{status.name}` | {meaning} | "
+                    f"{VELOCITY_KINDS[status.velocity]} |")
+    return "\n".join(rows) + "\n"

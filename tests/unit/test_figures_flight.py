@@ -158,3 +158,44 @@ def test_rows_spread_over_the_mass_ratios_ends_included():
     assert row_indices(2) == [0, 1]
     assert row_indices(6) == [0, 2, 5] or row_indices(6) == [0, 3, 5]
     assert row_indices(10)[0] == 0 and row_indices(10)[-1] == 9 and len(row_indices(10)) == 3
+
+
+def _pixels(artist, renderer):
+    return artist.get_window_extent(renderer)
+
+
+def test_each_colour_bar_label_reads_as_its_own_maps(bouncing_dataset):
+    """Each map's colour-bar label lies under its own map, inside the map's width, and
+    touches no other map: beside a map of a row sharing its y axis, a label would read
+    as the next map's y label (issue 34)."""
+    import matplotlib.pyplot as plt
+
+    from study.figures.bouncing import compose
+
+    fig, _ = compose(bouncing_dataset)
+    try:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        maps = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+        bars = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+        assert len(maps) == len(bars) == 3 * len(bouncing_dataset["M"])
+        for bar in bars:
+            label = bar.xaxis.label if bar.xaxis.label.get_text() else bar.yaxis.label
+            assert label.get_text()
+            box = _pixels(label, renderer)
+            centre = 0.5 * (box.x0 + box.x1)
+            # Its map: the one straight above the bar.
+            bar_box = bar.get_window_extent(renderer)
+            above = [ax for ax in maps if ax.get_window_extent(renderer).y0 >= bar_box.y1
+                     and ax.get_window_extent(renderer).x0 <= centre
+                     <= ax.get_window_extent(renderer).x1]
+            assert above, f"colour bar {label.get_text()!r} has no map above it"
+            own = min(above, key=lambda ax: ax.get_window_extent(renderer).y0 - bar_box.y1)
+            own_box = own.get_window_extent(renderer)
+            assert own_box.x0 <= box.x0 and box.x1 <= own_box.x1, label.get_text()
+            for other in maps:
+                tight = other.get_tightbbox(renderer)
+                if other is not own:
+                    assert not box.overlaps(tight), (label.get_text(), other.get_title())
+    finally:
+        plt.close(fig)
