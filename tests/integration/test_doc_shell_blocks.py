@@ -25,6 +25,7 @@ import pytest
 
 from study.cli import build_parser, main
 from study.engine.store import open_result
+from study.model.status import Status
 from tests.integration.test_doc_blocks import PAGES, ROOT, blocks, name
 
 STUDY = ".venv/bin/study"
@@ -109,4 +110,44 @@ def test_the_readme_own_structure_example_runs_as_printed(tmp_path: Path,
     assert (tmp_path / "own" / "regime-map.png").is_file()
     assert (tmp_path / "own" / "own.csv").read_text().startswith("f [Hz]")
     # the example writes nothing where make writes
+    assert not (tmp_path / "results").exists() and not (tmp_path / "figures").exists()
+
+
+def test_the_flight_tutorial_runs_as_printed(tmp_path: Path, monkeypatch, capsys) -> None:
+    """docs/getting-started/flight.md: its spec saved where the page says, every
+    ``study`` command of its shell blocks run in order (run, validate, info, figures,
+    export); the file holds every variable the page reads."""
+    page = ROOT / "docs" / "getting-started" / "flight.md"
+    text = page.read_text(encoding="utf-8")
+    specs = [code for _, code in blocks(text, "toml") if code.startswith("[study]")]
+    assert len(specs) == 1, "the flight tutorial shows one spec"
+    saved_as = re.search(r"^`(own/[\w.-]+\.toml)`", text, re.MULTILINE)
+    assert saved_as is not None, "flight.md names no spec file in own/"
+    commands = [line.split(" #", 1)[0].strip() for _, code in blocks(text, "sh")
+                for line in code.splitlines()]
+    commands = [line for line in commands if line.startswith(STUDY + " ")]
+    assert f"{STUDY} run {saved_as[1]} -o own/flight.nc" in commands
+    assert sum(line.startswith(f"{STUDY} figure ") for line in commands) >= 3
+    monkeypatch.chdir(tmp_path)
+    spec_path = tmp_path / saved_as[1]
+    spec_path.parent.mkdir(parents=True, exist_ok=True)
+    spec_path.write_text(specs[0], encoding="utf-8")
+    for line in commands:
+        status = main(shlex.split(line)[1:])
+        assert status == 0, f"flight.md: `{line}`: {capsys.readouterr().err}"
+    result = open_result(tmp_path / "own" / "flight.nc")
+    assert result.attrs["study_lift_off"] == "flight"
+    read = {"status", "velocity", "largest_hop", "airborne_fraction", "impacts_per_period",
+            "floquet_multiplier", "orbit_period", "nonconvergence",
+            "velocity_without_flight", "status_without_flight"}
+    assert read <= set(result), f"flight.md reads {sorted(read - set(result))}, not written"
+    for variable in read:
+        assert f"`{variable}`" in text, f"flight.md does not name `{variable}`"
+    # with flight no point stops at lift-off: the page's reading of the statuses
+    assert (result["status"] == Status.BOUNCING).any()
+    assert not (result["status"] == Status.LIFT_OFF).any()
+    assert (result["status_without_flight"] == Status.LIFT_OFF).any()
+    for stem in ("regime-map-flight", "bouncing", "velocity-curves-flight"):
+        assert (tmp_path / "own" / f"{stem}.png").is_file()
+    assert (tmp_path / "own" / "flight.csv").is_file()
     assert not (tmp_path / "results").exists() and not (tmp_path / "figures").exists()
