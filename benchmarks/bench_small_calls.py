@@ -84,7 +84,7 @@ def _kernels(f: float, a: float, points: int) -> dict[str, Callable[[], object]]
     omega = 2.0 * np.pi * f_flat
     lifted = np.zeros(points, dtype=bool)
     table = np.empty((points, orbit_kernel.N_OUT))
-    budget = Budget(10_000, 5_000)
+    budget = Budget(10_000, 5_000, 1e-3, 20_000)
     return {
         "one-way": lambda: one_way.velocity_points_small(f_flat, a_flat, constants, levels,
                                                          tuple(budget), velocity, status),

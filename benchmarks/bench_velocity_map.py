@@ -80,7 +80,7 @@ def _kernel_inputs(structure, f, a):
     inputs = (
         kernel.Amplitudes(a_plus, a_minus, b_plus, b_minus), lifted, 2 * np.pi * f_flat,
         kernel.FrictionLevels(structure.cs * structure.g, structure.ck * structure.g),
-        Budget(10_000, 5_000),
+        Budget(10_000, 5_000, 1e-3, 20_000),
     )
     return inputs, outputs
 

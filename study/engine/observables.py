@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from study.engine.variables import VARIABLES, Variable
 from study.model import lift_off_acceleration, mode_response, thresholds
-from study.model.contact import DEFAULT_FRICTION, Friction, check_friction
+from study.model.contact import COUPLINGS, DEFAULT_FRICTION, Friction, check_friction
 from study.model.structure import Structure
 from study.solvers.exact import (
     DEFAULT_COUPLING,
@@ -40,7 +40,9 @@ __all__ = [
     "Method",
     "Observable",
     "PointWork",
+    "markdown_table",
     "resolve",
+    "unmet_needs",
     "variables_of",
 ]
 
@@ -86,6 +88,8 @@ class Method:
                         "max_map_iterations": self.solver.max_map_iterations}
             if self.solver.continuation:  # only when on, as flight below
                 settings["continuation"] = True
+            # Only where not the default, as continuation.
+            settings.update(self.solver.averaging_changes())
         else:
             settings = {
                 "tolerance": self.integrator.tolerance,
@@ -195,21 +199,90 @@ class Observable:
         names in :data:`study.engine.variables.VARIABLES`.
     cached : bool
         Whether computed values are kept for reuse by later runs.
-    compute : callable
-        ``row``: ``compute(structure, f) -> {name: (n_f,)}``; ``point``:
-        ``compute(work: PointWork) -> {name: array}``; ``frontier``:
-        ``compute(structure, f, a, velocity, status, method, tolerance, progress=None)``,
-        each array ``(n_a, n_branch)`` (``progress(solves)`` after each bisection step).
+    function : callable
+        What :meth:`compute` calls: ``row``: ``function(structure, f) -> {name:
+        (n_f,)}``; ``point``: ``function(work: PointWork) -> {name: array}``;
+        ``frontier``: ``function(structure, f, a, velocity, status, method, tolerance,
+        progress=None)``, each array ``(n_a, n_branch)`` (``progress(solves)`` after each
+        bisection step).
+    methods : tuple of str or None
+        The velocity solvers (:data:`METHODS`, ``[solver] method``) that compute it;
+        None: any.
+    couplings : tuple of str or None
+        The couplings (:data:`study.model.contact.COUPLINGS`, ``[solver] coupling``) it
+        applies to; None: any.
+    flight : bool or None
+        True: only beside flight (``[solver] flight = true``); False: only without;
+        None: either.
+    why : str
+        Why it needs what ``methods``, ``couplings`` and ``flight`` say: the reason a
+        refusal gives (:func:`unmet_needs`).
     """
 
     name: str
     summary: str
     grid: str
     variables: tuple[str, ...]
-    compute: Callable[..., dict[str, NDArray[Any]]] = field(repr=False)
+    function: Callable[..., dict[str, NDArray[Any]]] = field(repr=False)
     requires: tuple[str, ...] = ()
     flight_variables: tuple[str, ...] = ()
     cached: bool = False
+    methods: tuple[str, ...] | None = None
+    couplings: tuple[str, ...] | None = None
+    flight: bool | None = None
+    why: str = ""
+
+    def __post_init__(self) -> None:
+        for key, declared, allowed in (("methods", self.methods, METHODS),
+                                       ("couplings", self.couplings, COUPLINGS)):
+            if declared is not None and (not declared or set(declared) - set(allowed)):
+                raise ValueError(f"observable {self.name!r}: {key} {declared!r} must be "
+                                 f"some of {allowed!r} (or None: any)")
+        if self.needs_anything and not self.why:
+            raise ValueError(f"observable {self.name!r}: say why it needs what it needs")
+
+    def compute(self, *args: Any, **kwargs: Any) -> dict[str, NDArray[Any]]:
+        """Its values, by :attr:`function`; a point observable first refuses a method
+        it does not apply to (the spec refuses it before; a direct caller gets the
+        same words)."""
+        if self.grid == "point" and self.needs_anything:
+            method = args[0].method
+            unmet = unmet_needs((self.name,), method.name, method.coupling, method.flight)
+            if unmet:
+                raise ValueError(unmet[0])
+        return self.function(*args, **kwargs)
+
+    @property
+    def needs_anything(self) -> bool:
+        """Whether it applies to some methods, couplings or flight only."""
+        return (self.methods, self.couplings, self.flight) != (None, None, None)
+
+    def needs(self) -> str:
+        """What it needs of ``[solver]``, in the words of a spec: ``coupling =
+        "two-way" with method = "exact"``; ``""`` if any method, coupling and flight
+        do."""
+        return " with ".join(text for _, text in self._needs())
+
+    def allowed(self) -> str:
+        """Every ``[solver]`` setting it allows, the ones it does not care about too."""
+        return ", ".join([self.needs() or "any method and coupling"]
+                         + (["any method"] if self.needs_anything and self.methods is None
+                            else [])
+                         + (["any coupling"] if self.needs_anything and self.couplings is None
+                            and not self.flight else [])  # flight has its coupling
+                         + (["with or without flight"] if self.flight is None else []))
+
+    def _needs(self) -> list[tuple[str, str]]:
+        """(key, what it must be) for each ``[solver]`` key it needs a value of."""
+        found = []
+        if self.couplings is not None:
+            found.append(("coupling", "coupling = " + _either(self.couplings)))
+        if self.methods is not None:
+            found.append(("method", "method = " + _either(self.methods)))
+        if self.flight is not None:
+            found.append(("flight", 'flight = true (with coupling = "two-way")' if self.flight
+                          else "flight = false"))
+        return found
 
     def flying(self) -> Observable:
         """The observable of a study with flight: its flight variables written too."""
@@ -222,6 +295,35 @@ class Observable:
     def needs_acceleration(self) -> bool:
         """Whether the sweep needs the drive acceleration axis ``a``."""
         return self.grid != "row"
+
+
+def _either(values: tuple[str, ...]) -> str:
+    """``"exact"`` or ``"exact" or "integrator"``."""
+    return " or ".join(f'"{v}"' for v in values)
+
+
+def unmet_needs(requested: tuple[str, ...] | list[str], method: str, coupling: str,
+                flight: bool) -> list[str]:
+    """The requested observables that do not apply to ``method``, ``coupling`` and
+    ``flight`` (as :attr:`Observable.methods`, :attr:`Observable.couplings` and
+    :attr:`Observable.flight` declare), one line each in :data:`OBSERVABLES` order:
+    the observable, what it needs and why, the settings given and what is allowed.
+    Empty where every one applies. The spec reader prefixes each with its file."""
+    given = {"method": f'method = "{method}"', "coupling": f'coupling = "{coupling}"',
+             "flight": f"flight = {'true' if flight else 'false'}"}
+    lines = []
+    for name, o in OBSERVABLES.items():
+        if name not in requested:
+            continue
+        if ((o.methods is None or method in o.methods)
+                and (o.couplings is None or coupling in o.couplings)
+                and (o.flight is None or flight == o.flight)):
+            continue
+        keys = [key for key, _ in o._needs()]
+        lines.append(
+            f'[study] observable "{name}" needs [solver] {o.needs()}: {o.why}; got '
+            f"{', '.join(given[key] for key in keys)} (allowed: {o.allowed()})")
+    return lines
 
 
 def _resonance(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray[Any]]:
@@ -256,10 +358,16 @@ def _diagnostics(work: PointWork) -> dict[str, NDArray[Any]]:
 
 
 def _floquet(work: PointWork) -> dict[str, NDArray[Any]]:
-    multiplier = work.solution.floquet_multiplier
-    if multiplier is None:  # the spec refuses it; a direct caller gets this message
-        raise ValueError("floquet needs the exact solver with two-way coupling")
-    return {"floquet_multiplier": multiplier}
+    return {"floquet_multiplier": work.solution.floquet_multiplier}
+
+
+def _irregular(work: PointWork) -> dict[str, NDArray[Any]]:
+    solution = work.solution
+    return {"averaged_velocity": solution.averaged_velocity,
+            "velocity_error": solution.velocity_error,
+            "averaged_periods": solution.averaged_periods,
+            "lyapunov_exponent": solution.lyapunov_exponent,
+            "lyapunov_error": solution.lyapunov_error}
 
 
 def _attractors(work: PointWork) -> dict[str, NDArray[Any]]:
@@ -275,8 +383,6 @@ def _paper_model(work: PointWork) -> dict[str, NDArray[Any]]:
 
 
 def _without_flight(work: PointWork) -> dict[str, NDArray[Any]]:
-    if not work.method.flight:  # the spec refuses it; a direct caller gets this message
-        raise ValueError("without_flight needs a study with flight")
     s = work.without_flight
     return {"velocity_without_flight": s.velocity, "status_without_flight": s.status}
 
@@ -309,18 +415,35 @@ _DECLARED = (
                cached=True),
     Observable("floquet", "largest Floquet multiplier of the orbit (exact two-way solver "
                "only)", "point", ("floquet_multiplier",), _floquet, requires=("velocity",),
-               cached=True),
+               cached=True, methods=("exact",), couplings=("two-way",),
+               why="the exact two-way solver is the one that computes the orbit's Floquet "
+               "multipliers"),
+    Observable("irregular", "time averages of motions without a stable cycle within reach "
+               "(chaotic, quasi-periodic): the averaged velocity, its standard error, the "
+               "periods averaged, the largest Lyapunov exponent and its error (exact two-way "
+               "solver only)", "point",
+               ("averaged_velocity", "velocity_error", "averaged_periods",
+                "lyapunov_exponent", "lyapunov_error"), _irregular, requires=("velocity",),
+               cached=True, methods=("exact",), couplings=("two-way",),
+               why="the exact two-way solver is the one that averages irregular motions "
+               "and computes their Lyapunov exponent"),
     Observable("attractors", "multistability: distinct stable orbits from 12 starting "
                "states and their velocity spread (exact solver; 12 solves per point)", "point",
                ("attractor_count", "attractor_velocity_spread", "attractor_starts_converged"),
-               _attractors, requires=("velocity",), cached=True),
+               _attractors, requires=("velocity",), cached=True, methods=("exact",),
+               why="the exact solver is the one that finds the stable orbits from several "
+               "starting states"),
     Observable("paper_model", "the paper's one-way velocity beside a two-way study", "point",
                ("velocity_one_way", "status_one_way"), _paper_model, requires=("velocity",),
-               cached=True),
+               cached=True, couplings=("two-way",),
+               why="it is the one-way model beside a two-way study; a one-way study's "
+               "velocity already is the paper's model"),
     Observable("without_flight", "the same method's velocity where the run stops at lift-off, "
                "beside a study with flight", "point",
                ("velocity_without_flight", "status_without_flight"), _without_flight,
-               requires=("velocity",), cached=True),
+               requires=("velocity",), cached=True, flight=True,
+               why="it is the velocity stopped at lift-off beside a study with flight; "
+               "without flight the study's velocity already stops there"),
     Observable("frontier", "zero-velocity frontier f*(a), refined by bisection", "frontier",
                ("frontier_frequency", "frontier_kind", "frontier_direction",
                 "frontier_bracket"), _frontier, requires=("velocity",)),
@@ -347,3 +470,30 @@ def variables_of(requested: tuple[str, ...] | list[str], flight: bool = False
     order."""
     names = {v for o in resolve(requested, flight) for v in o.variables}
     return tuple(v for name, v in VARIABLES.items() if name in names)
+
+
+def markdown_table() -> str:
+    """The docs' table of observables (docs/user-guide/specs.md), from their
+    declarations: name, what it computes, its grid, what it needs of ``[solver]`` and
+    the variables it writes (with flight also its flight variables)."""
+    grids = {"row": "per `f` (closed form)", "point": "per `(f, a)` (solver)",
+             "frontier": "per `a`, `branch` (bisection)"}
+    lines = ["| observable | what it computes | grid | needs | variables |",
+             "|---|---|---|---|---|"]
+    for name, o in OBSERVABLES.items():
+        needs = (f"`{o.needs()}`: {o.why}" if o.needs_anything
+                 else "any method and coupling" if o.grid != "row" else "no solver")
+        variables = ", ".join(f"`{v}`" for v in o.variables)
+        if o.flight_variables:
+            variables += "; with flight also " + ", ".join(f"`{v}`"
+                                                           for v in o.flight_variables)
+        if o.requires:
+            variables += " (with " + ", ".join(f"`{r}`" for r in o.requires) + ")"
+        lines.append(f"| `{name}` | {_cell(o.summary)} | {grids[o.grid]} | {_cell(needs)} "
+                     f"| {variables} |")
+    return "\n".join(lines) + "\n"
+
+
+def _cell(text: str) -> str:
+    """``text`` safe in a markdown table cell."""
+    return text.replace("|", "\\|").replace("*", "\\*")

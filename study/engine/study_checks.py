@@ -221,5 +221,6 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
             problems += check.flags_in_range(declared.name, written_codes)
         if declared.invalid_where and declared.invalid_where in good:
             problems += check.invalid_where(declared.name, declared.invalid_where,
-                                            declared.zero_when_static)
+                                            declared.zero_when_static,
+                                            declared.missing_where)
     return problems

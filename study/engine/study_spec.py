@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.observables import METHODS, variables_of
+from study.engine.observables import METHODS, unmet_needs, variables_of
 from study.engine.observables import OBSERVABLES as OBSERVABLE_REGISTRY
 from study.engine.spec_files import (
     SCHEMA_DIR,
@@ -105,7 +105,8 @@ SOLVER_OBSERVABLES = tuple(
     name for name, o in OBSERVABLE_REGISTRY.items() if o.needs_acceleration
 )
 #: ``[solver]`` keys of the exact solver and of the time integrator.
-EXACT_KEYS = ("max_events", "max_map_iterations", "continuation")
+EXACT_KEYS = ("max_events", "max_map_iterations", "continuation", "velocity_tolerance",
+              "max_average_periods")
 INTEGRATOR_KEYS = (
     "tolerance", "steps_per_period", "max_periods", "max_orbit_period", "period_tolerance",
 )
@@ -583,7 +584,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     settings = _solver(solver_table, observables, None if swept is None else swept[0],
                        path, problems)
     method, coupling, friction = settings[0], settings[1], settings[2]
-    flight = problems.collect(_flight, solver_table, observables, method, coupling, path)
+    flight = problems.collect(_flight, solver_table, method, coupling, path)
     # The law asked for, even where refused above: its parameters are not unread.
     _check_unread(structure, sweep, friction, coupling,
                   bool(solver_table.get("flight", False)), path, problems)
@@ -797,25 +798,10 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...],
     # The exact solver covers both couplings (closed form between events; with two-way
     # coupling the mode is a state of the orbit, found by Newton on the period map).
     method = solver_table.get("method", "exact")
-    if "paper_model" in observables and coupling == "one-way":
-        problems.add(
-            f'{path}: [study] observable "paper_model" (the one-way model beside a two-way '
-            'study) needs [solver] coupling = "two-way"; a one-way study\'s velocity already '
-            "is the paper's model"
-        )
-    if "attractors" in observables and method != "exact":
-        problems.add(
-            f'{path}: [study] observable "attractors" (stable orbits from several starting '
-            f'states) needs [solver] method = "exact" (the solver that computes it), got '
-            f'method = "{method}" (allowed: method = "exact", with either coupling)'
-        )
-    if "floquet" in observables and (method, coupling) != ("exact", "two-way"):
-        problems.add(
-            f'{path}: [study] observable "floquet" (the orbit\'s largest Floquet multiplier) '
-            f'needs [solver] coupling = "two-way" with method = "exact" (the solver that '
-            f'computes it); got coupling = "{coupling}", method = "{method}" (allowed: '
-            'coupling = "two-way", method = "exact")'
-        )
+    # What each observable needs of the method, coupling and flight, as it declares.
+    for line in unmet_needs(observables, method, coupling,
+                            bool(solver_table.get("flight", False))):
+        problems.add(f"{path}: {line}")
     wrong = sorted(
         k for k in solver_table if k in (INTEGRATOR_KEYS if method == "exact" else EXACT_KEYS)
     )
@@ -865,19 +851,12 @@ FLIGHT_NEEDS_BASE_MASS = (
     "M = 1 is a massless base: the impact matrix W = I + M/(1 - M) e e^T is unbounded")
 
 
-def _flight(solver_table: dict[str, Any], observables: tuple[str, ...], method: str,
-            coupling: str, path: str) -> bool:
+def _flight(solver_table: dict[str, Any], method: str, coupling: str, path: str) -> bool:
     """``[solver] flight``, refused where it cannot apply (a method that does not
-    implement the lift-off law ``flight``, one-way coupling), and the observables that
-    need it."""
+    implement the lift-off law ``flight``, one-way coupling; the observables that need
+    it or its absence are :func:`_solver`'s, from their declarations)."""
     flight = bool(solver_table.get("flight", False))
     if not flight:
-        if "without_flight" in observables:
-            raise SpecError(
-                f'{path}: [study] observable "without_flight" (the velocity without flight '
-                "beside a study with flight) needs [solver] flight = true; without it the "
-                'study\'s velocity already stops at lift-off (allowed: flight = true with '
-                'coupling = "two-way")')
         return False
     try:
         check_law("lift_off", "flight", method)
@@ -942,6 +921,8 @@ def _canonical(study: dict[str, Any], observables: tuple[str, ...], fixed: dict[
             # And continuation.
             **({"continuation": True} if method == "exact" and solver.continuation
                else {}),
+            # And the averaging of irregular motions, where not the default.
+            **(solver.averaging_changes() if method == "exact" else {}),
         },
     }
     return canonical

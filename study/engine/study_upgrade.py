@@ -12,7 +12,7 @@ from study.engine.layout import method_attributes, study_summary
 from study.engine.study_spec import parse_spec
 from study.engine.variables import VARIABLES
 
-__all__ = ["to_format_3"]
+__all__ = ["to_format_3", "to_format_4"]
 
 
 def to_format_3(nc: Any) -> None:
@@ -33,6 +33,25 @@ def to_format_3(nc: Any) -> None:
     for name, value in method_attributes(spec).items():
         nc.setncattr(name, value)
     nc.setncattr("summary", study_summary(spec))  # it names the method too
+    _declare_flags(nc)
+
+
+def to_format_4(nc: Any) -> None:
+    """Format 3 -> 4: today's status and nonconvergence flags (``chaotic``,
+    ``quasi_periodic`` and ``average_budget`` added; every code keeps its meaning).
+    No value is read or written: a file of format 3 holds none of the new codes.
+
+    Parameters
+    ----------
+    nc : netCDF4.Dataset
+        A study result of format 3, open in append mode.
+    """
+    _declare_flags(nc)
+
+
+def _declare_flags(nc: Any) -> None:
+    """Each flag variable declares today's full set of flags, a superset of the one it
+    was written with whose codes keep their meanings."""
     for name, variable in nc.variables.items():
         declared = VARIABLES.get(name)
         if declared is not None and declared.is_flag:

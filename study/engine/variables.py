@@ -39,7 +39,12 @@ STUDY_FORMATS = (
                  "study-result-v1.format-2"),
     ResultFormat(3, "0.2.0", "the friction and lift-off laws with their parameters as "
                  "attributes, and every status declared (bouncing included)",
-                 "study-result-v1", upgrade="study.engine.study_upgrade:to_format_3"),
+                 "study-result-v1.format-3",
+                 upgrade="study.engine.study_upgrade:to_format_3"),
+    ResultFormat(4, "0.3.0", "irregular motions measured: statuses chaotic and "
+                 "quasi_periodic, nonconvergence average_budget, the irregular observable's "
+                 "variables", "study-result-v1",
+                 upgrade="study.engine.study_upgrade:to_format_4"),
 )
 
 #: The format this version writes.
@@ -83,6 +88,10 @@ class Variable:
         ``zero_when_static``) 0 where it is static.
     zero_when_static : bool
         Whether the value must be 0 where the status is static.
+    missing_where : tuple of str
+        Statuses (flag names) with a velocity where this value is NaN too (a Floquet
+        multiplier of an irregular motion, which has no orbit), beside the invalid
+        ones of ``invalid_where``.
     flight_long_name, flight_comment : str
         ``long_name`` and ``comment`` in a study with flight, where they differ
         (default: the same as without).
@@ -98,6 +107,7 @@ class Variable:
     comment: str = ""
     invalid_where: str = ""
     zero_when_static: bool = True
+    missing_where: tuple[str, ...] = ()
     flight_long_name: str = ""
     flight_comment: str = ""
 
@@ -145,6 +155,8 @@ _DROPS = (f"the base dropped from "
           f"{len(ATTRACTOR_DROPS['phases'])} drive phases")
 
 _STATUS_FLAGS = tuple(s.name.lower() for s in Status)
+#: The statuses of motions averaged on the period map, without an orbit.
+_IRREGULAR = (Status.CHAOTIC.flag, Status.QUASI_PERIODIC.flag)
 _STATUS_VALUES = tuple(int(s) for s in Status)
 
 _DECLARED = (
@@ -196,11 +208,35 @@ _DECLARED = (
              "(plate deflection, its rate, sliding velocity)",
              comment="below 1: the orbit attracts nearby states; where static, the mode's "
              "free decay over one drive period; NaN (missing) where status is lift_off, "
-             "not_converged or friction_paradox", invalid_where="status",
-             zero_when_static=False,
+             "not_converged or friction_paradox, and for the irregular motions (chaotic, "
+             "quasi_periodic: no orbit)", invalid_where="status",
+             zero_when_static=False, missing_where=_IRREGULAR,
              flight_long_name="largest modulus of the Floquet multipliers of the steady "
              "orbit on the state (plate deflection, its rate, sliding velocity, height of "
              "the base above the table, its rate), flights and impacts included"),
+    Variable("averaged_velocity", "point", "float64", METRE_PER_SECOND,
+             "time-averaged velocity of a motion followed on the period map (no stable "
+             "cycle within reach)",
+             comment="the velocity of a chaotic or quasi_periodic point; the partial mean of "
+             "a point not_converged after the most periods allowed (nonconvergence "
+             "average_budget), whose velocity is NaN; NaN (missing) elsewhere"),
+    Variable("velocity_error", "point", "float64", METRE_PER_SECOND,
+             "standard error of the mean velocity",
+             comment="0 for an orbit or a static point (exact); for an averaged motion the "
+             "batch-means standard error of averaged_velocity (95 % confidence half-width: "
+             "1.96 times it); NaN (missing) where no velocity was found"),
+    Variable("averaged_periods", "point", "int32", DIMENSIONLESS,
+             "drive periods a motion was averaged over (0: an orbit, exact)"),
+    Variable("lyapunov_exponent", "point", "float64", DIMENSIONLESS,
+             "largest Lyapunov exponent per drive period",
+             comment="> 0: chaotic (nearby states separate by exp(exponent) per period); "
+             "for an averaged motion from a tangent vector carried through the period "
+             "map's exact Jacobians, saltations included; for an orbit log(floquet "
+             "multiplier) / orbit_period (exact, < 0 when stable); NaN (missing) where "
+             "neither applies"),
+    Variable("lyapunov_error", "point", "float64", DIMENSIONLESS,
+             "standard error of the largest Lyapunov exponent",
+             comment="0 for an orbit (exact); batch means over the averaged periods"),
     Variable("attractor_count", "point", "int32", DIMENSIONLESS,
              "distinct stable outcomes reached from 12 starting states (rest at four drive "
              "phases, the mode at 0, 1 and 2 times its steady response)",

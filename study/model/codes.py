@@ -15,11 +15,14 @@ LIFT_OFF = 3
 NOT_CONVERGED = 4
 FRICTION_PARADOX = 5
 BOUNCING = 6
+CHAOTIC = 7
+QUASI_PERIODIC = 8
 
 # Why a point did not converge (study.model.status.NonConvergence).
 REASON_NONE = 0
 REASON_NO_PERIODIC_ORBIT = 1
 REASON_EVENT_BUDGET = 2
+REASON_AVERAGE_BUDGET = 3
 
 # Contact mode "stuck" of the time integrators (their slip modes are their own).
 STICK = 0

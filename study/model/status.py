@@ -80,6 +80,19 @@ class Status(IntEnum):
                 "With flight only: a periodic orbit that leaves the table and lands again "
                 "in every period (flight phases and impacts); its mean velocity is given.",
                 "mean", "bouncing: flights and impacts (with flight)")
+    CHAOTIC = (codes.CHAOTIC,
+               "Two-way coupling: no stable cycle within reach, and the motion the solver's "
+               "start reaches is chaotic (its largest Lyapunov exponent more than three "
+               "standard errors above 0); its velocity is the time average over the "
+               "period map's iterates, with its standard error and the periods averaged.",
+               "mean", "chaotic: irregular, time-averaged velocity")
+    QUASI_PERIODIC = (codes.QUASI_PERIODIC,
+                      "Two-way coupling: no stable cycle within reach, and the motion "
+                      "reached is irregular without a clearly positive Lyapunov exponent "
+                      "(a quasi-periodic motion on an invariant curve, or a stable cycle "
+                      "longer than the cycle search's 16 periods); its velocity is the "
+                      "time average, as for CHAOTIC.",
+                      "mean", "quasi-periodic: time-averaged velocity")
 
     @property
     def flag(self) -> str:
@@ -117,11 +130,16 @@ class NonConvergence(IntEnum):
         attracting for the budget).
     EVENT_BUDGET
         The event loop exhausted its budget without closing an orbit.
+    AVERAGE_BUDGET
+        Two-way coupling: an irregular motion's time-averaged velocity was still outside
+        the velocity tolerance after the most periods allowed (``max_average_periods``);
+        its velocity error, periods averaged and exponent are kept.
     """
 
     NONE = codes.REASON_NONE
     NO_PERIODIC_ORBIT = codes.REASON_NO_PERIODIC_ORBIT
     EVENT_BUDGET = codes.REASON_EVENT_BUDGET
+    AVERAGE_BUDGET = codes.REASON_AVERAGE_BUDGET
 
 
 #: Statuses outside the model's validity or without a solution: no velocity (NaN),

@@ -61,14 +61,22 @@ __all__ = [
 ]
 
 #: Version of the steady-state algorithm; changes whenever its results may change.
-SOLVER_VERSION = "6"
+SOLVER_VERSION = "7"
 
 #: Largest budget of each :class:`SolverSettings` field: 100 times the default slip
 #: events (a budget only bounds pathological points; at about 1 us an event, 1e6 events
 #: and 1e6 circle-map iterations of 1e6 events each bound a point's work), and far
 #: below the int64 the kernels take (2**63 wrapped to a negative budget and answered
 #: NOT_CONVERGED). The spec schema's ``[solver]`` maxima are exported from it.
-MAX_SOLVER_BUDGET = {"max_events": 1_000_000, "max_map_iterations": 1_000_000}
+MAX_SOLVER_BUDGET = {"max_events": 1_000_000, "max_map_iterations": 1_000_000,
+                     "max_average_periods": 1_000_000}
+#: Smallest budget of each :class:`SolverSettings` field (1 but for the averaged
+#: periods: an irregular motion's averages are first examined after 256 periods).
+MIN_SOLVER_BUDGET = {"max_events": 1, "max_map_iterations": 1, "max_average_periods": 256}
+#: The settings of the averaging of irregular motions.
+AVERAGING_SETTINGS = ("velocity_tolerance", "max_average_periods")
+#: Range of :attr:`SolverSettings.velocity_tolerance` [1], open below.
+VELOCITY_TOLERANCE_RANGE = (0.0, 1.0)
 
 #: Inputs with at least this many points are solved by the parallel kernel.
 PARALLEL_THRESHOLD = 2048
@@ -89,6 +97,17 @@ class SolverSettings:
     max_map_iterations : int
         Iterations of the continuous-sliding circle map searched for an attracting
         cycle before ``NonConvergence.NO_PERIODIC_ORBIT``, 1 to 1e6.
+    velocity_tolerance : float
+        Two-way coupling only: an irregular motion (no stable cycle within reach:
+        ``CHAOTIC`` or ``QUASI_PERIODIC``) is averaged over the period map's iterates
+        until the 95 % confidence half-width of its mean velocity is within this
+        fraction of ``a / (2 pi f)`` [1], in (0, 1]. Default 1e-3 (about 1100 periods
+        of a chaotic bouncing motion).
+    max_average_periods : int
+        Two-way coupling only: periods an irregular motion is averaged over at most,
+        256 to 1e6; a motion whose mean is still outside the tolerance then is
+        ``NOT_CONVERGED`` (``NonConvergence.AVERAGE_BUDGET``), its partial averages'
+        error, periods and exponent kept. Default 20 000.
     continuation : bool
         Two-way coupling only: start each orbit's Newton search from the fixed points of
         the points before it along its line of the sweep (a column of accelerations at
@@ -109,6 +128,8 @@ class SolverSettings:
     max_events: int = 10_000
     max_map_iterations: int = 5_000
     continuation: bool = False
+    velocity_tolerance: float = 1e-3
+    max_average_periods: int = 20_000
 
     def __post_init__(self) -> None:
         if not isinstance(self.continuation, bool | np.bool_):
@@ -118,15 +139,36 @@ class SolverSettings:
         object.__setattr__(self, "continuation", bool(self.continuation))
         for name, largest in MAX_SOLVER_BUDGET.items():
             value = getattr(self, name)
+            smallest = MIN_SOLVER_BUDGET[name]
             if isinstance(value, bool | np.timedelta64) or not isinstance(
                     value, int | np.integer):
                 raise InputTypeError(
-                    f"solver setting {name!r} must be an integer >= 1 and <= {largest}, got "
-                    f"{value!r}")
-            if not 1 <= value <= largest:
+                    f"solver setting {name!r} must be an integer >= {smallest} and <= "
+                    f"{largest}, got {value!r}")
+            if not smallest <= value <= largest:
                 raise ValueError(
-                    f"solver setting {name!r} must be an integer >= 1 and <= {largest}, got "
-                    f"{value!r}")
+                    f"solver setting {name!r} must be an integer >= {smallest} and <= "
+                    f"{largest}, got {value!r}")
+        tolerance = self.velocity_tolerance
+        low, high = VELOCITY_TOLERANCE_RANGE
+        if isinstance(tolerance, bool) or not isinstance(tolerance, int | float | np.floating
+                                                          | np.integer):
+            raise InputTypeError(
+                f"solver setting 'velocity_tolerance' must be a number in ({low:g}, "
+                f"{high:g}], got {tolerance!r}")
+        if not low < float(tolerance) <= high:
+            raise ValueError(
+                f"solver setting 'velocity_tolerance' must be in ({low:g}, {high:g}] (a "
+                f"fraction of a / (2 pi f)), got {tolerance!r}")
+        object.__setattr__(self, "velocity_tolerance", float(tolerance))
+
+    def averaging_changes(self) -> dict[str, float | int]:
+        """The averaging settings of irregular motions (``velocity_tolerance``,
+        ``max_average_periods``) that differ from their defaults: canonical specs and
+        cache keys name them only then, so that those written before them keep their
+        fingerprints."""
+        return {name: getattr(self, name) for name in AVERAGING_SETTINGS
+                if getattr(self, name) != getattr(DEFAULT_SETTINGS, name)}
 
 
 #: The settings of ``settings=None``: frozen, so one instance serves every call.
@@ -176,13 +218,34 @@ class SteadyState:
         chatter counted (rebounds below the chattering cut-off end it plastically; a
         touch-down without speed counts as one); NaN without an orbit. ``None``
         unless ``flight=True``.
+    averaged_velocity : numpy.ndarray or None
+        Time-averaged velocity [m s-1] of a motion followed on the period map:
+        ``velocity`` for ``CHAOTIC`` and ``QUASI_PERIODIC``, the partial mean for
+        ``NOT_CONVERGED`` with ``AVERAGE_BUDGET`` (whose ``velocity`` is NaN), NaN
+        elsewhere. ``None`` from the one-way solver.
+    velocity_error : numpy.ndarray or None
+        Standard error of ``velocity`` [m s-1]: 0 for an orbit or a static point (exact),
+        the batch-means error of the time average for ``CHAOTIC`` and
+        ``QUASI_PERIODIC`` and for ``NOT_CONVERGED`` with ``AVERAGE_BUDGET`` (whose
+        velocity is NaN), NaN elsewhere. ``None`` from the one-way solver.
+    averaged_periods : numpy.ndarray of int32 or None
+        Drive periods an irregular motion was averaged over [1] (0 for an orbit).
+        ``None`` from the one-way solver.
+    lyapunov_exponent, lyapunov_error : numpy.ndarray or None
+        Largest Lyapunov exponent per drive period [1] and its standard error: for an
+        irregular motion from a tangent vector carried through the period map's exact
+        Jacobians (saltation matrices included), renormalised every period; for an
+        orbit ``log(floquet_multiplier) / orbit_period`` with error 0; NaN where
+        neither applies. ``None`` from the one-way solver.
 
     Notes
     -----
     With ``flight=True`` an orbit with a flight in it has the status
     :attr:`~study.model.status.Status.BOUNCING` and its mean velocity;
     ``STICK_SLIP`` and ``CONTINUOUS_SLIDING`` keep their meaning for orbits that stay
-    on the table.
+    on the table. Where no stable cycle is within reach of the start the two-way solver
+    follows the motion and reports it ``CHAOTIC`` or ``QUASI_PERIODIC`` with its time
+    averages (:class:`SolverSettings` ``velocity_tolerance``, ``max_average_periods``).
     """
 
     velocity: NDArray[np.float64]
@@ -196,6 +259,11 @@ class SteadyState:
     airborne_fraction: NDArray[np.float64] | None = None
     largest_hop: NDArray[np.float64] | None = None
     impacts_per_period: NDArray[np.float64] | None = None
+    averaged_velocity: NDArray[np.float64] | None = None
+    velocity_error: NDArray[np.float64] | None = None
+    averaged_periods: NDArray[np.int32] | None = None
+    lyapunov_exponent: NDArray[np.float64] | None = None
+    lyapunov_error: NDArray[np.float64] | None = None
 
 
 def scalar_if_0d(values: NDArray[Any]) -> Any:
@@ -339,7 +407,8 @@ def structure_vector(structure: Structure, coupling: str,
 def kernel_budget(settings: SolverSettings) -> Budget:
     """The kernels' :class:`~study.kernels.budget.Budget` of ``settings`` (frozen and
     hashable: a call with the same settings reuses it)."""
-    return Budget(int(settings.max_events), int(settings.max_map_iterations))
+    return Budget(int(settings.max_events), int(settings.max_map_iterations),
+                  float(settings.velocity_tolerance), int(settings.max_average_periods))
 
 
 def _force_constants(structure: Structure) -> Any:
@@ -440,6 +509,11 @@ def _orbit_steady_state(
         airborne_fraction=column(orbit_kernel.OUT_AIRBORNE) if flight else None,
         largest_hop=column(orbit_kernel.OUT_HOP) if flight else None,
         impacts_per_period=column(orbit_kernel.OUT_IMPACTS) if flight else None,
+        averaged_velocity=column(orbit_kernel.OUT_AVERAGED_VELOCITY),
+        velocity_error=column(orbit_kernel.OUT_VELOCITY_ERROR),
+        averaged_periods=column(orbit_kernel.OUT_AVERAGED_PERIODS, np.int32),
+        lyapunov_exponent=column(orbit_kernel.OUT_EXPONENT),
+        lyapunov_error=column(orbit_kernel.OUT_EXPONENT_ERROR),
     )
 
 

@@ -397,8 +397,8 @@ def test_velocity_kinks_at_regime_edges_are_orbits_of_the_reference(params, f, a
     for ai in (a - step, a, a + step):
         out = np.empty(points.N_OUT)
         points.solve_point(structure_vector(s, "two-way"), 2.0 * math.pi * f, ai,
-                           bool(ai > lift_off_acceleration(s, f)), Budget(10_000, 5_000),
-                           0.0, 1.0,
+                           bool(ai > lift_off_acceleration(s, f)),
+                           Budget(10_000, 5_000, 1e-3, 20_000), 0.0, 1.0,
                            out)
         assert Status(int(out[OUT_STATUS])) == Status.STICK_SLIP and out[OUT_PERIOD] == 1
         with mp.workdps(30):

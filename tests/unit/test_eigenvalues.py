@@ -215,8 +215,8 @@ def _orbit_jacobian(vector, table, omega, a):
     record = flight.FlightRecord(np.zeros(flight.N_FLIGHT_ACC), np.eye(5),
                                  np.empty((5, 5)), np.empty((5, 5)), np.zeros(2))
     _, _, periods, _ = flight_orbit.find_flight_orbit(
-        point, z, 0.0, flight_orbit.flight_scales(point), Budget(100_000, 5_000), record,
-        np.empty(5), np.empty((MAX_PERIOD, 5)))
+        point, z, 0.0, flight_orbit.flight_scales(point), Budget(100_000, 5_000, 1e-3, 20_000),
+        record, np.empty(5), np.empty((MAX_PERIOD, 5)), np.empty(flight_orbit.N_STATS))
     if periods == 0 or record.acc[flight.A_AIRBORNE] == 0.0:
         return None
     return record.jac.copy()

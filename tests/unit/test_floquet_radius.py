@@ -79,7 +79,7 @@ def test_not_finite_is_infinite():
 def test_orbit_jacobians_against_lapack():
     """The Jacobians of the period map at moving points of the paper's structure and
     at M = 1 (continuous sliding): the closed form within 1e-13 of LAPACK."""
-    budget = Budget(10_000, 5_000)
+    budget = Budget(10_000, 5_000, 1e-3, 20_000)
     checked = 0
     for mass, f_values in ((0.08, (12.0, 14.5, 16.5, 19.0)), (1.0, (8.0, 14.0, 25.0))):
         structure = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=mass, cs=0.25)

@@ -108,7 +108,7 @@ def test_the_orbit_with_flight_does_not_read_a_column_left_out():
     then the flight row) gives the full table's row, bit for bit, at bouncing drives."""
     structure = Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.9, cs=0.25)
     vector = structure_vector(structure, "two-way", True)
-    budget = Budget(10_000, 5_000)
+    budget = Budget(10_000, 5_000, 1e-3, 20_000)
     statuses = set()
     for f, a in ((14.5, 11.0), (10.0, 12.0), (20.0, 14.0), (7.0, 10.5)):
         omega = 2.0 * math.pi * f

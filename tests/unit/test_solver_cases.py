@@ -16,7 +16,7 @@ from numpy.testing import assert_allclose
 import study
 from study import NonConvergence, SolverSettings, Status
 from study.kernels import one_way as kernel
-from study.model import release_amplitudes, slip_amplitudes
+from study.model import codes, release_amplitudes, slip_amplitudes
 from study.model.paper import PAPER_STRUCTURE as PAPER
 from tests.reference.one_way_exact import exact_velocity
 
@@ -198,6 +198,7 @@ def test_status_codes_mirror_kernel_constants():
     assert Status.FRICTION_PARADOX.value == 5
     assert [r.value for r in NonConvergence] == [
         kernel.REASON_NONE, kernel.REASON_NO_PERIODIC_ORBIT, kernel.REASON_EVENT_BUDGET,
+        codes.REASON_AVERAGE_BUDGET,
     ]
 
 

@@ -127,7 +127,8 @@ def test_floquet_multiplier_at_the_fixed_point_is_the_reference_one():
         vector = structure_vector(s, "two-way")
         omega = 2.0 * math.pi * f
         out = np.empty(points.N_OUT)
-        points.solve_point(vector, omega, a, False, Budget(10_000, 5_000), 0.0, 1.0, out)
+        points.solve_point(vector, omega, a, False, Budget(10_000, 5_000, 1e-3, 20_000), 0.0,
+                           1.0, out)
         table = np.zeros((3, modes.N_MODE))
         modes.mode_table(vector, omega, a, table)
         z = out[OUT_DELTA:OUT_SPEED + 1].copy()
@@ -149,7 +150,7 @@ def _kernel_point(structure: Structure, f: float, a: float, coupling: str) -> np
     out = np.empty(points.N_OUT)
     lifted = bool(a > lift_off_acceleration(structure, f))
     points.solve_point(structure_vector(structure, coupling), 2.0 * math.pi * f, a, lifted,
-                       Budget(10_000, 5_000), 0.0, 1.0, out)
+                       Budget(10_000, 5_000, 1e-3, 20_000), 0.0, 1.0, out)
     return out
 
 
@@ -356,8 +357,8 @@ def test_every_start_reaches_the_same_orbit_near_a_kink_of_the_period_map():
     out = np.empty(points.N_OUT)
     for phase in attractor_kernel.START_PHASES:
         for factor in attractor_kernel.START_FACTORS:
-            points.solve_point(vector, omega, a, False, Budget(10_000, 5_000), phase / f, factor,
-                               out)
+            points.solve_point(vector, omega, a, False, Budget(10_000, 5_000, 1e-3, 20_000),
+                               phase / f, factor, out)
             assert Status(int(out[OUT_STATUS])) == Status.STICK_SLIP
             # v is 3.7e-6 a/w here: ill-conditioned, so compare in units of a/w (the
             # bad start was 3.3e-9 a/w off).

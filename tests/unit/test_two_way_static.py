@@ -31,7 +31,7 @@ from study.model.codes import LIFT_OFF, REASON_NONE, STATIC
 from study.model.inputs import SuspectInputWarning
 from study.solvers.exact import steady_state, structure_vector
 
-BUDGET = Budget(10_000, 5_000)
+BUDGET = Budget(10_000, 5_000, 1e-3, 20_000)
 # Columns of a static row that are not computed: no orbit, no state at phase 0.
 NAN_COLUMNS = (points.OUT_DELTA, points.OUT_DELTA_RATE, points.OUT_SPEED)
 
@@ -116,8 +116,8 @@ def test_static_row_is_the_full_construction_bit_for_bit():
 
 
 def test_lifted_static_row():
-    """A static point past lift-off: LIFT_OFF, everything but the reason, period and the
-    work columns (no pass: 0) NaN."""
+    """A static point past lift-off: LIFT_OFF, everything but the reason, period, periods
+    averaged and the work columns (no pass: 0) NaN."""
     structure = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
     vector = structure_vector(structure, "two-way")
     out = np.empty(points.N_OUT)
@@ -125,9 +125,10 @@ def test_lifted_static_row():
     assert out[points.OUT_STATUS] == LIFT_OFF
     assert out[points.OUT_REASON] == REASON_NONE
     assert out[points.OUT_PERIOD] == 0.0
+    assert out[points.OUT_AVERAGED_PERIODS] == 0.0
     rest = [i for i in range(points.N_OUT)
             if i not in (points.OUT_STATUS, points.OUT_REASON, points.OUT_PERIOD,
-                         *points.WORK_COLUMNS)]
+                         points.OUT_AVERAGED_PERIODS, *points.WORK_COLUMNS)]
     assert np.all(np.isnan(out[rest]))
     assert np.all(out[list(points.WORK_COLUMNS)] == 0.0)
 

@@ -150,19 +150,21 @@ class Checker:
         return [f"{name} holds values outside its flag_values "
                 f"{codes.tolist()}: {found}"]
 
-    def invalid_where(self, name: str, status: str, zero_when_static: bool = True
-                      ) -> list[str]:
+    def invalid_where(self, name: str, status: str, zero_when_static: bool = True,
+                      missing_where: tuple[str, ...] = ()) -> list[str]:
         mismatched = not_zero = 0
-        invalid = [int(s) for s in INVALID_STATUSES]
+        missing = (*INVALID_STATUSES, *(Status[flag.upper()] for flag in missing_where))
+        invalid = [int(s) for s in missing]
         for values, codes in self.slabs(name, status):
             mismatched += int(np.count_nonzero(np.isnan(values) != np.isin(codes, invalid)))
             if zero_when_static:
                 not_zero += int(np.count_nonzero((codes == Status.STATIC) & ~(values == 0.0)))
         problems = []
         if mismatched:
+            names = ", ".join(s.flag for s in missing)
             problems.append(
-                f"{name} must be NaN exactly where {status} is lift_off, not_converged or "
-                f"friction_paradox; {mismatched} points disagree")
+                f"{name} must be NaN exactly where {status} is one of {names}; "
+                f"{mismatched} points disagree")
         if not_zero:
             problems.append(f"{name} is not 0 where {status} is static ({not_zero} points)")
         return problems

@@ -19,12 +19,20 @@ from study.kernels.two_way.points import (
     OUT_PERIOD,
     OUT_STATUS,
     OUT_VELOCITY,
+    OUT_VELOCITY_ERROR,
     solve_drop,
     solve_point,
     start_state,
 )
 from study.kernels.two_way.propagation import stick_releases
-from study.model.codes import FRICTION_PARADOX, LIFT_OFF, NOT_CONVERGED, STATIC
+from study.model.codes import (
+    CHAOTIC,
+    FRICTION_PARADOX,
+    LIFT_OFF,
+    NOT_CONVERGED,
+    QUASI_PERIODIC,
+    STATIC,
+)
 
 # Starting states of the multistability check: rest at these drive phases [periods]
 # with the mode on these multiples of its steady response.
@@ -37,6 +45,9 @@ DROP_PHASES = (0.0, 0.25, 0.5, 0.75)
 # Two orbits are the same attractor when their periods agree and their mean velocities
 # agree to this fraction of the velocity scale a / w.
 SAME_ORBIT = 1e-9
+# Two irregular motions are the same attractor when their time-averaged velocities
+# agree within this many of their standard errors.
+IRREGULAR_SIGMAS = 4.0
 
 #: The columns of :func:`attractors_point`'s output row, in order, with their units.
 ATTRACTOR_COLUMNS = (
@@ -67,9 +78,14 @@ def _tally(row, velocities, periods, count, converged, others, scale):
     if status == FRICTION_PARADOX:
         return count, converged, others | 2
     period = 0.0 if status == STATIC else row[OUT_PERIOD]
+    reach = SAME_ORBIT * scale
+    if status == CHAOTIC or status == QUASI_PERIODIC:
+        # An irregular motion: one attractor whatever the start, its time averages
+        # alike within their errors (period -1 marks it).
+        period = -1.0
+        reach = max(reach, IRREGULAR_SIGMAS * row[OUT_VELOCITY_ERROR])
     for i in range(count):
-        if periods[i] == period and (
-                abs(velocities[i] - row[OUT_VELOCITY]) <= SAME_ORBIT * scale):
+        if periods[i] == period and abs(velocities[i] - row[OUT_VELOCITY]) <= reach:
             return count, converged, others
     velocities[count] = row[OUT_VELOCITY]
     periods[count] = period

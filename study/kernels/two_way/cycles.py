@@ -6,9 +6,26 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from study.kernels.time_average import (
+    CHAOTIC_DETECTION,
+    DISCARDED_PERIODS,
+    S_STATE,
+    examine,
+    examined,
+    looks_chaotic,
+    new_irregular,
+    out_of_reach,
+    record_period,
+    settles,
+    tangent_growth,
+)
 from study.kernels.two_way.modes import TWO_PI
 from study.kernels.two_way.newton import newton, spectral_radius
 from study.kernels.two_way.orbit import (
+    A_BACKWARD,
+    A_DISPLACEMENT,
+    A_FORWARD,
+    A_SLIPS,
     N_ACC,
     RUN_BUDGET,
     RUN_LIFT_OFF,
@@ -18,9 +35,12 @@ from study.kernels.two_way.orbit import (
     run,
 )
 from study.model.codes import (
+    CHAOTIC,
     FRICTION_PARADOX,
     LIFT_OFF,
     NOT_CONVERGED,
+    QUASI_PERIODIC,
+    REASON_AVERAGE_BUDGET,
     REASON_EVENT_BUDGET,
     REASON_NO_PERIODIC_ORBIT,
     REASON_NONE,
@@ -105,19 +125,24 @@ def _cycle(point, z, periods, section, scales, max_events, record, work):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def find_orbit(point, z, t_start, scales, budget, record, work, history):
+def find_orbit(point, z, t_start, scales, budget, record, work, history, stats):
     """Periodic orbit reached from state ``z`` at ``t_start`` [s] (in the first period) at
     the drive point ``point``, within ``budget`` (a :data:`~study.kernels.budget.Budget`);
     ``scales`` the natural sizes of the state, ``work`` (3) and ``history``
-    (``MAX_PERIOD`` x 3) scratch space.
+    (``MAX_PERIOD`` x 3) scratch space. Where no cycle is found the motion is averaged
+    as :func:`~study.kernels.two_way.flight_orbit.find_flight_orbit` does, into
+    ``stats`` (the ``S_*`` slots of :mod:`study.kernels.time_average`, the last
+    iterate's state from ``S_STATE``).
 
     Returns
     -------
     status, reason, periods, newton_found, radius
         ``periods`` > 0 and ``z`` the orbit's state at phase 0 when found; ``record``
-        then belongs to one pass around it. ``newton_found``: the outcome came from
-        Newton's method from the start, so ``z`` is the orbit's fixed point at phase 0
-        (``STICK_SLIP``) or the iterate near the orbit that left the table
+        then belongs to one pass around it. ``CHAOTIC`` or ``QUASI_PERIODIC`` (and
+        ``NOT_CONVERGED`` with ``AVERAGE_BUDGET``): ``stats`` holds the averages.
+        ``newton_found``: the outcome came from Newton's method from the start, so
+        ``z`` is the orbit's fixed point at phase 0 (``STICK_SLIP``) or the iterate
+        near the orbit that left the table
         (``LIFT_OFF``): a state to continue the next point of a sweep from. ``radius``
         the largest Floquet multiplier of ``record.jac`` when it was computed (so that
         it is not computed twice), else NaN.
@@ -143,18 +168,32 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history):
     if flag == RUN_PARADOX:
         return FRICTION_PARADOX, REASON_NONE, 0, False, np.nan
     # No stable fixed point near: iterate the map from the start and look for a cycle
-    # of up to MAX_PERIOD periods, then solve for it by Newton.
+    # of up to MAX_PERIOD periods, then solve for it by Newton; where none is found,
+    # the motion the iterates follow is averaged (study.kernels.time_average), a
+    # tangent vector carried through each period's Jacobian for its exponent.
     for i in range(3):
         z[i] = guess[i]
     tried = np.full(MAX_PERIOD + 1, np.inf)
     candidate = np.empty(3)
-    for iteration in range(budget.max_map_iterations):
+    irregular = new_irregular(scales, budget.max_average_periods)
+    tolerance = budget.velocity_tolerance * point.a / point.omega
+    chaotic = False
+    last = DISCARDED_PERIODS + budget.max_average_periods
+    jac = record.jac
+    grad = record.grad
+    for iteration in range(max(budget.max_map_iterations, last)):
         slot = iteration % MAX_PERIOD
         for i in range(3):
             history[slot, i] = z[i]
+            for j in range(3):
+                jac[i, j] = 1.0 if i == j else 0.0
+                grad[i, j] = 0.0
+        recorded = iteration - DISCARDED_PERIODS
+        if recorded >= 0:
+            record.acc[:] = 0.0
         # Past a burn-in the iterates trace the attractor: one that leaves the table is
         # outside the model (LIFT_OFF), converged or not.
-        flag = run(point, z, 0.0, period, record, False,
+        flag = run(point, z, 0.0, period, record, True,
                    0.0 if iteration >= BURN_IN else -1.0, max_events)
         if flag == RUN_PARADOX:
             return FRICTION_PARADOX, REASON_NONE, 0, False, np.nan
@@ -162,10 +201,35 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history):
             return LIFT_OFF, REASON_NONE, 0, False, np.nan
         if flag != RUN_OK:
             return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, False, np.nan
+        if iteration < last:
+            irregular.growths[iteration] = tangent_growth(jac, scales, irregular)
+        if recorded < 0:
+            chaotic = chaotic or looks_chaotic(irregular, iteration)
+        elif recorded < budget.max_average_periods:
+            acc = record.acc
+            record_period(irregular, recorded, acc[A_DISPLACEMENT], period, acc[A_SLIPS],
+                          acc[A_FORWARD], acc[A_BACKWARD], 0.0, 0.0, 0.0)
+            averaged = recorded + 1
+            if examined(averaged, budget.max_average_periods):
+                within, chaotic, negative = examine(irregular, averaged, tolerance, stats)
+                for i in range(3):  # the last iterate, for whatever is reported
+                    stats[S_STATE + i] = z[i]
+                if settles(averaged, budget.max_average_periods, iteration,
+                           budget.max_map_iterations, within, chaotic, negative):
+                    return ((CHAOTIC if chaotic else QUASI_PERIODIC), REASON_NONE, 0, False,
+                            np.nan)
+                if averaged == budget.max_average_periods or out_of_reach(
+                        averaged, budget.max_average_periods, stats, tolerance):
+                    return NOT_CONVERGED, REASON_AVERAGE_BUDGET, 0, False, np.nan
+        if iteration >= budget.max_map_iterations:
+            continue  # the cycle search's budget is spent
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
             back = (iteration - periods + 1) % MAX_PERIOD
             gap = state_distance(z, history[back], scales)
-            if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
+            # On a chaotic motion only a close return far nearer than the detection's
+            # is tried: the iterates converging onto a cycle after a chaotic transient.
+            if gap < (CHAOTIC_DETECTION if chaotic else CYCLE_DETECTION) and (
+                    gap < 0.5 * tried[periods]):
                 tried[periods] = gap
                 for shifted in range(2):
                     for i in range(3):

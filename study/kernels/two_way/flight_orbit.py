@@ -20,6 +20,30 @@ from numba import njit
 
 from study.kernels.eigenvalues import spectral_radius
 from study.kernels.structure_vector import GRAVITY, STIFFNESS
+from study.kernels.time_average import (
+    CHAOTIC_DETECTION,
+    DISCARDED_PERIODS,
+    S_AIRBORNE,
+    S_BACKWARD,
+    S_EXPONENT,
+    S_EXPONENT_ERROR,
+    S_FORWARD,
+    S_HOP,
+    S_IMPACTS,
+    S_PERIODS,
+    S_SLIPS,
+    S_STATE,
+    S_VELOCITY,
+    S_VELOCITY_ERROR,
+    examine,
+    examined,
+    looks_chaotic,
+    new_irregular,
+    out_of_reach,
+    record_period,
+    settles,
+    tangent_growth,
+)
 from study.kernels.two_way.cycles import (
     CYCLE_DETECTION,
     CYCLE_REACH,
@@ -57,9 +81,12 @@ from study.kernels.two_way.orbit import (
 )
 from study.model.codes import (
     BOUNCING,
+    CHAOTIC,
     CONTINUOUS_SLIDING,
     FRICTION_PARADOX,
     NOT_CONVERGED,
+    QUASI_PERIODIC,
+    REASON_AVERAGE_BUDGET,
     REASON_EVENT_BUDGET,
     REASON_NO_PERIODIC_ORBIT,
     REASON_NONE,
@@ -90,6 +117,10 @@ STABILITY_MARGIN = 1e-6
 # from rest is often a large hop that the orbit does not repeat, and a section chosen
 # on it lies where the orbit has an event.
 FIRST_PERIODS = 2
+
+#: Length of :func:`find_flight_orbit`'s ``stats``: the averages' slots
+#: (:mod:`study.kernels.time_average`'s ``S_*``) and the last iterate's state.
+N_STATS = S_STATE + N_STATE
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -343,20 +374,34 @@ def _flight_cycle(point, z, periods, scales, max_events, record, work):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
+def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, stats):
     """Periodic orbit with flight reached from the 5-state ``z`` at ``t_start`` [s] (in
     the first period), as :func:`~study.kernels.two_way.cycles.find_orbit`: Newton's
     method from the state a period later, then a search of the map's iterates for a
-    cycle of up to ``MAX_PERIOD`` periods.
+    cycle of up to ``MAX_PERIOD`` periods; where none is found, the time averages of
+    the motion the iterates follow (:mod:`study.kernels.time_average`).
+
+    After :data:`DISCARDED_PERIODS` iterates each period's velocity and the log-growth
+    of a tangent vector carried through the map's Jacobian are recorded. Every
+    :data:`AVERAGE_CHECK` periods (at least :data:`MIN_AVERAGED` recorded) the
+    averages are examined: once the exponent is clearly positive no more cycles are
+    tried (the motion is chaotic); once the velocity's 95 % half-width is within
+    ``budget.velocity_tolerance * a / omega`` the motion is reported, chaotic or
+    quasi-periodic (exponent not clearly positive), except that with an exponent
+    clearly negative the cycle search goes on to ``budget.max_map_iterations`` (a
+    stable cycle the iterates approach). After ``budget.max_average_periods`` recorded
+    periods the point is not converged (``AVERAGE_BUDGET``), its averages kept.
 
     Returns
     -------
     status, reason, periods, radius
         ``periods`` > 0 and ``z`` the orbit's state at phase 0 when found (``record``
         then belongs to one pass around it); status STICK_SLIP for any orbit found (the
-        caller names it from its statistics), FRICTION_PARADOX or NOT_CONVERGED;
-        ``radius`` the largest Floquet multiplier of ``record.jac`` when it was computed
-        (so that it is not computed twice), else NaN.
+        caller names it from its statistics), CHAOTIC or QUASI_PERIODIC (``stats``
+        filled, see ``S_*``), FRICTION_PARADOX or NOT_CONVERGED (with
+        ``AVERAGE_BUDGET``, ``stats`` filled too); ``radius`` the largest Floquet
+        multiplier of ``record.jac`` when it was computed (so that it is not computed
+        twice), else NaN.
     """
     max_events = budget.max_events
     period = TWO_PI / point.omega
@@ -387,21 +432,54 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
         z[i] = guess[i]
     tried = np.full(MAX_PERIOD + 1, np.inf)
     candidate = np.empty(N_STATE)
-    for iteration in range(budget.max_map_iterations):
+    irregular = new_irregular(scales, budget.max_average_periods)
+    tolerance = budget.velocity_tolerance * point.a / point.omega
+    chaotic = False
+    last = DISCARDED_PERIODS + budget.max_average_periods
+    for iteration in range(max(budget.max_map_iterations, last)):
         slot = iteration % MAX_PERIOD
         for i in range(N_STATE):
             history[slot, i] = z[i]
+        recorded = iteration - DISCARDED_PERIODS
+        for i in range(N_STATE):
+            for j in range(N_STATE):
+                record.jac[i, j] = 1.0 if i == j else 0.0
         record.acc[:] = 0.0
-        record.passes[1] += 1.0
-        flag = fly(point, z, 0.0, period, record, False, False, max_events)
+        record.passes[0] += 1.0
+        flag = fly(point, z, 0.0, period, record, True, recorded >= 0, max_events)
         if flag == RUN_PARADOX:
             return FRICTION_PARADOX, REASON_NONE, 0, np.nan
         if flag != RUN_OK:
             return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, np.nan
+        if iteration < last:
+            irregular.growths[iteration] = tangent_growth(record.jac, scales, irregular)
+        if recorded < 0:
+            chaotic = chaotic or looks_chaotic(irregular, iteration)
+        elif recorded < budget.max_average_periods:
+            acc = record.acc
+            record_period(irregular, recorded, acc[A_DISPLACEMENT], period, acc[A_SLIPS],
+                          acc[A_FORWARD], acc[A_BACKWARD], acc[A_AIRBORNE], acc[A_IMPACTS],
+                          acc[A_HOP])
+            averaged = recorded + 1
+            if examined(averaged, budget.max_average_periods):
+                within, chaotic, negative = examine(irregular, averaged, tolerance, stats)
+                for i in range(N_STATE):  # the last iterate, for whatever is reported
+                    stats[S_STATE + i] = z[i]
+                if settles(averaged, budget.max_average_periods, iteration,
+                           budget.max_map_iterations, within, chaotic, negative):
+                    return (CHAOTIC if chaotic else QUASI_PERIODIC), REASON_NONE, 0, np.nan
+                if averaged == budget.max_average_periods or out_of_reach(
+                        averaged, budget.max_average_periods, stats, tolerance):
+                    return NOT_CONVERGED, REASON_AVERAGE_BUDGET, 0, np.nan
+        if iteration >= budget.max_map_iterations:
+            continue  # the cycle search's budget is spent
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
             back = (iteration - periods + 1) % MAX_PERIOD
             gap = state_distance(z, history[back], scales)
-            if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
+            # On a chaotic motion only a close return far nearer than the detection's
+            # is tried: the iterates converging onto a cycle after a chaotic transient.
+            if gap < (CHAOTIC_DETECTION if chaotic else CYCLE_DETECTION) and (
+                    gap < 0.5 * tried[periods]):
                 tried[periods] = gap
                 for i in range(N_STATE):
                     candidate[i] = history[back, i]
@@ -418,17 +496,36 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def orbit_exponent(out, c_multiplier, c_period, c_velocity_error, c_averaged, c_exponent,
+                   c_exponent_error):
+    """Complete the row ``out`` of an orbit (or a static point) whose multiplier and
+    period it holds: its velocity is exact (error 0, no period averaged) and its
+    largest Lyapunov exponent per drive period is the log of its largest Floquet
+    multiplier over its period (a static point's period being one drive period)."""
+    out[c_velocity_error] = 0.0
+    out[c_averaged] = 0.0
+    out[c_exponent] = math.log(out[c_multiplier]) / max(out[c_period], 1.0)
+    out[c_exponent_error] = 0.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
-    """The orbit with flight reached from the 5-state ``z`` at ``t_start`` [s], written
+    """The motion with flight reached from the 5-state ``z`` at ``t_start`` [s], written
     into ``out`` at the positions ``columns`` (status, reason, velocity, slips, forward,
-    backward, period, multiplier, delta, delta_rate, speed, airborne, hop, impacts);
-    ``table`` holds the contact rows and the flight row.
+    backward, period, multiplier, delta, delta_rate, speed, airborne, hop, impacts,
+    averaged_velocity, velocity_error, averaged_periods, exponent, exponent_error);
+    ``table`` holds the contact rows and the flight row. An irregular motion
+    (``CHAOTIC``, ``QUASI_PERIODIC``) gets its time averages, no multiplier and period
+    0, and its last iterate as the state at phase 0; a point not converged after
+    averaging (``AVERAGE_BUDGET``) keeps no velocity but its partial mean (as
+    averaged_velocity), its error, periods and exponent.
 
     Returns
     -------
     float, float
-        The passes over the period map with its Jacobian (Newton's) and without it (the
-        map's iterates, the cycle checks): the work the point took.
+        The passes over the period map with its Jacobian (Newton's, and the averaged
+        periods') and without it (the map's iterates, the cycle checks): the work the
+        point took.
     """
     point = DrivePoint(structure, table, omega, a)
     scales = flight_scales(point)
@@ -437,15 +534,39 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
                           np.zeros(2))
     work = np.empty(N_STATE)
     history = np.empty((MAX_PERIOD, N_STATE))
+    stats = np.full(N_STATS, np.nan)
     status, reason, periods, radius = find_flight_orbit(point, z, t_start, scales, budget,
-                                                        record, work, history)
-    if math.isnan(radius):
-        radius = spectral_radius(record.jac)
+                                                        record, work, history, stats)
     passes = record.passes
     (c_status, c_reason, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier,
-     c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts) = columns
+     c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts, c_averaged_velocity,
+     c_velocity_error, c_averaged, c_exponent, c_exponent_error) = columns
     out[c_status] = status
     out[c_reason] = reason
+    if status == CHAOTIC or status == QUASI_PERIODIC or reason == REASON_AVERAGE_BUDGET:
+        out[c_averaged] = stats[S_PERIODS]
+        out[c_averaged_velocity] = stats[S_VELOCITY]
+        out[c_velocity_error] = stats[S_VELOCITY_ERROR]
+        out[c_exponent] = stats[S_EXPONENT]
+        out[c_exponent_error] = stats[S_EXPONENT_ERROR]
+        if status == NOT_CONVERGED:
+            return passes[0], passes[1]
+        period = TWO_PI / omega
+        out[c_velocity] = stats[S_VELOCITY]
+        out[c_slips] = stats[S_SLIPS]
+        out[c_forward] = stats[S_FORWARD] / period
+        out[c_backward] = stats[S_BACKWARD] / period
+        out[c_period] = 0.0
+        out[c_multiplier] = np.nan
+        out[c_delta] = stats[S_STATE]
+        out[c_rate] = stats[S_STATE + 1]
+        out[c_speed] = stats[S_STATE + 2]
+        out[c_airborne] = stats[S_AIRBORNE] / period
+        out[c_hop] = stats[S_HOP]
+        out[c_impacts] = stats[S_IMPACTS]
+        return passes[0], passes[1]
+    if math.isnan(radius):
+        radius = spectral_radius(record.jac)
     if periods == 0:
         return passes[0], passes[1]
     acc = record.acc
@@ -465,6 +586,8 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
         out[c_airborne] = 0.0
         out[c_hop] = acc[A_HOP]
         out[c_impacts] = 0.0
+        orbit_exponent(out, c_multiplier, c_period, c_velocity_error, c_averaged,
+                       c_exponent, c_exponent_error)
         return passes[0], passes[1]
     else:
         out[c_status] = STICK_SLIP if acc[A_STICK] > 0.0 else CONTINUOUS_SLIDING
@@ -480,4 +603,6 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     out[c_airborne] = acc[A_AIRBORNE] / span
     out[c_hop] = acc[A_HOP]
     out[c_impacts] = acc[A_IMPACTS] / periods
+    orbit_exponent(out, c_multiplier, c_period, c_velocity_error, c_averaged, c_exponent,
+                   c_exponent_error)
     return passes[0], passes[1]

@@ -29,6 +29,17 @@ from study.kernels.structure_vector import (
     STATIC_FRICTION,
     STIFFNESS,
 )
+from study.kernels.time_average import (
+    S_BACKWARD,
+    S_EXPONENT,
+    S_EXPONENT_ERROR,
+    S_FORWARD,
+    S_PERIODS,
+    S_SLIPS,
+    S_STATE,
+    S_VELOCITY,
+    S_VELOCITY_ERROR,
+)
 from study.kernels.two_way.continuation import (
     CONTINUED_LIFT_OFF,
     CONTINUED_ORBIT,
@@ -41,7 +52,7 @@ from study.kernels.two_way.continuation import (
 )
 from study.kernels.two_way.cycles import MAX_PERIOD, STABILITY_MARGIN, find_orbit
 from study.kernels.two_way.flight import FLIGHT_ROW, N_ROWS, N_STATE, Z_GAP, flight_row
-from study.kernels.two_way.flight_orbit import solve_flight
+from study.kernels.two_way.flight_orbit import orbit_exponent, solve_flight
 from study.kernels.two_way.modes import (
     EPS,
     M_OFFSET,
@@ -69,9 +80,12 @@ from study.kernels.two_way.orbit import (
 from study.kernels.two_way.propagation import particular, stick_propagator
 from study.model.codes import (
     BOUNCING,
+    CHAOTIC,
     CONTINUOUS_SLIDING,
     LIFT_OFF,
     NOT_CONVERGED,
+    QUASI_PERIODIC,
+    REASON_AVERAGE_BUDGET,
     REASON_NONE,
     STATIC,
     STICK_SLIP,
@@ -93,6 +107,14 @@ OUTPUT_COLUMNS = (
     ("airborne", "1", "fraction of the orbit's period the base spends off the table"),
     ("hop", "m", "largest gap between the base and the table over the orbit"),
     ("impacts", "1", "impacts of the base on the table per drive period"),
+    ("averaged_velocity", "m s-1", "time-averaged velocity of a motion followed on the "
+     "period map (irregular, or not converged after the most periods: its partial mean)"),
+    ("velocity_error", "m s-1", "standard error of the mean velocity (0: an orbit's, exact)"),
+    ("averaged_periods", "1", "drive periods an irregular motion was averaged over (0: an "
+     "orbit)"),
+    ("exponent", "1", "largest Lyapunov exponent per drive period (an orbit's: the log of "
+     "its largest Floquet multiplier over its period)"),
+    ("exponent_error", "1", "standard error of the exponent (0: an orbit's, exact)"),
     ("newton_passes", "1", "passes over the period map with its Jacobian the point took"),
     ("map_passes", "1", "passes over the period map without its Jacobian the point took"),
     ("continued", "1", "1: the contact orbit was continued from the sweep's last points; "
@@ -116,6 +138,11 @@ OUT_SPEED = _NAMES.index("speed")
 OUT_AIRBORNE = _NAMES.index("airborne")
 OUT_HOP = _NAMES.index("hop")
 OUT_IMPACTS = _NAMES.index("impacts")
+OUT_AVERAGED_VELOCITY = _NAMES.index("averaged_velocity")
+OUT_VELOCITY_ERROR = _NAMES.index("velocity_error")
+OUT_AVERAGED_PERIODS = _NAMES.index("averaged_periods")
+OUT_EXPONENT = _NAMES.index("exponent")
+OUT_EXPONENT_ERROR = _NAMES.index("exponent_error")
 OUT_NEWTON_PASSES = _NAMES.index("newton_passes")
 OUT_MAP_PASSES = _NAMES.index("map_passes")
 OUT_CONTINUED = _NAMES.index("continued")
@@ -127,7 +154,9 @@ N_OUT = len(OUTPUT_COLUMNS)
 # order.
 FLIGHT_COLUMNS = (OUT_STATUS, OUT_REASON, OUT_VELOCITY, OUT_SLIPS, OUT_FORWARD,
                   OUT_BACKWARD, OUT_PERIOD, OUT_MULTIPLIER, OUT_DELTA, OUT_DELTA_RATE,
-                  OUT_SPEED, OUT_AIRBORNE, OUT_HOP, OUT_IMPACTS)
+                  OUT_SPEED, OUT_AIRBORNE, OUT_HOP, OUT_IMPACTS, OUT_AVERAGED_VELOCITY,
+                  OUT_VELOCITY_ERROR,
+                  OUT_AVERAGED_PERIODS, OUT_EXPONENT, OUT_EXPONENT_ERROR)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -189,6 +218,8 @@ def _static_row(structure, omega, lifted, out, diagnostics):
     out[OUT_AIRBORNE] = 0.0
     out[OUT_HOP] = 0.0
     out[OUT_IMPACTS] = 0.0
+    out[OUT_VELOCITY_ERROR] = 0.0
+    out[OUT_EXPONENT_ERROR] = 0.0
     if not diagnostics:
         return
     # The orbit is the mode's steady response: perturbations decay with it.
@@ -198,16 +229,19 @@ def _static_row(structure, omega, lifted, out, diagnostics):
         out[OUT_MULTIPLIER] = stuck_radius(e11, e12, e21, e22, 0.0)
     else:
         out[OUT_MULTIPLIER] = np.inf
+    orbit_exponent(out, OUT_MULTIPLIER, OUT_PERIOD, OUT_VELOCITY_ERROR,
+                   OUT_AVERAGED_PERIODS, OUT_EXPONENT, OUT_EXPONENT_ERROR)
 
 
 #: Scratch arrays a run of points reuses (an allocation costs about as much as an
 #: event of the orbit): the mode table (``N_ROWS`` x ``N_MODE``), the state's natural
 #: scales, the state, a pass's end state, Newton's step and residual (2 x 3), the pass
 #: record, the cycle search's history (``MAX_PERIOD`` x 3) and an output row kept
-#: aside (``N_OUT``).
+#: aside (``N_OUT``), and an irregular motion's averages (the ``S_*`` slots of
+#: :mod:`study.kernels.time_average`, the state from ``S_STATE``).
 Workspace = namedtuple("Workspace",
                        ("table", "scales", "z", "work", "newton", "record", "history",
-                        "row"))
+                        "row", "stats"))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -221,7 +255,7 @@ def new_workspace(structure):
     return Workspace(table, np.empty(3), np.empty(3), np.empty(3), np.empty((2, 3)),
                      PassRecord(np.zeros(N_ACC), np.empty((3, 3)), np.empty((3, 3)),
                                 np.zeros(2)),
-                     np.empty((MAX_PERIOD, 3)), np.empty(N_OUT))
+                     np.empty((MAX_PERIOD, 3)), np.empty(N_OUT), np.empty(S_STATE + 3))
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
@@ -230,6 +264,7 @@ def start_row(out):
     out[:] = np.nan
     out[OUT_REASON] = REASON_NONE
     out[OUT_PERIOD] = 0.0
+    out[OUT_AVERAGED_PERIODS] = 0.0
     out[OUT_NEWTON_PASSES] = 0.0
     out[OUT_MAP_PASSES] = 0.0
     out[OUT_CONTINUED] = 0.0
@@ -322,7 +357,8 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
         # where it does not bounce is the contact solver's answer wanted (see
         # solve_point), so the row is kept aside for the case that it ends LIFT_OFF.
         _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
-        if static or out[OUT_STATUS] == BOUNCING:
+        if static or out[OUT_STATUS] == BOUNCING or (
+                out[OUT_STATUS] in (CHAOTIC, QUASI_PERIODIC) and out[OUT_AIRBORNE] > 0.0):
             forget(neighbours)
             return
         workspace.row[:] = out
@@ -363,7 +399,8 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
     if not solved:
         start_state(table, omega, t_start, z, factor)
         status, reason, periods, newton_found, radius = find_orbit(
-            point, z, t_start, scales, budget, record, work, workspace.history)
+            point, z, t_start, scales, budget, record, work, workspace.history,
+            workspace.stats)
         if newton_found and status == STICK_SLIP:
             remember(neighbours, omega, a, z, record.acc[A_EVENTS], record.acc[A_SLIPS])
         elif newton_found and status == LIFT_OFF:
@@ -388,6 +425,9 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
         out[OUT_MAP_PASSES] += workspace.row[OUT_MAP_PASSES]
     out[OUT_STATUS] = status
     out[OUT_REASON] = reason
+    if status in (CHAOTIC, QUASI_PERIODIC) or reason == REASON_AVERAGE_BUDGET:
+        _irregular_row(workspace.stats, omega, status, out)
+        return
     if periods == 0:
         return
     acc = record.acc
@@ -402,6 +442,36 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
     out[OUT_DELTA] = z[0]
     out[OUT_DELTA_RATE] = z[1]
     out[OUT_SPEED] = z[2]
+    out[OUT_AIRBORNE] = 0.0
+    out[OUT_HOP] = 0.0
+    out[OUT_IMPACTS] = 0.0
+    orbit_exponent(out, OUT_MULTIPLIER, OUT_PERIOD, OUT_VELOCITY_ERROR,
+                   OUT_AVERAGED_PERIODS, OUT_EXPONENT, OUT_EXPONENT_ERROR)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _irregular_row(stats, omega, status, out):
+    """``out`` of a contact motion averaged on the period map (``stats``'s ``S_*``
+    slots): its averages, no multiplier, period 0 and its last iterate as the state at
+    phase 0; a point not converged keeps no velocity, only its partial averages' error,
+    periods and exponent."""
+    out[OUT_AVERAGED_PERIODS] = stats[S_PERIODS]
+    out[OUT_AVERAGED_VELOCITY] = stats[S_VELOCITY]
+    out[OUT_VELOCITY_ERROR] = stats[S_VELOCITY_ERROR]
+    out[OUT_EXPONENT] = stats[S_EXPONENT]
+    out[OUT_EXPONENT_ERROR] = stats[S_EXPONENT_ERROR]
+    if status == NOT_CONVERGED:
+        return
+    period = TWO_PI / omega
+    out[OUT_VELOCITY] = stats[S_VELOCITY]
+    out[OUT_SLIPS] = stats[S_SLIPS]
+    out[OUT_FORWARD] = stats[S_FORWARD] / period
+    out[OUT_BACKWARD] = stats[S_BACKWARD] / period
+    out[OUT_PERIOD] = 0.0
+    out[OUT_MULTIPLIER] = np.nan
+    out[OUT_DELTA] = stats[S_STATE]
+    out[OUT_DELTA_RATE] = stats[S_STATE + 1]
+    out[OUT_SPEED] = stats[S_STATE + 2]
     out[OUT_AIRBORNE] = 0.0
     out[OUT_HOP] = 0.0
     out[OUT_IMPACTS] = 0.0
