@@ -24,8 +24,10 @@ from matplotlib.lines import Line2D
 
 from study.figures import FigureError
 from study.figures.common import (
+    IRREGULAR,
     VALID,
     coupling_label,
+    in_the_air,
     is_flight,
     lift_off_label,
     require_axis,
@@ -34,6 +36,7 @@ from study.figures.common import (
     save,
     selection_text,
     status_handles,
+    status_hatches,
     status_layers,
     structure_from_dataset,
     structure_text,
@@ -56,13 +59,14 @@ def row_indices(n: int, limit: int = MAX_ROWS) -> list[int]:
     return sorted(set(np.rint(np.linspace(0, n - 1, limit)).astype(int).tolist()))
 
 
-def bouncing_share(status: np.ndarray) -> tuple[float, float]:
-    """Share [1] of the points that bounce, of all points and of the moving ones
-    (stick-slip, continuous sliding or bouncing)."""
+def bouncing_share(status: np.ndarray, airborne: np.ndarray | None = None
+                   ) -> tuple[float, float]:
+    """Share [1] of the points that bounce (orbits, and irregular motions in the air
+    when ``airborne`` is given), of all points and of the moving ones (every status
+    with a velocity but static)."""
     status = np.asarray(status)
-    bouncing = np.count_nonzero(status == Status.BOUNCING)
-    moving = np.count_nonzero(np.isin(status, (Status.STICK_SLIP, Status.CONTINUOUS_SLIDING,
-                                               Status.BOUNCING)))
+    bouncing = np.count_nonzero(in_the_air(status, airborne))
+    moving = np.count_nonzero(np.isin(status, [s for s in VALID if s != Status.STATIC]))
     return bouncing / max(status.size, 1), bouncing / max(moving, 1)
 
 
@@ -82,11 +86,12 @@ def _over_fa(dataset: xr.Dataset, name: str, at: dict) -> np.ndarray:
     return dataset[name].isel(at).transpose("a", "f").values
 
 
-def _overlays(ax, dataset: xr.Dataset, at: dict, status: np.ndarray) -> None:
-    """The bouncing region's edge, the lift-off of the base at rest and the frontier."""
+def _overlays(ax, dataset: xr.Dataset, at: dict, flying: np.ndarray) -> None:
+    """The bouncing region's edge (``flying``, over (a, f)), the lift-off of the base at
+    rest and the frontier."""
     f = dataset["f"].values
     a = dataset["a"].values
-    bouncing = (status == Status.BOUNCING).astype(float)
+    bouncing = flying.astype(float)
     if bouncing.any() and min(bouncing.shape) > 1:
         ax.contour(f, a, bouncing, levels=[0.5], **_EDGE)
     if "lift_off_acceleration" in dataset:
@@ -161,20 +166,20 @@ def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
     painted = []
     for row, at in enumerate(ats):
         status = _over_fa(dataset, "status", at)
-        flying = status == Status.BOUNCING
+        airborne = 100 * _over_fa(dataset, "airborne_fraction", at)
+        flying = in_the_air(status, airborne)
         v = 1e3 * _over_fa(dataset, "velocity", at)
         velocity = np.ma.masked_where(~np.isin(status, VALID) | ~np.isfinite(v), v)
         limit = float(np.max(np.abs(velocity))) if velocity.count() else 0.0
         hop = 1e3 * _over_fa(dataset, "largest_hop", at)
         hop = np.ma.masked_where(~flying | ~np.isfinite(hop) | (hop <= 0), hop)
-        airborne = 100 * _over_fa(dataset, "airborne_fraction", at)
         panels = (
             (velocity, "RdBu", TwoSlopeNorm(0.0, -(limit or 1.0), limit or 1.0)),
             (hop, "viridis", _hop_norm(hop)),
             (np.ma.masked_where(~flying | ~np.isfinite(airborne), airborne), "magma_r",
              Normalize(0.0, 100.0)),
         )
-        share, of_moving = bouncing_share(status)
+        share, of_moving = bouncing_share(status, airborne)
         M = float(structure_from_dataset(dataset, **at).M)
         for column, (values, cmap, norm) in enumerate(panels):
             ax = axes[row, column]
@@ -183,7 +188,8 @@ def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
             fig.colorbar(mesh, ax=ax, location="bottom", shrink=0.85, aspect=30,
                          label=labels[column])
             painted += status_layers(ax, f, a, status)
-            _overlays(ax, dataset, at, status)
+            painted += status_hatches(ax, f, a, status, IRREGULAR)
+            _overlays(ax, dataset, at, flying)
             if column == 0:
                 ax.set_ylabel("drive acceleration a [m s$^{-2}$]")
             # Under every map (its colour bar below): the frequency axis on each row.

@@ -22,12 +22,14 @@ from study.model.paper import PAPER_POINTS, is_paper_structure
 from study.model.status import INVALID_STATUSES, Status
 
 __all__ = [
+    "IRREGULAR",
     "MAX_LEGEND_ENTRIES",
     "PAPER_POINTS",
     "VALID",
     "coupling_label",
     "disk_text",
     "grid_minimum",
+    "in_the_air",
     "is_flight",
     "is_paper_file",
     "lift_off_label",
@@ -43,6 +45,7 @@ __all__ = [
     "selection_text",
     "single_structure",
     "status_handles",
+    "status_hatches",
     "status_layers",
     "structure_from_dataset",
     "structure_text",
@@ -164,6 +167,21 @@ def structure_from_dataset(dataset: xr.Dataset, **at: int):
 VALID = tuple(s for s in Status if s not in INVALID_STATUSES)
 
 
+#: The statuses of motions averaged on the period map (no orbit).
+IRREGULAR = (Status.CHAOTIC, Status.QUASI_PERIODIC)
+
+
+def in_the_air(status: np.ndarray, airborne: np.ndarray | None = None) -> np.ndarray:
+    """Where the base leaves the table in the steady motion: the bouncing orbits, and
+    the irregular motions that spend time in the air (``airborne``, the airborne
+    fraction of the same shape, None without flight)."""
+    flying = status == Status.BOUNCING
+    if airborne is not None:
+        with np.errstate(invalid="ignore"):
+            flying |= np.isin(status, IRREGULAR) & (np.nan_to_num(airborne) > 0.0)
+    return flying
+
+
 def status_layers(ax: plt.Axes, f: np.ndarray, a: np.ndarray, status: np.ndarray
                   ) -> list[Status]:
     """Paint each status declared with a flat colour (:attr:`Status.colour`: the points
@@ -184,12 +202,41 @@ def status_layers(ax: plt.Axes, f: np.ndarray, a: np.ndarray, status: np.ndarray
 
 
 def status_handles(statuses: Iterable[Status]) -> list:
-    """Legend entries of flat status layers: each status's declared colour and legend
-    text (:attr:`Status.legend`), once each, in code order."""
+    """Legend entries of status layers: each status's declared flat colour or hatch and
+    its legend text (:attr:`Status.legend`), once each, in code order."""
     from matplotlib.patches import Patch
 
-    return [Patch(facecolor=flag.colour, edgecolor="0.3", lw=0.5, label=flag.legend)
-            for flag in sorted(set(statuses)) if flag.colour is not None]
+    handles = []
+    for flag in sorted(set(statuses)):
+        if flag.colour is not None:
+            handles.append(Patch(facecolor=flag.colour, edgecolor="0.3", lw=0.5,
+                                 label=flag.legend))
+        elif flag.hatch is not None:
+            handles.append(Patch(facecolor="none", edgecolor="black", hatch=flag.hatch,
+                                 label=flag.legend))
+    return handles
+
+
+def status_hatches(ax: plt.Axes, f: np.ndarray, a: np.ndarray, status: np.ndarray,
+                   statuses: Iterable[Status] = tuple(Status)) -> list[Status]:
+    """Hatch each status declared with a hatch (:attr:`Status.hatch`: classes of motion
+    with a velocity drawn apart, such as continuous sliding and the irregular motions)
+    over its velocity where it holds, of ``statuses`` (default all); ``status`` over
+    ``(a, f)``. Returns the statuses hatched, for :func:`status_handles`."""
+    hatched = []
+    for flag in statuses:
+        region = status == flag
+        if flag.hatch is None or not np.any(region):
+            continue
+        if min(region.shape) > 1:
+            ax.contourf(f, a, region.astype(float), levels=[0.5, 1.5], colors="none",
+                        hatches=[flag.hatch])
+        else:  # a single row or column: no area to hatch, a mark per point
+            grid_a, grid_f = np.meshgrid(a, f, indexing="ij")
+            ax.plot(grid_f[region], grid_a[region], ls="none", marker="o", ms=3,
+                    mfc="none", mec="black")
+        hatched.append(flag)
+    return hatched
 
 
 def selected_keys(dataset: xr.Dataset) -> set[str]:

@@ -34,6 +34,7 @@ from study.figures.common import (
     save,
     selection_text,
     status_handles,
+    status_hatches,
     status_layers,
     structure_from_dataset,
     structure_text,
@@ -107,9 +108,9 @@ def _panel(ax, dataset: xr.Dataset, at: dict, norm: TwoSlopeNorm):
     mesh = ax.pcolormesh(f, a, v.T, cmap="RdBu", norm=norm, shading="nearest",
                          rasterized=True)
     status_layers(ax, f, a, status.T)
+    status_hatches(ax, f, a, status.T)
     sliding = (status == Status.CONTINUOUS_SLIDING).astype(float)
-    if sliding.any():
-        ax.contourf(f, a, sliding.T, levels=[0.5, 1.5], colors="none", hatches=["////"])
+    if sliding.any() and min(sliding.shape) > 1:
         ax.contour(f, a, sliding.T, levels=[0.5], colors="k", linewidths=0.7)
     bouncing = (status == Status.BOUNCING).astype(float)
     if bouncing.any() and min(bouncing.shape) > 1:  # with flight: the region's edge
@@ -190,10 +191,11 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
         *(status_handles([Status.LIFT_OFF]) if not is_flight(dataset) else
           [Line2D([], [], color=_BOUNCING_EDGE, lw=1.1,
                   label="edge of the bouncing region (flight)")]),
-        Patch(facecolor="none", edgecolor="k", hatch="////",
+        Patch(facecolor="none", edgecolor="k", hatch=Status.CONTINUOUS_SLIDING.hatch,
               label=f"{Status.CONTINUOUS_SLIDING.legend} (CS)"),
-        *status_handles(flag for flag in Status if flag.colour is not None
-                        and flag != Status.LIFT_OFF
+        *status_handles(flag for flag in Status
+                        if (flag.colour is not None or flag.hatch is not None)
+                        and flag not in (Status.LIFT_OFF, Status.CONTINUOUS_SLIDING)
                         and np.any(dataset["status"].values == flag)),
         Line2D([], [], ls="none", marker="o", color="k", ms=3, label="frontier $f^*(a)$"),
     ]

@@ -13,7 +13,6 @@ import numpy as np
 import xarray as xr
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.lines import Line2D
-from matplotlib.patches import Patch
 
 from study.figures import common
 from study.figures.common import (
@@ -67,15 +66,17 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     a = dataset["a"].values
 
     fig, ax = plt.subplots(figsize=(8.0, 6.0), layout="constrained")
-    sliding, stuck = _velocity_map(fig, ax, dataset)
+    hatched, stuck = _velocity_map(fig, ax, dataset)
     handles = _curves(ax, dataset)
     status = dataset["status"].values
     # The statuses without a velocity, each in its declared colour; lift-off always
     # without flight (it explains where the map ends).
     painted = set(Status(code) for code in np.unique(status)) | (
         set() if common.is_flight(dataset) else {Status.LIFT_OFF})
-    handles += common.status_handles(flag for flag in painted if flag != Status.NOT_CONVERGED)
-    if np.any(status == Status.BOUNCING):
+    handles += common.status_handles(flag for flag in painted
+                                     if flag.colour is not None
+                                     and flag != Status.NOT_CONVERGED)
+    if np.any(_flying(dataset)):
         handles.append(Line2D([], [], color=BOUNCING_EDGE, lw=1.3,
                               label="edge of the bouncing region (flight)"))
     # The paper's points belong to the paper's structure: drawn on its maps only.
@@ -83,9 +84,8 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     if any(f[0] <= fp <= f[-1] and a[0] <= ap <= a[-1] for fp, ap in points.values()):
         handles.append(Line2D([], [], ls="none", marker="o", ms=5, mfc="white", mec="black",
                               label="the paper's points in regions S, P, N, PN"))
-    if np.any(sliding):
-        handles.append(Patch(facecolor="none", edgecolor="black", hatch="////",
-                             label=Status.CONTINUOUS_SLIDING.legend))
+    # Continuous sliding and the irregular motions: hatched over their velocity.
+    handles += common.status_handles(hatched)
     if np.any(stuck):
         handles += common.status_handles([Status.NOT_CONVERGED])
 
@@ -103,18 +103,24 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
                        f"{title} ({common.structure_text(dataset, tex=False)})")
 
 
+def _flying(dataset: xr.Dataset) -> xr.DataArray:
+    """Where the base leaves the table (:func:`study.figures.common.in_the_air`)."""
+    airborne = dataset.get("airborne_fraction")
+    return xr.apply_ufunc(common.in_the_air, dataset["status"],
+                          *([] if airborne is None else [airborne]))
+
+
 def _velocity_map(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  ) -> tuple[list[Status], np.ndarray]:
     """The velocity over (f, a) with its colour bar, lift-off and not-converged points
-    as flat layers, continuous sliding hatched. Returns where the structure slides
-    continuously and where the solver did not converge, over (a, f)."""
+    as flat layers, continuous sliding and the irregular motions hatched. Returns the
+    statuses hatched and where the solver did not converge, over (a, f)."""
     f = dataset["f"].values
     a = dataset["a"].values
     velocity = 1e3 * dataset["velocity"].transpose("a", "f").values  # mm s-1 over (a, f)
     status = dataset["status"].transpose("a", "f").values
     valid = np.isin(status, VALID)
     stuck = status == Status.NOT_CONVERGED
-    sliding = status == Status.CONTINUOUS_SLIDING
     shown = np.ma.masked_where(~valid | ~np.isfinite(velocity), velocity)
     limit = float(np.max(np.abs(shown))) if shown.count() else 0.0
     limit = limit if limit > 0 else 1.0
@@ -123,14 +129,12 @@ def _velocity_map(fig: plt.Figure, ax: plt.Axes, dataset: xr.Dataset
     fig.colorbar(mesh, ax=ax, label="mean velocity v [mm s$^{-1}$]  (> 0: forward)",
                  shrink=0.9)
     common.status_layers(ax, f, a, status)
-    if np.any(sliding):
-        ax.contourf(f, a, sliding.astype(float), levels=[0.5, 1.5], colors="none",
-                    hatches=["////"])
-    bouncing = status == Status.BOUNCING
+    hatched = common.status_hatches(ax, f, a, status)
+    bouncing = _flying(dataset).transpose("a", "f").values
     if np.any(bouncing) and min(bouncing.shape) > 1:  # with flight: the region's edge
         ax.contour(f, a, bouncing.astype(float), levels=[0.5], colors=BOUNCING_EDGE,
                    linewidths=1.3, zorder=3)
-    return sliding, stuck
+    return hatched, stuck
 
 
 def _curves(ax: plt.Axes, dataset: xr.Dataset) -> list:

@@ -29,17 +29,19 @@ class Status(IntEnum):
 
     Every member carries its declaration: :attr:`meaning` (one sentence),
     :attr:`velocity` (a key of :data:`VELOCITY_KINDS`), :attr:`legend` (the label of
-    its class in a figure's legend) and :attr:`colour` (its flat colour in the maps, or
-    ``None`` where figures draw it otherwise).
+    its class in a figure's legend), :attr:`colour` (its flat colour in the maps, for
+    the statuses without a velocity) and :attr:`hatch` (the hatch over its velocity in
+    the maps, for a class of motion drawn apart; ``None`` for neither).
     """
 
     meaning: str
     velocity: str
     legend: str
     colour: str | None
+    hatch: str | None
 
     def __new__(cls, code: int, meaning: str, velocity: str, legend: str,
-                colour: str | None = None) -> Status:
+                colour: str | None = None, hatch: str | None = None) -> Status:
         if velocity not in VELOCITY_KINDS:
             raise ValueError(f"Status velocity {velocity!r}; allowed: "
                              f"{', '.join(VELOCITY_KINDS)}")
@@ -49,6 +51,7 @@ class Status(IntEnum):
         member.velocity = velocity
         member.legend = legend
         member.colour = colour
+        member.hatch = hatch
         return member
 
     STATIC = (codes.STATIC,
@@ -60,7 +63,7 @@ class Status(IntEnum):
     CONTINUOUS_SLIDING = (codes.CONTINUOUS_SLIDING,
                           "Periodic orbit without any stick: slips reverse at ``v = 0`` "
                           "(seen as ``M -> 1``).",
-                          "mean", "continuous sliding (no stick)")
+                          "mean", "continuous sliding (no stick)", None, "////")
     LIFT_OFF = (codes.LIFT_OFF,
                 "``n(t) < 0`` during the cycle: the structure leaves the table, the model "
                 "without flight does not apply and no velocity is given.",
@@ -85,14 +88,14 @@ class Status(IntEnum):
                "start reaches is chaotic (its largest Lyapunov exponent more than three "
                "standard errors above 0); its velocity is the time average over the "
                "period map's iterates, with its standard error and the periods averaged.",
-               "mean", "chaotic: irregular, time-averaged velocity")
+               "mean", "chaotic: irregular, time-averaged velocity", None, "xxxx")
     QUASI_PERIODIC = (codes.QUASI_PERIODIC,
                       "Two-way coupling: no stable cycle within reach, and the motion "
                       "reached is irregular without a clearly positive Lyapunov exponent "
                       "(a quasi-periodic motion on an invariant curve, or a stable cycle "
                       "longer than the cycle search's 16 periods); its velocity is the "
                       "time average, as for CHAOTIC.",
-                      "mean", "quasi-periodic: time-averaged velocity")
+                      "mean", "quasi-periodic: time-averaged velocity", None, "....")
 
     @property
     def flag(self) -> str:

@@ -199,3 +199,23 @@ def test_each_colour_bar_label_reads_as_its_own_maps(bouncing_dataset):
                     assert not box.overlaps(tight), (label.get_text(), other.get_title())
     finally:
         plt.close(fig)
+
+
+@pytest.mark.parametrize("figure", ["bouncing", "mass-ratio-limit", "regime-map"])
+def test_irregular_points_are_their_own_class_with_their_velocity(
+        figure, bouncing_dataset, tmp_path, monkeypatch):
+    """Chaotic and quasi-periodic points keep their velocity on the maps and are named in
+    the legend by their declared text (issue 35), not drawn as holes."""
+    dataset = bouncing_dataset.copy()
+    bouncing = (dataset["status"] == int(Status.BOUNCING)).values
+    chosen = np.flatnonzero(bouncing.ravel())
+    assert chosen.size >= 4
+    status = dataset["status"].values.copy().ravel()
+    status[chosen[::2]] = int(Status.CHAOTIC)
+    status[chosen[1::4]] = int(Status.QUASI_PERIODIC)
+    dataset["status"] = dataset["status"].copy(data=status.reshape(bouncing.shape))
+    _, labels = _drawn(figure, dataset, tmp_path, monkeypatch)
+    for irregular in (Status.CHAOTIC, Status.QUASI_PERIODIC):
+        assert irregular.legend in labels, labels
+    assert not any(label.startswith("not converged") for label in labels), labels
+    assert Status.CHAOTIC in VALID and Status.QUASI_PERIODIC in VALID
