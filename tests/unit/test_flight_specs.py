@@ -253,7 +253,8 @@ def test_without_flight_needs_flight():
 
 def test_the_without_flight_observable_refuses_a_study_that_does_not_fly():
     work = type("Work", (), {"method": Method(coupling="two-way")})()
-    with pytest.raises(ValueError, match="without_flight needs a study with flight"):
+    with pytest.raises(ValueError, match=r'observable "without_flight" needs \[solver\] '
+                       r"flight = true .*got flight = false"):
         OBSERVABLES["without_flight"].compute(work)
 
 
