@@ -17,11 +17,16 @@ sys.path.insert(0, str(DOCS / "_ext"))
 
 from offline_inventories import write_inventories  # noqa: E402
 
+from study.engine.observables import markdown_table as observables_table  # noqa: E402
+from study.model.contact import markdown_table as laws_table  # noqa: E402
 from study.model.parameters import markdown_table  # noqa: E402
 
-# The parameter table of docs/user-guide/specs.md, from its one declaration in the package.
+# The tables of docs/user-guide/specs.md (parameters, observables, contact laws), each
+# from its one declaration in the package.
 (DOCS / "_generated").mkdir(exist_ok=True)
 (DOCS / "_generated" / "parameters.md").write_text(markdown_table(), encoding="utf-8")
+(DOCS / "_generated" / "observables.md").write_text(observables_table(), encoding="utf-8")
+(DOCS / "_generated" / "contact-laws.md").write_text(laws_table(), encoding="utf-8")
 from sphinx.ext import autosummary  # noqa: E402
 
 import study  # noqa: E402

@@ -51,6 +51,7 @@ __all__ = [
     "LawParameter",
     "check_friction",
     "check_law",
+    "markdown_table",
     "supported",
 ]
 
@@ -187,6 +188,25 @@ DEFAULT_FRICTION = "coulomb"
 def supported(kind: str, solver: str) -> tuple[str, ...]:
     """Names of the ``kind`` laws that ``solver`` implements."""
     return tuple(name for name, law in LAWS[kind].items() if solver in law.solvers)
+
+
+def markdown_table() -> str:
+    """The docs' table of contact laws (docs/user-guide/specs.md), from :data:`LAWS`:
+    each law's name, kind, what it says, the parameters it reads and the solvers that
+    implement it."""
+    lines = ["| law | kind | what it says | parameters | solvers |", "|---|---|---|---|---|"]
+    defaults = {"friction": DEFAULT_FRICTION, "coupling": DEFAULT_COUPLING,
+                "lift_off": DEFAULT_LIFT_OFF}
+    for kind, laws in LAWS.items():
+        for name, law in laws.items():
+            parameters = [f"`{p.name}` [{p.units}]: {p.long_name}"
+                          + (f"; {p.reason}" if p.reason else "") for p in law.parameters]
+            parameters += [f"reads the structure's `{p}`" for p in law.structure_parameters]
+            default = " (default)" if defaults[kind] == name else ""
+            description = law.description.replace("|", "\\|").replace("*", "\\*")
+            lines.append(f"| `{name}`{default} | {kind} | {description} | "
+                         f"{'<br>'.join(parameters) or 'none'} | {', '.join(law.solvers)} |")
+    return "\n".join(lines) + "\n"
 
 
 def check_law(kind: str, name: object, solver: str) -> ContactLaw:
