@@ -144,10 +144,13 @@ def compute_map(
     a : array_like
         Drive acceleration amplitudes [m s-2], 1-D, finite, >= 0, distinct.
     observables : list of str, default ("thresholds", "velocity")
-        What to compute, any of a spec's ``[study] observables``: ``"resonance"``,
-        ``"thresholds"``, ``"lift_off"``, ``"velocity"``, ``"diagnostics"``,
-        ``"floquet"`` (two-way), ``"attractors"``, ``"paper_model"`` (two-way),
-        ``"frontier"`` (needs ascending ``f``).
+        What to compute, any of a spec's ``[study] observables``
+        (:data:`study.engine.observables.OBSERVABLES`: ``"velocity"``,
+        ``"thresholds"``, ``"floquet"``, ...; ``"frontier"`` needs ascending ``f``).
+        Some apply to one coupling or to flight only (``"floquet"``, ``"paper_model"``:
+        two-way; ``"without_flight"``: flight), as each declares
+        (:attr:`study.engine.observables.Observable.couplings`, ``flight``; the user
+        guide's table of observables lists them).
     coupling : {"one-way", "two-way"}, default "one-way"
         The paper's model, or the mode also forced by the sliding base
         (:data:`study.solvers.exact.DEFAULT_COUPLING` is the default).
@@ -194,8 +197,9 @@ def compute_map(
         parameter is not real numbers (strings, booleans, complex, dates); ``flight``
         is not a bool.
     ValueError
-        An unknown coupling or observable, or values out of range (as a spec's,
-        the message names the key); ``flight`` with one-way coupling or ``M = 1``.
+        An unknown coupling or observable, an observable the coupling or flight does
+        not allow, or values out of range (as a spec's, the message names the key);
+        ``flight`` with one-way coupling or ``M = 1``.
 
     See Also
     --------
