@@ -68,8 +68,10 @@ print(result[["velocity", "status", "largest_hop", "airborne_fraction"]])
 # What the points are
 # -------------------
 # Each point has a status. Without flight every point past lift-off is ``LIFT_OFF``;
-# with flight it bounces (``BOUNCING``, with a velocity), or its motion is chaotic or
-# repeats only after more than 16 periods (``NOT_CONVERGED``, no velocity).
+# with flight it bounces (``BOUNCING``, with a velocity), or its motion never repeats
+# within 16 periods (``CHAOTIC`` or ``QUASI_PERIODIC``: its time-averaged velocity is
+# given), or is so irregular that its mean would need more periods than the budget
+# (``NOT_CONVERGED``, no velocity).
 def counts(status):
     codes, number = np.unique(status.values, return_counts=True)
     return ", ".join(f"{study.Status(int(c)).name} {n}" for c, n in zip(codes, number, strict=True))
