@@ -26,6 +26,7 @@ from matplotlib.patches import Patch
 from study.figures.common import (
     VALID,
     coupling_label,
+    in_the_air,
     is_flight,
     lift_off_label,
     require_axis,
@@ -112,7 +113,9 @@ def _panel(ax, dataset: xr.Dataset, at: dict, norm: TwoSlopeNorm):
     sliding = (status == Status.CONTINUOUS_SLIDING).astype(float)
     if sliding.any() and min(sliding.shape) > 1:
         ax.contour(f, a, sliding.T, levels=[0.5], colors="k", linewidths=0.7)
-    bouncing = (status == Status.BOUNCING).astype(float)
+    airborne = (dataset["airborne_fraction"].isel(at).transpose("f", "a").values
+                if "airborne_fraction" in dataset else None)
+    bouncing = in_the_air(status, airborne).astype(float)
     if bouncing.any() and min(bouncing.shape) > 1:  # with flight: the region's edge
         ax.contour(f, a, bouncing.T, levels=[0.5], colors=_BOUNCING_EDGE, linewidths=1.1)
 
@@ -139,13 +142,17 @@ def _panel(ax, dataset: xr.Dataset, at: dict, norm: TwoSlopeNorm):
     above_both = a[None, :] > np.maximum(a_plus, a_minus)[:, None]
     pn_share = np.count_nonzero(above_both & valid) / max(np.count_nonzero(valid), 1)
     cs_share = np.count_nonzero(status == Status.CONTINUOUS_SLIDING) / status.size
-    not_converged = int(np.count_nonzero(status == Status.NOT_CONVERGED))
     title = (f"M = {structure.M:g}: {branches} frontier branch"
              f"{'' if branches == 1 else 'es'}, CS {100 * cs_share:.0f} %")
     if is_flight(dataset):
         title += f", bouncing {100 * np.count_nonzero(bouncing) / status.size:.0f} %"
-    if not_converged:
-        title += f", {not_converged} not converged"
+    # The points of the classes drawn apart by a flat colour or a hatch, counted on a
+    # second line: on one line a panel's title runs into its neighbour's.
+    counted = [f"{np.count_nonzero(status == flag)} {flag.flag.replace('_', ' ')}"
+               for flag in (Status.CHAOTIC, Status.QUASI_PERIODIC, Status.NOT_CONVERGED)
+               if np.any(status == flag)]
+    if counted:
+        title += "\n" + ", ".join(counted)
     ax.set_title(title, fontsize=10)
     ax.text(0.02, 0.97, f"PN: {100 * pn_share:.0f} % of the valid map", transform=ax.transAxes,
             fontsize=8, va="top", bbox={"facecolor": "white", "edgecolor": "none",

@@ -219,3 +219,37 @@ def test_irregular_points_are_their_own_class_with_their_velocity(
         assert irregular.legend in labels, labels
     assert not any(label.startswith("not converged") for label in labels), labels
     assert Status.CHAOTIC in VALID and Status.QUASI_PERIODIC in VALID
+
+
+@pytest.mark.parametrize("figure", ["bouncing", "mass-ratio-limit"])
+def test_no_two_panel_titles_overlap(figure, bouncing_dataset, tmp_path, monkeypatch):
+    """Each panel's title stays over its own panel, even with every count a title can
+    carry (chaotic, quasi-periodic, not converged): titles of neighbouring panels must
+    not run into each other."""
+    from study.figures import common
+
+    dataset = bouncing_dataset.copy()
+    status = dataset["status"].values.copy().ravel()
+    bouncing = np.flatnonzero(status == int(Status.BOUNCING))
+    for k, flag in enumerate((Status.CHAOTIC, Status.QUASI_PERIODIC, Status.NOT_CONVERGED)):
+        status[bouncing[k::3][:40]] = int(flag)
+    dataset["status"] = dataset["status"].copy(data=status.reshape(dataset["status"].shape))
+    dataset["velocity"] = dataset["velocity"].where(
+        dataset["status"] != int(Status.NOT_CONVERGED))
+    kept = []
+    close = common.plt.close
+    monkeypatch.setattr(common.plt, "close", lambda fig=None: kept.append(fig))
+    draw_figure(figure, dataset, tmp_path / figure, sel=DRAWN[figure])
+    (fig,) = kept
+    try:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        titles = [ax.title for ax in fig.axes if ax.get_title()]
+        assert len(titles) >= 3
+        boxes = [title.get_window_extent(renderer) for title in titles]
+        for i, first in enumerate(boxes):
+            for j in range(i + 1, len(boxes)):
+                assert not first.overlaps(boxes[j]), (titles[i].get_text(),
+                                                     titles[j].get_text())
+    finally:
+        close(fig)
