@@ -179,3 +179,20 @@ def test_the_docs_tables_come_from_the_declarations():
     assert stribeck.endswith("| integrator |")
     flight = next(line for line in laws.splitlines() if line.startswith("| `flight` |"))
     assert "`restitution`" in flight and flight.endswith("| exact, integrator |")
+
+
+@pytest.mark.parametrize("name", [n for n in NEEDY if OBSERVABLES[n].couplings is not None
+                                  or OBSERVABLES[n].flight is not None])
+def test_the_python_api_refuses_as_a_spec_does(name):
+    """study.compute_map (always the exact solver) goes through the spec reader: the
+    same refusal, before any solve, for a one-way study without flight, which each
+    observable needing a coupling or flight does not apply to."""
+    import study
+
+    method, coupling, flight = "exact", "one-way", False
+    assert not _applies(OBSERVABLES[name], method, coupling, flight), name
+    structure = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
+    with pytest.raises(ValueError) as refused:
+        study.compute_map(structure, [14.0], [6.0], observables=["velocity", name],
+                          coupling=coupling, flight=flight)
+    assert unmet_needs((name,), method, coupling, flight)[0] in str(refused.value)
