@@ -118,6 +118,9 @@ STABILITY_MARGIN = 1e-6
 # on it lies where the orbit has an event.
 FIRST_PERIODS = 2
 
+#: An irregular motion's largest hop is the largest over every this-many-th averaged
+#: period (at least 16 of them: 256 periods are averaged at least).
+HOP_STRIDE = 16
 #: Length of :func:`find_flight_orbit`'s ``stats``: the averages' slots
 #: (:mod:`study.kernels.time_average`'s ``S_*``) and the last iterate's state.
 N_STATS = S_STATE + N_STATE
@@ -446,7 +449,10 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, 
                 record.jac[i, j] = 1.0 if i == j else 0.0
         record.acc[:] = 0.0
         record.passes[0] += 1.0
-        flag = fly(point, z, 0.0, period, record, True, recorded >= 0, max_events)
+        # The largest hop is sought in every HOP_STRIDE-th averaged period only: its
+        # closed form's maxima cost about as much as the pass itself.
+        flag = fly(point, z, 0.0, period, record, True,
+                   recorded >= 0 and recorded % HOP_STRIDE == 0, max_events)
         if flag == RUN_PARADOX:
             return FRICTION_PARADOX, REASON_NONE, 0, np.nan
         if flag != RUN_OK:
