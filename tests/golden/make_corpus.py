@@ -36,6 +36,7 @@ COMMANDS = {
     "integrator": "run",
     "paradox": "run",
     "flight": "run",
+    "irregular": "run",
     "stribeck": "run",
     "steering": "run",
     "steering-calibration": "run",
