@@ -102,7 +102,7 @@ FIGURES += $(addsuffix -two-way,$(TWO_WAY_FIGURES))
 # past lift-off): figures/NAME-flight.png is figure NAME of a *-flight result; bouncing
 # shows the bouncing region of mass-ratio-limit-flight.
 FLIGHT_FIGURES := regime-map velocity-curves mass-ratio-limit coupling
-FIGURES += $(addsuffix -flight,$(FLIGHT_FIGURES)) bouncing
+FIGURES += $(addsuffix -flight,$(FLIGHT_FIGURES)) bouncing lyapunov
 figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 
 figures/thresholds.png: results/thresholds.nc
@@ -125,6 +125,7 @@ figures/velocity-curves-flight.png: results/velocity-curves-flight.nc
 figures/mass-ratio-limit-flight.png: results/mass-ratio-limit-flight.nc
 figures/coupling-flight.png: results/coupling-flight.nc
 figures/bouncing.png: results/mass-ratio-limit-flight.nc
+figures/lyapunov.png: results/irregular-flight.nc
 # A figure's date says nothing of what it was drawn from (a figure of another file drawn
 # to the same name is newer than its result): `study figure --if-changed` is asked every
 # time and redraws unless the PNG records this result's checksum, these options and

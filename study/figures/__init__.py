@@ -94,6 +94,12 @@ FIGURES: dict[str, Figure] = {
         "With flight: velocity, largest hop and time in the air over (f, a) per M, the "
         "bouncing region's edge and the frontier f*(a) through it",
     ),
+    "lyapunov": Figure(
+        "study.figures.lyapunov", "irregular-flight",
+        ("velocity", "status", "lyapunov_exponent"),
+        "Irregular motion: the mean velocity with chaotic and quasi-periodic points "
+        "hatched, and the largest Lyapunov exponent over (f, a)",
+    ),
     "coupling": Figure(
         "study.figures.coupling", "coupling",
         ("velocity", "status", "velocity_one_way", "status_one_way", "M"),

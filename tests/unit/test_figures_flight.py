@@ -253,3 +253,62 @@ def test_no_two_panel_titles_overlap(figure, bouncing_dataset, tmp_path, monkeyp
                                                      titles[j].get_text())
     finally:
         close(fig)
+
+
+IRREGULAR_SPEC = """\
+[study]
+name = "irregular-small"
+observables = ["velocity", "diagnostics", "irregular"]
+
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+cs = 0.25
+M = 0.99
+
+[sweep]
+f = { start = 5.5, stop = 6.5, num = 5 }
+a = { start = 11.0, stop = 11.9, num = 4 }
+
+[solver]
+coupling = "two-way"
+flight = true
+"""
+
+
+def test_the_lyapunov_figure_draws_velocity_and_exponent(tmp_path):
+    """The lyapunov figure of a small irregular study: both maps, each colour bar under
+    its own map, the chaotic points named in the legend, the exponent's scale spanning
+    both signs (stable orbits below 0, chaotic motions above)."""
+    import matplotlib.pyplot as plt
+
+    from study.figures.lyapunov import compose
+
+    (tmp_path / "irregular.toml").write_text(IRREGULAR_SPEC)
+    run_study(tmp_path / "irregular.toml", tmp_path / "irregular.nc", progress=False,
+              workers=1)
+    dataset = open_result(tmp_path / "irregular.nc")
+    status = dataset["status"].values
+    assert np.any(status == Status.CHAOTIC), np.unique(status)
+    exponent = dataset["lyapunov_exponent"].values
+    assert np.nanmax(exponent) > 0.0 > np.nanmin(exponent)
+    fig, title = compose(dataset)
+    try:
+        assert "Lyapunov" in title
+        labels = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+        assert Status.CHAOTIC.legend in labels
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        maps = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+        bars = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+        assert len(maps) == len(bars) == 2
+        for own, bar in zip(maps, bars, strict=True):
+            box = bar.xaxis.label.get_window_extent(renderer)
+            own_box = own.get_window_extent(renderer)
+            assert own_box.x0 <= box.x0 and box.x1 <= own_box.x1
+            assert box.y1 < own_box.y0
+    finally:
+        plt.close(fig)
+    assert main(["figure", "lyapunov", str(tmp_path / "irregular.nc"), "-o",
+                 str(tmp_path / "lyapunov")]) == 0
