@@ -125,7 +125,7 @@ figures/velocity-curves-flight.png: results/velocity-curves-flight.nc
 figures/mass-ratio-limit-flight.png: results/mass-ratio-limit-flight.nc
 figures/coupling-flight.png: results/coupling-flight.nc
 figures/bouncing.png: results/mass-ratio-limit-flight.nc
-figures/lyapunov.png: results/irregular-flight.nc
+figures/lyapunov.png: results/irregular-bouncing.nc
 # A figure's date says nothing of what it was drawn from (a figure of another file drawn
 # to the same name is newer than its result): `study figure --if-changed` is asked every
 # time and redraws unless the PNG records this result's checksum, these options and

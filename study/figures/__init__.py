@@ -95,7 +95,7 @@ FIGURES: dict[str, Figure] = {
         "bouncing region's edge and the frontier f*(a) through it",
     ),
     "lyapunov": Figure(
-        "study.figures.lyapunov", "irregular-flight",
+        "study.figures.lyapunov", "irregular-bouncing",
         ("velocity", "status", "lyapunov_exponent"),
         "Irregular motion: the mean velocity with chaotic and quasi-periodic points "
         "hatched, and the largest Lyapunov exponent over (f, a)",

@@ -1,7 +1,7 @@
 """Irregular motion over the drive plane: the mean velocity and the largest Lyapunov
 exponent over (f, a).
 
-Drawn from a study with the ``irregular`` observable (the ``irregular-flight``
+Drawn from a study with the ``irregular`` observable (the ``irregular-bouncing``
 workflow). Left: the mean velocity [mm s-1], chaotic and quasi-periodic points hatched
 over it (their time-averaged velocity), points without a velocity flat. Right: the
 largest Lyapunov exponent per drive period, diverging about 0: below 0 the stable

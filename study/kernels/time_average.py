@@ -44,6 +44,11 @@ MIN_AVERAGED = 256
 #: Standard errors by which an exponent must exceed 0 to be positive (the motion is
 #: chaotic), or fall below it to be negative (a stable cycle the search may still find).
 EXPONENT_SIGMAS = 3.0
+#: A motion is quasi-periodic once its exponent is clearly (EXPONENT_SIGMAS errors)
+#: below this [1 per drive period]: nearby states separate by less than 3 % a period.
+#: An exponent neither clearly positive nor clearly below it is averaged on (its error
+#: falls as the periods grow), to the averaging budget at most.
+EXPONENT_ZERO = 0.03
 #: Before the averages start, the running exponent is examined after EARLY_EXPONENT
 #: periods past the tangent's settling, then every EARLY_CHECK: once it exceeds 0 by
 #: EARLY_SIGMAS standard errors, the cycle search tries only close returns within
@@ -210,7 +215,8 @@ def record_period(irregular, recorded, displacement, period, slips, forward, bac
 def examine(irregular, averaged, tolerance, stats):
     """The averages of the first ``averaged`` recorded periods into ``stats`` (``S_*``
     slots); returns whether the velocity's 95 % half-width is within ``tolerance``
-    [m s-1], whether the exponent is clearly positive and whether clearly negative."""
+    [m s-1], whether the exponent is clearly positive, whether clearly negative and
+    whether clearly below :data:`EXPONENT_ZERO`."""
     mean, error, _ = mean_and_error(irregular.velocities, averaged)
     exponent, exponent_error, _ = mean_and_error(
         irregular.growths[DISCARDED_PERIODS:], averaged)
@@ -224,20 +230,27 @@ def examine(irregular, averaged, tolerance, stats):
     stats[S_HOP] = irregular.sums[S_HOP - S_SLIPS]
     positive = exponent - EXPONENT_SIGMAS * exponent_error > 0.0
     negative = not exponent + EXPONENT_SIGMAS * exponent_error >= 0.0
-    return Z_95 * error <= tolerance, positive, negative
+    bounded = exponent + EXPONENT_SIGMAS * exponent_error < EXPONENT_ZERO
+    return Z_95 * error <= tolerance, positive, negative, bounded
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def settles(averaged, max_average_periods, iteration, max_map_iterations, within, chaotic,
-            negative):
+            negative, bounded):
     """Whether an irregular motion is reported after ``averaged`` periods (examined:
-    ``within``, ``chaotic``, ``negative`` from :func:`examine`) at iterate
-    ``iteration``: its mean is within the tolerance and it is chaotic, or its exponent
-    is not clearly negative, or the cycle search's budget is spent (a stable cycle
-    longer than the search's, or slower to attract than the budget), or the averaging's
-    is."""
-    return within and (chaotic or not negative or iteration + 1 >= max_map_iterations
-                       or averaged == max_average_periods)
+    ``within``, ``chaotic``, ``negative``, ``bounded`` from :func:`examine`) at iterate
+    ``iteration``: its mean must be within the tolerance, and then it is chaotic, or its
+    exponent is clearly below :data:`EXPONENT_ZERO` (quasi-periodic; while clearly
+    negative only once the cycle search's budget is spent: a stable cycle the iterates
+    approach may still be found), or the averaging's budget is spent (the exponent's
+    interval says how clear its class is)."""
+    if not within:
+        return False
+    if chaotic or averaged == max_average_periods:
+        return True
+    if negative:
+        return iteration + 1 >= max_map_iterations
+    return bounded
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -43,6 +43,10 @@ def _solve(s: Structure, f, a):
         st = Status(int(st))
         if st in INVALID_STATUSES:
             assert math.isnan(v), (s, f, a, st, v)
+        elif st in (Status.CHAOTIC, Status.QUASI_PERIODIC):
+            # An irregular motion: its time-averaged velocity, no orbit (no multiplier).
+            assert math.isfinite(v), (s, f, a, st, v)
+            assert math.isnan(fl), (s, f, a, st, fl)
         else:
             assert math.isfinite(v), (s, f, a, st, v)
             assert math.isfinite(fl) and fl < 1.0 + 1e-6, (s, f, a, st, fl)

@@ -127,6 +127,21 @@ a = {{ start = 0.0, stop = 12.0, num = 7 }}
 coupling = "two-way"
 flight = true
 """,
+    # Irregular bouncing at M = 0.99 (chaotic points among the orbits).
+    "irregular": f"""\
+[study]
+name = "irregular-small"
+observables = ["velocity", "irregular"]
+[structure]
+{PAPER}
+[sweep]
+M = {{ values = [0.99] }}
+f = {{ start = 5.5, stop = 6.5, num = 3 }}
+a = {{ start = 11.0, stop = 11.9, num = 3 }}
+[solver]
+coupling = "two-way"
+flight = true
+""",
 }
 
 LAB = """\
@@ -486,6 +501,7 @@ SOURCES = {
     "mass-ratio-limit": ("limit", []),
     "coupling": ("coupling", []),
     "bouncing": ("flight", []),
+    "lyapunov": ("irregular", []),
     "steering": ("trajectory", []),
     "steering-calibration": ("calibration", []),
     "steering-plan": ("plan", []),
@@ -497,6 +513,7 @@ def _cases():
     dims = {"paper": ("f", "a", "branch"), "loads": ("m_add", "f", "a"),
             "collapse": ("Q", "M", "f"), "limit": ("M", "f", "a", "branch"),
             "coupling": ("M", "f", "a"), "flight": ("M", "f", "a", "branch"),
+            "irregular": ("M", "f", "a"),
             "trajectory": ("t", "segment"),
             "calibration": ("f", "a"), "fit": ("measurement", "parameter", "profile_point"),
             "plan": ("strategy", "realisation", "t", "waypoint", "segment")}

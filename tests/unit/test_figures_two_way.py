@@ -113,8 +113,9 @@ def test_the_small_files_are_exact_two_way_studies(results):
 def test_every_velocity_figure_is_covered():
     velocity_figures = {name for name, figure in FIGURES.items()
                         if "velocity" in figure.requires}
-    # bouncing: drawn from a study with flight (tests/unit/test_figures_flight.py).
-    assert velocity_figures <= set(SOURCES) | {"mass-ratio", "bouncing"}
+    # bouncing and lyapunov: drawn from studies with flight
+    # (tests/unit/test_figures_flight.py).
+    assert velocity_figures <= set(SOURCES) | {"mass-ratio", "bouncing", "lyapunov"}
 
 
 @pytest.mark.parametrize("figure", sorted(SOURCES))

@@ -211,11 +211,13 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history, stats):
                           acc[A_FORWARD], acc[A_BACKWARD], 0.0, 0.0, 0.0)
             averaged = recorded + 1
             if examined(averaged, budget.max_average_periods):
-                within, chaotic, negative = examine(irregular, averaged, tolerance, stats)
+                within, chaotic, negative, bounded = examine(irregular, averaged, tolerance,
+                                                             stats)
                 for i in range(3):  # the last iterate, for whatever is reported
                     stats[S_STATE + i] = z[i]
                 if settles(averaged, budget.max_average_periods, iteration,
-                           budget.max_map_iterations, within, chaotic, negative):
+                           budget.max_map_iterations, within, chaotic, negative,
+                           bounded):
                     return ((CHAOTIC if chaotic else QUASI_PERIODIC), REASON_NONE, 0, False,
                             np.nan)
                 if averaged == budget.max_average_periods or out_of_reach(

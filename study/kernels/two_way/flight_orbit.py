@@ -389,11 +389,13 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, 
     :data:`AVERAGE_CHECK` periods (at least :data:`MIN_AVERAGED` recorded) the
     averages are examined: once the exponent is clearly positive no more cycles are
     tried (the motion is chaotic); once the velocity's 95 % half-width is within
-    ``budget.velocity_tolerance * a / omega`` the motion is reported, chaotic or
-    quasi-periodic (exponent not clearly positive), except that with an exponent
-    clearly negative the cycle search goes on to ``budget.max_map_iterations`` (a
-    stable cycle the iterates approach). After ``budget.max_average_periods`` recorded
-    periods the point is not converged (``AVERAGE_BUDGET``), its averages kept.
+    ``budget.velocity_tolerance * a / omega`` the motion is reported as its exponent
+    says (:func:`~study.kernels.time_average.settles`): chaotic (clearly positive) or
+    quasi-periodic (clearly below a small bound), an ambiguous exponent averaged on;
+    with an exponent clearly negative the cycle search goes on to
+    ``budget.max_map_iterations`` (a stable cycle the iterates approach). After
+    ``budget.max_average_periods`` recorded periods the point is not converged
+    (``AVERAGE_BUDGET``), its averages kept, unless its mean is within the tolerance.
 
     Returns
     -------
@@ -468,11 +470,13 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, 
                           acc[A_HOP])
             averaged = recorded + 1
             if examined(averaged, budget.max_average_periods):
-                within, chaotic, negative = examine(irregular, averaged, tolerance, stats)
+                within, chaotic, negative, bounded = examine(irregular, averaged, tolerance,
+                                                             stats)
                 for i in range(N_STATE):  # the last iterate, for whatever is reported
                     stats[S_STATE + i] = z[i]
                 if settles(averaged, budget.max_average_periods, iteration,
-                           budget.max_map_iterations, within, chaotic, negative):
+                           budget.max_map_iterations, within, chaotic, negative,
+                           bounded):
                     return (CHAOTIC if chaotic else QUASI_PERIODIC), REASON_NONE, 0, np.nan
                 if averaged == budget.max_average_periods or out_of_reach(
                         averaged, budget.max_average_periods, stats, tolerance):
