@@ -40,6 +40,11 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 RELEASES = sorted(p.name for p in HERE.glob("v*") if p.is_dir())
 CORPUS = sorted(HERE.glob("v*/*.nc"))
+#: The files of the releases before this version: the promise is that a later version
+#: reads what an earlier one wrote. (The files this version writes are read by this
+#: same code throughout the other tiers; they join these once a later version exists.
+#: Every file still opens, validates and describes above.)
+EARLIER = [path for path in CORPUS if path.parent.name != f"v{VERSION}"]
 #: The figure each golden file is drawn as (every file is drawn by at least one).
 FIGURE_OF = {
     "own": "regime-map",
@@ -49,6 +54,7 @@ FIGURE_OF = {
     "integrator": "velocity-curves",
     "paradox": "velocity-curves",
     "flight": "bouncing",
+    "irregular": "lyapunov",
     "stribeck": "velocity-curves",
     "steering": "steering",
     "steering-calibration": "steering-calibration",
@@ -58,7 +64,8 @@ FIGURE_OF = {
 }
 #: Figure options a file needs (a structure to draw where it sweeps one).
 FIGURE_SELECTION = {"mass-ratio-two-way": ["M=0.6"], "thresholds": ["M=0.08"],
-                    "paradox": ["M=0.99"], "flight": ["restitution=0"]}
+                    "paradox": ["M=0.99"], "flight": ["restitution=0"],
+                    "irregular": ["M=0.99", "restitution=0"]}
 
 
 def _id(path: Path) -> str:
@@ -122,7 +129,7 @@ def test_opens_validates_and_describes(path: Path):
         assert "study upgrade" in note and note in text
 
 
-@pytest.mark.parametrize("path", CORPUS, ids=_id)
+@pytest.mark.parametrize("path", EARLIER, ids=_id)
 def test_the_command_line_reads_it(path: Path, tmp_path: Path, capsys):
     """``study validate``, ``info``, ``export`` and ``figure``, as a user types them."""
     assert main(["validate", str(path)]) == 0
@@ -142,7 +149,7 @@ def test_the_command_line_reads_it(path: Path, tmp_path: Path, capsys):
     assert ("study upgrade" in captured.err) == older
 
 
-@pytest.mark.parametrize("path", CORPUS, ids=_id)
+@pytest.mark.parametrize("path", EARLIER, ids=_id)
 def test_upgrade_keeps_every_value(path: Path, tmp_path: Path):
     """``study upgrade`` writes today's format, bit for bit the same values, the same
     provenance and fingerprint, a valid checksum; the input is not touched."""
