@@ -240,17 +240,19 @@ def settles(averaged, max_average_periods, iteration, max_map_iterations, within
     """Whether an irregular motion is reported after ``averaged`` periods (examined:
     ``within``, ``chaotic``, ``negative``, ``bounded`` from :func:`examine`) at iterate
     ``iteration``: its mean must be within the tolerance, and then it is chaotic, or its
-    exponent is clearly below :data:`EXPONENT_ZERO` (quasi-periodic; while clearly
-    negative only once the cycle search's budget is spent: a stable cycle the iterates
-    approach may still be found), or the averaging's budget is spent (the exponent's
-    interval says how clear its class is)."""
+    exponent is clearly below :data:`EXPONENT_ZERO` and the cycle search's budget is
+    spent (quasi-periodic: before, the iterates may still approach a stable cycle the
+    search finds), or the averaging's budget is spent (the exponent's interval says how
+    clear its class is)."""
     if not within:
         return False
     if chaotic or averaged == max_average_periods:
         return True
-    if negative:
-        return iteration + 1 >= max_map_iterations
-    return bounded
+    # Not chaotic: the iterates may still be on a long transient to a stable cycle that
+    # the search would find, as release 0.2.0's did (a period-2 orbit with multiplier
+    # 0.51 reached after hundreds of irregular-looking periods): reported once the
+    # cycle search's budget is spent, as quasi-periodic when the exponent says so.
+    return iteration + 1 >= max_map_iterations and (bounded or negative)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -261,6 +263,8 @@ def out_of_reach(averaged, max_average_periods, stats, tolerance):
     root of the periods)."""
     if averaged < OUT_OF_REACH_AFTER:
         return False
+    # (Called only once the cycle search's budget is spent: a motion whose mean is out of
+    # reach may still settle on a stable cycle before.)
     ratio = Z_95 * stats[S_VELOCITY_ERROR] / tolerance
     return averaged * ratio * ratio > OUT_OF_REACH * max_average_periods
 

@@ -220,8 +220,9 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history, stats):
                            bounded):
                     return ((CHAOTIC if chaotic else QUASI_PERIODIC), REASON_NONE, 0, False,
                             np.nan)
-                if averaged == budget.max_average_periods or out_of_reach(
-                        averaged, budget.max_average_periods, stats, tolerance):
+                if averaged == budget.max_average_periods or (
+                        iteration + 1 >= budget.max_map_iterations and out_of_reach(
+                            averaged, budget.max_average_periods, stats, tolerance)):
                     return NOT_CONVERGED, REASON_AVERAGE_BUDGET, 0, False, np.nan
         if iteration >= budget.max_map_iterations:
             continue  # the cycle search's budget is spent

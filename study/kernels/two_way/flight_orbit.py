@@ -478,8 +478,9 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, 
                            budget.max_map_iterations, within, chaotic, negative,
                            bounded):
                     return (CHAOTIC if chaotic else QUASI_PERIODIC), REASON_NONE, 0, np.nan
-                if averaged == budget.max_average_periods or out_of_reach(
-                        averaged, budget.max_average_periods, stats, tolerance):
+                if averaged == budget.max_average_periods or (
+                        iteration + 1 >= budget.max_map_iterations and out_of_reach(
+                            averaged, budget.max_average_periods, stats, tolerance)):
                     return NOT_CONVERGED, REASON_AVERAGE_BUDGET, 0, np.nan
         if iteration >= budget.max_map_iterations:
             continue  # the cycle search's budget is spent
