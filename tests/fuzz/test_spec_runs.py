@@ -59,7 +59,7 @@ from study.cli import main
 from study.engine.runner import load_any
 from study.engine.spec_files import SpecError
 from study.model.inputs import StudyWarning
-from study.model.status import INVALID_STATUSES
+from study.model.status import INVALID_STATUSES, Status
 from study.scenes.scene_kind import SceneSpec
 from tests.support.reliability import record
 
@@ -87,6 +87,7 @@ WORKFLOWS = Path(__file__).resolve().parents[2] / "workflows"
 #: Float variables that may hold NaN, by result kind, with the flag variable that
 #: says why and its codes that allow it. Any other NaN is a silent NaN.
 _INVALID = tuple(int(s) for s in INVALID_STATUSES)
+_IRREGULAR = (int(Status.CHAOTIC), int(Status.QUASI_PERIODIC))
 NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
     "study": {
         "velocity": ("status", _INVALID),
@@ -99,7 +100,16 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         "airborne_fraction": ("status", _INVALID),
         "largest_hop": ("status", _INVALID),
         "impacts_per_period": ("status", _INVALID),
-        "floquet_multiplier": ("status", _INVALID),
+        # An irregular motion has no orbit, so no multiplier; its averages are written
+        # where the motion was averaged (irregular statuses, and not_converged with
+        # average_budget), else NaN.
+        "floquet_multiplier": ("status", _INVALID + _IRREGULAR),
+        "averaged_velocity": ("status", tuple(int(s) for s in Status
+                                              if s not in (Status.CHAOTIC,
+                                                           Status.QUASI_PERIODIC))),
+        "velocity_error": ("status", _INVALID),
+        "lyapunov_exponent": ("status", _INVALID),
+        "lyapunov_error": ("status", _INVALID),
         "frontier_frequency": ("frontier_kind", (0,)),
         "frontier_bracket": ("frontier_kind", (0,)),
     },
