@@ -520,6 +520,39 @@ def orbit_exponent(out, c_multiplier, c_period, c_velocity_error, c_averaged, c_
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def irregular_row(stats, omega, status, out, columns):
+    """Write a motion averaged on the period map (``stats``, the ``S_*`` slots of
+    :mod:`study.kernels.time_average`, the last iterate's state from ``S_STATE``) into
+    ``out`` at ``columns`` (as :func:`solve_flight`'s): its averages, no multiplier,
+    period 0 and its last iterate as the state at phase 0; a point not converged keeps
+    no velocity, only its partial mean, error, periods and exponent. A contact motion's
+    averages hold no flight (0 in the air, no impact, no hop)."""
+    (_, _, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier, c_delta,
+     c_rate, c_speed, c_airborne, c_hop, c_impacts, c_averaged_velocity, c_velocity_error,
+     c_averaged, c_exponent, c_exponent_error) = columns
+    out[c_averaged] = stats[S_PERIODS]
+    out[c_averaged_velocity] = stats[S_VELOCITY]
+    out[c_velocity_error] = stats[S_VELOCITY_ERROR]
+    out[c_exponent] = stats[S_EXPONENT]
+    out[c_exponent_error] = stats[S_EXPONENT_ERROR]
+    if status == NOT_CONVERGED:
+        return
+    period = TWO_PI / omega
+    out[c_velocity] = stats[S_VELOCITY]
+    out[c_slips] = stats[S_SLIPS]
+    out[c_forward] = stats[S_FORWARD] / period
+    out[c_backward] = stats[S_BACKWARD] / period
+    out[c_period] = 0.0
+    out[c_multiplier] = np.nan
+    out[c_delta] = stats[S_STATE]
+    out[c_rate] = stats[S_STATE + 1]
+    out[c_speed] = stats[S_STATE + 2]
+    out[c_airborne] = stats[S_AIRBORNE] / period
+    out[c_hop] = stats[S_HOP]
+    out[c_impacts] = stats[S_IMPACTS]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     """The motion with flight reached from the 5-state ``z`` at ``t_start`` [s], written
     into ``out`` at the positions ``columns`` (status, reason, velocity, slips, forward,
@@ -550,31 +583,12 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
                                                         record, work, history, stats)
     passes = record.passes
     (c_status, c_reason, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier,
-     c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts, c_averaged_velocity,
+     c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts, _,
      c_velocity_error, c_averaged, c_exponent, c_exponent_error) = columns
     out[c_status] = status
     out[c_reason] = reason
     if status == CHAOTIC or status == QUASI_PERIODIC or reason == REASON_AVERAGE_BUDGET:
-        out[c_averaged] = stats[S_PERIODS]
-        out[c_averaged_velocity] = stats[S_VELOCITY]
-        out[c_velocity_error] = stats[S_VELOCITY_ERROR]
-        out[c_exponent] = stats[S_EXPONENT]
-        out[c_exponent_error] = stats[S_EXPONENT_ERROR]
-        if status == NOT_CONVERGED:
-            return passes[0], passes[1]
-        period = TWO_PI / omega
-        out[c_velocity] = stats[S_VELOCITY]
-        out[c_slips] = stats[S_SLIPS]
-        out[c_forward] = stats[S_FORWARD] / period
-        out[c_backward] = stats[S_BACKWARD] / period
-        out[c_period] = 0.0
-        out[c_multiplier] = np.nan
-        out[c_delta] = stats[S_STATE]
-        out[c_rate] = stats[S_STATE + 1]
-        out[c_speed] = stats[S_STATE + 2]
-        out[c_airborne] = stats[S_AIRBORNE] / period
-        out[c_hop] = stats[S_HOP]
-        out[c_impacts] = stats[S_IMPACTS]
+        irregular_row(stats, omega, status, out, columns)
         return passes[0], passes[1]
     if math.isnan(radius):
         radius = spectral_radius(record.jac)

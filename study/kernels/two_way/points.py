@@ -30,15 +30,7 @@ from study.kernels.structure_vector import (
     STIFFNESS,
 )
 from study.kernels.time_average import (
-    S_BACKWARD,
-    S_EXPONENT,
-    S_EXPONENT_ERROR,
-    S_FORWARD,
-    S_PERIODS,
-    S_SLIPS,
     S_STATE,
-    S_VELOCITY,
-    S_VELOCITY_ERROR,
 )
 from study.kernels.two_way.continuation import (
     CONTINUED_LIFT_OFF,
@@ -52,7 +44,7 @@ from study.kernels.two_way.continuation import (
 )
 from study.kernels.two_way.cycles import MAX_PERIOD, STABILITY_MARGIN, find_orbit
 from study.kernels.two_way.flight import FLIGHT_ROW, N_ROWS, N_STATE, Z_GAP, flight_row
-from study.kernels.two_way.flight_orbit import orbit_exponent, solve_flight
+from study.kernels.two_way.flight_orbit import irregular_row, orbit_exponent, solve_flight
 from study.kernels.two_way.modes import (
     EPS,
     M_OFFSET,
@@ -426,7 +418,7 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
     out[OUT_STATUS] = status
     out[OUT_REASON] = reason
     if status in (CHAOTIC, QUASI_PERIODIC) or reason == REASON_AVERAGE_BUDGET:
-        _irregular_row(workspace.stats, omega, status, out)
+        irregular_row(workspace.stats, omega, status, out, FLIGHT_COLUMNS)
         return
     if periods == 0:
         return
@@ -447,34 +439,6 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
     out[OUT_IMPACTS] = 0.0
     orbit_exponent(out, OUT_MULTIPLIER, OUT_PERIOD, OUT_VELOCITY_ERROR,
                    OUT_AVERAGED_PERIODS, OUT_EXPONENT, OUT_EXPONENT_ERROR)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _irregular_row(stats, omega, status, out):
-    """``out`` of a contact motion averaged on the period map (``stats``'s ``S_*``
-    slots): its averages, no multiplier, period 0 and its last iterate as the state at
-    phase 0; a point not converged keeps no velocity, only its partial averages' error,
-    periods and exponent."""
-    out[OUT_AVERAGED_PERIODS] = stats[S_PERIODS]
-    out[OUT_AVERAGED_VELOCITY] = stats[S_VELOCITY]
-    out[OUT_VELOCITY_ERROR] = stats[S_VELOCITY_ERROR]
-    out[OUT_EXPONENT] = stats[S_EXPONENT]
-    out[OUT_EXPONENT_ERROR] = stats[S_EXPONENT_ERROR]
-    if status == NOT_CONVERGED:
-        return
-    period = TWO_PI / omega
-    out[OUT_VELOCITY] = stats[S_VELOCITY]
-    out[OUT_SLIPS] = stats[S_SLIPS]
-    out[OUT_FORWARD] = stats[S_FORWARD] / period
-    out[OUT_BACKWARD] = stats[S_BACKWARD] / period
-    out[OUT_PERIOD] = 0.0
-    out[OUT_MULTIPLIER] = np.nan
-    out[OUT_DELTA] = stats[S_STATE]
-    out[OUT_DELTA_RATE] = stats[S_STATE + 1]
-    out[OUT_SPEED] = stats[S_STATE + 2]
-    out[OUT_AIRBORNE] = 0.0
-    out[OUT_HOP] = 0.0
-    out[OUT_IMPACTS] = 0.0
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
