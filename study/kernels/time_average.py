@@ -58,6 +58,11 @@ EARLY_EXPONENT = 32
 EARLY_CHECK = 16
 EARLY_SIGMAS = 1.0
 CHAOTIC_DETECTION = 1e-6
+#: The near returns of a chaotic motion not tried at once are kept, at most this many
+#: (then they are tried), and tried in the order they came before any later one: a
+#: cycle the iterates converge onto after a chaotic transient is then found from the
+#: same iterate, with the same bits, as by a search that tries every near return.
+DEFERRED_TRIES = 256
 #: After OUT_OF_REACH_AFTER averaged periods, a motion whose mean would need more than
 #: OUT_OF_REACH times the averaging budget to reach the tolerance (the periods grow as
 #: the square of the half-width's ratio to it) is given up at once: not converged

@@ -8,6 +8,7 @@ from numba import njit
 
 from study.kernels.time_average import (
     CHAOTIC_DETECTION,
+    DEFERRED_TRIES,
     DISCARDED_PERIODS,
     S_STATE,
     examine,
@@ -178,6 +179,9 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history, stats):
     irregular = new_irregular(scales, budget.max_average_periods)
     tolerance = budget.velocity_tolerance * point.a / point.omega
     chaotic = False
+    deferred = np.empty((DEFERRED_TRIES, 3))
+    deferred_periods = np.zeros(DEFERRED_TRIES, dtype=np.int64)
+    waiting = 0
     last = DISCARDED_PERIODS + budget.max_average_periods
     jac = record.jac
     grad = record.grad
@@ -223,45 +227,92 @@ def find_orbit(point, z, t_start, scales, budget, record, work, history, stats):
                 if averaged == budget.max_average_periods or (
                         iteration + 1 >= budget.max_map_iterations and out_of_reach(
                             averaged, budget.max_average_periods, stats, tolerance)):
+                    found = _deferred_cycle(point, deferred, deferred_periods, waiting,
+                                            scales, max_events, record, work, candidate)
+                    waiting = 0
+                    if found != 0:
+                        return _found(found, z, candidate)
                     return NOT_CONVERGED, REASON_AVERAGE_BUDGET, 0, False, np.nan
         if iteration >= budget.max_map_iterations:
             continue  # the cycle search's budget is spent
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
             back = (iteration - periods + 1) % MAX_PERIOD
             gap = state_distance(z, history[back], scales)
-            # On a chaotic motion only a close return far nearer than the detection's
-            # is tried: the iterates converging onto a cycle after a chaotic transient.
-            if gap < (CHAOTIC_DETECTION if chaotic else CYCLE_DETECTION) and (
-                    gap < 0.5 * tried[periods]):
+            if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
                 tried[periods] = gap
-                for shifted in range(2):
-                    for i in range(3):
-                        candidate[i] = history[back, i]
-                    section = 0.0
-                    if shifted:
-                        # An orbit can cross phase 0 in a sliver of slip: the phase-0 map
-                        # then has a kink at the fixed point, which Newton cannot cross (it
-                        # takes the sliver for an approach to a stick). Another section of
-                        # the same orbit has no such kink.
-                        section = SECTION_SHIFT * period
-                        flag = run(point, candidate, 0.0, section, record, False, -1.0,
-                                   max_events)
-                        if flag != RUN_OK:
-                            break
-                    found = _cycle(point, candidate, periods, section, scales, max_events,
-                                   record, work)
-                    if found < 0:
-                        return LIFT_OFF, REASON_NONE, 0, False, np.nan
-                    if found > 0:
-                        if section != 0.0:
-                            # The orbit's state at phase 0, what is reported (the statistics
-                            # of a whole number of periods do not depend on the section).
-                            spare = PassRecord(np.zeros(N_ACC), record.jac, record.grad,
-                                               record.passes)
-                            run(point, candidate, section, period, spare, False, -1.0,
-                                max_events)
-                        for i in range(3):
-                            z[i] = candidate[i]
-                        return STICK_SLIP, REASON_NONE, found, False, np.nan
+                for i in range(3):
+                    deferred[waiting, i] = history[back, i]
+                deferred_periods[waiting] = periods
+                waiting += 1
+                # On a chaotic motion a near return waits (most would be failing Newton
+                # searches) until one is far nearer than the detection's: the iterates
+                # converging onto a cycle after a chaotic transient.
+                if not chaotic or gap < CHAOTIC_DETECTION or waiting == DEFERRED_TRIES:
+                    found = _deferred_cycle(point, deferred, deferred_periods, waiting,
+                                            scales, max_events, record, work, candidate)
+                    waiting = 0
+                    if found != 0:
+                        return _found(found, z, candidate)
                 break
+    found = _deferred_cycle(point, deferred, deferred_periods, waiting, scales, max_events,
+                            record, work, candidate)
+    if found != 0:
+        return _found(found, z, candidate)
     return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0, False, np.nan
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _contact_cycle(point, candidate, periods, scales, max_events, record, work):
+    """A stable cycle of ``periods`` drive periods from ``candidate`` at phase 0, sought
+    on the phase-0 section and then on a shifted one: its minimal period with
+    ``candidate`` its state at phase 0, 0 when not found, -1 when it leaves the table."""
+    period = TWO_PI / point.omega
+    start = candidate.copy()
+    for shifted in range(2):
+        for i in range(3):
+            candidate[i] = start[i]
+        section = 0.0
+        if shifted:
+            # An orbit can cross phase 0 in a sliver of slip: the phase-0 map then has a
+            # kink at the fixed point, which Newton cannot cross (it takes the sliver for
+            # an approach to a stick). Another section of the same orbit has no such kink.
+            section = SECTION_SHIFT * period
+            flag = run(point, candidate, 0.0, section, record, False, -1.0, max_events)
+            if flag != RUN_OK:
+                return 0
+        found = _cycle(point, candidate, periods, section, scales, max_events, record, work)
+        if found != 0:
+            if found > 0 and section != 0.0:
+                # The orbit's state at phase 0, what is reported (the statistics of a
+                # whole number of periods do not depend on the section).
+                spare = PassRecord(np.zeros(N_ACC), record.jac, record.grad, record.passes)
+                run(point, candidate, section, period, spare, False, -1.0, max_events)
+            return found
+    return 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _deferred_cycle(point, deferred, deferred_periods, waiting, scales, max_events, record,
+                    work, candidate):
+    """Try the ``waiting`` near returns kept in ``deferred`` (states at phase 0) for
+    cycles of ``deferred_periods`` periods, in the order they came: the first answer of
+    :func:`_contact_cycle` that is not 0 (``candidate`` the cycle's state), else 0."""
+    for k in range(waiting):
+        for i in range(3):
+            candidate[i] = deferred[k, i]
+        found = _contact_cycle(point, candidate, deferred_periods[k], scales, max_events,
+                               record, work)
+        if found != 0:
+            return found
+    return 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _found(found, z, candidate):
+    """:func:`find_orbit`'s answer for :func:`_deferred_cycle`'s ``found`` (``z``
+    takes the cycle's state)."""
+    if found < 0:
+        return LIFT_OFF, REASON_NONE, 0, False, np.nan
+    for i in range(3):
+        z[i] = candidate[i]
+    return STICK_SLIP, REASON_NONE, found, False, np.nan

@@ -22,6 +22,7 @@ from study.kernels.eigenvalues import spectral_radius
 from study.kernels.structure_vector import GRAVITY, STIFFNESS
 from study.kernels.time_average import (
     CHAOTIC_DETECTION,
+    DEFERRED_TRIES,
     DISCARDED_PERIODS,
     S_AIRBORNE,
     S_BACKWARD,
@@ -440,6 +441,9 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, 
     irregular = new_irregular(scales, budget.max_average_periods)
     tolerance = budget.velocity_tolerance * point.a / point.omega
     chaotic = False
+    deferred = np.empty((DEFERRED_TRIES, N_STATE))
+    deferred_periods = np.zeros(DEFERRED_TRIES, dtype=np.int64)
+    waiting = 0
     last = DISCARDED_PERIODS + budget.max_average_periods
     for iteration in range(max(budget.max_map_iterations, last)):
         slot = iteration % MAX_PERIOD
@@ -481,29 +485,66 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, 
                 if averaged == budget.max_average_periods or (
                         iteration + 1 >= budget.max_map_iterations and out_of_reach(
                             averaged, budget.max_average_periods, stats, tolerance)):
+                    found = _deferred_cycle(point, deferred, deferred_periods, waiting,
+                                            scales, max_events, record, work, candidate)
+                    waiting = 0
+                    if found != 0:
+                        return _found(found, z, candidate)
                     return NOT_CONVERGED, REASON_AVERAGE_BUDGET, 0, np.nan
         if iteration >= budget.max_map_iterations:
             continue  # the cycle search's budget is spent
         for periods in range(1, min(iteration + 1, MAX_PERIOD) + 1):
             back = (iteration - periods + 1) % MAX_PERIOD
             gap = state_distance(z, history[back], scales)
-            # On a chaotic motion only a close return far nearer than the detection's
-            # is tried: the iterates converging onto a cycle after a chaotic transient.
-            if gap < (CHAOTIC_DETECTION if chaotic else CYCLE_DETECTION) and (
-                    gap < 0.5 * tried[periods]):
+            if gap < CYCLE_DETECTION and gap < 0.5 * tried[periods]:
                 tried[periods] = gap
                 for i in range(N_STATE):
-                    candidate[i] = history[back, i]
-                found = _flight_cycle(point, candidate, periods, scales, max_events,
-                                      record, work)
-                if found < 0:
-                    return FRICTION_PARADOX, REASON_NONE, 0, np.nan
-                if found > 0:
-                    for i in range(N_STATE):
-                        z[i] = candidate[i]
-                    return STICK_SLIP, REASON_NONE, found, np.nan
+                    deferred[waiting, i] = history[back, i]
+                deferred_periods[waiting] = periods
+                waiting += 1
+                # On a chaotic motion a near return waits (most would be failing Newton
+                # searches) until one is far nearer than the detection's: the iterates
+                # converging onto a cycle after a chaotic transient.
+                if not chaotic or gap < CHAOTIC_DETECTION or waiting == DEFERRED_TRIES:
+                    found = _deferred_cycle(point, deferred, deferred_periods, waiting,
+                                            scales, max_events, record, work, candidate)
+                    waiting = 0
+                    if found != 0:
+                        return _found(found, z, candidate)
                 break
+    found = _deferred_cycle(point, deferred, deferred_periods, waiting, scales, max_events,
+                            record, work, candidate)
+    if found != 0:
+        return _found(found, z, candidate)
     return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, 0, np.nan
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _deferred_cycle(point, deferred, deferred_periods, waiting, scales, max_events, record,
+                    work, candidate):
+    """Try the ``waiting`` near returns kept in ``deferred`` (states at phase 0) for
+    cycles of ``deferred_periods`` periods, in the order they came: the first cycle
+    found (:func:`_flight_cycle`'s answer, ``candidate`` its state), 0 if none, -1 on
+    the paradox."""
+    for k in range(waiting):
+        for i in range(N_STATE):
+            candidate[i] = deferred[k, i]
+        found = _flight_cycle(point, candidate, deferred_periods[k], scales, max_events,
+                              record, work)
+        if found != 0:
+            return found
+    return 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _found(found, z, candidate):
+    """:func:`find_flight_orbit`'s answer for :func:`_deferred_cycle`'s ``found``
+    (``z`` takes the cycle's state)."""
+    if found < 0:
+        return FRICTION_PARADOX, REASON_NONE, 0, np.nan
+    for i in range(N_STATE):
+        z[i] = candidate[i]
+    return STICK_SLIP, REASON_NONE, found, np.nan
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
