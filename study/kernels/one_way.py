@@ -13,11 +13,16 @@ safeguarded Newton iteration. Stick releases are closed form (an arc of phase on
 which ``s tau - cs n > 0``).
 
 :mod:`study.solvers.exact` validates, allocates and calls the drivers
-:func:`solve_points` (all diagnostics) and :func:`velocity_points` (velocity and status
-only), with their arguments grouped in the named tuples below; a small call calls
+:func:`solve_points_averaged` (all diagnostics) and :func:`velocity_points` (velocity and
+status only), with their arguments grouped in the named tuples below; a small call calls
 :func:`steady_points_small`, :func:`velocity_points_small` and :func:`lift_off_small`,
 which take the named tuples' fields as plain tuples (numba's dispatch types those in
-C, named tuples in Python). :func:`sin_minus_x` is shared with the orbit kernel.
+C, named tuples in Python). Continuous sliding whose circle map has no cycle within
+reach is followed and time-averaged (:func:`_average_sliding`: ``QUASI_PERIODIC`` or
+``CHAOTIC``, docs/theory/irregular.md); :func:`solve_points` and
+:func:`solve_points_serial`, without the drive accelerations that scale the averaging's
+tolerance, leave it ``NOT_CONVERGED`` (``NO_PERIODIC_ORBIT``). :func:`sin_minus_x` is
+shared with the orbit kernel.
 Results are written to ``out`` arrays; nothing is allocated per point on the common
 (stick-slip) path.
 """
@@ -31,10 +36,25 @@ import numpy as np
 from numba import njit, prange
 
 from study.kernels.budget import Budget
+from study.kernels.time_average import (
+    DISCARDED_PERIODS,
+    EXPONENT_SIGMAS,
+    EXPONENT_ZERO,
+    S_STATE,
+    S_VELOCITY_ERROR,
+    Z_95,
+    examined,
+    mean_and_error,
+    out_of_reach,
+    settles,
+)
 from study.model.codes import (
+    CHAOTIC,
     CONTINUOUS_SLIDING,
     LIFT_OFF,
     NOT_CONVERGED,
+    QUASI_PERIODIC,
+    REASON_AVERAGE_BUDGET,
     REASON_EVENT_BUDGET,
     REASON_NO_PERIODIC_ORBIT,
     REASON_NONE,
@@ -79,6 +99,18 @@ FrictionLevels = namedtuple("FrictionLevels", ("static", "kinetic"))
 SteadyOutputs = namedtuple(
     "SteadyOutputs",
     ("velocity", "status", "reason", "slips", "forward", "backward", "period"))
+#: The time averages of :func:`solve_points_averaged`, one value per point: the
+#: time-averaged velocity [m s-1] of a continuous sliding without a cycle within reach
+#: (``QUASI_PERIODIC``, ``CHAOTIC``; the partial mean of ``NOT_CONVERGED`` with
+#: ``AVERAGE_BUDGET``; NaN elsewhere), its standard error [m s-1] (0 for an orbit or a
+#: static point, NaN where nothing was averaged and there is no orbit), the drive
+#: periods averaged (int32, 0 for an orbit), the Lyapunov exponent per drive period and
+#: its error (a continuous-sliding cycle: ``log|multiplier| / period``, error 0; NaN for
+#: stick-slip, static and lift-off points, which have no multiplier).
+AverageOutputs = namedtuple(
+    "AverageOutputs",
+    ("averaged_velocity", "velocity_error", "averaged_periods", "exponent",
+     "exponent_error"))
 #: The structure as the velocity path reads it, operation for operation as numpy
 #: evaluates ``study.model`` (see :func:`_lift_off`): ``Structure.omega0`` [rad s-1],
 #: ``1 / Q``, ``M``, numpy's cos and sin of the tilt, ``cs``, ``ck``, ``g`` [m s-2].
@@ -101,6 +133,8 @@ SlipConstants = namedtuple(
 _ROUND_OK = 0
 _ROUND_STUCK = 1
 _ROUND_BUDGET = 2
+# The circle map's search ran its iterations without finding a cycle (_circle_map).
+_ROUND_NO_CYCLE = 3
 
 
 @njit(cache=True, nogil=True)
@@ -337,12 +371,13 @@ def _refine_cycle(p, period, turns, k, max_events):
 
     Returns
     -------
-    converged, p, end, sign, distance, forward, backward, slips
-        The cycle's phase ``p`` and statistics of ``period`` map iterations along it.
+    converged, p, end, sign, distance, forward, backward, slips, multiplier
+        The cycle's phase ``p``, statistics of ``period`` map iterations along it and
+        the product of the map's derivatives over them (its multiplier).
     """
     found = False
     polish = 0
-    best = (np.inf, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0)
+    best = (np.inf, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 1.0)
     for _ in range(40):
         p = _mod_two_pi(p)
         flag, end, sign, deriv, distance, forward, backward, slips = _rounds(
@@ -362,14 +397,14 @@ def _refine_cycle(p, period, turns, k, max_events):
                 break
             found = True
         if found:
-            best = (abs(residual), p, end, sign, distance, forward, backward, slips)
+            best = (abs(residual), p, end, sign, distance, forward, backward, slips, deriv)
             if polish >= 4:
                 break
         p -= residual / (deriv - 1.0)
     if found:
-        _, p, end, sign, distance, forward, backward, slips = best
-        return True, p, end, sign, distance, forward, backward, slips
-    return False, p, 0.0, 0, 0.0, 0.0, 0.0, 0
+        _, p, end, sign, distance, forward, backward, slips, deriv = best
+        return True, p, end, sign, distance, forward, backward, slips, deriv
+    return False, p, 0.0, 0, 0.0, 0.0, 0.0, 0, 1.0
 
 
 @njit(cache=True, nogil=True)
@@ -380,10 +415,12 @@ def _circle_map(theta, k, max_rounds, max_events):
 
     Returns
     -------
-    flag, theta, sign, mean, slips, forward, backward, period
-        ``flag``: ``_ROUND_OK`` (cycle found; statistics per drive period follow),
-        ``_ROUND_STUCK`` (a stick appeared: resume stick-slip from ``theta, sign``),
-        or ``_ROUND_BUDGET`` (no cycle found).
+    flag, theta, sign, mean, slips, forward, backward, period, multiplier
+        ``flag``: ``_ROUND_OK`` (cycle found; statistics per drive period follow, and
+        the product of the map's derivatives over the cycle), ``_ROUND_STUCK`` (a stick
+        appeared: resume stick-slip from ``theta, sign``), ``_ROUND_BUDGET`` (the events
+        of an iteration ran out) or ``_ROUND_NO_CYCLE`` (no cycle within ``max_rounds``
+        iterations: ``theta`` is the next iterate, for :func:`_average_sliding`).
     """
     # Ring buffers over the last iterations: start phase, unwrapped phase advance
     # and derivative of the map.
@@ -395,9 +432,9 @@ def _circle_map(theta, k, max_rounds, max_events):
     for iteration in range(max_rounds):
         flag, end, sign, deriv, _, _, _, _ = _rounds(p, 1, k, max_events)
         if flag == _ROUND_STUCK:
-            return _ROUND_STUCK, end, sign, 0.0, 0.0, 0.0, 0.0, 0
+            return _ROUND_STUCK, end, sign, 0.0, 0.0, 0.0, 0.0, 0, 1.0
         if flag == _ROUND_BUDGET:
-            return _ROUND_BUDGET, end, sign, 0.0, 0.0, 0.0, 0.0, 0
+            return _ROUND_BUDGET, end, sign, 0.0, 0.0, 0.0, 0.0, 0, 1.0
         slot = iteration % MAX_MAP_PERIOD
         starts[slot] = p
         advances[slot] = end - p
@@ -417,9 +454,8 @@ def _circle_map(theta, k, max_rounds, max_events):
                 guess = starts[slot]
                 if product != 1.0:
                     guess -= (total - TWO_PI * turns) / (product - 1.0)
-                converged, p_star, end, sign, distance, forward, backward, slips = (
-                    _refine_cycle(guess, period, turns, k, max_events)
-                )
+                (converged, p_star, end, sign, distance, forward, backward, slips,
+                 multiplier) = _refine_cycle(guess, period, turns, k, max_events)
                 if converged:
                     # Report the cycle's own period, not a multiple that closed first.
                     for shorter in range(1, period):
@@ -430,7 +466,7 @@ def _circle_map(theta, k, max_rounds, max_events):
                         if short[0] == _ROUND_OK and abs(
                             short[1] - p_star - TWO_PI * turns_short
                         ) <= 1e3 * CYCLE_TOLERANCE:
-                            _, end, sign, _, distance, forward, backward, slips = short
+                            _, end, sign, multiplier, distance, forward, backward, slips = short
                             turns = turns_short
                             break
                     span = TWO_PI * turns
@@ -443,9 +479,126 @@ def _circle_map(theta, k, max_rounds, max_events):
                         forward / span,
                         backward / span,
                         int(turns),
+                        multiplier,
                     )
                 break
-    return _ROUND_BUDGET, p, 1, 0.0, 0.0, 0.0, 0.0, 0
+    return _ROUND_NO_CYCLE, p, 1, 0.0, 0.0, 0.0, 0.0, 0, 1.0
+
+
+@njit(cache=True, nogil=True)
+def _average_sliding(p, k, budget, natural, spent):
+    """Continuous sliding without a cycle within reach: the time averages of the circle
+    map's iterates from ``p`` (the start of a forward slip by immediate reversal), after
+    ``spent`` iterations of the cycle search, within ``budget`` (a
+    :data:`~study.kernels.budget.Budget`); ``natural`` [m s-2] is the drive acceleration
+    ``a``, whose ``velocity_tolerance`` is the tolerance of the mean of ``w v``.
+
+    The search found no cycle: its iterates follow a slow approach to a cycle the search
+    did not reach within its budget (exponent below 0), or an invariant circle of an
+    irrational rotation number (exponent 0). The latter is not expected of this model: a
+    forward slip starts only where it accelerates (``|psi0| < gamma <= pi / 2``), so the
+    iterates stay on an arc of at most half the circle, and the map's derivative (a
+    product of two negative slope ratios) is positive; an increasing map of an arc into
+    itself has every orbit converge to a fixed point. A seeded search of ~28 million
+    drive points found every continuous sliding a cycle of period 1.
+
+    The iterations the search has spent count towards the transient of
+    :data:`~study.kernels.time_average.DISCARDED_PERIODS` iterations (the rest is
+    discarded here); then each iterate ``i`` (one forward and one backward slip, a round
+    of ``t_i`` = its phase advance, not a whole number of drive periods) records its
+    displacement ``x_i`` (the integral of ``w v`` over the round) and ``g_i = log|d
+    theta_end / d theta_start|``. The mean is the time average ``V = sum x / sum t`` (a
+    mean of ``w v`` [m s-2]); its standard error is the batch means'
+    (:func:`~study.kernels.time_average.mean_and_error`) of ``(x_i - V t_i) / mean(t)``:
+    the per-iterate velocities ``x_i / t_i`` weighted by their rounds' durations
+    relative to the mean round, centred on ``V`` (the ratio estimator's linearised
+    error, so a long round weighs as the time it lasts). The Lyapunov exponent per drive
+    period is ``2 pi sum g / sum t``, its error the same way. The averages are examined
+    and the motion classified as the two-way's
+    (:func:`~study.kernels.time_average.examined`, ``settles``, ``out_of_reach``),
+    ``max_average_periods`` counting iterates.
+
+    Returns
+    -------
+    flag, theta, sign, status, reason, mean, slips, forward, backward, error, turns,
+    exponent, exponent_error
+        ``flag``: ``_ROUND_OK`` (averaged: ``status`` ``QUASI_PERIODIC`` or ``CHAOTIC``,
+        or ``NOT_CONVERGED`` with ``REASON_AVERAGE_BUDGET`` and its partial averages),
+        ``_ROUND_STUCK`` (a stick appeared: resume stick-slip from ``theta, sign``) or
+        ``_ROUND_BUDGET`` (the events of an iteration ran out). ``mean`` and ``error``
+        [m s-2] are of ``w v``; ``slips`` per drive period, ``forward`` and ``backward``
+        the fractions of the time slipping each way; ``turns`` the drive periods the
+        averaged iterates span; the exponent and its error per drive period.
+    """
+    max_events = budget.max_events
+    n_max = budget.max_average_periods
+    tolerance = budget.velocity_tolerance * natural
+    discard = max(DISCARDED_PERIODS - spent, 0)
+    distances = np.empty(n_max)
+    advances = np.empty(n_max)
+    growths = np.empty(n_max)
+    values = np.empty(n_max)
+    stats = np.zeros(S_STATE)
+    total_distance = 0.0
+    total_advance = 0.0
+    total_growth = 0.0
+    forward = 0.0
+    backward = 0.0
+    slips = 0
+    for iteration in range(discard + n_max):
+        flag, end, sign, deriv, distance, fwd, bwd, count = _rounds(p, 1, k, max_events)
+        if flag != _ROUND_OK:
+            return (flag, end, sign, NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, np.nan, 0.0,
+                    0.0, 0.0, np.nan, 0.0, np.nan, np.nan)
+        advance = end - p
+        p = _mod_two_pi(end)
+        recorded = iteration - discard
+        if recorded < 0:
+            continue
+        growth = np.log(abs(deriv))
+        distances[recorded] = distance
+        advances[recorded] = advance
+        growths[recorded] = growth
+        total_distance += distance
+        total_advance += advance
+        total_growth += growth
+        forward += fwd
+        backward += bwd
+        slips += count
+        averaged = recorded + 1
+        if not examined(averaged, n_max):
+            continue
+        mean = total_distance / total_advance
+        step = total_advance / averaged
+        for i in range(averaged):
+            values[i] = (distances[i] - mean * advances[i]) / step
+        _, error, _ = mean_and_error(values, averaged)
+        rate = total_growth / total_advance
+        for i in range(averaged):
+            values[i] = (growths[i] - rate * advances[i]) * (TWO_PI / step)
+        _, exponent_error, _ = mean_and_error(values, averaged)
+        exponent = TWO_PI * rate
+        within = Z_95 * error <= tolerance
+        positive = exponent - EXPONENT_SIGMAS * exponent_error > 0.0
+        negative = not exponent + EXPONENT_SIGMAS * exponent_error >= 0.0
+        bounded = exponent + EXPONENT_SIGMAS * exponent_error < EXPONENT_ZERO
+        # The cycle search has run its budget: settled once within the tolerance.
+        if settles(averaged, n_max, spent, spent, within, positive, negative, bounded):
+            status = CHAOTIC if positive else QUASI_PERIODIC
+            reason = REASON_NONE
+        else:
+            stats[S_VELOCITY_ERROR] = error
+            if averaged < n_max and not out_of_reach(averaged, n_max, stats, tolerance):
+                continue
+            status = NOT_CONVERGED
+            reason = REASON_AVERAGE_BUDGET
+        turns = total_advance / TWO_PI
+        return (_ROUND_OK, p, 1, status, reason, mean, slips / turns,
+                forward / total_advance, backward / total_advance, error, turns, exponent,
+                exponent_error)
+    # Not reached: the last iterate is examined (averaged == n_max).
+    return (_ROUND_BUDGET, p, 1, NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, np.nan, 0.0, 0.0,
+            0.0, np.nan, 0.0, np.nan, np.nan)
 
 
 @njit(cache=True, nogil=True)
@@ -482,23 +635,35 @@ def _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g):
 
 
 @njit(cache=True, nogil=True)
-def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget):
+def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget, natural):
     """Periodic orbit reached from rest at phase 0, for one drive point of amplitudes
     ``a_plus`` ... ``b_minus`` [m s-2], friction ``levels`` (:data:`FrictionLevels`),
-    within ``budget`` (a :data:`~study.kernels.budget.Budget`).
+    within ``budget`` (a :data:`~study.kernels.budget.Budget`); continuous sliding
+    without a cycle within reach is averaged (:func:`_average_sliding`) with the
+    tolerance ``velocity_tolerance * natural``, ``natural`` the drive acceleration ``a``
+    [m s-2] (NaN: not averaged, ``NO_PERIODIC_ORBIT`` as without averaging).
 
     Returns
     -------
-    status, reason, mean, slips, forward, backward, period
+    status, reason, mean, slips, forward, backward, period, error, turns, exponent,
+    exponent_error
         ``mean`` is the orbit's mean of ``w v`` [m s-2] (divide by ``w``),
         ``slips`` the slip events per drive period, ``forward``/``backward`` the
         fractions of the period spent slipping each way, ``period`` the orbit's
-        period in drive periods.
+        period in drive periods. ``error`` is the standard error of ``mean`` [m s-2]
+        (0 for an orbit or a static point, NaN when not converged but for
+        ``AVERAGE_BUDGET``), ``turns`` the drive periods averaged (0 for an orbit),
+        ``exponent`` the Lyapunov exponent per drive period with its error: for a
+        continuous-sliding cycle ``log|multiplier| / period`` (the circle map's
+        derivative over the cycle) with error 0; for an averaged motion the time
+        average; NaN elsewhere (a stick forgets the phase: there is no multiplier).
+        A point averaged to the budget (``NOT_CONVERGED``, ``AVERAGE_BUDGET``) keeps its
+        partial ``mean``.
     """
     max_events = budget.max_events
     k = _constants(a_plus, a_minus, b_plus, b_minus, levels.static, levels.kinetic)
     if not k.ok_p and not k.ok_m:
-        return STATIC, REASON_NONE, 0.0, 0.0, 0.0, 0.0, 0
+        return STATIC, REASON_NONE, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, np.nan, np.nan
     wait, sign = _next_release(0.0, 0, k)
     theta = wait
     # State at the two possible releases after a stick: (phase, distance, fwd, bwd, slips).
@@ -529,6 +694,10 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget):
                     (forward - previous[2]) / span,
                     (backward - previous[3]) / span,
                     int(turns),
+                    0.0,
+                    0.0,
+                    np.nan,
+                    np.nan,
                 )
             if sign > 0:
                 seen_p = True
@@ -537,13 +706,22 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget):
                 seen_m = True
                 rec_m = now
         elif since_stick >= CIRCLE_MAP_AFTER and sign > 0:
-            flag, theta_c, sign_c, mean, per, fwd, bwd, period = _circle_map(
+            flag, theta_c, sign_c, mean, per, fwd, bwd, period, multiplier = _circle_map(
                 theta, k, budget.max_map_iterations, max_events
             )
             if flag == _ROUND_OK:
-                return CONTINUOUS_SLIDING, REASON_NONE, mean, per, fwd, bwd, period
-            if flag == _ROUND_BUDGET:
-                return NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, np.nan, 0.0, 0.0, 0.0, 0
+                return (CONTINUOUS_SLIDING, REASON_NONE, mean, per, fwd, bwd, period, 0.0,
+                        0.0, np.log(abs(multiplier)) / period, 0.0)
+            if flag == _ROUND_NO_CYCLE and natural > 0.0:
+                (flag, theta_c, sign_c, st, why, mean, per, fwd, bwd, error, turns,
+                 exponent, exponent_error) = _average_sliding(
+                    theta_c, k, budget, natural, budget.max_map_iterations)
+                if flag == _ROUND_OK:
+                    return (st, why, mean, per, fwd, bwd, 0, error, turns, exponent,
+                            exponent_error)
+            if flag == _ROUND_BUDGET or flag == _ROUND_NO_CYCLE:
+                return (NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, np.nan, 0.0, 0.0, 0.0, 0,
+                        np.nan, 0.0, np.nan, np.nan)
             # A stick ended the sliding transient: restart the bookkeeping there.
             theta = theta_c
             sign = sign_c
@@ -564,7 +742,8 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget):
         sign = sign_next
         genuine = wait > 0.0
         since_stick += 1
-    return NOT_CONVERGED, REASON_EVENT_BUDGET, np.nan, 0.0, 0.0, 0.0, 0
+    return (NOT_CONVERGED, REASON_EVENT_BUDGET, np.nan, 0.0, 0.0, 0.0, 0, np.nan, 0.0, np.nan,
+            np.nan)
 
 
 @njit(cache=True, nogil=True)
@@ -580,10 +759,34 @@ def _write_lifted(i, out):
 
 
 @njit(cache=True, nogil=True)
+def _write_lifted_averages(i, averages):
+    """The averages of a point past lift-off into the :data:`AverageOutputs`
+    ``averages``."""
+    averages.averaged_velocity[i] = np.nan
+    averages.velocity_error[i] = np.nan
+    averages.averaged_periods[i] = 0
+    averages.exponent[i] = np.nan
+    averages.exponent_error[i] = np.nan
+
+
+@njit(cache=True, nogil=True)
+def _write_averages(i, orbit, omega, averages):
+    """The averages of ``orbit`` (what :func:`_solve_point` returns) at angular frequency
+    ``omega`` [rad s-1] into the :data:`AverageOutputs` ``averages``."""
+    st, why, mean, _, _, _, _, error, turns, exponent, exponent_error = orbit
+    averaged = st == CHAOTIC or st == QUASI_PERIODIC or why == REASON_AVERAGE_BUDGET
+    averages.averaged_velocity[i] = mean / omega if averaged else np.nan
+    averages.velocity_error[i] = error / omega
+    averages.averaged_periods[i] = round(turns)
+    averages.exponent[i] = exponent
+    averages.exponent_error[i] = exponent_error
+
+
+@njit(cache=True, nogil=True)
 def _write_orbit(i, orbit, omega, out):
     """The row of ``orbit`` (what :func:`_solve_point` returns) at angular frequency
     ``omega`` [rad s-1] into the :data:`SteadyOutputs` ``out``."""
-    st, why, mean, per, fwd, bwd, n_period = orbit
+    st, why, mean, per, fwd, bwd, n_period = orbit[:7]
     out.status[i] = st
     out.reason[i] = why
     if st == NOT_CONVERGED:
@@ -601,15 +804,33 @@ def _write_orbit(i, orbit, omega, out):
 
 @njit(cache=True, nogil=True)
 def _solve_into(i, amplitudes, lifted, omega, levels, budget, out):
-    """Solve point ``i`` and write its results into the :data:`SteadyOutputs` ``out``."""
+    """Solve point ``i`` and write its results into the :data:`SteadyOutputs` ``out``
+    (without the drive acceleration: continuous sliding without a cycle is not
+    averaged, see :func:`solve_points`)."""
     if lifted[i]:
         _write_lifted(i, out)
         return
     orbit = _solve_point(
         amplitudes.a_plus[i], amplitudes.a_minus[i], amplitudes.b_plus[i],
-        amplitudes.b_minus[i], levels, budget
+        amplitudes.b_minus[i], levels, budget, np.nan
     )
     _write_orbit(i, orbit, omega[i], out)
+
+
+@njit(cache=True, nogil=True)
+def _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out, averages):
+    """Solve point ``i`` of drive acceleration ``a[i]`` [m s-2] and write its results into
+    the :data:`SteadyOutputs` ``out`` and the :data:`AverageOutputs` ``averages``."""
+    if lifted[i]:
+        _write_lifted(i, out)
+        _write_lifted_averages(i, averages)
+        return
+    orbit = _solve_point(
+        amplitudes.a_plus[i], amplitudes.a_minus[i], amplitudes.b_plus[i],
+        amplitudes.b_minus[i], levels, budget, a[i]
+    )
+    _write_orbit(i, orbit, omega[i], out)
+    _write_averages(i, orbit, omega[i], averages)
 
 
 #: Points a thread takes at a time in the parallel kernels: whole cache lines of every
@@ -631,6 +852,10 @@ def solve_points(amplitudes, lifted, omega, levels, budget, out):
     one thread with all the slipping points of a map; single points interleaved
     would make every write miss the cache (a lane touches one value of each cache
     line, which is evicted before the next lane comes to it).
+
+    Without the drive accelerations, continuous sliding without a cycle within reach is
+    not averaged (``NOT_CONVERGED``, ``NO_PERIODIC_ORBIT``, as before the averaging):
+    :func:`solve_points_averaged` averages it.
     """
     n = omega.shape[0]
     blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
@@ -646,6 +871,30 @@ def solve_points_serial(amplitudes, lifted, omega, levels, budget, out):
     """Same as :func:`solve_points` on one thread: no thread-pool launch for small inputs."""
     for i in range(omega.shape[0]):
         _solve_into(i, amplitudes, lifted, omega, levels, budget, out)
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def solve_points_averaged(amplitudes, a, lifted, omega, levels, budget, out, averages):
+    """:func:`solve_points` at drive accelerations ``a`` [m s-2], continuous sliding
+    without a cycle within reach averaged (:func:`_average_sliding`, the tolerance
+    ``velocity_tolerance * a``), with the :data:`AverageOutputs` ``averages``."""
+    n = omega.shape[0]
+    blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
+    lanes = min(blocks, 256)
+    for lane in prange(lanes):
+        for block in range(lane, blocks, lanes):
+            for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
+                _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out,
+                                     averages)
+
+
+@njit(cache=True, nogil=True)
+def solve_points_averaged_serial(amplitudes, a, lifted, omega, levels, budget, out,
+                                 averages):
+    """Same as :func:`solve_points_averaged` on one thread."""
+    for i in range(omega.shape[0]):
+        _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out,
+                             averages)
 
 
 # Velocity only (``study.solvers.exact.steady_velocity``): the same orbits, nothing else,
@@ -779,7 +1028,8 @@ def _velocity_into(i, f, a, constants, levels, budget, out, given):
         out.status[i] = STATIC
         return
     # The diagnostics _solve_point also returns are dead code here, and compiled away.
-    st, _, mean, _, _, _, _ = _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget)
+    st, _, mean, _, _, _, _, _, _, _, _ = _solve_point(a_plus, a_minus, b_plus, b_minus,
+                                                       levels, budget, a[i])
     out.status[i] = st
     out.velocity[i] = np.nan if st == NOT_CONVERGED else mean / w
 
@@ -843,12 +1093,13 @@ def velocity_points_small(f, a, constants, levels, budget, velocity, status):
 
 @njit(cache=True, nogil=True)
 def steady_points_small(f, a, constants, levels, budget, velocity, status, reason, slips,
-                        forward, backward, period):
+                        forward, backward, period, averaged_velocity, velocity_error,
+                        averaged_periods, exponent, exponent_error):
     """:func:`solve_points_serial` at ``f`` [Hz], ``a`` [m s-2], the force amplitudes
     and the lift-off decision evaluated point by point as :func:`velocity_points`
     does (bit-identical to ``study.model``'s arrays, without their temporaries), with
     plain-tuple arguments as :func:`velocity_points_small` and the outputs of
-    :data:`SteadyOutputs` one by one.
+    :data:`SteadyOutputs`, then of :data:`AverageOutputs`, one by one.
 
     A point within 1e-13 of the lift-off threshold gets the status ``LIFT_UNDECIDED``
     (its other outputs unset), for the caller to solve with numpy's decision. Returns
@@ -858,6 +1109,8 @@ def steady_points_small(f, a, constants, levels, budget, velocity, status, reaso
     friction = FrictionLevels(*levels)
     limits = Budget(*budget)
     out = SteadyOutputs(velocity, status, reason, slips, forward, backward, period)
+    averages = AverageOutputs(averaged_velocity, velocity_error, averaged_periods, exponent,
+                              exponent_error)
     undecided = 0
     for i in range(f.shape[0]):
         lift, w, k_re, k_im, one_re, one_im = _lift_off(f[i], a[i], force)
@@ -866,12 +1119,14 @@ def steady_points_small(f, a, constants, levels, budget, velocity, status, reaso
             undecided += 1
         elif lift == 1:
             _write_lifted(i, out)
+            _write_lifted_averages(i, averages)
         else:
             a_plus, a_minus, b_plus, b_minus = _forces(
                 a[i], k_re, k_im, one_re, one_im, force.sin_alpha, force.static_friction,
                 force.kinetic_friction)
-            orbit = _solve_point(a_plus, a_minus, b_plus, b_minus, friction, limits)
+            orbit = _solve_point(a_plus, a_minus, b_plus, b_minus, friction, limits, a[i])
             _write_orbit(i, orbit, w, out)
+            _write_averages(i, orbit, w, averages)
     return undecided
 
 

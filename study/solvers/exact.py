@@ -98,14 +98,14 @@ class SolverSettings:
         Iterations of the continuous-sliding circle map searched for an attracting
         cycle before ``NonConvergence.NO_PERIODIC_ORBIT``, 1 to 1e6.
     velocity_tolerance : float
-        Two-way coupling only: an irregular motion (no stable cycle within reach:
-        ``CHAOTIC`` or ``QUASI_PERIODIC``) is averaged over the period map's iterates
-        until the 95 % confidence half-width of its mean velocity is within this
-        fraction of ``a / (2 pi f)`` [1], in (0, 1]. Default 1e-3 (about 1100 periods
-        of a chaotic bouncing motion).
+        An irregular motion (no stable cycle within reach: ``CHAOTIC`` or
+        ``QUASI_PERIODIC``) is averaged over the period map's iterates (one-way: the
+        continuous-sliding circle map's) until the 95 % confidence half-width of its
+        mean velocity is within this fraction of ``a / (2 pi f)`` [1], in (0, 1].
+        Default 1e-3 (about 1100 periods of a chaotic bouncing motion).
     max_average_periods : int
-        Two-way coupling only: periods an irregular motion is averaged over at most,
-        256 to 1e6; a motion whose mean is still outside the tolerance then is
+        Periods an irregular motion is averaged over at most (one-way: circle-map
+        iterates), 256 to 1e6; a motion whose mean is still outside the tolerance then is
         ``NOT_CONVERGED`` (``NonConvergence.AVERAGE_BUDGET``), its partial averages'
         error, periods and exponent kept. Default 20 000.
     continuation : bool
@@ -222,21 +222,27 @@ class SteadyState:
         Time-averaged velocity [m s-1] of a motion followed on the period map:
         ``velocity`` for ``CHAOTIC`` and ``QUASI_PERIODIC``, the partial mean for
         ``NOT_CONVERGED`` with ``AVERAGE_BUDGET`` (whose ``velocity`` is NaN), NaN
-        elsewhere. ``None`` from the one-way solver.
+        elsewhere. One-way: the same for continuous sliding whose circle map has no
+        cycle within reach (the time average over its iterates).
     velocity_error : numpy.ndarray or None
         Standard error of ``velocity`` [m s-1]: 0 for an orbit or a static point (exact),
         the batch-means error of the time average for ``CHAOTIC`` and
         ``QUASI_PERIODIC`` and for ``NOT_CONVERGED`` with ``AVERAGE_BUDGET`` (whose
-        velocity is NaN), NaN elsewhere. ``None`` from the one-way solver.
+        velocity is NaN), NaN elsewhere; the same from the one-way solver.
     averaged_periods : numpy.ndarray of int32 or None
         Drive periods an irregular motion was averaged over [1] (0 for an orbit).
-        ``None`` from the one-way solver.
+        One-way: the drive periods its averaged circle-map iterates span, rounded.
     lyapunov_exponent, lyapunov_error : numpy.ndarray or None
         Largest Lyapunov exponent per drive period [1] and its standard error: for an
         irregular motion from a tangent vector carried through the period map's exact
         Jacobians (saltation matrices included), renormalised every period; for an
         orbit ``log(floquet_multiplier) / orbit_period`` with error 0; NaN where
-        neither applies. ``None`` from the one-way solver.
+        neither applies. One-way (the phase of continuous sliding is its only state): a
+        continuous-sliding cycle's ``log|multiplier| / orbit_period``, the multiplier
+        the circle map's derivative over the cycle, error 0; an averaged motion's mean
+        of ``log|d theta_end / d theta_start|`` per drive period with its batch-means
+        error; NaN for stick-slip, static and lift-off points (a stick forgets the
+        phase: no multiplier) and where not converged but for ``AVERAGE_BUDGET``.
 
     Notes
     -----
@@ -542,24 +548,35 @@ def _one_way_steady_state(
         backward=np.empty(n),
         period=np.empty(n, dtype=np.int32),
     )
+    averages = one_way_kernel.AverageOutputs(
+        averaged_velocity=np.empty(n),
+        velocity_error=np.empty(n),
+        averaged_periods=np.empty(n, dtype=np.int32),
+        exponent=np.empty(n),
+        exponent_error=np.empty(n),
+    )
     # Launching the thread pool costs milliseconds: small inputs run on this thread.
     if parallel is None:
         parallel = n >= PARALLEL_THRESHOLD
     if parallel or n >= PARALLEL_THRESHOLD:
-        _solve_one_way(structure, f_flat, a_flat, settings, parallel, out)
+        _solve_one_way(structure, f_flat, a_flat, settings, parallel, out, averages)
     else:
         # The kernel evaluates the forces point by point, bit-identical to numpy's
         # arrays, whose temporaries cost a small call ten times its solve.
         kept = _kept(structure)
         if one_way_kernel.steady_points_small(f_flat, a_flat, kept.force, kept.levels,
-                                              tuple(kernel_budget(settings)), *out):
+                                              tuple(kernel_budget(settings)), *out,
+                                              *averages):
             # Points within 1e-13 of the lift-off threshold: solved the long way, where
             # numpy decides their lift-off.
             undecided = np.flatnonzero(out.status == one_way_kernel.LIFT_UNDECIDED)
             rows = one_way_kernel.SteadyOutputs(*(x[undecided] for x in out))
+            rows_averages = one_way_kernel.AverageOutputs(
+                *(x[undecided] for x in averages))
             _solve_one_way(structure, f_flat[undecided], a_flat[undecided], settings,
-                           False, rows)
-            for whole, part in zip(out, rows, strict=True):
+                           False, rows, rows_averages)
+            for whole, part in zip((*out, *averages), (*rows, *rows_averages),
+                                   strict=True):
                 whole[undecided] = part
     return SteadyState(
         velocity=_shaped(out.velocity, shape),
@@ -569,6 +586,11 @@ def _one_way_steady_state(
         forward_fraction=_shaped(out.forward, shape),
         backward_fraction=_shaped(out.backward, shape),
         orbit_period=_shaped(out.period, shape),
+        averaged_velocity=_shaped(averages.averaged_velocity, shape),
+        velocity_error=_shaped(averages.velocity_error, shape),
+        averaged_periods=_shaped(averages.averaged_periods, shape),
+        lyapunov_exponent=_shaped(averages.exponent, shape),
+        lyapunov_error=_shaped(averages.exponent_error, shape),
     )
 
 
@@ -579,10 +601,12 @@ def _solve_one_way(
     settings: SolverSettings,
     parallel: bool,
     out: Any,
+    averages: Any,
 ) -> None:
     """The one-way kernel at flat ``f``, ``a`` into the
-    :data:`~study.kernels.one_way.SteadyOutputs` ``out``, the forces and the lift-off
-    decisions computed by ``study.model`` (numpy)."""
+    :data:`~study.kernels.one_way.SteadyOutputs` ``out`` and
+    :data:`~study.kernels.one_way.AverageOutputs` ``averages``, the forces and the
+    lift-off decisions computed by ``study.model`` (numpy)."""
     a_plus, a_minus, b_plus, b_minus = (
         *release_amplitudes(structure, f_flat, a_flat),
         *slip_amplitudes(structure, f_flat, a_flat))
@@ -591,9 +615,10 @@ def _solve_one_way(
     amplitudes = one_way_kernel.Amplitudes(
         *(np.ascontiguousarray(x, dtype=np.complex128)
           for x in (a_plus, a_minus, b_plus, b_minus)))
-    kernel = one_way_kernel.solve_points if parallel else one_way_kernel.solve_points_serial
-    kernel(amplitudes, lifted, omega, _friction_levels(structure), kernel_budget(settings),
-           out)
+    kernel = (one_way_kernel.solve_points_averaged if parallel
+              else one_way_kernel.solve_points_averaged_serial)
+    kernel(amplitudes, np.ascontiguousarray(a_flat, dtype=np.float64), lifted, omega,
+           _friction_levels(structure), kernel_budget(settings), out, averages)
 
 
 def steady_state(
