@@ -230,7 +230,8 @@ def encode_block(key: str, f: NDArray[np.float64], a: NDArray[np.float64],
     f, a : numpy.ndarray
         ``(n_f,)`` drive frequencies [Hz] and ``(n_a,)`` accelerations [m s-2].
     arrays : dict
-        Variable name -> ``(n_f, n_a)`` array.
+        Variable name -> ``(n_f, n_a)`` array, or ``(n_f, n_a, ...)`` for a variable
+        with a value of several numbers per point (a phase section's periods).
     """
     f = np.ascontiguousarray(f, dtype=np.float64)
     a = np.ascontiguousarray(a, dtype=np.float64)
@@ -240,6 +241,10 @@ def encode_block(key: str, f: NDArray[np.float64], a: NDArray[np.float64],
         "encoding": _ENCODING,
         "variables": sorted(arrays),
         "shape": [int(f.size), int(a.size)],
+        # Only where a point holds several numbers: blocks without it read as before.
+        **({"trailing": {name: list(v.shape[2:]) for name, v in arrays.items()
+                         if np.ndim(v) > 2}}
+           if any(np.ndim(v) > 2 for v in arrays.values()) else {}),
         "a_sha256": _array_sha256(a),
         "dtypes": {name: array.dtype.str for name, array in payload.items()},
         "sha256": {name: _array_sha256(array) for name, array in payload.items()},
@@ -488,8 +493,10 @@ class ResultCache:
                     n_f, n_a = (int(n) for n in meta["shape"])
                     names = ("f",) if axes_only else ("f", *meta["variables"])
                     arrays = {}
+                    trailing = meta.get("trailing", {})
                     for name in names:
-                        shape = (n_f,) if name == "f" else (n_f, n_a)
+                        shape = (n_f,) if name == "f" else (
+                            n_f, n_a, *(int(n) for n in trailing.get(name, ())))
                         arrays[name] = decode_array(archive.read(f"{name}.bin"),
                                                     meta["dtypes"][name], shape)
                     problem = _check_block(meta, arrays)
@@ -575,6 +582,7 @@ class ResultCache:
     def lookup(
         self, key: str, f: NDArray[np.float64], a: NDArray[np.float64],
         variables: dict[str, np.dtype],
+        trailing: dict[str, tuple[int, ...]] | None = None,
     ) -> tuple[dict[str, NDArray[Any]], NDArray[np.bool_]]:
         """Kept values at the grid ``f x a``.
 
@@ -587,6 +595,10 @@ class ResultCache:
             Values match only if bitwise equal.
         variables : dict
             Variable name -> dtype of the arrays returned.
+        trailing : dict, optional
+            Variable name -> the shape of one point's value where it is not a number
+            (a phase section's periods); a block whose values have another shape is
+            not used.
 
         Returns
         -------
@@ -595,7 +607,8 @@ class ResultCache:
         found : numpy.ndarray of bool
             ``(n_f, n_a)``: which points were found.
         """
-        values = {name: np.zeros((f.size, a.size), dtype=dtype)
+        trailing = trailing or {}
+        values = {name: np.zeros((f.size, a.size, *trailing.get(name, ())), dtype=dtype)
                   for name, dtype in variables.items()}
         found = np.zeros((f.size, a.size), dtype=bool)
         index = self._index(key)
@@ -629,7 +642,9 @@ class ResultCache:
             if not match.any():
                 continue
             arrays = self._block(index.paths[b], key)
-            if arrays is None or not all(name in arrays for name in variables):
+            if arrays is None or not all(
+                    name in arrays and arrays[name].shape[2:] == values[name].shape[2:]
+                    for name in variables):
                 continue
             rows_query = rows_here
             cols_query = np.flatnonzero(match)

@@ -20,10 +20,10 @@ from numpy.typing import NDArray
 
 from study.engine.observables import Method, Observable, resolve
 from study.engine.study_spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec
-from study.engine.variables import VARIABLES
+from study.engine.variables import GRID_SIZES, GRIDS, VARIABLES
 from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS, Friction
 from study.model.parameters import STRUCTURE
-from study.model.units import KILOGRAM
+from study.model.units import DIMENSIONLESS, KILOGRAM
 
 __all__ = [
     "Coordinate",
@@ -93,6 +93,12 @@ def coordinates(spec: StudySpec) -> tuple[Coordinate, ...]:
     for name, value in spec.canonical["structure"].items():
         units, long_name = SWEEPABLE[name]
         found.append(Coordinate(name, (), np.float64(value), coordinate_attrs(units, long_name)))
+    # The dimensions of a point's values (a phase section's periods), counted from 0.
+    trailing = {d for o in resolve(spec.observables, spec.flight) for v in o.variables
+                for d in GRIDS[VARIABLES[v].grid][2:]}
+    for name in sorted(trailing):
+        found.append(Coordinate(name, (name,), np.arange(GRID_SIZES[name], dtype=np.int32),
+                                coordinate_attrs(DIMENSIONLESS, _TRAILING_NAMES[name])))
     if spec.mass is not None:
         found.append(Coordinate("m0", (), np.float64(spec.mass.m0),
                                 coordinate_attrs(KILOGRAM, "mass of the structure")))
@@ -107,6 +113,11 @@ def coordinates(spec: StudySpec) -> tuple[Coordinate, ...]:
             found.append(Coordinate("M", (), np.float64(spec.mass.mass_ratio(
                 spec.fixed.get("m_add", 0.0))), coordinate_attrs(units, long_name)))
     return tuple(found)
+
+
+#: long_name of each dimension of :data:`~study.engine.variables.GRID_SIZES`.
+_TRAILING_NAMES = {"section_period": "drive periods of the phase section, counted from "
+                   "the reported state"}
 
 
 def observables_by_grid(spec: StudySpec) -> tuple[tuple[Observable, ...],

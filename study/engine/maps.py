@@ -31,6 +31,7 @@ from study.engine.layout import (
 from study.engine.observables import OBSERVABLES
 from study.engine.study_spec import STRUCTURE_PARAMETERS, StudySpec, parse_spec
 from study.engine.sweep import Rectangle, Task, compute_task, plan_chunks
+from study.engine.variables import GRID_SIZES
 from study.model.inputs import (
     RADIAN_LIKE_TILT,
     SuspectInputWarning,
@@ -250,7 +251,7 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
     method = method_of(spec)
     f = spec.axis("f").values
     a = spec.axis("a").values if spec.needs_solver else np.empty(0)
-    sizes = {axis.name: len(axis) for axis in spec.axes}
+    sizes = {**GRID_SIZES, **{axis.name: len(axis) for axis in spec.axes}}
     variables = data_variables(spec, (*rows, *points))
     values: dict[str, NDArray[Any]] = {
         v.name: np.full(tuple(sizes[d] for d in v.dims),

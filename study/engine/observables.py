@@ -26,9 +26,11 @@ from study.model.contact import COUPLINGS, DEFAULT_FRICTION, Friction, check_fri
 from study.model.structure import Structure
 from study.solvers.exact import (
     DEFAULT_COUPLING,
+    SECTION_PERIODS,
     SolverSettings,
     SteadyState,
     attractors,
+    phase_section,
     steady_state,
 )
 from study.solvers.frontier import frontier_from_grid
@@ -370,6 +372,16 @@ def _irregular(work: PointWork) -> dict[str, NDArray[Any]]:
             "lyapunov_error": solution.lyapunov_error}
 
 
+def _section(work: PointWork) -> dict[str, NDArray[Any]]:
+    found = phase_section(work.structure, work.f, work.a, work.method.solver,
+                          solution=work.solution, **work.method.flight_keyword)
+    values = {"section_delta": found.delta, "section_delta_rate": found.delta_rate,
+              "section_speed": found.speed}
+    if work.method.flight:
+        values["section_gap"] = found.gap
+    return values
+
+
 def _attractors(work: PointWork) -> dict[str, NDArray[Any]]:
     found = attractors(work.structure, work.f, work.a, work.method.solver,
                        coupling=work.method.coupling, parallel=False,
@@ -427,6 +439,15 @@ _DECLARED = (
                cached=True, methods=("exact",), couplings=("two-way",),
                why="the exact two-way solver is the one that averages irregular motions "
                "and computes their Lyapunov exponent"),
+    Observable("section", "the phase-0 Poincare section: the state at drive phase 0 in "
+               f"{SECTION_PERIODS} consecutive periods of the motion (what a bifurcation "
+               "diagram plots; "
+               "exact two-way solver only)", "point",
+               ("section_delta", "section_delta_rate", "section_speed"), _section,
+               requires=("velocity",), flight_variables=("section_gap",), cached=True,
+               methods=("exact",), couplings=("two-way",),
+               why="the exact two-way solver is the one that follows the period map's "
+               "state"),
     Observable("attractors", "multistability: distinct stable orbits from 12 starting "
                "states and their velocity spread (exact solver; 12 solves per point)", "point",
                ("attractor_count", "attractor_velocity_spread", "attractor_starts_converged"),

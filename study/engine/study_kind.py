@@ -252,7 +252,7 @@ class _Run:
         ones = (1,) * len(spec.structure_axes)
         for variable in data_variables(spec, (*self.rows, *self.points)):
             chunks = (*ones, block) if variable.grid == "row" else (
-                *ones, block, max(self.a.size, 1))
+                *ones, block, max(self.a.size, 1), *VARIABLES[variable.name].trailing_shape)
             writer.variable(variable.name, variable.dims, variable.dtype,
                             {**variable.attrs, "coordinates": self.auxiliary}, chunks)
         return writer
@@ -271,7 +271,8 @@ class _Run:
             for observable in self.points:
                 key, _ = self.key(chunk.structure_index, observable)
                 dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in observable.variables}
-                values, present = self.cache.lookup(key, f, self.a, dtypes)
+                trailing = {v: VARIABLES[v].trailing_shape for v in observable.variables}
+                values, present = self.cache.lookup(key, f, self.a, dtypes, trailing)
                 found[observable.name] = (values, present)
                 missing |= ~present
             rectangles = missing_rectangles(missing) if self.points else ()

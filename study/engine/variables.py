@@ -22,10 +22,10 @@ from study.model.units import (
     METRE_PER_SECOND,
     METRE_PER_SECOND_SQUARED,
 )
-from study.solvers.exact import ATTRACTOR_DROPS, ATTRACTOR_STARTS
+from study.solvers.exact import ATTRACTOR_DROPS, ATTRACTOR_STARTS, SECTION_PERIODS
 
-__all__ = ["FRONTIER_KINDS", "GRIDS", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "STUDY_FORMATS",
-           "VARIABLES", "Variable"]
+__all__ = ["FRONTIER_KINDS", "GRIDS", "GRID_SIZES", "RESULT_FORMAT", "STALE_RESULT_FORMATS",
+           "STUDY_FORMATS", "VARIABLES", "Variable"]
 
 #: Every layout study results were written in (global attribute ``study_result_format``),
 #: oldest first; the last is the one this version writes. Files without the attribute
@@ -53,9 +53,14 @@ RESULT_FORMAT = STUDY_FORMATS[-1].number
 #: Variables whose values a stale format stored in other units: format -> {name: units}.
 STALE_RESULT_FORMATS: dict[int, dict[str, str]] = {1: {"mode_phase": "rad"}}
 
-#: Where a variable lives: over (structure..., f), (structure..., f, a), or the
-#: frontier's (structure..., a, branch).
-GRIDS = {"row": ("f",), "point": ("f", "a"), "frontier": ("a", "branch")}
+#: Where a variable lives: over (structure..., f), (structure..., f, a), the
+#: frontier's (structure..., a, branch), or a phase section's (structure..., f, a,
+#: section_period): consecutive drive periods of the motion at each point.
+GRIDS = {"row": ("f",), "point": ("f", "a"), "frontier": ("a", "branch"),
+         "section": ("f", "a", "section_period")}
+
+#: Lengths of the dimensions a study's spec does not set: a phase section's periods.
+GRID_SIZES = {"section_period": SECTION_PERIODS}
 
 #: How the velocity changes sign at a frontier point.
 FRONTIER_KINDS = ("none", "crossing", "jump")
@@ -125,6 +130,13 @@ class Variable:
     def dims(self, structure_dims: tuple[str, ...]) -> tuple[str, ...]:
         """Dimensions of the variable in a study with these structure axes."""
         return (*structure_dims, *GRIDS[self.grid])
+
+    @property
+    def trailing_shape(self) -> tuple[int, ...]:
+        """Lengths of its dimensions after the drive point's (``()`` but for a
+        section's periods): what a point's value holds."""
+        return tuple(GRID_SIZES[d] for d in GRIDS[self.grid][2:]) if self.grid == "section" \
+            else ()
 
     def texts(self, flight: bool = False) -> tuple[str, str]:
         """``long_name`` and ``comment`` in a study without or with flight."""
@@ -237,6 +249,21 @@ _DECLARED = (
     Variable("lyapunov_error", "point", "float64", DIMENSIONLESS,
              "standard error of the largest Lyapunov exponent",
              comment="0 for an orbit (exact); batch means over the averaged periods"),
+    Variable("section_delta", "section", "float64", METRE,
+             "the mode's deflection at drive phase 0 in consecutive periods of the motion",
+             comment="the phase-0 Poincare section: an orbit of period p repeats every p "
+             "entries, a quasi-periodic motion fills a curve, a chaotic one a cloud; from "
+             "the orbit's fixed point or the irregular motion's last averaged iterate; "
+             "NaN (missing) where the point has no motion"),
+    Variable("section_delta_rate", "section", "float64", METRE_PER_SECOND,
+             "the rate of the mode's deflection at drive phase 0 in consecutive periods",
+             comment="as section_delta"),
+    Variable("section_speed", "section", "float64", METRE_PER_SECOND,
+             "the base's sliding speed at drive phase 0 in consecutive periods",
+             comment="as section_delta"),
+    Variable("section_gap", "section", "float64", METRE,
+             "the base's height above the table at drive phase 0 in consecutive periods",
+             comment="0 on the table; as section_delta"),
     Variable("attractor_count", "point", "int32", DIMENSIONLESS,
              "distinct stable outcomes reached from 12 starting states (rest at four drive "
              "phases, the mode at 0, 1 and 2 times its steady response)",

@@ -26,6 +26,7 @@ from study.kernels import structure_vector as sv
 from study.kernels.budget import Budget
 from study.kernels.two_way import attractors as attractor_kernel
 from study.kernels.two_way import points as orbit_kernel
+from study.kernels.two_way import section as section_kernel
 from study.model import (
     as_acceleration,
     as_frequency,
@@ -43,19 +44,23 @@ from study.model.contact import (
     check_friction,
 )
 from study.model.inputs import InputTypeError, instance_of
+from study.model.status import Status
 from study.model.structure import Structure, check_structure
 
 __all__ = [
     "COUPLINGS",
     "DEFAULT_COUPLING",
     "MAX_SOLVER_BUDGET",
+    "SECTION_PERIODS",
     "Attractors",
+    "PhaseSection",
     "SolverSettings",
     "SteadyState",
     "attractors",
     "check_coupling",
     "check_flight",
     "check_settings",
+    "phase_section",
     "steady_state",
     "steady_velocity",
 ]
@@ -243,6 +248,13 @@ class SteadyState:
         of ``log|d theta_end / d theta_start|`` per drive period with its batch-means
         error; NaN for stick-slip, static and lift-off points (a stick forgets the
         phase: no multiplier) and where not converged but for ``AVERAGE_BUDGET``.
+    phase_state : numpy.ndarray or None
+        Shape ``(*shape, 5)``: the state at drive phase 0 the motion is reported at,
+        ``(delta [m], delta' [m s-1], v [m s-1], h [m], h' [m s-1])`` (the mode's
+        deflection and its rate, the sliding speed, the base's height above the table
+        and its rate; ``h = h' = 0`` on the table): an orbit's fixed point, an irregular
+        motion's last iterate; NaN for statuses without a mean velocity and for static
+        points. What :func:`phase_section` follows. ``None`` from the one-way solver.
 
     Notes
     -----
@@ -270,6 +282,7 @@ class SteadyState:
     averaged_periods: NDArray[np.int32] | None = None
     lyapunov_exponent: NDArray[np.float64] | None = None
     lyapunov_error: NDArray[np.float64] | None = None
+    phase_state: NDArray[np.float64] | None = None
 
 
 def scalar_if_0d(values: NDArray[Any]) -> Any:
@@ -520,7 +533,24 @@ def _orbit_steady_state(
         averaged_periods=column(orbit_kernel.OUT_AVERAGED_PERIODS, np.int32),
         lyapunov_exponent=column(orbit_kernel.OUT_EXPONENT),
         lyapunov_error=column(orbit_kernel.OUT_EXPONENT_ERROR),
+        phase_state=_phase_state(out, shape),
     )
+
+
+#: The output columns of the state at phase 0, in :attr:`SteadyState.phase_state`'s
+#: order.
+_PHASE_STATE_COLUMNS = (orbit_kernel.OUT_DELTA, orbit_kernel.OUT_DELTA_RATE,
+                        orbit_kernel.OUT_SPEED, orbit_kernel.OUT_GAP,
+                        orbit_kernel.OUT_GAP_RATE)
+#: Statuses whose motion has a state to follow: a mean velocity (orbits, irregular).
+_MOVING = np.array([s for s in Status if s.velocity == "mean"], dtype=np.int8)
+
+
+def _phase_state(out: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:
+    """:attr:`SteadyState.phase_state` from the orbit kernel's rows ``out``."""
+    state = out[:, _PHASE_STATE_COLUMNS].copy()
+    state[~np.isin(out[:, orbit_kernel.OUT_STATUS].astype(np.int8), _MOVING)] = np.nan
+    return state.reshape(*shape, len(_PHASE_STATE_COLUMNS))
 
 
 def _friction_levels(structure: Structure) -> Any:
@@ -807,6 +837,109 @@ def attractors(
         starts_converged=scalar_if_0d(
             out[:, attractor_kernel.OUT_STARTS_CONVERGED].astype(np.int32).reshape(shape)),
     )
+
+
+#: Drive periods a phase section holds by default (:func:`phase_section`): enough for a
+#: cycle's points to repeat several times over and a chaotic motion's to spread.
+SECTION_PERIODS = 64
+
+
+@dataclass(frozen=True)
+class PhaseSection:
+    """The phase-0 Poincare section of the motion at each drive point.
+
+    Each attribute has the shape ``(*shape, periods)``: the drive point's shape, then
+    consecutive drive periods of the motion the point reports (an orbit from its fixed
+    point, an irregular motion from its last averaged iterate), at phase 0 of each. An
+    orbit of period ``p`` repeats every ``p`` entries; NaN where the point has no
+    motion (static, lift-off, not converged, the friction paradox).
+
+    Attributes
+    ----------
+    delta : numpy.ndarray
+        The mode's deflection [m].
+    delta_rate : numpy.ndarray
+        Its rate [m s-1].
+    speed : numpy.ndarray
+        The base's sliding speed [m s-1].
+    gap : numpy.ndarray
+        The base's height above the table [m] (0 on it).
+    """
+
+    delta: NDArray[np.float64]
+    delta_rate: NDArray[np.float64]
+    speed: NDArray[np.float64]
+    gap: NDArray[np.float64]
+
+
+def phase_section(
+    structure: Structure,
+    f: ArrayLike,
+    a: ArrayLike,
+    settings: SolverSettings | None = None,
+    *,
+    flight: bool = False,
+    periods: int = SECTION_PERIODS,
+    solution: SteadyState | None = None,
+) -> PhaseSection:
+    """The states at drive phase 0 of ``periods`` consecutive periods of the motion the
+    two-way solver reports at each ``(f, a)``: what a bifurcation diagram plots.
+
+    From :attr:`SteadyState.phase_state` (an orbit's fixed point, an irregular motion's
+    last iterate) the exact period map is followed ``periods - 1`` periods without its
+    Jacobian. On an attractor these periods are as good as the ones before: one point
+    per period for an orbit of period 1, ``p`` repeating points for a cycle of ``p``
+    periods, a curve's worth for a quasi-periodic motion, a cloud for a chaotic one.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    f : array_like
+        Drive frequency [Hz], > 0. Broadcast against ``a``.
+    a : array_like
+        Drive acceleration amplitude [m s-2], >= 0.
+    settings : SolverSettings, optional
+        Solver budgets (as :func:`steady_state`'s).
+    flight : bool, default False
+        Follow the base off the table (as :func:`steady_state`'s).
+    periods : int, default SECTION_PERIODS
+        Drive periods in the section [1], at least 1.
+    solution : SteadyState, optional
+        The two-way :func:`steady_state` of the same arguments, if already computed
+        (its ``phase_state`` is followed; the points are not solved again).
+
+    Returns
+    -------
+    PhaseSection
+        Arrays ``(*shape, periods)``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`steady_state`; ``periods`` not a positive integer; a ``solution``
+        without a phase state (one-way) or of another shape.
+    """
+    structure = check_structure(structure)
+    flight = check_flight(flight, "two-way", structure)
+    settings = check_settings(settings, "two-way")
+    if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
+        raise ValueError(f"periods must be a positive integer, got {periods!r}")
+    shape, f_flat, a_flat = _flat_drive(f, a)
+    if solution is None:
+        solution = _orbit_steady_state(structure, f_flat, a_flat, shape, "two-way",
+                                       settings, None, flight)
+    if solution.phase_state is None or np.shape(solution.phase_state) != (*shape, 5):
+        raise ValueError("solution must be the two-way steady_state of the same f and a "
+                         f"(a phase_state of shape {(*shape, 5)})")
+    states = np.ascontiguousarray(np.reshape(solution.phase_state, (-1, 5)))
+    out = np.empty((f_flat.size, int(periods), 5))
+    section_kernel.follow_sections(structure_vector(structure, "two-way", flight),
+                                   2.0 * np.pi * f_flat, a_flat, states,
+                                   settings.max_events, out)
+    out = out.reshape(*shape, int(periods), 5)
+    return PhaseSection(delta=out[..., 0], delta_rate=out[..., 1], speed=out[..., 2],
+                        gap=out[..., 3])
 
 
 def steady_velocity(

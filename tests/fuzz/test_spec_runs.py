@@ -112,6 +112,9 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         "lyapunov_error": ("status", _INVALID),
         "frontier_frequency": ("frontier_kind", (0,)),
         "frontier_bracket": ("frontier_kind", (0,)),
+        # A phase section needs a motion: none where static or without a velocity.
+        **{f"section_{name}": ("status", (*_INVALID, int(Status.STATIC)))
+           for name in ("delta", "delta_rate", "speed", "gap")},
     },
     # Scene flags: motion status lift_off (3), not_converged (4) and friction_paradox
     # (5); a segment not_reached (2); a plan run other than completed (0).

@@ -63,6 +63,7 @@ from study.kernels.two_way.flight import (
     N_FLIGHT_ACC,
     N_STATE,
     Z_GAP,
+    Z_GAP_RATE,
     FlightRecord,
     fly,
 )
@@ -570,7 +571,7 @@ def irregular_row(stats, omega, status, out, columns):
     averages hold no flight (0 in the air, no impact, no hop)."""
     (_, _, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier, c_delta,
      c_rate, c_speed, c_airborne, c_hop, c_impacts, c_averaged_velocity, c_velocity_error,
-     c_averaged, c_exponent, c_exponent_error) = columns
+     c_averaged, c_exponent, c_exponent_error, c_gap, c_gap_rate) = columns
     out[c_averaged] = stats[S_PERIODS]
     out[c_averaged_velocity] = stats[S_VELOCITY]
     out[c_velocity_error] = stats[S_VELOCITY_ERROR]
@@ -588,6 +589,9 @@ def irregular_row(stats, omega, status, out, columns):
     out[c_delta] = stats[S_STATE]
     out[c_rate] = stats[S_STATE + 1]
     out[c_speed] = stats[S_STATE + 2]
+    flying = stats.shape[0] > S_STATE + Z_GAP_RATE  # a contact motion's: 3 states
+    out[c_gap] = stats[S_STATE + Z_GAP] if flying else 0.0
+    out[c_gap_rate] = stats[S_STATE + Z_GAP_RATE] if flying else 0.0
     out[c_airborne] = stats[S_AIRBORNE] / period
     out[c_hop] = stats[S_HOP]
     out[c_impacts] = stats[S_IMPACTS]
@@ -598,7 +602,8 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     """The motion with flight reached from the 5-state ``z`` at ``t_start`` [s], written
     into ``out`` at the positions ``columns`` (status, reason, velocity, slips, forward,
     backward, period, multiplier, delta, delta_rate, speed, airborne, hop, impacts,
-    averaged_velocity, velocity_error, averaged_periods, exponent, exponent_error);
+    averaged_velocity, velocity_error, averaged_periods, exponent, exponent_error, gap,
+    gap_rate);
     ``table`` holds the contact rows and the flight row. An irregular motion
     (``CHAOTIC``, ``QUASI_PERIODIC``) gets its time averages, no multiplier and period
     0, and its last iterate as the state at phase 0; a point not converged after
@@ -625,7 +630,7 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     passes = record.passes
     (c_status, c_reason, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier,
      c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts, _,
-     c_velocity_error, c_averaged, c_exponent, c_exponent_error) = columns
+     c_velocity_error, c_averaged, c_exponent, c_exponent_error, c_gap, c_gap_rate) = columns
     out[c_status] = status
     out[c_reason] = reason
     if status == CHAOTIC or status == QUASI_PERIODIC or reason == REASON_AVERAGE_BUDGET:
@@ -666,6 +671,8 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     out[c_delta] = z[0]
     out[c_rate] = z[1]
     out[c_speed] = z[2]
+    out[c_gap] = z[Z_GAP]
+    out[c_gap_rate] = z[Z_GAP_RATE]
     out[c_airborne] = acc[A_AIRBORNE] / span
     out[c_hop] = acc[A_HOP]
     out[c_impacts] = acc[A_IMPACTS] / periods

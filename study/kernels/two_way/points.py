@@ -96,6 +96,8 @@ OUTPUT_COLUMNS = (
     ("delta", "m", "the mode's displacement on the orbit at phase 0"),
     ("delta_rate", "m s-1", "the mode's velocity on the orbit at phase 0"),
     ("speed", "m s-1", "the sliding speed on the orbit at phase 0"),
+    ("gap", "m", "the base's height above the table on the orbit at phase 0 (0 on it)"),
+    ("gap_rate", "m s-1", "the rate of that height at phase 0 (0 on the table)"),
     ("airborne", "1", "fraction of the orbit's period the base spends off the table"),
     ("hop", "m", "largest gap between the base and the table over the orbit"),
     ("impacts", "1", "impacts of the base on the table per drive period"),
@@ -127,6 +129,8 @@ OUT_MULTIPLIER = _NAMES.index("multiplier")
 OUT_DELTA = _NAMES.index("delta")
 OUT_DELTA_RATE = _NAMES.index("delta_rate")
 OUT_SPEED = _NAMES.index("speed")
+OUT_GAP = _NAMES.index("gap")
+OUT_GAP_RATE = _NAMES.index("gap_rate")
 OUT_AIRBORNE = _NAMES.index("airborne")
 OUT_HOP = _NAMES.index("hop")
 OUT_IMPACTS = _NAMES.index("impacts")
@@ -148,7 +152,8 @@ FLIGHT_COLUMNS = (OUT_STATUS, OUT_REASON, OUT_VELOCITY, OUT_SLIPS, OUT_FORWARD,
                   OUT_BACKWARD, OUT_PERIOD, OUT_MULTIPLIER, OUT_DELTA, OUT_DELTA_RATE,
                   OUT_SPEED, OUT_AIRBORNE, OUT_HOP, OUT_IMPACTS, OUT_AVERAGED_VELOCITY,
                   OUT_VELOCITY_ERROR,
-                  OUT_AVERAGED_PERIODS, OUT_EXPONENT, OUT_EXPONENT_ERROR)
+                  OUT_AVERAGED_PERIODS, OUT_EXPONENT, OUT_EXPONENT_ERROR, OUT_GAP,
+                  OUT_GAP_RATE)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -434,6 +439,8 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
     out[OUT_DELTA] = z[0]
     out[OUT_DELTA_RATE] = z[1]
     out[OUT_SPEED] = z[2]
+    out[OUT_GAP] = 0.0
+    out[OUT_GAP_RATE] = 0.0
     out[OUT_AIRBORNE] = 0.0
     out[OUT_HOP] = 0.0
     out[OUT_IMPACTS] = 0.0
