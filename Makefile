@@ -103,6 +103,9 @@ FIGURES += $(addsuffix -two-way,$(TWO_WAY_FIGURES))
 # shows the bouncing region of mass-ratio-limit-flight.
 FLIGHT_FIGURES := regime-map velocity-curves mass-ratio-limit coupling
 FIGURES += $(addsuffix -flight,$(FLIGHT_FIGURES)) bouncing lyapunov
+# The bifurcation diagram along each drive axis: figures/bifurcation-along-X.png is
+# figure bifurcation of results/bifurcation-along-X.nc.
+FIGURES += bifurcation-along-a bifurcation-along-f
 figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 
 figures/thresholds.png: results/thresholds.nc
@@ -126,6 +129,8 @@ figures/mass-ratio-limit-flight.png: results/mass-ratio-limit-flight.nc
 figures/coupling-flight.png: results/coupling-flight.nc
 figures/bouncing.png: results/mass-ratio-limit-flight.nc
 figures/lyapunov.png: results/irregular-bouncing.nc
+figures/bifurcation-along-%.png: results/bifurcation-along-%.nc $(PACKAGE) FORCE | $(STAMP)
+	$(STUDY) figure bifurcation $< -o figures/bifurcation-along-$* --if-changed
 # A figure's date says nothing of what it was drawn from (a figure of another file drawn
 # to the same name is newer than its result): `study figure --if-changed` is asked every
 # time and redraws unless the PNG records this result's checksum, these options and

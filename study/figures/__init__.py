@@ -100,6 +100,12 @@ FIGURES: dict[str, Figure] = {
         "Irregular motion: the mean velocity with chaotic and quasi-periodic points "
         "hatched, and the largest Lyapunov exponent over (f, a)",
     ),
+    "bifurcation": Figure(
+        "study.figures.bifurcation", "bifurcation-along-a",
+        ("section_speed", "velocity", "status", "lyapunov_exponent"),
+        "Bifurcation diagram: the phase-0 section of the motion against f or a, coloured "
+        "by the largest Lyapunov exponent, the mean velocity beneath",
+    ),
     "coupling": Figure(
         "study.figures.coupling", "coupling",
         ("velocity", "status", "velocity_one_way", "status_one_way", "M"),

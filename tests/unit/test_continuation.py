@@ -247,13 +247,16 @@ def assert_same_orbits(structure: Structure, f: np.ndarray, a: np.ndarray,
 
 
 def two_way_workflows() -> list[str]:
-    """Every study workflow solved by the exact two-way solver (scenes are not)."""
+    """Every study workflow solved by the exact two-way solver (scenes are not) whose
+    rows hold several accelerations: the continuation runs along a row (a study of one
+    acceleration, bifurcation-along-f, has nothing to continue along)."""
     names = []
     for path in sorted(WORKFLOWS.glob("*.toml")):
         if detect_kind(path) != "study":
             continue
         spec = load_spec(path)
-        if spec.method == "exact" and spec.coupling == "two-way" and spec.needs_solver:
+        if (spec.method == "exact" and spec.coupling == "two-way" and spec.needs_solver
+                and spec.axis("a").values.size > 1):
             names.append(path.stem)
     return names
 

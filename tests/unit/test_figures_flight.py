@@ -312,3 +312,61 @@ def test_the_lyapunov_figure_draws_velocity_and_exponent(tmp_path):
         plt.close(fig)
     assert main(["figure", "lyapunov", str(tmp_path / "irregular.nc"), "-o",
                  str(tmp_path / "lyapunov")]) == 0
+
+
+BIFURCATION_SPEC = """\
+[study]
+name = "bifurcation-small"
+observables = ["velocity", "irregular", "section"]
+
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+cs = 0.25
+M = 0.99
+
+[sweep]
+f = { values = [5.3, 5.5, 5.625, 7.0] }
+a = { values = [11.6, 12.0] }
+
+[solver]
+coupling = "two-way"
+flight = true
+"""
+
+
+def test_the_bifurcation_figure_draws_the_section_along_one_axis(tmp_path):
+    """The bifurcation figure of a small section study: refused while both f and a are
+    swept (naming the --sel to give); along f (a selected) one dot per point and
+    section period in each section panel, as many as the file's finite section values,
+    coloured by the point's exponent; the chaotic points named in the legend."""
+    import matplotlib.pyplot as plt
+
+    from study.analyses.selection import select
+    from study.figures.bifurcation import compose
+
+    (tmp_path / "section.toml").write_text(BIFURCATION_SPEC)
+    run_study(tmp_path / "section.toml", tmp_path / "section.nc", progress=False, workers=1)
+    dataset = open_result(tmp_path / "section.nc")
+    with pytest.raises(FigureError, match="--sel a="):
+        compose(dataset)
+    along_f = select(dataset, ["a=11.6"])
+    status = along_f["status"].values
+    assert np.any(status == Status.CHAOTIC), np.unique(status)
+    fig, title = compose(along_f)
+    try:
+        assert "along f" in title
+        top, middle, bottom = (ax for ax in fig.axes if ax.get_label() != "<colorbar>")
+        finite = int(np.isfinite(along_f["section_speed"].values).sum())
+        assert finite > 0
+        for ax, name in ((top, "section_speed"), (middle, "section_gap")):
+            (dots,) = ax.collections
+            assert len(dots.get_offsets()) == int(np.isfinite(along_f[name].values).sum())
+            assert np.ma.count(dots.get_array()) == len(dots.get_offsets())
+        labels = [t.get_text() for t in bottom.get_legend().get_texts()]
+        assert Status.CHAOTIC.legend in labels
+    finally:
+        plt.close(fig)
+    assert main(["figure", "bifurcation", str(tmp_path / "section.nc"), "--sel", "a=11.6",
+                 "-o", str(tmp_path / "bifurcation")]) == 0

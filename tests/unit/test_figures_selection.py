@@ -142,6 +142,22 @@ a = {{ start = 11.0, stop = 11.9, num = 3 }}
 coupling = "two-way"
 flight = true
 """,
+    # The phase-0 section of bouncing at M = 0.99 along f (a chaotic point among the
+    # orbits).
+    "section": f"""\
+[study]
+name = "section-small"
+observables = ["velocity", "irregular", "section"]
+[structure]
+{PAPER}
+M = 0.99
+[sweep]
+f = {{ values = [5.5, 5.625, 7.0] }}
+a = {{ values = [11.6] }}
+[solver]
+coupling = "two-way"
+flight = true
+""",
 }
 
 LAB = """\
@@ -502,6 +518,7 @@ SOURCES = {
     "coupling": ("coupling", []),
     "bouncing": ("flight", []),
     "lyapunov": ("irregular", []),
+    "bifurcation": ("section", []),
     "steering": ("trajectory", []),
     "steering-calibration": ("calibration", []),
     "steering-plan": ("plan", []),
@@ -513,7 +530,7 @@ def _cases():
     dims = {"paper": ("f", "a", "branch"), "loads": ("m_add", "f", "a"),
             "collapse": ("Q", "M", "f"), "limit": ("M", "f", "a", "branch"),
             "coupling": ("M", "f", "a"), "flight": ("M", "f", "a", "branch"),
-            "irregular": ("M", "f", "a"),
+            "irregular": ("M", "f", "a"), "section": ("f", "a", "section_period"),
             "trajectory": ("t", "segment"),
             "calibration": ("f", "a"), "fit": ("measurement", "parameter", "profile_point"),
             "plan": ("strategy", "realisation", "t", "waypoint", "segment")}
