@@ -113,9 +113,10 @@ def test_the_small_files_are_exact_two_way_studies(results):
 def test_every_velocity_figure_is_covered():
     velocity_figures = {name for name, figure in FIGURES.items()
                         if "velocity" in figure.requires}
-    # bouncing and lyapunov: drawn from studies with flight
+    # bouncing, lyapunov and bifurcation: drawn from studies with flight
     # (tests/unit/test_figures_flight.py).
-    assert velocity_figures <= set(SOURCES) | {"mass-ratio", "bouncing", "lyapunov"}
+    assert velocity_figures <= set(SOURCES) | {"mass-ratio", "bouncing", "lyapunov",
+                                               "bifurcation"}
 
 
 @pytest.mark.parametrize("figure", sorted(SOURCES))

@@ -171,11 +171,24 @@ def test_slowly_attracting_sliding_cycles(params, f, a):
 def test_budgets_flag_points_instead_of_guessing(paper_structure):
     params, f, a = SLOW_CYCLE_B
     s = study.Structure(**params)
-    # A few map iterations cannot bring this slow transient near its cycle: flagged.
+    # A few map iterations cannot bring this slow transient near its cycle: the motion
+    # is followed and averaged instead, a stable cycle longer than searched for
+    # (quasi-periodic, its exponent clearly negative), its mean within its interval of
+    # the cycle's velocity.
+    cycle = study.steady_state(s, f, a)
     starved = study.steady_state(s, f, a, SolverSettings(max_map_iterations=3))
+    assert starved.status == Status.QUASI_PERIODIC
+    assert starved.lyapunov_exponent + 3.0 * starved.lyapunov_error < 0.0
+    assert abs(starved.velocity - cycle.velocity) <= 4.0 * starved.velocity_error + 1e-3 * (
+        a / (2.0 * np.pi * f))
+    # With the averaging starved too (a tolerance it cannot reach in its least budget):
+    # flagged, its partial mean kept, no velocity.
+    starved = study.steady_state(s, f, a, SolverSettings(
+        max_map_iterations=3, velocity_tolerance=1e-7, max_average_periods=256))
     assert starved.status == Status.NOT_CONVERGED
-    assert starved.reason == NonConvergence.NO_PERIODIC_ORBIT
+    assert starved.reason == NonConvergence.AVERAGE_BUDGET
     assert np.isnan(starved.velocity)
+    assert np.isfinite(starved.averaged_velocity)
     starved = study.steady_state(paper_structure, 14.6, 7.0, SolverSettings(max_events=1))
     assert starved.status == Status.NOT_CONVERGED
     assert starved.reason == NonConvergence.EVENT_BUDGET

@@ -65,15 +65,20 @@ def test_random_structures_bit_identical():
 
 
 @pytest.mark.parametrize(
-    "settings", [SolverSettings(max_events=2), SolverSettings(max_map_iterations=2)]
+    ("settings", "outcome"),
+    [(SolverSettings(max_events=2), Status.NOT_CONVERGED),
+     # A starved cycle search averages the motion instead (its slow cycles reported as
+     # quasi-periodic, docs/theory/irregular.md).
+     (SolverSettings(max_map_iterations=2), Status.QUASI_PERIODIC)]
 )
-def test_budgets_bit_identical(paper_structure, settings):
-    """Starved budgets: the same points are flagged NOT_CONVERGED (NaN) on both paths."""
+def test_budgets_bit_identical(paper_structure, settings, outcome):
+    """Starved budgets: the same points are flagged NOT_CONVERGED (NaN), or averaged,
+    on both paths."""
     s = paper_structure.replace(M=1.0, ck=0.1)
     f = np.linspace(10.0, 20.0, 41)[:, None]
     a = np.linspace(0.0, 12.0, 53)[None, :]
     status = _assert_same_bits(s, f, a, settings)
-    assert (status == Status.NOT_CONVERGED).any()
+    assert (status == outcome).any()
 
 
 def test_thresholds_to_the_ulp_bit_identical():
