@@ -901,7 +901,10 @@ def silent_nans(path: Path) -> list[str]:
 #: structure the model refuses, named by its parameter values): a mutated key may
 #: cause them without being named.
 CONSEQUENCES = re.compile(
-    r"\[plan\]: (command '\w+'|the (left|forward) command)|invalid structure at")
+    r"\[plan\]: (command '\w+'|the (left|forward) command)|invalid structure at"
+    # The whole file past the size a spec may have (a mutation that repeats a table
+    # ten thousand times): a property of the file, not of one key.
+    r"|spec is \d+ bytes; allowed at most \d+ bytes")
 
 _ALLOWED_WORDS = ("allowed", "required", "expected", "must", "at most", "at least", "needs",
                   "give ", "one of", "save it as", "takes", "only", "settings are", "should")
