@@ -19,10 +19,8 @@ status only), with their arguments grouped in the named tuples below; a small ca
 which take the named tuples' fields as plain tuples (numba's dispatch types those in
 C, named tuples in Python). Continuous sliding whose circle map has no cycle within
 reach is followed and time-averaged (:func:`_average_sliding`: ``QUASI_PERIODIC`` or
-``CHAOTIC``, docs/theory/irregular.md); :func:`solve_points` and
-:func:`solve_points_serial`, without the drive accelerations that scale the averaging's
-tolerance, leave it ``NOT_CONVERGED`` (``NO_PERIODIC_ORBIT``). :func:`sin_minus_x` is
-shared with the orbit kernel.
+``CHAOTIC``, docs/theory/irregular.md). :func:`sin_minus_x` is shared with the orbit
+kernel.
 Results are written to ``out`` arrays; nothing is allocated per point on the common
 (stick-slip) path.
 """
@@ -93,7 +91,7 @@ SLIP_END_ULPS = 4.0
 Amplitudes = namedtuple("Amplitudes", ("a_plus", "a_minus", "b_plus", "b_minus"))
 #: The friction levels ``cs g`` (``static``) and ``ck g`` (``kinetic``) [m s-2].
 FrictionLevels = namedtuple("FrictionLevels", ("static", "kinetic"))
-#: The output arrays of :func:`solve_points`, one value per point: velocity [m s-1],
+#: The output arrays of :func:`solve_points_averaged`, one value per point: velocity [m s-1],
 #: status and reason codes (int8), slips per period [1], forward and backward slip
 #: fractions [1], orbit period in drive periods (int32).
 SteadyOutputs = namedtuple(
@@ -803,21 +801,6 @@ def _write_orbit(i, orbit, omega, out):
 
 
 @njit(cache=True, nogil=True)
-def _solve_into(i, amplitudes, lifted, omega, levels, budget, out):
-    """Solve point ``i`` and write its results into the :data:`SteadyOutputs` ``out``
-    (without the drive acceleration: continuous sliding without a cycle is not
-    averaged, see :func:`solve_points`)."""
-    if lifted[i]:
-        _write_lifted(i, out)
-        return
-    orbit = _solve_point(
-        amplitudes.a_plus[i], amplitudes.a_minus[i], amplitudes.b_plus[i],
-        amplitudes.b_minus[i], levels, budget, np.nan
-    )
-    _write_orbit(i, orbit, omega[i], out)
-
-
-@njit(cache=True, nogil=True)
 def _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out, averages):
     """Solve point ``i`` of drive acceleration ``a[i]`` [m s-2] and write its results into
     the :data:`SteadyOutputs` ``out`` and the :data:`AverageOutputs` ``averages``."""
@@ -839,12 +822,14 @@ POINT_BLOCK = 64
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def solve_points(amplitudes, lifted, omega, levels, budget, out):
-    """Fill the :data:`SteadyOutputs` ``out`` at points of :data:`Amplitudes`
-    ``amplitudes``, ``lifted`` (past lift-off) and ``omega`` [rad s-1], friction
+def solve_points_averaged(amplitudes, a, lifted, omega, levels, budget, out, averages):
+    """Fill the :data:`SteadyOutputs` ``out`` and the :data:`AverageOutputs`
+    ``averages`` at points of :data:`Amplitudes` ``amplitudes``, drive accelerations
+    ``a`` [m s-2], ``lifted`` (past lift-off) and ``omega`` [rad s-1], friction
     ``levels`` (:data:`FrictionLevels`), within ``budget`` (a
     :data:`~study.kernels.budget.Budget`), in parallel over points (threads, GIL
-    released).
+    released). Continuous sliding without a cycle within reach is averaged
+    (:func:`_average_sliding`, the tolerance ``velocity_tolerance * a``).
 
     Points are dealt to threads in blocks of :data:`POINT_BLOCK` consecutive points,
     the blocks interleaved over the lanes: the cost of a point depends on its regime,
@@ -852,32 +837,7 @@ def solve_points(amplitudes, lifted, omega, levels, budget, out):
     one thread with all the slipping points of a map; single points interleaved
     would make every write miss the cache (a lane touches one value of each cache
     line, which is evicted before the next lane comes to it).
-
-    Without the drive accelerations, continuous sliding without a cycle within reach is
-    not averaged (``NOT_CONVERGED``, ``NO_PERIODIC_ORBIT``, as before the averaging):
-    :func:`solve_points_averaged` averages it.
     """
-    n = omega.shape[0]
-    blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
-    lanes = min(blocks, 256)
-    for lane in prange(lanes):
-        for block in range(lane, blocks, lanes):
-            for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
-                _solve_into(i, amplitudes, lifted, omega, levels, budget, out)
-
-
-@njit(cache=True, nogil=True)
-def solve_points_serial(amplitudes, lifted, omega, levels, budget, out):
-    """Same as :func:`solve_points` on one thread: no thread-pool launch for small inputs."""
-    for i in range(omega.shape[0]):
-        _solve_into(i, amplitudes, lifted, omega, levels, budget, out)
-
-
-@njit(cache=True, nogil=True, parallel=True)
-def solve_points_averaged(amplitudes, a, lifted, omega, levels, budget, out, averages):
-    """:func:`solve_points` at drive accelerations ``a`` [m s-2], continuous sliding
-    without a cycle within reach averaged (:func:`_average_sliding`, the tolerance
-    ``velocity_tolerance * a``), with the :data:`AverageOutputs` ``averages``."""
     n = omega.shape[0]
     blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
     lanes = min(blocks, 256)
@@ -898,7 +858,7 @@ def solve_points_averaged_serial(amplitudes, a, lifted, omega, levels, budget, o
 
 
 # Velocity only (``study.solvers.exact.steady_velocity``): the same orbits, nothing else,
-# dealt to threads in blocks as in solve_points.
+# dealt to threads in blocks as in solve_points_averaged.
 # Squares of the normal doubles in (1e-140, 1e140): products of three of them are
 # still normal, so their rounding error is a few ulps.
 SQUARES_LOW = 1e-280
@@ -1095,7 +1055,7 @@ def velocity_points_small(f, a, constants, levels, budget, velocity, status):
 def steady_points_small(f, a, constants, levels, budget, velocity, status, reason, slips,
                         forward, backward, period, averaged_velocity, velocity_error,
                         averaged_periods, exponent, exponent_error):
-    """:func:`solve_points_serial` at ``f`` [Hz], ``a`` [m s-2], the force amplitudes
+    """:func:`solve_points_averaged_serial` at ``f`` [Hz], ``a`` [m s-2], the force amplitudes
     and the lift-off decision evaluated point by point as :func:`velocity_points`
     does (bit-identical to ``study.model``'s arrays, without their temporaries), with
     plain-tuple arguments as :func:`velocity_points_small` and the outputs of
