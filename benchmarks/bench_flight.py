@@ -46,6 +46,7 @@ from docs_tables import load_average, machine, write_docs_table  # noqa: E402
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
+from study.kernels.start import RELEASE  # noqa: E402
 from study.kernels.two_way import flight, points  # noqa: E402
 from study.kernels.two_way.modes import TWO_PI, DrivePoint, mode_row  # noqa: E402
 from study.solvers.exact import (  # noqa: E402
@@ -156,7 +157,7 @@ def _work_table(f: np.ndarray, a: np.ndarray, with_flight: bool) -> np.ndarray:
     out = np.empty((f.size, points.N_OUT))
     lifted = a > study.lift_off_acceleration(STRUCTURE, f)
     points.solve_points_serial(vector, 2.0 * np.pi * f, a, lifted,
-                               kernel_budget(DEFAULT_SETTINGS), False, out)
+                               kernel_budget(DEFAULT_SETTINGS), False, RELEASE, out)
     return out
 
 

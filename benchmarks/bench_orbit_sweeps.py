@@ -91,6 +91,7 @@ from floor_one_way import F_RANGE as PAPER_F  # noqa: E402
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
 from study.engine.study_spec import load_spec  # noqa: E402
+from study.kernels.start import RELEASE  # noqa: E402
 from study.kernels.structure_vector import LIFT_OFF_LAW  # noqa: E402
 from study.kernels.two_way import continuation  # noqa: E402
 from study.kernels.two_way import points as orbit  # noqa: E402
@@ -231,7 +232,7 @@ class Kernel:
         ``points.solve_points_serial`` runs with continuation."""
         omega, a, lifted, out = arguments
         if driver is orbit.solve_points_serial:
-            driver(self.vector, omega, a, lifted, self.budget, True, out)
+            driver(self.vector, omega, a, lifted, self.budget, True, RELEASE, out)
         else:
             driver(self.vector, omega, a, lifted, self.budget, out)
         return out

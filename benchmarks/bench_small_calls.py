@@ -53,6 +53,7 @@ import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
 from study.kernels import one_way  # noqa: E402
 from study.kernels.budget import Budget  # noqa: E402
+from study.kernels.start import RELEASE  # noqa: E402
 from study.kernels.two_way import points as orbit_kernel  # noqa: E402
 from study.solvers.exact import steady_state, steady_velocity, structure_vector  # noqa: E402
 
@@ -89,7 +90,8 @@ def _kernels(f: float, a: float, points: int) -> dict[str, Callable[[], object]]
         "one-way": lambda: one_way.velocity_points_small(f_flat, a_flat, constants, levels,
                                                          tuple(budget), velocity, status),
         "two-way": lambda: orbit_kernel.solve_points_serial(vector, omega, a_flat, lifted,
-                                                            budget, False, table),
+                                                            budget, False, RELEASE,
+                                                            table),
     }
 
 

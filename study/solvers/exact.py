@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels import one_way as one_way_kernel
 from study.kernels import structure_vector as sv
 from study.kernels.budget import Budget
+from study.kernels.start import RELEASE, SWITCH_ON, Start
 from study.kernels.two_way import attractors as attractor_kernel
 from study.kernels.two_way import points as orbit_kernel
 from study.kernels.two_way import section as section_kernel
@@ -52,7 +53,9 @@ __all__ = [
     "DEFAULT_COUPLING",
     "MAX_SOLVER_BUDGET",
     "SECTION_PERIODS",
+    "START_NAMES",
     "Attractors",
+    "Drop",
     "PhaseSection",
     "SolverSettings",
     "SteadyState",
@@ -60,6 +63,7 @@ __all__ = [
     "check_coupling",
     "check_flight",
     "check_settings",
+    "check_start",
     "phase_section",
     "steady_state",
     "steady_velocity",
@@ -85,6 +89,121 @@ VELOCITY_TOLERANCE_RANGE = (0.0, 1.0)
 
 #: Inputs with at least this many points are solved by the parallel kernel.
 PARALLEL_THRESHOLD = 2048
+
+#: The named starts (docs/theory/starts.md), the default first: ``"release"`` (the base
+#: at rest on the table at drive phase 0, the mode on its steady stick response) and
+#: ``"switch-on"`` (the base at rest on the table, the mode at rest at ``delta = delta'
+#: = 0``, the drive switched on at phase 0). A :class:`Drop` is the third kind.
+START_NAMES = ("release", "switch-on")
+#: The allowed values of ``start``, as the error messages name them.
+START_ALLOWED = ('"release" (default), "switch-on", or a drop { drop = height_m, phase = '
+                 'fraction_of_period } (height > 0, phase in [0, 1))')
+#: The keys of a drop's table (``phase`` optional, default 0).
+DROP_KEYS = ("drop", "phase")
+
+
+@dataclass(frozen=True)
+class Drop:
+    """The drop start: the structure held at rest ``height`` above the vibrating table,
+    the mode at rest at ``delta = delta' = 0`` (the static deflection of a held base),
+    let go at drive phase ``phase``.
+
+    Not the drops of :func:`attractors`, whose mode starts at rest at its flight
+    equilibrium ``g cos(alpha) / k`` (a structure already falling freely): this one is
+    held, then let go, so the mode starts its free oscillation about that equilibrium.
+
+    Parameters
+    ----------
+    height : float
+        Height of the base above the table [m], finite and > 0.
+    phase : float, default 0
+        Drive phase of the release [periods] (fraction of ``1/f``), in [0, 1): the
+        table's acceleration is then ``-a cos(2 pi phase)``.
+
+    Raises
+    ------
+    ValueError
+        A height or phase that is not a finite number in range, naming the key
+        ``start`` and the allowed values.
+    """
+
+    height: float
+    phase: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name, value in (("drop", self.height), ("phase", self.phase)):
+            if isinstance(value, bool) or not isinstance(value, int | float | np.integer
+                                                          | np.floating):
+                raise InputTypeError(
+                    f"solver setting 'start': {name} must be a number, got {value!r}; "
+                    f"allowed: {START_ALLOWED}")
+        height, phase = float(self.height), float(self.phase)
+        if not (np.isfinite(height) and height > 0.0):
+            raise ValueError(
+                f"solver setting 'start': drop = {self.height!r} m: the height must be "
+                f"finite and > 0; allowed: {START_ALLOWED}")
+        if not (np.isfinite(phase) and 0.0 <= phase < 1.0):
+            raise ValueError(
+                f"solver setting 'start': phase = {self.phase!r}: the drive phase must be "
+                f"in [0, 1) (a fraction of the period); allowed: {START_ALLOWED}")
+        object.__setattr__(self, "height", height)
+        object.__setattr__(self, "phase", phase)
+
+    def canonical(self) -> dict[str, float]:
+        """As a spec writes it: ``{"drop": height, "phase": phase}``."""
+        return {"drop": self.height, "phase": self.phase}
+
+    def label(self) -> str:
+        """``"drop 0.002 m at phase 0.25"``: what a result's ``start`` attribute says."""
+        return f"drop {self.height!r} m at phase {self.phase!r}"
+
+
+def as_start(value: object) -> str | Drop:
+    """``value`` as a start: one of :data:`START_NAMES`, a :class:`Drop`, or a mapping
+    ``{"drop": height, "phase": phase}`` (a spec's table) made a :class:`Drop`; else a
+    ValueError (an InputTypeError for a wrong type) naming ``start`` and the allowed
+    values."""
+    if isinstance(value, Drop):
+        return value
+    if isinstance(value, str):
+        if value not in START_NAMES:
+            raise ValueError(f"solver setting 'start' must be {START_ALLOWED}; got "
+                             f"{value!r}")
+        return value
+    if isinstance(value, dict):
+        unknown = sorted(str(k) for k in value if k not in DROP_KEYS)
+        if unknown or "drop" not in value:
+            problem = (f"unknown key {', '.join(map(repr, unknown))}" if unknown
+                       else "no key 'drop' (the height [m])")
+            raise ValueError(f"solver setting 'start' = {value!r}: {problem}; allowed: "
+                             f"{START_ALLOWED}")
+        return Drop(value["drop"], value.get("phase", 0.0))
+    raise InputTypeError(f"solver setting 'start' must be {START_ALLOWED}; got "
+                         f"{type(value).__name__}: {value!r}")
+
+
+def start_label(start: str | Drop) -> str:
+    """A start as a result's ``start`` attribute names it: ``"release"``,
+    ``"switch-on"``, ``"drop 0.002 m at phase 0.25"``."""
+    return start.label() if isinstance(start, Drop) else start
+
+
+def start_attributes(start: str | Drop) -> dict[str, str | float]:
+    """The attributes a result records its start in: ``start`` (:func:`start_label`),
+    ``start_kind`` (``release``, ``switch-on`` or ``drop``), and for a drop
+    ``start_height`` [m] and ``start_phase`` [periods]. A file without them started by
+    the release."""
+    if isinstance(start, Drop):
+        return {"start": start.label(), "start_kind": "drop", "start_height": start.height,
+                "start_phase": start.phase}
+    return {"start": start, "start_kind": start}
+
+
+def kernel_start(start: str | Drop) -> Any:
+    """The kernels' :data:`~study.kernels.start.Start` of a checked ``start``."""
+    if isinstance(start, Drop):
+        return Start(start.phase, 0.0, start.height)
+    return RELEASE if start == "release" else SWITCH_ON
 
 
 @dataclass(frozen=True)
@@ -121,13 +240,26 @@ class SolverSettings:
         one is stable; where several are, the continued orbit follows its neighbours'
         branch, as a slowly swept drive would (docs/theory/two-way.md), and a point's
         value depends on the grid it is part of. Default False: every point from rest.
+        Not with a ``start`` other than ``"release"``: a start is a protocol for each
+        point, which continuing from the neighbours would replace.
+    start : str or Drop
+        Two-way coupling only: the state each point's motion starts from, a physical
+        protocol (docs/theory/starts.md): ``"release"`` (default: the base at rest on the
+        table at drive phase 0, the mode on its steady stick response, as if held down
+        while the table shakes, then let go), ``"switch-on"`` (the base at rest on the
+        table, the mode at rest at ``delta = delta' = 0``, the drive switched on at phase
+        0), or a :class:`Drop` (the base held at rest above the table, mode at rest at
+        0, let go at a drive phase; needs ``flight=True``). A mapping ``{"drop": height,
+        "phase": phase}`` is taken for a :class:`Drop`. Where several motions are
+        stable, the start decides which one the point reports.
 
     Raises
     ------
     ValueError
         A budget that is not an integer (:class:`study.model.inputs.InputTypeError`, also
         a TypeError) or is outside its range, naming the field; ``continuation`` not a
-        bool (an InputTypeError).
+        bool (an InputTypeError); a ``start`` that is none of the allowed values, or
+        other than ``"release"`` with ``continuation``.
     """
 
     max_events: int = 10_000
@@ -135,8 +267,10 @@ class SolverSettings:
     continuation: bool = False
     velocity_tolerance: float = 1e-3
     max_average_periods: int = 20_000
+    start: str | Drop = "release"
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "start", as_start(self.start))
         if not isinstance(self.continuation, bool | np.bool_):
             raise InputTypeError(
                 f"solver setting 'continuation' must be True or False, got "
@@ -166,6 +300,8 @@ class SolverSettings:
                 f"solver setting 'velocity_tolerance' must be in ({low:g}, {high:g}] (a "
                 f"fraction of a / (2 pi f)), got {tolerance!r}")
         object.__setattr__(self, "velocity_tolerance", float(tolerance))
+        if self.continuation and self.start != "release":
+            raise ValueError(_CONTINUED_START.format(start=self.start))
 
     def averaging_changes(self) -> dict[str, float | int]:
         """The averaging settings of irregular motions (``velocity_tolerance``,
@@ -174,6 +310,23 @@ class SolverSettings:
         fingerprints."""
         return {name: getattr(self, name) for name in AVERAGING_SETTINGS
                 if getattr(self, name) != getattr(DEFAULT_SETTINGS, name)}
+
+    def start_changes(self) -> dict[str, str | dict[str, float]]:
+        """``{"start": ...}`` (the name, or a drop's ``{"drop": height, "phase":
+        phase}``) when the start is not the release, else nothing: canonical specs and
+        cache keys name it only then, so that those written before starts were named
+        keep their fingerprints."""
+        if self.start == "release":
+            return {}
+        return {"start": (self.start.canonical() if isinstance(self.start, Drop)
+                          else self.start)}
+
+
+#: Why continuation and a start other than the release exclude each other.
+_CONTINUED_START = (
+    "solver setting 'start' = {start!r} with continuation = True: a start is the protocol "
+    "each point's motion begins with, and continuing from the neighbours' orbits would "
+    "replace it; allowed: start = \"release\" with continuation, or continuation = False")
 
 
 #: The settings of ``settings=None``: frozen, so one instance serves every call.
@@ -309,6 +462,40 @@ def check_settings(settings: object, coupling: str | None = None) -> SolverSetti
         raise ValueError(
             f"SolverSettings(continuation=True) needs coupling='two-way', got "
             f"coupling={coupling!r}: the one-way solver has no orbit to continue")
+    return settings
+
+
+def check_start(settings: SolverSettings, start: object, coupling: str,
+                flight: bool) -> SolverSettings:
+    """``settings`` with the ``start`` keyword (None: ``settings.start``) checked against
+    the model: a start other than the release needs ``coupling="two-way"`` (the one-way
+    model has no state of the mode to start: its transient decays on its own), a drop
+    needs ``flight=True`` (the base starts off the table); the keyword and a
+    ``settings.start`` other than the release must agree. ValueErrors name ``start``,
+    the value and the allowed values."""
+    if start is not None:
+        start = as_start(start)
+        if settings.start != "release" and start != settings.start:
+            raise ValueError(
+                f"start={start!r} and settings.start={settings.start!r} differ: give the "
+                "start once (the keyword overrides the default of the settings, not "
+                "another start)")
+        if start != settings.start:
+            if settings.continuation and start != "release":
+                raise ValueError(_CONTINUED_START.format(start=start))
+            settings = dataclasses.replace(settings, start=start)
+    start = settings.start
+    if start != "release" and coupling != "two-way":
+        raise ValueError(
+            f"start {start_label(start)!r} needs coupling='two-way', got "
+            f"coupling={coupling!r}: the one-way model's mode is driven by the table alone "
+            f"and has no state to start (only the release applies); allowed: "
+            f"{START_ALLOWED}, the last two with coupling='two-way'")
+    if isinstance(start, Drop) and not flight:
+        raise ValueError(
+            f"start {start.label()!r} needs flight=True (the lift-off law 'flight'): the "
+            "base starts above the table and must fly to it; allowed: \"release\", "
+            "\"switch-on\", or a drop with flight=True")
     return settings
 
 
@@ -475,7 +662,7 @@ def _orbit_table(
         parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
     kernel = orbit_kernel.solve_points if parallel else orbit_kernel.solve_points_serial
     kernel(structure_vector(structure, coupling, flight), omega, a_flat, lifted,
-           kernel_budget(settings), settings.continuation, out)
+           kernel_budget(settings), settings.continuation, kernel_start(settings.start), out)
     return out
 
 
@@ -495,7 +682,8 @@ def _orbit_velocity(
     parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
     kernel = orbit_kernel.velocity_points if parallel else orbit_kernel.velocity_points_serial
     kernel(structure_vector(structure, coupling, flight), 2.0 * np.pi * f_flat, a_flat,
-           lifted, kernel_budget(settings), settings.continuation, velocity, status)
+           lifted, kernel_budget(settings), settings.continuation,
+           kernel_start(settings.start), velocity, status)
     return velocity, status
 
 
@@ -661,12 +849,14 @@ def steady_state(
     friction: str | Friction = DEFAULT_FRICTION,
     parallel: bool | None = None,
     flight: bool = False,
+    start: str | Drop | None = None,
 ) -> SteadyState:
     """Exact steady periodic orbit of the stick-slip motion at each ``(f, a)``.
 
     Event-driven and closed form between events (docs/theory/exact-solvers.md); no time
-    step. The orbit is the one reached from rest at drive phase 0 with the mode on
-    its steady response. Runs in parallel over points and releases the GIL.
+    step. The orbit is the one reached from the ``start`` (by default the release: rest
+    at drive phase 0 with the mode on its steady response). Runs in parallel over points
+    and releases the GIL.
 
     With ``coupling="two-way"`` the base's sliding acceleration also forces the mode,
     which becomes a state of the orbit: the orbit is the fixed point of the period map,
@@ -703,6 +893,11 @@ def steady_state(
         a bouncing orbit with ``BOUNCING`` and its velocity, airborne fraction, largest
         hop and impacts per period (docs/theory/flight.md). Needs
         ``coupling="two-way"`` and ``M < 1``.
+    start : {"release", "switch-on"} or Drop, optional
+        The state each point's motion starts from (:class:`SolverSettings` ``start``,
+        docs/theory/starts.md); overrides ``settings.start`` (which must then be the
+        release or the same). Other than ``"release"`` needs ``coupling="two-way"``, a
+        :class:`Drop` ``flight=True``.
 
     Returns
     -------
@@ -718,8 +913,9 @@ def steady_state(
     ValueError
         ``f`` or ``a`` out of range or not finite (the message names the first offending
         value and its index), shapes that do not broadcast, an unknown coupling,
-        ``flight=True`` with one-way coupling or ``M = 1`` (:func:`check_flight`), or
-        continuation with one-way coupling.
+        ``flight=True`` with one-way coupling or ``M = 1`` (:func:`check_flight`),
+        continuation with one-way coupling, or a ``start`` the model cannot take
+        (:func:`check_start`).
 
     See Also
     --------
@@ -729,7 +925,7 @@ def steady_state(
     coupling = check_coupling(coupling)
     flight = check_flight(flight, coupling, structure)
     check_friction(friction, "exact")
-    settings = check_settings(settings, coupling)
+    settings = check_start(check_settings(settings, coupling), start, coupling, flight)
     shape, f_flat, a_flat = _flat_drive(f, a)
     if coupling == "two-way":
         return _orbit_steady_state(structure, f_flat, a_flat, shape, coupling, settings,
@@ -922,7 +1118,7 @@ def phase_section(
     """
     structure = check_structure(structure)
     flight = check_flight(flight, "two-way", structure)
-    settings = check_settings(settings, "two-way")
+    settings = check_start(check_settings(settings, "two-way"), None, "two-way", flight)
     if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
         raise ValueError(f"periods must be a positive integer, got {periods!r}")
     shape, f_flat, a_flat = _flat_drive(f, a)
@@ -950,6 +1146,7 @@ def steady_velocity(
     *,
     coupling: str = DEFAULT_COUPLING,
     flight: bool = False,
+    start: str | Drop | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
     """Mean steady velocity and status at each ``(f, a)``.
 
@@ -968,6 +1165,8 @@ def steady_velocity(
     flight : bool, default False
         Follow the base off the table (see :func:`steady_state`): bouncing orbits get
         the status ``BOUNCING`` and their velocity.
+    start : {"release", "switch-on"} or Drop, optional
+        The state each point's motion starts from (see :func:`steady_state`).
 
     Returns
     -------
@@ -1005,7 +1204,7 @@ def steady_velocity(
     coupling = check_coupling(coupling)
     structure = check_structure(structure)
     flight = check_flight(flight, coupling, structure)
-    settings = check_settings(settings, coupling)
+    settings = check_start(check_settings(settings, coupling), start, coupling, flight)
     shape, f_flat, a_flat = _flat_drive(f, a)
     if coupling != "one-way":
         # The orbit kernel's velocity and status only (those of steady_state, bit for

@@ -40,10 +40,14 @@ from study.model.structure import Structure
 from study.model.units import DEGREE, SECOND
 from study.solvers.exact import (
     DEFAULT_COUPLING,
+    DEFAULT_SETTINGS,
     PARALLEL_THRESHOLD,
+    Drop,
     SteadyState,
+    as_start,
     check_coupling,
     check_flight,
+    check_start,
     check_structure,
     scalar_if_0d,
 )
@@ -567,6 +571,28 @@ def steady_mode_state(structure: Structure, f: ArrayLike, a: ArrayLike) -> NDArr
     return state
 
 
+def _to_phase_zero(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+                   y0: NDArray[np.float64], phase: float, coupling: str,
+                   friction: str | Friction, settings: IntegratorSettings
+                   ) -> NDArray[np.float64]:
+    """The states ``y0`` (rows, with flight) at drive phase ``phase`` [periods] carried
+    by :func:`simulate` to the next phase 0 (the base's position dropped): where
+    :func:`integrated_steady_state`'s whole periods begin."""
+    carried = np.empty_like(y0)
+    for i in range(f.size):
+        duration = (1.0 - phase) / f[i]
+        run = simulate(structure, Schedule.constant(f[i], a[i], duration, 360.0 * phase),
+                       coupling=coupling, friction=friction, initial_state=y0[i],
+                       output_times=[duration], settings=settings, max_events=0,
+                       flight=True)
+        if run.outcome != "completed" or run.gap is None or run.gap_rate is None:
+            carried[i] = np.nan
+            continue
+        carried[i] = (run.delta[-1], run.delta_rate[-1], 0.0, run.v[-1], run.gap[-1],
+                      run.gap_rate[-1])
+    return carried
+
+
 def integrated_steady_state(
     structure: Structure,
     f: ArrayLike,
@@ -577,11 +603,12 @@ def integrated_steady_state(
     settings: IntegratorSettings | None = None,
     parallel: bool | None = None,
     flight: bool = False,
+    start: str | Drop = "release",
 ) -> SteadyState:
     """Steady orbit at each ``(f, a)`` by time integration until the motion repeats.
 
-    Starts from :func:`steady_mode_state` (the exact solver's canonical start) and
-    integrates whole drive periods until the state at the period boundaries and the
+    Starts from the ``start`` (by default :func:`steady_mode_state`, the exact solver's
+    release) and integrates whole drive periods until the state at the period boundaries and the
     displacement per period repeat (see :class:`IntegratorSettings`). With two-way
     coupling the mode's transient must decay first: about ``Q / pi`` periods per
     factor ``e``.
@@ -606,6 +633,15 @@ def integrated_steady_state(
     flight : bool
         The lift-off law (see :func:`simulate`): with True (two-way coupling, ``M < 1``)
         an orbit with flight is ``BOUNCING``, with its velocity.
+    start : {"release", "switch-on"} or Drop, default "release"
+        The state the motion starts from, as the exact solver's ``start``
+        (:class:`study.solvers.exact.SolverSettings`, docs/theory/starts.md): the same
+        states, so that the integrator checks the exact solver from each.
+        ``"switch-on"``: every state 0 at phase 0; a :class:`~study.solvers.exact.Drop`
+        (needs ``flight=True``): at rest at its height, the mode at rest, at its phase
+        (a drop at a phase other than 0 is first integrated by :func:`simulate` to the
+        next phase 0, one point at a time). Other than ``"release"`` needs two-way
+        coupling.
 
     Returns
     -------
@@ -629,8 +665,17 @@ def integrated_steady_state(
     n = f_flat.size
     omega = 2.0 * np.pi * f_flat
     period = 1.0 / f_flat  # f > 0, checked by as_frequency
+    start = check_start(DEFAULT_SETTINGS, as_start(start), check_coupling(coupling),
+                        flight).start
     y0 = np.zeros((n, size))
-    y0[:, :_kernel.STATE_SIZE] = steady_mode_state(structure, f_flat, a_flat).reshape(n, 4)
+    if start == "release":
+        y0[:, :_kernel.STATE_SIZE] = steady_mode_state(structure, f_flat, a_flat).reshape(
+            n, 4)
+    elif isinstance(start, Drop):
+        y0[:, _kernel.GAP] = start.height
+        if start.phase != 0.0:
+            y0 = _to_phase_zero(structure, f_flat, a_flat, y0, start.phase, coupling,
+                                friction, settings)
     scale = np.ascontiguousarray(_scales(structure, omega, flight).reshape(n, size))
     if settings.steps_per_period:
         fixed = period / settings.steps_per_period

@@ -73,6 +73,7 @@ import study
 from study.engine.spec_files import detect_kind
 from study.engine.study_spec import load_spec
 from study.kernels.budget import Budget
+from study.kernels.start import RELEASE
 from study.kernels.two_way import continuation, modes, newton, orbit
 from study.kernels.two_way import points as kernel
 from study.kernels.two_way.continuation import DEPTH, forget, new_neighbours, predict, remember
@@ -143,7 +144,7 @@ def solve(driver, structure: Structure, f: np.ndarray, a: np.ndarray,
     arguments = (structure_vector(structure, "two-way"), 2.0 * math.pi * f, a, lifted,
                  kernel_budget(DEFAULT_SETTINGS) if budget is None else budget)
     if driver in (kernel.solve_points, kernel.solve_points_serial):
-        driver(*arguments, continued, out)
+        driver(*arguments, continued, RELEASE, out)
     else:
         driver(*arguments, out)
     return out

@@ -20,6 +20,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit, prange
 
+from study.kernels.start import is_release
 from study.kernels.structure_vector import (
     COS_ALPHA,
     GRAVITY,
@@ -353,7 +354,7 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
         # a stick-slip point's time): the orbit with flight is sought first. Only
         # where it does not bounce is the contact solver's answer wanted (see
         # solve_point), so the row is kept aside for the case that it ends LIFT_OFF.
-        _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
+        _solve_flying(structure, table, omega, a, budget, t_start, factor, 0.0, out)
         if static or out[OUT_STATUS] == BOUNCING or (
                 out[OUT_STATUS] in (CHAOTIC, QUASI_PERIODIC) and out[OUT_AIRBORNE] > 0.0):
             forget(neighbours)
@@ -413,7 +414,7 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
             out[:] = workspace.row
             out[OUT_CONTINUED] = continued
         else:
-            _solve_flying(structure, table, omega, a, budget, t_start, factor, out)
+            _solve_flying(structure, table, omega, a, budget, t_start, factor, 0.0, out)
         out[OUT_NEWTON_PASSES] += record.passes[0]
         out[OUT_MAP_PASSES] += record.passes[1]
         return
@@ -449,13 +450,15 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _solve_flying(structure, table, omega, a, budget, t_start, factor, out):
-    """The orbit with flight from rest on the table at ``t_start`` [s], the mode on
-    ``factor`` times its steady response; ``table`` has its contact rows filled. The
-    flight search's passes are written to ``out`` (the caller adds its own)."""
+def _solve_flying(structure, table, omega, a, budget, t_start, factor, height, out):
+    """The orbit with flight from rest ``height`` [m] above the table (0: on it) at
+    ``t_start`` [s], the mode at rest on ``factor`` times its steady response;
+    ``table`` has its contact rows filled. The flight search's passes are written to
+    ``out`` (the caller adds its own)."""
     flight_row(structure, table)
     z = np.zeros(N_STATE)
     start_state(table, omega, t_start, z, factor)
+    z[Z_GAP] = height
     with_jac, without = solve_flight(structure, table, omega, a, budget, z, t_start, out,
                                      FLIGHT_COLUMNS)
     out[OUT_NEWTON_PASSES] = with_jac
@@ -479,6 +482,46 @@ def solve_drop(structure, omega, a, budget, t_start, height, out):
     z[0] = table[FLIGHT_ROW, M_OFFSET]
     z[Z_GAP] = height
     solve_flight(structure, table, omega, a, budget, z, t_start, out, FLIGHT_COLUMNS)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_started(structure, omega, a, lifted, budget, start, out, neighbours, workspace,
+                  diagnostics):
+    """One point's motion from a named start other than the release: ``start`` a
+    :data:`~study.kernels.start.Start` (the drive phase, the mode's factor, the base's
+    height), the other arguments as :func:`solve_point_along`'s.
+
+    The motion is followed from that state, never decided in closed form (a start off
+    the steady stick response can slip or leave the table in its transient where the
+    steady response would not) and never continued from ``neighbours`` (which are
+    forgotten: the start is the protocol's, not a neighbour's orbit). On the table
+    (height 0) the point is solved as :func:`solve_decided` solves a point that is not
+    static, from that state; an orbit that never slips is reported ``STATIC``, as a
+    static point's row. From above the table (a drop, only with the lift-off law
+    ``flight``) the motion with flight is followed from the start.
+    """
+    start_row(out)
+    forget(neighbours)
+    t_start = start.phase * TWO_PI / omega
+    if start.height > 0.0:
+        table = workspace.table
+        mode_drive(structure, omega, a, table, 0, searched_only=True)
+        mode_drive(structure, omega, a, table, 1, searched_only=True)
+        mode_drive(structure, omega, a, table, 2, searched_only=True)
+        _solve_flying(structure, table, omega, a, budget, t_start, start.factor,
+                      start.height, out)
+        return
+    solve_decided(structure, omega, a, lifted, False, budget, t_start, start.factor, out,
+                  neighbours, workspace, diagnostics)
+    forget(neighbours)
+    if out[OUT_STATUS] == STICK_SLIP and out[OUT_SLIPS] == 0.0:
+        # The motion settled on the stick: the steady stick response, a static point.
+        newton_passes = out[OUT_NEWTON_PASSES]
+        map_passes = out[OUT_MAP_PASSES]
+        start_row(out)
+        _static_row(structure, omega, False, out, diagnostics)
+        out[OUT_NEWTON_PASSES] = newton_passes
+        out[OUT_MAP_PASSES] = map_passes
 
 
 #: Longest run of points continued one from the other (see :func:`sweep_runs`): a
@@ -509,11 +552,16 @@ def sweep_runs(omega, a):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _solve_run(structure, omega, a, lifted, budget, continued, begin, end, out):
+def _solve_run(structure, omega, a, lifted, budget, continued, start, begin, end, out):
     neighbours = new_neighbours()
     workspace = new_workspace(structure)
     flying = structure[LIFT_OFF_LAW] != 0.0
+    released = is_release(start)
     for i in range(begin, end):
+        if not released:
+            solve_started(structure, omega[i], a[i], lifted[i], budget, start, out[i],
+                          neighbours, workspace, True)
+            continue
         if not continued:
             forget(neighbours)
         # The static decision here, and solve_decided for the others: a static point
@@ -529,40 +577,49 @@ def _solve_run(structure, omega, a, lifted, budget, continued, begin, end, out):
 
 
 @njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def solve_points(structure, omega, a, lifted, budget, continued, out):
+def solve_points(structure, omega, a, lifted, budget, continued, start, out):
     """Fill ``out`` (n x ``N_OUT``) at the points ``omega`` [rad s-1], ``a`` [m s-2]
     (``lifted``: past lift-off) in parallel: the runs of :func:`sweep_runs`, each in
     order on one thread, interleaved over the lanes. With ``continued`` each point of a
-    run is continued from the points before it; else each is solved from rest (the
-    runs only share their scratch space: the results do not depend on them)."""
+    run is continued from the points before it; else each is solved from ``start`` (a
+    :data:`~study.kernels.start.Start`; the runs only share their scratch space: the
+    results do not depend on them). A start other than the release is never continued
+    (:func:`solve_started`)."""
     starts = sweep_runs(omega, a)
     runs = starts.shape[0] - 1
     lanes = min(runs, 256)
     for lane in prange(lanes):
         for r in range(lane, runs, lanes):
-            _solve_run(structure, omega, a, lifted, budget, continued, starts[r],
+            _solve_run(structure, omega, a, lifted, budget, continued, start, starts[r],
                        starts[r + 1], out)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def solve_points_serial(structure, omega, a, lifted, budget, continued, out):
+def solve_points_serial(structure, omega, a, lifted, budget, continued, start, out):
     """Same as :func:`solve_points` on one thread."""
     starts = sweep_runs(omega, a)
     for r in range(starts.shape[0] - 1):
-        _solve_run(structure, omega, a, lifted, budget, continued, starts[r], starts[r + 1],
-                   out)
+        _solve_run(structure, omega, a, lifted, budget, continued, start, starts[r],
+                   starts[r + 1], out)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _velocity_run(structure, omega, a, lifted, budget, continued, begin, end, velocity,
-                  status):
+def _velocity_run(structure, omega, a, lifted, budget, continued, start, begin, end,
+                  velocity, status):
     neighbours = new_neighbours()
     workspace = new_workspace(structure)
     row = np.empty(N_OUT)
     flying = structure[LIFT_OFF_LAW] != 0.0
+    released = is_release(start)
     for i in range(begin, end):
         if not continued:
             forget(neighbours)
+        if not released:
+            solve_started(structure, omega[i], a[i], lifted[i], budget, start, row,
+                          neighbours, workspace, False)
+            velocity[i] = row[OUT_VELOCITY]
+            status[i] = np.int8(row[OUT_STATUS])
+            continue
         static = static_point(structure, omega[i], a[i], lifted[i], row, False)
         if not static or (lifted[i] and flying):
             solve_decided(structure, omega[i], a[i], lifted[i], static, budget, 0.0, 1.0,
@@ -574,7 +631,8 @@ def _velocity_run(structure, omega, a, lifted, budget, continued, begin, end, ve
 
 
 @njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def velocity_points(structure, omega, a, lifted, budget, continued, velocity, status):
+def velocity_points(structure, omega, a, lifted, budget, continued, start, velocity,
+                    status):
     """The velocity [m s-1] and the status (int8) of :func:`solve_points`, bit for bit,
     into ``velocity`` and ``status``: no table of every column (136 bytes a point) and
     no multiplier of the static points."""
@@ -583,17 +641,17 @@ def velocity_points(structure, omega, a, lifted, budget, continued, velocity, st
     lanes = min(runs, 256)
     for lane in prange(lanes):
         for r in range(lane, runs, lanes):
-            _velocity_run(structure, omega, a, lifted, budget, continued, starts[r],
-                          starts[r + 1], velocity, status)
+            _velocity_run(structure, omega, a, lifted, budget, continued, start,
+                          starts[r], starts[r + 1], velocity, status)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def velocity_points_serial(structure, omega, a, lifted, budget, continued, velocity,
-                           status):
+def velocity_points_serial(structure, omega, a, lifted, budget, continued, start,
+                           velocity, status):
     """Same as :func:`velocity_points` on one thread."""
     starts = sweep_runs(omega, a)
     for r in range(starts.shape[0] - 1):
-        _velocity_run(structure, omega, a, lifted, budget, continued, starts[r],
+        _velocity_run(structure, omega, a, lifted, budget, continued, start, starts[r],
                       starts[r + 1], velocity, status)
 
 
