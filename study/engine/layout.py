@@ -24,6 +24,7 @@ from study.engine.variables import GRID_SIZES, GRIDS, VARIABLES
 from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS, Friction
 from study.model.parameters import STRUCTURE
 from study.model.units import DIMENSIONLESS, KILOGRAM
+from study.solvers.exact import start_attributes
 
 __all__ = [
     "Coordinate",
@@ -232,13 +233,18 @@ def _law_attribute(kind: str, parameter: str) -> str:
 
 
 def protocol_attributes(spec: StudySpec) -> dict[str, str | float]:
-    """How each point's motion is started and how the sweep visits the grid.
+    """How each point's motion is started (and, later, how the sweep visits the grid).
 
-    None today. The place where a later issue (issue 33) adds the start protocol and
-    the sweep protocol: what this returns joins :func:`method_attributes`, and so is
-    written into every result and compared with the embedded spec by validation.
+    What this returns joins :func:`method_attributes`, and so is written into every
+    result and compared with the embedded spec by validation: the start
+    (:func:`study.solvers.exact.start_attributes`): ``study_start``, its label
+    (``"release"``, ``"switch-on"``, ``"drop 0.002 m at phase 0.25"``),
+    ``study_start_kind`` (``release``, ``switch-on`` or ``drop``) and for a drop the
+    floats ``study_start_height`` [m] and ``study_start_phase`` [periods]. A file
+    written before starts were named has none of them: its points started by the
+    release (validation reads it so).
     """
-    return {}
+    return {f"study_{key}": value for key, value in start_attributes(spec.solver.start).items()}
 
 
 def contact_law_attributes(coupling: str, friction: Friction | str | None = None,

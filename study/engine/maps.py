@@ -43,9 +43,11 @@ from study.model.parameters import STRUCTURE as STRUCTURE_TABLE
 from study.model.structure import Structure
 from study.solvers.exact import (
     DEFAULT_COUPLING,
+    Drop,
     SolverSettings,
     check_coupling,
     check_flight,
+    check_start,
     check_structure,
 )
 from study.version import VERSION
@@ -93,6 +95,13 @@ def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.fl
     # Only when on, as in a spec that omits it: the text of a map without flight stays.
     lines += ["flight = true"] if flight else []
     lines += ["continuation = true"] if settings.continuation else []
+    # And the start, where not the release.
+    start = settings.start
+    if isinstance(start, Drop):
+        lines += [f"start = {{ drop = {_toml_number(start.height)}, phase = "
+                  f"{_toml_number(start.phase)} }}"]
+    elif start != "release":
+        lines += [f'start = "{start}"']
     return "\n".join([*lines, ""])
 
 
@@ -127,6 +136,7 @@ def compute_map(
     sweep: Mapping[str, ArrayLike] | None = None,
     settings: SolverSettings | None = None,
     workers: int | None = None,
+    start: str | Drop | None = None,
 ) -> xr.Dataset:
     """A labelled map over the drive ``(f, a)`` and any swept structure parameter.
 
@@ -170,6 +180,10 @@ def compute_map(
         Budgets of the exact solver.
     workers : int, optional
         Threads computing the map [1]; default one per core.
+    start : {"release", "switch-on"} or Drop, optional
+        The state each point's motion starts from (``[solver] start`` of a spec;
+        :func:`study.steady_state`); overrides ``settings.start``. Recorded in the
+        dataset's attribute ``study_start``.
 
     Returns
     -------
@@ -224,6 +238,7 @@ def compute_map(
     settings = SolverSettings() if settings is None else settings
     if not isinstance(settings, SolverSettings):
         raise TypeError(f"settings must be a study.SolverSettings, got {settings!r}")
+    settings = check_start(settings, start, coupling, flight)
     swept: dict[str, NDArray[np.float64]] = {}
     for name, values in dict(sweep or {}).items():
         if name not in STRUCTURE_PARAMETERS:

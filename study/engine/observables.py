@@ -92,6 +92,7 @@ class Method:
                 settings["continuation"] = True
             # Only where not the default, as continuation.
             settings.update(self.solver.averaging_changes())
+            settings.update(self.solver.start_changes())
         else:
             settings = {
                 "tolerance": self.integrator.tolerance,

@@ -54,8 +54,11 @@ def _stale_format_problems(meta: StoredFile, written: ResultFormat) -> list[str]
 
 
 #: Method attributes a file may lack and what their absence means: files written before
-#: every result recorded its lift-off law wrote ``study_lift_off`` only with flight.
-_ABSENT_MEANS = {"study_lift_off": DEFAULT_LIFT_OFF}
+#: every result recorded its lift-off law wrote ``study_lift_off`` only with flight, and
+#: files written before starts were named have no ``study_start``: their points started
+#: by the release.
+_ABSENT_MEANS = {"study_lift_off": DEFAULT_LIFT_OFF, "study_start": "release",
+                 "study_start_kind": "release"}
 
 
 def method_problems(attrs: Mapping[str, Any], spec: StudySpec) -> list[str]:
@@ -65,7 +68,8 @@ def method_problems(attrs: Mapping[str, Any], spec: StudySpec) -> list[str]:
     compared with the spec's value (texts as texts, numbers exactly). A key the file
     lacks is no problem here (files of older versions do not have them all; the result
     schema decides which are required), except ``study_lift_off``, whose absence has
-    always meant the law ``stop``. ``source``, the prose that repeats the other
+    always meant the law ``stop``, and ``study_start`` and ``study_start_kind``, whose
+    absence means the release. ``source``, the prose that repeats the other
     attributes, is not compared: its wording may change between versions.
 
     Parameters

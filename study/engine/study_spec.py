@@ -75,7 +75,13 @@ from study.model.parameters import (
     schema_properties,
 )
 from study.model.structure import Structure, tilt_warnings
-from study.solvers.exact import DEFAULT_COUPLING, MAX_SOLVER_BUDGET, SolverSettings
+from study.solvers.exact import (
+    DEFAULT_COUPLING,
+    MAX_SOLVER_BUDGET,
+    Drop,
+    SolverSettings,
+    start_label,
+)
 from study.solvers.frontier import finest_tolerance
 from study.solvers.integrator import MAX_INTEGRATOR_BUDGET, IntegratorSettings
 
@@ -106,7 +112,7 @@ SOLVER_OBSERVABLES = tuple(
 )
 #: ``[solver]`` keys of the exact solver and of the time integrator.
 EXACT_KEYS = ("max_events", "max_map_iterations", "continuation", "velocity_tolerance",
-              "max_average_periods")
+              "max_average_periods", "start")
 INTEGRATOR_KEYS = (
     "tolerance", "steps_per_period", "max_periods", "max_orbit_period", "period_tolerance",
 )
@@ -309,7 +315,35 @@ def spec_schema() -> dict[str, Any]:
             "neighbours' branch, as a slowly swept drive, and a point's value depends on "
             "its grid); false (default): every point from rest"),
     }
+    solver["start"] = _start_schema()
     return schema
+
+
+def _start_schema() -> dict[str, Any]:
+    """``[solver] start``: a named start or a drop's table (the values
+    :func:`study.solvers.exact.as_start` takes; it also checks them, with the messages
+    the API gives)."""
+    return {
+        "anyOf": [
+            {"enum": ["release", "switch-on"]},
+            {"type": "object", "additionalProperties": False, "required": ["drop"],
+             "properties": {
+                 "drop": {"type": "number", "exclusiveMinimum": 0,
+                          "description": "height of the base above the table [m], > 0"},
+                 "phase": {"type": "number", "minimum": 0, "exclusiveMaximum": 1,
+                           "description": "drive phase of the release [periods], in "
+                                          "[0, 1) (default 0)"}}},
+        ],
+        "default": "release",
+        "description": (
+            "exact solver, two-way coupling: the state each point's motion starts from, a "
+            "physical protocol (docs/theory/starts.md): \"release\" (default: the base at "
+            "rest on the table at drive phase 0, the mode on its steady stick response), "
+            "\"switch-on\" (base and mode at rest, the drive switched on at phase 0) or "
+            "{ drop = height_m, phase = fraction_of_period } (the base held at rest above "
+            "the table, the mode at rest, let go at that phase; height > 0, phase in "
+            "[0, 1); needs flight = true)"),
+    }
 
 
 def _flight_schema() -> dict[str, Any]:
@@ -585,6 +619,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
                        path, problems)
     method, coupling, friction = settings[0], settings[1], settings[2]
     flight = problems.collect(_flight, solver_table, method, coupling, path)
+    _check_start(settings[3], coupling, flight, path, problems)
     # The law asked for, even where refused above: its parameters are not unread.
     _check_unread(structure, sweep, friction, coupling,
                   bool(solver_table.get("flight", False)), path, problems)
@@ -842,6 +877,29 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...],
     return method, coupling, friction, solver, integrator, frontier_tolerance
 
 
+def _check_start(solver: SolverSettings | None, coupling: str, flight: bool | None,
+                 path: str, problems: _Problems) -> None:
+    """``[solver] start`` where the model can take it: other than the release needs
+    coupling = "two-way" (the one-way model's mode has no state to start), a drop needs
+    flight = true (the base starts above the table)."""
+    if solver is None or solver.start == "release":
+        return
+    start = solver.start
+    shown = (f"{{ drop = {start.height!r}, phase = {start.phase!r} }}"
+             if isinstance(start, Drop) else f'"{start}"')
+    if coupling != "two-way":
+        problems.add(
+            f'{path}: [solver] start = {shown} ({start_label(start)}) needs coupling = '
+            f'"two-way": the one-way model\'s mode is driven by the table alone and has no '
+            f'state to start; got coupling = "{coupling}" (allowed: coupling = "two-way", '
+            'or start = "release")')
+    elif isinstance(start, Drop) and flight is False:
+        problems.add(
+            f"{path}: [solver] start = {shown} ({start_label(start)}) needs flight = true: "
+            "the base starts above the table and must fly to it (allowed: flight = true, "
+            'or start = "release" or "switch-on")')
+
+
 #: Why flight needs two-way coupling (the decision of issue 21).
 FLIGHT_NEEDS_TWO_WAY = (
     "the one-way model's mode is driven by the table alone, which does not hold once the "
@@ -923,6 +981,8 @@ def _canonical(study: dict[str, Any], observables: tuple[str, ...], fixed: dict[
                else {}),
             # And the averaging of irregular motions, where not the default.
             **(solver.averaging_changes() if method == "exact" else {}),
+            # And the start, where not the release.
+            **(solver.start_changes() if method == "exact" else {}),
         },
     }
     return canonical

@@ -153,14 +153,16 @@ def test_a_swept_restitution_is_left_to_its_coordinate() -> None:
         "lift-off flight, restitution e swept")
 
 
-def test_every_attribute_follows_the_spec_and_no_protocol_is_written_yet() -> None:
+def test_every_attribute_follows_the_spec_and_the_start_is_recorded() -> None:
     spec = parse_spec(spec_text("coulomb"), "coulomb.toml")
     attrs = method_attributes(spec)
     assert list(attrs) == ["source", "study_solver_method", "study_coupling",
-                           "study_friction_law", "study_lift_off"]
+                           "study_friction_law", "study_lift_off", "study_start",
+                           "study_start_kind"]
     assert attrs["study_friction_law"] == "coulomb"
     assert attrs["study_lift_off"] == "stop"
-    assert protocol_attributes(spec) == {}
+    assert protocol_attributes(spec) == {"study_start": "release",
+                                         "study_start_kind": "release"}
     assert method_problems(attrs, spec) == []
 
 
