@@ -172,8 +172,10 @@ class PointWork:
 
     @_solved_once
     def one_way(self) -> SteadyState:
-        """Steady state of the paper's one-way model by the exact solver."""
-        return steady_state(self.structure, self.f, self.a, self.method.solver, parallel=False)
+        """Steady state of the paper's one-way model by the exact solver (from the
+        release, whatever the study's start: the one-way mode has no state to start)."""
+        return steady_state(self.structure, self.f, self.a,
+                            replace(self.method.solver, start="release"), parallel=False)
 
     @_solved_once
     def without_flight(self) -> SteadyState:

@@ -619,7 +619,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
                        path, problems)
     method, coupling, friction = settings[0], settings[1], settings[2]
     flight = problems.collect(_flight, solver_table, method, coupling, path)
-    _check_start(settings[3], coupling, flight, path, problems)
+    _check_start(settings[3], coupling, flight, observables, path, problems)
     # The law asked for, even where refused above: its parameters are not unread.
     _check_unread(structure, sweep, friction, coupling,
                   bool(solver_table.get("flight", False)), path, problems)
@@ -878,10 +878,12 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...],
 
 
 def _check_start(solver: SolverSettings | None, coupling: str, flight: bool | None,
-                 path: str, problems: _Problems) -> None:
+                 observables: tuple[str, ...], path: str, problems: _Problems) -> None:
     """``[solver] start`` where the model can take it: other than the release needs
     coupling = "two-way" (the one-way model's mode has no state to start), a drop needs
-    flight = true (the base starts above the table)."""
+    flight = true (the base starts above the table) and no ``without_flight``
+    observable (the same start with the run stopped at lift-off: no state of that
+    model)."""
     if solver is None or solver.start == "release":
         return
     start = solver.start
@@ -898,6 +900,12 @@ def _check_start(solver: SolverSettings | None, coupling: str, flight: bool | No
             f"{path}: [solver] start = {shown} ({start_label(start)}) needs flight = true: "
             "the base starts above the table and must fly to it (allowed: flight = true, "
             'or start = "release" or "switch-on")')
+    elif isinstance(start, Drop) and "without_flight" in observables:
+        problems.add(
+            f"{path}: [solver] start = {shown} ({start_label(start)}) with the observable "
+            "without_flight: that observable solves the same start with the run stopped at "
+            "lift-off, and a base above the table is no state of that model (allowed: "
+            'start = "release" or "switch-on" with without_flight, or remove it)')
 
 
 #: Why flight needs two-way coupling (the decision of issue 21).

@@ -321,3 +321,29 @@ def test_compute_map_takes_the_start_and_records_it():
                                                                                    0.25)
     direct = _solve(Drop(0.002, 0.25), f=np.array(f)[:, None], a=np.array(a)[None, :])
     assert_array_equal(dropped["velocity"].values, direct.velocity)
+
+
+def test_a_drop_is_refused_beside_without_flight_and_the_paper_model_starts_by_release():
+    with pytest.raises(SpecError, match="with the observable without_flight"):
+        parse_spec(SPEC.format(coupling="two-way",
+                               extra="flight = true\nstart = { drop = 0.002 }").replace(
+            'observables = ["velocity"]', 'observables = ["velocity", "without_flight"]'),
+            "starts.toml")
+    f, a = [13.0, 14.0], [8.0]
+    switched = compute_map(PAPER, f, a, observables=("velocity", "paper_model"),
+                           coupling="two-way", start="switch-on")
+    released = compute_map(PAPER, f, a, observables=("velocity", "paper_model"),
+                           coupling="two-way")
+    assert_array_equal(switched["velocity_one_way"].values,
+                       released["velocity_one_way"].values)
+
+
+def test_a_study_file_records_its_start_and_validates(tmp_path):
+    spec = tmp_path / "starts.toml"
+    spec.write_text(SPEC.format(coupling="two-way", extra='flight = true\nstart = "switch-on"'),
+                    encoding="utf-8")
+    result = study.run(spec, tmp_path / "starts.nc")
+    assert result.attrs["study_start"] == "switch-on"
+    assert result.attrs["study_start_kind"] == "switch-on"
+    assert_allclose(result["velocity"].sel(f=13.0, a=12.0).item(), BACKWARD_HOP, rtol=0,
+                    atol=5e-5)
