@@ -347,3 +347,17 @@ def test_a_study_file_records_its_start_and_validates(tmp_path):
     assert result.attrs["study_start_kind"] == "switch-on"
     assert_allclose(result["velocity"].sel(f=13.0, a=12.0).item(), BACKWARD_HOP, rtol=0,
                     atol=5e-5)
+
+
+def test_kept_values_of_one_start_are_never_lent_to_another():
+    """The cache key (the method's canonical settings) names the start only when it is
+    not the release: keys of values kept before starts were named are unchanged."""
+    from study.engine.observables import Method
+
+    released = Method(coupling="two-way", solver=SolverSettings()).canonical()
+    assert "start" not in released
+    switched = Method(coupling="two-way", solver=SolverSettings(start="switch-on")).canonical()
+    assert switched == {**released, "start": "switch-on"}
+    dropped = Method(coupling="two-way", flight=True,
+                     solver=SolverSettings(start=Drop(0.002, 0.25))).canonical()
+    assert dropped["start"] == {"drop": 0.002, "phase": 0.25}
