@@ -49,6 +49,8 @@ from study.kernels.two_way.cycles import (
     CYCLE_DETECTION,
     CYCLE_REACH,
     MAX_PERIOD,
+    SAME_FIXED_POINT,
+    contracts_onto,
     state_distance,
 )
 from study.kernels.two_way.flight import (
@@ -382,9 +384,16 @@ def _flight_cycle(point, z, periods, scales, max_events, record, work):
 def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, stats):
     """Periodic orbit with flight reached from the 5-state ``z`` at ``t_start`` [s] (in
     the first period), as :func:`~study.kernels.two_way.cycles.find_orbit`: Newton's
-    method from the state a period later, then a search of the map's iterates for a
-    cycle of up to ``MAX_PERIOD`` periods; where none is found, the time averages of
-    the motion the iterates follow (:mod:`study.kernels.time_average`).
+    method from the state two periods later, then the map's iterates from that state,
+    searched for a cycle of up to ``MAX_PERIOD`` periods; where none is found, the time
+    averages of the motion the iterates follow (:mod:`study.kernels.time_average`).
+
+    A stable fixed point found by Newton's method is reported only once verified
+    reached: an iterate's pass has the orbit's events and shows the map contracting
+    onto it (:func:`~study.kernels.two_way.cycles.contracts_onto`), or the cycle search
+    finds it again from a near return of the iterates. Until then the iterates are
+    followed as without it, and what they reach (another cycle, an irregular motion)
+    is reported instead.
 
     After :data:`DISCARDED_PERIODS` iterates each period's velocity and the log-growth
     of a tangent vector carried through the map's Jacobian are recorded. Every
@@ -429,10 +438,24 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, 
     guess = z.copy()
     flag, converged = _quiet_newton(point, z, 1, scales, max_events, record, work,
                                     MAX_NEWTON)
+    # A stable fixed point found from the start is kept aside (its state, its pass's
+    # statistics and Jacobian) until an iterate of the map from the start is verified to
+    # lie where the map contracts onto it (contracts_onto, the pass with the orbit's
+    # events); the cycle search below follows the same iterates meanwhile and reports
+    # whatever they reach instead, where that is not the fixed point.
+    pending = False
+    pending_radius = np.nan
+    pending_z = np.empty(N_STATE)
+    pending_acc = np.empty(N_FLIGHT_ACC)
+    pending_jac = np.empty((N_STATE, N_STATE))
     if converged:
         radius = spectral_radius(record.jac)
         if radius < 1.0 + STABILITY_MARGIN:
-            return STICK_SLIP, REASON_NONE, 1, radius
+            pending = True
+            pending_radius = radius
+            pending_z[:] = z
+            pending_acc[:] = record.acc
+            pending_jac[:, :] = record.jac
     if flag == RUN_PARADOX:
         return FRICTION_PARADOX, REASON_NONE, 0, np.nan
     for i in range(N_STATE):
@@ -464,6 +487,11 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, 
             return FRICTION_PARADOX, REASON_NONE, 0, np.nan
         if flag != RUN_OK:
             return NOT_CONVERGED, REASON_EVENT_BUDGET, 0, np.nan
+        if pending and record.acc[A_EVENT_COUNT] == pending_acc[A_EVENT_COUNT] and (
+                contracts_onto(history[slot], z, record.jac, pending_z, pending_radius,
+                               scales)):
+            return _pending_orbit(z, record, pending_z, pending_acc, pending_jac,
+                                  pending_radius)
         if iteration < last:
             irregular.growths[iteration] = tangent_growth(record.jac, scales, irregular)
         if recorded < 0:
@@ -510,6 +538,12 @@ def find_flight_orbit(point, z, t_start, scales, budget, record, work, history, 
                     found = _deferred_cycle(point, deferred, deferred_periods, waiting,
                                             scales, max_events, record, work, candidate)
                     waiting = 0
+                    if pending and found == 1 and state_distance(
+                            candidate, pending_z, scales) <= SAME_FIXED_POINT:
+                        # The iterates closing on the fixed point found from the start:
+                        # reached, and reported with the bits Newton gave it there.
+                        return _pending_orbit(z, record, pending_z, pending_acc,
+                                              pending_jac, pending_radius)
                     if found != 0:
                         return _found(found, z, candidate)
                 break
@@ -535,6 +569,17 @@ def _deferred_cycle(point, deferred, deferred_periods, waiting, scales, max_even
         if found != 0:
             return found
     return 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _pending_orbit(z, record, pending_z, pending_acc, pending_jac, radius):
+    """:func:`find_flight_orbit`'s answer for the fixed point found from the start once
+    verified: ``z`` and ``record`` take its state and its pass's statistics and
+    Jacobian again."""
+    z[:] = pending_z
+    record.acc[:] = pending_acc
+    record.jac[:, :] = pending_jac
+    return STICK_SLIP, REASON_NONE, 1, radius
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
