@@ -70,7 +70,7 @@ __all__ = [
 ]
 
 #: Version of the steady-state algorithm; changes whenever its results may change.
-SOLVER_VERSION = "8"
+SOLVER_VERSION = "9"
 
 #: Largest budget of each :class:`SolverSettings` field: 100 times the default slip
 #: events (a budget only bounds pathological points; at about 1 us an event, 1e6 events
