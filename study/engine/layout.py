@@ -349,7 +349,8 @@ def method_summary(attrs: Mapping[str, Any], swept: Iterable[str] = (), *,
                    solver: bool = True) -> str:
     """A result's method in one line, from its global attributes (those of
     :func:`method_attributes`): ``exact solver, one-way coupling, friction stribeck
-    (stribeck_speed=0.01 m s-1), lift-off flight, restitution e=0.5``.
+    (stribeck_speed=0.01 m s-1), lift-off flight, restitution e=0.5``, then the start
+    where it is not the release (``start switch-on``).
 
     Files written before the method was recorded whole lack some attributes: the line
     says what the file has, and a default it assumes as such (``friction coulomb (not
@@ -374,6 +375,11 @@ def method_summary(attrs: Mapping[str, Any], swept: Iterable[str] = (), *,
              ] if solver else []
     parts += [f"{coupling} coupling" if isinstance(coupling, str) else "coupling not recorded",
               _friction_summary(attrs), _lift_off_summary(attrs, swept)]
+    # The start only where it is not the release (absent: the release, as before starts
+    # were named), so that the line of every other result stays as it was.
+    start = attrs.get("study_start")
+    if solver and start is not None and start != "release":
+        parts.append(f"start {start}")
     return ", ".join(parts)
 
 

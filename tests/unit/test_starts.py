@@ -361,3 +361,14 @@ def test_kept_values_of_one_start_are_never_lent_to_another():
     dropped = Method(coupling="two-way", flight=True,
                      solver=SolverSettings(start=Drop(0.002, 0.25))).canonical()
     assert dropped["start"] == {"drop": 0.002, "phase": 0.25}
+
+
+def test_the_method_line_names_a_start_other_than_the_release():
+    from study.engine.layout import method_summary
+
+    released = method_attributes(_spec())
+    assert "start" not in method_summary(released)
+    switched = method_attributes(_spec('start = "switch-on"'))
+    assert method_summary(switched).endswith(", start switch-on")
+    dropped = method_attributes(_spec("flight = true\nstart = { drop = 0.002, phase = 0.25 }"))
+    assert method_summary(dropped).endswith("start drop 0.002 m at phase 0.25")
