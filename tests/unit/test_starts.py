@@ -372,3 +372,21 @@ def test_the_method_line_names_a_start_other_than_the_release():
     assert method_summary(switched).endswith(", start switch-on")
     dropped = method_attributes(_spec("flight = true\nstart = { drop = 0.002, phase = 0.25 }"))
     assert method_summary(dropped).endswith("start drop 0.002 m at phase 0.25")
+
+
+def test_drops_below_lift_off_land_on_the_one_orbit_on_the_table():
+    """The paper's structure below lift-off (8 m s-2) has one orbit on the table: every
+    start reaches it, the drops after their landing (the flight kernel from the drop,
+    the contact kernel from the release), and the integrator from the drop at half a
+    period (simulated to phase 0 first)."""
+    f = np.array([13.0, 14.0, 15.0])
+    release = steady_state(PAPER, f, 8.0, coupling="two-way", flight=True)
+    for start in ("switch-on", Drop(0.001, 0.0), Drop(0.0005, 0.5)):
+        other = steady_state(PAPER, f, 8.0, coupling="two-way", flight=True, start=start)
+        assert_array_equal(other.status, release.status)
+        assert_array_equal(other.impacts_per_period, 0.0)
+        assert_allclose(other.velocity, release.velocity, rtol=1e-9, atol=0)
+    integrated = integrated_steady_state(PAPER, f, 8.0, coupling="two-way", flight=True,
+                                         start=Drop(0.0005, 0.5))
+    assert_array_equal(integrated.status, release.status)
+    assert_allclose(integrated.velocity, release.velocity, rtol=1e-6, atol=0)
