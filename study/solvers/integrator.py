@@ -574,11 +574,14 @@ def steady_mode_state(structure: Structure, f: ArrayLike, a: ArrayLike) -> NDArr
 def _to_phase_zero(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
                    y0: NDArray[np.float64], phase: float, coupling: str,
                    friction: str | Friction, settings: IntegratorSettings
-                   ) -> NDArray[np.float64]:
+                   ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
     """The states ``y0`` (rows, with flight) at drive phase ``phase`` [periods] carried
     by :func:`simulate` to the next phase 0 (the base's position dropped): where
-    :func:`integrated_steady_state`'s whole periods begin."""
-    carried = np.empty_like(y0)
+    :func:`integrated_steady_state`'s whole periods begin. Also each row's status where
+    that run did not complete (``FRICTION_PARADOX``, else ``NOT_CONVERGED``; -1 where it
+    did), its state then left at 0."""
+    carried = np.zeros_like(y0)
+    failed = np.full(f.size, -1, dtype=np.int8)
     for i in range(f.size):
         duration = (1.0 - phase) / f[i]
         run = simulate(structure, Schedule.constant(f[i], a[i], duration, 360.0 * phase),
@@ -586,11 +589,12 @@ def _to_phase_zero(structure: Structure, f: NDArray[np.float64], a: NDArray[np.f
                        output_times=[duration], settings=settings, max_events=0,
                        flight=True)
         if run.outcome != "completed" or run.gap is None or run.gap_rate is None:
-            carried[i] = np.nan
+            failed[i] = (codes.FRICTION_PARADOX if run.outcome == "friction_paradox"
+                         else codes.NOT_CONVERGED)
             continue
         carried[i] = (run.delta[-1], run.delta_rate[-1], 0.0, run.v[-1], run.gap[-1],
                       run.gap_rate[-1])
-    return carried
+    return carried, failed
 
 
 def integrated_steady_state(
@@ -668,14 +672,15 @@ def integrated_steady_state(
     start = check_start(DEFAULT_SETTINGS, as_start(start), check_coupling(coupling),
                         flight).start
     y0 = np.zeros((n, size))
+    failed = np.full(n, -1, dtype=np.int8)
     if start == "release":
         y0[:, :_kernel.STATE_SIZE] = steady_mode_state(structure, f_flat, a_flat).reshape(
             n, 4)
     elif isinstance(start, Drop):
         y0[:, _kernel.GAP] = start.height
         if start.phase != 0.0:
-            y0 = _to_phase_zero(structure, f_flat, a_flat, y0, start.phase, coupling,
-                                friction, settings)
+            y0, failed = _to_phase_zero(structure, f_flat, a_flat, y0, start.phase,
+                                        coupling, friction, settings)
     scale = np.ascontiguousarray(_scales(structure, omega, flight).reshape(n, size))
     if settings.steps_per_period:
         fixed = period / settings.steps_per_period
@@ -691,6 +696,16 @@ def integrated_steady_state(
         settings.max_periods, settings.max_orbit_period, settings.resolved_period_tolerance)
     kernel = _kernel.periodic_points if parallel else _kernel.periodic_points_serial
     kernel(p, points, search, results)
+    # A drop whose run to phase 0 did not complete has no motion to report.
+    lost = failed >= 0
+    if np.any(lost):
+        results[lost] = 0.0
+        results[lost, _kernel.R_STATUS] = failed[lost]
+        results[lost, _kernel.R_REASON] = np.where(failed[lost] == codes.NOT_CONVERGED,
+                                                   codes.REASON_EVENT_BUDGET, codes.REASON_NONE)
+        for name in ("VELOCITY", "SLIPS", "FORWARD", "BACKWARD", "AIRBORNE", "HOP",
+                     "IMPACTS"):
+            results[lost, getattr(_kernel, "R_" + name)] = np.nan
     column = {name: results[:, getattr(_kernel, "R_" + name.upper())]
               for name in ("status", "reason", "velocity", "slips", "forward", "backward",
                            "orbit_period", "airborne", "hop", "impacts")}

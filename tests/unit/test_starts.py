@@ -390,3 +390,13 @@ def test_drops_below_lift_off_land_on_the_one_orbit_on_the_table():
                                          start=Drop(0.0005, 0.5))
     assert_array_equal(integrated.status, release.status)
     assert_allclose(integrated.velocity, release.velocity, rtol=1e-6, atol=0)
+
+
+def test_an_integrated_drop_that_does_not_reach_phase_0_has_no_motion():
+    from study.solvers.integrator import IntegratorSettings
+
+    lost = integrated_steady_state(BISTABLE, F, A, coupling="two-way", flight=True,
+                                   start=Drop(0.002, 0.25),
+                                   settings=IntegratorSettings(max_steps=2))
+    assert Status(int(lost.status)) is Status.NOT_CONVERGED
+    assert np.isnan(lost.velocity)
