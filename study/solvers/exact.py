@@ -626,7 +626,7 @@ def _force_constants(structure: Structure) -> Any:
     )
 
 
-def _lifted(
+def past_lift_off(
     structure: Structure, f_flat: NDArray[np.float64], a_flat: NDArray[np.float64],
 ) -> NDArray[np.bool_]:
     """``a > lift_off_acceleration(structure, f)`` on flat arrays: decided by the kernel
@@ -655,7 +655,7 @@ def _orbit_table(
 ) -> NDArray[np.float64]:
     """Rows of the orbit kernel (:data:`study.kernels.two_way.points.OUTPUT_COLUMNS`)
     at each point; ``flight`` follows the base off the table (else LIFT_OFF)."""
-    lifted = _lifted(structure, f_flat, a_flat)
+    lifted = past_lift_off(structure, f_flat, a_flat)
     omega = 2.0 * np.pi * f_flat
     out = np.empty((f_flat.size, orbit_kernel.N_OUT))
     if parallel is None:
@@ -676,7 +676,7 @@ def _orbit_velocity(
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
     """Velocity and status of :func:`_orbit_table` on flat ``f``, ``a``, from the orbit
     kernel's velocity-only drivers."""
-    lifted = _lifted(structure, f_flat, a_flat)
+    lifted = past_lift_off(structure, f_flat, a_flat)
     velocity = np.empty(f_flat.size)
     status = np.empty(f_flat.size, dtype=np.int8)
     parallel = f_flat.size >= PARALLEL_THRESHOLD // 8
@@ -699,6 +699,14 @@ def _orbit_steady_state(
 ) -> SteadyState:
     """:func:`steady_state` by the orbit kernel (the mode as a state) on flat ``f``, ``a``."""
     out = _orbit_table(structure, f_flat, a_flat, coupling, settings, parallel, flight)
+    return steady_state_from_rows(out, shape, flight)
+
+
+def steady_state_from_rows(out: NDArray[np.float64], shape: tuple[int, ...],
+                           flight: bool) -> SteadyState:
+    """The :class:`SteadyState` of the orbit kernel's rows ``out``
+    (:data:`study.kernels.two_way.points.OUTPUT_COLUMNS`, one a point), each field
+    shaped ``shape``; the flight fields only with ``flight``."""
 
     def column(index: int, dtype: type | None = None) -> Any:
         values = out[:, index] if dtype is None else out[:, index].astype(dtype)

@@ -657,10 +657,11 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
 
     Returns
     -------
-    float, float
+    float, float, float
         The passes over the period map with its Jacobian (Newton's, and the averaged
         periods') and without it (the map's iterates, the cycle checks): the work the
-        point took.
+        point took; 1.0 where the orbit is the fixed point that Newton's method found
+        from the state two periods after the start (verified reached), else 0.0.
     """
     point = DrivePoint(structure, table, omega, a)
     scales = flight_scales(point)
@@ -672,6 +673,8 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     stats = np.full(N_STATS, np.nan)
     status, reason, periods, radius = find_flight_orbit(point, z, t_start, scales, budget,
                                                         record, work, history, stats)
+    # Only the fixed point found by Newton's method from the start comes with its radius.
+    from_start = 0.0 if math.isnan(radius) else 1.0
     passes = record.passes
     (c_status, c_reason, c_velocity, c_slips, c_forward, c_backward, c_period, c_multiplier,
      c_delta, c_rate, c_speed, c_airborne, c_hop, c_impacts, _,
@@ -680,11 +683,11 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     out[c_reason] = reason
     if status == CHAOTIC or status == QUASI_PERIODIC or reason == REASON_AVERAGE_BUDGET:
         irregular_row(stats, omega, status, out, columns)
-        return passes[0], passes[1]
+        return passes[0], passes[1], from_start
     if math.isnan(radius):
         radius = spectral_radius(record.jac)
     if periods == 0:
-        return passes[0], passes[1]
+        return passes[0], passes[1], from_start
     acc = record.acc
     span = periods * TWO_PI / omega
     if acc[A_AIRBORNE] > 0.0:
@@ -704,7 +707,7 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
         out[c_impacts] = 0.0
         orbit_exponent(out, c_multiplier, c_period, c_velocity_error, c_averaged,
                        c_exponent, c_exponent_error)
-        return passes[0], passes[1]
+        return passes[0], passes[1], from_start
     else:
         out[c_status] = STICK_SLIP if acc[A_STICK] > 0.0 else CONTINUOUS_SLIDING
     out[c_velocity] = acc[A_DISPLACEMENT] / span
@@ -723,4 +726,4 @@ def solve_flight(structure, table, omega, a, budget, z, t_start, out, columns):
     out[c_impacts] = acc[A_IMPACTS] / periods
     orbit_exponent(out, c_multiplier, c_period, c_velocity_error, c_averaged, c_exponent,
                    c_exponent_error)
-    return passes[0], passes[1]
+    return passes[0], passes[1], from_start

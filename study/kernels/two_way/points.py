@@ -44,7 +44,14 @@ from study.kernels.two_way.continuation import (
     remember,
 )
 from study.kernels.two_way.cycles import MAX_PERIOD, STABILITY_MARGIN, find_orbit
-from study.kernels.two_way.flight import FLIGHT_ROW, N_ROWS, N_STATE, Z_GAP, flight_row
+from study.kernels.two_way.flight import (
+    FLIGHT_ROW,
+    N_ROWS,
+    N_STATE,
+    Z_GAP,
+    Z_GAP_RATE,
+    flight_row,
+)
 from study.kernels.two_way.flight_orbit import irregular_row, orbit_exponent, solve_flight
 from study.kernels.two_way.modes import (
     EPS,
@@ -115,6 +122,9 @@ OUTPUT_COLUMNS = (
     ("continued", "1", "1: the contact orbit was continued from the sweep's last points; "
      "0: solved cold, nothing to continue from; < 0: solved cold, the continuation's "
      "FAILED_* code (study.kernels.two_way.continuation)"),
+    ("from_start", "1", "1: the orbit reported is the fixed point Newton's method found from "
+     "the point's start (its state after two periods with flight), verified reached; 0: "
+     "the motion from the start reached another motion, or none"),
 )
 _NAMES = tuple(name for name, _, _ in OUTPUT_COLUMNS)
 
@@ -143,8 +153,9 @@ OUT_EXPONENT_ERROR = _NAMES.index("exponent_error")
 OUT_NEWTON_PASSES = _NAMES.index("newton_passes")
 OUT_MAP_PASSES = _NAMES.index("map_passes")
 OUT_CONTINUED = _NAMES.index("continued")
+OUT_FROM_START = _NAMES.index("from_start")
 #: The columns that record the work a point took, not its orbit.
-WORK_COLUMNS = (OUT_NEWTON_PASSES, OUT_MAP_PASSES, OUT_CONTINUED)
+WORK_COLUMNS = (OUT_NEWTON_PASSES, OUT_MAP_PASSES, OUT_CONTINUED, OUT_FROM_START)
 #: Length of an output row.
 N_OUT = len(OUTPUT_COLUMNS)
 # The columns :func:`~study.kernels.two_way.flight_orbit.solve_flight` writes, in its
@@ -342,11 +353,33 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
         if not (lifted and flying):
             return
     table = workspace.table
-    point = DrivePoint(structure, table, omega, a)
     # Only the columns the rows' event searches read (see mode_drive).
     mode_drive(structure, omega, a, table, 0, searched_only=True)
     mode_drive(structure, omega, a, table, 1, searched_only=True)
     mode_drive(structure, omega, a, table, 2, searched_only=True)
+    initial = np.zeros(N_STATE)
+    start_state(table, omega, t_start, initial, factor)
+    solve_from(structure, omega, a, lifted, static, budget, t_start, initial, out,
+               neighbours, workspace, diagnostics)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def solve_from(structure, omega, a, lifted, static, budget, t_start, initial, out,
+               neighbours, workspace, diagnostics):
+    """:func:`solve_decided` from the state ``initial`` at ``t_start`` [s] (in the first
+    period): ``(delta, delta', v, h, h')`` [m, m s-1, m s-1, m, m s-1], on the table
+    (``h = h' = 0``) unless the lift-off law is ``flight``; ``workspace.table`` holds
+    the drive's columns (:func:`solve_decided` fills them). The contact search starts
+    from its first three components, the search with flight from all five."""
+    flying = structure[LIFT_OFF_LAW] != 0.0
+    table = workspace.table
+    point = DrivePoint(structure, table, omega, a)
+    if flying and (initial[Z_GAP] != 0.0 or initial[Z_GAP_RATE] != 0.0):
+        # Off the table (a carried state of a sweep, in flight at phase 0): only the
+        # search with flight follows it; its answer stands, whatever it is.
+        forget(neighbours)
+        _fly_from(structure, table, omega, a, budget, t_start, initial, out)
+        return
     flight_first = lifted and flying
     if flight_first:
         # Past the stick's lift-off threshold the motion from the start usually leaves
@@ -354,7 +387,7 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
         # a stick-slip point's time): the orbit with flight is sought first. Only
         # where it does not bounce is the contact solver's answer wanted (see
         # solve_point), so the row is kept aside for the case that it ends LIFT_OFF.
-        _solve_flying(structure, table, omega, a, budget, t_start, factor, 0.0, out)
+        _fly_from(structure, table, omega, a, budget, t_start, initial, out)
         if static or out[OUT_STATUS] == BOUNCING or (
                 out[OUT_STATUS] in (CHAOTIC, QUASI_PERIODIC) and out[OUT_AIRBORNE] > 0.0):
             forget(neighbours)
@@ -395,7 +428,9 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
         else:
             out[OUT_CONTINUED] = outcome
     if not solved:
-        start_state(table, omega, t_start, z, factor)
+        z[0] = initial[0]
+        z[1] = initial[1]
+        z[2] = initial[2]
         status, reason, periods, newton_found, radius = find_orbit(
             point, z, t_start, scales, budget, record, work, workspace.history,
             workspace.stats)
@@ -408,13 +443,14 @@ def solve_decided(structure, omega, a, lifted, static, budget, t_start, factor, 
             forget(neighbours)
     out[OUT_NEWTON_PASSES] = record.passes[0]
     out[OUT_MAP_PASSES] = record.passes[1]
+    out[OUT_FROM_START] = 1.0 if newton_found and status == STICK_SLIP else 0.0
     if flying and status == LIFT_OFF:
         if flight_first:
             continued = out[OUT_CONTINUED]
             out[:] = workspace.row
             out[OUT_CONTINUED] = continued
         else:
-            _solve_flying(structure, table, omega, a, budget, t_start, factor, 0.0, out)
+            _fly_from(structure, table, omega, a, budget, t_start, initial, out)
         out[OUT_NEWTON_PASSES] += record.passes[0]
         out[OUT_MAP_PASSES] += record.passes[1]
         return
@@ -455,14 +491,24 @@ def _solve_flying(structure, table, omega, a, budget, t_start, factor, height, o
     ``t_start`` [s], the mode at rest on ``factor`` times its steady response;
     ``table`` has its contact rows filled. The flight search's passes are written to
     ``out`` (the caller adds its own)."""
-    flight_row(structure, table)
     z = np.zeros(N_STATE)
     start_state(table, omega, t_start, z, factor)
     z[Z_GAP] = height
-    with_jac, without = solve_flight(structure, table, omega, a, budget, z, t_start, out,
-                                     FLIGHT_COLUMNS)
+    _fly_from(structure, table, omega, a, budget, t_start, z, out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _fly_from(structure, table, omega, a, budget, t_start, initial, out):
+    """The orbit with flight from the 5-state ``initial`` at ``t_start`` [s] (copied:
+    ``initial`` is kept); ``table`` has its contact rows filled. The flight search's
+    passes are written to ``out`` (the caller adds its own)."""
+    flight_row(structure, table)
+    z = initial.copy()
+    with_jac, without, from_start = solve_flight(structure, table, omega, a, budget, z,
+                                                 t_start, out, FLIGHT_COLUMNS)
     out[OUT_NEWTON_PASSES] = with_jac
     out[OUT_MAP_PASSES] = without
+    out[OUT_FROM_START] = from_start
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -514,8 +560,15 @@ def solve_started(structure, omega, a, lifted, budget, start, out, neighbours, w
     solve_decided(structure, omega, a, lifted, False, budget, t_start, start.factor, out,
                   neighbours, workspace, diagnostics)
     forget(neighbours)
+    stuck_is_static(structure, omega, out, diagnostics)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def stuck_is_static(structure, omega, out, diagnostics):
+    """A row whose orbit never slips (a motion followed from a state, not decided in
+    closed form, that settled on the stick) made the static point's row: the steady
+    stick response, its work kept."""
     if out[OUT_STATUS] == STICK_SLIP and out[OUT_SLIPS] == 0.0:
-        # The motion settled on the stick: the steady stick response, a static point.
         newton_passes = out[OUT_NEWTON_PASSES]
         map_passes = out[OUT_MAP_PASSES]
         start_row(out)
