@@ -46,7 +46,9 @@ The modules, each importing only those above it:
   that state (a section in the middle of the longest stretch without events);
 - :mod:`~study.kernels.two_way.points`: one drive point's orbit, and its drivers (with
   flight, a point past the stick's lift-off threshold is solved with flight first, any
-  other with the contact model first, and with flight where that ends LIFT_OFF);
+  other with the contact model first, and with flight where that ends LIFT_OFF), each
+  point from the start the drivers are given (:mod:`study.kernels.start`: the release,
+  the switch-on or a drop);
 - :mod:`~study.kernels.two_way.attractors`: the multistability check, and its drivers
   (with flight, drops among the starts).
 
