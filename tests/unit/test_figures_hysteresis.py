@@ -1,0 +1,71 @@
+"""The hysteresis figure: slow sweeps up and down, from the solver's own sweeps."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import study
+from study.figures import FigureError
+from study.figures.hysteresis import compose, differing, draw
+from study.solvers.protocol import slow_sweep
+
+STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
+
+
+def _dataset(f, a, along="f"):
+    """A result-like dataset of sweeps up and down (``direction``, ``f``, ``a``)."""
+    sweeps = [slow_sweep(STRUCTURE, f, a, along=along, direction=d, flight=True)
+              for d in ("up", "down")]
+    dims = ("direction", "f", "a")
+    return xr.Dataset(
+        {"velocity": (dims, np.stack([s.state.velocity for s in sweeps])),
+         "status": (dims, np.stack([s.state.status for s in sweeps])),
+         "jumped": (dims, np.stack([s.jumped for s in sweeps]).astype(np.int8))},
+        coords={"direction": ["up", "down"], "f": f, "a": a,
+                **{k: getattr(STRUCTURE, k) for k in ("f0", "Q", "alpha", "M", "cs")}},
+        attrs={"study_name": "hysteresis-test", "study_protocol_along": along,
+               "study_coupling": "two-way", "study_flight": 1})
+
+
+@pytest.fixture(scope="module")
+def line():
+    return _dataset(np.array([14.8, 15.2, 15.6, 16.0, 16.4]), np.array([10.0]))
+
+
+def test_the_sweeps_differ_where_the_forward_hop_persists(line):
+    apart = differing(line.squeeze("a")).values
+    # Swept up the forward hop persists to 16.0 Hz; swept down the backward hop; both
+    # on the backward hop at 16.4 Hz after the up sweep's jump.
+    np.testing.assert_array_equal(apart, [True, True, True, True, False])
+    up = line["velocity"].sel(direction="up").values.ravel()
+    down = line["velocity"].sel(direction="down").values.ravel()
+    assert np.all(up[:4] > 0.0) and np.all(down < 0.0)
+
+
+def test_the_line_figure_counts_what_it_shows(line, tmp_path):
+    fig, title = compose(line)
+    text = fig.axes[0].get_title()
+    assert text.startswith("4 of 5 drive values end on different motions")
+    assert "1 jumps" in text
+    assert "Hysteresis along f" in title
+    paths = draw(line, tmp_path / "hysteresis")
+    assert all(p.exists() and p.stat().st_size > 0 for p in paths)
+
+
+def test_a_map_shows_where_the_sweeps_differ(tmp_path):
+    dataset = _dataset(np.array([14.8, 16.0, 16.4]), np.array([9.0, 10.0]))
+    fig, _ = compose(dataset)
+    count = int(differing(dataset).sum())
+    assert f"at {count} of 6 points" in fig.axes[0].get_title()
+    assert 0 < count < 6
+
+
+def test_a_file_without_both_directions_is_refused(line):
+    with pytest.raises(FigureError, match="direction"):
+        compose(line.sel(direction=["up"]))
