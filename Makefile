@@ -22,6 +22,8 @@
 #                   the cost of a call on a few points -> results/bench-small-calls.md,
 #                   a flight map with frontier run again onto another output and forced,
 #                   against the first run -> results/bench-frontier-reuse.md,
+#                   slow sweeps and verified starts against the one-way map
+#                   -> results/bench-protocol.md,
 #                   reading a million-row measurement file (printed)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
@@ -222,6 +224,7 @@ bench: $(STAMP)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_orbit_sweeps.py
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_small_calls.py
 	$(PY) benchmarks/bench_frontier_reuse.py
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_protocol.py
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
 
