@@ -43,8 +43,8 @@ def _flight_alone(f: float, a: float) -> tuple[np.ndarray, float]:
     z = np.zeros(flight.N_STATE)
     points.start_state(table, omega, 0.0, z, 1.0)
     out = np.full(points.N_OUT, np.nan)
-    with_jac, without = flight_orbit.solve_flight(vector, table, omega, a, BUDGET, z, 0.0,
-                                                  out, points.FLIGHT_COLUMNS)
+    with_jac, without, _ = flight_orbit.solve_flight(vector, table, omega, a, BUDGET, z, 0.0,
+                                                     out, points.FLIGHT_COLUMNS)
     return out, with_jac + without
 
 

@@ -277,6 +277,7 @@ def start_row(out):
     out[OUT_NEWTON_PASSES] = 0.0
     out[OUT_MAP_PASSES] = 0.0
     out[OUT_CONTINUED] = 0.0
+    out[OUT_FROM_START] = 0.0
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
