@@ -125,7 +125,7 @@ def observables_by_grid(spec: StudySpec) -> tuple[tuple[Observable, ...],
                                                  tuple[Observable, ...], Observable | None]:
     """The study's observables (with those they require): closed-form rows, solver
     points, and the frontier if asked for."""
-    observables = resolve(spec.observables, spec.flight)
+    observables = resolve(spec.observables, spec.flight, spec.protocol is not None)
     return (tuple(o for o in observables if o.grid == "row"),
             tuple(o for o in observables if o.grid == "point"),
             next((o for o in observables if o.grid == "frontier"), None))
@@ -156,7 +156,7 @@ def pad_branches(values: NDArray[Any], branches: int, dtype: str) -> NDArray[Any
 def method_of(spec: StudySpec) -> Method:
     """How the study computes velocities (solver, coupling and settings)."""
     return Method(spec.method, spec.coupling, spec.solver, spec.integrator, spec.friction,
-                  spec.flight)
+                  spec.flight, spec.protocol)
 
 
 def study_summary(spec: StudySpec) -> str:
@@ -242,9 +242,16 @@ def protocol_attributes(spec: StudySpec) -> dict[str, str | float]:
     ``study_start_kind`` (``release``, ``switch-on`` or ``drop``) and for a drop the
     floats ``study_start_height`` [m] and ``study_start_phase`` [periods]. A file
     written before starts were named has none of them: its points started by the
-    release (validation reads it so).
+    release (validation reads it so). With a slow sweep (``[sweep] protocol``) also
+    ``study_protocol`` (``"slow sweep"``), ``study_protocol_along`` (``f`` or ``a``)
+    and ``study_protocol_direction`` (``up`` or ``down``); without one none of them.
     """
-    return {f"study_{key}": value for key, value in start_attributes(spec.solver.start).items()}
+    found: dict[str, str | float] = {
+        f"study_{key}": value for key, value in start_attributes(spec.solver.start).items()}
+    if spec.protocol is not None:
+        found.update({"study_protocol": "slow sweep", "study_protocol_along": spec.protocol[0],
+                      "study_protocol_direction": spec.protocol[1]})
+    return found
 
 
 def contact_law_attributes(coupling: str, friction: Friction | str | None = None,

@@ -35,6 +35,7 @@ from study.solvers.exact import (
 )
 from study.solvers.frontier import frontier_from_grid
 from study.solvers.integrator import IntegratorSettings, integrated_steady_state
+from study.solvers.protocol import SweptState, slow_sweep
 
 __all__ = [
     "METHODS",
@@ -71,6 +72,11 @@ class Method:
     flight : bool
         Past lift-off the base flies and lands by impacts (the lift-off law
         ``flight``); default False: the solver stops with ``LIFT_OFF`` there.
+    protocol : tuple of str or None
+        ``(along, direction)`` of a slow sweep (``[sweep] protocol``,
+        :func:`study.solvers.protocol.slow_sweep`): a block ``f x a`` is solved as the
+        runs of that sweep, each holding every value of ``along``; None (default):
+        every point from its start.
     """
 
     name: str = "exact"
@@ -79,6 +85,7 @@ class Method:
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
     friction: Friction = field(default_factory=Friction)
     flight: bool = False
+    protocol: tuple[str, str] | None = None
 
     def __post_init__(self) -> None:
         check_friction(self.friction, self.name)
@@ -105,6 +112,8 @@ class Method:
             settings["friction"] = self.friction.canonical()
         if self.flight:  # only when on: the keys of values kept without it stay theirs
             settings["flight"] = True
+        if self.protocol is not None:  # likewise: values kept without it keep their keys
+            settings["protocol"] = {"along": self.protocol[0], "direction": self.protocol[1]}
         return {"method": self.name, "coupling": self.coupling, **settings}
 
     @property
@@ -114,13 +123,26 @@ class Method:
 
     def solve(self, structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
               parallel: bool = False) -> SteadyState:
-        """Steady state at ``(f, a)`` (broadcast) [Hz, m s-2] by this method."""
+        """Steady state at ``(f, a)`` (broadcast) [Hz, m s-2] by this method (with a
+        protocol, ``f`` and ``a`` span the block ``f x a`` of whole runs: :meth:`sweep`)."""
+        if self.protocol is not None:
+            return self.sweep(structure, np.ravel(f), np.ravel(a), parallel).state
         if self.name == "integrator":
             return integrated_steady_state(structure, f, a, coupling=self.coupling,
                                            friction=self.friction, settings=self.integrator,
                                            parallel=parallel, **self.flight_keyword)
         return steady_state(structure, f, a, self.solver, coupling=self.coupling,
                             parallel=parallel, **self.flight_keyword)
+
+    def sweep(self, structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+              parallel: bool = False) -> SweptState:
+        """The slow sweep of :attr:`protocol` over the grid ``f x a`` (1-D axes, each
+        run whole: every value of the swept axis)."""
+        if self.protocol is None:
+            raise ValueError("Method.sweep needs a protocol")
+        along, direction = self.protocol
+        return slow_sweep(structure, f, a, along=along, direction=direction,
+                          flight=self.flight, settings=self.solver, parallel=parallel)
 
 
 class _solved_once:
@@ -168,7 +190,14 @@ class PointWork:
     @_solved_once
     def solution(self) -> SteadyState:
         """Steady state by the study's method (computed once per task)."""
+        if self.method.protocol is not None:
+            return self.swept.state
         return self.method.solve(self.structure, self.f, self.a)
+
+    @_solved_once
+    def swept(self) -> SweptState:
+        """The slow sweep of the study's protocol over the block (whole runs)."""
+        return self.method.sweep(self.structure, np.ravel(self.f), np.ravel(self.a))
 
     @_solved_once
     def one_way(self) -> SteadyState:
@@ -202,6 +231,11 @@ class Observable:
     flight_variables : tuple of str
         Variables it also writes when the study flies (``[solver] flight = true``):
         names in :data:`study.engine.variables.VARIABLES`.
+    protocol_variables : tuple of str
+        Variables it also writes in a slow sweep (``[sweep] protocol``): ``jumped``
+        beside the velocity, since every swept point has jumped or not (not an
+        observable of its own: it means nothing without a protocol, and a spec asking
+        for it would be refused beside ``frontier``).
     cached : bool
         Whether computed values are kept for reuse by later runs.
     function : callable
@@ -231,6 +265,7 @@ class Observable:
     function: Callable[..., dict[str, NDArray[Any]]] = field(repr=False)
     requires: tuple[str, ...] = ()
     flight_variables: tuple[str, ...] = ()
+    protocol_variables: tuple[str, ...] = ()
     cached: bool = False
     methods: tuple[str, ...] | None = None
     couplings: tuple[str, ...] | None = None
@@ -288,6 +323,13 @@ class Observable:
             found.append(("flight", 'flight = true (with coupling = "two-way")' if self.flight
                           else "flight = false"))
         return found
+
+    def sweeping(self) -> Observable:
+        """The observable of a study with a slow sweep: its protocol variables too."""
+        if not self.protocol_variables:
+            return self
+        return replace(self, variables=(*self.variables, *self.protocol_variables),
+                       protocol_variables=())
 
     def flying(self) -> Observable:
         """The observable of a study with flight: its flight variables written too."""
@@ -349,6 +391,8 @@ def _lift_off(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray
 def _velocity(work: PointWork) -> dict[str, NDArray[Any]]:
     s = work.solution
     values = {"velocity": s.velocity, "status": s.status}
+    if work.method.protocol is not None:
+        values["jumped"] = work.swept.jumped.astype(np.int8)
     if work.method.flight:
         values.update({"airborne_fraction": s.airborne_fraction, "largest_hop": s.largest_hop,
                        "impacts_per_period": s.impacts_per_period})
@@ -422,7 +466,8 @@ _DECLARED = (
     Observable("velocity", "steady mean velocity and the solver's status (with flight also "
                "the airborne fraction, largest hop and impacts per period)", "point",
                ("velocity", "status"), _velocity, cached=True,
-               flight_variables=("airborne_fraction", "largest_hop", "impacts_per_period")),
+               flight_variables=("airborne_fraction", "largest_hop", "impacts_per_period"),
+               protocol_variables=("jumped",)),
     Observable("diagnostics", "slips per period, slip fractions, orbit period, why not "
                "converged", "point",
                ("slips_per_period", "forward_slip_fraction", "backward_slip_fraction",
@@ -477,22 +522,24 @@ _DECLARED = (
 OBSERVABLES: dict[str, Observable] = {o.name: o for o in _DECLARED}
 
 
-def resolve(requested: tuple[str, ...] | list[str], flight: bool = False
-            ) -> tuple[Observable, ...]:
+def resolve(requested: tuple[str, ...] | list[str], flight: bool = False,
+            protocol: bool = False) -> tuple[Observable, ...]:
     """The requested observables and those they require, in :data:`OBSERVABLES` order
-    (with ``flight``, each writing its flight variables too)."""
+    (with ``flight``, each writing its flight variables too; with ``protocol``, a slow
+    sweep, its protocol variables)."""
     wanted = set(requested)
     for name in list(wanted):
         wanted.update(OBSERVABLES[name].requires)
-    return tuple(o.flying() if flight else o
-                 for name, o in OBSERVABLES.items() if name in wanted)
+    found = tuple(o.flying() if flight else o
+                  for name, o in OBSERVABLES.items() if name in wanted)
+    return tuple(o.sweeping() for o in found) if protocol else found
 
 
-def variables_of(requested: tuple[str, ...] | list[str], flight: bool = False
-                 ) -> tuple[Variable, ...]:
-    """Every variable a study with these observables (and ``flight``) writes, in file
-    order."""
-    names = {v for o in resolve(requested, flight) for v in o.variables}
+def variables_of(requested: tuple[str, ...] | list[str], flight: bool = False,
+                 protocol: bool = False) -> tuple[Variable, ...]:
+    """Every variable a study with these observables (and ``flight``, a ``protocol``)
+    writes, in file order."""
+    names = {v for o in resolve(requested, flight, protocol) for v in o.variables}
     return tuple(v for name, v in VARIABLES.items() if name in names)
 
 
@@ -511,6 +558,9 @@ def markdown_table() -> str:
         if o.flight_variables:
             variables += "; with flight also " + ", ".join(f"`{v}`"
                                                            for v in o.flight_variables)
+        if o.protocol_variables:
+            variables += "; with `[sweep] protocol` also " + ", ".join(
+                f"`{v}`" for v in o.protocol_variables)
         if o.requires:
             variables += " (with " + ", ".join(f"`{r}`" for r in o.requires) + ")"
         lines.append(f"| `{name}` | {_cell(o.summary)} | {grids[o.grid]} | {_cell(needs)} "

@@ -185,7 +185,7 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
         elif not check.equals(name, np.array([value], dtype=np.float64)):
             problems.append(f"{name} differs from the embedded spec's {value!r}")
     structure_dims = tuple(axis.name for axis in spec.axes if axis.name not in ("f", "a"))
-    wanted = variables_of(spec.observables, spec.flight)
+    wanted = variables_of(spec.observables, spec.flight, spec.protocol is not None)
     wanted_names = {v.name for v in wanted}
     for name in variables:
         if name in VARIABLES and name not in wanted_names:

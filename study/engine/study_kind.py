@@ -110,8 +110,21 @@ def stream_study(spec: StudySpec, job: RunJob) -> RunReport:
 def _plan(spec: StudySpec) -> list[Chunk]:
     a_axis = spec.axis("a")
     n_a = len(a_axis) if (a_axis is not None and spec.needs_solver) else 1
-    return plan_chunks(tuple(len(axis) for axis in spec.structure_axes), len(spec.axis("f")),
-                       n_a, spec.chunk_points)
+    n_f = len(spec.axis("f"))
+    # A slow sweep's task holds whole runs: along a every chunk does (each holds every
+    # a); along f one chunk holds every f of its structure.
+    along_f = spec.protocol is not None and spec.protocol[0] == "f"
+    return plan_chunks(tuple(len(axis) for axis in spec.structure_axes), n_f, n_a,
+                       n_f * n_a if along_f else spec.chunk_points)
+
+
+def whole_runs(missing: np.ndarray, along: str) -> np.ndarray:
+    """A slow sweep's missing points widened to their whole runs: a point's value
+    depends on the points before it on its run, so a run is computed whole or not at
+    all (along a: every a of a row of f; along f: every f of a column of a)."""
+    if along == "a":
+        return np.broadcast_to(missing.any(axis=1, keepdims=True), missing.shape).copy()
+    return np.broadcast_to(missing.any(axis=0, keepdims=True), missing.shape).copy()
 
 
 def _structure_content(structure: Structure) -> dict[str, float]:
@@ -233,6 +246,13 @@ class _Run:
                 "method": self.method.canonical(),
                 "code_sha256": self.code,
             }
+            if self.method.protocol is not None:
+                # A point of a slow sweep depends on every value its run visits before
+                # it: a changed swept axis changes every run, and no value is lent to
+                # another run (only when a protocol is given: other keys are kept).
+                along = self.method.protocol[0]
+                content["swept"] = {along: (self.f if along == "f" else self.a).tolist()}
+            self._keys[item] = (entry_key(content), content)
             self._keys[item] = (entry_key(content), content)
         return self._keys[item]
 
@@ -275,6 +295,8 @@ class _Run:
                 values, present = self.cache.lookup(key, f, self.a, dtypes, trailing)
                 found[observable.name] = (values, present)
                 missing |= ~present
+            if self.method.protocol is not None:
+                missing = whole_runs(missing, self.method.protocol[0])
             rectangles = missing_rectangles(missing) if self.points else ()
             needed = tuple(o.name for o in self.points if not found[o.name][1].all())
             task = Task(chunk, structure, f, self.a, tuple(o.name for o in self.rows), needed,

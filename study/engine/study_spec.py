@@ -84,6 +84,7 @@ from study.solvers.exact import (
 )
 from study.solvers.frontier import finest_tolerance
 from study.solvers.integrator import MAX_INTEGRATOR_BUDGET, IntegratorSettings
+from study.solvers.protocol import SWEEP_AXES, SWEEP_DIRECTIONS
 
 __all__ = [
     "METHODS",
@@ -116,6 +117,10 @@ EXACT_KEYS = ("max_events", "max_map_iterations", "continuation", "velocity_tole
 INTEGRATOR_KEYS = (
     "tolerance", "steps_per_period", "max_periods", "max_orbit_period", "period_tolerance",
 )
+
+#: ``[sweep] protocol`` keys and the directions it takes ("both": up, then down).
+PROTOCOL_KEYS = ("along", "direction")
+PROTOCOL_DIRECTIONS = (*SWEEP_DIRECTIONS, "both")
 
 #: Structure parameters: units and long names (SI inside), from the parameter table
 #: (:mod:`study.model.parameters`), as are the drive's and the swept mass's.
@@ -189,6 +194,9 @@ class StudySpec:
         Accuracy and budgets of the time integrator (used with ``method = "integrator"``).
     friction : Friction
         The friction law (``[solver] friction``).
+    protocol : tuple of str or None
+        ``[sweep] protocol``: ``(along, direction)`` of a slow sweep
+        (:func:`study.solvers.protocol.slow_sweep`); None: every point from its start.
     flight : bool
         ``[solver] flight = true``: past lift-off the base flies and lands by impacts
         (the lift-off law ``flight`` of :mod:`study.model.contact`); default false, the
@@ -225,6 +233,7 @@ class StudySpec:
     integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
     friction: Friction = field(default_factory=Friction)
     flight: bool = False
+    protocol: tuple[str, str] | None = None
     warnings: tuple[str, ...] = field(default=(), repr=False, compare=False)
 
     @property
@@ -292,7 +301,24 @@ def spec_schema() -> dict[str, Any]:
     structure["properties"] = {
         **{name: {"$ref": f"#/$defs/parameter/{name}"} for name in STRUCTURE}, "mass": mass}
     schema["properties"]["sweep"]["properties"] = {
-        name: {"$ref": "#/$defs/axis"} for name in (*DRIVE, *STRUCTURE, "m_add")}
+        **{name: {"$ref": "#/$defs/axis"} for name in (*DRIVE, *STRUCTURE, "m_add")},
+        "protocol": {
+            "type": "object",
+            "additionalProperties": False,
+            "required": ["along"],
+            "properties": {
+                "along": {"enum": list(SWEEP_AXES), "description": "the drive axis stepped"},
+                "direction": {"enum": list(PROTOCOL_DIRECTIONS), "default": "up",
+                              "description": "up: increasing values; down: decreasing"},
+            },
+            "description": (
+                "exact solver, two-way coupling: a slow sweep (docs/theory/starts.md): "
+                "along the axis the drive steps to the next value at phase 0 with the "
+                "state carried, one run for each value of the other drive axis, the "
+                "first point of a run started by [solver] start; absent: every point "
+                "from its start"),
+        },
+    }
     listed = schema["properties"]["study"]["properties"]["observables"]
     listed["description"] = ("a non-empty list of distinct names from: "
                              + ", ".join(OBSERVABLES))
@@ -620,6 +646,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     method, coupling, friction = settings[0], settings[1], settings[2]
     flight = problems.collect(_flight, solver_table, method, coupling, path)
     _check_start(settings[3], coupling, flight, observables, path, problems)
+    protocol = problems.collect(_protocol, sweep, observables, settings[0], coupling,
+                                settings[3], path)
     # The law asked for, even where refused above: its parameters are not unread.
     _check_unread(structure, sweep, friction, coupling,
                   bool(solver_table.get("flight", False)), path, problems)
@@ -629,6 +657,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     _, _, friction, solver, integrator, frontier_tolerance = settings
     canonical = _canonical(study, observables, fixed, mass, sweep, axes, method, coupling,
                            friction, solver, integrator, frontier_tolerance, flight)
+    if protocol is not None:  # only when given: every fingerprint without it is kept
+        canonical["protocol"] = {"along": protocol[0], "direction": protocol[1]}
     spec = StudySpec(
         name=study["name"],
         title=study.get("title", study["name"]),
@@ -648,6 +678,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         integrator=integrator,
         friction=friction,
         flight=flight,
+        protocol=protocol,
         warnings=_suspect_tilts(fixed, axes, path),
     )
     _check_structures(spec, path)
@@ -793,7 +824,7 @@ def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
             f"{', '.join(o for o in observables if o in SOLVER_OBSERVABLES)}"
         )
 
-    order = [name for name in sweep if name not in DRIVE_PARAMETERS]
+    order = [name for name in sweep if name not in DRIVE_PARAMETERS and name != "protocol"]
     order += [name for name in ("f", "a") if name in sweep]
     # The size guard needs only the axis lengths: refuse an absurd study before a
     # single value is generated.
@@ -875,6 +906,62 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...],
                 f"than doubles resolve near the largest f; allowed: >= {finest:.3g} Hz"
             )
     return method, coupling, friction, solver, integrator, frontier_tolerance
+
+
+def _protocol(sweep: dict[str, Any], observables: tuple[str, ...], method: str,
+              coupling: str, solver: SolverSettings | None, path: str
+              ) -> tuple[str, str] | None:
+    """``[sweep] protocol`` checked: ``(along, direction)``, or None without it. A slow
+    sweep steps a drive axis of at least 2 values and carries the exact two-way
+    solver's state (no integrator, no one-way coupling, no continuation: the sweep
+    carries the motion itself)."""
+    where = f"{path}: [sweep] protocol"
+    table = sweep.get("protocol")
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise SpecError(f'{where} = {table!r}: a table {{ along = "f" or "a", direction = '
+                        '"up", "down" or "both" }')
+    unknown = sorted(set(table) - set(PROTOCOL_KEYS))
+    if unknown:
+        raise SpecError(f"{where}: unknown key {', '.join(unknown)}; allowed: "
+                        f"{', '.join(PROTOCOL_KEYS)}")
+    along = table.get("along")
+    if along not in SWEEP_AXES:
+        raise SpecError(f"{where} along = {along!r}: not a drive axis; allowed: "
+                        f"{', '.join(repr(x) for x in SWEEP_AXES)}")
+    if along not in sweep:
+        raise SpecError(f'{where} along = "{along}": {along} is not swept; allowed: a drive '
+                        f"axis of [sweep] with at least 2 values")
+    if axis_length(sweep[along]) < 2:
+        raise SpecError(f'{where} along = "{along}": [sweep] {along} has '
+                        f"{axis_length(sweep[along])} value, nothing to sweep; allowed: a "
+                        "drive axis with at least 2 values")
+    direction = table.get("direction", "up")
+    if direction not in PROTOCOL_DIRECTIONS:
+        raise SpecError(f"{where} direction = {direction!r}; allowed: "
+                        f"{', '.join(repr(x) for x in PROTOCOL_DIRECTIONS)}")
+    if direction == "both":
+        raise SpecError(f'{where} direction = "both": not built yet (the direction '
+                        'dimension of the result); allowed: "up" or "down" (run the study '
+                        "once with each)")
+    if "frontier" in observables:
+        raise SpecError(f'{where} with the observable "frontier": its bisection solves '
+                        "single points between the grid's, which no run of the sweep "
+                        'visits (allowed: remove "frontier", or no protocol)')
+    needs = ' needs method = "exact" with coupling = "two-way" (a slow sweep carries the '
+    if method != "exact":
+        raise SpecError(f'{where}{needs}exact solver\'s state from point to point); got '
+                        f'method = "{method}" (allowed: method = "exact", or no protocol)')
+    if coupling != "two-way":
+        raise SpecError(f'{where}{needs}state of the mode, which the one-way model has '
+                        f'not); got coupling = "{coupling}" (allowed: coupling = '
+                        '"two-way", or no protocol)')
+    if solver is not None and solver.continuation:
+        raise SpecError(f"{where} with [solver] continuation = true: a slow sweep carries "
+                        "the motion from point to point itself (allowed: continuation = "
+                        "false, or no protocol)")
+    return str(along), str(direction)
 
 
 def _check_start(solver: SolverSettings | None, coupling: str, flight: bool | None,

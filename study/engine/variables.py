@@ -302,6 +302,11 @@ _DECLARED = (
     Variable("status_without_flight", "point", "int8", DIMENSIONLESS,
              "outcome of the same method without flight (lift_off where the base would "
              "leave the table)", flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("jumped", "point", "int8", DIMENSIONLESS,
+             "whether the slowly swept motion jumped at this point: the branch followed "
+             "from the previous point of its run ended ([sweep] protocol)",
+             flags=("followed", "jumped"), flag_values=(0, 1),
+             comment="the first point of a run, started by [solver] start, is followed"),
     Variable("frontier_frequency", "frontier", "float64", HERTZ,
              "drive frequency f*(a) where the mean velocity changes sign",
              comment="NaN-padded where an acceleration has fewer branches"),

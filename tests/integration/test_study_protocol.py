@@ -1,0 +1,164 @@
+"""Slow sweeps in studies ([sweep] protocol): the file holds slow_sweep's values bit for
+bit, resume and extend recompute whole runs only, and every refusal names its key."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from study.engine.runner import StudyInterrupted, run_study
+from study.engine.spec_files import SpecError
+from study.engine.store import open_result
+from study.engine.study_spec import load_spec
+from study.model.structure import Structure
+from study.solvers.exact import SolverSettings
+from study.solvers.protocol import slow_sweep
+
+SPEC = """\
+[study]
+name = "hysteresis-small"
+observables = ["velocity"]
+
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+M = 0.99
+cs = 0.25
+
+[sweep]
+f = {{ values = {f} }}
+a = {{ values = {a} }}
+protocol = {protocol}
+
+[solver]
+coupling = "two-way"
+flight = true
+chunk_points = {chunk_points}
+"""
+
+STRUCTURE = Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
+F = [14.8, 15.2, 15.6, 16.0, 16.4]
+
+
+def write(folder: Path, protocol: str, f=F, a=(10.0,), chunk_points=5, name="h") -> Path:
+    path = folder / f"{name}.toml"
+    path.write_text(SPEC.format(f=list(f), a=list(a), protocol=protocol,
+                                chunk_points=chunk_points))
+    return path
+
+
+def expected(f, a, along, direction):
+    return slow_sweep(STRUCTURE, np.asarray(f), np.asarray(a), along=along,
+                      direction=direction, flight=True, settings=SolverSettings())
+
+
+@pytest.mark.parametrize("direction", ["up", "down"])
+def test_a_sweep_along_f_is_slow_sweeps_bit_for_bit(tmp_path, direction):
+    spec = write(tmp_path, f'{{ along = "f", direction = "{direction}" }}')
+    report = run_study(spec, tmp_path / "h.nc", progress=False)
+    ds = open_result(tmp_path / "h.nc")
+    swept = expected(F, [10.0], "f", direction)
+    np.testing.assert_array_equal(ds["velocity"].values, swept.state.velocity)
+    np.testing.assert_array_equal(ds["status"].values, swept.state.status)
+    np.testing.assert_array_equal(ds["jumped"].values, swept.jumped.astype(np.int8))
+    assert ds["jumped"].dtype == np.int8 and list(ds["jumped"].attrs["flag_values"]) == [0, 1]
+    assert ds.attrs["study_protocol_along"] == "f"
+    assert ds.attrs["study_protocol_direction"] == direction
+    # One chunk holds every f (whole runs), whatever chunk_points says.
+    assert report.chunks == 1
+
+
+def test_up_and_down_differ_at_m_099(tmp_path):
+    up = expected(F, [10.0], "f", "up").state.velocity
+    down = expected(F, [10.0], "f", "down").state.velocity
+    assert np.sum(up != down) >= 1  # hysteresis: the fixture is worth its name
+
+
+def test_along_a_resume_recomputes_whole_runs_and_extend_adds_runs(tmp_path):
+    f, a = [15.2, 15.6, 16.0, 16.4], [9.0, 10.0]
+    spec = write(tmp_path, '{ along = "a", direction = "up" }', f=f, a=a, chunk_points=2)
+    output = tmp_path / "h.nc"
+    with pytest.raises(StudyInterrupted):
+        run_study(spec, output, progress=False, stop_after=2)
+    report = run_study(spec, output, progress=False)
+    assert report.chunks == 4 and report.reused == 2 and report.computed == 2
+    assert (report.points_computed, report.points_reused) == (4, 4)
+    swept = expected(f, a, "a", "up")
+    np.testing.assert_array_equal(open_result(output)["velocity"].values,
+                                  swept.state.velocity)
+    # A new f adds a run (a row along a); the other runs are reused.
+    f_more = [*f, 16.8]
+    spec = write(tmp_path, '{ along = "a", direction = "up" }', f=f_more, a=a,
+                 chunk_points=2)
+    report = run_study(spec, output, progress=False)
+    assert (report.points_computed, report.points_reused) == (2, 8)
+    np.testing.assert_array_equal(open_result(output)["velocity"].values,
+                                  expected(f_more, a, "a", "up").state.velocity)
+    # A new a changes every run: nothing is reused.
+    spec = write(tmp_path, '{ along = "a", direction = "up" }', f=f_more, a=[*a, 11.0],
+                 chunk_points=2)
+    report = run_study(spec, output, progress=False)
+    assert (report.points_computed, report.points_reused) == (15, 0)
+
+
+def test_along_f_a_new_a_adds_runs_and_a_new_f_changes_every_run(tmp_path):
+    output = tmp_path / "h.nc"
+    f = F[:3]
+    run_study(write(tmp_path, '{ along = "f" }', f=f, a=[10.0]), output, progress=False)
+    report = run_study(write(tmp_path, '{ along = "f" }', f=f, a=[9.0, 10.0]), output,
+                       progress=False)
+    assert (report.points_computed, report.points_reused) == (3, 3)
+    np.testing.assert_array_equal(open_result(output)["velocity"].values,
+                                  expected(f, [9.0, 10.0], "f", "up").state.velocity)
+    report = run_study(write(tmp_path, '{ along = "f" }', f=F[:4], a=[9.0, 10.0]), output,
+                       progress=False)
+    assert (report.points_computed, report.points_reused) == (8, 0)
+
+
+def test_a_protocol_changes_the_fingerprint_and_only_then(tmp_path):
+    up = load_spec(write(tmp_path, '{ along = "f", direction = "up" }', name="u"))
+    down = load_spec(write(tmp_path, '{ along = "f", direction = "down" }', name="d"))
+    path = write(tmp_path, '{ along = "f" }', name="n")
+    path.write_text(path.read_text().replace('protocol = { along = "f" }\n', ""))
+    plain = load_spec(path)
+    assert plain.protocol is None and "protocol" not in plain.canonical
+    assert up.protocol == ("f", "up") and up.sha256 != down.sha256 != plain.sha256
+
+
+REFUSALS = [
+    ('{ along = "f", speed = 1 }', {}, "unknown key 'speed'; allowed keys: along, direction"),
+    ('{ along = "M" }', {}, "protocol.along: 'M' is not allowed; allowed: 'f', 'a'"),
+    ('{ along = "a" }', {}, 'along = "a": [sweep] a has 1 value'),
+    ('{ along = "f", direction = "sideways" }', {},
+     "protocol.direction: 'sideways' is not allowed; allowed: 'up', 'down', 'both'"),
+    ('{ along = "f", direction = "both" }', {}, 'direction = "both": not built yet'),
+    ('{ along = "f" }', {"coupling": '"one-way"'}, 'got coupling = "one-way"'),
+    ('{ along = "f" }', {"continuation": "true"}, "continuation = true"),
+]
+
+
+@pytest.mark.parametrize(("protocol", "solver", "words"), REFUSALS)
+def test_refusals_name_the_key_and_the_allowed_values(tmp_path, protocol, solver, words):
+    path = write(tmp_path, protocol)
+    text = path.read_text()
+    for key, value in solver.items():
+        text = text.replace('coupling = "two-way"\n', "") if key == "coupling" else text
+        text += f"{key} = {value}\n"
+    if "one-way" in str(solver.values()):
+        text = text.replace("flight = true\n", "")
+    path.write_text(text)
+    with pytest.raises(SpecError) as err:
+        load_spec(path)
+    assert str(path) in str(err.value) and "[sweep] protocol" in str(err.value)
+    assert words in str(err.value)
+
+
+def test_the_integrator_is_refused(tmp_path):
+    path = write(tmp_path, '{ along = "f" }')
+    path.write_text(path.read_text().replace("flight = true\n", 'flight = true\nmethod = '
+                                             '"integrator"\n'))
+    with pytest.raises(SpecError, match=r'\[sweep\] protocol needs method = "exact"'):
+        load_spec(path)
