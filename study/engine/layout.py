@@ -94,6 +94,11 @@ def coordinates(spec: StudySpec) -> tuple[Coordinate, ...]:
     for name, value in spec.canonical["structure"].items():
         units, long_name = SWEEPABLE[name]
         found.append(Coordinate(name, (), np.float64(value), coordinate_attrs(units, long_name)))
+    if spec.both_directions:
+        found.append(Coordinate("direction", ("direction",), np.array(spec.directions),
+                                coordinate_attrs(DIMENSIONLESS, "direction of the slow sweep "
+                                                 "(increasing or decreasing values of the "
+                                                 "swept axis)")))
     # The dimensions of a point's values (a phase section's periods), counted from 0.
     trailing = {d for o in resolve(spec.observables, spec.flight) for v in o.variables
                 for d in GRIDS[VARIABLES[v].grid][2:]}
@@ -137,10 +142,20 @@ def data_variables(spec: StudySpec, observables: tuple[Observable, ...]
     (without the ``coordinates`` attribute, which a file adds)."""
     structure_dims = tuple(axis.name for axis in spec.structure_axes)
     return tuple(
-        DataVariable(name, VARIABLES[name].grid, VARIABLES[name].dims(structure_dims),
+        DataVariable(name, VARIABLES[name].grid, variable_dims(spec, name, structure_dims),
                      VARIABLES[name].dtype, VARIABLES[name].attrs(spec.flight))
         for observable in observables for name in observable.variables
     )
+
+
+def variable_dims(spec: StudySpec, name: str, structure_dims: tuple[str, ...]
+                  ) -> tuple[str, ...]:
+    """A declared variable's dimensions in the study's result: with a slow sweep both
+    ways, every per-point variable has a leading ``direction`` (up, down)."""
+    dims = VARIABLES[name].dims(structure_dims)
+    if spec.both_directions and VARIABLES[name].grid in ("point", "section"):
+        return ("direction", *dims)
+    return dims
 
 
 def pad_branches(values: NDArray[Any], branches: int, dtype: str) -> NDArray[Any]:

@@ -412,6 +412,11 @@ class GridWriter:
         with self._writing():
             if dims == (name,):
                 self.dataset.createDimension(name, values.size)
+            if values.dtype.kind == "U":  # labels: netCDF strings
+                var = self.dataset.createVariable(name, str, dims)
+                var.setncatts(attrs)
+                var[:] = values.astype(object)
+                return
             var = self.dataset.createVariable(name, values.dtype, dims)
             var.setncatts(attrs)
             var[...] = values

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from study.engine.kinds import ResultFormat
-from study.engine.layout import method_attributes
+from study.engine.layout import method_attributes, variable_dims
 from study.engine.observables import variables_of
 from study.engine.study_spec import StudySpec, parse_spec
 from study.engine.validation.checks import (
@@ -198,7 +198,7 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
             problems.append(f"variable {name!r} asked for by the spec is missing")
             continue
         before = len(problems)
-        dims = declared.dims(structure_dims)
+        dims = variable_dims(spec, name, structure_dims)
         if var.dims != dims:
             problems.append(f"{name} has dimensions ({', '.join(var.dims)}); declared "
                             f"({', '.join(dims)})")

@@ -18,7 +18,7 @@ import os
 import threading
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -114,8 +114,13 @@ def _plan(spec: StudySpec) -> list[Chunk]:
     # A slow sweep's task holds whole runs: along a every chunk does (each holds every
     # a); along f one chunk holds every f of its structure.
     along_f = spec.protocol is not None and spec.protocol[0] == "f"
-    return plan_chunks(tuple(len(axis) for axis in spec.structure_axes), n_f, n_a,
-                       n_f * n_a if along_f else spec.chunk_points)
+    chunks = plan_chunks(tuple(len(axis) for axis in spec.structure_axes), n_f, n_a,
+                         n_f * n_a if along_f else spec.chunk_points)
+    if not spec.both_directions:
+        return chunks
+    # Both ways: every chunk once up, once down (the down chunks numbered after).
+    return [*chunks, *(replace(chunk, number=len(chunks) + chunk.number, direction=1)
+                       for chunk in chunks)]
 
 
 def whole_runs(missing: np.ndarray, along: str) -> np.ndarray:
@@ -215,6 +220,11 @@ class _Run:
         self.cache = cache
         self.on_chunk: Callable[[int], None] | None = job.options.get("on_chunk")
         self.method = method_of(spec)
+        #: The method of each direction of a slow sweep both ways (a chunk's
+        #: ``direction`` indexes it); else the study's method alone.
+        self.methods = (tuple(replace(self.method, protocol=(spec.protocol[0], direction))
+                              for direction in spec.directions)
+                        if spec.both_directions else (self.method,))
         self.rows, self.points, self.frontier = observables_by_grid(spec)
         self.f = spec.axis("f").values
         a_axis = spec.axis("a")
@@ -234,16 +244,19 @@ class _Run:
 
     # -- cache keys --------------------------------------------------------------
 
-    def key(self, structure_index: tuple[int, ...], observable: Observable
-            ) -> tuple[str, dict[str, Any]]:
-        """Cache key and content of an observable's values for one structure."""
-        item = (structure_index, observable.name)
+    def key(self, structure_index: tuple[int, ...], observable: Observable,
+            direction: int = 0) -> tuple[str, dict[str, Any]]:
+        """Cache key and content of an observable's values for one structure (in one
+        direction of a slow sweep both ways: each direction's values are those of a
+        sweep that way alone, and shared with it)."""
+        item = (structure_index, observable.name, direction)
         if item not in self._keys:
+            method = self.methods[direction]
             content = {
                 "observable": observable.name,
                 "variables": {v: VARIABLES[v].dtype for v in observable.variables},
                 "structure": _structure_content(self.structures[structure_index]),
-                "method": self.method.canonical(),
+                "method": method.canonical(),
                 "code_sha256": self.code,
             }
             if self.method.protocol is not None:
@@ -272,6 +285,8 @@ class _Run:
         ones = (1,) * len(spec.structure_axes)
         for variable in data_variables(spec, (*self.rows, *self.points)):
             chunks = (*ones, block) if variable.grid == "row" else (
+                *(1,) * (len(variable.dims) - len(ones) - 2
+                         - len(VARIABLES[variable.name].trailing_shape)),
                 *ones, block, max(self.a.size, 1), *VARIABLES[variable.name].trailing_shape)
             writer.variable(variable.name, variable.dims, variable.dtype,
                             {**variable.attrs, "coordinates": self.auxiliary}, chunks)
@@ -289,7 +304,7 @@ class _Run:
             found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]] = {}
             missing = np.zeros((f.size, self.a.size), dtype=bool)
             for observable in self.points:
-                key, _ = self.key(chunk.structure_index, observable)
+                key, _ = self.key(chunk.structure_index, observable, chunk.direction)
                 dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in observable.variables}
                 trailing = {v: VARIABLES[v].trailing_shape for v in observable.variables}
                 values, present = self.cache.lookup(key, f, self.a, dtypes, trailing)
@@ -299,13 +314,15 @@ class _Run:
                 missing = whole_runs(missing, self.method.protocol[0])
             rectangles = missing_rectangles(missing) if self.points else ()
             needed = tuple(o.name for o in self.points if not found[o.name][1].all())
-            task = Task(chunk, structure, f, self.a, tuple(o.name for o in self.rows), needed,
-                        rectangles, self.method)
+            # Rows are the same both ways: written by the first direction's chunk.
+            rows = tuple(o.name for o in self.rows) if chunk.direction == 0 else ()
+            task = Task(chunk, structure, f, self.a, rows, needed, rectangles,
+                        self.methods[chunk.direction])
             pending[chunk.number] = found
-            if not rectangles and not self.rows:
+            if not rectangles and not rows:
                 self._finish(task, ({}, [], []), pending.pop(chunk.number))
                 continue
-            entries = tuple((self.key(chunk.structure_index, observable)[0],
+            entries = tuple((self.key(chunk.structure_index, observable, chunk.direction)[0],
                              observable.variables)
                             for observable in self.points if observable.name in needed)
             yield _Job(task, entries)
@@ -320,7 +337,8 @@ class _Run:
         where_rows = (*chunk.structure_index, slice(chunk.f_start, chunk.f_stop))
         for name, values in rows.items():
             self.writer.write(name, where_rows, values)
-        where_points = (*where_rows, slice(None))
+        where_points = ((chunk.direction,) if self.spec.both_directions else ()) + (
+            *where_rows, slice(None))
         for observable in self.points:
             values, _ = found[observable.name]
             for rectangle, computed in zip(task.rectangles, blocks, strict=True):
@@ -332,7 +350,7 @@ class _Run:
         stored = [o for o in self.points if o.name in task.points]
         for rectangle, datas in zip(task.rectangles, encoded, strict=True):
             for observable, data in zip(stored, datas, strict=True):
-                key, content = self.key(chunk.structure_index, observable)
+                key, content = self.key(chunk.structure_index, observable, chunk.direction)
                 self._keep(key, content, task.a[rectangle.columns], data)
         size = chunk.size * max(self.a.size, 1)
         computed_points = task.point_count if self.points else size
@@ -377,7 +395,8 @@ class _Run:
         try:
             self.writer = self._open(temporary)
             total = len(self.f) * max(self.a.size, 1) * int(np.prod(
-                [len(axis) for axis in self.spec.structure_axes], dtype=np.int64))
+                [len(axis) for axis in self.spec.structure_axes], dtype=np.int64)) * len(
+                self.methods)
             # "done" is said only of the whole run: the map is one phase of it.
             then = "frontier next" if self.frontier is not None else "sealing the file"
             self.progress = Progress(total, self.spec.name, progress,

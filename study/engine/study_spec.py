@@ -196,7 +196,8 @@ class StudySpec:
         The friction law (``[solver] friction``).
     protocol : tuple of str or None
         ``[sweep] protocol``: ``(along, direction)`` of a slow sweep
-        (:func:`study.solvers.protocol.slow_sweep`); None: every point from its start.
+        (:func:`study.solvers.protocol.slow_sweep`; direction ``"both"``: up and down,
+        a leading ``direction`` dimension); None: every point from its start.
     flight : bool
         ``[solver] flight = true``: past lift-off the base flies and lands by impacts
         (the lift-off law ``flight`` of :mod:`study.model.contact`); default false, the
@@ -254,6 +255,19 @@ class StudySpec:
     def axis(self, name: str) -> Axis | None:
         """The swept axis called ``name``, if any."""
         return next((axis for axis in self.axes if axis.name == name), None)
+
+    @property
+    def directions(self) -> tuple[str, ...]:
+        """The slow sweep's directions, ``("up", "down")`` for ``"both"``; ``()``
+        without a protocol."""
+        if self.protocol is None:
+            return ()
+        return SWEEP_DIRECTIONS if self.protocol[1] == "both" else (self.protocol[1],)
+
+    @property
+    def both_directions(self) -> bool:
+        """Whether point variables have a leading ``direction`` dimension."""
+        return len(self.directions) == 2
 
     @property
     def needs_solver(self) -> bool:
@@ -941,10 +955,6 @@ def _protocol(sweep: dict[str, Any], observables: tuple[str, ...], method: str,
     if direction not in PROTOCOL_DIRECTIONS:
         raise SpecError(f"{where} direction = {direction!r}; allowed: "
                         f"{', '.join(repr(x) for x in PROTOCOL_DIRECTIONS)}")
-    if direction == "both":
-        raise SpecError(f'{where} direction = "both": not built yet (the direction '
-                        'dimension of the result); allowed: "up" or "down" (run the study '
-                        "once with each)")
     if "frontier" in observables:
         raise SpecError(f'{where} with the observable "frontier": its bisection solves '
                         "single points between the grid's, which no run of the sweep "

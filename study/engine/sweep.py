@@ -37,12 +37,16 @@ class Chunk:
         Index along the structure axes.
     f_start, f_stop : int
         Slice of the frequency axis.
+    direction : int
+        Index of the slow sweep's direction (``[sweep] protocol`` with direction
+        ``"both"``: 0 up, 1 down); 0 otherwise.
     """
 
     number: int
     structure_index: tuple[int, ...]
     f_start: int
     f_stop: int
+    direction: int = 0
 
     @property
     def size(self) -> int:

@@ -71,6 +71,41 @@ def test_a_sweep_along_f_is_slow_sweeps_bit_for_bit(tmp_path, direction):
     assert report.chunks == 1
 
 
+def test_both_ways_is_up_and_down_under_a_direction_dimension(tmp_path):
+    spec = write(tmp_path, '{ along = "f", direction = "both" }')
+    report = run_study(spec, tmp_path / "h.nc", progress=False)
+    ds = open_result(tmp_path / "h.nc")
+    assert list(ds["direction"].values) == ["up", "down"]
+    assert ds["velocity"].dims == ("direction", "f", "a")
+    assert ds["jumped"].dims == ("direction", "f", "a")
+    assert ds.attrs["study_protocol_direction"] == "both"
+    for direction in ("up", "down"):
+        swept = expected(F, [10.0], "f", direction)
+        np.testing.assert_array_equal(ds["velocity"].sel(direction=direction).values,
+                                      swept.state.velocity)
+        np.testing.assert_array_equal(ds["jumped"].sel(direction=direction).values,
+                                      swept.jumped.astype(np.int8))
+    assert report.chunks == 2 and report.points == 2 * len(F)
+    # Each direction's values are those of a sweep that way alone: shared with it.
+    report = run_study(write(tmp_path, '{ along = "f", direction = "down" }', name="d"),
+                       tmp_path / "d.nc", progress=False)
+    assert (report.points_computed, report.points_reused) == (0, len(F))
+
+
+def test_both_ways_with_thresholds_keeps_rows_without_direction(tmp_path):
+    path = write(tmp_path, '{ along = "a", direction = "both" }', f=[15.2, 16.0],
+                 a=[9.0, 10.0])
+    path.write_text(path.read_text().replace('observables = ["velocity"]',
+                                             'observables = ["thresholds", "diagnostics"]'))
+    run_study(path, tmp_path / "h.nc", progress=False)
+    ds = open_result(tmp_path / "h.nc")
+    assert ds["a_star_plus"].dims == ("f",)
+    assert ds["slips_per_period"].dims == ("direction", "f", "a")
+    np.testing.assert_array_equal(ds["velocity"].sel(direction="down").values,
+                                  expected([15.2, 16.0], [9.0, 10.0], "a", "down")
+                                  .state.velocity)
+
+
 def test_up_and_down_differ_at_m_099(tmp_path):
     up = expected(F, [10.0], "f", "up").state.velocity
     down = expected(F, [10.0], "f", "down").state.velocity
@@ -134,7 +169,6 @@ REFUSALS = [
     ('{ along = "a" }', {}, 'along = "a": [sweep] a has 1 value'),
     ('{ along = "f", direction = "sideways" }', {},
      "protocol.direction: 'sideways' is not allowed; allowed: 'up', 'down', 'both'"),
-    ('{ along = "f", direction = "both" }', {}, 'direction = "both": not built yet'),
     ('{ along = "f" }', {"coupling": '"one-way"'}, 'got coupling = "one-way"'),
     ('{ along = "f" }', {"continuation": "true"}, "continuation = true"),
 ]
