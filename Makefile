@@ -108,6 +108,9 @@ FIGURES += $(addsuffix -flight,$(FLIGHT_FIGURES)) bouncing lyapunov
 # The bifurcation diagram along each drive axis: figures/bifurcation-along-X.png is
 # figure bifurcation of results/bifurcation-along-X.nc.
 FIGURES += bifurcation-along-a bifurcation-along-f
+# Slow sweeps up and down: figures/hysteresis-X.png is figure hysteresis of
+# results/hysteresis-X.nc.
+FIGURES += hysteresis-flight hysteresis-paper
 figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 
 figures/thresholds.png: results/thresholds.nc
@@ -133,6 +136,8 @@ figures/bouncing.png: results/mass-ratio-limit-flight.nc
 figures/lyapunov.png: results/irregular-bouncing.nc
 figures/bifurcation-along-%.png: results/bifurcation-along-%.nc $(PACKAGE) FORCE | $(STAMP)
 	$(STUDY) figure bifurcation $< -o figures/bifurcation-along-$* --if-changed
+figures/hysteresis-%.png: results/hysteresis-%.nc $(PACKAGE) FORCE | $(STAMP)
+	$(STUDY) figure hysteresis $< -o figures/hysteresis-$* --if-changed
 # A figure's date says nothing of what it was drawn from (a figure of another file drawn
 # to the same name is newer than its result): `study figure --if-changed` is asked every
 # time and redraws unless the PNG records this result's checksum, these options and

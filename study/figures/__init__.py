@@ -106,6 +106,12 @@ FIGURES: dict[str, Figure] = {
         "Bifurcation diagram: the phase-0 section of the motion against f or a, coloured "
         "by the largest Lyapunov exponent, the mean velocity beneath",
     ),
+    "hysteresis": Figure(
+        "study.figures.hysteresis", "hysteresis-flight",
+        ("velocity", "status", "jumped"),
+        "Slow sweeps up and down: the velocity against the swept drive with the jumps "
+        "marked, or over a map where the two sweeps end on different motions",
+    ),
     "coupling": Figure(
         "study.figures.coupling", "coupling",
         ("velocity", "status", "velocity_one_way", "status_one_way", "M"),

@@ -88,12 +88,16 @@ def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
                            "a slow sweep up and down of one structure")
     if "direction" not in dataset.dims or set(dataset["direction"].values) != {"up",
                                                                                "down"}:
-        raise FigureError("figure 'hysteresis' compares the sweeps up and down: this file "
-                          f"(study {dataset.attrs.get('study_name')!r}) holds no "
-                          "'direction' dimension with both; declare [sweep] protocol = "
+        raise FigureError("figure 'hysteresis' compares the sweeps up and down, which "
+                          "needs several values of direction (up and down): this file "
+                          f"(study {dataset.attrs.get('study_name')!r}, as selected) holds "
+                          "not both; a study declares them with [sweep] protocol = "
                           "{ along = ..., direction = \"both\" }")
     axis = sweep_axis(dataset)
     other = "a" if axis == "f" else "f"
+    if dataset.sizes.get(axis, 1) < 2:
+        raise FigureError(f"figure 'hysteresis' draws the sweeps along {axis}, which needs "
+                          f"several values of {axis}; the selection leaves one")
     if dataset.sizes.get(other, 1) > 1:
         return _map(dataset, axis)
     return _line(dataset.squeeze(other) if other in dataset.dims else dataset, axis,

@@ -67,5 +67,5 @@ def test_a_map_shows_where_the_sweeps_differ(tmp_path):
 
 
 def test_a_file_without_both_directions_is_refused(line):
-    with pytest.raises(FigureError, match="direction"):
+    with pytest.raises(FigureError, match="several values of direction"):
         compose(line.sel(direction=["up"]))

@@ -142,6 +142,22 @@ a = {{ start = 11.0, stop = 11.9, num = 3 }}
 coupling = "two-way"
 flight = true
 """,
+    # Slow sweeps up and down at M = 0.99 with flight across the forward hop's fold.
+    "hysteresis": f"""\
+[study]
+name = "hysteresis-small"
+observables = ["velocity"]
+[structure]
+{PAPER}
+M = 0.99
+[sweep]
+f = {{ values = [14.8, 15.6, 16.4] }}
+a = {{ values = [9.0, 10.0] }}
+protocol = {{ along = "f", direction = "both" }}
+[solver]
+coupling = "two-way"
+flight = true
+""",
     # The phase-0 section of bouncing at M = 0.99 along f (a chaotic point among the
     # orbits).
     "section": f"""\
@@ -519,6 +535,7 @@ SOURCES = {
     "bouncing": ("flight", []),
     "lyapunov": ("irregular", []),
     "bifurcation": ("section", []),
+    "hysteresis": ("hysteresis", []),
     "steering": ("trajectory", []),
     "steering-calibration": ("calibration", []),
     "steering-plan": ("plan", []),
@@ -531,6 +548,7 @@ def _cases():
             "collapse": ("Q", "M", "f"), "limit": ("M", "f", "a", "branch"),
             "coupling": ("M", "f", "a"), "flight": ("M", "f", "a", "branch"),
             "irregular": ("M", "f", "a"), "section": ("f", "a", "section_period"),
+            "hysteresis": ("direction", "f", "a"),
             "trajectory": ("t", "segment"),
             "calibration": ("f", "a"), "fit": ("measurement", "parameter", "profile_point"),
             "plan": ("strategy", "realisation", "t", "waypoint", "segment")}

@@ -114,9 +114,10 @@ def test_every_velocity_figure_is_covered():
     velocity_figures = {name for name, figure in FIGURES.items()
                         if "velocity" in figure.requires}
     # bouncing, lyapunov and bifurcation: drawn from studies with flight
-    # (tests/unit/test_figures_flight.py).
+    # (tests/unit/test_figures_flight.py); hysteresis from slow sweeps
+    # (tests/unit/test_figures_hysteresis.py, tests/unit/test_figures_selection.py).
     assert velocity_figures <= set(SOURCES) | {"mass-ratio", "bouncing", "lyapunov",
-                                               "bifurcation"}
+                                               "bifurcation", "hysteresis"}
 
 
 @pytest.mark.parametrize("figure", sorted(SOURCES))
