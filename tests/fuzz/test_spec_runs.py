@@ -134,6 +134,8 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
 def _shrink_axis(axis: dict[str, Any], n: int) -> dict[str, Any]:
     if "values" in axis:
         return {"values": axis["values"][:n]}
+    if "num" not in axis:  # not an axis: the sweep's protocol table, kept as it is
+        return axis
     return {**axis, "num": min(axis["num"], n)}
 
 
