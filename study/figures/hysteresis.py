@@ -130,13 +130,8 @@ def _line(dataset: xr.Dataset, axis: str, other: str) -> tuple[plt.Figure, str]:
     where = f"f = {fixed:g} Hz" if other == "f" else f"a = {fixed:g} m s$^{{-2}}$"
     ax.set_title(f"{apart} of {x.size} drive values end on different motions up and "
                  f"down; {jumps} jumps", fontsize=10)
-    selected = selection_text(dataset)
-    fig.suptitle(f"Slow sweeps along {axis} at {where}, up and down\n"
-                 f"{coupling_label(dataset)}\n{structure_text(dataset)}"
-                 + (f"\n{selected}" if selected else ""), fontsize=11)
-    title = (f"Hysteresis along {axis} at {where.replace('$^{-2}$', '^-2')}, "
-             f"{coupling_label(dataset)} ({structure_text(dataset, tex=False)})")
-    return fig, title
+    return fig, _titles(fig, dataset, f"Slow sweeps along {axis} at {where}, up and down",
+                        f"Hysteresis along {axis} at {where.replace('$^{-2}$', '^-2')}")
 
 
 def _map(dataset: xr.Dataset, axis: str) -> tuple[plt.Figure, str]:
@@ -153,10 +148,14 @@ def _map(dataset: xr.Dataset, axis: str) -> tuple[plt.Figure, str]:
     ax.set_ylabel(_AXES["a"])
     ax.set_title(f"swept along {axis}: up and down end on different motions at {count} "
                  f"of {apart.size} points", fontsize=10)
+    return fig, _titles(fig, dataset, f"Where slow sweeps up and down differ (along {axis})",
+                        f"Hysteresis map, swept along {axis}")
+
+
+def _titles(fig: plt.Figure, dataset: xr.Dataset, head: str, plain: str) -> str:
+    """Set the figure's title (``head``, the coupling, the structure, the selection)
+    and return its one-line title for the files' metadata (``plain`` and the same)."""
     selected = selection_text(dataset)
-    fig.suptitle(f"Where slow sweeps up and down differ (along {axis})\n"
-                 f"{coupling_label(dataset)}\n{structure_text(dataset)}"
+    fig.suptitle(f"{head}\n{coupling_label(dataset)}\n{structure_text(dataset)}"
                  + (f"\n{selected}" if selected else ""), fontsize=11)
-    title = (f"Hysteresis map, swept along {axis}, {coupling_label(dataset)} "
-             f"({structure_text(dataset, tex=False)})")
-    return fig, title
+    return f"{plain}, {coupling_label(dataset)} ({structure_text(dataset, tex=False)})"
