@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.observables import Method, Observable, resolve
+from study.engine.observables import UNSWEPT_VARIABLES, Method, Observable, resolve
 from study.engine.study_spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec
 from study.engine.variables import GRID_SIZES, GRIDS, VARIABLES
 from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS, Friction
@@ -151,9 +151,11 @@ def data_variables(spec: StudySpec, observables: tuple[Observable, ...]
 def variable_dims(spec: StudySpec, name: str, structure_dims: tuple[str, ...]
                   ) -> tuple[str, ...]:
     """A declared variable's dimensions in the study's result: with a slow sweep both
-    ways, every per-point variable has a leading ``direction`` (up, down)."""
+    ways, every per-point variable has a leading ``direction`` (up, down), but those of
+    each point from its start alone (:data:`study.engine.observables.UNSWEPT_VARIABLES`)."""
     dims = VARIABLES[name].dims(structure_dims)
-    if spec.both_directions and VARIABLES[name].grid in ("point", "section"):
+    if (spec.both_directions and VARIABLES[name].grid in ("point", "section")
+            and name not in UNSWEPT_VARIABLES):
         return ("direction", *dims)
     return dims
 

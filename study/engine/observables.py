@@ -40,6 +40,7 @@ from study.solvers.protocol import SweptState, slow_sweep
 __all__ = [
     "METHODS",
     "OBSERVABLES",
+    "UNSWEPT_VARIABLES",
     "Method",
     "Observable",
     "PointWork",
@@ -200,6 +201,12 @@ class PointWork:
         return self.method.sweep(self.structure, np.ravel(self.f), np.ravel(self.a))
 
     @_solved_once
+    def unswept(self) -> SteadyState:
+        """Steady state by the study's method without its protocol: each point from the
+        declared start alone, as the same study without ``[sweep] protocol`` solves it."""
+        return replace(self.method, protocol=None).solve(self.structure, self.f, self.a)
+
+    @_solved_once
     def one_way(self) -> SteadyState:
         """Steady state of the paper's one-way model by the exact solver (from the
         release, whatever the study's start: the one-way mode has no state to start)."""
@@ -236,6 +243,12 @@ class Observable:
         beside the velocity, since every swept point has jumped or not (not an
         observable of its own: it means nothing without a protocol, and a spec asking
         for it would be refused beside ``frontier``).
+    unswept : bool
+        Its values are each point's from the declared start alone, beside a slow sweep
+        (``[sweep] protocol``): solved by the study's method without the protocol,
+        once whatever the sweep's direction (no ``direction`` dimension), and kept
+        under the key of a study without a protocol. Only with a protocol: without one
+        they would be the velocity itself.
     cached : bool
         Whether computed values are kept for reuse by later runs.
     function : callable
@@ -266,6 +279,7 @@ class Observable:
     requires: tuple[str, ...] = ()
     flight_variables: tuple[str, ...] = ()
     protocol_variables: tuple[str, ...] = ()
+    unswept: bool = False
     cached: bool = False
     methods: tuple[str, ...] | None = None
     couplings: tuple[str, ...] | None = None
@@ -287,15 +301,18 @@ class Observable:
         same words)."""
         if self.grid == "point" and self.needs_anything:
             method = args[0].method
-            unmet = unmet_needs((self.name,), method.name, method.coupling, method.flight)
+            unmet = unmet_needs((self.name,), method.name, method.coupling, method.flight,
+                                method.protocol is not None)
             if unmet:
                 raise ValueError(unmet[0])
         return self.function(*args, **kwargs)
 
     @property
     def needs_anything(self) -> bool:
-        """Whether it applies to some methods, couplings or flight only."""
-        return (self.methods, self.couplings, self.flight) != (None, None, None)
+        """Whether it applies to some methods, couplings or flight only (or with a slow
+        sweep only: :attr:`unswept`)."""
+        return (self.methods, self.couplings, self.flight) != (None, None, None) \
+            or self.unswept
 
     def needs(self) -> str:
         """What it needs of ``[solver]``, in the words of a spec: ``coupling =
@@ -350,17 +367,26 @@ def _either(values: tuple[str, ...]) -> str:
 
 
 def unmet_needs(requested: tuple[str, ...] | list[str], method: str, coupling: str,
-                flight: bool) -> list[str]:
+                flight: bool, protocol: bool = False) -> list[str]:
     """The requested observables that do not apply to ``method``, ``coupling`` and
     ``flight`` (as :attr:`Observable.methods`, :attr:`Observable.couplings` and
-    :attr:`Observable.flight` declare), one line each in :data:`OBSERVABLES` order:
-    the observable, what it needs and why, the settings given and what is allowed.
-    Empty where every one applies. The spec reader prefixes each with its file."""
+    :attr:`Observable.flight` declare) or, for an :attr:`Observable.unswept` one, to a
+    study without a slow sweep (``protocol`` False), one line each in
+    :data:`OBSERVABLES` order: the observable, what it needs and why, the settings
+    given and what is allowed. Empty where every one applies. The spec reader prefixes
+    each with its file."""
     given = {"method": f'method = "{method}"', "coupling": f'coupling = "{coupling}"',
              "flight": f"flight = {'true' if flight else 'false'}"}
     lines = []
     for name, o in OBSERVABLES.items():
         if name not in requested:
+            continue
+        if o.unswept and not protocol:
+            lines.append(
+                f'[study] observable "{name}" needs [sweep] protocol: {o.why}; got no '
+                f'protocol (allowed: with [sweep] protocol = {{ along = "f" or "a", '
+                f'direction = "up", "down" or "both" }}; observables without a protocol: '
+                f"{', '.join(n for n, other in OBSERVABLES.items() if not other.unswept)})")
             continue
         if ((o.methods is None or method in o.methods)
                 and (o.couplings is None or coupling in o.couplings)
@@ -435,6 +461,11 @@ def _attractors(work: PointWork) -> dict[str, NDArray[Any]]:
                        **work.method.flight_keyword)
     return {"attractor_count": found.count, "attractor_velocity_spread": found.velocity_spread,
             "attractor_starts_converged": found.starts_converged}
+
+
+def _unswept(work: PointWork) -> dict[str, NDArray[Any]]:
+    s = work.unswept
+    return {"velocity_unswept": s.velocity, "status_unswept": s.status}
 
 
 def _paper_model(work: PointWork) -> dict[str, NDArray[Any]]:
@@ -513,6 +544,12 @@ _DECLARED = (
                requires=("velocity",), cached=True, flight=True,
                why="it is the velocity stopped at lift-off beside a study with flight; "
                "without flight the study's velocity already stops there"),
+    Observable("unswept", "beside a slow sweep, the velocity each point reaches from the "
+               "declared start alone (the same study without its protocol: one more map "
+               "of the solver)", "point", ("velocity_unswept", "status_unswept"), _unswept,
+               requires=("velocity",), cached=True, unswept=True,
+               why="it is each point's answer from its start alone beside the swept "
+               "velocity; without a protocol the study's velocity already is that answer"),
     Observable("frontier", "zero-velocity frontier f*(a), refined by bisection", "frontier",
                ("frontier_frequency", "frontier_kind", "frontier_direction",
                 "frontier_bracket"), _frontier, requires=("velocity",)),
@@ -520,6 +557,10 @@ _DECLARED = (
 
 #: name -> Observable, in the order they appear in a dataset.
 OBSERVABLES: dict[str, Observable] = {o.name: o for o in _DECLARED}
+
+#: Variables of the :attr:`Observable.unswept` observables: the same whatever the slow
+#: sweep's direction (no ``direction`` dimension).
+UNSWEPT_VARIABLES = frozenset(v for o in _DECLARED if o.unswept for v in o.variables)
 
 
 def resolve(requested: tuple[str, ...] | list[str], flight: bool = False,
@@ -552,7 +593,8 @@ def markdown_table() -> str:
     lines = ["| observable | what it computes | grid | needs | variables |",
              "|---|---|---|---|---|"]
     for name, o in OBSERVABLES.items():
-        needs = (f"`{o.needs()}`: {o.why}" if o.needs_anything
+        needs = (f"`[sweep] protocol`: {o.why}" if o.unswept
+                 else f"`{o.needs()}`: {o.why}" if o.needs_anything
                  else "any method and coupling" if o.grid != "row" else "no solver")
         variables = ", ".join(f"`{v}`" for v in o.variables)
         if o.flight_variables:

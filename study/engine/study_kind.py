@@ -249,9 +249,14 @@ class _Run:
         """Cache key and content of an observable's values for one structure (in one
         direction of a slow sweep both ways: each direction's values are those of a
         sweep that way alone, and shared with it)."""
+        if observable.unswept:
+            # Each point from its start alone: the same both ways, kept under the key
+            # of the study's method without its protocol (and no swept values).
+            direction = -1
         item = (structure_index, observable.name, direction)
         if item not in self._keys:
-            method = self.methods[direction]
+            method = (replace(self.method, protocol=None) if observable.unswept
+                      else self.methods[direction])
             content = {
                 "observable": observable.name,
                 "variables": {v: VARIABLES[v].dtype for v in observable.variables},
@@ -259,13 +264,12 @@ class _Run:
                 "method": method.canonical(),
                 "code_sha256": self.code,
             }
-            if self.method.protocol is not None:
+            if method.protocol is not None:
                 # A point of a slow sweep depends on every value its run visits before
                 # it: a changed swept axis changes every run, and no value is lent to
                 # another run (only when a protocol is given: other keys are kept).
-                along = self.method.protocol[0]
+                along = method.protocol[0]
                 content["swept"] = {along: (self.f if along == "f" else self.a).tolist()}
-            self._keys[item] = (entry_key(content), content)
             self._keys[item] = (entry_key(content), content)
         return self._keys[item]
 
@@ -303,7 +307,7 @@ class _Run:
             f = self.f[chunk.f_start:chunk.f_stop]
             found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]] = {}
             missing = np.zeros((f.size, self.a.size), dtype=bool)
-            for observable in self.points:
+            for observable in self._points(chunk):
                 key, _ = self.key(chunk.structure_index, observable, chunk.direction)
                 dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in observable.variables}
                 trailing = {v: VARIABLES[v].trailing_shape for v in observable.variables}
@@ -313,7 +317,8 @@ class _Run:
             if self.method.protocol is not None:
                 missing = whole_runs(missing, self.method.protocol[0])
             rectangles = missing_rectangles(missing) if self.points else ()
-            needed = tuple(o.name for o in self.points if not found[o.name][1].all())
+            needed = tuple(o.name for o in self._points(chunk)
+                           if not found[o.name][1].all())
             # Rows are the same both ways: written by the first direction's chunk.
             rows = tuple(o.name for o in self.rows) if chunk.direction == 0 else ()
             task = Task(chunk, structure, f, self.a, rows, needed, rectangles,
@@ -324,8 +329,17 @@ class _Run:
                 continue
             entries = tuple((self.key(chunk.structure_index, observable, chunk.direction)[0],
                              observable.variables)
-                            for observable in self.points if observable.name in needed)
+                            for observable in self._points(chunk)
+                            if observable.name in needed)
             yield _Job(task, entries)
+
+    def _points(self, chunk: Chunk) -> tuple[Observable, ...]:
+        """The solver observables a chunk computes and writes: with a slow sweep both
+        ways, those of each point from its start alone (:attr:`Observable.unswept`) with
+        the first direction only, as the rows."""
+        if chunk.direction == 0:
+            return self.points
+        return tuple(o for o in self.points if not o.unswept)
 
     def _finish(self, task: Task,
                 result: tuple[dict[str, np.ndarray], list[dict[str, Any]], list[list[bytes]]],
@@ -337,9 +351,10 @@ class _Run:
         where_rows = (*chunk.structure_index, slice(chunk.f_start, chunk.f_stop))
         for name, values in rows.items():
             self.writer.write(name, where_rows, values)
-        where_points = ((chunk.direction,) if self.spec.both_directions else ()) + (
+        swept_where = ((chunk.direction,) if self.spec.both_directions else ()) + (
             *where_rows, slice(None))
-        for observable in self.points:
+        for observable in self._points(chunk):
+            where_points = (*where_rows, slice(None)) if observable.unswept else swept_where
             values, _ = found[observable.name]
             for rectangle, computed in zip(task.rectangles, blocks, strict=True):
                 for name in observable.variables:
@@ -347,7 +362,7 @@ class _Run:
                         values[name][np.ix_(rectangle.rows, rectangle.columns)] = computed[name]
             for name in observable.variables:
                 self.writer.write(name, where_points, values[name])
-        stored = [o for o in self.points if o.name in task.points]
+        stored = [o for o in self._points(chunk) if o.name in task.points]
         for rectangle, datas in zip(task.rectangles, encoded, strict=True):
             for observable, data in zip(stored, datas, strict=True):
                 key, content = self.key(chunk.structure_index, observable, chunk.direction)

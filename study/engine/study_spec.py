@@ -656,7 +656,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     fixed_mass = problems.collect(_fixed_structure, structure, mass_table, sweep, path)
     swept = problems.collect(_sweep_axes, sweep, observables, solver_table, path)
     settings = _solver(solver_table, observables, None if swept is None else swept[0],
-                       path, problems)
+                       path, problems, "protocol" in sweep)
     method, coupling, friction = settings[0], settings[1], settings[2]
     flight = problems.collect(_flight, solver_table, method, coupling, path)
     _check_start(settings[3], coupling, flight, observables, path, problems)
@@ -866,11 +866,13 @@ def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
 
 
 def _solver(solver_table: dict[str, Any], observables: tuple[str, ...],
-            axes: list[Axis] | None, path: str, problems: _Problems
-            ) -> tuple[str, str, Friction | None, SolverSettings | None,
-                       IntegratorSettings | None, float | None]:
+            axes: list[Axis] | None, path: str, problems: _Problems,
+            protocol: bool = False) -> tuple[str, str, Friction | None,
+                                             SolverSettings | None,
+                                             IntegratorSettings | None, float | None]:
     """Method, coupling, friction law, the settings of both solvers and the frontier
-    tolerance, with what each observable needs of them; each problem is added to
+    tolerance, with what each observable needs of them (and of a slow sweep:
+    ``protocol``, whether ``[sweep]`` declares one); each problem is added to
     ``problems`` (a setting it makes unknown is None; the frontier tolerance is not
     checked without the sweep's f)."""
     coupling = solver_table.get("coupling", DEFAULT_COUPLING)
@@ -880,7 +882,7 @@ def _solver(solver_table: dict[str, Any], observables: tuple[str, ...],
     method = solver_table.get("method", "exact")
     # What each observable needs of the method, coupling and flight, as it declares.
     for line in unmet_needs(observables, method, coupling,
-                            bool(solver_table.get("flight", False))):
+                            bool(solver_table.get("flight", False)), protocol):
         problems.add(f"{path}: {line}")
     wrong = sorted(
         k for k in solver_table if k in (INTEGRATOR_KEYS if method == "exact" else EXACT_KEYS)

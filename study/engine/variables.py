@@ -307,6 +307,16 @@ _DECLARED = (
              "from the previous point of its run ended ([sweep] protocol)",
              flags=("followed", "jumped"), flag_values=(0, 1),
              comment="the first point of a run, started by [solver] start, is followed"),
+    Variable("velocity_unswept", "point", "float64", METRE_PER_SECOND,
+             "mean steady velocity each point reaches from the declared start alone, "
+             "beside a slow sweep ([sweep] protocol): the same study's velocity without "
+             "its protocol",
+             comment="the same whatever the sweep's direction (no direction dimension); "
+             "exactly 0 when static; NaN (missing) where status_unswept is lift_off, "
+             "not_converged or friction_paradox", invalid_where="status_unswept"),
+    Variable("status_unswept", "point", "int8", DIMENSIONLESS,
+             "outcome of the solver from the declared start alone, beside a slow sweep",
+             flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
     Variable("frontier_frequency", "frontier", "float64", HERTZ,
              "drive frequency f*(a) where the mean velocity changes sign",
              comment="NaN-padded where an acceleration has fewer branches"),

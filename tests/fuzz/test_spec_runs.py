@@ -97,6 +97,8 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         "velocity_one_way": ("status_one_way", _INVALID),
         # With flight: the same points stopped at lift-off, and the flight's statistics.
         "velocity_without_flight": ("status_without_flight", _INVALID),
+        # Beside a slow sweep, each point from its start alone.
+        "velocity_unswept": ("status_unswept", _INVALID),
         "airborne_fraction": ("status", _INVALID),
         "largest_hop": ("status", _INVALID),
         "impacts_per_period": ("status", _INVALID),

@@ -196,3 +196,79 @@ def test_the_integrator_is_refused(tmp_path):
                                              '"integrator"\n'))
     with pytest.raises(SpecError, match=r'\[sweep\] protocol needs method = "exact"'):
         load_spec(path)
+
+
+# ----------------------------------------------------------- unswept: each point alone
+
+
+def with_unswept(path: Path) -> Path:
+    path.write_text(path.read_text().replace('observables = ["velocity"]',
+                                             'observables = ["velocity", "unswept"]'))
+    return path
+
+
+def without_protocol(path: Path) -> Path:
+    text = path.read_text()
+    path.write_text(text[:text.index("protocol = ")] + text[text.index("\n[solver]"):])
+    return path
+
+
+def test_unswept_is_the_same_study_without_its_protocol_bit_for_bit(tmp_path):
+    from study.engine.variables import VARIABLES
+
+    a = (9.0, 10.0)
+    spec = with_unswept(write(tmp_path, '{ along = "f", direction = "both" }', a=a))
+    run_study(spec, tmp_path / "h.nc", progress=False, cache=tmp_path / "kept")
+    plain = without_protocol(write(tmp_path, '{ along = "f" }', a=a, name="plain"))
+    run_study(plain, tmp_path / "p.nc", progress=False, cache=tmp_path / "other")
+    ds, alone = open_result(tmp_path / "h.nc"), open_result(tmp_path / "p.nc")
+    # No direction: the answer from the start alone does not depend on the sweep.
+    assert ds["velocity_unswept"].dims == ds["status_unswept"].dims == ("f", "a")
+    np.testing.assert_array_equal(ds["velocity_unswept"].values, alone["velocity"].values)
+    np.testing.assert_array_equal(ds["status_unswept"].values, alone["status"].values)
+    for name in ("velocity_unswept", "status_unswept"):
+        assert ds[name].attrs["long_name"] == VARIABLES[name].long_name
+        assert ds[name].attrs["units"] == VARIABLES[name].units
+    assert ds["velocity_unswept"].attrs["units"] == "m s-1"
+    assert list(ds["status_unswept"].attrs["flag_meanings"].split()) == \
+        ds["status"].attrs["flag_meanings"].split()
+    # The fixture shows what the figure puts beside the sweeps: the sweep up keeps the
+    # forward hop where the start alone settles on the backward one.
+    up = ds["velocity"].sel(direction="up").values
+    assert np.any(up != ds["velocity_unswept"].values)
+    # Kept once for both directions: a study swept one way reuses them all.
+    down = with_unswept(write(tmp_path, '{ along = "f", direction = "down" }', a=a,
+                              name="d"))
+    report = run_study(down, tmp_path / "d.nc", progress=False, cache=tmp_path / "kept")
+    assert (report.points_computed, report.points_reused) == (0, 2 * len(F))
+    np.testing.assert_array_equal(open_result(tmp_path / "d.nc")["velocity_unswept"].values,
+                                  alone["velocity"].values)
+
+
+def test_unswept_added_to_a_sweep_computes_it_alone_and_keeps_the_other_keys(tmp_path):
+    spec = write(tmp_path, '{ along = "f", direction = "up" }')
+    before = load_spec(spec)
+    run_study(spec, tmp_path / "h.nc", progress=False, cache=tmp_path / "kept")
+    with_unswept(spec)
+    after = load_spec(spec)
+    assert after.sha256 != before.sha256
+    report = run_study(spec, tmp_path / "h.nc", progress=False, cache=tmp_path / "kept")
+    # The sweep's values are reused; the unswept map is the one computed.
+    assert report.points_computed == len(F) and report.chunks == 1
+    ds = open_result(tmp_path / "h.nc")
+    np.testing.assert_array_equal(ds["velocity"].values,
+                                  expected(F, [10.0], "f", "up").state.velocity)
+    again = run_study(spec, tmp_path / "h.nc", progress=False, cache=tmp_path / "kept",
+                      force=True)
+    assert (again.points_computed, again.points_reused) == (0, len(F))
+
+
+def test_unswept_without_a_protocol_is_refused_naming_the_key_and_the_file(tmp_path):
+    path = without_protocol(with_unswept(write(tmp_path, '{ along = "f" }')))
+    with pytest.raises(SpecError) as err:
+        load_spec(path)
+    message = str(err.value)
+    assert message.startswith(f'{path}: [study] observable "unswept" needs [sweep] '
+                              "protocol")
+    assert 'allowed: with [sweep] protocol = { along = "f" or "a"' in message
+    assert "observables without a protocol: resonance, thresholds" in message

@@ -64,7 +64,9 @@ NEEDY = [name for name, o in OBSERVABLES.items() if o.needs_anything]
 
 
 def _applies(o: Observable, method: str, coupling: str, flight: bool) -> bool:
-    return ((o.methods is None or method in o.methods)
+    """Whether ``o`` applies to a spec of these settings without a slow sweep (an
+    unswept observable needs one)."""
+    return (not o.unswept and (o.methods is None or method in o.methods)
             and (o.couplings is None or coupling in o.couplings)
             and (o.flight is None or o.flight == flight))
 
@@ -88,6 +90,7 @@ def test_the_known_needs_are_declared():
     assert OBSERVABLES["attractors"].couplings is None
     assert OBSERVABLES["paper_model"].couplings == ("two-way",)
     assert OBSERVABLES["without_flight"].flight is True
+    assert OBSERVABLES["unswept"].unswept and OBSERVABLES["unswept"].needs_anything
     for name in ("resonance", "thresholds", "lift_off", "velocity", "diagnostics",
                  "frontier"):
         assert not OBSERVABLES[name].needs_anything, name
@@ -107,6 +110,12 @@ def test_each_declared_need_is_enforced_by_the_spec(name, method, coupling, flig
     message = str(refused.value)
     # One problem: the observable's, alone on its line, naming the file and the key.
     assert "\n" not in message, message
+    if o.unswept:
+        assert message.startswith(f'{PATH}: [study] observable "{name}" needs [sweep] '
+                                  "protocol: "), message
+        assert "got no protocol (allowed: with [sweep] protocol = " in message
+        assert o.why in message
+        return
     assert message.startswith(f'{PATH}: [study] observable "{name}" needs [solver] '), message
     allowed = message.split("(allowed: ", 1)[1]
     if o.methods is not None:
@@ -148,7 +157,9 @@ def test_every_unmet_need_is_reported_at_once_one_line_each():
 
 
 def test_unmet_needs_follow_the_registry_order_and_ignore_what_applies():
-    assert unmet_needs(list(OBSERVABLES), "exact", "two-way", True) == []
+    assert unmet_needs(list(OBSERVABLES), "exact", "two-way", True, protocol=True) == []
+    assert [line.split('"')[1] for line in
+            unmet_needs(list(OBSERVABLES), "exact", "two-way", True)] == ["unswept"]
     names = [line.split('"')[1] for line in
              unmet_needs(list(reversed(OBSERVABLES)), "integrator", "one-way", False)]
     assert names == [n for n in OBSERVABLES if n in names]
