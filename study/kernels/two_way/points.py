@@ -23,6 +23,7 @@ from numba import njit, prange
 from study.kernels.start import is_release
 from study.kernels.structure_vector import (
     COS_ALPHA,
+    DAMPING,
     GRAVITY,
     LIFT_OFF_LAW,
     MASS_RATIO,
@@ -207,6 +208,46 @@ def _is_static(structure, omega, a, pr, pi):
     for sign in (1.0, -1.0):
         kappa = -m * (sign * sa + cs * ca)
         if math.hypot(-kappa * w2 * pr + cs * a, -kappa * w2 * pi) > level:
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def stays_static(structure, omega, a, table, state):
+    """The structure, stuck on the table at phase 0 in ``state`` (``(delta, delta', v,
+    h, h')`` [m, m s-1, m s-1, m, m s-1]) under the drive ``omega`` [rad s-1], ``a``
+    [m s-2] (``table`` the mode table of that drive), provably never slips: a
+    sufficient test, in closed form, for the state a slow sweep carries.
+
+    Stuck, the mode is its steady stick response plus a free decay ``delta_h`` from
+    the state's difference to that response at phase 0. The decay adds
+    ``kappa_s (-c delta_h' - k delta_h)`` to each release function of
+    :func:`_is_static`; by Cauchy-Schwarz that is at most ``|kappa_s| sqrt((c^2 + k)
+    E)`` with ``E = delta_h'^2 + k delta_h^2``, which the damping never lets grow
+    (``E' = -2 c delta_h'^2``). So the structure stays stuck for ever when each release
+    amplitude plus that bound stays below ``cs g``, at the precision of the static
+    decision; then the motion it settles on is the static point's. False where the
+    state is not stuck on the table, or the bound cannot decide (the motion must then
+    be followed)."""
+    if state[2] != 0.0 or state[Z_GAP] != 0.0 or state[Z_GAP_RATE] != 0.0:
+        return False
+    dp, dpd, _, _ = particular(table[0], omega, 1.0, 0.0)
+    decay = state[0] - dp
+    decay_rate = state[1] - dpd
+    c = structure[DAMPING]
+    k = structure[STIFFNESS]
+    bound = math.sqrt((c * c + k) * (decay_rate * decay_rate + k * decay * decay))
+    pr, pi = stick_response(structure, omega, a)
+    w2 = omega * omega
+    m = structure[MASS_RATIO]
+    ca = structure[COS_ALPHA]
+    sa = structure[SIN_ALPHA]
+    cs = structure[STATIC_FRICTION]
+    level = cs * structure[GRAVITY] * (1.0 + 8.0 * EPS)
+    for sign in (1.0, -1.0):
+        kappa = -m * (sign * sa + cs * ca)
+        amplitude = math.hypot(-kappa * w2 * pr + cs * a, -kappa * w2 * pi)
+        if not amplitude + abs(kappa) * bound <= level:
             return False
     return True
 

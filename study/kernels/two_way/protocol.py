@@ -41,6 +41,7 @@ from study.kernels.two_way.points import (
     start_row,
     start_state,
     static_point,
+    stays_static,
     stuck_is_static,
 )
 from study.model.codes import (
@@ -128,10 +129,15 @@ def sweep_run(structure, omega, a, lifted, budget, start, order, out, jumped):
             mode_drive(structure, omega[i], a[i], table, 0, searched_only=True)
             mode_drive(structure, omega[i], a[i], table, 1, searched_only=True)
             mode_drive(structure, omega[i], a[i], table, 2, searched_only=True)
-            solve_from(structure, omega[i], a[i], lifted[i], False, budget, 0.0, state,
-                       row, neighbours, workspace, True)
-            forget(neighbours)
-            stuck_is_static(structure, omega[i], row, True)
+            if not lifted[i] and stays_static(structure, omega[i], a[i], table, state):
+                # Most of a map's points: stuck and provably staying stuck, the
+                # motion is the static point's, decided without following it.
+                static_point(structure, omega[i], a[i], False, row, True)
+            else:
+                solve_from(structure, omega[i], a[i], lifted[i], False, budget, 0.0,
+                           state, row, neighbours, workspace, True)
+                forget(neighbours)
+                stuck_is_static(structure, omega[i], row, True)
         else:
             _first_point(structure, omega[i], a[i], lifted[i], budget, start, row,
                          neighbours, workspace)
