@@ -108,9 +108,6 @@ def _line(dataset: xr.Dataset, axis: str, other: str) -> tuple[plt.Figure, str]:
     x = dataset[axis].values
     fig, ax = plt.subplots(figsize=(8.5, 5.0), layout="constrained")
     ax.axhline(0.0, color="0.6", linewidth=0.6)
-    if "velocity_unswept" in dataset:
-        ax.plot(x, 1e3 * dataset["velocity_unswept"].values, "o", color="0.55",
-                markersize=3, label="each point from its start alone")
     jumps = 0
     for direction, marker in (("up", "^"), ("down", "v")):
         v = 1e3 * dataset["velocity"].sel(direction=direction).values
@@ -122,6 +119,12 @@ def _line(dataset: xr.Dataset, axis: str, other: str) -> tuple[plt.Figure, str]:
             ax.plot(x[jumped], v[jumped], "o", markersize=9, markerfacecolor="none",
                     markeredgecolor=_COLOURS[direction], markeredgewidth=1.5,
                     label=f"jumped (swept {direction})")
+    if "velocity_unswept" in dataset:
+        # Above the sweeps (each value lies on one of them or on neither): open circles.
+        start = dataset.attrs.get("study_start", "release")
+        ax.plot(x, 1e3 * dataset["velocity_unswept"].values, "o", markersize=6.5,
+                markerfacecolor="none", markeredgecolor="black", markeredgewidth=0.8,
+                zorder=5, label=f"each point from its start alone ({start})")
     apart = int(differing(dataset).sum())
     ax.set_xlabel(_AXES[axis])
     ax.set_ylabel("mean velocity [mm s$^{-1}$]")

@@ -12,7 +12,7 @@ import xarray as xr
 
 import study
 from study.figures import FigureError
-from study.figures.hysteresis import compose, differing, draw
+from study.figures.hysteresis import DIFFERENT, compose, differing, draw
 from study.solvers.protocol import slow_sweep
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
@@ -69,3 +69,53 @@ def test_a_map_shows_where_the_sweeps_differ(tmp_path):
 def test_a_file_without_both_directions_is_refused(line):
     with pytest.raises(FigureError, match="several values of direction"):
         compose(line.sel(direction=["up"]))
+
+
+SPEC = """\
+[study]
+name = "hysteresis-unswept"
+observables = ["velocity", "unswept"]
+
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+M = 0.99
+cs = 0.25
+
+[sweep]
+f = { values = [14.8, 15.2, 15.6, 16.0, 16.4] }
+a = { values = [10.0] }
+protocol = { along = "f", direction = "both" }
+
+[solver]
+coupling = "two-way"
+flight = true
+"""
+
+
+def test_a_computed_file_shows_each_points_answer_from_its_start_beside_the_sweeps(
+        tmp_path):
+    from study.engine.runner import run_study
+    from study.engine.store import open_result
+    from study.figures import draw_figure
+
+    (tmp_path / "h.toml").write_text(SPEC)
+    run_study(tmp_path / "h.toml", tmp_path / "h.nc", progress=False,
+              cache=tmp_path / "kept")
+    dataset = open_result(tmp_path / "h.nc")
+    assert dataset["velocity_unswept"].dims == ("f", "a")
+    fig, _ = compose(dataset)
+    drawn = {line.get_label(): line for line in fig.axes[0].get_lines()}
+    unswept = drawn["each point from its start alone (release)"]
+    np.testing.assert_array_equal(unswept.get_ydata(),
+                                  1e3 * dataset["velocity_unswept"].values.ravel())
+    # The release lands on the up sweep's forward hop or the down sweep's backward hop,
+    # point by point: each value is one of the two sweeps' (the same orbit, to the
+    # figure's tolerance).
+    up, down = (dataset["velocity"].sel(direction=d).values.ravel() for d in ("up", "down"))
+    alone = dataset["velocity_unswept"].values.ravel()
+    scale = DIFFERENT * 10.0 / (2.0 * np.pi * dataset["f"].values)
+    assert np.all((np.abs(alone - up) <= scale) | (np.abs(alone - down) <= scale))
+    paths = draw_figure("hysteresis", dataset, tmp_path / "figure")
+    assert all(p.exists() and p.stat().st_size > 0 for p in paths)
