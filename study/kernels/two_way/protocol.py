@@ -129,9 +129,12 @@ def sweep_run(structure, omega, a, lifted, budget, start, order, out, jumped):
             mode_drive(structure, omega[i], a[i], table, 0, searched_only=True)
             mode_drive(structure, omega[i], a[i], table, 1, searched_only=True)
             mode_drive(structure, omega[i], a[i], table, 2, searched_only=True)
-            if not lifted[i] and stays_static(structure, omega[i], a[i], table, state):
+            if not lifted[i] and (a[i] == 0.0 or stays_static(structure, omega[i], a[i],
+                                                              table, state)):
                 # Most of a map's points: stuck and provably staying stuck, the
-                # motion is the static point's, decided without following it.
+                # motion is the static point's, decided without following it. On a
+                # still table (a = 0) every motion dissipates to that rest, and the
+                # drive's scales, which the search measures distances by, vanish.
                 static_point(structure, omega[i], a[i], False, row, True)
             else:
                 solve_from(structure, omega[i], a[i], lifted[i], False, budget, 0.0,
