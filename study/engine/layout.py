@@ -12,7 +12,7 @@ laws and their parameters) from :func:`method_attributes`.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from study.engine.observables import UNSWEPT_VARIABLES, Method, Observable, resolve
 from study.engine.study_spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec
+from study.engine.sweep import Chunk, plan_chunks
 from study.engine.variables import GRID_SIZES, GRIDS, VARIABLES
 from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS, Friction
 from study.model.parameters import STRUCTURE
@@ -33,12 +34,14 @@ __all__ = [
     "coordinate_attrs",
     "coordinates",
     "data_variables",
+    "direction_methods",
     "method_attributes",
     "method_description",
     "method_of",
     "method_summary",
     "observables_by_grid",
     "pad_branches",
+    "plan_study",
     "protocol_attributes",
     "study_summary",
 ]
@@ -174,6 +177,34 @@ def method_of(spec: StudySpec) -> Method:
     """How the study computes velocities (solver, coupling and settings)."""
     return Method(spec.method, spec.coupling, spec.solver, spec.integrator, spec.friction,
                   spec.flight, spec.protocol)
+
+
+def direction_methods(spec: StudySpec) -> tuple[Method, ...]:
+    """The method of each direction of a slow sweep both ways (a chunk's ``direction``
+    indexes it: up, then down), else the study's method alone."""
+    method = method_of(spec)
+    if not spec.both_directions:
+        return (method,)
+    return tuple(replace(method, protocol=(spec.protocol[0], direction))
+                 for direction in spec.directions)
+
+
+def plan_study(spec: StudySpec) -> list[Chunk]:
+    """The chunks of a study (:func:`study.engine.sweep.plan_chunks`), as a result file
+    and :func:`study.compute_map` cut it: a slow sweep's task holds whole runs (along a
+    every chunk does, each holding every a; along f one chunk holds every f of its
+    structure), and both ways every chunk comes once up, once down (the down chunks
+    numbered after, ``direction`` 1)."""
+    a_axis = spec.axis("a")
+    n_a = len(a_axis) if (a_axis is not None and spec.needs_solver) else 1
+    n_f = len(spec.axis("f"))
+    along_f = spec.protocol is not None and spec.protocol[0] == "f"
+    chunks = plan_chunks(tuple(len(axis) for axis in spec.structure_axes), n_f, n_a,
+                         n_f * n_a if along_f else spec.chunk_points)
+    if not spec.both_directions:
+        return chunks
+    return [*chunks, *(replace(chunk, number=len(chunks) + chunk.number, direction=1)
+                       for chunk in chunks)]
 
 
 def study_summary(spec: StudySpec) -> str:

@@ -10,6 +10,7 @@ dims, units, long names, flag attributes and status names are those of the file.
 
 from __future__ import annotations
 
+import json
 import os
 import warnings
 from collections.abc import Iterable, Mapping
@@ -23,14 +24,16 @@ from numpy.typing import ArrayLike, NDArray
 from study.engine.layout import (
     coordinates,
     data_variables,
+    direction_methods,
     method_attributes,
     method_of,
     observables_by_grid,
     pad_branches,
+    plan_study,
 )
-from study.engine.observables import OBSERVABLES
+from study.engine.observables import OBSERVABLES, UNSWEPT_VARIABLES
 from study.engine.study_spec import STRUCTURE_PARAMETERS, StudySpec, parse_spec
-from study.engine.sweep import Rectangle, Task, compute_task, plan_chunks
+from study.engine.sweep import Rectangle, Task, compute_task
 from study.engine.variables import GRID_SIZES
 from study.model.inputs import (
     RADIAN_LIKE_TILT,
@@ -66,14 +69,29 @@ def _toml_values(values: NDArray[np.float64]) -> str:
     return "{ values = [" + ", ".join(_toml_number(v) for v in values) + "] }"
 
 
+def _toml_scalar(name: str, value: object) -> str:
+    """A protocol value as TOML (a string, a boolean or a number; anything else is
+    refused naming the key)."""
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int | float):
+        return repr(value)
+    raise TypeError(f"protocol[{name!r}] must be a string, got {value!r}")
+
+
 def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
                   observables: tuple[str, ...], coupling: str,
                   sweep: Mapping[str, NDArray[np.float64]],
-                  settings: SolverSettings, flight: bool = False) -> str:
+                  settings: SolverSettings, flight: bool = False,
+                  protocol: Mapping[str, object] | None = None) -> str:
     """The study spec (TOML) of a :func:`compute_map` call.
 
     The structure's parameters are fixed in ``[structure]`` except those swept; a
     kinetic friction equal to the static one (the default) follows a swept ``cs``.
+    ``protocol`` is written as ``[sweep] protocol``, as given (the spec reader checks
+    it).
     """
     fixed = structure.as_dict()
     if "cs" in sweep and "ck" not in sweep and structure.ck == structure.cs:
@@ -88,8 +106,11 @@ def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.fl
               if name not in sweep]
     lines += ["", "[sweep]"]
     lines += [f"{name} = {_toml_values(values)}" for name, values in sweep.items()]
-    lines += [f"f = {_toml_values(f)}", f"a = {_toml_values(a)}", "",
-              "[solver]", f'coupling = "{coupling}"',
+    lines += [f"f = {_toml_values(f)}", f"a = {_toml_values(a)}"]
+    if protocol is not None:
+        lines += ["protocol = { " + ", ".join(f"{key} = {_toml_scalar(key, value)}"
+                                              for key, value in protocol.items()) + " }"]
+    lines += ["", "[solver]", f'coupling = "{coupling}"',
               f"max_events = {int(settings.max_events)}",
               f"max_map_iterations = {int(settings.max_map_iterations)}"]
     # Only when on, as in a spec that omits it: the text of a map without flight stays.
@@ -137,6 +158,7 @@ def compute_map(
     settings: SolverSettings | None = None,
     workers: int | None = None,
     start: str | Drop | None = None,
+    protocol: Mapping[str, str] | None = None,
 ) -> xr.Dataset:
     """A labelled map over the drive ``(f, a)`` and any swept structure parameter.
 
@@ -184,6 +206,15 @@ def compute_map(
         The state each point's motion starts from (``[solver] start`` of a spec;
         :func:`study.steady_state`); overrides ``settings.start``. Recorded in the
         dataset's attribute ``study_start``.
+    protocol : dict, optional
+        A slow sweep, as ``[sweep] protocol`` of a spec: ``{"along": "f" or "a",
+        "direction": "up", "down" or "both"}`` (direction default ``"up"``;
+        :func:`study.solvers.protocol.slow_sweep`). Needs ``coupling="two-way"``, at
+        least 2 values along ``along``, no ``continuation`` and no ``"frontier"``; the
+        observable ``"unswept"`` needs it. ``"both"`` gives every per-point variable a
+        leading ``direction`` dimension (``up``, ``down``); the dataset records
+        ``study_protocol_along`` and ``study_protocol_direction``. Default: every point
+        from its start.
 
     Returns
     -------
@@ -254,8 +285,11 @@ def compute_map(
             "is in degree", SuspectInputWarning, stacklevel=2)
     f_values = _axis("f", f)
     a_values = _axis("a", a)
+    if protocol is not None and not isinstance(protocol, Mapping):
+        raise TypeError('protocol must be a dict such as {"along": "f", "direction": "up"}, '
+                        f"got {protocol!r}")
     text = map_spec_text(structure, f_values, a_values, names, coupling, swept, settings,
-                         flight)
+                         flight, protocol)
     spec = parse_spec(text, MAP_SPEC_SOURCE)
     return _computed(spec, workers)
 
@@ -264,25 +298,29 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
     """Every chunk of ``spec`` computed on threads and gathered into its layout."""
     rows, points, frontier = observables_by_grid(spec)
     method = method_of(spec)
+    methods = direction_methods(spec)
     f = spec.axis("f").values
     a = spec.axis("a").values if spec.needs_solver else np.empty(0)
-    sizes = {**GRID_SIZES, **{axis.name: len(axis) for axis in spec.axes}}
+    sizes = {**GRID_SIZES, **{axis.name: len(axis) for axis in spec.axes},
+             "direction": len(spec.directions)}
     variables = data_variables(spec, (*rows, *points))
     values: dict[str, NDArray[Any]] = {
         v.name: np.full(tuple(sizes[d] for d in v.dims),
                         np.nan if np.dtype(v.dtype).kind == "f" else 0, dtype=v.dtype)
         for v in variables
     }
-    chunks = plan_chunks(tuple(len(axis) for axis in spec.structure_axes), f.size,
-                         max(a.size, 1) if points else 1, spec.chunk_points)
+    # The chunks of the study's file: a slow sweep's whole runs, each direction's.
     tasks = []
-    for chunk in chunks:
+    for chunk in plan_study(spec):
         part = f[chunk.f_start:chunk.f_stop]
+        # Rows, and the values of each point from its start alone, with the first
+        # direction only (they do not depend on it), as the file's.
+        here = tuple(o.name for o in points if chunk.direction == 0 or not o.unswept)
         rectangles = ((Rectangle(np.arange(part.size), np.arange(a.size)),)
-                      if points and a.size else ())
+                      if here and a.size else ())
         tasks.append(Task(chunk, spec.structure_at(chunk.structure_index), part, a,
-                          tuple(o.name for o in rows), tuple(o.name for o in points),
-                          rectangles, method))
+                          tuple(o.name for o in rows) if chunk.direction == 0 else (),
+                          here, rectangles, methods[chunk.direction]))
     threads = workers if workers is not None else (os.cpu_count() or 1)
     threads = bounded_integer("workers", threads, 1)
     with ThreadPoolExecutor(max_workers=min(int(threads), len(tasks))) as pool:
@@ -291,9 +329,11 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
             where = (*task.chunk.structure_index, slice(task.chunk.f_start, task.chunk.f_stop))
             for name, computed in row_values.items():
                 values[name][where] = computed
+            lead = (task.chunk.direction,) if spec.both_directions else ()
             for computed in blocks:
                 for name, block in computed.items():
-                    values[name][(*where, slice(None))] = block
+                    at = where if name in UNSWEPT_VARIABLES else (*lead, *where)
+                    values[name][(*at, slice(None))] = block
     data = {v.name: (v.dims, values[v.name], v.attrs) for v in variables}
     if frontier is not None:
         data.update(_frontier(spec, frontier, f, a, values, method))

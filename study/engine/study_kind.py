@@ -30,10 +30,12 @@ from study.engine.kinds import ResultKind, register
 from study.engine.layout import (
     coordinates,
     data_variables,
+    direction_methods,
     method_attributes,
     method_of,
     observables_by_grid,
     pad_branches,
+    plan_study,
     study_summary,
 )
 from study.engine.observables import Observable
@@ -56,7 +58,7 @@ from study.engine.store import (
     new_temporary,
 )
 from study.engine.study_spec import SPEC_SCHEMA, StudySpec, load_spec, parse_spec
-from study.engine.sweep import Chunk, Task, compute_task, missing_rectangles, plan_chunks
+from study.engine.sweep import Chunk, Task, compute_task, missing_rectangles
 from study.engine.variables import RESULT_FORMAT, STUDY_FORMATS, VARIABLES
 from study.model.structure import Structure
 from study.solvers.frontier import frontier_branches, frontier_work
@@ -105,22 +107,6 @@ def stream_study(spec: StudySpec, job: RunJob) -> RunReport:
             raise
         raise StoreError(f"{err}; the {computing.points_kept} points computed are "
                          f"kept in {computing.cache.root} for the next run") from None
-
-
-def _plan(spec: StudySpec) -> list[Chunk]:
-    a_axis = spec.axis("a")
-    n_a = len(a_axis) if (a_axis is not None and spec.needs_solver) else 1
-    n_f = len(spec.axis("f"))
-    # A slow sweep's task holds whole runs: along a every chunk does (each holds every
-    # a); along f one chunk holds every f of its structure.
-    along_f = spec.protocol is not None and spec.protocol[0] == "f"
-    chunks = plan_chunks(tuple(len(axis) for axis in spec.structure_axes), n_f, n_a,
-                         n_f * n_a if along_f else spec.chunk_points)
-    if not spec.both_directions:
-        return chunks
-    # Both ways: every chunk once up, once down (the down chunks numbered after).
-    return [*chunks, *(replace(chunk, number=len(chunks) + chunk.number, direction=1)
-                       for chunk in chunks)]
 
 
 def whole_runs(missing: np.ndarray, along: str) -> np.ndarray:
@@ -222,14 +208,12 @@ class _Run:
         self.method = method_of(spec)
         #: The method of each direction of a slow sweep both ways (a chunk's
         #: ``direction`` indexes it); else the study's method alone.
-        self.methods = (tuple(replace(self.method, protocol=(spec.protocol[0], direction))
-                              for direction in spec.directions)
-                        if spec.both_directions else (self.method,))
+        self.methods = direction_methods(spec)
         self.rows, self.points, self.frontier = observables_by_grid(spec)
         self.f = spec.axis("f").values
         a_axis = spec.axis("a")
         self.a = a_axis.values if (a_axis is not None and spec.needs_solver) else np.empty(0)
-        self.chunks = _plan(spec)
+        self.chunks = plan_study(spec)
         #: Every structure of the study by its index: the spec is read once, here.
         self.structures = dict(spec.structures())
         self.code = code_sha256()
@@ -591,7 +575,7 @@ class _Run:
 
 
 def _study_chunks(spec: StudySpec) -> int:
-    return len(_plan(spec))
+    return len(plan_study(spec))
 
 
 #: The parameter-study kind.

@@ -272,3 +272,84 @@ def test_unswept_without_a_protocol_is_refused_naming_the_key_and_the_file(tmp_p
                               "protocol")
     assert 'allowed: with [sweep] protocol = { along = "f" or "a"' in message
     assert "observables without a protocol: resonance, thresholds" in message
+
+
+# ------------------------------------------- compute_map(protocol=...): the file in memory
+
+
+def _data(dataset):
+    """Variables and coordinates with their attributes, without the global attributes
+    (provenance, the spec's text and path differ)."""
+    return dataset.drop_attrs(deep=False)
+
+
+@pytest.mark.parametrize(("along", "direction", "a"), [("f", "both", (9.0, 10.0)),
+                                                       ("a", "down", (9.0, 10.0, 11.0))])
+def test_compute_map_with_a_protocol_is_the_study_file_bit_for_bit(tmp_path, along,
+                                                                   direction, a):
+    import xarray as xr
+
+    from study import compute_map
+
+    observables = ["velocity", "diagnostics", "unswept"]
+    ours = compute_map(STRUCTURE, F, a, observables=observables, coupling="two-way",
+                       flight=True, protocol={"along": along, "direction": direction},
+                       workers=2)
+    spec = with_unswept(write(tmp_path, f'{{ along = "{along}", direction = '
+                                        f'"{direction}" }}', a=a))
+    spec.write_text(spec.read_text().replace('"unswept"]', '"diagnostics", "unswept"]'))
+    run_study(spec, tmp_path / "h.nc", progress=False, cache=tmp_path / "kept")
+    theirs = open_result(tmp_path / "h.nc")
+    xr.testing.assert_identical(_data(ours), _data(theirs))
+    for key in ("study_protocol", "study_protocol_along", "study_protocol_direction",
+                "study_start"):
+        assert ours.attrs[key] == theirs.attrs[key]
+    assert ("direction" in ours.dims) == (direction == "both")
+    # The equivalent spec it records runs to the same dataset.
+    kept = tmp_path / "kept.toml"
+    kept.write_text(ours.attrs["study_spec"])
+    assert load_spec(kept).protocol == (along, direction)
+    run_study(kept, tmp_path / "kept.nc", progress=False, cache=tmp_path / "kept")
+    xr.testing.assert_identical(_data(ours), _data(open_result(tmp_path / "kept.nc")))
+
+
+@pytest.mark.parametrize(("protocol", "solver", "words"), REFUSALS)
+def test_compute_map_refuses_a_protocol_as_a_spec_does(tmp_path, protocol, solver, words):
+    import tomllib
+
+    from study import compute_map
+    from study.engine.maps import MAP_SPEC_SOURCE
+
+    table = tomllib.loads(f"p = {protocol}")["p"]
+    one_way = solver.get("coupling") == '"one-way"'
+    settings = SolverSettings(continuation=solver.get("continuation") == "true")
+    a = (10.0,) if 'along = "a"' in protocol else (9.0, 10.0)
+    with pytest.raises(ValueError) as refused:
+        compute_map(STRUCTURE, F, a, observables=["velocity"],
+                    coupling="one-way" if one_way else "two-way", flight=not one_way,
+                    settings=settings, protocol=table)
+    assert str(refused.value).startswith(f"{MAP_SPEC_SOURCE}: ")
+    assert "[sweep] protocol" in str(refused.value) and words in str(refused.value)
+    # The same words as the spec file's, but for where.
+    path = write(tmp_path, protocol, a=a)
+    text = path.read_text()
+    for key, value in solver.items():
+        text = text.replace('coupling = "two-way"\n', "") if key == "coupling" else text
+        text += f"{key} = {value}\n"
+    if one_way:
+        text = text.replace("flight = true\n", "")
+    path.write_text(text)
+    with pytest.raises(SpecError) as spec_refused:
+        load_spec(path)
+    assert str(refused.value).replace(MAP_SPEC_SOURCE, "") == \
+        str(spec_refused.value).replace(str(path), "")
+
+
+def test_compute_map_refuses_unswept_without_a_protocol_and_a_protocol_not_a_table():
+    from study import compute_map
+
+    with pytest.raises(ValueError, match=r'observable "unswept" needs \[sweep\] protocol'):
+        compute_map(STRUCTURE, F, [10.0], observables=["velocity", "unswept"],
+                    coupling="two-way", flight=True)
+    with pytest.raises(TypeError, match="protocol must be a dict"):
+        compute_map(STRUCTURE, F, [10.0], coupling="two-way", flight=True, protocol="f")
