@@ -90,8 +90,9 @@ def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.fl
 
     The structure's parameters are fixed in ``[structure]`` except those swept; a
     kinetic friction equal to the static one (the default) follows a swept ``cs``.
-    ``protocol`` is written as ``[sweep] protocol``, as given (the spec reader checks
-    it).
+    Every solver setting that decides the numbers is written where it is not the
+    default (as a spec that omits it), and ``protocol`` as ``[sweep] protocol``, as
+    given (the spec reader checks it).
     """
     fixed = structure.as_dict()
     if "cs" in sweep and "ck" not in sweep and structure.ck == structure.cs:
@@ -116,6 +117,13 @@ def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.fl
     # Only when on, as in a spec that omits it: the text of a map without flight stays.
     lines += ["flight = true"] if flight else []
     lines += ["continuation = true"] if settings.continuation else []
+    # The averaging of irregular motions, only where not the default (as the canonical
+    # spec names them): the text of a map at the defaults stays.
+    averaging = settings.averaging_changes()
+    if "velocity_tolerance" in averaging:
+        lines += [f"velocity_tolerance = {_toml_number(averaging['velocity_tolerance'])}"]
+    if "max_average_periods" in averaging:
+        lines += [f"max_average_periods = {int(averaging['max_average_periods'])}"]
     # And the start, where not the release.
     start = settings.start
     if isinstance(start, Drop):

@@ -353,3 +353,32 @@ def test_compute_map_refuses_unswept_without_a_protocol_and_a_protocol_not_a_tab
                     coupling="two-way", flight=True)
     with pytest.raises(TypeError, match="protocol must be a dict"):
         compute_map(STRUCTURE, F, [10.0], coupling="two-way", flight=True, protocol="f")
+
+
+def test_the_equivalent_spec_keeps_the_averaging_settings(tmp_path):
+    """compute_map's spec text dropped velocity_tolerance and max_average_periods: run
+    as a study it averaged irregular motions with the defaults."""
+    import xarray as xr
+
+    from study import compute_map
+    from study.engine.study_spec import parse_spec
+
+    settings = SolverSettings(velocity_tolerance=2e-2, max_average_periods=300)
+    f, a = np.array([5.5, 7.0, 8.5]), np.array([12.0])  # chaos of bifurcation-along-f
+    observables = ["velocity", "irregular"]
+    ours = compute_map(STRUCTURE, f, a, observables=observables, coupling="two-way",
+                       flight=True, settings=settings, workers=1)
+    text = ours.attrs["study_spec"]
+    assert "velocity_tolerance = 0.02" in text and "max_average_periods = 300" in text
+    assert parse_spec(text, "map.toml").solver == settings
+    spec = tmp_path / "map.toml"
+    spec.write_text(text)
+    run_study(spec, tmp_path / "map.nc", progress=False, cache=tmp_path / "kept")
+    theirs = open_result(tmp_path / "map.nc")
+    xr.testing.assert_identical(_data(ours), _data(theirs))
+    # The settings decide the numbers here: the defaults average longer.
+    plain = compute_map(STRUCTURE, f, a, observables=observables, coupling="two-way",
+                        flight=True, workers=1)
+    assert "velocity_tolerance" not in plain.attrs["study_spec"]
+    assert not np.array_equal(plain["averaged_periods"].values,
+                              ours["averaged_periods"].values)
