@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.observables import METHODS, unmet_needs, variables_of
+from study.engine.observables import METHODS, UNSWEPT_VARIABLES, unmet_needs, variables_of
 from study.engine.observables import OBSERVABLES as OBSERVABLE_REGISTRY
 from study.engine.spec_files import (
     SCHEMA_DIR,
@@ -540,7 +540,8 @@ def _size(n: float) -> str:
 
 
 def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_points: int,
-               path: str, flight: bool = False) -> None:
+               path: str, flight: bool = False,
+               protocol: tuple[object, object] | None = None) -> None:
     """Refuse a study whose output or memory would be absurd, before any work.
 
     Parameters
@@ -556,6 +557,11 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
         The spec file, for messages.
     flight : bool
         ``[solver] flight``: the velocity observable writes its flight variables too.
+    protocol : tuple, optional
+        ``(along, direction)`` of ``[sweep] protocol`` as given (checked later): a slow
+        sweep writes ``jumped`` too; ``direction = "both"`` computes and writes every
+        per-point variable twice (but the unswept ones) in twice the chunks; along
+        ``f`` one chunk holds every ``f`` and ``a`` of a structure.
 
     Raises
     ------
@@ -569,24 +575,46 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
     structures = math.prod(n for name, n in lengths.items() if name not in DRIVE_PARAMETERS)
     n_f = lengths.get("f", 1)
     n_a = lengths.get("a", 1) if needs_solver else 1
-    # What each variable holds per point, from its declaration.
-    variables = variables_of(observables, flight)
+    # What each variable holds per point, from its declaration (a phase section's
+    # periods too).
+    variables = variables_of(observables, flight, protocol is not None)
     per_f_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "row")
-    per_point_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "point")
+    point_bytes = {v.name: np.dtype(v.dtype).itemsize * math.prod(v.trailing_shape)
+                   for v in variables if v.grid in ("point", "section")}
+    per_point_bytes = sum(point_bytes.values())
+    # A slow sweep both ways: every point computed and written once each way, but the
+    # values of each point from its start alone (no direction dimension).
+    directions = 2 if protocol is not None and protocol[1] == "both" else 1
+    written_point_bytes = per_point_bytes + (directions - 1) * sum(
+        size for name, size in point_bytes.items() if name not in UNSWEPT_VARIABLES)
     swept = [name for name in lengths if needs_solver or name != "a"]
     keys = " x ".join(swept)
     sizes = " x ".join(str(lengths[name]) for name in swept)
-    points = structures * n_f * n_a
-    output = structures * n_f * (per_f_bytes + n_a * per_point_bytes)
+    points = structures * n_f * n_a * directions
+    output = structures * n_f * (per_f_bytes + n_a * written_point_bytes)
     if points > MAX_POINTS or output > MAX_OUTPUT_BYTES:
+        both = (' x 2 directions ([sweep] protocol direction = "both")'
+                if directions == 2 else "")
         raise SpecError(
-            f"{path}: [sweep] {keys} = {sizes} = {points:.3g} points ({_size(output)} of "
-            f"output); allowed at most {MAX_POINTS:.3g} points and {_size(MAX_OUTPUT_BYTES)}: "
-            "sweep fewer values"
+            f"{path}: [sweep] {keys} = {sizes}{both} = {points:.3g} points "
+            f"({_size(output)} of output); allowed at most {MAX_POINTS:.3g} points and "
+            f"{_size(MAX_OUTPUT_BYTES)}: sweep fewer values"
         )
     # How study.engine.sweep cuts the grid: whole frequency rows (every a), about
-    # chunk_points points per chunk.
-    f_per_chunk = max(1, min(n_f, chunk_points // n_a))
+    # chunk_points points per chunk; a slow sweep along f holds every f in one chunk
+    # (its runs whole).
+    along_f = needs_solver and protocol is not None and protocol[0] == "f"
+    if along_f:
+        chunk_bytes = n_f * (per_f_bytes + n_a * per_point_bytes)
+        if chunk_bytes > MAX_CHUNK_BYTES:
+            raise SpecError(
+                f'{path}: [sweep] protocol along = "f": one task holds every f and a of a '
+                f"structure ({n_f} x {n_a} points), {_size(chunk_bytes)}, more than one "
+                f"task may hold ({_size(MAX_CHUNK_BYTES)}); allowed: at most "
+                f"{MAX_CHUNK_BYTES // max(per_point_bytes, 1)} points (f x a), or "
+                'along = "a"'
+            )
+    f_per_chunk = n_f if along_f else max(1, min(n_f, chunk_points // n_a))
     chunk_bytes = f_per_chunk * (per_f_bytes + n_a * per_point_bytes)
     if chunk_bytes > MAX_CHUNK_BYTES:
         if f_per_chunk == 1:
@@ -602,7 +630,7 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
             f"{_size(chunk_bytes)}; allowed: at most {int(MAX_CHUNK_BYTES // per_chunk_point)} "
             "points per chunk"
         )
-    chunks = structures * math.ceil(n_f / f_per_chunk)
+    chunks = structures * math.ceil(n_f / f_per_chunk) * directions
     if chunks > MAX_CHUNKS:
         smallest = math.ceil(points / MAX_CHUNKS)
         raise SpecError(
@@ -845,8 +873,11 @@ def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
     lengths = {name: axis_length(sweep[name]) for name in order}
     chunk_points = int(solver_table.get("chunk_points",
                                         default_chunk_points(math.prod(lengths.values()))))
+    protocol = sweep.get("protocol")  # as given: checked with the solver's settings
     check_size(lengths, observables, chunk_points, path,
-               bool(solver_table.get("flight", False)))
+               bool(solver_table.get("flight", False)),
+               (protocol.get("along"), protocol.get("direction", "up"))
+               if isinstance(protocol, dict) else None)
     axes = []
     for name in order:
         units, long_name = SWEEPABLE[name]

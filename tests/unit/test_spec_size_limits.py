@@ -202,3 +202,62 @@ def test_the_workflows_pass_the_guard():
         text = path.read_text(encoding="utf-8")
         if "[study]" in text:
             parse_spec(text, str(path))
+
+
+# ------------------------------------------------------- slow sweeps ([sweep] protocol)
+
+
+def test_both_directions_count_twice_the_points():
+    lengths = {"f": 19_000, "a": 100_000}  # 1.9e9 points: allowed one way
+    check_size(lengths, ("velocity",), 20_000, PATH, protocol=("a", "up"))
+    with pytest.raises(SpecError) as refused:
+        check_size(lengths, ("velocity",), 20_000, PATH, protocol=("a", "both"))
+    assert ('[sweep] f x a = 19000 x 100000 x 2 directions ([sweep] protocol direction = '
+            '"both") = 3.8e+09 points') in str(refused.value)
+
+
+def test_both_directions_write_twice_but_the_unswept_values():
+    # 1e9 points of velocity, status, jumped and diagnostics (39 bytes each): 36.3 GiB
+    # one way, 72.6 GiB both; unswept (9 bytes) is written once: 81 GiB.
+    lengths = {"f": 10_000, "a": 100_000}
+    observables = ("velocity", "diagnostics")
+    check_size(lengths, observables, 20_000, PATH, protocol=("a", "down"))
+    with pytest.raises(SpecError, match=r"= 2e\+09 points \(72\.6 GiB of output\)"):
+        check_size(lengths, observables, 20_000, PATH, protocol=("a", "both"))
+    with pytest.raises(SpecError, match=r"= 2e\+09 points \(81 GiB of output\)"):
+        check_size(lengths, (*observables, "unswept"), 20_000, PATH,
+                   protocol=("a", "both"))
+
+
+@pytest.mark.usefixtures("no_values")
+def test_a_spec_swept_both_ways_is_refused_on_its_lengths():
+    message = _refused(spec_text(
+        f="{ start = 10.0, stop = 20.0, num = 19000 }",
+        a='{ start = 0.0, stop = 12.0, num = 100000 }\nprotocol = { along = "a", '
+          'direction = "both" }', solver='coupling = "two-way"'))
+    assert "x 2 directions" in message and "3.8e+09 points" in message
+
+
+def test_a_sweep_along_f_holds_every_f_and_a_in_one_task():
+    lengths = {"f": 1000, "a": 100_000}  # 1e8 points of 10 bytes in one task
+    check_size(lengths, ("velocity",), 20_000, PATH, protocol=("a", "up"))
+    with pytest.raises(SpecError) as refused:
+        check_size(lengths, ("velocity",), 20_000, PATH, protocol=("f", "up"))
+    message = str(refused.value)
+    assert '[sweep] protocol along = "f": one task holds every f and a of a structure ' \
+           "(1000 x 100000 points), 954 MiB" in message
+    assert f"allowed: at most {MAX_CHUNK_BYTES // 10} points (f x a)" in message
+
+
+def test_chunks_both_ways_count_twice():
+    lengths = {"Q": 600_000, "f": 2, "a": 2}  # one chunk per structure and direction
+    check_size(lengths, ("velocity",), 4, PATH, protocol=("a", "up"))
+    with pytest.raises(SpecError, match=r"1\.2e\+06 chunks"):
+        check_size(lengths, ("velocity",), 4, PATH, protocol=("a", "both"))
+
+
+def test_a_phase_section_counts_its_periods():
+    # 1e8 points of velocity and status (9 bytes) and 64 periods of three section
+    # variables (1536 bytes): 144 GiB, where 9 bytes a point would be 0.84 GiB.
+    with pytest.raises(SpecError, match=r"1e\+08 points \(144 GiB of output\)"):
+        check_size({"f": 10_000, "a": 10_000}, ("velocity", "section"), 20_000, PATH)
