@@ -8,11 +8,11 @@ from typing import Any
 
 import numpy as np
 
-from study.engine.layout import method_attributes, study_summary
+from study.engine.layout import method_attributes, protocol_attributes, study_summary
 from study.engine.study_spec import parse_spec
 from study.engine.variables import VARIABLES
 
-__all__ = ["to_format_3", "to_format_4"]
+__all__ = ["to_format_3", "to_format_4", "to_format_5"]
 
 
 def to_format_3(nc: Any) -> None:
@@ -47,6 +47,27 @@ def to_format_4(nc: Any) -> None:
         A study result of format 3, open in append mode.
     """
     _declare_flags(nc)
+
+
+def to_format_5(nc: Any) -> None:
+    """Format 4 -> 5: the start each point's motion began from, recorded.
+
+    A file of format 4 (study 0.3.0) has no start attributes: its points started by the
+    release, and it holds no slow sweep (no ``[sweep] protocol``, no ``jumped``, no
+    ``direction`` dimension), no ``unswept`` and no ``section`` variables. Format 5
+    requires ``study_start`` and ``study_start_kind``: they are written from the
+    embedded spec, which decided the numbers (``"release"`` for every file 0.3.0
+    wrote), as :func:`study.engine.layout.protocol_attributes` writes them for a new
+    file. No value is read or written; the flags are already today's.
+
+    Parameters
+    ----------
+    nc : netCDF4.Dataset
+        A study result of format 4, open in append mode.
+    """
+    spec = parse_spec(str(nc.getncattr("study_spec")), "the embedded spec")
+    for name, value in protocol_attributes(spec).items():
+        nc.setncattr(name, value)
 
 
 def _declare_flags(nc: Any) -> None:

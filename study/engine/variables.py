@@ -43,8 +43,14 @@ STUDY_FORMATS = (
                  upgrade="study.engine.study_upgrade:to_format_3"),
     ResultFormat(4, "0.3.0", "irregular motions measured: statuses chaotic and "
                  "quasi_periodic, nonconvergence average_budget, the irregular observable's "
-                 "variables", "study-result-v1",
+                 "variables", "study-result-v1.format-4",
                  upgrade="study.engine.study_upgrade:to_format_4"),
+    ResultFormat(5, "0.4.0", "the start recorded (study_start, study_start_kind, a drop's "
+                 "height and phase), slow sweeps (study_protocol and its along and "
+                 "direction, jumped, the unswept observable's variables, a direction "
+                 "dimension both ways) and the section observable's variables",
+                 "study-result-v1",
+                 upgrade="study.engine.study_upgrade:to_format_5"),
 )
 
 #: The format this version writes.

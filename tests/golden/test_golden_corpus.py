@@ -40,11 +40,26 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 RELEASES = sorted(p.name for p in HERE.glob("v*") if p.is_dir())
 CORPUS = sorted(HERE.glob("v*/*.nc"))
+
+
+def _is_older_format(path: Path) -> bool:
+    """Whether the file's format is older than the one this code writes."""
+    attrs = read_attributes(path)
+    kind = kind_of_schema(str(attrs["study_result_schema"]))
+    return attrs.get(kind.format_attribute, kind.formats[0].number) != kind.current_format.number
+
+
 #: The files of the releases before this version: the promise is that a later version
 #: reads what an earlier one wrote. (The files this version writes are read by this
 #: same code throughout the other tiers; they join these once a later version exists.
-#: Every file still opens, validates and describes above.)
-EARLIER = [path for path in CORPUS if path.parent.name != f"v{VERSION}"]
+#: Every file still opens, validates and describes above.) Also this version's files of
+#: a format changed since its release (its studies, format 4, while the unreleased code
+#: writes format 5): they are read and upgraded as any earlier release's.
+EARLIER = [path for path in CORPUS
+           if path.parent.name != f"v{VERSION}" or _is_older_format(path)]
+#: Every study of the corpus, of every release (formats 2, 3 and 4).
+STUDIES = [path for path in CORPUS
+           if read_attributes(path)["study_result_schema"] == "study-result-v1"]
 #: The figure each golden file is drawn as (every file is drawn by at least one).
 FIGURE_OF = {
     "own": "regime-map",
@@ -302,3 +317,149 @@ def test_an_older_study_does_not_replace_a_newer_versions_file(tmp_path: Path, c
     assert main(["run", str(spec), "-o", str(newer), "--cache", str(tmp_path / "c"),
                  "--force"]) == 0
     assert validate_file(newer) == "study result"
+
+
+# ---------------------------------------------------------------------------
+# Format 5: the start and slow sweeps recorded (format 4 is study 0.3.0's)
+
+FORMAT_5_SPEC = """\
+[study]
+name = "format-5"
+observables = ["velocity", "section", "unswept"]
+
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+M = 0.99
+cs = 0.25
+
+[sweep]
+f = { values = [15.2, 16.0] }
+a = { values = [10.0] }
+protocol = { along = "f", direction = "both" }
+
+[solver]
+coupling = "two-way"
+flight = true
+start = "switch-on"
+"""
+
+
+def test_the_current_study_format_is_5_and_4_is_frozen_as_0_3_0_wrote_it():
+    from study.engine.variables import RESULT_FORMAT, STUDY_FORMATS
+
+    assert RESULT_FORMAT == 5
+    assert [f.number for f in STUDY_FORMATS] == [1, 2, 3, 4, 5]
+    four = STUDY_FORMATS[3]
+    assert (four.release, four.schema) == ("0.3.0", "study-result-v1.format-4")
+    frozen = json.loads((REPO / "study" / "schemas" / f"{four.schema}.schema.json").read_text())
+    assert frozen["properties"]["attrs"]["properties"]["study_result_format"]["const"] == 4
+    # 0.3.0 knew no start: its schema names none of the attributes format 5 added.
+    assert not [name for name in frozen["properties"]["attrs"]["properties"]
+                if name.startswith(("study_start", "study_protocol"))]
+    current = json.loads((REPO / "study" / "schemas" / "study-result-v1.schema.json").read_text())
+    attrs = current["properties"]["attrs"]
+    assert attrs["properties"]["study_result_format"]["const"] == 5
+    assert {"study_start", "study_start_kind"} <= set(attrs["required"])
+
+
+@pytest.mark.parametrize("path", [p for p in STUDIES if p.parent.name == "v0.3.0"], ids=_id)
+def test_a_0_3_0_study_upgrades_to_format_5_started_by_the_release(path: Path,
+                                                                  tmp_path: Path):
+    """Step 4 -> 5 reads and writes no value: a format-4 file started by the release and
+    holds no slow sweep; the start is recorded from its embedded spec, the format and
+    the history change, nothing else."""
+    old = read_attributes(path)
+    assert old["study_result_format"] == 4
+    assert not [name for name in old if name.startswith(("study_start", "study_protocol"))]
+    output = tmp_path / "upgraded.nc"
+    assert main(["upgrade", str(path), "-o", str(output)]) == 0
+    assert validate_file(output) == "study result"
+    new = read_attributes(output)
+    assert new["study_result_format"] == 5
+    assert (new["study_start"], new["study_start_kind"]) == ("release", "release")
+    changed = {name for name in set(old) | set(new) if old.get(name) != new.get(name)}
+    assert changed <= {"study_result_format", "history", "date_modified", "study_start",
+                       "study_start_kind", "study_content_sha256"}, changed
+    assert new["study_content_sha256"] == old["study_content_sha256"]
+    assert "format 4 -> 5" in new["history"].splitlines()[-1]
+    assert new["history"].startswith(old["history"])
+    with netCDF4.Dataset(path) as a, netCDF4.Dataset(output) as b:
+        assert dict(a.dimensions.items()).keys() == dict(b.dimensions.items()).keys()
+        for name, variable in a.variables.items():
+            assert {k: str(variable.getncattr(k)) for k in variable.ncattrs()} == {
+                k: str(b[name].getncattr(k)) for k in b[name].ncattrs()}, name
+
+
+@pytest.mark.parametrize("path", [p for p in STUDIES if p.parent.name in ("v0.1.0", "v0.2.0")],
+                         ids=_id)
+def test_older_studies_upgrade_all_the_way_to_format_5(path: Path, tmp_path: Path):
+    before = read_attributes(path).get("study_result_format", 1)
+    output = tmp_path / "upgraded.nc"
+    assert main(["upgrade", str(path), "-o", str(output)]) == 0
+    assert validate_file(output) == "study result"
+    new = read_attributes(output)
+    assert new["study_result_format"] == 5
+    assert (new["study_start"], new["study_start_kind"]) == ("release", "release")
+    assert f"format {before} -> 5" in new["history"].splitlines()[-1]
+
+
+def test_a_format_5_file_written_today_validates_and_0_3_0_s_rules_are_not_its(tmp_path):
+    """A slow sweep both ways from the switch-on, with the section and unswept
+    observables: every attribute, dimension and variable format 5 added, by the current
+    schema; one without its start is refused (format 5 requires it)."""
+    from study.engine.runner import run_study
+    from study.engine.validation.formats import schema_path
+    from study.engine.validation.header import file_header, schema_problems
+    from study.engine.validation.reading import file_metadata, open_netcdf
+    from study.engine.variables import STUDY_FORMATS
+
+    spec = tmp_path / "format-5.toml"
+    spec.write_text(FORMAT_5_SPEC)
+    output = run_study(spec, tmp_path / "format-5.nc", cache=tmp_path / "cache",
+                       progress=False, workers=1).output
+    assert validate_file(output) == "study result"
+    assert file_format_note(output) == ""
+    attrs = read_attributes(output)
+    assert attrs["study_result_format"] == 5
+    assert (attrs["study_start"], attrs["study_start_kind"]) == ("switch-on", "switch-on")
+    assert (attrs["study_protocol"], attrs["study_protocol_along"],
+            attrs["study_protocol_direction"]) == ("slow sweep", "f", "both")
+    with open_netcdf(output) as nc:
+        header = file_header(file_metadata(nc, output))
+        assert nc["direction"][:].tolist() == ["up", "down"]
+    assert header["dims"]["direction"] == 2 and "section_period" in header["dims"]
+    for name in ("jumped", "velocity_unswept", "status_unswept", "section_delta"):
+        assert name in header["variables"], name
+    assert schema_problems(schema_path(STUDY_FORMATS[-1]), header) == []
+    # Its start is required; a direction dimension is a sweep both ways.
+    without_start = json.loads(json.dumps(header))
+    del without_start["attrs"]["study_start"]
+    assert schema_problems(schema_path(STUDY_FORMATS[-1]), without_start)
+    one_way = json.loads(json.dumps(header))
+    one_way["attrs"]["study_protocol_direction"] = "up"
+    assert schema_problems(schema_path(STUDY_FORMATS[-1]), one_way)
+    copy = tmp_path / "no-start.nc"
+    shutil.copyfile(output, copy)
+    with netCDF4.Dataset(copy, "a") as nc:
+        nc.delncattr("study_start")
+    with pytest.raises(ResultError, match="study_start"):
+        validate_file(copy)
+
+
+def test_a_format_newer_than_5_is_refused_naming_the_file_and_formats(tmp_path, capsys):
+    """Never read by rules it was not written for: one line that names the file, the
+    format it claims and the newest this version reads."""
+    path = HERE / "v0.3.0" / "own.nc"
+    newer = _tampered(path, tmp_path, study_result_format=np.int32(6))
+    with pytest.raises(ResultError) as raised:
+        validate_file(newer)
+    message = str(raised.value)
+    assert "\n" not in message
+    assert message.startswith(f"{newer}: study result format 6,")
+    assert "this version reads formats 1-5" in message and "upgrade study" in message
+    assert main(["validate", str(newer)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(newer) in err and "format 6" in err
+    assert "formats 1-5" in err and "Traceback" not in err

@@ -405,7 +405,7 @@ f = { values = [1.0, 14.44, 1000.0] }
     output = run_study(spec, tmp_path / "resonance.nc", progress=False, workers=1).output
     validate_file(output)
     with xr.open_dataset(output) as data:
-        assert data.attrs["study_result_format"] == RESULT_FORMAT == 4
+        assert data.attrs["study_result_format"] == RESULT_FORMAT == 5
         assert data.mode_phase.attrs["units"] == "degree"
         phase = data.mode_phase.values
     # Below, at and far above resonance: ~0, 90 and ~180 degree (not 0, pi/2, pi).
