@@ -934,7 +934,7 @@ def steady_state(
     flight = check_flight(flight, coupling, structure)
     check_friction(friction, "exact")
     settings = check_start(check_settings(settings, coupling), start, coupling, flight)
-    shape, f_flat, a_flat = _flat_drive(f, a)
+    shape, f_flat, a_flat = flat_drive(f, a)
     if coupling == "two-way":
         return _orbit_steady_state(structure, f_flat, a_flat, shape, coupling, settings,
                                    parallel, flight)
@@ -1025,7 +1025,7 @@ def attractors(
     coupling = check_coupling(coupling)
     flight = check_flight(flight, coupling, structure)
     settings = check_settings(settings)
-    shape, f_flat, a_flat = _flat_drive(f, a)
+    shape, f_flat, a_flat = flat_drive(f, a)
     lifted = a_flat > lift_off_acceleration(structure, f_flat)
     out = np.empty((f_flat.size, attractor_kernel.N_ATTRACTOR_OUT))
     if parallel is None:
@@ -1129,7 +1129,7 @@ def phase_section(
     settings = check_start(check_settings(settings, "two-way"), None, "two-way", flight)
     if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
         raise ValueError(f"periods must be a positive integer, got {periods!r}")
-    shape, f_flat, a_flat = _flat_drive(f, a)
+    shape, f_flat, a_flat = flat_drive(f, a)
     if solution is None:
         solution = _orbit_steady_state(structure, f_flat, a_flat, shape, "two-way",
                                        settings, None, flight)
@@ -1213,7 +1213,7 @@ def steady_velocity(
     structure = check_structure(structure)
     flight = check_flight(flight, coupling, structure)
     settings = check_start(check_settings(settings, coupling), start, coupling, flight)
-    shape, f_flat, a_flat = _flat_drive(f, a)
+    shape, f_flat, a_flat = flat_drive(f, a)
     if coupling != "one-way":
         # The orbit kernel's velocity and status only (those of steady_state, bit for
         # bit), without its table of every column.
@@ -1263,7 +1263,7 @@ def _velocity_only(
     return out.velocity, out.status
 
 
-def _flat_drive(
+def flat_drive(
     f: ArrayLike, a: ArrayLike,
 ) -> tuple[tuple[int, ...], NDArray[np.float64], NDArray[np.float64]]:
     """The broadcast shape of the checked drive ``f``, ``a`` and both flattened

@@ -1,0 +1,301 @@
+"""Basins: every motion a drive point holds, and the share of starts that reach each.
+
+Near M = 1, and wherever the structure bounces, one drive can hold several stable
+motions; which one a structure performs then depends on how it was put down. At each
+drive point :func:`basins` follows the motion from each of ``starts`` seeded starts
+(:func:`basin_starts`) to the attractor it reaches, verified as every start is
+(docs/theory/starts.md), groups the outcomes into attractors and reports each one's
+motion and its basin fraction: the share of the starts that reach it, with its 95 %
+binomial (Wilson) interval. Start 0 is the solver's start (the release by default), so
+the attractor it reaches is the one :func:`study.solvers.exact.steady_state` reports.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from study.kernels.two_way import basins as basin_kernel
+from study.model.structure import Structure, check_structure
+from study.solvers.exact import (
+    SolverSettings,
+    check_coupling,
+    check_flight,
+    check_settings,
+    check_start,
+    flat_drive,
+    kernel_budget,
+    kernel_start,
+    past_lift_off,
+    structure_vector,
+)
+
+#: Starts at each drive point by default.
+DEFAULT_STARTS = 24
+#: The confidence of the basin fractions' intervals, and its normal quantile.
+CONFIDENCE = 0.95
+_Z = 1.959963984540054
+#: With flight, every third start (of those after the first) is a drop from a height
+#: drawn log-uniformly between these [m].
+DROP_HEIGHT_RANGE = (1e-4, 5e-3)
+#: The mode starts at rest on a multiple of its steady stick response drawn uniformly
+#: from this range [1].
+FACTOR_RANGE = (0.0, 2.0)
+#: The status of an attractor slot that holds none (a point with fewer attractors).
+NO_ATTRACTOR = -1
+
+
+@dataclass(frozen=True)
+class BasinStarts:
+    """The starts of :func:`basins`, the same at every drive point.
+
+    Attributes
+    ----------
+    phase : numpy.ndarray
+        Drive phase of each start [periods], in [0, 1).
+    factor : numpy.ndarray
+        The mode starts at rest on this multiple of its steady stick response at that
+        phase [1].
+    height : numpy.ndarray
+        The base starts at rest this high above the table [m] (0: on it).
+    """
+
+    phase: NDArray[np.float64]
+    factor: NDArray[np.float64]
+    height: NDArray[np.float64]
+
+    def __len__(self) -> int:
+        return int(self.phase.size)
+
+
+def basin_starts(starts: int = DEFAULT_STARTS, *, seed: int = 0, flight: bool = False,
+                 first: tuple[float, float, float] = (0.0, 1.0, 0.0)) -> BasinStarts:
+    """The ``starts`` starts of :func:`basins`: ``first`` (phase, factor, height; the
+    solver's start, by default the release), then seeded draws.
+
+    Each drawn start holds the base at rest at a drive phase drawn uniformly from
+    [0, 1) periods, the mode at rest on a multiple of its steady stick response at that
+    phase drawn uniformly from :data:`FACTOR_RANGE`; on the table, or, with ``flight``,
+    for every third draw, above it at a height drawn log-uniformly from
+    :data:`DROP_HEIGHT_RANGE`. The draws come from ``numpy.random.default_rng(seed)``,
+    so the same ``(starts, seed, flight)`` give the same starts on every machine.
+
+    Raises
+    ------
+    ValueError
+        ``starts`` not an integer >= 1, or ``seed`` not an integer >= 0.
+    """
+    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or starts < 1:
+        raise ValueError(f"basins: 'starts' must be an integer >= 1, got {starts!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"basins: 'seed' must be an integer >= 0, got {seed!r}")
+    rng = np.random.default_rng(int(seed))
+    drawn = int(starts) - 1
+    phase = rng.uniform(0.0, 1.0, drawn)
+    factor = rng.uniform(*FACTOR_RANGE, drawn)
+    low, high = np.log(DROP_HEIGHT_RANGE)
+    heights = np.exp(rng.uniform(low, high, drawn))
+    height = np.where((np.arange(drawn) % 3 == 2) & bool(flight), heights, 0.0)
+    return BasinStarts(phase=np.concatenate([[first[0]], phase]),
+                       factor=np.concatenate([[first[1]], factor]),
+                       height=np.concatenate([[first[2]], height]))
+
+
+def wilson_interval(successes: ArrayLike, trials: ArrayLike) -> tuple[NDArray[np.float64],
+                                                                       NDArray[np.float64]]:
+    """The :data:`CONFIDENCE` Wilson score interval ``(low, high)`` of a binomial
+    proportion ``successes / trials`` (NaN where ``trials`` is 0)."""
+    k = np.asarray(successes, dtype=float)
+    n = np.asarray(trials, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        p = k / n
+        z2 = _Z * _Z
+        centre = (p + z2 / (2.0 * n)) / (1.0 + z2 / n)
+        half = _Z * np.sqrt(p * (1.0 - p) / n + z2 / (4.0 * n * n)) / (1.0 + z2 / n)
+    return np.clip(centre - half, 0.0, 1.0), np.clip(centre + half, 0.0, 1.0)
+
+
+def _checked_starts(starts: BasinStarts, flight: bool) -> BasinStarts:
+    """Given starts as float64 arrays, checked: one length, at least one, phases in
+    [0, 1), factors finite, heights finite and >= 0 (> 0 only with flight)."""
+    phase, factor, height = (np.ascontiguousarray(np.asarray(x, dtype=np.float64).ravel())
+                             for x in (starts.phase, starts.factor, starts.height))
+    if not phase.size or not phase.size == factor.size == height.size:
+        raise ValueError("basins: the starts' phase, factor and height must be 1-D arrays "
+                         f"of one length >= 1, got {phase.size}, {factor.size} and "
+                         f"{height.size}")
+    if not np.all((phase >= 0.0) & (phase < 1.0)):
+        raise ValueError("basins: a start's phase must be in [0, 1) periods")
+    if not np.all(np.isfinite(factor)):
+        raise ValueError("basins: a start's factor must be finite")
+    if not np.all(np.isfinite(height) & (height >= 0.0)):
+        raise ValueError("basins: a start's height must be finite and >= 0 [m]")
+    if np.any(height > 0.0) and not flight:
+        raise ValueError("basins: a start above the table (height > 0) needs flight=True")
+    return BasinStarts(phase=phase, factor=factor, height=height)
+
+
+@dataclass(frozen=True)
+class Basins:
+    """The attractors at each drive point and their basin fractions.
+
+    Per-attractor fields have the drive's shape plus a last ``attractor`` axis, as long
+    as the most attractors any point holds; attractors are numbered at each point in
+    the order the starts first reach them (start 0 reaches attractor 0), and a slot a
+    point does not fill has ``status`` :data:`NO_ATTRACTOR`, NaN values and fraction 0.
+
+    Attributes
+    ----------
+    status : numpy.ndarray of int8
+        :class:`~study.model.status.Status` code of each attractor; an outcome outside
+        the model (lift-off without flight, the friction paradox, not converged) is one
+        entry, so that the fractions add up to 1.
+    velocity : numpy.ndarray
+        Mean velocity on the attractor [m s-1].
+    velocity_error : numpy.ndarray
+        Its standard error [m s-1] (0 for an orbit's, exact).
+    largest_hop : numpy.ndarray
+        Largest height of the base above the table over the motion [m].
+    orbit_period : numpy.ndarray of int32
+        An orbit's period in drive periods [1] (0: static or irregular).
+    floquet_multiplier : numpy.ndarray
+        An orbit's largest Floquet multiplier modulus [1].
+    lyapunov_exponent : numpy.ndarray
+        Largest Lyapunov exponent per drive period [1].
+    fraction : numpy.ndarray
+        Basin fraction [1]: the share of the drawn starts that reach the attractor.
+    fraction_low, fraction_high : numpy.ndarray
+        Its :data:`CONFIDENCE` Wilson interval [1].
+    count : numpy.ndarray of int32
+        Attractors at each point [1].
+    default_attractor : numpy.ndarray of int32
+        The attractor start 0 (the solver's start) reaches, or -1 where it was not
+        drawn.
+    starts_drawn : numpy.ndarray of int32
+        Starts followed at each point [1]: those on the table that the model cannot
+        hold there (a negative normal force) are not drawn without flight.
+    reached : numpy.ndarray of int32
+        For each point and start, the attractor it reached (-1: not drawn).
+    starts : BasinStarts
+        The starts.
+    """
+
+    status: NDArray[np.int8]
+    velocity: NDArray[np.float64]
+    velocity_error: NDArray[np.float64]
+    largest_hop: NDArray[np.float64]
+    orbit_period: NDArray[np.int32]
+    floquet_multiplier: NDArray[np.float64]
+    lyapunov_exponent: NDArray[np.float64]
+    fraction: NDArray[np.float64]
+    fraction_low: NDArray[np.float64]
+    fraction_high: NDArray[np.float64]
+    count: NDArray[np.int32]
+    default_attractor: NDArray[np.int32]
+    starts_drawn: NDArray[np.int32]
+    reached: NDArray[np.int32]
+    starts: BasinStarts
+
+
+def basins(
+    structure: Structure,
+    f: ArrayLike,
+    a: ArrayLike,
+    *,
+    starts: int | BasinStarts = DEFAULT_STARTS,
+    seed: int = 0,
+    flight: bool = False,
+    settings: SolverSettings | None = None,
+    parallel: bool | None = None,
+) -> Basins:
+    """Every attractor the starts reach at each drive point, with its basin fraction.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    f : array_like
+        Drive frequency [Hz], > 0.
+    a : array_like
+        Drive acceleration amplitude [m s-2], >= 0; broadcast against ``f``.
+    starts : int or BasinStarts, default 24
+        Starts at each point: that many (:func:`basin_starts`: the solver's start, then
+        seeded draws), or the given ones (start 0 the one ``default_attractor`` names).
+    seed : int, default 0
+        Seed of the draws (unused with given starts).
+    flight : bool, default False
+        Let the base fly and land (as :func:`study.solvers.exact.steady_state`); a third
+        of the draws are then drops.
+    settings : SolverSettings, optional
+        Budgets and the solver's start (start 0); ``continuation`` must be False (every
+        start is followed from its own state).
+    parallel : bool, optional
+        Spread points over all cores; by default with at least 16 points.
+
+    Returns
+    -------
+    Basins
+        The attractors, their fractions and which one the solver's start reaches.
+
+    Raises
+    ------
+    ValueError
+        Bad ``starts`` or ``seed`` (naming the key), continuation, or drive values out
+        of range (as :func:`study.solvers.exact.steady_state`).
+    """
+    structure = check_structure(structure)
+    coupling = check_coupling("two-way")
+    flight = check_flight(flight, coupling, structure)
+    settings = check_start(check_settings(settings, coupling), None, coupling, flight)
+    if settings.continuation:
+        raise ValueError("basins follows every start from its own state: solver setting "
+                         "'continuation' must be False with it")
+    if isinstance(starts, BasinStarts):
+        table = _checked_starts(starts, flight)
+    else:
+        first = kernel_start(settings.start)
+        table = basin_starts(starts, seed=seed, flight=flight,
+                             first=(first.phase, first.factor, first.height))
+    shape, f_flat, a_flat = flat_drive(f, a)
+    n, k = f_flat.size, len(table)
+    out = np.empty((n, k, basin_kernel.N_BASIN))
+    reached = np.empty((n, k), dtype=np.int64)
+    counts = np.zeros(n, dtype=np.int64)
+    if parallel is None:
+        parallel = n >= 16
+    kernel = basin_kernel.basins_points if parallel else basin_kernel.basins_points_serial
+    kernel(structure_vector(structure, coupling, flight), 2.0 * np.pi * f_flat, a_flat,
+           past_lift_off(structure, f_flat, a_flat), kernel_budget(settings),
+           table.phase, table.factor, table.height, out, reached, counts)
+    width = max(int(counts.max(initial=0)), 1)
+    out = out[:, :width]
+    drawn = (reached >= 0).sum(axis=1)
+    present = np.arange(width)[None, :] < counts[:, None]
+    hits = np.where(present, out[..., basin_kernel.B_STARTS], 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fraction = np.where(drawn[:, None] > 0, hits / drawn[:, None], np.nan)
+    low, high = wilson_interval(hits, np.broadcast_to(drawn[:, None], hits.shape))
+
+    def per_attractor(column: int, dtype: type = np.float64, fill: float = np.nan):
+        values = np.where(present, out[..., column], fill)
+        return values.astype(dtype).reshape(*shape, width)
+
+    return Basins(
+        status=per_attractor(basin_kernel.B_STATUS, np.int8, NO_ATTRACTOR),
+        velocity=per_attractor(basin_kernel.B_VELOCITY),
+        velocity_error=per_attractor(basin_kernel.B_VELOCITY_ERROR),
+        largest_hop=per_attractor(basin_kernel.B_HOP),
+        orbit_period=per_attractor(basin_kernel.B_PERIOD, np.int32, 0),
+        floquet_multiplier=per_attractor(basin_kernel.B_MULTIPLIER),
+        lyapunov_exponent=per_attractor(basin_kernel.B_EXPONENT),
+        fraction=np.where(present, fraction, 0.0).reshape(*shape, width),
+        fraction_low=np.where(present, low, 0.0).reshape(*shape, width),
+        fraction_high=np.where(present, high, 0.0).reshape(*shape, width),
+        count=counts.astype(np.int32).reshape(shape),
+        default_attractor=reached[:, 0].astype(np.int32).reshape(shape),
+        starts_drawn=drawn.astype(np.int32).reshape(shape),
+        reached=reached.astype(np.int32).reshape(*shape, k),
+        starts=table,
+    )
