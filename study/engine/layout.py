@@ -30,6 +30,7 @@ from study.solvers.exact import start_attributes
 __all__ = [
     "Coordinate",
     "DataVariable",
+    "basins_attributes",
     "contact_law_attributes",
     "coordinate_attrs",
     "coordinates",
@@ -105,8 +106,9 @@ def coordinates(spec: StudySpec) -> tuple[Coordinate, ...]:
     # The dimensions of a point's values (a phase section's periods), counted from 0.
     trailing = {d for o in resolve(spec.observables, spec.flight) for v in o.variables
                 for d in GRIDS[VARIABLES[v].grid][2:]}
+    sizes = {**GRID_SIZES, **spec.dimension_sizes}
     for name in sorted(trailing):
-        found.append(Coordinate(name, (name,), np.arange(GRID_SIZES[name], dtype=np.int32),
+        found.append(Coordinate(name, (name,), np.arange(sizes[name], dtype=np.int32),
                                 coordinate_attrs(DIMENSIONLESS, _TRAILING_NAMES[name])))
     if spec.mass is not None:
         found.append(Coordinate("m0", (), np.float64(spec.mass.m0),
@@ -126,7 +128,9 @@ def coordinates(spec: StudySpec) -> tuple[Coordinate, ...]:
 
 #: long_name of each dimension of :data:`~study.engine.variables.GRID_SIZES`.
 _TRAILING_NAMES = {"section_period": "drive periods of the phase section, counted from "
-                   "the reported state"}
+                   "the reported state",
+                   "attractor": "attractors at the drive point, numbered from 0 in the order "
+                   "the starts first reach them"}
 
 
 def observables_by_grid(spec: StudySpec) -> tuple[tuple[Observable, ...],
@@ -146,7 +150,8 @@ def data_variables(spec: StudySpec, observables: tuple[Observable, ...]
     structure_dims = tuple(axis.name for axis in spec.structure_axes)
     return tuple(
         DataVariable(name, VARIABLES[name].grid, variable_dims(spec, name, structure_dims),
-                     VARIABLES[name].dtype, VARIABLES[name].attrs(spec.flight))
+                     VARIABLES[name].dtype,
+                     VARIABLES[name].attrs(spec.flight, spec.observables))
         for observable in observables for name in observable.variables
     )
 
@@ -157,7 +162,7 @@ def variable_dims(spec: StudySpec, name: str, structure_dims: tuple[str, ...]
     ways, every per-point variable has a leading ``direction`` (up, down), but those of
     each point from its start alone (:data:`study.engine.observables.UNSWEPT_VARIABLES`)."""
     dims = VARIABLES[name].dims(structure_dims)
-    if (spec.both_directions and VARIABLES[name].grid in ("point", "section")
+    if (spec.both_directions and VARIABLES[name].grid in ("point", "section", "attractor")
             and name not in UNSWEPT_VARIABLES):
         return ("direction", *dims)
     return dims
@@ -176,7 +181,7 @@ def pad_branches(values: NDArray[Any], branches: int, dtype: str) -> NDArray[Any
 def method_of(spec: StudySpec) -> Method:
     """How the study computes velocities (solver, coupling and settings)."""
     return Method(spec.method, spec.coupling, spec.solver, spec.integrator, spec.friction,
-                  spec.flight, spec.protocol)
+                  spec.flight, spec.protocol, spec.basins)
 
 
 def direction_methods(spec: StudySpec) -> tuple[Method, ...]:
@@ -302,6 +307,15 @@ def protocol_attributes(spec: StudySpec) -> dict[str, str | float]:
     return found
 
 
+def basins_attributes(spec: StudySpec) -> dict[str, int]:
+    """How the ``basins`` observable sampled each point, in a study that asks for it:
+    ``study_basins_starts``, ``study_basins_seed`` and ``study_basins_max_attractors``
+    (``[basins]``, its defaults where absent); nothing in any other study."""
+    if spec.basins is None:
+        return {}
+    return {f"study_basins_{key}": value for key, value in spec.basins.canonical().items()}
+
+
 def contact_law_attributes(coupling: str, friction: Friction | str | None = None,
                            lift_off: str = DEFAULT_LIFT_OFF,
                            lift_off_values: Mapping[str, float] | None = None
@@ -385,7 +399,8 @@ def method_attributes(spec: StudySpec) -> dict[str, str | float]:
         (``"stop"`` or ``"flight"``), and one float ``study_lift_off_<parameter>`` for
         each fixed structure parameter the lift-off law reads
         (``study_lift_off_restitution`` with flight; left out where it is swept, its
-        coordinate holds it), then :func:`protocol_attributes`.
+        coordinate holds it), then :func:`protocol_attributes` and, with the basins
+        observable, :func:`basins_attributes`.
     """
     return {
         "source": f"study: {method_description(spec)}",
@@ -393,6 +408,7 @@ def method_attributes(spec: StudySpec) -> dict[str, str | float]:
         **contact_law_attributes(spec.coupling, spec.friction, spec.lift_off,
                                  _lift_off_values(spec)),
         **protocol_attributes(spec),
+        **basins_attributes(spec),
     }
 
 

@@ -31,7 +31,7 @@ from study.engine.layout import (
     pad_branches,
     plan_study,
 )
-from study.engine.observables import OBSERVABLES, UNSWEPT_VARIABLES
+from study.engine.observables import OBSERVABLES, UNSWEPT_VARIABLES, BasinSettings
 from study.engine.study_spec import STRUCTURE_PARAMETERS, StudySpec, parse_spec
 from study.engine.sweep import Rectangle, Task, compute_task
 from study.engine.variables import GRID_SIZES
@@ -69,30 +69,32 @@ def _toml_values(values: NDArray[np.float64]) -> str:
     return "{ values = [" + ", ".join(_toml_number(v) for v in values) + "] }"
 
 
-def _toml_scalar(name: str, value: object) -> str:
-    """A protocol value as TOML (a string, a boolean or a number; anything else is
-    refused naming the key)."""
+def _toml_scalar(name: str, value: object, table: str = "protocol") -> str:
+    """A protocol or basins value as TOML (a string, a boolean or a number; anything
+    else is refused naming the key)."""
     if isinstance(value, str):
         return json.dumps(value)
-    if isinstance(value, bool):
+    if isinstance(value, bool | np.bool_):
         return "true" if value else "false"
-    if isinstance(value, int | float):
-        return repr(value)
-    raise TypeError(f"protocol[{name!r}] must be a string, got {value!r}")
+    if isinstance(value, int | float | np.integer | np.floating):
+        return repr(value.item() if isinstance(value, np.generic) else value)
+    raise TypeError(f"{table}[{name!r}] must be "
+                    f"{'a string' if table == 'protocol' else 'an integer'}, got {value!r}")
 
 
 def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
                   observables: tuple[str, ...], coupling: str,
                   sweep: Mapping[str, NDArray[np.float64]],
                   settings: SolverSettings, flight: bool = False,
-                  protocol: Mapping[str, object] | None = None) -> str:
+                  protocol: Mapping[str, object] | None = None,
+                  basins: Mapping[str, object] | None = None) -> str:
     """The study spec (TOML) of a :func:`compute_map` call.
 
     The structure's parameters are fixed in ``[structure]`` except those swept; a
     kinetic friction equal to the static one (the default) follows a swept ``cs``.
     Every solver setting that decides the numbers is written where it is not the
-    default (as a spec that omits it), and ``protocol`` as ``[sweep] protocol``, as
-    given (the spec reader checks it).
+    default (as a spec that omits it), ``protocol`` as ``[sweep] protocol``, as
+    given (the spec reader checks it), and ``basins`` as ``[basins]``, as given.
     """
     fixed = structure.as_dict()
     if "cs" in sweep and "ck" not in sweep and structure.ck == structure.cs:
@@ -131,6 +133,10 @@ def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.fl
                   f"{_toml_number(start.phase)} }}"]
     elif start != "release":
         lines += [f'start = "{start}"']
+    if basins is not None:
+        lines += ["", "[basins]"]
+        lines += [f"{key} = {_toml_scalar(key, value, 'basins')}"
+                  for key, value in basins.items()]
     return "\n".join([*lines, ""])
 
 
@@ -167,6 +173,7 @@ def compute_map(
     workers: int | None = None,
     start: str | Drop | None = None,
     protocol: Mapping[str, str] | None = None,
+    basins: Mapping[str, int] | None = None,
 ) -> xr.Dataset:
     """A labelled map over the drive ``(f, a)`` and any swept structure parameter.
 
@@ -223,6 +230,14 @@ def compute_map(
         leading ``direction`` dimension (``up``, ``down``); the dataset records
         ``study_protocol_along`` and ``study_protocol_direction``. Default: every point
         from its start.
+    basins : dict, optional
+        How the observable ``"basins"`` samples each point, as ``[basins]`` of a spec:
+        ``{"starts": 24, "seed": 0, "max_attractors": 8}`` (any of them; those are the
+        defaults). Only with ``"basins"`` among ``observables``; the dataset records
+        ``study_basins_starts``, ``study_basins_seed`` and
+        ``study_basins_max_attractors``, and its per-attractor variables
+        (``basin_velocity``, ``basin_fraction``, ...) have a last dimension
+        ``attractor`` of ``max_attractors`` slots.
 
     Returns
     -------
@@ -296,8 +311,13 @@ def compute_map(
     if protocol is not None and not isinstance(protocol, Mapping):
         raise TypeError('protocol must be a dict such as {"along": "f", "direction": "up"}, '
                         f"got {protocol!r}")
+    if basins is not None and not isinstance(basins, Mapping):
+        raise TypeError('basins must be a dict such as {"starts": 24, "seed": 0}, got '
+                        f"{basins!r}")
+    if "basins" in names:  # its settings spelled out in the equivalent spec
+        basins = {**BasinSettings().canonical(), **(basins or {})}
     text = map_spec_text(structure, f_values, a_values, names, coupling, swept, settings,
-                         flight, protocol)
+                         flight, protocol, basins)
     spec = parse_spec(text, MAP_SPEC_SOURCE)
     return _computed(spec, workers)
 
@@ -309,7 +329,7 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
     methods = direction_methods(spec)
     f = spec.axis("f").values
     a = spec.axis("a").values if spec.needs_solver else np.empty(0)
-    sizes = {**GRID_SIZES, **{axis.name: len(axis) for axis in spec.axes},
+    sizes = {**GRID_SIZES, **spec.dimension_sizes, **{axis.name: len(axis) for axis in spec.axes},
              "direction": len(spec.directions)}
     variables = data_variables(spec, (*rows, *points))
     values: dict[str, NDArray[Any]] = {

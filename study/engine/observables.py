@@ -20,10 +20,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.variables import VARIABLES, Variable
+from study.engine.variables import DEFAULT_MAX_ATTRACTORS, VARIABLES, Variable
 from study.model import lift_off_acceleration, mode_response, thresholds
 from study.model.contact import COUPLINGS, DEFAULT_FRICTION, Friction, check_friction
 from study.model.structure import Structure
+from study.solvers.basins import DEFAULT_STARTS, NO_ATTRACTOR, basins
 from study.solvers.exact import (
     DEFAULT_COUPLING,
     SECTION_PERIODS,
@@ -38,9 +39,11 @@ from study.solvers.integrator import IntegratorSettings, integrated_steady_state
 from study.solvers.protocol import SweptState, slow_sweep
 
 __all__ = [
+    "BASIN_KEYS",
     "METHODS",
     "OBSERVABLES",
     "UNSWEPT_VARIABLES",
+    "BasinSettings",
     "Method",
     "Observable",
     "PointWork",
@@ -52,6 +55,45 @@ __all__ = [
 
 #: Velocity solvers a spec can choose with ``[solver] method``.
 METHODS = ("exact", "integrator")
+
+#: The keys of a spec's ``[basins]`` table (:class:`BasinSettings`).
+BASIN_KEYS = ("starts", "seed", "max_attractors")
+
+
+@dataclass(frozen=True)
+class BasinSettings:
+    """How the ``basins`` observable samples each drive point (a spec's ``[basins]``).
+
+    Attributes
+    ----------
+    starts : int
+        Starts followed at each point (:func:`study.solvers.basins.basin_starts`: the
+        solver's start, then seeded draws), >= 1; default 24.
+    seed : int
+        Seed of the draws, >= 0; default 0 (the same starts at every point and on
+        every machine).
+    max_attractors : int
+        Attractor slots per point (the ``attractor`` dimension), >= 1; default 8. A
+        point with more attractors keeps the first ones its starts reach;
+        ``attractor_count`` stays exact.
+    """
+
+    starts: int = DEFAULT_STARTS
+    seed: int = 0
+    max_attractors: int = DEFAULT_MAX_ATTRACTORS
+
+    def __post_init__(self) -> None:
+        for key, lowest in (("starts", 1), ("seed", 0), ("max_attractors", 1)):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                    or value < lowest:
+                raise ValueError(f"{key} = {value!r}: an integer >= {lowest}")
+            object.__setattr__(self, key, int(value))
+
+    def canonical(self) -> dict[str, int]:
+        """The settings as plain JSON data (in the canonical spec and the cache key of
+        the basins observable's values)."""
+        return {key: getattr(self, key) for key in BASIN_KEYS}
 
 
 @dataclass(frozen=True)
@@ -78,6 +120,11 @@ class Method:
         :func:`study.solvers.protocol.slow_sweep`): a block ``f x a`` is solved as the
         runs of that sweep, each holding every value of ``along``; None (default):
         every point from its start.
+    basins : BasinSettings or None
+        How the ``basins`` observable samples each point (a spec's ``[basins]``); None:
+        the defaults. Not in :meth:`canonical` (the velocity's values do not depend on
+        it): it enters the cache key of the basins observable's values alone
+        (:attr:`Observable.settings`).
     """
 
     name: str = "exact"
@@ -87,6 +134,7 @@ class Method:
     friction: Friction = field(default_factory=Friction)
     flight: bool = False
     protocol: tuple[str, str] | None = None
+    basins: BasinSettings | None = None
 
     def __post_init__(self) -> None:
         check_friction(self.friction, self.name)
@@ -251,6 +299,10 @@ class Observable:
         they would be the velocity itself.
     cached : bool
         Whether computed values are kept for reuse by later runs.
+    settings : callable or None
+        ``settings(method) -> dict``: what its values depend on beyond the method's
+        :meth:`Method.canonical` (the basins observable's ``[basins]``), added to the
+        cache key of its values alone; None: nothing.
     function : callable
         What :meth:`compute` calls: ``row``: ``function(structure, f) -> {name:
         (n_f,)}``; ``point``: ``function(work: PointWork) -> {name: array}``;
@@ -281,6 +333,7 @@ class Observable:
     protocol_variables: tuple[str, ...] = ()
     unswept: bool = False
     cached: bool = False
+    settings: Callable[[Method], dict[str, Any]] | None = field(default=None, repr=False)
     methods: tuple[str, ...] | None = None
     couplings: tuple[str, ...] | None = None
     flight: bool | None = None
@@ -463,6 +516,54 @@ def _attractors(work: PointWork) -> dict[str, NDArray[Any]]:
             "attractor_starts_converged": found.starts_converged}
 
 
+def basin_settings(method: Method) -> BasinSettings:
+    """The ``basins`` observable's settings of a method (the defaults if none)."""
+    return method.basins if method.basins is not None else BasinSettings()
+
+
+def _basin_key(method: Method) -> dict[str, Any]:
+    return {"basins": basin_settings(method).canonical()}
+
+
+#: Each per-attractor variable of the basins observable: the field of
+#: :class:`study.solvers.basins.Basins` it is, and the value of an empty slot.
+_PER_ATTRACTOR = {
+    "basin_status": ("status", NO_ATTRACTOR),
+    "basin_velocity": ("velocity", np.nan),
+    "basin_velocity_error": ("velocity_error", np.nan),
+    "basin_largest_hop": ("largest_hop", np.nan),
+    "basin_period": ("orbit_period", 0),
+    "basin_multiplier": ("floquet_multiplier", np.nan),
+    "basin_exponent": ("lyapunov_exponent", np.nan),
+    "basin_fraction": ("fraction", np.nan),
+    "basin_fraction_low": ("fraction_low", np.nan),
+    "basin_fraction_high": ("fraction_high", np.nan),
+}
+
+
+def _basins(work: PointWork) -> dict[str, NDArray[Any]]:
+    """:func:`study.solvers.basins.basins` at the block, its attractors in
+    ``max_attractors`` slots (the first ones reached; empty slots filled), the count
+    exact."""
+    settings = basin_settings(work.method)
+    found = basins(work.structure, work.f, work.a, starts=settings.starts,
+                   seed=settings.seed, flight=work.method.flight,
+                   settings=work.method.solver, parallel=False)
+    slots = settings.max_attractors
+    width = min(found.status.shape[-1], slots)
+    present = np.arange(slots) < np.minimum(found.count, slots)[..., None]
+    values: dict[str, NDArray[Any]] = {}
+    for name, (source, empty) in _PER_ATTRACTOR.items():
+        computed = getattr(found, source)
+        array = np.full((*found.count.shape, slots), empty, dtype=VARIABLES[name].dtype)
+        array[..., :width] = computed[..., :width]
+        values[name] = np.where(present, array, np.asarray(empty, dtype=array.dtype))
+    values.update({"attractor_count": found.count.astype(np.int32),
+                   "default_attractor": found.default_attractor.astype(np.int32),
+                   "starts_drawn": found.starts_drawn.astype(np.int32)})
+    return values
+
+
 def _unswept(work: PointWork) -> dict[str, NDArray[Any]]:
     s = work.unswept
     return {"velocity_unswept": s.velocity, "status_unswept": s.status}
@@ -533,6 +634,20 @@ _DECLARED = (
                _attractors, requires=("velocity",), cached=True, methods=("exact",),
                why="the exact solver is the one that finds the stable orbits from several "
                "starting states"),
+    Observable("basins", "every attractor at each point and its basin fraction: the motions "
+               "that seeded starts reach ([basins] starts, 24 by default: the solver's "
+               "start, then drive phases, mode amplitudes and, with flight, drops), each "
+               "one's status, velocity, largest hop, period, Floquet multiplier or Lyapunov "
+               "exponent, and the share of the starts that reach it with its 95 % Wilson "
+               "interval (exact two-way solver; one solve per start and point)", "point",
+               ("basin_status", "basin_velocity", "basin_velocity_error", "basin_largest_hop",
+                "basin_period", "basin_multiplier", "basin_exponent", "basin_fraction",
+                "basin_fraction_low", "basin_fraction_high", "attractor_count",
+                "default_attractor", "starts_drawn"),
+               _basins, requires=("velocity",), cached=True, settings=_basin_key,
+               methods=("exact",), couplings=("two-way",),
+               why="the exact two-way solver is the one that follows each start to the "
+               "attractor it reaches, verified"),
     Observable("paper_model", "the paper's one-way velocity beside a two-way study", "point",
                ("velocity_one_way", "status_one_way"), _paper_model, requires=("velocity",),
                cached=True, couplings=("two-way",),

@@ -33,9 +33,11 @@ from study.engine.validation.header import (
     schema_problems,
     short,
 )
-from study.engine.validation.reading import StoredFile
+from study.engine.validation.reading import StoredFile, read_slab, slabs
 from study.engine.variables import RESULT_FORMAT, STALE_RESULT_FORMATS, VARIABLES
 from study.model.contact import DEFAULT_LIFT_OFF
+from study.model.status import INVALID_STATUSES, Status
+from study.solvers.basins import NO_ATTRACTOR
 
 __all__ = ["declared_flag_problems", "method_problems", "study_problems"]
 
@@ -204,7 +206,8 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
                             f"({', '.join(dims)})")
         if var.type_name != declared.dtype:
             problems.append(f"{name} is {var.type_name}; declared {declared.dtype}")
-        expected = {"units": declared.units, "long_name": declared.texts(spec.flight)[0]}
+        expected = {"units": declared.units,
+                    "long_name": declared.texts(spec.flight, spec.observables)[0]}
         for key, value in expected.items():
             if not same_text(var.attrs.get(key), value):
                 problems.append(f"{name}: {key} {short(repr(var.attrs.get(key)), 80)}; "
@@ -227,4 +230,90 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
             problems += check.invalid_where(declared.name, declared.invalid_where,
                                             declared.zero_when_static,
                                             declared.missing_where)
+    if getattr(spec, "basins", None) is not None:
+        problems += _basins_problems(check, meta, spec, good)
+    return problems
+
+
+#: The basins observable's variables: per drive point and attractor, and per point.
+_PER_ATTRACTOR = ("basin_status", "basin_velocity", "basin_velocity_error",
+                  "basin_largest_hop", "basin_period", "basin_multiplier", "basin_exponent",
+                  "basin_fraction", "basin_fraction_low", "basin_fraction_high")
+_PER_POINT = ("attractor_count", "default_attractor", "starts_drawn")
+#: How far the fractions of a point may add up from 1 (each is a count over the starts
+#: drawn, added in double precision).
+_FRACTION_SUM = 1e-12
+
+
+def _basins_problems(check: Checker, meta: StoredFile, spec: Any, good: set[str]
+                     ) -> list[str]:
+    """The basins observable's layout and values against its ``[basins]``: the file
+    records its settings, the attractor dimension has ``max_attractors`` slots numbered
+    0..n-1, and at each point the slots filled are the first ``min(attractor_count,
+    max_attractors)`` (basin_status no_attractor exactly in the others, where every
+    float per attractor is NaN), the fractions are in [0, 1] inside their interval and
+    add up to 1 where starts were drawn and every attractor has a slot (to at most 1
+    where some has none), no attractor where no start was drawn, at most ``starts``
+    starts, the default attractor among those found (or -1), and the velocity is NaN
+    exactly where the status has none (or the slot is empty) and 0 where static."""
+    settings = spec.basins
+    problems = []
+    for key, value in settings.canonical().items():
+        name = f"study_basins_{key}"
+        if name not in meta.attrs:
+            problems.append(f"{name} is missing: a study with the observable basins "
+                            f"records its [basins] {key} ({value!r})")
+    slots = settings.max_attractors
+    if meta.dims.get("attractor") != slots:
+        return [*problems, f"dimension attractor has {meta.dims.get('attractor')} slots; "
+                f"[basins] max_attractors = {slots}"]
+    coordinate = meta.variables.get("attractor")
+    if coordinate is None or coordinate.dims != ("attractor",) or \
+            not check.equals("attractor", np.arange(slots)):
+        problems.append(f"coordinate attractor must number the slots 0..{slots - 1}")
+    if not all(name in good for name in (*_PER_ATTRACTOR, *_PER_POINT)):
+        return problems  # their layout is reported above
+    counts: dict[str, int] = {}
+
+    def count(what: str, mask: np.ndarray) -> None:
+        counts[what] = counts.get(what, 0) + int(np.count_nonzero(mask))
+
+    shape = meta.variables["attractor_count"].shape
+    invalid = [int(s) for s in INVALID_STATUSES] + [NO_ATTRACTOR]
+    for index in slabs(shape, 8 * (slots + 1) * len(_PER_ATTRACTOR)):
+        read = {name: read_slab(check.nc.variables[name], index, meta.path)
+                for name in (*_PER_ATTRACTOR, *_PER_POINT)}
+        status = read["basin_status"]
+        found, drawn = read["attractor_count"], read["starts_drawn"]
+        filled = np.minimum(found, slots)[..., None]
+        present = np.arange(slots) < filled
+        count("basin_status is no_attractor exactly in the slots after the first "
+              "min(attractor_count, max_attractors)", (status != NO_ATTRACTOR) != present)
+        for name in _PER_ATTRACTOR:
+            if name not in ("basin_status", "basin_period"):
+                count(f"{name} is NaN exactly where basin_status is no_attractor",
+                      (status == NO_ATTRACTOR) & ~np.isnan(read[name]))
+        fraction = read["basin_fraction"]
+        low, high = read["basin_fraction_low"], read["basin_fraction_high"]
+        count("basin_fraction is in [0, 1], within [basin_fraction_low, "
+              "basin_fraction_high], where an attractor fills the slot",
+              present & ~((fraction >= 0) & (fraction <= 1) & (low <= fraction)
+                          & (fraction <= high)))
+        total = np.where(present, fraction, 0.0).sum(axis=-1)
+        whole = (drawn > 0) & (found <= slots)
+        count("basin_fraction adds up to 1 over the attractors where starts were drawn "
+              "(at most 1 where attractor_count exceeds max_attractors)",
+              (whole & (np.abs(total - 1.0) > _FRACTION_SUM))
+              | ((found > slots) & (total > 1.0 + _FRACTION_SUM)))
+        count("attractor_count is 0 exactly where starts_drawn is 0, and starts_drawn at "
+              f"most [basins] starts = {settings.starts}",
+              ((drawn == 0) != (found == 0)) | (drawn < 0) | (drawn > settings.starts))
+        count("default_attractor is -1 or an attractor found",
+              (read["default_attractor"] < -1) | (read["default_attractor"] >= found))
+        velocity = read["basin_velocity"]
+        count("basin_velocity is NaN exactly where basin_status is lift_off, "
+              "not_converged, friction_paradox or no_attractor, and 0 where static",
+              (np.isnan(velocity) != np.isin(status, invalid))
+              | ((status == Status.STATIC) & ~(velocity == 0.0)))
+    problems += [f"{what} ({n} points disagree)" for what, n in counts.items() if n]
     return problems

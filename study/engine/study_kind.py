@@ -248,6 +248,10 @@ class _Run:
                 "method": method.canonical(),
                 "code_sha256": self.code,
             }
+            if observable.settings is not None:
+                # What its values depend on beyond the method (the basins' [basins]):
+                # only in its own key, so that every other key stays as it was.
+                content.update(observable.settings(method))
             if method.protocol is not None:
                 # A point of a slow sweep depends on every value its run visits before
                 # it: a changed swept axis changes every run, and no value is lent to
@@ -271,11 +275,12 @@ class _Run:
         self.auxiliary = " ".join(scalars)
         block = max(chunk.size for chunk in self.chunks)
         ones = (1,) * len(spec.structure_axes)
+        sizes = spec.dimension_sizes
         for variable in data_variables(spec, (*self.rows, *self.points)):
+            trailing = VARIABLES[variable.name].trailing(sizes)
             chunks = (*ones, block) if variable.grid == "row" else (
-                *(1,) * (len(variable.dims) - len(ones) - 2
-                         - len(VARIABLES[variable.name].trailing_shape)),
-                *ones, block, max(self.a.size, 1), *VARIABLES[variable.name].trailing_shape)
+                *(1,) * (len(variable.dims) - len(ones) - 2 - len(trailing)),
+                *ones, block, max(self.a.size, 1), *trailing)
             writer.variable(variable.name, variable.dims, variable.dtype,
                             {**variable.attrs, "coordinates": self.auxiliary}, chunks)
         return writer
@@ -294,7 +299,8 @@ class _Run:
             for observable in self._points(chunk):
                 key, _ = self.key(chunk.structure_index, observable, chunk.direction)
                 dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in observable.variables}
-                trailing = {v: VARIABLES[v].trailing_shape for v in observable.variables}
+                trailing = {v: VARIABLES[v].trailing(self.spec.dimension_sizes)
+                            for v in observable.variables}
                 values, present = self.cache.lookup(key, f, self.a, dtypes, trailing)
                 found[observable.name] = (values, present)
                 missing |= ~present

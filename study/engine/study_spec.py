@@ -44,7 +44,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.observables import METHODS, UNSWEPT_VARIABLES, unmet_needs, variables_of
+from study.engine.observables import (
+    BASIN_KEYS,
+    METHODS,
+    UNSWEPT_VARIABLES,
+    BasinSettings,
+    unmet_needs,
+    variables_of,
+)
 from study.engine.observables import OBSERVABLES as OBSERVABLE_REGISTRY
 from study.engine.spec_files import (
     SCHEMA_DIR,
@@ -57,6 +64,7 @@ from study.engine.spec_files import (
     parse_toml,
     read_spec_text,
 )
+from study.engine.variables import DEFAULT_MAX_ATTRACTORS
 from study.model.contact import (
     DEFAULT_FRICTION,
     DEFAULT_LIFT_OFF,
@@ -75,6 +83,7 @@ from study.model.parameters import (
     schema_properties,
 )
 from study.model.structure import Structure, tilt_warnings
+from study.solvers.basins import DROP_HEIGHT_RANGE, FACTOR_RANGE
 from study.solvers.exact import (
     DEFAULT_COUPLING,
     MAX_SOLVER_BUDGET,
@@ -117,6 +126,11 @@ EXACT_KEYS = ("max_events", "max_map_iterations", "continuation", "velocity_tole
 INTEGRATOR_KEYS = (
     "tolerance", "steps_per_period", "max_periods", "max_orbit_period", "period_tolerance",
 )
+
+#: ``[basins]``: the largest values a spec may give (starts: each costs a solve per
+#: point; seed: the draws' generator takes any, 32 bits are plenty; max_attractors:
+#: slots per point, each a value of every per-attractor variable).
+MAX_BASIN_SETTINGS = {"starts": 100_000, "seed": 2**32 - 1, "max_attractors": 1_000}
 
 #: ``[sweep] protocol`` keys and the directions it takes ("both": up, then down).
 PROTOCOL_KEYS = ("along", "direction")
@@ -198,6 +212,9 @@ class StudySpec:
         ``[sweep] protocol``: ``(along, direction)`` of a slow sweep
         (:func:`study.solvers.protocol.slow_sweep`; direction ``"both"``: up and down,
         a leading ``direction`` dimension); None: every point from its start.
+    basins : BasinSettings or None
+        ``[basins]``: how the ``basins`` observable samples each point (its defaults
+        where the table is absent); None: the study does not ask for ``basins``.
     flight : bool
         ``[solver] flight = true``: past lift-off the base flies and lands by impacts
         (the lift-off law ``flight`` of :mod:`study.model.contact`); default false, the
@@ -235,6 +252,7 @@ class StudySpec:
     friction: Friction = field(default_factory=Friction)
     flight: bool = False
     protocol: tuple[str, str] | None = None
+    basins: BasinSettings | None = None
     warnings: tuple[str, ...] = field(default=(), repr=False, compare=False)
 
     @property
@@ -268,6 +286,16 @@ class StudySpec:
     def both_directions(self) -> bool:
         """Whether point variables have a leading ``direction`` dimension."""
         return len(self.directions) == 2
+
+    @property
+    def dimension_sizes(self) -> dict[str, int]:
+        """Lengths of the dimensions after a drive point's
+        (:data:`study.engine.variables.GRID_SIZES`, the attractor slots set by
+        ``[basins] max_attractors``): the ``sizes`` of
+        :meth:`study.engine.variables.Variable.trailing`."""
+        slots = self.basins.max_attractors if self.basins is not None \
+            else DEFAULT_MAX_ATTRACTORS
+        return {"attractor": slots}
 
     @property
     def needs_solver(self) -> bool:
@@ -356,7 +384,38 @@ def spec_schema() -> dict[str, Any]:
             "its grid); false (default): every point from rest"),
     }
     solver["start"] = _start_schema()
+    schema["properties"]["basins"] = _basins_schema()
     return schema
+
+
+def _basins_schema() -> dict[str, Any]:
+    """``[basins]``: the basins observable's sampling (:class:`BasinSettings`)."""
+    defaults = BasinSettings()
+    lowest = {"starts": 1, "seed": 0, "max_attractors": 1}
+    words = {
+        "starts": "starts followed at each drive point: the solver's start ([solver] "
+                  "start), then seeded draws (the base at rest at a drive phase drawn "
+                  "uniformly, the mode at rest on a multiple of its steady response drawn "
+                  f"from [{FACTOR_RANGE[0]:g}, {FACTOR_RANGE[1]:g}); with flight every third "
+                  "draw dropped from a height drawn log-uniformly from "
+                  f"{1e3 * DROP_HEIGHT_RANGE[0]:g} to {1e3 * DROP_HEIGHT_RANGE[1]:g} mm)",
+        "seed": "seed of the draws: the same starts at every point and on every machine",
+        "max_attractors": "attractor slots per point (the attractor dimension): a point "
+                          "with more attractors keeps the first ones its starts reach "
+                          "(attractor_count stays exact)",
+    }
+    return {
+        "type": "object",
+        "additionalProperties": False,
+        "properties": {
+            key: {"type": "integer", "minimum": lowest[key],
+                  "maximum": MAX_BASIN_SETTINGS[key], "default": getattr(defaults, key),
+                  "description": f"{words[key]} (default {getattr(defaults, key)})"}
+            for key in BASIN_KEYS},
+        "description": (
+            "only with the observable basins (exact solver, two-way coupling): how each "
+            "drive point is sampled; absent: the defaults"),
+    }
 
 
 def _start_schema() -> dict[str, Any]:
@@ -541,7 +600,8 @@ def _size(n: float) -> str:
 
 def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_points: int,
                path: str, flight: bool = False,
-               protocol: tuple[object, object] | None = None) -> None:
+               protocol: tuple[object, object] | None = None,
+               max_attractors: int = DEFAULT_MAX_ATTRACTORS) -> None:
     """Refuse a study whose output or memory would be absurd, before any work.
 
     Parameters
@@ -562,6 +622,9 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
         sweep writes ``jumped`` too; ``direction = "both"`` computes and writes every
         per-point variable twice (but the unswept ones) in twice the chunks; along
         ``f`` one chunk holds every ``f`` and ``a`` of a structure.
+    max_attractors : int
+        ``[basins] max_attractors``: the attractor slots of each point of the basins
+        observable's per-attractor variables.
 
     Raises
     ------
@@ -579,8 +642,9 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
     # periods too).
     variables = variables_of(observables, flight, protocol is not None)
     per_f_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "row")
-    point_bytes = {v.name: np.dtype(v.dtype).itemsize * math.prod(v.trailing_shape)
-                   for v in variables if v.grid in ("point", "section")}
+    sizes = {"attractor": max_attractors}
+    point_bytes = {v.name: np.dtype(v.dtype).itemsize * math.prod(v.trailing(sizes))
+                   for v in variables if v.grid in ("point", "section", "attractor")}
     per_point_bytes = sum(point_bytes.values())
     # A slow sweep both ways: every point computed and written once each way, but the
     # values of each point from its start alone (no direction dimension).
@@ -682,7 +746,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     problems = _Problems(path)
     observables = tuple(o for o in OBSERVABLES if o in study["observables"])
     fixed_mass = problems.collect(_fixed_structure, structure, mass_table, sweep, path)
-    swept = problems.collect(_sweep_axes, sweep, observables, solver_table, path)
+    swept = problems.collect(_sweep_axes, sweep, observables, solver_table, path,
+                             _given_slots(raw.get("basins")))
     settings = _solver(solver_table, observables, None if swept is None else swept[0],
                        path, problems, "protocol" in sweep)
     method, coupling, friction = settings[0], settings[1], settings[2]
@@ -690,6 +755,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     _check_start(settings[3], coupling, flight, observables, path, problems)
     protocol = problems.collect(_protocol, sweep, observables, settings[0], coupling,
                                 settings[3], path)
+    basins = problems.collect(_basins, raw.get("basins"), observables, "protocol" in sweep,
+                              settings[3], path)
     # The law asked for, even where refused above: its parameters are not unread.
     _check_unread(structure, sweep, friction, coupling,
                   bool(solver_table.get("flight", False)), path, problems)
@@ -701,6 +768,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
                            friction, solver, integrator, frontier_tolerance, flight)
     if protocol is not None:  # only when given: every fingerprint without it is kept
         canonical["protocol"] = {"along": protocol[0], "direction": protocol[1]}
+    if basins is not None:  # likewise: only in a study that asks for basins
+        canonical["basins"] = basins.canonical()
     spec = StudySpec(
         name=study["name"],
         title=study.get("title", study["name"]),
@@ -721,6 +790,7 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         friction=friction,
         flight=flight,
         protocol=protocol,
+        basins=basins,
         warnings=_suspect_tilts(fixed, axes, path),
     )
     _check_structures(spec, path)
@@ -728,6 +798,14 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     for axis in spec.structure_axes:
         _check_bounds(axis, path)
     return spec
+
+
+def _given_slots(table: Any) -> int:
+    """``[basins] max_attractors`` as given (the schema has checked it), for the size
+    guard; the default without it."""
+    slots = table.get("max_attractors") if isinstance(table, dict) else None
+    return slots if isinstance(slots, int) and not isinstance(slots, bool) \
+        else DEFAULT_MAX_ATTRACTORS
 
 
 def _suspect_tilts(fixed: dict[str, float], axes: list[Axis], path: str) -> tuple[str, ...]:
@@ -854,7 +932,8 @@ def _fixed_structure(structure: dict[str, Any], mass_table: dict[str, Any] | Non
 
 
 def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
-                solver_table: dict[str, Any], path: str) -> tuple[list[Axis], int]:
+                solver_table: dict[str, Any], path: str,
+                max_attractors: int = DEFAULT_MAX_ATTRACTORS) -> tuple[list[Axis], int]:
     """The axes in result order (structure axes, then f, a) and the chunk size; the size
     guard runs on the axis lengths before any value is generated."""
     if "f" not in sweep:
@@ -877,7 +956,7 @@ def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
     check_size(lengths, observables, chunk_points, path,
                bool(solver_table.get("flight", False)),
                (protocol.get("along"), protocol.get("direction", "up"))
-               if isinstance(protocol, dict) else None)
+               if isinstance(protocol, dict) else None, max_attractors)
     axes = []
     for name in order:
         units, long_name = SWEEPABLE[name]
@@ -1005,6 +1084,47 @@ def _protocol(sweep: dict[str, Any], observables: tuple[str, ...], method: str,
                         "the motion from point to point itself (allowed: continuation = "
                         "false, or no protocol)")
     return str(along), str(direction)
+
+
+def _basins(table: Any, observables: tuple[str, ...], protocol: bool,
+            solver: SolverSettings | None, path: str) -> BasinSettings | None:
+    """``[basins]`` checked (the schema has checked its keys and their ranges): the
+    settings of a study that asks for the observable ``basins`` (the defaults without
+    the table), None for any other study; refused without that observable, beside the
+    observable ``attractors`` (both write ``attractor_count``), with a slow sweep or
+    with continuation (each start is followed from its own state)."""
+    asked = "basins" in observables
+    if not asked:
+        if table is not None:
+            raise SpecError(f'{path}: [basins] is read only by the observable "basins", '
+                            'which this study does not ask for: it would have no effect '
+                            '(allowed: add "basins" to [study] observables, or remove '
+                            "[basins])")
+        return None
+    if "attractors" in observables:
+        raise SpecError(f'{path}: [study] observables "attractors" and "basins" both '
+                        'write attractor_count (basins counts the attractors of its own '
+                        'starts, with each one\'s motion and basin fraction); allowed: one '
+                        'of them')
+    if protocol:
+        raise SpecError(f'{path}: [study] observable "basins" with [sweep] protocol: basins '
+                        "follows each of its starts from its own state at every point, "
+                        "whatever the sweep carries (allowed: no protocol, or remove "
+                        '"basins")')
+    if solver is not None and solver.continuation:
+        raise SpecError(f'{path}: [study] observable "basins" with [solver] continuation = '
+                        "true: basins follows each of its starts from its own state "
+                        '(allowed: continuation = false, or remove "basins")')
+    table = dict(table or {})
+    unknown = sorted(set(table) - set(BASIN_KEYS))
+    if unknown:  # the schema refuses them first; kept for a caller without it
+        raise SpecError(f"{path}: [basins] unknown key {', '.join(unknown)}; allowed: "
+                        f"{', '.join(BASIN_KEYS)}")
+    try:
+        return BasinSettings(**table)
+    except ValueError as err:
+        raise SpecError(f"{path}: [basins] {err}; allowed: starts, max_attractors "
+                        "integers >= 1, seed an integer >= 0") from None
 
 
 def _check_start(solver: SolverSettings | None, coupling: str, flight: bool | None,

@@ -22,10 +22,12 @@ from study.model.units import (
     METRE_PER_SECOND,
     METRE_PER_SECOND_SQUARED,
 )
+from study.solvers.basins import NO_ATTRACTOR
 from study.solvers.exact import ATTRACTOR_DROPS, ATTRACTOR_STARTS, SECTION_PERIODS
 
-__all__ = ["FRONTIER_KINDS", "GRIDS", "GRID_SIZES", "RESULT_FORMAT", "STALE_RESULT_FORMATS",
-           "STUDY_FORMATS", "VARIABLES", "Variable"]
+__all__ = ["BASIN_STATUS_FLAGS", "DEFAULT_MAX_ATTRACTORS", "FRONTIER_KINDS", "GRIDS",
+           "GRID_SIZES", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "STUDY_FORMATS", "VARIABLES",
+           "Variable"]
 
 #: Every layout study results were written in (global attribute ``study_result_format``),
 #: oldest first; the last is the one this version writes. Files without the attribute
@@ -60,13 +62,20 @@ RESULT_FORMAT = STUDY_FORMATS[-1].number
 STALE_RESULT_FORMATS: dict[int, dict[str, str]] = {1: {"mode_phase": "rad"}}
 
 #: Where a variable lives: over (structure..., f), (structure..., f, a), the
-#: frontier's (structure..., a, branch), or a phase section's (structure..., f, a,
-#: section_period): consecutive drive periods of the motion at each point.
+#: frontier's (structure..., a, branch), a phase section's (structure..., f, a,
+#: section_period): consecutive drive periods of the motion at each point, or the
+#: basins' (structure..., f, a, attractor): the attractors at each point.
 GRIDS = {"row": ("f",), "point": ("f", "a"), "frontier": ("a", "branch"),
-         "section": ("f", "a", "section_period")}
+         "section": ("f", "a", "section_period"), "attractor": ("f", "a", "attractor")}
 
-#: Lengths of the dimensions a study's spec does not set: a phase section's periods.
-GRID_SIZES = {"section_period": SECTION_PERIODS}
+#: Attractor slots per point of the basins observable without ``[basins]
+#: max_attractors``.
+DEFAULT_MAX_ATTRACTORS = 8
+
+#: Lengths of the dimensions after a drive point's: a phase section's periods, and the
+#: attractor slots (by default; a spec's ``[basins] max_attractors`` sets them: the
+#: ``sizes`` of :meth:`Variable.trailing`).
+GRID_SIZES = {"section_period": SECTION_PERIODS, "attractor": DEFAULT_MAX_ATTRACTORS}
 
 #: How the velocity changes sign at a frontier point.
 FRONTIER_KINDS = ("none", "crossing", "jump")
@@ -106,6 +115,11 @@ class Variable:
     flight_long_name, flight_comment : str
         ``long_name`` and ``comment`` in a study with flight, where they differ
         (default: the same as without).
+    observable_texts : tuple of (str, str, str)
+        ``(observable, long_name, comment)``: the texts of a variable that two
+        observables write (never in one study), in a study that asks for that
+        observable (``attractor_count``: the ``attractors`` observable's count of 12
+        starts, or the ``basins`` observable's of its own starts).
     """
 
     name: str
@@ -121,6 +135,7 @@ class Variable:
     missing_where: tuple[str, ...] = ()
     flight_long_name: str = ""
     flight_comment: str = ""
+    observable_texts: tuple[tuple[str, str, str], ...] = ()
 
     def __post_init__(self) -> None:
         if self.grid not in GRIDS:
@@ -140,19 +155,35 @@ class Variable:
     @property
     def trailing_shape(self) -> tuple[int, ...]:
         """Lengths of its dimensions after the drive point's (``()`` but for a
-        section's periods): what a point's value holds."""
-        return tuple(GRID_SIZES[d] for d in GRIDS[self.grid][2:]) if self.grid == "section" \
-            else ()
+        section's periods and the attractor slots, these by default): what a point's
+        value holds."""
+        return self.trailing()
 
-    def texts(self, flight: bool = False) -> tuple[str, str]:
-        """``long_name`` and ``comment`` in a study without or with flight."""
+    def trailing(self, sizes: dict[str, int] | None = None) -> tuple[int, ...]:
+        """Lengths of its dimensions after the drive point's in a study whose
+        dimensions have these ``sizes`` (:data:`GRID_SIZES` where not given: a spec's
+        ``[basins] max_attractors`` sets the attractor slots)."""
+        if self.grid not in ("section", "attractor"):
+            return ()
+        given = {**GRID_SIZES, **(sizes or {})}
+        return tuple(given[d] for d in GRIDS[self.grid][2:])
+
+    def texts(self, flight: bool = False,
+              observables: tuple[str, ...] | list[str] = ()) -> tuple[str, str]:
+        """``long_name`` and ``comment`` in a study without or with flight (asking for
+        ``observables``: see :attr:`observable_texts`)."""
+        for observable, long_name, comment in self.observable_texts:
+            if observable in observables:
+                return long_name, comment
         if not flight:
             return self.long_name, self.comment
         return (self.flight_long_name or self.long_name, self.flight_comment or self.comment)
 
-    def attrs(self, flight: bool = False) -> dict[str, Any]:
-        """CF/ACDD attributes as written to the file (of a study with ``flight``)."""
-        long_name, comment = self.texts(flight)
+    def attrs(self, flight: bool = False,
+              observables: tuple[str, ...] | list[str] = ()) -> dict[str, Any]:
+        """CF/ACDD attributes as written to the file (of a study with ``flight``, asking
+        for ``observables``)."""
+        long_name, comment = self.texts(flight, observables)
         attrs: dict[str, Any] = {"units": self.units, "long_name": long_name}
         if self.flags:
             attrs["flag_values"] = np.array(self.flag_values, dtype=self.dtype)
@@ -176,6 +207,17 @@ _STATUS_FLAGS = tuple(s.name.lower() for s in Status)
 #: The statuses of motions averaged on the period map, without an orbit.
 _IRREGULAR = (Status.CHAOTIC.flag, Status.QUASI_PERIODIC.flag)
 _STATUS_VALUES = tuple(int(s) for s in Status)
+#: The flags of ``basin_status``: the statuses, and ``no_attractor`` for a slot a point
+#: does not fill (fewer attractors than slots).
+BASIN_STATUS_FLAGS = ("no_attractor", *_STATUS_FLAGS)
+_BASIN_STATUS_VALUES = (NO_ATTRACTOR, *_STATUS_VALUES)
+#: What every per-attractor value of the basins observable says of an empty slot.
+_EMPTY_SLOT = "NaN (missing) exactly where basin_status is no_attractor (a slot the point "\
+    "does not fill)"
+#: The basins' starts, as their long names say.
+_BASIN_STARTS = ("the seeded starts of [basins] (the solver's start, then the base at rest "
+                 "at drawn drive phases with the mode at drawn multiples of its steady "
+                 "response, with flight every third one dropped from a drawn height)")
 
 _DECLARED = (
     Variable("mode_gain", "row", "float64", DIMENSIONLESS,
@@ -282,7 +324,15 @@ _DECLARED = (
              flight_comment="stable orbits (bouncing ones included) told apart by period "
              "and mean velocity, the friction paradox one outcome; 1 where static; > 1: "
              "multistable (the motion depends on how the structure is put down); 0: no "
-             "start converged"),
+             "start converged",
+             observable_texts=(("basins", f"attractors reached from {_BASIN_STARTS}",
+                                "exact: every attractor found, also beyond the attractor "
+                                "slots (a point with more attractors than [basins] "
+                                "max_attractors keeps the first ones reached in its slots, "
+                                "their fractions then add up to less than 1); an outcome "
+                                "outside the model (lift_off, friction_paradox, "
+                                "not_converged) counts as one; > 1: multistable; 0: no "
+                                "start drawn"),)),
     Variable("attractor_velocity_spread", "point", "float64", METRE_PER_SECOND,
              "largest minus smallest mean velocity among the stable orbits found",
              comment="0 with a single orbit or none"),
@@ -291,6 +341,60 @@ _DECLARED = (
              "friction paradox",
              flight_long_name=f"starting states (of {_CONTACT_STARTS + _DROP_STARTS}) "
              "that reached a stable orbit or the friction paradox"),
+    Variable("basin_status", "attractor", "int8", DIMENSIONLESS,
+             "outcome (study.Status) of the motion on each attractor at the drive point, "
+             "the attractors numbered in the order the starts first reach them",
+             flags=BASIN_STATUS_FLAGS, flag_values=_BASIN_STATUS_VALUES,
+             comment="no_attractor (-1): a slot the point does not fill; an outcome outside "
+             "the model (lift_off, friction_paradox, not_converged) is one entry, so "
+             "that the fractions add up to 1"),
+    Variable("basin_velocity", "attractor", "float64", METRE_PER_SECOND,
+             "mean velocity of the motion on each attractor, positive forward",
+             comment="exactly 0 when static; time-averaged for a chaotic or "
+             "quasi_periodic attractor; NaN (missing) where basin_status is lift_off, "
+             "not_converged, friction_paradox or no_attractor"),
+    Variable("basin_velocity_error", "attractor", "float64", METRE_PER_SECOND,
+             "standard error of the mean velocity on each attractor",
+             comment=f"0 for an orbit or a static point (exact); batch means for an "
+             f"averaged motion; {_EMPTY_SLOT}, and where there is no velocity"),
+    Variable("basin_largest_hop", "attractor", "float64", METRE,
+             "largest height of the base above the table over the motion on each "
+             "attractor",
+             comment=f"0 where the motion never leaves the table; {_EMPTY_SLOT}, and "
+             "where there is no motion"),
+    Variable("basin_period", "attractor", "int32", DIMENSIONLESS,
+             "period of the orbit on each attractor in drive periods",
+             comment="0: static, irregular (chaotic, quasi_periodic), no orbit, or a slot "
+             "the point does not fill"),
+    Variable("basin_multiplier", "attractor", "float64", DIMENSIONLESS,
+             "largest modulus of the Floquet multipliers of the orbit on each attractor",
+             comment=f"below 1: stable; {_EMPTY_SLOT}, and where there is no orbit"),
+    Variable("basin_exponent", "attractor", "float64", DIMENSIONLESS,
+             "largest Lyapunov exponent per drive period of the motion on each attractor",
+             comment=f"> 0: chaotic; for an orbit log(multiplier) / period; {_EMPTY_SLOT}, "
+             "and where neither applies"),
+    Variable("basin_fraction", "attractor", "float64", DIMENSIONLESS,
+             "basin fraction of each attractor: the share of the starts drawn at the "
+             "point that reach it",
+             comment="the chance that the structure put down by a start drawn at random "
+             "performs this motion; the fractions of a point add up to 1 (less where "
+             f"attractor_count exceeds the slots); {_EMPTY_SLOT}"),
+    Variable("basin_fraction_low", "attractor", "float64", DIMENSIONLESS,
+             "lower bound of the 95 % Wilson score interval of the basin fraction",
+             comment=f"binomial, of starts_drawn trials; {_EMPTY_SLOT}"),
+    Variable("basin_fraction_high", "attractor", "float64", DIMENSIONLESS,
+             "upper bound of the 95 % Wilson score interval of the basin fraction",
+             comment=f"binomial, of starts_drawn trials; {_EMPTY_SLOT}"),
+    Variable("default_attractor", "point", "int32", DIMENSIONLESS,
+             "the attractor the solver's start ([solver] start, the release by default) "
+             "reaches: its index along the attractor dimension",
+             comment="the motion velocity and status report; -1: the start was not drawn "
+             "(without flight, a state on the table the model cannot hold there)"),
+    Variable("starts_drawn", "point", "int32", DIMENSIONLESS,
+             f"starts followed at the drive point, of {_BASIN_STARTS}",
+             comment="without flight a start on the table that the model cannot hold "
+             "there (a negative normal force) is not drawn; the trials of the fractions' "
+             "intervals"),
     Variable("velocity_one_way", "point", "float64", METRE_PER_SECOND,
              "mean steady velocity of the paper's one-way model at the same point "
              "(exact solver), for comparison with the two-way velocity",

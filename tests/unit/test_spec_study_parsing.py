@@ -195,13 +195,19 @@ def test_observables_are_kept_in_canonical_order():
     """Asked in any order, the observables are kept in their declared order (that of
     the registry, whose declarations the spec's list follows)."""
     declared = tuple(study.engine.observables.OBSERVABLES)
-    # Every one but unswept (which needs a slow sweep, where the frontier is refused).
-    plain = tuple(o for o in declared if o != "unswept")
+    # Every one but unswept (which needs a slow sweep, where the frontier is refused)
+    # and basins (refused beside attractors, whose attractor_count it writes too, and
+    # with a slow sweep).
+    plain = tuple(o for o in declared if o not in ("unswept", "basins"))
     spec = parse({"study": {"observables": list(reversed(plain))},
                   "solver": {"coupling": "two-way", "flight": True}})
     assert spec.observables == plain and OBSERVABLES == declared
     assert declared.index("velocity") < declared.index("frontier")
-    swept = tuple(o for o in declared if o != "frontier")
+    with_basins = (*(o for o in plain if o != "attractors"), "basins")
+    spec = parse({"study": {"observables": list(reversed(with_basins))},
+                  "solver": {"coupling": "two-way", "flight": True}})
+    assert spec.observables == tuple(o for o in declared if o in with_basins)
+    swept = tuple(o for o in declared if o not in ("frontier", "basins"))
     spec = parse({"study": {"observables": list(reversed(swept))},
                   "sweep": {"protocol": {"along": "f", "direction": "both"}},
                   "solver": {"coupling": "two-way", "flight": True}})
@@ -516,7 +522,7 @@ REFUSALS = [
     # unknown tables and keys: the message lists what is allowed
     pytest.param(
         {"output": {"file": "x.nc"}},
-        ["top level", "'output'", "allowed keys: solver, structure, study, sweep"],
+        ["top level", "'output'", "allowed keys: basins, solver, structure, study, sweep"],
         id="unknown-table",
     ),
     pytest.param(
