@@ -24,6 +24,7 @@
 #                   against the first run -> results/bench-frontier-reuse.md,
 #                   slow sweeps and verified starts against the one-way map
 #                   -> results/bench-protocol.md,
+#                   basins (24 starts) against a single-start map -> results/bench-basins.md,
 #                   reading a million-row measurement file (printed)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
@@ -138,6 +139,10 @@ figures/bifurcation-along-%.png: results/bifurcation-along-%.nc $(PACKAGE) FORCE
 	$(STUDY) figure bifurcation $< -o figures/bifurcation-along-$* --if-changed
 figures/hysteresis-%.png: results/hysteresis-%.nc $(PACKAGE) FORCE | $(STAMP)
 	$(STUDY) figure hysteresis $< -o figures/hysteresis-$* --if-changed
+# Basins: figures/basins-X.png is figure basins of results/basins-X.nc (each motion
+# followed over the map, study.analyses.basins.follow_attractors).
+figures/basins-%.png: results/basins-%.nc $(PACKAGE) FORCE | $(STAMP)
+	$(STUDY) figure basins $< -o figures/basins-$* --if-changed
 # A figure's date says nothing of what it was drawn from (a figure of another file drawn
 # to the same name is newer than its result): `study figure --if-changed` is asked every
 # time and redraws unless the PNG records this result's checksum, these options and
@@ -230,6 +235,7 @@ bench: $(STAMP)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_small_calls.py
 	$(PY) benchmarks/bench_frontier_reuse.py
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_protocol.py
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_basins.py
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
 

@@ -112,6 +112,14 @@ FIGURES: dict[str, Figure] = {
         "Slow sweeps up and down: the velocity against the swept drive with the jumps "
         "marked, or over a map where the two sweeps end on different motions",
     ),
+    "basins": Figure(
+        "study.figures.basins", "basins-flight",
+        ("basin_status", "basin_velocity", "basin_largest_hop", "basin_period",
+         "basin_fraction"),
+        "Basins: each motion followed across the drive (global continuation), its region "
+        "coloured by its basin fraction over (f, a), or the fractions stacked along one "
+        "axis",
+    ),
     "coupling": Figure(
         "study.figures.coupling", "coupling",
         ("velocity", "status", "velocity_one_way", "status_one_way", "M"),

@@ -235,10 +235,20 @@ def _plan() -> xr.Dataset:
         waypoint=("waypoint", np.arange(dataset.sizes["waypoint"]))).drop_vars("strategy")
 
 
+def _basins():
+    """A small basins map at M = 0.99 with flight (tests/support/basins_dataset.py)."""
+    import study
+    from tests.support.basins_dataset import computed
+
+    return computed(study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25),
+                    [12.5, 13.0, 13.5], [10.0, 12.0], starts=6, flight=True)
+
+
 SCENES = {
     "trajectory": trajectory_dataset,
     "calibration": calibration_dataset,
     "plan": _plan,
+    "basins": _basins,
 }
 
 
@@ -536,6 +546,7 @@ SOURCES = {
     "lyapunov": ("irregular", []),
     "bifurcation": ("section", []),
     "hysteresis": ("hysteresis", []),
+    "basins": ("basins", []),
     "steering": ("trajectory", []),
     "steering-calibration": ("calibration", []),
     "steering-plan": ("plan", []),
@@ -549,6 +560,7 @@ def _cases():
             "coupling": ("M", "f", "a"), "flight": ("M", "f", "a", "branch"),
             "irregular": ("M", "f", "a"), "section": ("f", "a", "section_period"),
             "hysteresis": ("direction", "f", "a"),
+            "basins": ("f", "a", "attractor"),
             "trajectory": ("t", "segment"),
             "calibration": ("f", "a"), "fit": ("measurement", "parameter", "profile_point"),
             "plan": ("strategy", "realisation", "t", "waypoint", "segment")}

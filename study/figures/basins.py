@@ -1,0 +1,201 @@
+"""Basins: each motion of a map followed across the drive, and its share of the starts.
+
+Drawn from a study with the ``basins`` observable (the ``attractor`` dimension, the
+``basin_*`` variables). The attractors are labelled by
+:func:`study.analyses.basins.follow_attractors` (or by the file's ``attractor_label``
+where it holds one, so that a line selected from a labelled map keeps the map's
+labels); each label has one colour in both drawings. Over (f, a): one panel per label,
+most points first (at most :data:`MAX_PANELS`), its region coloured by its basin
+fraction. Along one drive axis (the other of one value, or selected with ``--sel``):
+the velocity of each label above, and the basin fractions stacked beneath, as
+Attractors.jl's basins-fractions plot.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.colors import LinearSegmentedColormap, to_rgb
+
+from study.analyses.basins import (
+    class_name,
+    follow_attractors,
+    fraction_by_label,
+    status_class,
+)
+from study.figures.common import (
+    coupling_label,
+    require_dims,
+    save,
+    selection_text,
+    structure_text,
+)
+
+__all__ = ["MAX_PANELS", "compose", "draw", "label_colour", "labelled"]
+
+#: Labels drawn over (f, a) at most, most points first.
+MAX_PANELS = 6
+_AXES = {"f": "drive frequency f [Hz]", "a": "drive acceleration a [m s$^{-2}$]"}
+_PALETTE = plt.get_cmap("tab10").colors
+
+
+def label_colour(label: int) -> tuple[float, float, float]:
+    """The colour of a label in both drawings (tab10, cycled)."""
+    return tuple(to_rgb(_PALETTE[int(label) % len(_PALETTE)]))
+
+
+def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
+    """Draw the basins figure; returns the PNG and PDF.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A basins map of one structure (``f``, ``a``, ``attractor``) holding
+        ``basin_status``, ``basin_velocity`` [m s-1], ``basin_largest_hop`` [m],
+        ``basin_period`` and ``basin_fraction`` [1].
+    output : pathlib.Path
+        File stem.
+    """
+    fig, title = compose(dataset)
+    return save(fig, output, dataset, title)
+
+
+def labelled(dataset: xr.Dataset) -> tuple[xr.Dataset, xr.Dataset]:
+    """The dataset with ``attractor_label`` and the per-label summary: the file's own
+    labels where it holds them, else :func:`~study.analyses.basins.follow_attractors`'s.
+    """
+    if "attractor_label" not in dataset:
+        return follow_attractors(dataset)
+    labels = dataset["attractor_label"]
+    present = np.unique(labels.values[labels.values >= 0])
+    shares = fraction_by_label(dataset).sel(label=present)
+    velocity = dataset["basin_velocity"]
+    summary = xr.Dataset(
+        {"points": ("label", [int((labels == k).sum()) for k in present]),
+         "velocity_min": ("label", [float(velocity.where(labels == k).min()) for k in present]),
+         "velocity_max": ("label", [float(velocity.where(labels == k).max()) for k in present]),
+         "fraction_max": shares.max([d for d in shares.dims if d != "label"])},
+        coords={"label": present})
+    classes = []
+    for k in present:
+        where = labels == k
+        period = int(dataset["basin_period"].where(where).max())
+        status = int(dataset["basin_status"].where(where).max())
+        classes.append(class_name(int(status_class(np.array([status]),
+                                                   np.array([period]))[0])))
+    summary["status_class"] = ("label", np.array(classes, dtype=object))
+    return dataset, summary
+
+
+def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
+    """The figure of :func:`draw`, not saved, and its one-line title."""
+    from study.figures import FigureError
+
+    if "attractor" not in dataset["basin_status"].dims:
+        raise FigureError("figure 'basins' follows every attractor of each point, which "
+                          "needs several values of attractor (the whole dimension); the "
+                          "selection leaves one")
+    dataset = require_dims(dataset, "basins", ("f", "a", "attractor"),
+                           "the attractors of one structure over (f, a)", "basin_status")
+    several = [d for d in ("f", "a") if dataset.sizes.get(d, 1) > 1]
+    if not several:
+        raise FigureError("figure 'basins' draws the attractors along f or a, which needs "
+                          "several values of f or a; the selection leaves one")
+    labelled_map, summary = labelled(dataset)
+    if len(several) == 2:
+        return _map(labelled_map, summary)
+    axis = several[0]
+    other = "a" if axis == "f" else "f"
+    if other in labelled_map.dims:
+        labelled_map = labelled_map.squeeze(other)
+    return _line(labelled_map, summary, axis, other)
+
+
+def _describe(summary: xr.Dataset, label: int) -> str:
+    row = summary.sel(label=label)
+    low, high = 1e3 * float(row["velocity_min"]), 1e3 * float(row["velocity_max"])
+    speed = (f"v {low:+.0f} to {high:+.0f} mm s$^{{-1}}$" if np.isfinite(low)
+             else "no velocity")
+    return f"{row['status_class'].item()}, {speed}"
+
+
+def _map(dataset: xr.Dataset, summary: xr.Dataset) -> tuple[plt.Figure, str]:
+    shares = fraction_by_label(dataset).transpose("label", "f", "a")
+    order = summary["label"].values[np.argsort(-summary["points"].values, kind="stable")]
+    shown = order[:MAX_PANELS]
+    columns = min(3, shown.size)
+    rows = -(-shown.size // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(4.2 * columns + 0.8, 3.6 * rows + 1.6),
+                             layout="constrained", sharex=True, sharey=True, squeeze=False)
+    f, a = dataset["f"].values, dataset["a"].values
+    for ax, label in zip(axes.flat, shown, strict=False):
+        colour = label_colour(label)
+        cmap = LinearSegmentedColormap.from_list(f"label-{label}",
+                                                 [(0.96, 0.96, 0.96), colour])
+        mesh = ax.pcolormesh(f, a, shares.sel(label=label).values.T, shading="nearest",
+                             cmap=cmap, vmin=0.0, vmax=1.0)
+        fig.colorbar(mesh, ax=ax, label="basin fraction", shrink=0.85)
+        points = int(summary["points"].sel(label=label))
+        ax.set_title(f"label {label}: {_describe(summary, label)}\n{points} points",
+                     fontsize=9, color=colour)
+    for ax in axes.flat[shown.size:]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel(_AXES["f"])
+    for ax in axes[:, 0]:
+        ax.set_ylabel(_AXES["a"])
+    count = dataset["attractor_label"].max("attractor") >= 0
+    most = int((dataset["attractor_label"] >= 0).sum("attractor").max())
+    fig.text(0.5, 0.0, f"{order.size} motions followed over {int(count.sum())} points, at "
+             f"most {most} at one point; the {shown.size} with most points drawn",
+             ha="center", va="bottom", fontsize=9)
+    return fig, _titles(fig, dataset, "Each motion followed over (f, a), coloured by "
+                        "its basin fraction", "Basins over (f, a)")
+
+
+def _line(dataset: xr.Dataset, summary: xr.Dataset, axis: str,
+          other: str) -> tuple[plt.Figure, str]:
+    shares = fraction_by_label(dataset).transpose("label", axis)
+    x = dataset[axis].values
+    present = [int(k) for k in summary["label"].values
+               if bool(shares.sel(label=k).notnull().any())]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8.5, 7.0), layout="constrained",
+                                      sharex=True, height_ratios=(1.0, 1.2))
+    top.axhline(0.0, color="0.6", linewidth=0.6)
+    label_of = dataset["attractor_label"].transpose(axis, "attractor").values
+    velocity = dataset["basin_velocity"].transpose(axis, "attractor").values
+    for label in present:
+        v = np.where(label_of == label, velocity, np.nan)
+        v = np.nanmax(np.where(np.isnan(v), -np.inf, v), axis=1)
+        v = np.where(np.isfinite(v), v, np.nan)
+        top.plot(x, 1e3 * v, "o-", color=label_colour(label), markersize=3.0,
+                 linewidth=1.0, label=f"label {label}: {_describe(summary, label)}")
+    top.set_ylabel("mean velocity [mm s$^{-1}$]")
+    top.legend(fontsize=8, loc="best")
+    stacked = np.nan_to_num(np.stack([shares.sel(label=k).values for k in present]))
+    bottom.stackplot(x, stacked, colors=[label_colour(k) for k in present],
+                     labels=[f"label {k}" for k in present], alpha=0.85)
+    bottom.set_ylim(0.0, 1.0)
+    bottom.set_xlim(x.min(), x.max())
+    bottom.set_xlabel(_AXES[axis])
+    bottom.set_ylabel("basin fraction (stacked)")
+    bottom.legend(fontsize=8, loc="upper right")
+    fixed = float(dataset[other].values)
+    where = f"f = {fixed:g} Hz" if other == "f" else f"a = {fixed:g} m s$^{{-2}}$"
+    most = int((label_of >= 0).sum(axis=1).max())
+    top.set_title(f"{len(present)} motions along {axis}, at most {most} at one drive",
+                  fontsize=10)
+    return fig, _titles(fig, dataset, f"Basin fractions along {axis} at {where}",
+                        f"Basins along {axis} at {where.replace('$^{-2}$', '^-2')}")
+
+
+def _titles(fig: plt.Figure, dataset: xr.Dataset, head: str, plain: str) -> str:
+    """Set the figure's title (``head``, the coupling, the structure, the selection)
+    and return its one-line title for the files' metadata."""
+    selected = selection_text(dataset)
+    fig.suptitle(f"{head}\n{coupling_label(dataset)}\n{structure_text(dataset)}"
+                 + (f"\n{selected}" if selected else ""), fontsize=11)
+    return f"{plain}, {coupling_label(dataset)} ({structure_text(dataset, tex=False)})"

@@ -1,0 +1,88 @@
+"""The basins figure: each motion followed over the drive, drawn from a computed map
+(M = 0.99 with flight, where the forward and backward hops coexist)."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+import pytest
+from matplotlib.colors import to_rgb
+from numpy.testing import assert_allclose, assert_array_equal
+
+import study
+from study.analyses.basins import follow_attractors, fraction_by_label
+from study.figures import FigureError, draw_figure
+from study.figures.basins import MAX_PANELS, compose, draw, label_colour
+from tests.support.basins_dataset import computed
+
+M_TO_1 = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
+
+
+@pytest.fixture(scope="module")
+def basins_map():
+    return computed(M_TO_1, np.arange(12.5, 15.01, 0.5), [10.0, 11.0, 12.0], starts=8,
+                    flight=True, name="basins-figure-test")
+
+
+def test_the_map_has_one_panel_per_label_coloured_by_its_fraction(basins_map, tmp_path):
+    labelled, summary = follow_attractors(basins_map)
+    shares = fraction_by_label(labelled).transpose("label", "f", "a")
+    fig, title = compose(basins_map)
+    panels = [ax for ax in fig.axes if ax.get_visible() and ax.get_title().startswith("label")]
+    assert len(panels) == min(summary.sizes["label"], MAX_PANELS) >= 2
+    for ax in panels:
+        label = int(ax.get_title().split(":")[0].split()[1])
+        assert to_rgb(ax.title.get_color()) == label_colour(label)
+        points = int(summary["points"].sel(label=label))
+        assert f"{points} points" in ax.get_title()
+        mesh = ax.collections[0]
+        drawn = np.ma.filled(mesh.get_array().astype(float), np.nan).ravel()
+        assert_array_equal(drawn, shares.sel(label=label).values.T.ravel())
+        assert mesh.get_clim() == (0.0, 1.0)
+    # Both hops are drawn: one label moves forward, one backward.
+    texts = " ".join(ax.get_title() for ax in panels)
+    assert "v +" in texts and "v -" in texts
+    assert "Basins over (f, a)" in title
+    paths = draw(basins_map, tmp_path / "basins")
+    assert all(p.exists() and p.stat().st_size > 0 for p in paths)
+
+
+def test_a_line_stacks_the_fractions_in_the_maps_colours(basins_map):
+    labelled, _ = follow_attractors(basins_map)
+    line = labelled.sel(a=10.0)  # the map's labels kept (attractor_label in the dataset)
+    fig, title = compose(line)
+    top, bottom = fig.axes
+    stacks = {c.get_label(): c for c in bottom.collections}
+    shares = fraction_by_label(line)
+    present = [int(k) for k in shares["label"].values
+               if bool(shares.sel(label=k).notnull().any())]
+    assert sorted(stacks) == sorted(f"label {k}" for k in present)
+    assert len(present) >= 2  # the fold: two motions along f at 10 m s-2
+    for k in present:
+        assert_allclose(stacks[f"label {k}"].get_facecolor()[0][:3], label_colour(k))
+    # The stacked fractions add up to 1 at every frequency: the top of the stack.
+    total = shares.fillna(0.0).sum("label").values
+    assert_allclose(total, 1.0, rtol=0, atol=1e-12)
+    # The velocity of each label, in mm s-1, where it exists.
+    curves = {c.get_label().split(":")[0]: c for c in top.get_lines() if
+              c.get_label().startswith("label")}
+    for k in present:
+        where = line["attractor_label"] == k
+        expected = 1e3 * line["basin_velocity"].where(where).max("attractor").values
+        assert_allclose(curves[f"label {k}"].get_ydata(), expected, rtol=1e-12)
+    assert "Basins along f at a = 10" in title
+
+
+def test_a_line_selected_from_the_file_draws(basins_map, tmp_path):
+    paths = draw_figure("basins", basins_map, tmp_path / "line", sel=["f=13.5"])
+    assert all(p.exists() for p in paths)
+
+
+def test_one_drive_point_is_refused(basins_map):
+    with pytest.raises(FigureError, match="several values of f or a"):
+        compose(basins_map.isel(f=0, a=0))
+    with pytest.raises(FigureError, match="several values of attractor"):
+        compose(basins_map.isel(attractor=0))
