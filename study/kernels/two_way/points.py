@@ -213,14 +213,15 @@ def _is_static(structure, omega, a, pr, pi):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def stays_static(structure, omega, a, table, state):
-    """The structure, stuck on the table at phase 0 in ``state`` (``(delta, delta', v,
-    h, h')`` [m, m s-1, m s-1, m, m s-1]) under the drive ``omega`` [rad s-1], ``a``
-    [m s-2] (``table`` the mode table of that drive), provably never slips: a
-    sufficient test, in closed form, for the state a slow sweep carries.
+def stays_static(structure, omega, a, table, state, t):
+    """The structure, stuck on the table at time ``t`` [s] in ``state`` (``(delta,
+    delta', v, h, h')`` [m, m s-1, m s-1, m, m s-1]) under the drive ``omega``
+    [rad s-1], ``a`` [m s-2] (``table`` the mode table of that drive), provably never
+    slips: a sufficient test, in closed form, for the state a slow sweep carries or a
+    start on the table.
 
     Stuck, the mode is its steady stick response plus a free decay ``delta_h`` from
-    the state's difference to that response at phase 0. The decay adds
+    the state's difference to that response at ``t``. The decay adds
     ``kappa_s (-c delta_h' - k delta_h)`` to each release function of
     :func:`_is_static`; by Cauchy-Schwarz that is at most ``|kappa_s| sqrt((c^2 + k)
     E)`` with ``E = delta_h'^2 + k delta_h^2``, which the damping never lets grow
@@ -231,7 +232,7 @@ def stays_static(structure, omega, a, table, state):
     be followed)."""
     if state[2] != 0.0 or state[Z_GAP] != 0.0 or state[Z_GAP_RATE] != 0.0:
         return False
-    dp, dpd, _, _ = particular(table[0], omega, 1.0, 0.0)
+    dp, dpd, _, _ = particular(table[0], omega, math.cos(omega * t), math.sin(omega * t))
     decay = state[0] - dp
     decay_rate = state[1] - dpd
     c = structure[DAMPING]
@@ -585,12 +586,28 @@ def solve_started(structure, omega, a, lifted, budget, start, out, neighbours, w
     forgotten: the start is the protocol's, not a neighbour's orbit). On the table
     (height 0) the point is solved as :func:`solve_decided` solves a point that is not
     static, from that state; an orbit that never slips is reported ``STATIC``, as a
-    static point's row. From above the table (a drop, only with the lift-off law
-    ``flight``) the motion with flight is followed from the start.
+    static point's row, and a start that provably stays stuck
+    (:func:`stays_static`) is decided so without following it. From above the table (a
+    drop, only with the lift-off law ``flight``) the motion with flight is followed from
+    the start. On a still table (``a = 0``) every start comes to rest: ``STATIC``.
     """
     start_row(out)
     forget(neighbours)
+    if a == 0.0:
+        # A still table: every motion dissipates to rest, from any start; the drive's
+        # scales, by which the searches measure distances, vanish.
+        _static_row(structure, omega, False, out, diagnostics)
+        return
     t_start = start.phase * TWO_PI / omega
+    if start.height == 0.0 and not lifted:
+        # Stuck at the start and provably staying stuck: the static point's motion,
+        # decided without following it (as a slow sweep decides a carried state).
+        state = np.zeros(N_STATE)
+        mode_drive(structure, omega, a, workspace.table, 0, searched_only=True)
+        start_state(workspace.table, omega, t_start, state, start.factor)
+        if stays_static(structure, omega, a, workspace.table, state, t_start):
+            _static_row(structure, omega, False, out, diagnostics)
+            return
     if start.height > 0.0:
         table = workspace.table
         mode_drive(structure, omega, a, table, 0, searched_only=True)

@@ -130,7 +130,7 @@ def sweep_run(structure, omega, a, lifted, budget, start, order, out, jumped):
             mode_drive(structure, omega[i], a[i], table, 1, searched_only=True)
             mode_drive(structure, omega[i], a[i], table, 2, searched_only=True)
             if not lifted[i] and (a[i] == 0.0 or stays_static(structure, omega[i], a[i],
-                                                              table, state)):
+                                                              table, state, 0.0)):
                 # Most of a map's points: stuck and provably staying stuck, the
                 # motion is the static point's, decided without following it. On a
                 # still table (a = 0) every motion dissipates to that rest, and the
