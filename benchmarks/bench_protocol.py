@@ -2,9 +2,11 @@
 
 Times, on one numba thread (CPU time, the minimum of ``--repeats`` rounds, all in one
 run), per point of a map: the one-way ``steady_velocity`` (the unit), the two-way
-``steady_state`` from the release (verified reached), and ``slow_sweep`` along ``a`` up,
+``steady_state`` from the release (verified reached) and continued from its neighbours
+(unverified: the opt-in speed setting), and ``slow_sweep`` along ``a`` up,
 and up plus down (a protocol swept ``"both"`` ways), on the paper's structure (M = 0.08)
-and on M = 1. Writes results/bench-protocol.md.
+and on M = 1. Writes results/bench-protocol.md and the documentation's table
+docs/speed/protocol.md.
 
 Goals of the issue: a swept map (one direction) within 5x the one-way map per point,
 "both" about twice that.
@@ -25,11 +27,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from docs_tables import load_average, machine
+from docs_tables import load_average, machine, write_docs_table
 
 import study
 from study.engine.provenance import git_state, utc_now
-from study.solvers.exact import steady_state, steady_velocity
+from study.solvers.exact import SolverSettings, steady_state, steady_velocity
 from study.solvers.protocol import slow_sweep
 
 #: The issue's goal: a swept map at most this many one-way maps per point.
@@ -47,8 +49,10 @@ def _cpu(call) -> float:
     return time.process_time() - start
 
 
-def measure(structure: study.Structure, size: int, repeats: int) -> dict[str, float]:
-    """CPU seconds per point of each call on a ``size`` x ``size`` map."""
+def measure(structure: study.Structure, size: int,
+            repeats: int) -> tuple[dict[str, float], dict[str, int]]:
+    """CPU seconds per point of each call on a ``size`` x ``size`` map, and how the
+    sweep up reached its points (:func:`sweep_kinds`)."""
     f = np.linspace(5.0, 30.0, size)
     a = np.linspace(0.0, 12.0, size)
     flat_f, flat_a = (np.ascontiguousarray(x).ravel()
@@ -58,6 +62,9 @@ def measure(structure: study.Structure, size: int, repeats: int) -> dict[str, fl
                                                            coupling="one-way"),
         "two-way steady_state (release, verified)": lambda: steady_state(
             structure, flat_f, flat_a, coupling="two-way"),
+        "two-way steady_state (continuation, unverified)": lambda: steady_state(
+            structure, flat_f, flat_a, coupling="two-way",
+            settings=SolverSettings(continuation=True)),
         "slow_sweep along a, up": lambda: slow_sweep(structure, f, a, along="a"),
         "slow_sweep along a, up and down": lambda: (
             slow_sweep(structure, f, a, along="a"),
@@ -69,7 +76,27 @@ def measure(structure: study.Structure, size: int, repeats: int) -> dict[str, fl
     for _ in range(repeats):
         for name, call in calls.items():
             best[name] = min(best[name], _cpu(call))
-    return {name: seconds / flat_f.size for name, seconds in best.items()}
+    kinds = sweep_kinds(slow_sweep(structure, f, a, along="a").state.status)
+    return {name: seconds / flat_f.size for name, seconds in best.items()}, kinds
+
+
+#: Statuses after which a sweep has a state to carry to the next point.
+_CARRIES = (study.Status.STATIC, study.Status.STICK_SLIP, study.Status.CONTINUOUS_SLIDING,
+            study.Status.BOUNCING, study.Status.CHAOTIC, study.Status.QUASI_PERIODIC)
+
+
+def sweep_kinds(status: np.ndarray) -> dict[str, int]:
+    """How a sweep along the second axis of ``status`` reached its points: a run's first
+    point and every point after one with no state to carry start by the start (solved
+    as the unswept map solves them), a point after a static one that is static itself
+    (decided in closed form where it provably stays stuck), and the others followed from
+    the carried state."""
+    carried = np.isin(status[:, :-1], [int(c) for c in _CARRIES])
+    static = status[:, 1:] == int(study.Status.STATIC)
+    return {"started again (the first of a run, or after a point with no state)":
+            int(status.shape[0] + np.sum(~carried)),
+            "static, reached stuck": int(np.sum(carried & static)),
+            "followed from the carried state": int(np.sum(carried & ~static))}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -80,32 +107,43 @@ def main(argv: list[str] | None = None) -> int:
                         help="points per axis of the M = 1 map (default 301)")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--output", type=Path, default=Path("results/bench-protocol.md"))
+    parser.add_argument("--docs", action=argparse.BooleanOptionalAction, default=True,
+                        help="also write the documentation's table docs/speed/protocol.md")
     args = parser.parse_args(argv)
     loads = [load_average()]
-    lines = ["# Slow sweeps and verified starts: cost per point", "",
-             f"Machine: {machine()}; load average {loads[0]} (start). Commit "
-             f"{git_state().get('commit', '?')}, {utc_now()}.", "",
-             "One numba thread, CPU time, minimum of "
-             f"{args.repeats} rounds in this one run.", ""]
+    table = []
+    notes = []
     for name, structure in MAPS.items():
         size = args.size if name.startswith("paper") else args.size_m1
-        times = measure(structure, size, args.repeats)
+        times, kinds = measure(structure, size, args.repeats)
         unit = times["one-way steady_velocity"]
-        lines += [f"## {name}: {size} x {size} = {size * size} points", "",
+        table += [f"**{name}: {size} x {size} = {size * size} points**", "",
                   "| call | CPU per point [us] | over one-way |", "|---|---|---|"]
         for call, seconds in times.items():
-            lines.append(f"| {call} | {seconds * 1e6:.2f} | {seconds / unit:.1f}x |")
+            table.append(f"| {call} | {seconds * 1e6:.2f} | {seconds / unit:.1f}x |")
         swept = times["slow_sweep along a, up"] / unit
-        lines += ["", f"A swept map costs {swept:.1f}x the one-way map per point (goal "
-                  f"<= {GOAL_SWEPT:g}x: {'met' if swept <= GOAL_SWEPT else 'not met'}); "
-                  "up and down "
-                  f"{times['slow_sweep along a, up and down'] / unit:.1f}x.", ""]
-        print("\n".join(lines[-(len(times) + 6):]), flush=True)
+        both = times["slow_sweep along a, up and down"] / unit
+        unswept = times["two-way steady_state (release, verified)"] / unit
+        shares = ", ".join(f"{count / (size * size):.0%} {kind}"
+                           for kind, count in kinds.items())
+        table += ["", f"A swept map costs {swept:.1f}x the one-way map per point (goal <= "
+                  f"{GOAL_SWEPT:g}x: {'met' if swept <= GOAL_SWEPT else 'not met'}); up "
+                  f"and down {both:.1f}x; the unswept map from the release {unswept:.1f}x. "
+                  f"The sweep up reached its points so: {shares}.", ""]
+        print("\n".join(table[-(len(times) + 6):]), flush=True)
     loads.append(load_average())
-    lines.append(f"Load average after: {loads[1]}.")
+    notes.append("One numba thread, CPU time, the minimum of "
+                 f"{args.repeats} rounds in this one run; load average {loads[0]} before, "
+                 f"{loads[1]} after.")
+    measured = f"{machine()}, commit {git_state().get('commit', '?')}"
     args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text("\n".join(lines) + "\n")
+    args.output.write_text("\n".join(["# Slow sweeps and verified starts: cost per point",
+                                      "", f"Machine: {measured}, {utc_now()}.", "",
+                                      *table, *notes]) + "\n")
     print(f"wrote {args.output}")
+    if args.docs:
+        write_docs_table("protocol", "bench_protocol.py", measured, "\n".join(table),
+                         "\n".join(notes))
     return 0
 
 
