@@ -98,6 +98,12 @@ def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
         raise FigureError("figure 'basins' follows every attractor of each point, which "
                           "needs several values of attractor (the whole dimension); the "
                           "selection leaves one")
+    if ("attractor_count" in dataset
+            and int(dataset["attractor_count"].max()) > dataset.sizes["attractor"]):
+        raise FigureError("figure 'basins' follows every attractor of each point, which "
+                          "needs several values of attractor (all its slots); the "
+                          f"selection leaves {dataset.sizes['attractor']} of them where a "
+                          f"point holds {int(dataset['attractor_count'].max())}")
     dataset = require_dims(dataset, "basins", ("f", "a", "attractor"),
                            "the attractors of one structure over (f, a)", "basin_status")
     several = [d for d in ("f", "a") if dataset.sizes.get(d, 1) > 1]
@@ -105,6 +111,9 @@ def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
         raise FigureError("figure 'basins' draws the attractors along f or a, which needs "
                           "several values of f or a; the selection leaves one")
     labelled_map, summary = labelled(dataset)
+    if not summary.sizes["label"]:
+        raise FigureError("figure 'basins': no point of this file (as selected) holds an "
+                          "attractor")
     if len(several) == 2:
         return _map(labelled_map, summary)
     axis = several[0]

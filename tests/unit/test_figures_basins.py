@@ -1,5 +1,6 @@
-"""The basins figure: each motion followed over the drive, drawn from a computed map
-(M = 0.99 with flight, where the forward and backward hops coexist)."""
+"""The basins figure: each motion followed over the drive, drawn from a map the engine
+computes (compute_map with the basins observable; M = 0.99 with flight, where the
+forward and backward hops coexist)."""
 
 from __future__ import annotations
 
@@ -86,3 +87,6 @@ def test_one_drive_point_is_refused(basins_map):
         compose(basins_map.isel(f=0, a=0))
     with pytest.raises(FigureError, match="several values of attractor"):
         compose(basins_map.isel(attractor=0))
+    assert int(basins_map["attractor_count"].max()) == 2
+    with pytest.raises(FigureError, match=r"several values of attractor \(all its slots"):
+        compose(basins_map.isel(attractor=[0]))
