@@ -6,9 +6,10 @@ Drawn from a study with the ``basins`` observable (the ``attractor`` dimension, 
 where it holds one, so that a line selected from a labelled map keeps the map's
 labels); each label has one colour in both drawings. Over (f, a): one panel per label,
 most points first (at most :data:`MAX_PANELS`), its region coloured by its basin
-fraction. Along one drive axis (the other of one value, or selected with ``--sel``):
-the velocity of each label above, and the basin fractions stacked beneath, as
-Attractors.jl's basins-fractions plot.
+fraction (from grey, a basin too small to be seen, to the label's colour, every start;
+white where the motion is not found). Along one drive axis (the other of one value, or
+selected with ``--sel``): the velocity of each label above, and the basin fractions
+stacked beneath, as Attractors.jl's basins-fractions plot.
 """
 
 from __future__ import annotations
@@ -143,7 +144,7 @@ def _map(dataset: xr.Dataset, summary: xr.Dataset) -> tuple[plt.Figure, str]:
     for ax, label in zip(axes.flat, shown, strict=False):
         colour = label_colour(label)
         cmap = LinearSegmentedColormap.from_list(f"label-{label}",
-                                                 [(0.96, 0.96, 0.96), colour])
+                                                 [(0.85, 0.85, 0.85), colour])
         mesh = ax.pcolormesh(f, a, shares.sel(label=label).values.T, shading="nearest",
                              cmap=cmap, vmin=0.0, vmax=1.0)
         fig.colorbar(mesh, ax=ax, label="basin fraction", shrink=0.85)
@@ -158,11 +159,10 @@ def _map(dataset: xr.Dataset, summary: xr.Dataset) -> tuple[plt.Figure, str]:
         ax.set_ylabel(_AXES["a"])
     count = dataset["attractor_label"].max("attractor") >= 0
     most = int((dataset["attractor_label"] >= 0).sum("attractor").max())
-    fig.text(0.5, 0.0, f"{order.size} motions followed over {int(count.sum())} points, at "
-             f"most {most} at one point; the {shown.size} with most points drawn",
-             ha="center", va="bottom", fontsize=9)
-    return fig, _titles(fig, dataset, "Each motion followed over (f, a), coloured by "
-                        "its basin fraction", "Basins over (f, a)")
+    head = ("Each motion followed over (f, a), coloured by its basin fraction\n"
+            f"{order.size} motions over {int(count.sum())} points, at most {most} at one "
+            f"point; the {shown.size} with most points drawn")
+    return fig, _titles(fig, dataset, head, "Basins over (f, a)")
 
 
 def _line(dataset: xr.Dataset, summary: xr.Dataset, axis: str,
