@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.variables import DEFAULT_MAX_ATTRACTORS, VARIABLES, Variable
+from study.engine.variables import DEFAULT_MAX_ATTRACTORS, GRIDS, VARIABLES, Variable
 from study.model import lift_off_acceleration, mode_response, thresholds
 from study.model.contact import COUPLINGS, DEFAULT_FRICTION, Friction, check_friction
 from study.model.structure import Structure
@@ -720,7 +720,12 @@ def markdown_table() -> str:
                 f"`{v}`" for v in o.protocol_variables)
         if o.requires:
             variables += " (with " + ", ".join(f"`{r}`" for r in o.requires) + ")"
-        lines.append(f"| `{name}` | {_cell(o.summary)} | {grids[o.grid]} | {_cell(needs)} "
+        # The dimensions some of its variables have beyond the drive point's (a phase
+        # section's periods, the basins' attractor slots).
+        beyond = sorted({d for v in (*o.variables, *o.flight_variables)
+                         for d in GRIDS[VARIABLES[v].grid][2:]})
+        grid = grids[o.grid] + "".join(f", and `{d}`" for d in beyond)
+        lines.append(f"| `{name}` | {_cell(o.summary)} | {grid} | {_cell(needs)} "
                      f"| {variables} |")
     return "\n".join(lines) + "\n"
 
