@@ -127,8 +127,12 @@ def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
 def _describe(summary: xr.Dataset, label: int) -> str:
     row = summary.sel(label=label)
     low, high = 1e3 * float(row["velocity_min"]), 1e3 * float(row["velocity_max"])
-    speed = (f"v {low:+.0f} to {high:+.0f} mm s$^{{-1}}$" if np.isfinite(low)
-             else "no velocity")
+    if row["status_class"].item() == "static":
+        speed = "at rest"
+    elif np.isfinite(low):
+        speed = f"v {low:+.0f} to {high:+.0f} mm s$^{{-1}}$"
+    else:
+        speed = "no velocity"
     return f"{row['status_class'].item()}, {speed}"
 
 
