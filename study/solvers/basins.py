@@ -171,11 +171,12 @@ class Basins:
     count : numpy.ndarray of int32
         Attractors at each point [1].
     default_attractor : numpy.ndarray of int32
-        The attractor start 0 (the solver's start) reaches, or -1 where it was not
-        drawn.
+        The attractor start 0 (the solver's start, always followed as
+        :func:`study.solvers.exact.steady_state` follows it) reaches.
     starts_drawn : numpy.ndarray of int32
-        Starts followed at each point [1]: those on the table that the model cannot
-        hold there (a negative normal force) are not drawn without flight.
+        Starts followed at each point [1]: the other starts on the table that the
+        model cannot hold there (a negative normal force) are not drawn without
+        flight.
     reached : numpy.ndarray of int32
         For each point and start, the attractor it reached (-1: not drawn).
     starts : BasinStarts

@@ -19,7 +19,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 import study
 from study.model import mode_response
 from study.solvers.basins import BasinStarts, basin_starts, basins, wilson_interval
-from study.solvers.exact import SolverSettings
+from study.solvers.exact import SolverSettings, past_lift_off
 from study.solvers.integrator import Schedule, simulate
 
 #: The M -> 1 structure of the flight workflows: two hops coexist at 13 Hz, 12 m s-2
@@ -159,3 +159,22 @@ def test_the_starts_are_seeded_and_drops_only_with_flight():
 def test_bad_arguments_are_refused_naming_the_key(kwargs, text):
     with pytest.raises(ValueError, match=re.escape(text)):
         basins(PAPER, 15.0, 5.0, **kwargs)
+
+
+def test_past_lift_off_without_flight_the_solver_start_is_still_followed():
+    """Past the stick's lift-off threshold the release is no state the model can hold on
+    the table, yet the solver follows it (lift-off, or an orbit that stays on the
+    table); start 0 is followed the same way, so default_attractor names that answer
+    at every point, while the other starts off the table are not drawn."""
+    f, a = (x.ravel() for x in np.meshgrid(np.linspace(12.0, 18.0, 13), [9.5, 10.5, 11.5],
+                                          indexing="ij"))
+    lifted = past_lift_off(PAPER, f, a)
+    assert lifted.sum() >= 20
+    found = basins(PAPER, f, a, starts=8)
+    steady = study.steady_state(PAPER, f, a, coupling="two-way")
+    rows = np.arange(f.size)
+    assert np.all(found.default_attractor == 0)
+    assert_array_equal(found.velocity[rows, 0], steady.velocity)
+    assert_array_equal(found.status[rows, 0], steady.status)
+    assert np.any(steady.status[lifted] == study.Status.STICK_SLIP)
+    assert np.any(found.starts_drawn[lifted] < 8)

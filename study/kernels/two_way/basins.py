@@ -145,7 +145,9 @@ def basins_point(structure, omega, a, lifted, budget, phases, factors, heights, 
     they were first reached, the rest NaN; ``reached[s]`` the index of the attractor
     start ``s`` reached, or -1 where the start was not drawn: a start on the table that
     the model cannot hold there (a negative normal force) without the lift-off law
-    ``flight``. Returns the number of attractors."""
+    ``flight``. Start 0, the solver's own, is always followed, as the point drivers
+    follow it (past the stick's lift-off threshold too), so that the attractor it
+    reaches is the one they report. Returns the number of attractors."""
     flying = structure[LIFT_OFF_LAW] != 0.0
     out[:, :] = np.nan
     row = np.empty(N_OUT)
@@ -157,8 +159,8 @@ def basins_point(structure, omega, a, lifted, budget, phases, factors, heights, 
     count = 0
     for s in range(phases.shape[0]):
         start = Start(phases[s], factors[s], heights[s])
-        if start.height == 0.0 and not flying and not on_the_table(structure, omega, a,
-                                                                    table, start):
+        if s > 0 and start.height == 0.0 and not flying and not on_the_table(
+                structure, omega, a, table, start):
             reached[s] = -1
             continue
         if is_release(start):
