@@ -50,7 +50,8 @@ STUDY_FORMATS = (
     ResultFormat(5, "0.4.0", "the start recorded (study_start, study_start_kind, a drop's "
                  "height and phase), slow sweeps (study_protocol and its along and "
                  "direction, jumped, the unswept observable's variables, a direction "
-                 "dimension both ways) and the section observable's variables",
+                 "dimension both ways), the section observable's variables and the basins "
+                 "observable's (study_basins_* attributes, an attractor dimension)",
                  "study-result-v1",
                  upgrade="study.engine.study_upgrade:to_format_5"),
 )

@@ -220,3 +220,16 @@ def test_validation_refuses_inconsistent_basins(tmp_path, name, change, words):
         variable[:] = values
     with pytest.raises(ResultError, match=words):
         seal(output)  # the checksum of the changed values, then validation
+
+
+def test_the_header_schema_needs_the_basins_settings_beside_the_basins(tmp_path):
+    """A file with the basins' variables but without the study_basins_* attributes that
+    say how its starts were drawn is refused by the format's header schema."""
+    output = tmp_path / "b.nc"
+    run_study(write(tmp_path), output, progress=False)
+    with netCDF4.Dataset(output, "a") as nc:
+        nc.delncattr("study_basins_starts")
+        nc.delncattr("study_basins_seed")
+        nc.delncattr("study_basins_max_attractors")
+    with pytest.raises(ResultError, match="study_basins_starts"):
+        seal(output)
