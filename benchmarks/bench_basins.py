@@ -110,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
              "start on a still table (a = 0) are decided static in closed form. One numba "
              f"thread, CPU time, the minimum of {args.repeats} rounds in this one run; "
              f"load average {loads[0]} before, {loads[1]} after.")
-    measured = f"{machine()}, commit {git_state().get('commit', '?')}"
+    measured = f"{machine()}, commit {git_state().get('git_commit', '?')[:7]}"
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text("\n".join(["# Basins: cost per point", "",
                                       f"Machine: {measured}, {utc_now()}.", "", *table,

@@ -135,7 +135,7 @@ def main(argv: list[str] | None = None) -> int:
     notes.append("One numba thread, CPU time, the minimum of "
                  f"{args.repeats} rounds in this one run; load average {loads[0]} before, "
                  f"{loads[1]} after.")
-    measured = f"{machine()}, commit {git_state().get('commit', '?')}"
+    measured = f"{machine()}, commit {git_state().get('git_commit', '?')[:7]}"
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text("\n".join(["# Slow sweeps and verified starts: cost per point",
                                       "", f"Machine: {measured}, {utc_now()}.", "",
