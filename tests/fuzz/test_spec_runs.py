@@ -114,6 +114,13 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         "lyapunov_error": ("status", _INVALID),
         "frontier_frequency": ("frontier_kind", (0,)),
         "frontier_bracket": ("frontier_kind", (0,)),
+        # Basins: an empty attractor slot (basin_status no_attractor, -1) holds NaN, and
+        # an outcome outside the model has no velocity; an irregular one no multiplier.
+        **{f"basin_{name}": ("basin_status", (-1, *_INVALID))
+           for name in ("velocity", "velocity_error", "largest_hop", "exponent")},
+        "basin_multiplier": ("basin_status", (-1, *_INVALID, *_IRREGULAR)),
+        **{f"basin_{name}": ("basin_status", (-1,))
+           for name in ("fraction", "fraction_low", "fraction_high")},
         # A phase section needs a motion: none where static or without a velocity.
         **{f"section_{name}": ("status", (*_INVALID, int(Status.STATIC)))
            for name in ("delta", "delta_rate", "speed", "gap")},
