@@ -114,7 +114,10 @@ def wilson_interval(successes: ArrayLike, trials: ArrayLike) -> tuple[NDArray[np
         z2 = _Z * _Z
         centre = (p + z2 / (2.0 * n)) / (1.0 + z2 / n)
         half = _Z * np.sqrt(p * (1.0 - p) / n + z2 / (4.0 * n * n)) / (1.0 + z2 / n)
-    return np.clip(centre - half, 0.0, 1.0), np.clip(centre + half, 0.0, 1.0)
+    # Rounding can put an end a few ulps inside p itself (at p = 0 or 1): the interval
+    # always holds the estimate.
+    return (np.clip(np.fmin(centre - half, p), 0.0, 1.0),
+            np.clip(np.fmax(centre + half, p), 0.0, 1.0))
 
 
 def _checked_starts(starts: BasinStarts, flight: bool) -> BasinStarts:

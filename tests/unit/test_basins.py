@@ -178,3 +178,14 @@ def test_past_lift_off_without_flight_the_solver_start_is_still_followed():
     assert_array_equal(found.status[rows, 0], steady.status)
     assert np.any(steady.status[lifted] == study.Status.STICK_SLIP)
     assert np.any(found.starts_drawn[lifted] < 8)
+
+
+def test_the_wilson_interval_always_holds_the_estimate():
+    """At every count of up to 200 trials, low <= k / n <= high, at 0 and 1 too (a
+    rounding had once put the upper end a few ulps below 1 at k = n)."""
+    n = np.concatenate([np.full(k + 1, k) for k in range(1, 201)])
+    k = np.concatenate([np.arange(m + 1) for m in range(1, 201)])
+    low, high = wilson_interval(k, n)
+    assert np.all(low <= k / n)
+    assert np.all(k / n <= high)
+    assert np.all((low >= 0.0) & (high <= 1.0))
