@@ -62,9 +62,9 @@ FIGURES: dict[str, Figure] = {
     ),
     "regime-map": Figure(
         "study.figures.regime_map", "regime-map",
-        ("velocity", "status", "a_star_plus", "a_star_minus", "lift_off_acceleration",
-         "frontier_frequency"),
-        "Fig. 2: velocity over (f, a), regions S, P, N, PN, thresholds and frontier f*(a)",
+        ("velocity", "status", "a_star_plus", "a_star_minus", "lift_off_acceleration"),
+        "Fig. 2: velocity over (f, a), regions S, P, N, PN, thresholds and, when the study "
+        "computed it, the frontier f*(a)",
     ),
     "force-traces": Figure(
         "study.figures.force_traces", "regime-map",

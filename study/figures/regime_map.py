@@ -1,5 +1,7 @@
 """The paper's Fig. 2: mean velocity over (f, a), thresholds, lift-off and frontier f*(a).
 
+The frontier is drawn when the study computed it; a map without it says so.
+
 Drawn from a ``regime-map`` result file alone (``study figure regime-map FILE``).
 """
 
@@ -34,6 +36,8 @@ __all__ = ["draw"]
 OUTLINE = [path_effects.withStroke(linewidth=3.2, foreground="white")]
 #: The edge of the bouncing region (a study with flight).
 BOUNCING_EDGE = "darkgreen"
+#: The legend's line for a study that did not compute the frontier.
+NO_FRONTIER = 'frontier f*(a) not computed (observable "frontier")'
 
 
 def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
@@ -46,8 +50,9 @@ def draw(dataset: xr.Dataset, output: Path) -> list[Path]:
     Parameters
     ----------
     dataset : xarray.Dataset
-        A result holding velocity and status over (f, a), a*_pm, the lift-off
-        acceleration and the frontier f*(a).
+        A result holding velocity and status over (f, a), a*_pm and the lift-off
+        acceleration; the frontier f*(a) is drawn when it holds it (observable
+        ``frontier``), else the legend says it was not computed.
     output : pathlib.Path
         File stem.
 
@@ -153,13 +158,18 @@ def _curves(ax: plt.Axes, dataset: xr.Dataset) -> list:
         (line,) = ax.plot(f, dataset[name].values, label=label, path_effects=OUTLINE, **style)
         handles.append(line)
 
-    frontier = dataset["frontier_frequency"].transpose("a", "branch").values
-    for branch in range(frontier.shape[1]):
-        found = int(np.count_nonzero(np.isfinite(frontier[:, branch])))
-        ax.plot(frontier[:, branch], a, color="black", lw=1.2, marker="o", ms=2.5,
-                markevery=max(1, found // 25), zorder=4)
-    handles.append(Line2D([], [], color="black", lw=1.2, marker="o", ms=2.5,
-                          label="frontier f*(a): v changes sign"))
+    if "frontier_frequency" in dataset:
+        frontier = dataset["frontier_frequency"].transpose("a", "branch").values
+        for branch in range(frontier.shape[1]):
+            found = int(np.count_nonzero(np.isfinite(frontier[:, branch])))
+            ax.plot(frontier[:, branch], a, color="black", lw=1.2, marker="o", ms=2.5,
+                    markevery=max(1, found // 25), zorder=4)
+        handles.append(Line2D([], [], color="black", lw=1.2, marker="o", ms=2.5,
+                              label="frontier f*(a): v changes sign"))
+    else:
+        # A map without the frontier (it costs bisections, on a flight study often more
+        # than the map): said, so that no reader looks for its line.
+        handles.append(Line2D([], [], ls="none", label=NO_FRONTIER))
     # A two-way study with the paper's model beside it: where the one-way velocity
     # changes sign (the paper's frontier), for comparison.
     paper = one_way_velocity(dataset, "a", "f")

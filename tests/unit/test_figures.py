@@ -106,7 +106,6 @@ def test_figure_command_writes_png_and_pdf_with_provenance(figure, results, tmp_
     ("figure", "source", "missing"),
     [
         ("regime-map", "thresholds", "velocity"),
-        ("regime-map", "velocity-curves", "frontier_frequency"),
         ("thresholds", "velocity-curves", "mode_gain"),
         ("velocity-curves", "thresholds", "status"),
         ("force-traces", "thresholds", "velocity"),
@@ -178,8 +177,8 @@ a = {{ start = 0.0, stop = 12.0, num = 4 }}
 
 def test_a_refusal_names_the_observables_to_add(tmp_path, capsys):
     """The README's example spec (thresholds, velocity) drawn as regime-map: the message
-    names lift_off and frontier, the observables the registry says write the missing
-    variables, and the spec so extended holds everything the figure needs."""
+    names lift_off, the observable the registry says writes the missing variable, and
+    the spec so extended holds everything the figure needs (the frontier is optional)."""
     from study.engine.observables import variables_of
 
     spec = tmp_path / "own.toml"
@@ -188,11 +187,46 @@ def test_a_refusal_names_the_observables_to_add(tmp_path, capsys):
     assert main(["figure", "regime-map", str(tmp_path / "own.nc"), "-o",
                  str(tmp_path / "x")]) == 1
     message = capsys.readouterr().err
-    assert "needs lift_off_acceleration, frontier_frequency" in message
-    assert ("add 'lift_off', 'frontier' to the spec's observables (observables = "
-            '["thresholds", "lift_off", "velocity", "frontier"])') in message
-    suggested = ["thresholds", "lift_off", "velocity", "frontier"]
+    assert "needs lift_off_acceleration, which" in message
+    assert ("add 'lift_off' to the spec's observables (observables = "
+            '["thresholds", "lift_off", "velocity"])') in message
+    suggested = ["thresholds", "lift_off", "velocity"]
     written = {v.name for v in variables_of(suggested)}
     assert set(FIGURES["regime-map"].requires) <= written
     assert not set(FIGURES["regime-map"].requires) <= {v.name for v in variables_of(
         ["thresholds", "velocity"])}
+
+
+def _legend_labels(figure) -> list[str]:
+    return [t.get_text() for legend in figure.legends + [ax.get_legend() for ax in figure.axes]
+            if legend is not None for t in legend.get_texts()]
+
+
+def test_a_regime_map_without_the_frontier_is_drawn_and_says_so(results, tmp_path,
+                                                                monkeypatch):
+    """The frontier's bisections can cost more than the map (15x on a flight study):
+    a study without the observable ``frontier`` draws its map, and the legend says the
+    frontier was not computed; with it, the legend names the frontier's line instead.
+    (Refused before: figure 'regime-map' needed frontier_frequency.)"""
+    import matplotlib.pyplot as plt
+
+    from study.figures import common, regime_map
+
+    drawn = {}
+
+    def keep(fig, output, dataset, description):
+        drawn[output.name] = _legend_labels(fig)
+        plt.close(fig)
+        return []
+
+    monkeypatch.setattr(common, "save", keep)
+    full = open_result(results["regime-map"])
+    draw_figure("regime-map", full.drop_vars([v for v in full.variables
+                                               if str(v).startswith("frontier_")]),
+                tmp_path / "without")
+    draw_figure("regime-map", full, tmp_path / "with")
+    assert regime_map.NO_FRONTIER in drawn["without"]
+    assert "frontier f*(a): v changes sign" not in drawn["without"]
+    assert "frontier f*(a): v changes sign" in drawn["with"]
+    assert regime_map.NO_FRONTIER not in drawn["with"]
+    assert "not computed" in regime_map.NO_FRONTIER
