@@ -36,10 +36,10 @@ from study.engine.study_spec import STRUCTURE_PARAMETERS, StudySpec, parse_spec
 from study.engine.sweep import Rectangle, Task, compute_task
 from study.engine.variables import GRID_SIZES
 from study.model.inputs import (
-    RADIAN_LIKE_TILT,
     SuspectInputWarning,
     as_real_array,
     bounded_integer,
+    radian_tilt_note,
     tilt_looks_like_radians,
 )
 from study.model.parameters import STRUCTURE as STRUCTURE_TABLE
@@ -301,11 +301,10 @@ def compute_map(
         swept[name] = _axis(f"sweep[{name!r}]", values)
     radian_like = [v for v in swept.get("alpha", ()) if tilt_looks_like_radians(v)]
     if radian_like:
-        low, high = RADIAN_LIKE_TILT
         warnings.warn(
-            f"sweep['alpha'] holds {len(radian_like)} tilts between {low:g} and {high:.4g} "
-            f"degree (first {radian_like[0]!r}): they look like angles in radians; alpha "
-            "is in degree", SuspectInputWarning, stacklevel=2)
+            f"sweep['alpha'] holds {len(radian_like)} tilts that look like angles in "
+            f"radians (first {radian_like[0]!r} degree): {radian_tilt_note(radian_like[0])}",
+            SuspectInputWarning, stacklevel=2)
     f_values = _axis("f", f)
     a_values = _axis("a", a)
     if protocol is not None and not isinstance(protocol, Mapping):

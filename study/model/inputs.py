@@ -27,6 +27,7 @@ __all__ = [
     "bounded_integer",
     "bounded_number",
     "instance_of",
+    "radian_like_range",
     "radian_tilt_note",
     "real_number",
     "tilt_looks_like_radians",
@@ -64,9 +65,16 @@ def radian_tilt_note(alpha: float) -> str:
     """Why a tilt ``alpha`` [degree] that :func:`tilt_looks_like_radians` is suspect, and
     the value in degree it would be if it were radians: the one text of the warning of
     :class:`study.Structure` and of a spec's tilt (:mod:`study.engine.study_spec`)."""
+    return (f"{radian_like_range()} looks like an angle in radians; alpha is in degree "
+            f"(for {alpha!r} rad give alpha = {math.degrees(alpha):.6g})")
+
+
+def radian_like_range() -> str:
+    """:data:`RADIAN_LIKE_TILT` in words, in degree throughout: ``"a tilt of 0.05 to
+    1.571 degree (the numbers of 2.865 to 90 degree written in radians)"``."""
     low, high = RADIAN_LIKE_TILT
-    return (f"a tilt between {low:g} and {high:.4g} degree looks like an angle in radians; "
-            f"alpha is in degree (for {alpha!r} rad give alpha = {math.degrees(alpha):.6g})")
+    return (f"a tilt of {low:g} to {high:.4g} degree (the numbers of {math.degrees(low):.4g} "
+            f"to {math.degrees(high):.4g} degree written in radians)")
 
 
 def _kind_name(value: Any) -> str:

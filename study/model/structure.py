@@ -101,9 +101,10 @@ class Structure:
     Warns
     -----
     study.SuspectInputWarning
-        If ``0.05 <= |alpha| < pi/2`` (:data:`study.model.inputs.RADIAN_LIKE_TILT`): a tilt
-        below 1.6 degree that looks like an angle in radians (``alpha=0.785`` for 45
-        degree). The structure is built as given, in degree.
+        If ``0.05 <= |alpha| < 1.571`` degree (:data:`study.model.inputs.RADIAN_LIKE_TILT`,
+        the numbers of 2.9 to 90 degree written in radians): a tilt that looks like an
+        angle in radians (``alpha=0.785`` for 45 degree). The structure is built as
+        given, in degree.
     """
 
     f0: float

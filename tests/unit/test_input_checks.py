@@ -53,6 +53,22 @@ def test_a_tilt_that_looks_like_radians_warns(alpha) -> None:
     assert issubclass(study.StudyWarning, UserWarning)
 
 
+def test_the_radians_warning_states_its_range_in_degree_throughout() -> None:
+    """The window's ends are degree values (0.05 and 1.571 degree), and what they are
+    in radians (2.865 and 90 degree) is said as such: no "pi/2 degree" (issue 47)."""
+    with pytest.warns(study.SuspectInputWarning) as caught:
+        study.Structure(**{**PAPER, "alpha": 1.117})
+    with pytest.warns(study.SuspectInputWarning) as swept:
+        study.compute_map(STRUCTURE, f=[14.0], a=[0.0], observables=["thresholds"],
+                          sweep={"alpha": [0.5, 1.0]})
+    low, high = RADIAN_LIKE_TILT
+    for message in (str(caught[0].message), str(swept[0].message)):
+        assert f"a tilt of {low:g} to {high:.4g} degree" in message
+        assert (f"the numbers of {math.degrees(low):.4g} to {math.degrees(high):.4g} degree "
+                "written in radians") in message
+        assert "pi" not in message
+
+
 @pytest.mark.parametrize("alpha", [0.0, 1e-6, 0.01, 0.0499, math.pi / 2, 2.0, 64.0, -89.9])
 def test_other_tilts_do_not_warn(alpha) -> None:
     with warnings.catch_warnings():
