@@ -1,5 +1,5 @@
 """Where a user's own files go, the README and the docs agree, and git ignores it; what
-the install page says ``make`` installs is what the Makefile installs."""
+the README and the install page say ``make`` installs is what the Makefile installs."""
 
 from __future__ import annotations
 
@@ -32,3 +32,23 @@ def test_the_install_page_names_the_extras_make_installs() -> None:
     assert f"pip install -e '.[{extras[1]}]'" in page
     named = set(re.findall(r"pip install -e '\.\[([a-z,]+)\]'", page))
     assert named == {extras[1]}
+
+
+def _make_extras() -> list[str]:
+    extras = re.search(r"pip install --quiet -e '\.\[([a-z,]+)\]'",
+                       (ROOT / "Makefile").read_text())
+    assert extras is not None
+    return extras[1].split(",")
+
+
+def test_the_readme_and_the_install_page_say_what_make_test_installs() -> None:
+    """Both pages' ``make test`` line names the extras the Makefile installs (the README
+    said "its test extra" while the Makefile installs test and docs, issue 47)."""
+    extras = _make_extras()
+    spoken = " and ".join(extras) + (" extras" if len(extras) > 1 else " extra")
+    line = f"make test     # create .venv, install study with its {spoken}, lint, run the tests"
+    for page in (ROOT / "README.md", ROOT / "docs" / "getting-started" / "install.md"):
+        text = page.read_text(encoding="utf-8")
+        assert line in text, page.name
+        assert len(re.findall(r"^make test +#.*$", text, re.MULTILINE)) == 1, page.name
+
