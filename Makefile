@@ -112,8 +112,6 @@ FIGURES += bifurcation-along-a bifurcation-along-f
 # Slow sweeps up and down: figures/hysteresis-X.png is figure hysteresis of
 # results/hysteresis-X.nc.
 FIGURES += hysteresis-flight hysteresis-paper
-# Basins: figures/basins-X.png is figure basins of results/basins-X.nc.
-FIGURES += basins-flight basins-paper
 # Basins: figures/basins-X.png is figure basins of results/basins-X.nc (workflows
 # basins-flight and basins-paper: every attractor of 24 starts and its basin fraction).
 FIGURES += basins-flight basins-paper

@@ -1,5 +1,6 @@
 """Where a user's own files go, the README and the docs agree, and git ignores it; what
-the README and the install page say ``make`` installs is what the Makefile installs."""
+the README and the install page say ``make`` installs is what the Makefile installs;
+the Makefile names each figure once."""
 
 from __future__ import annotations
 
@@ -52,3 +53,12 @@ def test_the_readme_and_the_install_page_say_what_make_test_installs() -> None:
         assert line in text, page.name
         assert len(re.findall(r"^make test +#.*$", text, re.MULTILINE)) == 1, page.name
 
+
+def test_the_makefile_names_each_figure_once() -> None:
+    """``FIGURES += ...`` lines add figures no other line adds (``basins-flight
+    basins-paper`` was added twice, with its comment)."""
+    makefile = (ROOT / "Makefile").read_text().replace("\\\n", " ")  # continued lines
+    names = [word for line in re.findall(r"^FIGURES \+?:?= (.*)$", makefile, re.MULTILINE)
+             for word in line.split() if not word.startswith("$(")]
+    assert {"thresholds", "steering-plan", "basins-flight"} <= set(names)
+    assert len(names) == len(set(names)), sorted(n for n in names if names.count(n) > 1)
