@@ -27,7 +27,8 @@
 #                   basins (24 starts) against a single-start map -> results/bench-basins.md,
 #                   reading a million-row measurement file (printed)
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
-#   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas
+#   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas,
+#                   and the generated tables of docs/user-guide/specs.md
 #   make designs    run every design spec in designs/: results/design-<name>.nc
 
 PYTHON ?= python3
@@ -78,7 +79,9 @@ $(STAMP): pyproject.toml
 # keeps an identical copy at the top of the repo (a test checks they agree).
 # The spec schema's observables are exported from study/engine/observables.py, the
 # parameters of the study, fit and design spec schemas from study/model/parameters.py; results_schema/
-# is the repository's copy of the package's schemas (a test checks both).
+# is the repository's copy of the package's schemas (a test checks both). The tables
+# of docs/user-guide/specs.md (parameters, observables, contact laws) are written into
+# the page from the same declarations (docs/generate_tables.py; a test checks them).
 schemas: | $(STAMP)
 	$(PY) -c "from study.engine.study_spec import export_spec_schema as e; text = e(); \
 	open('study/schemas/study-spec-v1.schema.json', 'w').write(text)"
@@ -89,6 +92,7 @@ schemas: | $(STAMP)
 	$(PY) -c "from study.analyses.design import export_design_spec_schema as e; text = e(); \
 	open('study/schemas/study-design-spec-v1.schema.json', 'w').write(text)"
 	$(MAKE) $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
+	$(PY) docs/generate_tables.py
 
 results_schema/%.json: study/schemas/%.json
 	cp $< $@

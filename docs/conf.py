@@ -17,16 +17,9 @@ sys.path.insert(0, str(DOCS / "_ext"))
 
 from offline_inventories import write_inventories  # noqa: E402
 
-from study.engine.observables import markdown_table as observables_table  # noqa: E402
-from study.model.contact import markdown_table as laws_table  # noqa: E402
-from study.model.parameters import markdown_table  # noqa: E402
-
-# The tables of docs/user-guide/specs.md (parameters, observables, contact laws), each
-# from its one declaration in the package.
-(DOCS / "_generated").mkdir(exist_ok=True)
-(DOCS / "_generated" / "parameters.md").write_text(markdown_table(), encoding="utf-8")
-(DOCS / "_generated" / "observables.md").write_text(observables_table(), encoding="utf-8")
-(DOCS / "_generated" / "contact-laws.md").write_text(laws_table(), encoding="utf-8")
+# The tables of docs/user-guide/specs.md (parameters, observables, contact laws) are
+# written into the page by docs/generate_tables.py (`make schemas`), so that its source
+# shows them too; tests/unit/test_docs_tables.py keeps them equal to their declarations.
 from sphinx.ext import autosummary  # noqa: E402
 
 import study  # noqa: E402
@@ -52,7 +45,7 @@ extensions = [
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"
-exclude_patterns = ["_build", "_ext", "_generated", "_templates", "examples", "**/*.ipynb",
+exclude_patterns = ["_build", "_ext", "_templates", "examples", "**/*.ipynb",
                     "**/*.py", "**/*.zip", "**/*.md5", "**/*.codeobj.json"]
 templates_path = ["_templates"]
 
