@@ -57,6 +57,8 @@ __all__ = [
     "load_schema",
     "parse_toml",
     "read_spec_text",
+    "schema_error",
+    "schema_problems",
     "where",
 ]
 
@@ -423,12 +425,28 @@ def check_schema(raw: Mapping[str, Any], schema: Mapping[str, Any], path: str,
     SpecError
         Listing every violation, one per line, as ``[table] key: problem; allowed: ...``.
     """
+    found = schema_problems(raw, schema)
+    if found:
+        raise schema_error(found, path, what)
+
+
+def schema_error(found: list[tuple[str, tuple[Any, ...]]], path: str,
+                 what: str = "spec") -> SpecError:
+    """The refusal of :func:`check_schema` for the violations ``found``."""
+    return SpecError(f"{path}: invalid {what}:\n  "
+                     + "\n  ".join(dict.fromkeys(message for message, _ in found)))
+
+
+def schema_problems(raw: Mapping[str, Any], schema: Mapping[str, Any]
+                    ) -> list[tuple[str, tuple[Any, ...]]]:
+    """Every violation of ``schema`` by ``raw``, as ``(message, tainted)``: the message of
+    :func:`check_schema` and the location it leaves unknown (the value's own path; the
+    whole table for an unknown or missing key, which may be any of its keys misspelt).
+    A spec's other checks run on what no violation taints
+    (:func:`study.engine.study_spec.parse_spec`)."""
     validator = _validator_class()(schema)
     errors = sorted(validator.iter_errors(raw), key=lambda e: list(map(str, e.absolute_path)))
-    if not errors:
-        return
-    messages = dict.fromkeys(_explain(error) for error in errors)
-    raise SpecError(f"{path}: invalid {what}:\n  " + "\n  ".join(messages))
+    return [(_explain(error), tuple(error.absolute_path)) for error in errors]
 
 
 # ---------------------------------------------------------------------------

@@ -39,7 +39,7 @@ import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -59,10 +59,11 @@ from study.engine.spec_files import (
     axis_length,
     axis_values,
     canonical_sha256,
-    check_schema,
     load_schema,
     parse_toml,
     read_spec_text,
+    schema_error,
+    schema_problems,
 )
 from study.engine.variables import DEFAULT_MAX_ATTRACTORS
 from study.model.contact import (
@@ -545,15 +546,36 @@ def default_chunk_points(points: int) -> int:
 
 
 def parse_spec(text: str, path: str = "<string>") -> StudySpec:
-    """Validate a study spec given as TOML text (see :func:`load_spec`)."""
+    """Validate a study spec given as TOML text (see :func:`load_spec`).
+
+    The schema's violations and the problems of the spec's other checks are reported
+    together: a check runs on what no violation leaves unknown (an unknown observable
+    and ``num = 0`` do not keep ``M = 1`` with flight for a second run), and one that
+    reads a refused key is left for the run after its fix."""
     raw = parse_toml(text, path)
     # Before the schema, whose words for a parameter of another law are only "does not
-    # match any allowed form".
+    # match any allowed form": its own message, in place of the schema's.
     problems = _Problems(path)
     _check_unread_friction(raw, path, problems)
-    problems.raise_any()
-    check_schema(raw, spec_schema(), path, "study spec")
-    return _build(raw, text, path)
+    tainted = [("solver", "friction")] if problems.messages else []
+    violations = [(message, where) for message, where in schema_problems(raw, spec_schema())
+                  if not any(_overlap(where, t) for t in tainted)]
+    if not violations and not problems.messages:
+        return _build(raw, text, path)
+    tainted += [where for _, where in violations]
+    before = list(problems.messages)
+    others = _Problems(path, tuple(tainted))
+    _check_parts(raw, path, others)
+    if not others.messages and not before:  # the schema's alone, as they always read
+        raise schema_error(violations, path, "study spec")
+    problems.messages = [*before, *(f"{path}: {m}" for m, _ in violations), *others.messages]
+    raise problems.error()
+
+
+def _overlap(first: tuple[Any, ...], second: tuple[Any, ...]) -> bool:
+    """Whether two locations in a spec (key paths) are one within the other."""
+    n = min(len(first), len(second))
+    return first[:n] == second[:n]
 
 
 def _parameter_bounds(name: str) -> tuple[str, Any]:
@@ -704,15 +726,30 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
         )
 
 
-class _Problems:
-    """The problems of one spec, gathered so that one :class:`SpecError` names them all."""
+#: A location that stands for the key names of a table (whether a key is given), not
+#: their values: ``("sweep", KEYS)`` is read by a check that asks which parameters are
+#: swept, and is left unknown only by a violation of the whole table.
+KEYS = "<keys>"
 
-    def __init__(self, path: str) -> None:
+
+class _Problems:
+    """The problems of one spec, gathered so that one :class:`SpecError` names them all.
+
+    ``tainted``: the locations (key paths) the schema refused; a check that reads one of
+    them (:meth:`reading`) is not run, since its answer would follow from the refusal.
+    """
+
+    def __init__(self, path: str, tainted: tuple[tuple[Any, ...], ...] = ()) -> None:
         self.path = path
+        self.tainted = tainted
         self.messages: list[str] = []
 
     def add(self, message: str) -> None:
         self.messages.append(message)
+
+    def reads(self, *locations: tuple[Any, ...]) -> bool:
+        """Whether a check that reads ``locations`` may run: none is tainted."""
+        return not any(_overlap(location, t) for location in locations for t in self.tainted)
 
     def collect(self, check: Any, *args: Any) -> Any:
         """``check(*args)``, its :class:`SpecError` kept as a problem (then None)."""
@@ -722,48 +759,151 @@ class _Problems:
             self.add(str(err))
             return None
 
-    def raise_any(self) -> None:
-        """One :class:`SpecError`: a single problem's message as it is; several under a
-        first line naming the file, one a line."""
+    def reading(self, locations: tuple[tuple[Any, ...], ...], check: Any, *args: Any) -> Any:
+        """:meth:`collect` of a check that reads ``locations``; None, unrun, if one is
+        tainted. Beside the schema's violations a check that trips on what they left
+        (a value it did not expect) adds nothing: the spec is refused already."""
+        if not self.reads(*locations):
+            return None
+        if not self.tainted:
+            return self.collect(check, *args)
+        try:
+            return self.collect(check, *args)
+        except (TypeError, ValueError, KeyError, AttributeError, IndexError):
+            return None
+
+    def error(self) -> SpecError:
+        """One :class:`SpecError` of the problems found: a single problem's message as it
+        is; several under a first line naming the file, one a line."""
         if len(self.messages) == 1:
-            raise SpecError(self.messages[0])
+            return SpecError(self.messages[0])
+        return SpecError(f"{self.path}: {len(self.messages)} problems, each to fix:\n"
+                         + "\n".join(f"  - {m}" for m in self.messages))
+
+    def raise_any(self) -> None:
+        """Raise :meth:`error` if any problem was found."""
         if self.messages:
-            raise SpecError(f"{self.path}: {len(self.messages)} problems, each to fix:\n"
-                            + "\n".join(f"  - {m}" for m in self.messages))
+            raise self.error()
+
+
+class _Parts(NamedTuple):
+    """A spec's tables, each checked (:func:`_check_parts`)."""
+
+    study: dict[str, Any]
+    observables: tuple[str, ...]
+    fixed: dict[str, float]
+    mass: MassModel | None
+    sweep: dict[str, Any]
+    axes: list[Axis]
+    chunk_points: int
+    settings: tuple[Any, ...]
+    flight: bool
+    protocol: tuple[str, str] | None
+    basins: BasinSettings | None
+
+
+def _table(raw: dict[str, Any], name: str) -> dict[str, Any]:
+    """A table of the spec, or an empty one where it is absent or not a table (then the
+    schema has refused it, and the checks reading it do not run)."""
+    table = raw.get(name, {})
+    return dict(table) if isinstance(table, dict) else {}
+
+
+def _check_parts(raw: dict[str, Any], path: str, problems: _Problems) -> _Parts | None:
+    """Check a spec's tables: the structure, the sweep, the solver settings, flight, the
+    parameters the laws read and every structure of the study are checked
+    independently, each problem added to ``problems``; the checked parts, or None.
+
+    Each check names the locations it reads, so that beside the schema's violations
+    (``problems.tainted``) the checks of the rest still run."""
+    study = _table(raw, "study")
+    structure = _table(raw, "structure")
+    mass_table = structure.pop("mass", None)
+    sweep = _table(raw, "sweep")
+    solver_table = _table(raw, "solver")
+    asked_flight = solver_table.get("flight", False) is True
+
+    observed = ("study", "observables")
+    asked = study.get("observables", ())
+    observables = tuple(o for o in OBSERVABLES
+                        if isinstance(asked, list | tuple) and o in asked)
+    fixed_mass = problems.reading((("structure",), ("sweep", KEYS)), _fixed_structure,
+                                  structure, mass_table, sweep, path)
+    swept = problems.reading(
+        (("sweep",), observed, ("solver", "chunk_points"), ("solver", "flight"),
+         ("basins", "max_attractors")),
+        _sweep_axes, sweep, observables, solver_table, path, _given_slots(raw.get("basins")))
+    problems.reading((("solver", "method"), ("solver", "coupling"), ("solver", "flight"),
+                      observed, ("sweep", KEYS)), _needs, solver_table, observables, path,
+                     problems, "protocol" in sweep)
+    settings = problems.reading((("solver",),), _solver, solver_table,
+                                None if swept is None else swept[0], path, problems)
+    method = solver_table.get("method", "exact")
+    coupling = solver_table.get("coupling", DEFAULT_COUPLING)
+    flight = problems.reading((("solver", "flight"), ("solver", "method"),
+                               ("solver", "coupling")), _flight, solver_table, method,
+                              coupling, path)
+    if settings is not None:
+        problems.reading((("solver",), observed), _check_start, settings[3], coupling, flight,
+                         observables, path, problems)
+    protocol = None if settings is None else problems.reading(
+        (("sweep",), observed, ("solver",)), _protocol, sweep, observables, settings[0],
+        coupling, settings[3], path)
+    basins = None if settings is None else problems.reading(
+        (("basins",), observed, ("sweep", KEYS), ("solver",)), _basins, raw.get("basins"),
+        observables, "protocol" in sweep, settings[3], path)
+    # The law asked for, even where refused above: its parameters are not unread.
+    problems.reading((("structure", KEYS), ("sweep", KEYS), ("solver", "friction"),
+                      ("solver", "coupling"), ("solver", "flight")), _check_unread,
+                     structure, sweep, None if settings is None else settings[2], coupling,
+                     asked_flight, path, problems)
+    # Every structure of the study, with the flight asked for (even if refused above:
+    # M = 1 is a problem of its own); its swept parameters only once the sweep passed.
+    structure_axes = _structure_axes(sweep, None if swept is None else swept[0], path,
+                                     problems)
+    if fixed_mass is not None and structure_axes is not None:
+        problems.reading(
+            (("structure",), ("sweep", KEYS), ("solver", "flight"),
+             *(("sweep", axis.name) for axis in structure_axes)),
+            _check_structures, fixed_mass[0], fixed_mass[1], structure_axes, asked_flight,
+            path)
+    if problems.messages or None in (fixed_mass, swept, settings, flight):
+        return None
+    return _Parts(study, observables, *fixed_mass, sweep, *swept, settings, flight,
+                  protocol, basins)
+
+
+def _structure_axes(sweep: dict[str, Any], axes: list[Axis] | None, path: str,
+                    problems: _Problems) -> list[Axis] | None:
+    """The swept structure parameters: :func:`_sweep_axes`' axes but the drive's, or,
+    where the sweep was refused (a drive axis, its size), each structure axis alone
+    if none is refused and they hold at most :data:`MAX_CHUNKS` structures (each is a
+    chunk at least: more are the size guard's to refuse); None if unknown."""
+    if axes is not None:
+        return [axis for axis in axes if axis.name not in DRIVE_PARAMETERS]
+    names = [name for name in sweep if name not in DRIVE_PARAMETERS and name != "protocol"]
+    if not problems.reads(("sweep", KEYS), *(("sweep", name) for name in names)):
+        return None
+    try:
+        if math.prod(axis_length(sweep[name]) for name in names) > MAX_CHUNKS:
+            return None
+        return [Axis(name, axis_values(sweep[name], f"{path}: [sweep] {name}"),
+                     *SWEEPABLE[name]) for name in names]
+    except (SpecError, TypeError, ValueError, KeyError):  # the sweep's to refuse
+        return None
 
 
 def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
-    """A checked :class:`StudySpec` from a spec's tables. The structure, the sweep, the
-    solver settings, flight and the parameters the laws read are checked independently
-    and their problems reported together; each structure of the study is built once
-    those pass."""
-    study = raw["study"]
-    structure = dict(raw["structure"])
-    mass_table = structure.pop("mass", None)
-    sweep = raw.get("sweep", {})
-    solver_table = dict(raw.get("solver", {}))
-
+    """A checked :class:`StudySpec` from a spec's tables (:func:`_check_parts`: every
+    problem reported together)."""
     problems = _Problems(path)
-    observables = tuple(o for o in OBSERVABLES if o in study["observables"])
-    fixed_mass = problems.collect(_fixed_structure, structure, mass_table, sweep, path)
-    swept = problems.collect(_sweep_axes, sweep, observables, solver_table, path,
-                             _given_slots(raw.get("basins")))
-    settings = _solver(solver_table, observables, None if swept is None else swept[0],
-                       path, problems, "protocol" in sweep)
-    method, coupling, friction = settings[0], settings[1], settings[2]
-    flight = problems.collect(_flight, solver_table, method, coupling, path)
-    _check_start(settings[3], coupling, flight, observables, path, problems)
-    protocol = problems.collect(_protocol, sweep, observables, settings[0], coupling,
-                                settings[3], path)
-    basins = problems.collect(_basins, raw.get("basins"), observables, "protocol" in sweep,
-                              settings[3], path)
-    # The law asked for, even where refused above: its parameters are not unread.
-    _check_unread(structure, sweep, friction, coupling,
-                  bool(solver_table.get("flight", False)), path, problems)
+    parts = _check_parts(raw, path, problems)
     problems.raise_any()
-    fixed, mass = fixed_mass
-    axes, chunk_points = swept
-    _, _, friction, solver, integrator, frontier_tolerance = settings
+    assert parts is not None
+    study, observables, fixed, mass = parts.study, parts.observables, parts.fixed, parts.mass
+    sweep, axes, chunk_points, flight = parts.sweep, parts.axes, parts.chunk_points, parts.flight
+    protocol, basins = parts.protocol, parts.basins
+    method, coupling, friction, solver, integrator, frontier_tolerance = parts.settings
     canonical = _canonical(study, observables, fixed, mass, sweep, axes, method, coupling,
                            friction, solver, integrator, frontier_tolerance, flight)
     if protocol is not None:  # only when given: every fingerprint without it is kept
@@ -793,10 +933,6 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         basins=basins,
         warnings=_suspect_tilts(fixed, axes, path),
     )
-    _check_structures(spec, path)
-    # After the structure's own checks: they have the better words where they apply.
-    for axis in spec.structure_axes:
-        _check_bounds(axis, path)
     return spec
 
 
@@ -975,25 +1111,28 @@ def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
     return axes, chunk_points
 
 
-def _solver(solver_table: dict[str, Any], observables: tuple[str, ...],
-            axes: list[Axis] | None, path: str, problems: _Problems,
-            protocol: bool = False) -> tuple[str, str, Friction | None,
-                                             SolverSettings | None,
-                                             IntegratorSettings | None, float | None]:
+def _needs(solver_table: dict[str, Any], observables: tuple[str, ...], path: str,
+           problems: _Problems, protocol: bool = False) -> None:
+    """What each observable needs of the method, coupling and flight, as it declares
+    (and of a slow sweep: ``protocol``, whether ``[sweep]`` declares one), each unmet
+    need added to ``problems``."""
+    for line in unmet_needs(observables, solver_table.get("method", "exact"),
+                            solver_table.get("coupling", DEFAULT_COUPLING),
+                            bool(solver_table.get("flight", False)), protocol):
+        problems.add(f"{path}: {line}")
+
+
+def _solver(solver_table: dict[str, Any], axes: list[Axis] | None, path: str,
+            problems: _Problems) -> tuple[str, str, Friction | None, SolverSettings | None,
+                                          IntegratorSettings | None, float | None]:
     """Method, coupling, friction law, the settings of both solvers and the frontier
-    tolerance, with what each observable needs of them (and of a slow sweep:
-    ``protocol``, whether ``[sweep]`` declares one); each problem is added to
-    ``problems`` (a setting it makes unknown is None; the frontier tolerance is not
-    checked without the sweep's f)."""
+    tolerance; each problem is added to ``problems`` (a setting it makes unknown is
+    None; the frontier tolerance is not checked without the sweep's f)."""
     coupling = solver_table.get("coupling", DEFAULT_COUPLING)
     raw_friction = solver_table.get("friction", DEFAULT_FRICTION)
     # The exact solver covers both couplings (closed form between events; with two-way
     # coupling the mode is a state of the orbit, found by Newton on the period map).
     method = solver_table.get("method", "exact")
-    # What each observable needs of the method, coupling and flight, as it declares.
-    for line in unmet_needs(observables, method, coupling,
-                            bool(solver_table.get("flight", False)), protocol):
-        problems.add(f"{path}: {line}")
     wrong = sorted(
         k for k in solver_table if k in (INTEGRATOR_KEYS if method == "exact" else EXACT_KEYS)
     )
@@ -1257,27 +1396,34 @@ def _check_bounds(axis: Axis, path: str) -> None:
         )
 
 
-def _check_structures(spec: StudySpec, path: str) -> None:
+def _check_structures(fixed: dict[str, float], mass: MassModel | None,
+                      structure_axes: list[Axis], flight: bool, path: str) -> None:
     """Build every structure of the study now, so a bad one is refused before work
-    (with flight, also one without a base mass)."""
-    ranges = [range(len(axis)) for axis in spec.structure_axes]
+    (with flight, also one without a base mass); then the swept values' ranges (after
+    the structure's own checks: they have the better words where they apply)."""
+    ranges = [range(len(axis)) for axis in structure_axes]
     for index in itertools.product(*ranges):
+        params = dict(fixed)
+        for axis, i in zip(structure_axes, index, strict=True):
+            params[axis.name] = float(axis.values[i])
         try:
-            structure = spec.structure_at(index)
+            structure = _build_structure(params, mass)
         except ValueError as err:
-            raise SpecError(f"{path}: invalid structure at {_where(spec, index)}: "
+            raise SpecError(f"{path}: invalid structure at {_where(structure_axes, index)}: "
                             f"{err}") from None
-        if spec.flight and structure.M >= 1:
+        if flight and structure.M >= 1:
             raise SpecError(
-                f"{path}: M = {structure.M!r} at {_where(spec, index)} with [solver] "
-                f"flight = true: flight needs M < 1 ({FLIGHT_NEEDS_BASE_MASS}); allowed: "
-                "M < 1, or flight = false")
+                f"{path}: M = {structure.M!r} at {_where(structure_axes, index)} with "
+                f"[solver] flight = true: flight needs M < 1 ({FLIGHT_NEEDS_BASE_MASS}); "
+                "allowed: M < 1, or flight = false")
+    for axis in structure_axes:
+        _check_bounds(axis, path)
 
 
-def _where(spec: StudySpec, index: tuple[int, ...]) -> str:
+def _where(structure_axes: list[Axis] | tuple[Axis, ...], index: tuple[int, ...]) -> str:
     """A structure of the study as the spec gives it: the swept values at ``index``."""
     at = ", ".join(
         f"{axis.name} = {float(axis.values[i])!r}"
-        for axis, i in zip(spec.structure_axes, index, strict=True)
+        for axis, i in zip(structure_axes, index, strict=True)
     )
     return f"[sweep] point {at}" if at else "[structure]"

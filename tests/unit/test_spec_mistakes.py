@@ -132,3 +132,113 @@ def test_run_without_an_output_writes_beside_the_spec(tmp_path: Path,
     ds = study.run(path, workers=1)
     assert Path(ds.encoding["source"]) == own / "mistake.nc"
     assert not (tmp_path / "results").exists()
+
+
+USER = """\
+[study]
+name = "user"
+observables = [{observables}]
+
+[structure]
+f0 = 18.0
+Q = 25.0
+alpha = 55.0
+M = {M}
+cs = 0.35
+{structure}
+[sweep]
+f = {f}
+a = {{ start = 0.0, stop = 14.0, num = 29 }}
+{sweep}
+[solver]
+coupling = "two-way"
+{solver}
+"""
+GOOD_F = "{ start = 8.0, stop = 20.0, num = 121 }"
+
+
+def _user(tmp_path: Path, name: str = "user.toml", *, observables: str = '"velocity"',
+          M: str = "0.9", f: str = GOOD_F, structure: str = "", sweep: str = "",
+          solver: str = "flight = true") -> Path:
+    path = tmp_path / name
+    path.write_text(USER.format(observables=observables, M=M, f=f, structure=structure,
+                                sweep=sweep, solver=solver))
+    return path
+
+
+def _refusal(path: Path) -> str:
+    with pytest.raises(SpecError) as refused:
+        load_spec(path)
+    return str(refused.value)
+
+
+def _alone(tmp_path: Path, **mistake: str) -> str:
+    """The message of one problem alone: the line it must keep in a joint refusal."""
+    message = _refusal(_user(tmp_path, "alone.toml", **mistake))
+    assert "\n" not in message, message
+    return message.replace("alone.toml", "user.toml")
+
+
+def test_schema_violations_and_the_other_checks_are_reported_in_one_error(tmp_path):
+    """Issue 47: an unknown observable and num = 0 (the schema's) and M = 1 with flight
+    (the structure's, found only once the schema passed) came in two runs; now in one
+    error, one line each, each the message it has alone, naming its key."""
+    path = _user(tmp_path, observables='"velocity", "velocty"', M="1.0",
+                 f="{ start = 8.0, stop = 20.0, num = 0 }")
+    lines = _refusal(path).splitlines()
+    assert lines[0] == f"{path}: 3 problems, each to fix:"
+    assert len(lines) == 4
+    assert lines[1].startswith(f"  - {path}: [study] observables[1]: 'velocty' is not allowed")
+    assert lines[2].startswith(f"  - {path}: [sweep] f: ")
+    assert "f.num = 0 is out of range" in lines[2]
+    flight_alone = _alone(tmp_path, M="1.0")
+    assert flight_alone.startswith(f"{tmp_path / 'user.toml'}: M = 1.0 at [structure] with "
+                                   "[solver] flight = true: flight needs M < 1")
+    assert lines[3] == f"  - {flight_alone}"
+
+
+def test_the_schema_alone_keeps_its_message(tmp_path):
+    """Schema violations without another problem read as they always did."""
+    path = _user(tmp_path, observables='"velocity", "velocty"',
+                 f="{ start = 8.0, stop = 20.0, num = 0 }")
+    message = _refusal(path)
+    assert message.startswith(f"{path}: invalid study spec:\n  [study] observables[1]: ")
+    assert len(message.splitlines()) == 3
+
+
+def test_m_one_with_flight_is_reported_beside_the_other_checks(tmp_path):
+    """M = 1 with flight was checked only after every other check had passed: beside an
+    observable's unmet need and [basins] without basins it came a run later."""
+    path = _user(tmp_path, M="1.0", observables='"velocity", "frontier"',
+                 sweep='protocol = { along = "f", direction = "up" }',
+                 structure="", solver="flight = true\n\n[basins]\nstarts = 4")
+    lines = _refusal(path).splitlines()
+    assert lines[0] == f"{path}: 3 problems, each to fix:"
+    assert '[sweep] protocol with the observable "frontier"' in lines[1]
+    assert "[basins] is read only by the observable \"basins\"" in lines[2]
+    assert lines[3] == f"  - {_alone(tmp_path, M='1.0')}"
+    # A swept structure point names its values, as alone.
+    swept = _user(tmp_path, M="1.0", f="{ start = 8.0, stop = 20.0, num = 0 }",
+                  structure="", sweep="Q = { values = [20.0, 25.0] }")
+    swept.write_text(swept.read_text().replace("Q = 25.0\n", ""))
+    message = _refusal(swept)
+    assert "2 problems" in message
+    assert "M = 1.0 at [sweep] point Q = 20.0 with [solver] flight = true" in message
+
+
+def test_a_problem_that_follows_from_a_refused_key_is_not_reported(tmp_path):
+    """A check that reads what the schema refused is left for the run after the fix: a
+    misspelt observable does not also make [basins] unread, a misspelt parameter does
+    not also make the structure miss one, a refused M is not also checked for flight."""
+    path = _user(tmp_path, observables='"velocity", "basin"',
+                 solver="flight = true\n\n[basins]\nstarts = 4")
+    message = _refusal(path)
+    assert "'basin' is not allowed" in message and "[basins]" not in message
+    assert "\n  - " not in message  # the schema's alone
+    misspelt = _user(tmp_path, M="0.9\nq = 25.0")
+    misspelt.write_text(misspelt.read_text().replace("Q = 25.0\n", ""))
+    message = _refusal(misspelt)
+    assert "unknown key 'q'" in message and "missing" not in message
+    refused_m = _user(tmp_path, M='"1.0"', f="{ start = 8.0, stop = 20.0, num = 0 }")
+    message = _refusal(refused_m)
+    assert "[structure] M" in message and "flight needs M < 1" not in message
