@@ -75,7 +75,13 @@ from study.model.contact import (
     check_friction,
     check_law,
 )
-from study.model.inputs import SuspectInputWarning, radian_tilt_note, tilt_looks_like_radians
+from study.model.inputs import (
+    SuspectInputWarning,
+    drop_height_note,
+    frequency_axis_note,
+    radian_tilt_note,
+    tilt_looks_like_radians,
+)
 from study.model.parameters import (
     DRIVE,
     MASS,
@@ -230,8 +236,10 @@ class StudySpec:
     path : str
         Where it was read from.
     warnings : tuple of str
-        What looks like a mistake but is allowed (a tilt that looks like radians), one
-        message each naming the file and the key; :func:`load_spec` warns of each.
+        What looks like a mistake but is allowed (a tilt that looks like radians, a drop
+        start that looks like millimetres, drive frequencies that look like angular
+        ones), one message each naming the file, the key and the value;
+        :func:`load_spec` warns of each.
     """
 
     name: str
@@ -519,7 +527,8 @@ def load_spec(path: str | Path) -> StudySpec:
     Warns
     -----
     study.SuspectInputWarning
-        For each of :attr:`StudySpec.warnings` (a tilt that looks like radians).
+        For each of :attr:`StudySpec.warnings` (a tilt that looks like radians, a drop
+        height like millimetres, drive frequencies like angular ones).
     """
     spec = parse_spec(read_spec_text(path, "study spec"), str(path))
     for message in spec.warnings:
@@ -931,7 +940,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
         flight=flight,
         protocol=protocol,
         basins=basins,
-        warnings=_suspect_tilts(fixed, axes, path),
+        warnings=(*_suspect_tilts(fixed, axes, path),
+                  *_suspect_units(fixed, axes, solver, path)),
     )
     return spec
 
@@ -959,6 +969,33 @@ def _suspect_tilts(fixed: dict[str, float], axes: list[Axis], path: str) -> tupl
             return (f"{path}: [sweep] alpha: every tilt swept, up to {largest!r} degree, "
                     f"looks like radians: {radian_tilt_note(largest)}",)
     return ()
+
+
+def _suspect_units(fixed: dict[str, float], axes: list[Axis], solver: SolverSettings,
+                   path: str) -> tuple[str, ...]:
+    """A drop start that looks like a height in millimetres and drive frequencies that
+    look like angular ones or are far above the resonance
+    (:func:`study.model.inputs.drop_height_note`, :func:`~study.model.inputs.
+    frequency_axis_note`): a warning each, naming the key and the value, not a refusal
+    (each is a valid study)."""
+    def largest(name: str) -> float:
+        axis = next((axis for axis in axes if axis.name == name), None)
+        return float(np.max(axis.values)) if axis is not None else float(
+            fixed.get(name, STRUCTURE[name].default))
+
+    f = next(axis for axis in axes if axis.name == "f").values
+    f_min, f_max = float(np.min(f)), float(np.max(f))
+    found = []
+    start = solver.start
+    if isinstance(start, Drop):
+        note = drop_height_note(start.height, f_min, largest("g"))
+        if note is not None:
+            found.append(f"{path}: [solver] start drop = {start.height!r} m: a drop of "
+                         f"{note}")
+    note = frequency_axis_note(f_min, f_max, largest("f0"))
+    if note is not None:
+        found.append(f"{path}: [sweep] f = {f_min:g} .. {f_max:g} Hz: {note}")
+    return tuple(found)
 
 
 def _choosing(law: ContactLaw) -> str:

@@ -4,7 +4,9 @@ A string, a boolean, a complex number or a date where a physical quantity is exp
 is refused with a :class:`InputTypeError` naming the argument (``Q='30'`` is not
 read as 30). A value that is allowed but looks like a mistake gives a
 :class:`SuspectInputWarning`: a plate tilt between :data:`RADIAN_LIKE_TILT` degrees
-looks like an angle in radians.
+looks like an angle in radians; in a spec, a drop from above :data:`SUSPECT_DROP_HEIGHT`
+looks like millimetres, and drive frequencies far above the resonance like angular
+frequencies (:func:`drop_height_note`, :func:`frequency_axis_note`).
 """
 
 from __future__ import annotations
@@ -19,14 +21,22 @@ from numpy.typing import NDArray
 from study.model.units import DIMENSIONLESS
 
 __all__ = [
+    "FAR_ABOVE_RESONANCE",
+    "RADIAN_LIKE_FREQUENCY",
     "RADIAN_LIKE_TILT",
+    "RESONANT_BAND",
+    "SUSPECT_DROP_HEIGHT",
+    "SUSPECT_DROP_HOPS",
     "InputTypeError",
     "StudyWarning",
     "SuspectInputWarning",
     "as_real_array",
     "bounded_integer",
     "bounded_number",
+    "drop_height_note",
+    "frequency_axis_note",
     "instance_of",
+    "natural_hop",
     "radian_like_range",
     "radian_tilt_note",
     "real_number",
@@ -75,6 +85,66 @@ def radian_like_range() -> str:
     low, high = RADIAN_LIKE_TILT
     return (f"a tilt of {low:g} to {high:.4g} degree (the numbers of {math.degrees(low):.4g} "
             f"to {math.degrees(high):.4g} degree written in radians)")
+
+
+#: A drop height [m] above which a start looks like a height given in millimetres: a
+#: fall from 0.1 m lands at 1.4 m s-1, some 20 times the table's speed at a = g, 14 Hz
+#: (the drops the package draws itself are 0.1 to 5 mm).
+SUSPECT_DROP_HEIGHT = 0.1
+#: A drop height looks mistaken above this many natural hop scales ``g / (2 pi f)^2``
+#: of the study's lowest drive frequency (the table's displacement at a = g; bouncing
+#: hops are a few of them: 0.5 to 4 at M = 0.99, 12-17 Hz).
+SUSPECT_DROP_HOPS = 100.0
+#: Drive frequencies all above this many times the resonance f0 look like angular
+#: frequencies [rad s-1] when ``f / (2 pi)`` comes within :data:`RESONANT_BAND` of f0.
+RADIAN_LIKE_FREQUENCY = 2.0
+#: Drive frequencies all above this many times f0 look mistaken whatever they are: the
+#: mode's gain there is below 1 / (5^2 - 1) = 1/24 of the table's motion.
+FAR_ABOVE_RESONANCE = 5.0
+#: Within 20 % of the resonance: where ``f / (2 pi)`` of frequencies all above
+#: :data:`RADIAN_LIKE_FREQUENCY` f0 lands when they are angular ones of a study around f0.
+RESONANT_BAND = (0.8, 1.25)
+
+
+def natural_hop(f: float, g: float) -> float:
+    """The natural hop scale ``g / (2 pi f)^2`` [m] at drive frequency ``f`` [Hz] and
+    gravity ``g`` [m s-2]: how far the table moves at an acceleration of g."""
+    return g / (2.0 * math.pi * f) ** 2
+
+
+def drop_height_note(height: float, f_min: float, g: float) -> str | None:
+    """Why a drop from ``height`` [m] onto a table driven from ``f_min`` [Hz] up looks
+    like a height in millimetres (above :data:`SUSPECT_DROP_HEIGHT` or
+    :data:`SUSPECT_DROP_HOPS` natural hop scales at ``f_min``), or None: the text of a
+    spec's warning (:mod:`study.engine.study_spec`)."""
+    hop = natural_hop(f_min, g)
+    if height <= SUSPECT_DROP_HEIGHT and height <= SUSPECT_DROP_HOPS * hop:
+        return None
+    return (f"{height / hop:.3g} times the natural hop scale g / (2 pi f)^2 = "
+            f"{hop * 1e3:.3g} mm of the lowest drive frequency ({f_min:g} Hz)"
+            + (f" and above {SUSPECT_DROP_HEIGHT:g} m" if height > SUSPECT_DROP_HEIGHT else "")
+            + f": it looks like a height in millimetres; the height is in metres (for "
+            f"{height:g} mm give drop = {height / 1e3:g})")
+
+
+def frequency_axis_note(f_min: float, f_max: float, f0: float) -> str | None:
+    """Why drive frequencies ``f_min`` .. ``f_max`` [Hz] look mistaken for a resonance
+    ``f0`` [Hz], or None: every one above :data:`RADIAN_LIKE_FREQUENCY` f0 while ``f /
+    (2 pi)`` reaches :data:`RESONANT_BAND` (angular frequencies given for f), or every
+    one above :data:`FAR_ABOVE_RESONANCE` f0."""
+    low, high = RESONANT_BAND
+    hz_min, hz_max = f_min / (2.0 * math.pi), f_max / (2.0 * math.pi)
+    if f_min > RADIAN_LIKE_FREQUENCY * f0 and hz_max >= low * f0 and hz_min <= high * f0:
+        return (f"every drive frequency is above {RADIAN_LIKE_FREQUENCY:g} times the "
+                f"resonance f0 = {f0:g} Hz, and f / (2 pi) = {hz_min:.4g} .. {hz_max:.4g} Hz "
+                "would come within 20 % of it: they look like angular frequencies in rad "
+                "s-1; f is in Hz (f = omega / (2 pi))")
+    if f_min > FAR_ABOVE_RESONANCE * f0:
+        return (f"every drive frequency is above {FAR_ABOVE_RESONANCE:g} times the "
+                f"resonance f0 = {f0:g} Hz, where the mode's gain is below 1/"
+                f"{FAR_ABOVE_RESONANCE ** 2 - 1:g} of the table's motion: f is in Hz, f0 "
+                "too")
+    return None
 
 
 def _kind_name(value: Any) -> str:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import study
@@ -242,3 +243,89 @@ def test_a_problem_that_follows_from_a_refused_key_is_not_reported(tmp_path):
     refused_m = _user(tmp_path, M='"1.0"', f="{ start = 8.0, stop = 20.0, num = 0 }")
     message = _refusal(refused_m)
     assert "[structure] M" in message and "flight needs M < 1" not in message
+
+
+def test_a_drop_in_millimetres_warns_naming_the_key_the_file_and_the_value(tmp_path, capsys):
+    """Issue 47: a drop of 2.0 m (2 mm meant) passed silently. Above 0.1 m, or above 100
+    natural hop scales g / (2 pi f)^2 of the lowest frequency, a drop warns: the key,
+    the file, the value, what looks wrong and the units; study run prints it and runs."""
+    from study.model.inputs import natural_hop
+
+    path = _user(tmp_path, solver="flight = true\nstart = { drop = 2.0, phase = 0.25 }")
+    with pytest.warns(study.SuspectInputWarning) as caught:
+        spec = load_spec(path)
+    assert len(caught) == 1
+    message = str(caught[0].message)
+    hop = 9.8 / (2 * np.pi * 8.0) ** 2
+    np.testing.assert_allclose(natural_hop(8.0, 9.8), hop, rtol=1e-15)
+    assert message.startswith(f"{path}: [solver] start drop = 2.0 m: a drop of "
+                              f"{2.0 / hop:.3g} times the natural hop scale")
+    assert f"= {hop * 1e3:.3g} mm of the lowest drive frequency (8 Hz)" in message
+    assert "above 0.1 m" in message and "looks like a height in millimetres" in message
+    assert "the height is in metres (for 2 mm give drop = 0.002)" in message
+    assert spec.solver.start.height == 2.0  # allowed, as given
+    # The drops a study means do not warn: 2 mm, and 9 cm at 8 Hz (23 hop scales).
+    for height in ("0.002", "0.09"):
+        fine = _user(tmp_path, solver=f"flight = true\nstart = {{ drop = {height} }}")
+        assert load_spec(fine).warnings == ()
+    # Far above the hop scale of a high drive frequency, below 0.1 m: 5 cm at 100 Hz.
+    high = _user(tmp_path, solver="flight = true\nstart = { drop = 0.05 }",
+                 f="{ start = 100.0, stop = 120.0, num = 3 }", structure="f0 = 90.0")
+    high.write_text(high.read_text().replace("f0 = 18.0\n", ""))
+    with pytest.warns(study.SuspectInputWarning) as caught:
+        load_spec(high)
+    (warning,) = [str(w.message) for w in caught]
+    assert "2.01e+03 times the natural hop scale" in warning and "above 0.1 m" not in warning
+    output = tmp_path / "out.nc"
+    small = _user(tmp_path, solver="flight = true\nstart = { drop = 2.0 }",
+                  f="{ values = [14.0] }")
+    small.write_text(small.read_text().replace("num = 29", "num = 2"))
+    assert main(["run", str(small), "-o", str(output), "--workers", "1",
+                 "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith(f"study: warning: {small}: [solver] start drop = 2.0 m: ")
+
+
+@pytest.mark.parametrize(("f", "low", "high", "says"), [
+    ("{ start = 50.0, stop = 190.0, num = 15 }", 50.0, 190.0,
+     "look like angular frequencies in rad s-1; f is in Hz"),
+    ("{ start = 63.0, stop = 107.0, num = 5 }", 63.0, 107.0,  # 10-17 Hz, below f0
+     "look like angular frequencies in rad s-1; f is in Hz"),
+    ("{ values = [200.0, 300.0] }", 200.0, 300.0, "above 5 times the resonance f0 = 18 Hz"),
+])
+def test_drive_frequencies_far_above_the_resonance_warn(tmp_path, f, low, high, says):
+    """Issue 47: f = 50-190 (rad s-1) for f0 = 18 Hz passed silently. Every f above 2 f0
+    with f / (2 pi) coming within 20 % of f0, or every f above 5 f0, warns."""
+    path = _user(tmp_path, f=f)
+    with pytest.warns(study.SuspectInputWarning) as caught:
+        load_spec(path)
+    (message,) = [str(w.message) for w in caught]
+    assert message.startswith(f"{path}: [sweep] f = {low:g} .. {high:g} Hz: every drive "
+                              "frequency is above")
+    assert says in message
+    if "rad" in says:
+        hz = f"{low / (2 * np.pi):.4g} .. {high / (2 * np.pi):.4g} Hz"
+        assert f"f / (2 pi) = {hz} would come within 20 % of it" in message
+
+
+@pytest.mark.parametrize("f", [
+    "{ start = 8.0, stop = 20.0, num = 121 }",   # the user's own, across f0 = 18 Hz
+    "{ start = 5.0, stop = 90.0, num = 18 }",    # wide, reaching 5 f0
+    "{ start = 37.0, stop = 80.0, num = 3 }",    # above 2 f0, f / (2 pi) short of 0.8 f0
+    "{ values = [1.0, 2.0] }",                   # far below resonance: quasi-static
+])
+def test_frequencies_a_study_may_mean_do_not_warn(tmp_path, f):
+    assert load_spec(_user(tmp_path, f=f)).warnings == ()
+
+
+def test_no_workflow_looks_mistaken() -> None:
+    """The workflows' drops and frequency axes are all within the plausible bounds."""
+    import warnings
+
+    root = Path(__file__).resolve().parents[2] / "workflows"
+    for spec in sorted(root.glob("*.toml")):
+        if "[study]" not in spec.read_text(encoding="utf-8"):
+            continue
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", study.SuspectInputWarning)
+            load_spec(spec)
