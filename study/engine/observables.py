@@ -18,9 +18,10 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from study.engine.variables import DEFAULT_MAX_ATTRACTORS, GRIDS, VARIABLES, Variable
+from study.kernels.time_average import Z_95
 from study.model import lift_off_acceleration, mode_response, thresholds
 from study.model.contact import COUPLINGS, DEFAULT_FRICTION, Friction, check_friction
 from study.model.structure import Structure
@@ -51,6 +52,7 @@ __all__ = [
     "resolve",
     "unmet_needs",
     "variables_of",
+    "velocity_interval",
 ]
 
 #: Velocity solvers a spec can choose with ``[solver] method``.
@@ -485,14 +487,28 @@ def _diagnostics(work: PointWork) -> dict[str, NDArray[Any]]:
             "nonconvergence": s.reason}
 
 
+def velocity_interval(mean: ArrayLike, error: ArrayLike
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The 95 % confidence interval ``(low, high)`` [m s-1] of an averaged velocity
+    ``mean`` [m s-1] with standard error ``error`` [m s-1]: ``mean -+ Z_95 error``, the
+    normal quantile of the averaging's own tolerance
+    (:data:`study.kernels.time_average.Z_95`; batch means of at least 32 batches). NaN
+    where either is."""
+    mean = np.asarray(mean, dtype=np.float64)
+    half = Z_95 * np.asarray(error, dtype=np.float64)
+    return mean - half, mean + half
+
+
 def _floquet(work: PointWork) -> dict[str, NDArray[Any]]:
     return {"floquet_multiplier": work.solution.floquet_multiplier}
 
 
 def _irregular(work: PointWork) -> dict[str, NDArray[Any]]:
     solution = work.solution
+    low, high = velocity_interval(solution.averaged_velocity, solution.velocity_error)
     return {"averaged_velocity": solution.averaged_velocity,
             "velocity_error": solution.velocity_error,
+            "averaged_velocity_low": low, "averaged_velocity_high": high,
             "averaged_periods": solution.averaged_periods,
             "lyapunov_exponent": solution.lyapunov_exponent,
             "lyapunov_error": solution.lyapunov_error}
@@ -611,11 +627,12 @@ _DECLARED = (
                why="the exact two-way solver is the one that computes the orbit's Floquet "
                "multipliers"),
     Observable("irregular", "time averages of motions without a stable cycle within reach "
-               "(chaotic, quasi-periodic): the averaged velocity, its standard error, the "
-               "periods averaged, the largest Lyapunov exponent and its error (exact two-way "
-               "solver only)", "point",
-               ("averaged_velocity", "velocity_error", "averaged_periods",
-                "lyapunov_exponent", "lyapunov_error"), _irregular, requires=("velocity",),
+               "(chaotic, quasi-periodic): the averaged velocity, its standard error and "
+               "95 % interval, the periods averaged, the largest Lyapunov exponent and its "
+               "error (exact two-way solver only)", "point",
+               ("averaged_velocity", "velocity_error", "averaged_velocity_low",
+                "averaged_velocity_high", "averaged_periods", "lyapunov_exponent",
+                "lyapunov_error"), _irregular, requires=("velocity",),
                cached=True, methods=("exact",), couplings=("two-way",),
                why="the exact two-way solver is the one that averages irregular motions "
                "and computes their Lyapunov exponent"),

@@ -163,7 +163,8 @@ def declared_flag_problems(name: str, var: Any, declared: Any, exact: bool) -> l
 def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
                             current: bool = True) -> list[str]:
     """Coordinates and variables against the spec and the declarations (a file of an
-    older format may declare fewer flags: see :func:`declared_flag_problems`)."""
+    older format may declare fewer flags, see :func:`declared_flag_problems`; any file
+    may lack an optional variable, :attr:`study.engine.variables.Variable.optional`)."""
     problems = []
     variables = meta.variables
     for axis in spec.axes:
@@ -187,7 +188,8 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
         elif not check.equals(name, np.array([value], dtype=np.float64)):
             problems.append(f"{name} differs from the embedded spec's {value!r}")
     structure_dims = tuple(axis.name for axis in spec.axes if axis.name not in ("f", "a"))
-    wanted = variables_of(spec.observables, spec.flight, spec.protocol is not None)
+    wanted = [v for v in variables_of(spec.observables, spec.flight, spec.protocol is not None)
+              if not v.optional or v.name in variables]
     wanted_names = {v.name for v in wanted}
     for name in variables:
         if name in VARIABLES and name not in wanted_names:
@@ -232,7 +234,28 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
                                             declared.missing_where)
     if getattr(spec, "basins", None) is not None:
         problems += _basins_problems(check, meta, spec, good)
+    if {"averaged_velocity", *_VELOCITY_INTERVAL} <= good:
+        problems += _interval_problems(check)
     return problems
+
+
+#: The ends of the averaged velocity's 95 % interval (the irregular observable).
+_VELOCITY_INTERVAL = ("averaged_velocity_low", "averaged_velocity_high")
+
+
+def _interval_problems(check: Checker) -> list[str]:
+    """The averaged velocity's interval: NaN exactly where the velocity is, and holding
+    it elsewhere."""
+    outside = 0
+    for mean, low, high in check.slabs("averaged_velocity", *_VELOCITY_INTERVAL):
+        missing = np.isnan(mean)
+        outside += int(np.count_nonzero(
+            (np.isnan(low) != missing) | (np.isnan(high) != missing)
+            | (~missing & ~((low <= mean) & (mean <= high)))))
+    if not outside:
+        return []
+    return [f"averaged_velocity_low and averaged_velocity_high are NaN exactly where "
+            f"averaged_velocity is, and hold it elsewhere ({outside} points disagree)"]
 
 
 #: The basins observable's variables: per drive point and attractor, and per point.

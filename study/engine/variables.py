@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from study.engine.kinds import ResultFormat
+from study.kernels.time_average import Z_95
 from study.model.status import NonConvergence, Status
 from study.model.units import (
     DEGREE,
@@ -121,6 +122,12 @@ class Variable:
         observables write (never in one study), in a study that asks for that
         observable (``attractor_count``: the ``attractors`` observable's count of 12
         starts, or the ``basins`` observable's of its own starts).
+    optional : bool
+        Whether a file whose observables write it may lack it: a variable added to an
+        observable after files of it were written (the averaged velocity's interval),
+        which those files, of any format, and their upgrades (``study upgrade``
+        recomputes nothing) stay valid without; held, it is checked as any other.
+        Default False.
     """
 
     name: str
@@ -137,6 +144,7 @@ class Variable:
     flight_long_name: str = ""
     flight_comment: str = ""
     observable_texts: tuple[tuple[str, str, str], ...] = ()
+    optional: bool = False
 
     def __post_init__(self) -> None:
         if self.grid not in GRIDS:
@@ -285,7 +293,18 @@ _DECLARED = (
              "standard error of the mean velocity",
              comment="0 for an orbit or a static point (exact); for an averaged motion the "
              "batch-means standard error of averaged_velocity (95 % confidence half-width: "
-             "1.96 times it); NaN (missing) where no velocity was found"),
+             f"{Z_95:.7g} times it, averaged_velocity_low to averaged_velocity_high); NaN "
+             "(missing) where no velocity was found"),
+    Variable("averaged_velocity_low", "point", "float64", METRE_PER_SECOND,
+             "lower end of the 95 % confidence interval of the averaged velocity",
+             comment=f"averaged_velocity - {Z_95:.7g} velocity_error (the normal quantile: "
+             "batch means of at least 32 batches); NaN (missing) where averaged_velocity "
+             "is", optional=True),
+    Variable("averaged_velocity_high", "point", "float64", METRE_PER_SECOND,
+             "upper end of the 95 % confidence interval of the averaged velocity",
+             comment=f"averaged_velocity + {Z_95:.7g} velocity_error (the normal quantile: "
+             "batch means of at least 32 batches); NaN (missing) where averaged_velocity "
+             "is", optional=True),
     Variable("averaged_periods", "point", "int32", DIMENSIONLESS,
              "drive periods a motion was averaged over (0: an orbit, exact)"),
     Variable("lyapunov_exponent", "point", "float64", DIMENSIONLESS,
