@@ -433,10 +433,15 @@ _DECLARED = (
              "outcome of the same method without flight (lift_off where the base would "
              "leave the table)", flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
     Variable("jumped", "point", "int8", DIMENSIONLESS,
-             "whether the slowly swept motion jumped at this point: the branch followed "
-             "from the previous point of its run ended ([sweep] protocol)",
+             "whether the slowly swept motion jumped at this point: the motion the sweep "
+             "settles on is not the continuation of the previous point's along its branch "
+             "([sweep] protocol)",
              flags=("followed", "jumped"), flag_values=(0, 1),
-             comment="the first point of a run, started by [solver] start, is followed"),
+             comment="the previous point's orbit followed to this drive by pseudo-arclength "
+             "continuation folded back or ended on the way, or the carried state settled "
+             "on another motion, whatever the velocity does; the doubled orbit of a "
+             "period doubling (and a period halving) is followed; the first point of a "
+             "run, started by [solver] start, is followed"),
     Variable("velocity_unswept", "point", "float64", METRE_PER_SECOND,
              "mean steady velocity each point reaches from the declared start alone, "
              "beside a slow sweep ([sweep] protocol): the same study's velocity without "

@@ -39,8 +39,11 @@ from study.solvers.exact import (
 SWEEP_AXES = ("f", "a")
 #: The directions of a sweep: increasing or decreasing values of the swept axis.
 SWEEP_DIRECTIONS = ("up", "down")
-#: A point jumped where the branch followed ended and its mean velocity differs from the
-#: point's before it on its run by more than this fraction of a / (2 pi f).
+#: Where the branch followed goes on to a point but lost its stability on the way, the
+#: motion the sweep settles on continues it (the doubled orbit of a period doubling, a
+#: quasi-periodic motion about a torus) when its mean velocity is that of the orbit
+#: followed to this fraction of a / (2 pi f); the same fraction decides after an
+#: irregular motion, which has no orbit to follow.
 JUMP_FRACTION = protocol_kernel.JUMP_FRACTION
 
 
@@ -54,11 +57,13 @@ class SweptState:
         The motion at each drive point as the sweep reaches it, each field of shape
         ``(len(f), len(a))``.
     jumped : numpy.ndarray of bool
-        Where the motion left the branch it followed: started from the state carried
-        from the previous point of its run, it did not settle on the fixed point that
-        Newton's method continues from that state (a fold, a loss of stability,
-        lift-off), and its mean velocity differs from the previous point's by more than
-        :data:`JUMP_FRACTION` of ``a / (2 pi f)`` (a period doubling is no jump).
+        Where the motion the sweep settles on, started from the state carried from the
+        previous point of its run, is not the continuation of the motion there: that
+        motion's orbit, followed along its branch to this drive by pseudo-arclength
+        continuation on the exact period map, folded back or ended on the way (a fold, a
+        non-smooth end), or goes on but the carried state settled on another motion,
+        whatever the velocity does. The doubled orbit of a period doubling on the way
+        (and a period halving) is no jump; see :func:`study.kernels.two_way.protocol.is_jump`.
     along : str
         The swept axis, ``"f"`` or ``"a"``.
     direction : str

@@ -10,7 +10,8 @@ is solved as any point from a state (:func:`~study.kernels.two_way.points.solve_
 Newton's method from the carried state, verified reached, else the iterates followed).
 Where a point's motion has no state to carry (outside the model: lift-off without
 flight, the friction paradox, a budget spent) the next point starts by the declared
-start again.
+start again. A point jumped where the motion it settles on is not the continuation of
+the motion before it (:func:`is_jump`: that motion's branch followed to the new drive).
 """
 
 from __future__ import annotations
@@ -22,18 +23,29 @@ from numba import njit, prange
 
 from study.kernels.start import is_release
 from study.kernels.structure_vector import LIFT_OFF_LAW
+from study.kernels.two_way.branch import (
+    FOLLOWED,
+    LOST,
+    Segment,
+    follow_branch,
+    new_branch_work,
+    on_orbit,
+)
 from study.kernels.two_way.continuation import forget, new_neighbours
 from study.kernels.two_way.flight import N_STATE, Z_GAP, Z_GAP_RATE
-from study.kernels.two_way.modes import mode_drive
+from study.kernels.two_way.modes import DrivePoint, mode_drive
 from study.kernels.two_way.points import (
     OUT_DELTA,
     OUT_DELTA_RATE,
-    OUT_FROM_START,
     OUT_GAP,
     OUT_GAP_RATE,
+    OUT_MAP_PASSES,
+    OUT_NEWTON_PASSES,
+    OUT_PERIOD,
     OUT_SPEED,
     OUT_STATUS,
     OUT_VELOCITY,
+    OUT_VELOCITY_ERROR,
     new_workspace,
     solve_decided,
     solve_from,
@@ -53,12 +65,16 @@ from study.model.codes import (
     STICK_SLIP,
 )
 
-#: A point of a sweep jumped when the motion from the carried state did not settle on
-#: the fixed point Newton's method continues from it (the branch followed ended: a
-#: fold, a loss of stability, lift-off) and its mean velocity differs from the point's
-#: before it by more than this fraction of the velocity scale a / (2 pi f): a loss of
-#: stability onto a nearby motion (a period doubling) is no jump.
+#: Where the branch the sweep followed goes on to the next point but the motion there is
+#: another one, it is still no jump when the followed orbit lost its stability on the
+#: way (a period doubling, a torus) and the motion the sweep settles on (the doubled
+#: orbit, the quasi-periodic motion around it) has its velocity to this fraction of
+#: the velocity scale a / (2 pi f); an irregular motion followed to the next point
+#: (which has no orbit to follow) jumped where the velocity changes by more than this
+#: fraction plus IRREGULAR_SIGMAS combined standard errors.
 JUMP_FRACTION = 0.05
+#: Standard errors of two irregular motions' velocities within which they are one.
+IRREGULAR_SIGMAS = 4.0
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -107,19 +123,103 @@ def _first_point(structure, omega, a, lifted, budget, start, out, neighbours, wo
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _orbit(status):
+    """A status with an orbit to follow: a periodic motion or the static point's."""
+    return status in (STATIC, STICK_SLIP, CONTINUOUS_SLIDING, BOUNCING)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _irregular(status):
+    return status == CHAOTIC or status == QUASI_PERIODIC
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def is_jump(structure, before, omega0, a0, z0, omega1, a1, row, z1, has_state, branch,
+            max_events):
+    """Whether the motion a sweep settled on at ``(omega1, a1)`` [rad s-1, m s-2] (its
+    output row ``row``, its state at phase 0 ``z1`` where ``has_state``) is not the
+    continuation of the motion it was carried from: the row ``before`` at ``(omega0,
+    a0)``, whose state at phase 0 ``z0`` (``N_STATE``) was carried.
+
+    - An orbit (or the static point) before is followed along its branch to the new
+      drive by pseudo-arclength continuation on the exact period map
+      (:func:`~study.kernels.two_way.branch.follow_branch`, through a period halving
+      onto the orbit of half its period). Where the branch folds back or ends on the
+      way (a fold, a non-smooth end, lift-off without flight) the motion jumped,
+      whatever its velocity. Where it goes on, the motion continues it when it is that
+      orbit (one of its points within ``SAME_STATE`` of the orbit followed); the
+      doubled orbit of a period doubling on the way, or an irregular motion where the
+      orbit followed lost its stability, continues it when its velocity is that of the
+      orbit followed to :data:`JUMP_FRACTION` of ``a / omega`` (plus
+      :data:`IRREGULAR_SIGMAS` standard errors); any other motion is a jump (the
+      carried state left the branch's basin). Where the branch cannot be followed at
+      all (a step budget spent), the velocity decides, to :data:`JUMP_FRACTION`.
+    - An irregular motion before has no orbit to follow: the motion jumped where its
+      velocity changes by more than :data:`JUMP_FRACTION` of ``a / omega`` plus
+      :data:`IRREGULAR_SIGMAS` combined standard errors.
+    - No motion now (lift-off without flight, the paradox, not converged) is no jump:
+      its status says what happened, and the sweep starts again after it.
+
+    Returns ``(jumped, newton_passes, map_passes)``, the passes the test took."""
+    status0 = int(before[OUT_STATUS])
+    status1 = int(row[OUT_STATUS])
+    if not has_state or not (_orbit(status1) or _irregular(status1)):
+        return False, 0.0, 0.0
+    scale = JUMP_FRACTION * a1 / omega1
+    if _irregular(status0):
+        spread = IRREGULAR_SIGMAS * math.hypot(before[OUT_VELOCITY_ERROR],
+                                               row[OUT_VELOCITY_ERROR])
+        return abs(row[OUT_VELOCITY] - before[OUT_VELOCITY]) > scale + spread, 0.0, 0.0
+    if not _orbit(status0):
+        return False, 0.0, 0.0
+    if status0 == STATIC and status1 == STATIC:
+        return False, 0.0, 0.0
+    periods0 = max(int(before[OUT_PERIOD]), 1)
+    followed, periods0 = follow_branch(structure, Segment(omega0, a0, omega1, a1), z0,
+                                       periods0, branch, max_events)
+    if followed.outcome == LOST:
+        # The branch could not be followed (a budget spent, a singular system): the
+        # velocity alone decides.
+        moved = abs(row[OUT_VELOCITY] - before[OUT_VELOCITY]) > scale
+        return moved, followed.newton_passes, followed.map_passes
+    if followed.outcome != FOLLOWED:
+        # The branch folded back or ended before the new drive.
+        return True, followed.newton_passes, followed.map_passes
+    near = abs(row[OUT_VELOCITY] - followed.velocity) <= scale
+    if _irregular(status1):
+        spread = IRREGULAR_SIGMAS * row[OUT_VELOCITY_ERROR]
+        lost = followed.radius > 1.0
+        moved = not (lost and abs(row[OUT_VELOCITY] - followed.velocity) <= scale + spread)
+        return moved, followed.newton_passes, followed.map_passes
+    flying = structure[LIFT_OFF_LAW] != 0.0
+    point = DrivePoint(structure, branch.table, omega1, a1)
+    passes = branch.flight.passes if flying else branch.contact.passes
+    before_map = passes[1]
+    same = on_orbit(point, branch.z, followed.section, periods0, z1, branch, flying,
+                    max_events)
+    moved = not same
+    if moved and followed.flipped and int(row[OUT_PERIOD]) == 2 * periods0 and near:
+        # The doubled orbit of the period doubling the branch went through.
+        moved = False
+    return moved, followed.newton_passes, followed.map_passes + passes[1] - before_map
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def sweep_run(structure, omega, a, lifted, budget, start, order, out, jumped):
     """Solve the points ``order`` (indices into ``omega`` [rad s-1], ``a`` [m s-2],
     ``lifted``, the rows of ``out`` and ``jumped``) as one slow sweep, in that order.
 
-    ``jumped[i]`` is 1 where point ``i``, started from the carried state, did not
-    settle on the fixed point Newton's method found from it and its mean velocity
-    differs from the previous point's by more than :data:`JUMP_FRACTION` of
-    ``a / omega`` (both with a velocity), else 0."""
+    ``jumped[i]`` is 1 where the motion the sweep settles on at point ``i``, started
+    from the state carried from the point before, is not the continuation of the motion
+    there, else 0 (:func:`is_jump`)."""
     workspace = new_workspace(structure)
     neighbours = new_neighbours()
+    branch = new_branch_work(structure)
     state = np.zeros(N_STATE)
+    carried_state = np.zeros(N_STATE)
+    settled = np.zeros(N_STATE)
     carried = False
-    previous = np.nan
+    previous = -1
     for k in range(order.shape[0]):
         i = order[k]
         row = out[i]
@@ -144,11 +244,21 @@ def sweep_run(structure, omega, a, lifted, budget, start, order, out, jumped):
         else:
             _first_point(structure, omega[i], a[i], lifted[i], budget, start, row,
                          neighbours, workspace)
-        velocity = row[OUT_VELOCITY]
-        jumped[i] = 1 if carried and row[OUT_FROM_START] != 1.0 and abs(
-            velocity - previous) > JUMP_FRACTION * a[i] / omega[i] else 0
-        previous = velocity
-        carried = settled_state(structure, omega[i], a[i], row, workspace.table, state)
+        for m in range(N_STATE):
+            carried_state[m] = state[m]
+        has_state = settled_state(structure, omega[i], a[i], row, workspace.table, settled)
+        jumped[i] = 0
+        if carried:
+            moved, newton_passes, map_passes = is_jump(
+                structure, out[previous], omega[previous], a[previous], carried_state,
+                omega[i], a[i], row, settled, has_state, branch, budget.max_events)
+            jumped[i] = 1 if moved else 0
+            row[OUT_NEWTON_PASSES] += newton_passes
+            row[OUT_MAP_PASSES] += map_passes
+        for m in range(N_STATE):
+            state[m] = settled[m]
+        carried = has_state
+        previous = i
 
 
 @njit(cache=True, nogil=True, parallel=True, error_model="numpy")
