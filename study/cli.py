@@ -494,7 +494,8 @@ def _add_run_command(commands: Any) -> None:
     run.add_argument("--cache", type=_folder_path, metavar="DIR",
                      help="kept values to reuse and extend (default: $STUDY_CACHE, else "
                      "RESULT_FOLDER/.study-cache)")
-    _overwrite_option(run, "result")
+    _overwrite_option(run, "result", ", or the result of another study (another "
+                      "recorded name)")
     run.set_defaults(handler=_run)
 
 
@@ -596,7 +597,7 @@ def _add_fit_command(commands: Any) -> None:
                          help="result file (default: results/<spec file stem>.nc)")
     fitting.add_argument("--figure", type=_output_path, metavar="STEM",
                          help="also draw measurements over the fitted model (STEM.png, .pdf)")
-    _overwrite_option(fitting, "result")
+    _overwrite_option(fitting, "result", ", or the result of another fit")
     fitting.set_defaults(handler=_fit)
 
 
@@ -612,7 +613,7 @@ def _add_design_command(commands: Any) -> None:
     designing.add_argument("spec", type=Path, help="design spec (TOML)")
     designing.add_argument("-o", "--output", type=_output_path,
                            help="result file (default: results/<spec file stem>.nc)")
-    _overwrite_option(designing, "result")
+    _overwrite_option(designing, "result", ", or the result of another design")
     designing.set_defaults(handler=_design)
 
 
@@ -621,11 +622,12 @@ def build_parser() -> argparse.ArgumentParser:
     return _parser()
 
 
-def _overwrite_option(command: argparse.ArgumentParser, what: str) -> None:
+def _overwrite_option(command: argparse.ArgumentParser, what: str,
+                      another: str = "") -> None:
     command.add_argument(
         "--overwrite", action="store_true",
-        help=f"replace an existing file that is not a {what} written by study (a file "
-        "the command reads is never replaced)")
+        help=f"replace an existing file that is not a {what} written by study{another} (a "
+        "file the command reads is never replaced)")
 
 
 def main(argv: list[str] | None = None) -> int:
