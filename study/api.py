@@ -82,6 +82,10 @@ def run(
     study.engine.outputs.OutputError
         ``output`` is the spec, a folder, or (without ``overwrite``) a file of another
         kind or the result of another study; nothing is computed.
+    study.engine.runner.RunInterrupted
+        Ctrl-C (SIGINT, a notebook's interrupt): the work running was finished and every
+        point computed is kept for the next call; the message says how many. A
+        :class:`KeyboardInterrupt`.
     study.engine.executors.ClusterError
         ``scheduler`` cannot be reached or has no worker.
 

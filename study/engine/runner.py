@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from study.engine.executors import TASK_TIMEOUT, Executor
+from study.engine.interrupts import RunInterrupted
 from study.engine.kinds import ResultKind, kind_named, kind_of_spec
 from study.engine.outputs import OutputError, check_output
 from study.engine.progress import Progress
@@ -52,6 +53,7 @@ from study.engine.validation.reading import ResultError
 
 __all__ = [
     "PAPER_REFERENCE",
+    "RunInterrupted",
     "RunJob",
     "RunReport",
     "StudyBusy",
