@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from study.engine.compiling import compile_notices
 from study.engine.executors import TASK_TIMEOUT, Executor
 from study.engine.interrupts import RunInterrupted
 from study.engine.kinds import ResultKind, kind_named, kind_of_spec
@@ -346,7 +347,7 @@ def _compute_and_write(job: RunJob, spec: Any) -> RunReport:
     total, unit = kind.work(spec) if kind.work else (0, "pt")
     shown = Progress(total, spec.name, job.options.get("progress"), unit=unit)
     try:
-        with shown.running():
+        with shown.running(), compile_notices(shown):
             outcome = kind.compute(spec, shown)
     finally:
         shown.close()

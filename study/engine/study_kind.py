@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from study.engine.cache import ResultCache, encode_block, entry_key
+from study.engine.compiling import compile_notices
 from study.engine.executors import TASK_TIMEOUT, Executor, executor
 from study.engine.interrupts import RunInterrupted, stop_requests
 from study.engine.kinds import ResultKind, register
@@ -531,6 +532,7 @@ class _Run:
                         pool = running.enter_context(executor(
                             scheduler, workers, self.code, task_timeout=task_timeout))
                         running.enter_context(self.progress.running())
+                        running.enter_context(compile_notices(self.progress))
                         self.scheduler_name, self.threads = pool.name, pool.threads
                         if on_start is not None:
                             on_start(pool)
@@ -594,7 +596,7 @@ class _Run:
         found = {}
         reused = 0
         try:
-            with shown.running():
+            with shown.running(), compile_notices(shown):
                 for index, structure in self.structures.items():
                     if stop.is_set():
                         raise KeyboardInterrupt

@@ -1,10 +1,11 @@
 """Work units: a chunk's missing points are cut only where no value depends on the cut,
 each unit's values are kept as it comes back, progress moves within a chunk, a stop
-request (Ctrl-C) keeps every point computed and says so. The values are checked
-against the solvers called once on the whole grid."""
+request (Ctrl-C) keeps every point computed and says so, and numba's compilations are
+shown. The values are checked against the solvers called once on the whole grid."""
 
 from __future__ import annotations
 
+import io
 import itertools
 import re
 import signal
@@ -15,8 +16,10 @@ import pytest
 
 import study
 import study.engine.study_kind as study_kind
+from study.engine.compiling import COMPILING, compile_notices
 from study.engine.interrupts import RunInterrupted, stop_requests
 from study.engine.observables import Method
+from study.engine.progress import Progress
 from study.engine.runner import run_study
 from study.engine.store import open_result
 from study.engine.sweep import GRAINS, Rectangle, UnitSizer, cut_unit, unit_grain
@@ -270,3 +273,46 @@ def test_a_program_with_its_own_sigint_handler_keeps_it():
         assert seen == [signal.SIGINT] and not stop.is_set()
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+# -- compilations ---------------------------------------------------------------------
+
+
+def test_a_compilation_is_said_and_shown_until_it_ends():
+    from numba import njit
+
+    @njit(cache=False)
+    def never_compiled_before(x):
+        return x + 1
+
+    stream = io.StringIO()
+    progress = Progress(10, "own", True, stream=stream)
+    with compile_notices(progress) as watch:
+        assert never_compiled_before(1) == 2
+        assert never_compiled_before(2) == 3  # compiled: nothing more to say
+    text = stream.getvalue()
+    assert text.count(f"study: {COMPILING} (the first run") == 1
+    assert watch.compilations == 1 and watch.seconds > 0
+    assert "study: compiled the solver kernels in" in text
+    # While it compiles, the progress names the phase in place of the time left.
+    progress.set_phase(COMPILING)
+    assert progress.line().endswith(COMPILING)
+    progress.set_phase(None)
+    assert progress.line().endswith("time left: estimating")
+
+
+def test_no_compilation_no_word_and_off_means_silent():
+    stream = io.StringIO()
+    with compile_notices(Progress(10, "own", True, stream=stream)):
+        pass
+    assert stream.getvalue() == ""
+    from numba import njit
+
+    @njit(cache=False)
+    def compiled_quietly(x):
+        return 2 * x
+
+    quiet = io.StringIO()
+    with compile_notices(Progress(10, "own", False, stream=quiet)):
+        compiled_quietly(1)
+    assert quiet.getvalue() == ""
