@@ -16,7 +16,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -465,12 +464,9 @@ class _Run:
 
     def _say_stopping(self) -> None:
         """Ctrl-C came: the run finishes the units running, to keep them."""
-        line = ("stopping: finishing the work running to keep it (about a second; longer "
-                "while the solver kernels compile); Ctrl-C again to stop at once")
-        if self.progress.quiet:
-            print(f"study: {line}", file=sys.stderr, flush=True)
-        else:
-            self.progress.say(line)
+        self.progress.say("stopping: finishing the work running to keep it (about a "
+                          "second; longer while the solver kernels compile); Ctrl-C again "
+                          "to stop at once")
 
     def interrupted(self) -> RunInterrupted:
         """The error that ends an interrupted run: what it kept, in one line for people
