@@ -9,6 +9,7 @@ import io
 import itertools
 import re
 import signal
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -215,7 +216,10 @@ def test_progress_moves_within_a_one_chunk_study(tmp_path, capsys):
 
 @pytest.fixture
 def python_sigint():
-    """SIGINT with Python's own handler (a test runner's worker may ignore it)."""
+    """SIGINT with Python's own handler (a test runner's worker may ignore it), in the
+    main thread (pytest-xdist runs tests there), where signal handlers run."""
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signal handlers run in the main thread only")
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     yield
     signal.signal(signal.SIGINT, previous)
@@ -264,7 +268,7 @@ def test_a_second_interrupt_raises_at_once(python_sigint):
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
-def test_a_program_with_its_own_sigint_handler_keeps_it():
+def test_a_program_with_its_own_sigint_handler_keeps_it(python_sigint):
     seen = []
     previous = signal.signal(signal.SIGINT, lambda number, frame: seen.append(number))
     try:
