@@ -58,8 +58,9 @@ def run(
     progress : bool, default False
         Print progress lines (on stderr) while the study runs.
     overwrite : bool, default False
-        Replace an existing file at ``output`` that is not a result of this kind (as
-        ``study run --overwrite``); the spec itself is never replaced.
+        Replace an existing file at ``output`` that is not a result of this kind, or the
+        result of another study (another recorded ``[study] name``; as ``study run
+        --overwrite``); the spec itself is never replaced.
 
     Returns
     -------
@@ -80,7 +81,11 @@ def run(
         Another process is writing the same result.
     study.engine.outputs.OutputError
         ``output`` is the spec, a folder, or (without ``overwrite``) a file of another
-        kind; nothing is computed.
+        kind or the result of another study; nothing is computed.
+    study.engine.runner.RunInterrupted
+        Ctrl-C (SIGINT, a notebook's interrupt): the work running was finished and every
+        point computed is kept for the next call; the message says how many. A
+        :class:`KeyboardInterrupt`.
     study.engine.executors.ClusterError
         ``scheduler`` cannot be reached or has no worker.
 

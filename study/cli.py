@@ -49,7 +49,7 @@ def _load_telling_warnings(path: Path) -> Any:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from study.engine.runner import StudyInterrupted, run
+    from study.engine.runner import RunInterrupted, StudyInterrupted, run
 
     spec = _load_telling_warnings(args.spec)
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
@@ -70,9 +70,14 @@ def _run(args: argparse.Namespace) -> int:
     except StudyInterrupted as err:
         print(f"study: {err}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print("\nstudy: interrupted; computed values are kept, run again to resume",
-              file=sys.stderr)
+    except RunInterrupted as err:  # Ctrl-C: it says what was kept
+        print(f"\nstudy: {err}", file=sys.stderr)
+        _exit_now_if_computing()
+        return 130
+    except KeyboardInterrupt:  # before a study computed anything, or a scene, fit, design
+        print("\nstudy: interrupted before the result was written; nothing of this run "
+              "was kept", file=sys.stderr)
+        _exit_now_if_computing()
         return 130
     if report.metadata_updated:
         print(f"{report.output}: metadata updated (numbers unchanged, nothing recomputed)")
@@ -92,6 +97,19 @@ def _run(args: argparse.Namespace) -> int:
         print(f"{report.output}: rewritten because {report.reason} (values the cache kept "
               "were reused); the file it replaces was kept until the new one was sealed")
     return 0
+
+
+def _exit_now_if_computing() -> None:
+    """After a second Ctrl-C, threads may still be computing units whose values nobody
+    will keep (numba kernels cannot be stopped): the interpreter would wait for them
+    before it exits, up to minutes while a kernel compiles. Everything kept is on disk
+    (written whole or not at all) and the result's temporary is gone: exit at once."""
+    from study.engine.interrupts import computing_threads
+
+    if computing_threads():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
 
 
 def _cache(args: argparse.Namespace) -> int:
@@ -494,7 +512,8 @@ def _add_run_command(commands: Any) -> None:
     run.add_argument("--cache", type=_folder_path, metavar="DIR",
                      help="kept values to reuse and extend (default: $STUDY_CACHE, else "
                      "RESULT_FOLDER/.study-cache)")
-    _overwrite_option(run, "result")
+    _overwrite_option(run, "result", ", or the result of another study (another "
+                      "recorded name)")
     run.set_defaults(handler=_run)
 
 
@@ -596,7 +615,7 @@ def _add_fit_command(commands: Any) -> None:
                          help="result file (default: results/<spec file stem>.nc)")
     fitting.add_argument("--figure", type=_output_path, metavar="STEM",
                          help="also draw measurements over the fitted model (STEM.png, .pdf)")
-    _overwrite_option(fitting, "result")
+    _overwrite_option(fitting, "result", ", or the result of another fit")
     fitting.set_defaults(handler=_fit)
 
 
@@ -612,7 +631,7 @@ def _add_design_command(commands: Any) -> None:
     designing.add_argument("spec", type=Path, help="design spec (TOML)")
     designing.add_argument("-o", "--output", type=_output_path,
                            help="result file (default: results/<spec file stem>.nc)")
-    _overwrite_option(designing, "result")
+    _overwrite_option(designing, "result", ", or the result of another design")
     designing.set_defaults(handler=_design)
 
 
@@ -621,11 +640,12 @@ def build_parser() -> argparse.ArgumentParser:
     return _parser()
 
 
-def _overwrite_option(command: argparse.ArgumentParser, what: str) -> None:
+def _overwrite_option(command: argparse.ArgumentParser, what: str,
+                      another: str = "") -> None:
     command.add_argument(
         "--overwrite", action="store_true",
-        help=f"replace an existing file that is not a {what} written by study (a file "
-        "the command reads is never replaced)")
+        help=f"replace an existing file that is not a {what} written by study{another} (a "
+        "file the command reads is never replaced)")
 
 
 def main(argv: list[str] | None = None) -> int:

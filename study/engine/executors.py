@@ -1,7 +1,9 @@
 """Where chunks are computed: local threads, or the workers of a dask scheduler.
 
 The runner hands a function and a list of items to an :class:`Executor` and
-receives ``(item, result)`` pairs as they complete. Two kinds exist:
+receives ``(item, result)`` pairs as they complete; once its ``stop`` event is set
+(Ctrl-C, :mod:`study.engine.interrupts`) no item is started any more, and the items
+running are still collected, so that their results are kept. Two kinds exist:
 
 * local (no scheduler): a thread pool in this process. The numba kernels release
   the GIL, so threads run side by side; nothing is pickled, no port is opened
@@ -24,6 +26,7 @@ receive it, and a task that cannot be loaded is reported, not retried forever.
 from __future__ import annotations
 
 import os
+import threading
 import time
 import uuid
 from abc import ABC, abstractmethod
@@ -31,7 +34,11 @@ from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["TASK_TIMEOUT", "ClusterError", "Executor", "check_address", "executor"]
+__all__ = ["TASK_TIMEOUT", "THREAD_PREFIX", "ClusterError", "Executor", "check_address",
+           "executor"]
+
+#: The names of the local executor's threads begin with this (``study_0``, ...).
+THREAD_PREFIX = "study"
 
 #: Marks the end of the items (items themselves may be None).
 _END = object()
@@ -53,6 +60,9 @@ SILENT_HEARTBEAT = 2.0
 # Sleep while no task has finished [s]: from the shortest, doubling up to the
 # longest, so that quick tasks are collected at once and an idle wait costs nothing.
 _POLL = (0.001, 0.02)
+
+# How often a local run waiting for its threads looks at its stop event [s].
+_STOP_POLL = 0.1
 
 
 class ClusterError(RuntimeError):
@@ -78,7 +88,8 @@ class Executor(ABC):
 
     @abstractmethod
     def run_unordered(self, function: Callable[[Any], Any], items: Iterable[Any], *,
-                      label: str) -> Iterator[tuple[Any, Any]]:
+                      label: str, stop: threading.Event | None = None
+                      ) -> Iterator[tuple[Any, Any]]:
         """Compute ``function(item)`` for every item; yield ``(item, result)`` pairs.
 
         Pairs come in the order the computations finish. At most a few items per
@@ -94,6 +105,10 @@ class Executor(ABC):
             The work, one item per call.
         label : str
             Names the tasks (on the dashboard of a cluster).
+        stop : threading.Event, optional
+            Once set, no more items are drawn, the items not yet started are cancelled
+            (locally; a cluster's in flight are all collected) and the pairs of those
+            running are still yielded: then the iteration ends.
 
         Raises
         ------
@@ -185,7 +200,7 @@ class _LocalExecutor(Executor):
         self.name = "local"
         self.threads = threads
         self.dashboard = None
-        self._pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="study")
+        self._pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix=THREAD_PREFIX)
 
     def __enter__(self) -> _LocalExecutor:
         return self
@@ -195,7 +210,7 @@ class _LocalExecutor(Executor):
         # and the interpreter waits for them before it exits anyway.
         self._pool.shutdown(wait=error is None, cancel_futures=True)
 
-    def run_unordered(self, function, items, *, label):
+    def run_unordered(self, function, items, *, label, stop=None):
         from concurrent.futures import FIRST_COMPLETED, wait
 
         # Items are drawn from the iterable only as slots free up: a generator of
@@ -206,6 +221,10 @@ class _LocalExecutor(Executor):
         exhausted = False
         try:
             while True:
+                if stop is not None and stop.is_set():
+                    exhausted = True
+                    for future in [f for f in running if f.cancel()]:
+                        del running[future]
                 while not exhausted and len(running) < window:
                     item = next(source, _END)
                     if item is _END:
@@ -214,7 +233,10 @@ class _LocalExecutor(Executor):
                         running[self._pool.submit(function, item)] = item
                 if not running:
                     return
-                finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                # A wait without timeout would not wake for the stop event: a signal
+                # handler runs, but the wait resumes until a task finishes.
+                finished, _ = wait(running, timeout=None if stop is None else _STOP_POLL,
+                                   return_when=FIRST_COMPLETED)
                 for future in finished:
                     item = running.pop(future)
                     yield item, future.result()
@@ -484,7 +506,7 @@ class _DaskExecutor(Executor):
         return sorted(address for address, when in seen.items()
                       if newest - when > SILENT_HEARTBEAT)
 
-    def run_unordered(self, function, items, *, label):
+    def run_unordered(self, function, items, *, label, stop=None):
         import cloudpickle
         from distributed import as_completed
 
@@ -502,6 +524,8 @@ class _DaskExecutor(Executor):
         pause = _POLL[0]
         try:
             while True:
+                if stop is not None and stop.is_set():
+                    exhausted = True  # what is in flight is still collected
                 while not exhausted and len(running) < window:
                     item = next(source, _END)
                     if item is _END:

@@ -4,7 +4,11 @@ On a terminal tqdm draws its bar. When stderr is not a terminal (``make > log``,
 CI), a plain line is printed at least every 10 % of the work or every 30 s,
 whichever comes first, so a long run is never silent. While :meth:`Progress.running`
 is active, a heartbeat keeps the elapsed time moving between updates (a scene that
-integrates for a minute, or a first chunk that compiles the solver).
+integrates for a minute, or a first chunk that compiles the solver). A phase that makes
+no progress of its own says what it is (:meth:`Progress.set_phase`: "compiling the
+solver kernels", :mod:`study.engine.compiling`) in place of the time left, and a line
+(:meth:`Progress.say`) when it begins. Everything goes to stderr; with progress off
+(``--no-progress``) nothing is written.
 
 The time left is shown only once it means something (:class:`TimeLeft`): after
 :data:`ETA_MIN_FRACTION` of the work and :data:`ETA_MIN_SECONDS`, estimated from the
@@ -145,7 +149,19 @@ class Progress:
         self.time_left = TimeLeft(self.total, self.start)
         self._last_time = self.start
         self._last_fraction = 0.0
+        self._phase: str | None = None
         self._lock = threading.Lock()
+
+    def set_phase(self, phase: str | None) -> None:
+        """Show ``phase`` (what the work is doing while it makes no progress of its own:
+        ``"compiling the solver kernels"``) in place of the time left until it is set to
+        None; the bar shows it at once, a log line at the next heartbeat."""
+        with self._lock:
+            if phase == self._phase:
+                return
+            self._phase = phase
+            if self.enabled and self.bar is not None:
+                self.bar.set_postfix_str(self._left(self.clock()), refresh=True)
 
     def update(self, work: float, computed: float | None = None) -> None:
         """``work`` more is done, ``computed`` of it computed in this run (default: all;
@@ -192,6 +208,8 @@ class Progress:
     def _left(self, now: float) -> str:
         if self.done >= self.total:
             return self.finished
+        if self._phase is not None:
+            return self._phase
         seconds = self.time_left.seconds(now)
         if seconds is None:
             return "time left: estimating"

@@ -24,9 +24,11 @@ from typing import Any
 
 import numpy as np
 
+from study.engine.compiling import compile_notices
 from study.engine.executors import TASK_TIMEOUT, Executor
+from study.engine.interrupts import RunInterrupted
 from study.engine.kinds import ResultKind, kind_named, kind_of_spec
-from study.engine.outputs import check_output
+from study.engine.outputs import OutputError, check_output
 from study.engine.progress import Progress
 from study.engine.provenance import (
     environment,
@@ -52,6 +54,7 @@ from study.engine.validation.reading import ResultError
 
 __all__ = [
     "PAPER_REFERENCE",
+    "RunInterrupted",
     "RunJob",
     "RunReport",
     "StudyBusy",
@@ -218,6 +221,25 @@ def _refuse_newer(kind: ResultKind, output: Path) -> None:
             "(--force)")
 
 
+def _refuse_another(kind: ResultKind, spec: Any, output: Path, overwrite: bool) -> None:
+    """A result of this kind written by another study (spec, fit, design: its recorded
+    name, :attr:`ResultKind.name_attribute`, is not this spec's ``name``) is not
+    replaced without ``overwrite``: its values may exist nowhere else. A rerun of the
+    same study (same name, whatever changed in its spec) rewrites its own file."""
+    if overwrite:
+        return
+    attrs = file_attributes(output)
+    if attrs is None or attrs.get("study_result_schema") != kind.result_schema:
+        return
+    theirs = attrs.get(kind.name_attribute)
+    if theirs is None or str(theirs) == spec.name:
+        return
+    raise OutputError(
+        f"-o {output}: holds the result of {kind.name} {str(theirs)!r}, not of the "
+        f"{kind.name} {spec.name!r} of {spec.path}; its values may exist nowhere else: "
+        "give another output name, or --overwrite to replace it")
+
+
 def _why_recomputed(kind: ResultKind, spec: Any, output: Path, force: bool) -> str:
     """Why an existing ``output`` is computed again (``""`` if there is none)."""
     attrs = file_attributes(output)
@@ -274,7 +296,8 @@ def run(spec: Any, output: str | Path | None = None, *, force: bool = False,
         The command line recorded in the file's history.
     overwrite : bool
         Replace an existing file at ``output`` that is not a result of this kind
-        (:func:`study.engine.outputs.check_output`; the spec itself is never replaced).
+        (:func:`study.engine.outputs.check_output`; the spec itself is never replaced), or
+        a result of this kind written by another study (another recorded name).
     **options
         The kind's own options (:func:`run_study`'s for a study; ``progress`` for all).
     """
@@ -292,6 +315,7 @@ def run_kind(kind: ResultKind, spec: Any, output: str | Path | None = None, *,
     spec = _spec_of(kind, spec)
     output = Path(output) if output is not None else default_output(spec)
     check_output(output, kind.result_schema, inputs=kind.inputs(spec), overwrite=overwrite)
+    _refuse_another(kind, spec, output, overwrite)
     if not force:
         _refuse_newer(kind, output)
     command = command or f"study.run({shlex.quote(spec.path)})"
@@ -323,7 +347,7 @@ def _compute_and_write(job: RunJob, spec: Any) -> RunReport:
     total, unit = kind.work(spec) if kind.work else (0, "pt")
     shown = Progress(total, spec.name, job.options.get("progress"), unit=unit)
     try:
-        with shown.running():
+        with shown.running(), compile_notices(shown):
             outcome = kind.compute(spec, shown)
     finally:
         shown.close()
@@ -394,8 +418,9 @@ def run_scene(spec: Any, output: str | Path | None = None, *, force: bool = Fals
     command : str, optional
         The command line recorded in the file's history.
     overwrite : bool
-        Replace an existing file at ``output`` that is not a scene result
-        (:func:`study.engine.outputs.check_output`; the spec itself is never replaced).
+        Replace an existing file at ``output`` that is not a scene result, or the result
+        of another scene (:func:`study.engine.outputs.check_output`; the spec itself is
+        never replaced).
     progress : bool, optional
         Force progress output on or off; default: a bar on a terminal, log lines
         otherwise (work in the units of :func:`study.scenes.scene_kind.scene_work`).
@@ -457,8 +482,9 @@ def run_study(
         Called with the :class:`study.engine.executors.Executor` once it is ready, before any
         chunk is computed (to show where the run goes, e.g. the dashboard).
     overwrite : bool
-        Replace an existing file at ``output`` that is not a study result
-        (:func:`study.engine.outputs.check_output`; the spec itself is never replaced).
+        Replace an existing file at ``output`` that is not a study result, or the result
+        of another study (its recorded ``[study] name`` is not this spec's;
+        :func:`study.engine.outputs.check_output`; the spec itself is never replaced).
     task_timeout : float
         With ``scheduler``: seconds the workers may go without finishing a task
         before the run ends, naming the workers that hold the tasks (a frozen

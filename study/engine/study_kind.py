@@ -2,10 +2,11 @@
 
 Registers the ``study`` kind (:mod:`study.engine.kinds`): its spec parser
 (:mod:`study.engine.study_spec`), its computation, which streams (the grid is planned
-in chunks, looked up in the cache of kept values, the missing ones sent to the
-executor and each chunk written into the result file as it arrives, together with its
-computed values into the cache; memory holds a bounded number of chunks, never the
-study), its validator (:mod:`study.engine.study_checks`) and its description. The
+in chunks, looked up in the cache of kept values, the missing points cut into work
+units of about a second (:func:`study.engine.sweep.cut_unit`) and sent to the
+executor; each unit's values go into the cache as it arrives, and each chunk into the
+result file once its units are all back; memory holds a bounded number of chunks,
+never the study), its validator (:mod:`study.engine.study_checks`) and its description. The
 runner (:mod:`study.engine.runner`) decides whether to run at all, holds the lock and
 commits the file; this module is what a run of a study does once it runs.
 """
@@ -18,14 +19,17 @@ import os
 import threading
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, replace
+from contextlib import ExitStack
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from study.engine.cache import ResultCache, encode_block, entry_key
+from study.engine.compiling import compile_notices
 from study.engine.executors import TASK_TIMEOUT, Executor, executor
+from study.engine.interrupts import RunInterrupted, stop_requests
 from study.engine.kinds import ResultKind, register
 from study.engine.layout import (
     coordinates,
@@ -58,7 +62,15 @@ from study.engine.store import (
     new_temporary,
 )
 from study.engine.study_spec import SPEC_SCHEMA, StudySpec, load_spec, parse_spec
-from study.engine.sweep import Chunk, Task, compute_task, missing_rectangles
+from study.engine.sweep import (
+    Chunk,
+    Task,
+    UnitSizer,
+    compute_task,
+    cut_unit,
+    missing_rectangles,
+    unit_grain,
+)
 from study.engine.variables import RESULT_FORMAT, STUDY_FORMATS, VARIABLES
 from study.model.structure import Structure
 from study.solvers.frontier import frontier_branches, frontier_work
@@ -154,7 +166,11 @@ def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class _Job:
-    """A task and the cache entries its computed values go to: what a worker gets."""
+    """A work unit and the cache entries its computed values go to: what a worker gets.
+
+    The unit is a :class:`~study.engine.sweep.Task` of one chunk holding one piece of
+    its missing points (or none: a chunk's closed-form rows alone); the chunk's first
+    unit carries its rows."""
 
     task: Task
     #: (entry key, variable names) of each solver observable the task computes.
@@ -162,10 +178,10 @@ class _Job:
 
 
 def _compute_and_encode(job: _Job) -> tuple[dict[str, np.ndarray], list[dict[str, Any]],
-                                            list[list[bytes]]]:
-    """Compute a task and encode its values as cache blocks, on the worker: compression
-    and checksums run beside the solver, in parallel, not on the one thread that
-    writes the file (and a remote worker sends compressed blocks).
+                                            list[list[bytes]], float]:
+    """Compute a work unit and encode its values as cache blocks, on the worker:
+    compression and checksums run beside the solver, in parallel, not on the one thread
+    that writes the file (and a remote worker sends compressed blocks).
 
     Returns
     -------
@@ -173,8 +189,12 @@ def _compute_and_encode(job: _Job) -> tuple[dict[str, np.ndarray], list[dict[str
         As :func:`study.engine.sweep.compute_task`.
     blocks : list of list of bytes
         For each rectangle, one encoded block per entry of ``job.entries``.
+    seconds : float
+        Computing time of the unit [s] (what the next units are sized by).
     """
+    began = time.perf_counter()
     rows, rectangles = compute_task(job.task)
+    seconds = time.perf_counter() - began
     task = job.task
     blocks = [
         [encode_block(key, task.f[rectangle.rows], task.a[rectangle.columns],
@@ -182,7 +202,22 @@ def _compute_and_encode(job: _Job) -> tuple[dict[str, np.ndarray], list[dict[str
          for key, variables in job.entries]
         for rectangle, computed in zip(task.rectangles, rectangles, strict=True)
     ]
-    return rows, rectangles, blocks
+    return rows, rectangles, blocks, seconds
+
+
+@dataclass
+class _OpenChunk:
+    """A chunk whose work units are out: the values found kept, filled in by its units
+    as they come back, and written into the file once the last is back."""
+
+    #: The chunk's whole task (every missing rectangle).
+    task: Task
+    found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]]
+    rows: dict[str, np.ndarray] = field(default_factory=dict)
+    #: Units handed out and not back yet.
+    out: int = 0
+    #: Every unit of the chunk is handed out.
+    cut: bool = False
 
 
 def _gather_provenance(found: dict[str, Any]) -> None:
@@ -287,10 +322,11 @@ class _Run:
 
     # -- the work --------------------------------------------------------------------
 
-    def _jobs(self, pending: dict[int, Any]) -> Iterator[_Job]:
-        """Look each chunk up in the cache; yield what needs computing. Chunks found
-        whole are written at once (``pending`` keeps the found values until the
-        task's result arrives)."""
+    def _jobs(self, pending: dict[int, _OpenChunk]) -> Iterator[_Job]:
+        """Look each chunk up in the cache; yield the work units of what needs
+        computing, each sized when it is drawn (:class:`study.engine.sweep.UnitSizer`).
+        Chunks found whole are written at once (``pending`` keeps a chunk's values until
+        its last unit is back)."""
         for chunk in self.chunks:
             structure = self.structures[chunk.structure_index]
             f = self.f[chunk.f_start:chunk.f_stop]
@@ -313,15 +349,36 @@ class _Run:
             rows = tuple(o.name for o in self.rows) if chunk.direction == 0 else ()
             task = Task(chunk, structure, f, self.a, rows, needed, rectangles,
                         self.methods[chunk.direction])
-            pending[chunk.number] = found
+            if self.points:
+                reused = chunk.size * self.a.size - task.point_count
+                self.points_reused += reused
+                if reused:
+                    self.progress.update(reused, 0)
+            opened = _OpenChunk(task, found)
             if not rectangles and not rows:
-                self._finish(task, ({}, [], []), pending.pop(chunk.number))
+                self._write_chunk(opened)
                 continue
+            pending[chunk.number] = opened
             entries = tuple((self.key(chunk.structure_index, observable, chunk.direction)[0],
                              observable.variables)
                             for observable in self._points(chunk)
                             if observable.name in needed)
-            yield _Job(task, entries)
+            if not rectangles:  # the closed-form rows alone
+                opened.out, opened.cut = 1, True
+                yield _Job(task, entries)
+                continue
+            left = list(rectangles)
+            first = True
+            while left:
+                rectangle = left.pop(0)
+                piece, rest = cut_unit(rectangle, unit_grain(task.method, rectangle),
+                                       self.sizer.points())
+                left[:0] = rest
+                opened.out += 1
+                opened.cut = not left
+                yield _Job(replace(task, rows=rows if first else (), rectangles=(piece,)),
+                           entries)
+                first = False
 
     def _points(self, chunk: Chunk) -> tuple[Observable, ...]:
         """The solver observables a chunk computes and writes: with a slow sweep both
@@ -331,43 +388,63 @@ class _Run:
             return self.points
         return tuple(o for o in self.points if not o.unswept)
 
-    def _finish(self, task: Task,
-                result: tuple[dict[str, np.ndarray], list[dict[str, Any]], list[list[bytes]]],
-                found: dict[str, tuple[dict[str, np.ndarray], np.ndarray]]) -> None:
-        """Write one chunk into the file and its computed values (encoded by the
-        worker) into the cache."""
+    def _unit_done(self, job: _Job, result: tuple[dict[str, np.ndarray],
+                                                  list[dict[str, Any]], list[list[bytes]],
+                                                  float],
+                   pending: dict[int, _OpenChunk]) -> _OpenChunk | None:
+        """Keep a work unit's values (encoded by the worker) in the cache at once and
+        put them into its chunk; the chunk, if this was its last unit (it is then
+        written into the file), else None."""
+        task = job.task
         chunk = task.chunk
-        rows, blocks, encoded = result
-        where_rows = (*chunk.structure_index, slice(chunk.f_start, chunk.f_stop))
-        for name, values in rows.items():
-            self.writer.write(name, where_rows, values)
-        swept_where = ((chunk.direction,) if self.spec.both_directions else ()) + (
-            *where_rows, slice(None))
-        for observable in self._points(chunk):
-            where_points = (*where_rows, slice(None)) if observable.unswept else swept_where
-            values, _ = found[observable.name]
-            for rectangle, computed in zip(task.rectangles, blocks, strict=True):
-                for name in observable.variables:
-                    if name in computed:
-                        values[name][np.ix_(rectangle.rows, rectangle.columns)] = computed[name]
-            for name in observable.variables:
-                self.writer.write(name, where_points, values[name])
+        opened = pending[chunk.number]
+        rows, blocks, encoded, seconds = result
+        opened.rows.update(rows)
         stored = [o for o in self._points(chunk) if o.name in task.points]
         for rectangle, datas in zip(task.rectangles, encoded, strict=True):
             for observable, data in zip(stored, datas, strict=True):
                 key, content = self.key(chunk.structure_index, observable, chunk.direction)
                 self._keep(key, content, task.a[rectangle.columns], data)
-        size = chunk.size * max(self.a.size, 1)
-        computed_points = task.point_count if self.points else size
+        for observable in self._points(chunk):
+            values, _ = opened.found[observable.name]
+            for rectangle, computed in zip(task.rectangles, blocks, strict=True):
+                for name in observable.variables:
+                    if name in computed:
+                        values[name][np.ix_(rectangle.rows, rectangle.columns)] = computed[name]
+        computed_points = task.point_count if self.points else chunk.size * max(
+            self.a.size, 1)
         self.points_computed += computed_points
-        if self.keeping and self.points:
-            self.points_kept += computed_points
-        self.points_reused += size - computed_points
+        if self.points:
+            if self.keeping:
+                self.points_kept += computed_points
+            self.sizer.measured(computed_points, seconds)
         if computed_points:
+            self.progress.update(computed_points, computed_points)
+        opened.out -= 1
+        if not (opened.cut and opened.out == 0):
+            return None
+        del pending[chunk.number]
+        self._write_chunk(opened)
+        return opened
+
+    def _write_chunk(self, opened: _OpenChunk) -> None:
+        """Write one chunk, its values all found or computed, into the file."""
+        task = opened.task
+        chunk = task.chunk
+        where_rows = (*chunk.structure_index, slice(chunk.f_start, chunk.f_stop))
+        for name, values in opened.rows.items():
+            self.writer.write(name, where_rows, values)
+        swept_where = ((chunk.direction,) if self.spec.both_directions else ()) + (
+            *where_rows, slice(None))
+        for observable in self._points(chunk):
+            where_points = (*where_rows, slice(None)) if observable.unswept else swept_where
+            values, _ = opened.found[observable.name]
+            for name in observable.variables:
+                self.writer.write(name, where_points, values[name])
+        if task.point_count if self.points else chunk.size:
             self.chunks_computed += 1
         else:
             self.chunks_reused += 1
-        self.progress.update(size, computed_points)
 
     def _keep(self, key: str, content: dict[str, Any], a: np.ndarray, block: bytes) -> None:
         """Keep a computed block; a cache that cannot be written (disk full, read-only)
@@ -385,9 +462,48 @@ class _Run:
                 "the run goes on without keeping them" + (f": {what_to_do}" if what_to_do
                                                           else ""))
 
+    def _say_stopping(self) -> None:
+        """Ctrl-C came: the run finishes the units running, to keep them."""
+        self.progress.say("stopping: finishing the work running to keep it (about a "
+                          "second; longer while the solver kernels compile); Ctrl-C again "
+                          "to stop at once")
+
+    def interrupted(self) -> RunInterrupted:
+        """The error that ends an interrupted run: what it kept, in one line for people
+        (every point computed was kept as its unit came back, unless the cache could not
+        be written)."""
+        total = self._total()
+        kept = self.points_kept + self.points_reused
+        where = f" in {self.cache.root}" if kept else ""
+        lost = ("" if self.keeping or not self.points_computed else
+                f"; the cache could not keep the {self.points_computed - self.points_kept} "
+                "others computed")
+        return RunInterrupted(
+            f"interrupted; kept {kept} of {total} points ({self.points_kept} computed in "
+            f"this run){where}{lost}; run again to resume", kept, total, self.points_kept)
+
     def execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
                 stop_after: int | None, on_start: Callable[[Executor], None] | None,
                 task_timeout: float = TASK_TIMEOUT) -> RunReport:
+        try:
+            return self._execute(scheduler, workers, progress, stop_after, on_start,
+                                 task_timeout)
+        except (RunInterrupted, StudyInterrupted):
+            raise
+        except KeyboardInterrupt:
+            # A second Ctrl-C, or one outside the computing phases (the values computed
+            # are kept all the same: each was kept as its unit came back).
+            raise self.interrupted() from None
+
+    def _total(self) -> int:
+        """Drive points of the study, in each direction of a slow sweep both ways."""
+        return len(self.f) * max(self.a.size, 1) * int(np.prod(
+            [len(axis) for axis in self.spec.structure_axes], dtype=np.int64)) * len(
+            self.methods)
+
+    def _execute(self, scheduler: str | None, workers: int | None, progress: bool | None,
+                 stop_after: int | None, on_start: Callable[[Executor], None] | None,
+                 task_timeout: float) -> RunReport:
         self.cache.clean_temporaries()
         # What the provenance records of the checkout and the machine (a git
         # subprocess, package metadata) does not depend on the run: gathered while the
@@ -397,42 +513,46 @@ class _Run:
                                      daemon=True)
         gathering.start()
         temporary = new_temporary(self.output)
+        self.sizer = UnitSizer()
         try:
             self.writer = self._open(temporary)
-            total = len(self.f) * max(self.a.size, 1) * int(np.prod(
-                [len(axis) for axis in self.spec.structure_axes], dtype=np.int64)) * len(
-                self.methods)
             # "done" is said only of the whole run: the map is one phase of it.
             then = "frontier next" if self.frontier is not None else "sealing the file"
-            self.progress = Progress(total, self.spec.name, progress,
+            self.progress = Progress(self._total(), self.spec.name, progress,
                                      finished=f"map done; {then}")
-            pending: dict[int, Any] = {}
+            pending: dict[int, _OpenChunk] = {}
             computed_chunks = 0
-            try:
-                with executor(scheduler, workers, self.code,
-                              task_timeout=task_timeout) as pool, self.progress.running():
-                    self.scheduler_name, self.threads = pool.name, pool.threads
-                    if on_start is not None:
-                        on_start(pool)
-                    for job, result in pool.run_unordered(_compute_and_encode,
-                                                          self._jobs(pending),
-                                                          label=self.spec.name):
-                        task = job.task
-                        self._finish(task, result, pending.pop(task.chunk.number))
-                        if task.rectangles:
+            with stop_requests(on_request=self._say_stopping) as stop:
+                try:
+                    with ExitStack() as running:
+                        pool = running.enter_context(executor(
+                            scheduler, workers, self.code, task_timeout=task_timeout))
+                        running.enter_context(self.progress.running())
+                        running.enter_context(compile_notices(self.progress))
+                        self.scheduler_name, self.threads = pool.name, pool.threads
+                        if on_start is not None:
+                            on_start(pool)
+                        for job, result in pool.run_unordered(
+                                _compute_and_encode, self._jobs(pending),
+                                label=self.spec.name, stop=stop):
+                            opened = self._unit_done(job, result, pending)
+                            if opened is None or not opened.task.rectangles:
+                                continue
                             computed_chunks += 1
                             if self.on_chunk is not None:
-                                self.on_chunk(task.chunk.number)
-                        if stop_after is not None and computed_chunks >= stop_after:
-                            kept = (f"their values are kept in {self.cache.root}"
-                                    if self.keeping else "the cache could not keep them")
-                            raise StudyInterrupted(
-                                f"stopped after {computed_chunks} computed chunks on request; "
-                                f"{kept}")
-            finally:
-                self.progress.close()
-            if self.frontier is not None:
-                self._write_frontier(progress)
+                                self.on_chunk(opened.task.chunk.number)
+                            if stop_after is not None and computed_chunks >= stop_after:
+                                kept = (f"their values are kept in {self.cache.root}"
+                                        if self.keeping else "the cache could not keep them")
+                                raise StudyInterrupted(
+                                    f"stopped after {computed_chunks} computed chunks on "
+                                    f"request; {kept}")
+                finally:
+                    self.progress.close()
+                if stop.is_set():
+                    raise self.interrupted()
+                if self.frontier is not None:
+                    self._write_frontier(progress, stop)
             gathering.join()
             self.writer.set_attributes(self._provenance_attrs())
             self.writer.close()
@@ -448,9 +568,11 @@ class _Run:
             self.points_computed, self.points_reused,
         )
 
-    def _write_frontier(self, progress: bool | None) -> None:
+    def _write_frontier(self, progress: bool | None, stop: threading.Event) -> None:
         """Frontier f*(a) of every structure from its whole velocity rows, with its own
-        progress (the points its bisections solve, counted beforehand)."""
+        progress (the points its bisections solve, counted beforehand). A structure's
+        frontier is kept once it is found; a stop request (Ctrl-C) ends the phase
+        after the bisection step running."""
         spec = self.spec
         rows = {}
         for index in self.structures:
@@ -461,11 +583,19 @@ class _Run:
                 for index, (velocity, status) in rows.items()}
         shown = Progress(sum(work.values()), f"{spec.name} frontier", progress, unit="solve",
                          finished="frontier done; sealing the file")
+
+        def advance(solves: int) -> None:
+            shown.update(solves)
+            if stop.is_set():
+                raise KeyboardInterrupt  # what the frontier found so far is kept
+
         found = {}
         reused = 0
         try:
-            with shown.running():
+            with shown.running(), compile_notices(shown):
                 for index, structure in self.structures.items():
+                    if stop.is_set():
+                        raise KeyboardInterrupt
                     velocity, status = rows[index]
                     key, content = self._frontier_key(index, velocity, status)
                     slots = np.arange(frontier_branches(velocity, status), dtype=np.float64)
@@ -477,7 +607,7 @@ class _Run:
                         continue
                     found[index] = self.frontier.compute(
                         structure, self.f, self.a, velocity, status, self.method,
-                        spec.frontier_tolerance, progress=shown.update)
+                        spec.frontier_tolerance, progress=advance)
                     self._keep_frontier(key, content, slots, found[index])
             if reused:
                 shown.say(f"frontier of {reused} of {len(self.structures)} structures "

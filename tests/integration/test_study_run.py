@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import study
+from study.engine.cache import ResultCache
 from study.engine.provenance import code_sha256, fingerprint
 from study.engine.runner import StudyInterrupted, run_study
 from study.engine.store import open_result
@@ -139,7 +140,12 @@ def test_interrupted_run_resumes_to_the_same_result(tmp_path, finished):
         run_study(spec_path, output, progress=False, stop_after=3, on_chunk=first.append)
     assert not output.exists() and not list(tmp_path.glob(".small.nc.*.tmp"))
     assert len(first) == 3
-    assert len(kept_blocks(tmp_path)) == 3 * 2  # velocity and diagnostics per chunk
+    # velocity and diagnostics: at least the three chunks (units of chunks still running
+    # when it stopped are kept too)
+    kept = {entry.content["observable"]: entry.points
+            for entry in ResultCache(tmp_path / ".study-cache").entries()}
+    assert set(kept) == {"velocity", "diagnostics"}
+    assert kept["velocity"] == kept["diagnostics"] >= 3 * 51
     seen = []
     report = run_study(spec_path, output, progress=False, on_chunk=seen.append)
     assert report.reused == 3 and report.computed == full_report.chunks - 3
@@ -252,15 +258,18 @@ def test_a_second_writer_of_the_same_result_is_refused(tmp_path):
     assert output.exists()
 
 
-def test_ctrl_c_keeps_finished_chunks_and_the_next_run_resumes(tmp_path):
-    """A real SIGINT to `study run`, then a second `study run` that finishes the job.
+def test_ctrl_c_keeps_every_computed_point_of_a_one_chunk_study(tmp_path):
+    """A real SIGINT to `study run` of a study in one chunk, then a second `study run`.
 
-    The work must outlast the interrupt by far on a busy machine: each chunk runs the
-    multistability check (twelve two-way orbit solves per point, about 0.3 s a chunk on
-    one thread), and the signal is sent after 2 of 20 chunks, leaving seconds of work.
-    With the one-way velocity alone a whole run took well under a second, and the
-    signal could land while the finished process was already shutting down.
+    The values of a chunk used to be kept only once the whole chunk was computed: a
+    one-chunk study interrupted kept nothing, though it said "computed values are kept".
+    Now each work unit (about a second of solving) is kept as it comes back, the units
+    running when the signal comes are finished and kept, and the message counts them.
+    The work (the multistability check: twelve two-way orbit solves per point, about 6 s
+    on one thread) outlasts the interrupt by far: the signal is sent once the first units
+    are kept, seconds before the end even on a busy machine.
     """
+    import re
     import signal
     import time
 
@@ -269,15 +278,15 @@ def test_ctrl_c_keeps_finished_chunks_and_the_next_run_resumes(tmp_path):
         SPEC.format(name="slow", Q=17.5, extra="M = 0.3", sweeps="",
                     observables='"velocity", "attractors"')
         .replace("num = 23", "num = 100").replace("num = 17", "num = 200")
-        .replace("chunk_points = 51", 'chunk_points = 1000\ncoupling = "two-way"')
+        .replace("chunk_points = 51", 'chunk_points = 20000\ncoupling = "two-way"')
     )
     output = tmp_path / "slow.nc"
+    cache = ResultCache(tmp_path / ".study-cache")
 
-    def kept_chunks() -> int:
-        """Chunks whose values are kept for both observables (one folder each)."""
-        folders = sorted((tmp_path / ".study-cache").glob("??/*"))
-        counts = [len(list(folder.glob("block-*.npz"))) for folder in folders]
-        return min(counts) if len(counts) == 2 else 0
+    def kept_points() -> dict[str, int]:
+        """Points kept for each observable."""
+        return {entry.content.get("observable", "?"): entry.points
+                for entry in cache.entries()}
 
     command = [str(Path(sys.executable).with_name("study")), "run", str(spec_path),
                "-o", str(output), "--no-progress", "--workers", "1"]
@@ -288,28 +297,33 @@ def test_ctrl_c_keeps_finished_chunks_and_the_next_run_resumes(tmp_path):
                                text=True,
                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 300
+    seen = 0
     while time.monotonic() < deadline and process.poll() is None:
-        if kept_chunks() >= 2:
+        counts = kept_points()
+        seen = min(counts.values()) if len(counts) == 2 else 0
+        if seen >= 3:  # a few units of both observables
             break
         time.sleep(0.02)
     assert process.poll() is None, "the run ended before it could be interrupted"
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=300)
     assert process.returncode == 130, stderr
-    assert "computed values are kept" in stderr
+    said = re.search(r"kept (\d+) of (\d+) points \((\d+) computed in this run\)", stderr)
+    assert said, stderr
+    kept, total, computed = map(int, said.groups())
+    assert total == 100 * 200 and kept == computed and seen <= kept < total
+    assert kept_points() == {"velocity": kept, "attractors": kept}
     assert not output.exists()
-    kept = kept_chunks()
-    assert 2 <= kept < 20
     report = run_study(spec_path, output, progress=False)
-    assert report.chunks == 20
-    assert report.reused == kept and report.computed == report.chunks - kept
+    assert report.chunks == 1
+    assert (report.points_reused, report.points_computed) == (kept, total - kept)
     s = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.3, cs=0.25)
     ds = open_result(output)
     f, a = ds["f"].values, ds["a"].values
     v, status = study.steady_velocity(s, f[:, None], a[None, :], coupling="two-way")
     np.testing.assert_array_equal(ds["velocity"].values, v)
     np.testing.assert_array_equal(ds["status"].values, status)
-    # the attractor counts of a row from the kept chunks and one computed on resume
+    # the attractor counts of a row kept before the interrupt and one computed on resume
     for row in (0, f.size - 1):
         found = study.solvers.exact.attractors(s, f[row], a, coupling="two-way")
         np.testing.assert_array_equal(ds["attractor_count"].values[row], found.count)

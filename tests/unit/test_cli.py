@@ -129,6 +129,41 @@ def test_run_resumes_an_interrupted_study(capsys, spec: Path, output: Path) -> N
     assert counts(out) == (CHUNKS, CHUNKS - 1, 1)
 
 
+def test_another_study_s_result_is_refused_naming_both(capsys, workspace, spec: Path,
+                                                      output: Path) -> None:
+    """`study run hyst.toml -o map-copy.nc` replaced the map of study `nc-map` without a
+    word but "rewritten because its spec changed", its values kept only in another
+    folder's cache."""
+    status, _, err = run(capsys, "run", spec, "-o", output, "--no-progress")
+    assert status == 0, err
+    before = output.read_bytes()
+    other = workspace[0] / "other.toml"
+    other.write_text(spec_text(name="other", f_num=9))
+    status, out, err = run(capsys, "run", other, "-o", output, "--no-progress")
+    assert status == 1 and out == ""
+    assert err == (f"study: -o {output}: holds the result of study 'tiny', not of the study "
+                   f"'other' of {other}; its values may exist nowhere else: give another "
+                   "output name, or --overwrite to replace it\n")
+    assert output.read_bytes() == before
+    # Asked to: replaced, and the file is the other study's.
+    status, out, err = run(capsys, "run", other, "-o", output, "--no-progress", "--overwrite")
+    assert status == 0, err
+    assert open_result(output).attrs["study_name"] == "other"
+
+
+def test_the_same_study_rewrites_its_own_result(capsys, spec: Path, output: Path) -> None:
+    """"Same study" is the recorded [study] name: a spec whose numbers changed (or that
+    moved to another file) still rewrites the file it wrote."""
+    status, _, err = run(capsys, "run", spec, "-o", output, "--no-progress")
+    assert status == 0, err
+    moved = spec.with_name("tiny-moved.toml")
+    moved.write_text(spec_text(f_num=9))
+    status, out, err = run(capsys, "run", moved, "-o", output, "--no-progress")
+    assert status == 0, err
+    assert "rewritten because its spec changed" in out
+    assert open_result(output).sizes["f"] == 9
+
+
 def test_history_records_the_command_given_to_main(capsys, spec: Path, output: Path) -> None:
     status, _, err = run(capsys, "run", spec, "-o", output, "--no-progress")
     assert status == 0, err
