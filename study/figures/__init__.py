@@ -165,6 +165,16 @@ def _missing_message(name: str, dataset: xr.Dataset, missing: Sequence[str]) -> 
         return (f"{message}: they are written only by a study with flight; add [solver] "
                 f'flight = true (with coupling = "two-way") to the spec and run it again, '
                 f"or draw it from {figure.source}")
+    swept_only = {v for o in OBSERVABLES.values() for v in o.protocol_variables}
+    swept = [v for v in missing if v in swept_only]
+    if swept and dataset.attrs.get("study_result_schema") == RESULT_SCHEMA:
+        message += (f": {', '.join(swept)} {'is' if len(swept) == 1 else 'are'} written "
+                    "only by a slow sweep; add [sweep] protocol = { along = \"f\", "
+                    "direction = \"both\" } (the axis swept, \"f\" or \"a\"; exact "
+                    "two-way solver: [solver] coupling = \"two-way\") to the spec")
+        missing = [v for v in missing if v not in swept_only]
+        if not missing:
+            return f"{message} and run it again, or draw it from {figure.source}"
     writers = [o.name for o in OBSERVABLES.values() if set(o.variables) & set(missing)]
     if writers and dataset.attrs.get("study_result_schema") == RESULT_SCHEMA:
         held = {o.name for o in OBSERVABLES.values()

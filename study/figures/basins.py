@@ -4,12 +4,16 @@ Drawn from a study with the ``basins`` observable (the ``attractor`` dimension, 
 ``basin_*`` variables). The attractors are labelled by
 :func:`study.analyses.basins.follow_attractors` (or by the file's ``attractor_label``
 where it holds one, so that a line selected from a labelled map keeps the map's
-labels); each label has one colour in both drawings. Over (f, a): one panel per label,
-most points first (at most :data:`MAX_PANELS`), its region coloured by its basin
-fraction (from grey, a basin too small to be seen, to the label's colour, every start;
-white where the motion is not found). Along one drive axis (the other of one value, or
-selected with ``--sel``): the velocity of each label above, and the basin fractions
-stacked beneath, as Attractors.jl's basins-fractions plot.
+labels); each label has one colour in both drawings. Over (f, a), both axes of at least
+:data:`~study.figures.common.MIN_CELLS` values: one panel per label, most points first
+(at most :data:`MAX_PANELS`), its region coloured by its basin fraction (from grey, a
+basin too small to be seen, to the label's colour, every start; white where the motion
+is not found), each point a cell (:func:`~study.figures.common.map_mesh`: a listed
+axis's cells only as wide as its smallest step). Along one drive axis (the other of one
+value, or selected with ``--sel``): the velocity of each label above, and the basin
+fractions stacked beneath, a bar per grid point, as Attractors.jl's basins-fractions
+plot; with a coarse second axis (fewer values, such as a listed ``a = [10, 12]``), one
+such column per value of it.
 """
 
 from __future__ import annotations
@@ -29,13 +33,15 @@ from study.analyses.basins import (
 )
 from study.figures.common import (
     coupling_label,
+    is_coarse,
+    map_mesh,
     require_dims,
     save,
     selection_text,
     structure_text,
 )
 
-__all__ = ["MAX_PANELS", "compose", "draw", "label_colour", "labelled"]
+__all__ = ["MAX_PANELS", "bar_width", "compose", "draw", "label_colour", "labelled"]
 
 #: Labels drawn over (f, a) at most, most points first.
 MAX_PANELS = 6
@@ -115,13 +121,13 @@ def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
     if not summary.sizes["label"]:
         raise FigureError("figure 'basins': no point of this file (as selected) holds an "
                           "attractor")
-    if len(several) == 2:
+    if len(several) == 2 and not any(is_coarse(dataset[d].values) for d in several):
         return _map(labelled_map, summary)
-    axis = several[0]
+    # A line of the axis with more values per value of the other (a coarse or listed
+    # axis is drawn as what it is: its values, never cells spanning between them).
+    axis = max(several, key=lambda d: dataset.sizes[d])
     other = "a" if axis == "f" else "f"
-    if other in labelled_map.dims:
-        labelled_map = labelled_map.squeeze(other)
-    return _line(labelled_map, summary, axis, other)
+    return _lines(labelled_map, summary, axis, other)
 
 
 def _describe(summary: xr.Dataset, label: int) -> str:
@@ -149,8 +155,8 @@ def _map(dataset: xr.Dataset, summary: xr.Dataset) -> tuple[plt.Figure, str]:
         colour = label_colour(label)
         cmap = LinearSegmentedColormap.from_list(f"label-{label}",
                                                  [(0.85, 0.85, 0.85), colour])
-        mesh = ax.pcolormesh(f, a, shares.sel(label=label).values.T, shading="nearest",
-                             cmap=cmap, vmin=0.0, vmax=1.0)
+        mesh = map_mesh(ax, f, a, shares.sel(label=label).values.T, cmap=cmap,
+                        vmin=0.0, vmax=1.0)
         fig.colorbar(mesh, ax=ax, label="basin fraction", shrink=0.85)
         points = int(summary["points"].sel(label=label))
         ax.set_title(f"label {label}: {_describe(summary, label)}\n{points} points",
@@ -169,14 +175,70 @@ def _map(dataset: xr.Dataset, summary: xr.Dataset) -> tuple[plt.Figure, str]:
     return fig, _titles(fig, dataset, head, "Basins over (f, a)")
 
 
-def _line(dataset: xr.Dataset, summary: xr.Dataset, axis: str,
-          other: str) -> tuple[plt.Figure, str]:
+def _where(dataset: xr.Dataset, other: str) -> str:
+    fixed = float(dataset[other].values)
+    return f"f = {fixed:g} Hz" if other == "f" else f"a = {fixed:g} m s$^{{-2}}$"
+
+
+def bar_width(x: np.ndarray) -> float:
+    """The width [units of ``x``] of a grid point's bar: 0.8 of the smallest step, so
+    that each bar reads as the one point it was computed at."""
+    steps = np.abs(np.diff(np.asarray(x, dtype=float)))
+    return 0.8 * float(np.min(steps)) if steps.size else 1.0
+
+
+def _lines(dataset: xr.Dataset, summary: xr.Dataset, axis: str,
+           other: str) -> tuple[plt.Figure, str]:
+    """Along ``axis``: per value of ``other`` (a column each), the velocity of each
+    label above its basin fractions stacked in a bar per grid point."""
+    values = (dataset[other].values if other in dataset.dims
+              else np.atleast_1d(dataset[other].values))
+    columns = values.size
+    fig, axes = plt.subplots(2, columns, figsize=(8.5 if columns == 1 else 4.6 * columns,
+                                                  7.0),
+                             layout="constrained", sharex=True, sharey="row",
+                             height_ratios=(1.0, 1.2), squeeze=False)
+    handles: dict[str, object] = {}
+    for column, value in enumerate(values):
+        at = dataset.sel({other: value}) if other in dataset.dims else dataset
+        top, bottom = axes[:, column]
+        present, most = _line(top, bottom, at, summary, axis)
+        head = f"{_where(at, other)}: " if columns > 1 else ""
+        top.set_title(f"{head}{len(present)} motions along {axis}, at most {most} at one "
+                      "drive", fontsize=10 if columns == 1 else 9)
+        if columns == 1:
+            top.legend(fontsize=8, loc="best")  # the bars: each label's colour
+        else:
+            # The velocities' entries name each label; its bars have its colour.
+            for handle, label in zip(*top.get_legend_handles_labels(), strict=True):
+                handles.setdefault(label, handle)
+        if column:
+            top.set_ylabel("")
+            bottom.set_ylabel("")
+    if columns > 1:
+        fig.legend(list(handles.values()), list(handles), loc="outside lower center",
+                   ncols=2, fontsize=8)
+    if columns == 1:
+        where = _where(dataset if other not in dataset.dims else dataset.squeeze(other),
+                       other)
+    else:
+        symbol, units = ("f", "Hz") if other == "f" else ("a", "m s$^{-2}$")
+        where = f"{symbol} = {', '.join(f'{v:g}' for v in values)} {units}"
+    return fig, _titles(fig, dataset, f"Basin fractions along {axis} at {where}",
+                        f"Basins along {axis} at {where.replace('$^{-2}$', '^-2')}")
+
+
+def _line(top: plt.Axes, bottom: plt.Axes, dataset: xr.Dataset, summary: xr.Dataset,
+          axis: str) -> tuple[list[int], int]:
+    """One line along ``axis`` (the other drive axis of one value): each label's
+    velocity on ``top``, the basin fractions stacked on ``bottom``, a bar per grid
+    point (never a band between points: a motion found at one point is one bar).
+    Returns the labels present and the most attractors at one point."""
     shares = fraction_by_label(dataset).transpose("label", axis)
     x = dataset[axis].values
+    held = set(shares["label"].values.tolist())
     present = [int(k) for k in summary["label"].values
-               if bool(shares.sel(label=k).notnull().any())]
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8.5, 7.0), layout="constrained",
-                                      sharex=True, height_ratios=(1.0, 1.2))
+               if k in held and bool(shares.sel(label=k).notnull().any())]
     top.axhline(0.0, color="0.6", linewidth=0.6)
     label_of = dataset["attractor_label"].transpose(axis, "attractor").values
     velocity = dataset["basin_velocity"].transpose(axis, "attractor").values
@@ -187,22 +249,19 @@ def _line(dataset: xr.Dataset, summary: xr.Dataset, axis: str,
         top.plot(x, 1e3 * v, "o-", color=label_colour(label), markersize=3.0,
                  linewidth=1.0, label=f"label {label}: {_describe(summary, label)}")
     top.set_ylabel("mean velocity [mm s$^{-1}$]")
-    top.legend(fontsize=8, loc="best")
-    stacked = np.nan_to_num(np.stack([shares.sel(label=k).values for k in present]))
-    bottom.stackplot(x, stacked, colors=[label_colour(k) for k in present],
-                     labels=[f"label {k}" for k in present], alpha=0.85)
+    width = bar_width(x)
+    below = np.zeros(x.size)
+    for label in present:
+        share = np.nan_to_num(shares.sel(label=label).values)
+        bottom.bar(x, share, width=width, bottom=below, color=label_colour(label),
+                   alpha=0.85, linewidth=0, label=f"label {label}")
+        below = below + share
     bottom.set_ylim(0.0, 1.0)
-    bottom.set_xlim(x.min(), x.max())
+    bottom.set_xlim(float(x.min()) - width, float(x.max()) + width)
     bottom.set_xlabel(_AXES[axis])
     bottom.set_ylabel("basin fraction (stacked)")
-    bottom.legend(fontsize=8, loc="upper right")
-    fixed = float(dataset[other].values)
-    where = f"f = {fixed:g} Hz" if other == "f" else f"a = {fixed:g} m s$^{{-2}}$"
     most = int((label_of >= 0).sum(axis=1).max())
-    top.set_title(f"{len(present)} motions along {axis}, at most {most} at one drive",
-                  fontsize=10)
-    return fig, _titles(fig, dataset, f"Basin fractions along {axis} at {where}",
-                        f"Basins along {axis} at {where.replace('$^{-2}$', '^-2')}")
+    return present, most
 
 
 def _titles(fig: plt.Figure, dataset: xr.Dataset, head: str, plain: str) -> str:

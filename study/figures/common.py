@@ -24,15 +24,21 @@ from study.model.status import INVALID_STATUSES, Status
 __all__ = [
     "IRREGULAR",
     "MAX_LEGEND_ENTRIES",
+    "MIN_CELLS",
     "PAPER_POINTS",
     "VALID",
+    "cell_edges",
     "coupling_label",
     "disk_text",
     "grid_minimum",
     "in_the_air",
+    "is_coarse",
     "is_flight",
     "is_paper_file",
+    "is_two_way",
+    "leaves_the_table",
     "lift_off_label",
+    "map_mesh",
     "one_way_velocity",
     "parameter_text",
     "provenance_line",
@@ -44,6 +50,7 @@ __all__ = [
     "selected_keys",
     "selection_text",
     "single_structure",
+    "spread_indices",
     "status_handles",
     "status_hatches",
     "status_layers",
@@ -54,6 +61,11 @@ __all__ = [
 
 #: Curves beyond this many get a colour bar instead of one legend entry each.
 MAX_LEGEND_ENTRIES = 8
+
+#: An axis with fewer values than this is coarse: a figure draws it as what it is, a
+#: line or marker per value, never as a map's cells (cells over a = 10 and 12 would
+#: read as values over 9-13 that were not computed).
+MIN_CELLS = 5
 
 
 def provenance_line(dataset: xr.Dataset) -> str:
@@ -405,6 +417,75 @@ def single_structure(dataset: xr.Dataset, figure: str) -> xr.Dataset:
     return require_dims(dataset, figure, ("f", "a", "branch"), "a single structure")
 
 
+def is_coarse(values: np.ndarray) -> bool:
+    """Whether an axis is too coarse for a map's cells: fewer than :data:`MIN_CELLS`
+    values (a line or marker per value is drawn instead)."""
+    return np.asarray(values).size < MIN_CELLS
+
+
+def spread_indices(n: int, limit: int) -> list[int]:
+    """Indices of at most ``limit`` of ``n`` values, evenly spread, ends included."""
+    if n <= limit:
+        return list(range(n))
+    return sorted(set(np.rint(np.linspace(0, n - 1, limit)).astype(int).tolist()))
+
+
+def cell_edges(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The edges of a map's cells along one axis, and the index of the value each cell
+    shows (-1 for a gap, drawn blank).
+
+    On a regular grid a cell spans from midpoint to midpoint (a whole step at each end,
+    as ``shading="nearest"``). On an irregular axis (a listed one, ``values = [...]``)
+    each value's cell is only as wide as the axis's smallest step, centred on it, and
+    the rest is left blank: a cell never stretches over values that were not computed.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        The axis's values (at least 2, strictly monotone), in its units.
+
+    Returns
+    -------
+    edges : numpy.ndarray
+        ``cells + 1`` edges, in the units of ``values``.
+    index : numpy.ndarray
+        For each cell, the index into ``values`` it shows, or -1.
+    """
+    values = np.asarray(values, dtype=float)
+    steps = np.diff(values)
+    if values.size < 2 or not (np.all(steps > 0) or np.all(steps < 0)):
+        raise ValueError(f"cell_edges needs at least 2 strictly monotone values, got "
+                         f"{values.tolist()}")
+    if np.allclose(steps, steps[0], rtol=1e-6, atol=0.0):
+        middle = 0.5 * (values[1:] + values[:-1])
+        edges = np.concatenate([[values[0] - 0.5 * steps[0]], middle,
+                                [values[-1] + 0.5 * steps[-1]]])
+        return edges, np.arange(values.size)
+    half = 0.5 * float(np.min(np.abs(steps))) * np.sign(steps[0])
+    edges = [values[0] - half]
+    index = []
+    for i, value in enumerate(values):
+        if abs(value - half - edges[-1]) > 1e-9 * abs(half):  # a step wider: a gap
+            edges.append(value - half)
+            index.append(-1)
+        edges.append(value + half)
+        index.append(i)
+    return np.array(edges), np.array(index)
+
+
+def map_mesh(ax: plt.Axes, x: np.ndarray, y: np.ndarray, values: np.ndarray, **options):
+    """``ax.pcolormesh`` of ``values`` (over ``(y, x)``) in cells of :func:`cell_edges`
+    along each axis: a regular grid as ``shading="nearest"``, a listed axis's values in
+    cells of its smallest step, blank between. Returns the mesh."""
+    x_edges, x_index = cell_edges(x)
+    y_edges, y_index = cell_edges(y)
+    data = np.ma.masked_invalid(np.ma.asarray(values, dtype=float))
+    shown = data[np.ix_(np.maximum(y_index, 0), np.maximum(x_index, 0))]
+    gaps = (y_index[:, None] < 0) | (x_index[None, :] < 0)
+    shown = np.ma.masked_where(gaps | np.ma.getmaskarray(shown), shown)
+    return ax.pcolormesh(x_edges, y_edges, shown, **options)
+
+
 def is_paper_file(dataset: xr.Dataset, ignore: tuple[str, ...] = ()) -> bool:
     """Whether the file's (selected) structure is the paper's (:mod:`study.model.paper`):
     only then are the paper's points and statements drawn."""
@@ -470,6 +551,18 @@ def coupling_label(dataset: xr.Dataset) -> str:
     if is_flight(dataset):
         text += ", flight past lift-off"
     return text + (", time integration" if method == "integrator" else "")
+
+
+def is_two_way(dataset: xr.Dataset) -> bool:
+    """Whether the file's velocities are two-way coupled (``study_coupling``)."""
+    return str(dataset.attrs.get("study_coupling", "one-way")) == "two-way"
+
+
+def leaves_the_table(status: np.ndarray, airborne: np.ndarray | None = None
+                     ) -> np.ndarray:
+    """Where the study's own motion leaves the table: lift-off (without flight) and the
+    motions in the air (:func:`in_the_air`: bouncing, irregular motions that fly)."""
+    return (np.asarray(status) == Status.LIFT_OFF) | in_the_air(np.asarray(status), airborne)
 
 
 def is_flight(dataset: xr.Dataset) -> bool:

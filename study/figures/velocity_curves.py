@@ -6,7 +6,9 @@ does not apply. With flight (``velocity-curves-flight``) the curves go on past l
 their bouncing points are drawn over a wide pale band, and the same curves without
 flight (``without_flight``) dotted, ending where they lift off. Points that did not
 converge leave gaps and are marked on the axis.
-Up to 8 curves get a legend entry each; more get a colour bar of the frequency. With
+Up to 8 curves get a legend entry each; more get a colour bar of the frequency. A file of
+more than 12 frequencies draws 12 of them, evenly spread on the colour scale (closer
+near the resonance; the title says so; ``--sel f=...`` draws the ones chosen instead). With
 ``--measurements lab.csv`` the measured velocities are drawn with their error bars, each
 in the colour of the curve of the nearest frequency (:mod:`study.figures.measured`).
 """
@@ -34,11 +36,16 @@ from study.figures.common import (
     parameter_text,
     require_axis,
     restore_dim,
+    selected_keys,
     single_structure,
 )
 from study.model.status import Status
 
-__all__ = ["FREQUENCY_COLORS", "draw", "frequency_position"]
+__all__ = ["FREQUENCY_COLORS", "MAX_CURVES", "draw", "drawn_curves", "frequency_position"]
+
+#: Curves drawn at most without ``--sel f=...``: the paper's twelve; beyond, as many
+#: evenly spread (:func:`drawn_curves`), the title says so and how to pick others.
+MAX_CURVES = 12
 
 #: Diverging colours for the drive frequency: blues below the resonance (forward
 #: motion), reds above (backward); light near f0, dark far from it, never so light
@@ -68,6 +75,27 @@ def frequency_position(f: np.ndarray, f0: float) -> np.ndarray:
     offset = np.asarray(f, dtype=float) - f0
     span = max(float(np.max(np.abs(offset))), 1e-12)
     return 0.5 + 0.5 * np.sign(offset) * np.sqrt(np.abs(offset) / span)
+
+
+def drawn_curves(dataset: xr.Dataset, f0: float, measured_curves=()) -> np.ndarray:
+    """The indices along ``f`` of the curves drawn: every one up to :data:`MAX_CURVES`
+    or where ``--sel`` chose the frequencies; else :data:`MAX_CURVES` evenly spread on
+    the colour scale (:func:`frequency_position`: ends included, closer together near
+    the resonance ``f0`` [Hz], where the curves differ most), the one nearest ``f0``
+    in place of its neighbour, and those of
+    ``measured_curves`` (the curves measurements are drawn on), so that a file of 81
+    frequencies still reads."""
+    count = dataset.sizes["f"]
+    if count <= MAX_CURVES or "f" in selected_keys(dataset):
+        return np.arange(count)
+    position = frequency_position(dataset["f"].values, f0)
+    targets = np.linspace(position.min(), position.max(), MAX_CURVES)
+    chosen = {int(np.argmin(np.abs(position - t))) for t in targets}
+    resonance = int(np.argmin(np.abs(position - 0.5)))  # the curve nearest f0
+    if resonance not in chosen:  # in place of the chosen one nearest to it
+        chosen.remove(min(chosen, key=lambda i: abs(position[i] - 0.5)))
+        chosen.add(resonance)
+    return np.array(sorted(chosen | {int(i) for i in measured_curves}))
 
 
 def _matched(data, rows: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -116,6 +144,23 @@ def draw(dataset: xr.Dataset, output: Path,
     # One frequency selected (--sel f=14.5): its curve alone.
     dataset = restore_dim(dataset, "f", _ALONG_F)
     structure = common.structure_from_dataset(dataset)
+    data = rows = curve = None
+    if measurements:
+        data = measured.load(measurements)
+        rows = measured.same_structure(data, measured.pick(data, "velocity",
+                                                           "velocity-curves"),
+                                       dataset, "velocity-curves")
+        status = dataset["status"].transpose("f", "a").values
+        speed = np.abs(dataset["velocity"].transpose("f", "a").values)
+        valid_speed = np.where(np.isin(status, VALID), speed, 0.0)
+        check_velocity_units(data, rows, float(np.nanmax(valid_speed, initial=0.0)))
+        rows, curve = _matched(data, rows, dataset["f"].values)
+    shown = drawn_curves(dataset, structure.f0, () if curve is None else np.unique(curve))
+    total = dataset.sizes["f"]
+    if shown.size < total:
+        if curve is not None:
+            curve = np.searchsorted(shown, curve)
+        dataset = dataset.isel(f=shown)
     f = dataset["f"].values
     a = dataset["a"].values
     velocity = 1e3 * dataset["velocity"].transpose("f", "a").values  # mm s-1
@@ -132,16 +177,6 @@ def draw(dataset: xr.Dataset, output: Path,
     norm = Normalize(float(f.min()), float(f.max()) if f.size > 1 else float(f[0]) + 1.0)
     colour_bar = f.size > MAX_LEGEND_ENTRIES
     colours = [FREQUENCY_COLORS(p) for p in frequency_position(f, structure.f0)]
-
-    data = rows = None
-    if measurements:
-        data = measured.load(measurements)
-        rows = measured.same_structure(data, measured.pick(data, "velocity",
-                                                           "velocity-curves"),
-                                       dataset, "velocity-curves")
-        valid_speed = np.where(np.isin(status, VALID), np.abs(velocity), 0.0)
-        check_velocity_units(data, rows, 1e-3 * float(np.nanmax(valid_speed, initial=0.0)))
-        rows, curve = _matched(data, rows, f)
 
     fig, ax = plt.subplots(figsize=(8.0, 5.2), layout="constrained")
     ax.axhline(0.0, color="black", lw=0.8)
@@ -179,8 +214,13 @@ def draw(dataset: xr.Dataset, output: Path,
              f"{coupling_label(dataset)}")
     if rows is not None:
         title += f", with {rows.size} measured"
+    subset = ""
+    if f.size < total:
+        subset = (f"\n{f.size} of the file's {total} frequencies (closer near $f_0$"
+                  + (", and those measured" if curve is not None else "")
+                  + "); others: --sel f=F1,F2,... or --sel f=START:STOP")
     ax.set_title(title.replace("frequencies, ", "frequencies\n", 1)
-                 + f"\n{parameter_text(dataset)}", fontsize=11)
+                 + f"\n{parameter_text(dataset)}{subset}", fontsize=11)
     _legend(fig, ax, handles, colour_bar, ScalarMappable(norm=norm, cmap=cmap), f,
             structure.f0)
     return common.save(fig, output, dataset,

@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 
 import numpy as np
 import pytest
+from matplotlib.collections import QuadMesh
 from matplotlib.colors import to_rgb
 from numpy.testing import assert_allclose, assert_array_equal
 
@@ -24,8 +25,9 @@ M_TO_1 = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
 
 @pytest.fixture(scope="module")
 def basins_map():
-    return computed(M_TO_1, np.arange(12.5, 15.01, 0.5), [10.0, 11.0, 12.0], starts=8,
-                    flight=True, name="basins-figure-test")
+    # At least MIN_CELLS values of each axis: a map of cells (fewer: lines per value).
+    return computed(M_TO_1, np.arange(12.5, 15.01, 0.5), [10.0, 10.5, 11.0, 11.5, 12.0],
+                    starts=8, flight=True, name="basins-figure-test")
 
 
 def test_the_map_has_one_panel_per_label_coloured_by_its_fraction(basins_map, tmp_path):
@@ -56,17 +58,25 @@ def test_a_line_stacks_the_fractions_in_the_maps_colours(basins_map):
     line = labelled.sel(a=10.0)  # the map's labels kept (attractor_label in the dataset)
     fig, title = compose(line)
     top, bottom = fig.axes
-    stacks = {c.get_label(): c for c in bottom.collections}
+    stacks = {c.get_label(): c for c in bottom.containers}  # a bar per grid point
     shares = fraction_by_label(line)
     present = [int(k) for k in shares["label"].values
                if bool(shares.sel(label=k).notnull().any())]
     assert sorted(stacks) == sorted(f"label {k}" for k in present)
     assert len(present) >= 2  # the fold: two motions along f at 10 m s-2
     for k in present:
-        assert_allclose(stacks[f"label {k}"].get_facecolor()[0][:3], label_colour(k))
+        bars = stacks[f"label {k}"].patches
+        assert_allclose(bars[0].get_facecolor()[:3], label_colour(k))
+        assert_allclose([b.get_height() for b in bars],
+                        shares.sel(label=k).fillna(0.0).values, rtol=0, atol=0)
+        assert_allclose([b.get_x() + 0.5 * b.get_width() for b in bars],
+                        line["f"].values, rtol=1e-12)
+        assert all(b.get_width() <= 0.5 for b in bars)  # within the grid's step
     # The stacked fractions add up to 1 at every frequency: the top of the stack.
     total = shares.fillna(0.0).sum("label").values
     assert_allclose(total, 1.0, rtol=0, atol=1e-12)
+    tops = sum(np.array([b.get_height() for b in c.patches]) for c in stacks.values())
+    assert_allclose(tops, 1.0, rtol=0, atol=1e-12)
     # The velocity of each label, in mm s-1, where it exists.
     curves = {c.get_label().split(":")[0]: c for c in top.get_lines() if
               c.get_label().startswith("label")}
@@ -75,6 +85,18 @@ def test_a_line_stacks_the_fractions_in_the_maps_colours(basins_map):
         expected = 1e3 * line["basin_velocity"].where(where).max("attractor").values
         assert_allclose(curves[f"label {k}"].get_ydata(), expected, rtol=1e-12)
     assert "Basins along f at a = 10" in title
+
+
+def test_a_coarse_axis_is_drawn_as_lines_per_value(basins_map):
+    """Three values of a (fewer than MIN_CELLS): a column of lines and bars per value,
+    no map cells spanning the values between."""
+    coarse = basins_map.isel(a=[0, 2, 4])  # 3 values, fewer than MIN_CELLS = 5
+    fig, title = compose(coarse)
+    assert not [c for ax in fig.axes for c in ax.collections if isinstance(c, QuadMesh)]
+    tops = [ax for ax in fig.axes if ax.get_title()]
+    assert [ax.get_title().split(":")[0] for ax in tops] == [
+        "a = 10 m s$^{-2}$", "a = 11 m s$^{-2}$", "a = 12 m s$^{-2}$"]
+    assert "Basins along f at a = 10, 11, 12 m s^-2" in title
 
 
 def test_a_line_selected_from_the_file_draws(basins_map, tmp_path):

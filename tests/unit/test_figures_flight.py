@@ -370,3 +370,39 @@ def test_the_bifurcation_figure_draws_the_section_along_one_axis(tmp_path):
         plt.close(fig)
     assert main(["figure", "bifurcation", str(tmp_path / "section.nc"), "--sel", "a=11.6",
                  "-o", str(tmp_path / "bifurcation")]) == 0
+
+
+def test_the_bouncing_legend_names_only_what_is_drawn(bouncing_dataset, tmp_path,
+                                                      monkeypatch):
+    """Drawn before a frontier is computed (no frontier observable), the legend has no
+    frontier; with one it has."""
+    _, labels = _drawn("bouncing", bouncing_dataset, tmp_path, monkeypatch)
+    assert any(label.startswith("frontier") for label in labels), labels
+    frontier = [name for name in bouncing_dataset.data_vars if name.startswith("frontier_")]
+    before = bouncing_dataset.drop_vars(frontier)
+    _, labels = _drawn("bouncing", before, tmp_path, monkeypatch)
+    assert not any("frontier" in label for label in labels), labels
+    assert any(label.startswith("edge of the bouncing region") for label in labels), labels
+
+
+def test_the_bouncing_maps_draw_the_studys_lift_off_not_the_one_way_estimate(
+        bouncing_dataset, tmp_path, monkeypatch):
+    """The closed-form lift-off is the one-way model's for a base at rest; the two-way
+    base that slides leaves the table elsewhere (the edge drawn from the file's own
+    statuses), so the estimate is neither drawn nor in the legend."""
+    from study.figures import common
+
+    kept = []
+    close = common.plt.close
+    monkeypatch.setattr(common.plt, "close", lambda fig=None: kept.append(fig))
+    draw_figure("bouncing", bouncing_dataset, tmp_path / "bouncing")
+    (fig,) = kept
+    estimates = [bouncing_dataset["lift_off_acceleration"].isel(M=i).values
+                 for i in range(bouncing_dataset.sizes["M"])]
+    lines = [np.asarray(line.get_ydata(), dtype=float) for ax in fig.axes
+             for line in ax.get_lines()]
+    labels = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+    close(fig)
+    assert not [line for line in lines for e in estimates
+                if line.shape == e.shape and np.allclose(line, e, equal_nan=True)]
+    assert not any(label.startswith("lift-off of the base at rest") for label in labels)

@@ -58,12 +58,17 @@ def test_the_line_figure_counts_what_it_shows(line, tmp_path):
     assert all(p.exists() and p.stat().st_size > 0 for p in paths)
 
 
-def test_a_map_shows_where_the_sweeps_differ(tmp_path):
+def test_two_accelerations_are_a_panel_each_counting_where_the_sweeps_differ(tmp_path):
+    """Two values of a (a listed axis) are two panels of lines, not a map whose cells
+    would span 8.5-10.5: each counts its own drive values that differ."""
     dataset = _dataset(np.array([14.8, 16.0, 16.4]), np.array([9.0, 10.0]))
     fig, _ = compose(dataset)
-    count = int(differing(dataset).sum())
-    assert f"at {count} of 6 points" in fig.axes[0].get_title()
-    assert 0 < count < 6
+    panels = [ax for ax in fig.axes if ax.get_lines()]
+    assert len(panels) == 2
+    counts = [int(differing(dataset.sel(a=a)).sum()) for a in (9.0, 10.0)]
+    for ax, a, count in zip(panels, ("9", "10"), counts, strict=True):
+        assert ax.get_title().startswith(f"a = {a} m s$^{{-2}}$: {count} of 3 drive values")
+    assert 0 < sum(counts) < 6
 
 
 def test_a_file_without_both_directions_is_refused(line):

@@ -14,6 +14,7 @@ from study.engine.runner import run_study
 from study.engine.store import open_result
 from study.figures import FIGURES, draw_figure
 from study.figures.common import coupling_label
+from study.model.status import Status
 
 STRUCTURE = """\
 [structure]
@@ -163,12 +164,41 @@ def _legend_labels(source, figure, tmp_path, monkeypatch) -> list[str]:
     return labels
 
 
+def _drawn_lines(source, figure, tmp_path, monkeypatch):
+    """The figure's legend labels and the y data of every line on its maps."""
+    from study.figures import common
+
+    kept = []
+    close = common.plt.close
+    monkeypatch.setattr(common.plt, "close", lambda fig=None: kept.append(fig))
+    draw_figure(figure, open_result(source), tmp_path / figure)
+    (fig,) = kept
+    labels = [t.get_text() for legend in fig.legends + [ax.get_legend() for ax in fig.axes]
+              if legend is not None for t in legend.get_texts()]
+    lines = [np.asarray(line.get_ydata(), dtype=float) for ax in fig.axes
+             for line in ax.get_lines()]
+    close(fig)
+    return labels, lines
+
+
 @pytest.mark.parametrize("figure", ["regime-map", "mass-ratio-limit"])
-def test_a_two_way_map_calls_the_lift_off_curve_a_base_at_rest_estimate(figure, results,
-                                                                       tmp_path, monkeypatch):
-    """The closed-form lift-off is that of a base at rest: with two-way coupling moving
-    points lie above it, so the legend must not say 'n < 0 above'."""
-    labels = _legend_labels(results[SOURCES[figure]], figure, tmp_path, monkeypatch)
-    assert any(label.startswith("lift-off of the base at rest (one-way estimate")
-               for label in labels), labels
+def test_a_two_way_map_draws_its_own_lift_off_not_the_one_way_estimate(
+        figure, results, tmp_path, monkeypatch):
+    """The closed-form lift-off is that of a base at rest (the one-way model's): a
+    sliding two-way base lifts off elsewhere (at M = 1 near 5 m s-2 where the estimate
+    says under 3), so a two-way map draws the study's own lift-off (its lift_off points)
+    and not the estimate: no line of it, no legend entry."""
+    source = results[SOURCES[figure]]
+    labels, lines = _drawn_lines(source, figure, tmp_path, monkeypatch)
+    dataset = open_result(source)
+    estimate = dataset["lift_off_acceleration"]
+    estimates = ([estimate.values] if "M" not in estimate.dims else
+                 [estimate.isel(M=i).values for i in range(dataset.sizes["M"])])
+    drawn = [line for line in lines if any(
+        line.shape == e.shape and np.allclose(line, e, equal_nan=True) for e in estimates)]
+    assert not drawn
+    assert not any(label.startswith("lift-off of the base at rest") for label in labels), labels
     assert not any("n < 0 above" in label for label in labels), labels
+    # Its own lift-off instead: the points that leave the table, in the legend.
+    assert int((dataset["status"] == Status.LIFT_OFF).sum()) > 0
+    assert any(label.startswith("lift-off: outside the model") for label in labels), labels
