@@ -144,9 +144,13 @@ def test_resume_and_extend_compute_only_new_points_with_the_same_values(tmp_path
     with pytest.raises(StudyInterrupted):
         run_study(spec, output, progress=False, stop_after=1)
     report = run_study(spec, output, progress=False)
-    # chunk_points = 2 with 2 accelerations: one frequency a chunk.
-    assert (report.chunks, report.reused, report.computed) == (3, 1, 2)
-    assert (report.points_computed, report.points_reused) == (4, 2)
+    # chunk_points = 2 with 2 accelerations: one frequency a chunk. The stop comes
+    # after the first whole chunk; work units of the others finished by then are
+    # kept too (how many depends on the workers' timing), never computed twice.
+    assert (report.chunks, report.reused + report.computed) == (3, 3)
+    assert report.reused >= 1
+    assert report.points_computed + report.points_reused == 6
+    assert report.points_reused >= 2
     whole = open_result(output)
     assert_holds(whole, expected(F, A), 3)
     # Along f: only the new frequency is computed, the others are the same bit for bit.
