@@ -130,11 +130,12 @@ N_EXTENDED = N_STATE + 1
 #: records of a pass in contact (3-state) and with flight (5-state); the multipliers'
 #: real and imaginary parts; a pass's Jacobian; the extended point, its prediction,
 #: the accepted point and its tangent, a new tangent (``N_EXTENDED``), the bordered
-#: system and its right-hand side; the parameter derivative of the map.
+#: system and its right-hand side; the parameter derivative of the map; the flag of
+#: the last pass (1).
 BranchWork = namedtuple("BranchWork", (
     "table", "z", "work", "residual", "step", "scales", "reference", "contact", "flight",
     "real", "imag", "jac", "point", "predicted", "accepted", "tangent", "turned",
-    "system", "rhs", "derivative"))
+    "system", "rhs", "derivative", "flags"))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -153,7 +154,7 @@ def new_branch_work(structure):
         np.zeros(N_STATE), np.zeros(N_STATE), np.eye(N_STATE), np.zeros(N_EXTENDED),
         np.zeros(N_EXTENDED), np.zeros(N_EXTENDED), np.zeros(N_EXTENDED),
         np.zeros(N_EXTENDED), np.zeros((N_EXTENDED, N_EXTENDED)), np.zeros(N_EXTENDED),
-        np.zeros(N_STATE))
+        np.zeros(N_STATE), np.zeros(1))
 
 
 #: A straight segment of the drive plane: ``t`` in [0, 1] goes from ``(omega0, a0)`` to
@@ -204,6 +205,7 @@ def period_pass(point, z, section, periods, work, flying, want_jac, max_events):
             for j in range(N_STATE):
                 record.jac[i, j] = 1.0 if i == j else 0.0
         flag = fly(point, end, section, section + span, record, want_jac, False, max_events)
+        work.flags[0] = flag
         if want_jac:
             for i in range(N_STATE):
                 for j in range(N_STATE):
@@ -219,6 +221,7 @@ def period_pass(point, z, section, periods, work, flying, want_jac, max_events):
     end[Z_GAP_RATE] = 0.0
     # Lift-off ends the pass: without flight the orbit does not exist past it.
     flag = run(point, end, section, section + span, record, want_jac, 0.0, max_events)
+    work.flags[0] = flag
     if want_jac:
         for i in range(N_STATE):
             for j in range(N_STATE):
@@ -228,7 +231,7 @@ def period_pass(point, z, section, periods, work, flying, want_jac, max_events):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _flow(point, z, t_begin, t_end, work, flying, max_events):
+def flow(point, z, t_begin, t_end, work, flying, max_events):
     """``z`` followed from ``t_begin`` to ``t_end`` [s] (in place, no Jacobian); the
     run's flag."""
     if t_end <= t_begin:
@@ -277,7 +280,7 @@ MODE_SAMPLES = 32
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _contact_section(point, z, section, periods, work, max_events):
+def contact_section(point, z, section, periods, work, max_events):
     """For a contact orbit through ``z`` on the section at ``section`` [s]: the phase
     (fraction of ``periods`` periods from phase 0) of the middle of its longest stretch
     in one contact mode (stuck, slipping forward or backward), the mode sampled at
@@ -302,7 +305,7 @@ def _contact_section(point, z, section, periods, work, max_events):
     longest = 0
     middle = 0.0
     for k in range(samples):
-        if _flow(point, state, section + k * piece, section + (k + 1) * piece, work, False,
+        if flow(point, state, section + k * piece, section + (k + 1) * piece, work, False,
                  max_events) != RUN_OK:
             return (section / span) % 1.0, False
         mode = 0.0 if state[2] == 0.0 else (1.0 if state[2] > 0.0 else -1.0)
@@ -330,7 +333,7 @@ def _contact_section(point, z, section, periods, work, max_events):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _near_one(work, flying):
+def near_one(work, flying):
     """A real multiplier of the last :func:`multiplier_signature` (its eigenvalues in
     ``work.real``, ``work.imag``) within :data:`SINGULAR_MARGIN` of +1."""
     n = N_STATE if flying else 3
@@ -341,7 +344,7 @@ def _near_one(work, flying):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _crowded(work, section, span):
+def crowded_section(work, section, span):
     """An event of the flight pass just made from ``section`` [s] lies within
     :data:`SECTION_MARGIN` of the longest stretch without events from it."""
     acc = work.flight.acc
@@ -354,7 +357,7 @@ def _crowded(work, section, span):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _fixed_point(point, z, section, periods, work, flying, max_events, first):
+def fixed_point(point, z, section, periods, work, flying, max_events, first):
     """Newton's method on ``P^periods(z) - z`` at the drive ``point`` from ``z`` (in
     place) on the section at ``section`` [s], held to contract (each correction below
     :data:`CONTRACTION` times the one before) from a first correction below ``first``
@@ -406,7 +409,7 @@ def _fixed_point(point, z, section, periods, work, flying, max_events, first):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _derivative(structure, work, segment, t, z, phase, periods, flying, max_events):
+def parameter_derivative(structure, work, segment, t, z, phase, periods, flying, max_events):
     """The derivative of ``P^periods`` in the segment's ``t`` at the fixed point ``z``
     (the map on the section at ``phase`` of the period) into ``work.derivative``, by a
     forward difference (``P(z) = z`` at ``t`` to the corrector's tolerance); the drive
@@ -423,7 +426,7 @@ def _derivative(structure, work, segment, t, z, phase, periods, flying, max_even
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _tangent(work, n, out):
+def branch_tangent(work, n, out):
     """The branch's unit tangent in the scaled space ``(z / reference, t)`` into ``out``
     (``N_EXTENDED``; the state's entries past ``n`` 0, the parameter's at
     ``N_STATE``), from ``work.jac`` and ``work.derivative``, oriented along
@@ -462,14 +465,29 @@ def _tangent(work, n, out):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _arclength_step(structure, work, segment, phase, periods, flying, max_events, h,
-                    kink):
+def moved_tangent(work, n, previous, out):
+    """The branch's tangent into ``out`` after its section moved: the state's
+    coordinates changed, so the tangent before (``previous``) can only orient it by its
+    drive component, which is the same on every section; ``work.tangent`` is
+    overwritten (``previous`` may be it)."""
+    way = 1.0 if previous[N_STATE] >= 0.0 else -1.0
+    for i in range(N_EXTENDED):
+        work.tangent[i] = 0.0
+    work.tangent[N_STATE] = way
+    return branch_tangent(work, n, out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def arclength_step(structure, work, segment, phase, periods, flying, max_events, h,
+                   kink, fresh=False):
     """Newton's method on the fixed-point equations bordered by the arclength condition
     ``tangent . (y - predicted) = 0``, from ``work.predicted`` into ``work.point`` (the
     scaled ``(z / reference, t)``), the parameter derivative held at the accepted
-    point's (``work.derivative``). Held as :func:`_fixed_point`, the first correction
-    below :data:`STEP_CORRECTION` ``h`` (unless ``kink``). Returns ``(converged,
-    displacement)``; the drive is left at the point's ``t``."""
+    point's (``work.derivative``), or, with ``fresh``, taken anew at each iterate by a
+    forward difference (a pass more an iteration: from a branch point, whose derivative
+    lacks the very direction the new branch leaves in). Held as :func:`fixed_point`,
+    the first correction below :data:`STEP_CORRECTION` ``h`` (unless ``kink``). Returns
+    ``(converged, displacement)``; the drive is left at the point's ``t``."""
     n = N_STATE if flying else 3
     m = n + 1
     y = work.point
@@ -495,6 +513,20 @@ def _arclength_step(structure, work, segment, phase, periods, flying, max_events
                                                  flying, True, max_events)
         if flag != RUN_OK:
             return False, np.nan
+        if fresh:
+            mapped = work.residual
+            for i in range(N_STATE):
+                mapped[i] = work.work[i]
+            step = DERIVATIVE_STEP if t + DERIVATIVE_STEP <= 1.0 else -DERIVATIVE_STEP
+            shifted = drive_at(structure, work, segment, t + step, flying)
+            flag, _, _ = period_pass(shifted, z, phase * periods * TWO_PI / shifted.omega,
+                                     periods, work, flying, False, max_events)
+            if flag != RUN_OK:
+                return False, np.nan
+            for i in range(N_STATE):
+                derivative[i] = (work.work[i] - mapped[i]) / step
+                work.work[i] = mapped[i]
+            point = drive_at(structure, work, segment, t, flying)
         for i in range(n):
             for j in range(n):
                 system[i, j] = ((work.jac[i, j] - (1.0 if i == j else 0.0)) * reference[j]
@@ -587,12 +619,12 @@ def follow_orbit(structure, segment, z0, periods, work, max_events,
         if flag == RUN_OK:
             phase = quiet_section(work.flight.acc, 0.0, span) / span
     else:
-        phase, _ = _contact_section(point, z, 0.0, periods, work, max_events)
-    _flow(point, z, 0.0, phase * span, work, flying, max_events)
-    converged, displacement, _ = _fixed_point(point, z, phase * span, periods, work, flying,
+        phase, _ = contact_section(point, z, 0.0, periods, work, max_events)
+    flow(point, z, 0.0, phase * span, work, flying, max_events)
+    converged, displacement, _ = fixed_point(point, z, phase * span, periods, work, flying,
                                               max_events, first)
     steps = 0
-    if not converged or not _derivative(structure, work, segment, 0.0, z, phase, periods,
+    if not converged or not parameter_derivative(structure, work, segment, 0.0, z, phase, periods,
                                         flying, max_events):
         return Followed(LOST, 0.0, False, False, np.nan, np.nan, phase, steps,
                         passes[0] - start_newton, passes[1] - start_map)
@@ -601,7 +633,7 @@ def follow_orbit(structure, segment, z0, periods, work, max_events,
     for i in range(N_EXTENDED):
         tangent[i] = 0.0
     tangent[N_STATE] = 1.0
-    if not _tangent(work, n, turned):
+    if not branch_tangent(work, n, turned):
         return Followed(LOST, 0.0, False, False, radius, np.nan, phase, steps,
                         passes[0] - start_newton, passes[1] - start_map)
     for i in range(N_EXTENDED):
@@ -632,7 +664,7 @@ def follow_orbit(structure, segment, z0, periods, work, max_events,
                 z[i] = (accepted[i] + length * tangent[i]) * reference[i]
             point = drive_at(structure, work, segment, 1.0, flying)
             span = periods * TWO_PI / point.omega
-            ok, displacement, _ = _fixed_point(
+            ok, displacement, _ = fixed_point(
                 point, z, phase * span, periods, work, flying, max_events,
                 np.inf if kink else STEP_CORRECTION * length)
             if ok:
@@ -643,7 +675,7 @@ def follow_orbit(structure, segment, z0, periods, work, max_events,
             length = h
             for i in range(N_EXTENDED):
                 predicted[i] = accepted[i] + h * tangent[i]
-            ok, displacement = _arclength_step(structure, work, segment, phase, periods,
+            ok, displacement = arclength_step(structure, work, segment, phase, periods,
                                                flying, max_events, h, kink)
             if ok:
                 point = drive_at(structure, work, segment, y[N_STATE], flying)
@@ -656,8 +688,8 @@ def follow_orbit(structure, segment, z0, periods, work, max_events,
             jumped = ok and not kink and (abs(next_radius - radius)
                                           > MOST_MULTIPLIER_CHANGE)
         if ok and not jumped:
-            ok = _derivative(structure, work, segment, y[N_STATE], z, phase, periods,
-                             flying, max_events) and _tangent(work, n, turned)
+            ok = parameter_derivative(structure, work, segment, y[N_STATE], z, phase, periods,
+                             flying, max_events) and branch_tangent(work, n, turned)
             if ok:
                 cosine = 0.0
                 for i in range(N_EXTENDED):
@@ -684,7 +716,7 @@ def follow_orbit(structure, segment, z0, periods, work, max_events,
             return Followed(FOLDED, accepted[N_STATE], flipped, torus, radius, np.nan,
                             phase, steps, passes[0] - start_newton,
                             passes[1] - start_map)
-        if accepted[N_STATE] < 1.0 and _near_one(work, flying):
+        if accepted[N_STATE] < 1.0 and near_one(work, flying):
             return Followed(SINGULAR, accepted[N_STATE], flipped, torus, radius, np.nan,
                             phase, steps, passes[0] - start_newton,
                             passes[1] - start_map)
@@ -702,12 +734,12 @@ def follow_orbit(structure, segment, z0, periods, work, max_events,
         # in contact the orbit's mode is sampled.
         moved = phase
         if flying:
-            crowded = _crowded(work, phase * span, span)
+            crowded = crowded_section(work, phase * span, span)
             if crowded:
                 moved = quiet_section(work.flight.acc, phase * span,
                                       phase * span + span) / span
         else:
-            moved, crowded = _contact_section(point, z, phase * span, periods, work,
+            moved, crowded = contact_section(point, z, phase * span, periods, work,
                                               max_events)
         if crowded:
             # An event came near the section: moved to the middle of the orbit's
@@ -717,18 +749,18 @@ def follow_orbit(structure, segment, z0, periods, work, max_events,
                 moved -= 1.0
             start = phase * span
             if moved * span < start:
-                _flow(point, z, start, span, work, flying, max_events)
+                flow(point, z, start, span, work, flying, max_events)
                 start = 0.0
-            _flow(point, z, start, moved * span, work, flying, max_events)
+            flow(point, z, start, moved * span, work, flying, max_events)
             phase = moved
-            ok, _, _ = _fixed_point(point, z, phase * span, periods, work, flying,
+            ok, _, _ = fixed_point(point, z, phase * span, periods, work, flying,
                                     max_events, FIRST_CORRECTION)
-            if not ok or not _derivative(structure, work, segment, accepted[N_STATE], z,
+            if not ok or not parameter_derivative(structure, work, segment, accepted[N_STATE], z,
                                          phase, periods, flying, max_events):
                 return Followed(LOST, accepted[N_STATE], flipped, torus, radius, np.nan,
                                 phase, steps, passes[0] - start_newton,
                                 passes[1] - start_map)
-            if not _tangent(work, n, turned):
+            if not moved_tangent(work, n, tangent, turned):
                 return Followed(LOST, accepted[N_STATE], flipped, torus, radius, np.nan,
                                 phase, steps, passes[0] - start_newton,
                                 passes[1] - start_map)
@@ -756,7 +788,7 @@ def on_orbit(point, z, phase, periods, state, work, flying, max_events):
         mapped[i] = state[i]
     # The state's orbit followed to the section's drive phase.
     shift = section - period * math.floor(section / period)
-    if _flow(point, mapped, 0.0, shift, work, flying, max_events) != RUN_OK:
+    if flow(point, mapped, 0.0, shift, work, flying, max_events) != RUN_OK:
         return False
     current = work.step
     for i in range(N_STATE):
@@ -807,13 +839,13 @@ def follow_branch(structure, segment, z0, periods, work, max_events):
         half = work.point
         for i in range(N_STATE):
             half[i] = state[i]
-        if _flow(point, half, section, section + 0.5 * span, work, flying,
+        if flow(point, half, section, section + 0.5 * span, work, flying,
                  max_events) != RUN_OK:
             break
         if state_distance(state[:n], half[:n], work.scales[:n]) > HALVING_GAP:
             break
         # The state at phase 0 (the end of the orbit's period from the section).
-        if _flow(point, state, section, span, work, flying, max_events) != RUN_OK:
+        if flow(point, state, section, span, work, flying, max_events) != RUN_OK:
             break
         omega = segment.omega0 + reached * (segment.omega1 - segment.omega0)
         a = segment.a0 + reached * (segment.a1 - segment.a0)
@@ -830,3 +862,18 @@ def follow_branch(structure, segment, z0, periods, work, max_events):
     return Followed(followed.outcome, begin + followed.reached * (1.0 - begin),
                     followed.flipped, followed.torus, followed.radius, followed.velocity,
                     followed.section, followed.steps, newton_passes, map_passes), periods
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def polish_orbit(structure, omega, a, z, periods, work, max_events):
+    """Newton's method on ``P^periods(z) - z`` at the drive ``(omega, a)`` [rad s-1,
+    m s-2] from ``z`` (``N_STATE`` at phase 0, in place), held to contract but not to a
+    first correction: a state given near an orbit. True where it converged."""
+    flying = structure[LIFT_OFF_LAW] != 0.0
+    point = drive_at(structure, work, Segment(omega, a, omega, a), 0.0, flying)
+    for _ in range(3):
+        converged, _, _ = fixed_point(point, z, 0.0, periods, work, flying, max_events,
+                                      np.inf)
+        if converged:
+            return True
+    return False
