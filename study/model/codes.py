@@ -48,3 +48,19 @@ EVENT_IMPACT = 6
 IMPACT_STICK = 0  # the base ends the impact at rest tangentially (v = 0; e > 0 rebounds)
 IMPACT_SLIP = 1  # the base ends the impact sliding, either way
 IMPACT_PARADOX = 2  # the sliding effective normal mass is not positive: no solution
+
+# Bifurcations of a periodic orbit's branch (study.model.bifurcations).
+BIFURCATION_FOLD = 1
+BIFURCATION_PERIOD_DOUBLING = 2
+BIFURCATION_TORUS = 3
+BIFURCATION_GRAZING = 4
+BIFURCATION_LIFT_OFF = 5
+BIFURCATION_SLIP_ONSET = 6
+BIFURCATION_BRANCH_POINT = 7
+
+# Why a traced branch ended (study.model.bifurcations).
+BRANCH_REACHED = 1
+BRANCH_ENDED = 2
+BRANCH_BUDGET = 3
+BRANCH_LEFT = 4
+BRANCH_LOST = 5

@@ -1,0 +1,159 @@
+"""The bifurcations of a periodic orbit's branch and the ends of a traced branch,
+declared once: each kind's code, its name, what it means for the walker and its test
+function.
+
+The codes are :mod:`study.model.codes`' (the kernels return them as plain integers);
+the ``flag_values``/``flag_meanings`` of the result variables, the documentation's
+table (:func:`markdown_table`) and the figures' markers follow from :data:`KINDS` and
+:data:`ENDS`. A kind is only ever added, never renumbered.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from study.model import codes
+
+__all__ = ["ENDS", "KINDS", "BifurcationKind", "BranchEnd", "end_named", "kind_named",
+           "kind_of_code", "markdown_table"]
+
+
+@dataclass(frozen=True)
+class BifurcationKind:
+    """A kind of bifurcation on a periodic orbit's branch.
+
+    Attributes
+    ----------
+    name : str
+        Its name in data and in the API (``bifurcation_kind``'s flag meaning).
+    code : int
+        Its code (:mod:`study.model.codes`).
+    meaning : str
+        What happens to the orbit there, and what it means for the walker.
+    test : str
+        How it is found and located.
+    marker : str
+        Its matplotlib marker in the figures.
+    """
+
+    name: str
+    code: int
+    meaning: str
+    test: str
+    marker: str
+
+
+#: The kinds of bifurcation, in code order.
+KINDS = (
+    BifurcationKind(
+        "fold", codes.BIFURCATION_FOLD,
+        "a real Floquet multiplier through +1: the branch turns back (a saddle-node), "
+        "the stable orbit meeting an unstable one; a slow sweep that rides the stable "
+        "one jumps here",
+        "the sign of the branch tangent's drive component, located by regula falsi on "
+        "it", "s"),
+    BifurcationKind(
+        "period_doubling", codes.BIFURCATION_PERIOD_DOUBLING,
+        "a real multiplier through -1: the orbit loses (or gains) its stability to an "
+        "orbit of twice its period, a hop that alternates between two heights",
+        "mu + 1 for the real multiplier nearest -1, located by regula falsi", "D"),
+    BifurcationKind(
+        "torus", codes.BIFURCATION_TORUS,
+        "a complex pair of multipliers through the unit circle (Neimark-Sacker): a "
+        "quasi-periodic motion is born about the orbit",
+        "|mu| - 1 for the complex pair nearest the unit circle, located by regula falsi",
+        "o"),
+    BifurcationKind(
+        "grazing", codes.BIFURCATION_GRAZING,
+        "the orbit's sequence of events changes: a flight touches the table, a stick or "
+        "a slip shrinks to nothing (the period map is only piecewise smooth there: the "
+        "branch may go on with the new sequence, fold or end)",
+        "the sequence of events of a period, located by bisection", "^"),
+    BifurcationKind(
+        "lift_off", codes.BIFURCATION_LIFT_OFF,
+        "without flight the orbit's normal force reaches 0: the base would leave the "
+        "table, where the contact model stops applying; the branch ends",
+        "the end of the steps the branch can be followed by, located to the shortest "
+        "step", "v"),
+    BifurcationKind(
+        "slip_onset", codes.BIFURCATION_SLIP_ONSET,
+        "on the table a stick first slips (or the last slip vanishes): the static "
+        "motion ends at the thresholds a*+- of eq. 5 and the structure starts to walk",
+        "the sequence of events (a slip appears), located by bisection", "P"),
+    BifurcationKind(
+        "branch_point", codes.BIFURCATION_BRANCH_POINT,
+        "a real multiplier through +1 while the branch runs on: another branch crosses "
+        "this one (as an orbit of twice the period meets its own at a period doubling)",
+        "mu - 1 for the real multiplier nearest +1, located by regula falsi", "X"),
+)
+
+
+@dataclass(frozen=True)
+class BranchEnd:
+    """Why a traced branch ended.
+
+    Attributes
+    ----------
+    name : str
+        Its name (the ``branch_end`` attribute).
+    code : int
+        Its code (:mod:`study.model.codes`).
+    meaning : str
+        What it means.
+    """
+
+    name: str
+    code: int
+    meaning: str
+
+
+#: The ends of a traced branch, in code order.
+ENDS = (
+    BranchEnd("reached", codes.BRANCH_REACHED,
+              "the branch reached the drive asked for (`to`)"),
+    BranchEnd("ended", codes.BRANCH_ENDED,
+              "the orbit ceases to exist: no step, however short, follows it on (a "
+              "non-smooth end; without flight a lift-off)"),
+    BranchEnd("budget", codes.BRANCH_BUDGET,
+              "the budget of steps was spent before `to`"),
+    BranchEnd("turned_back", codes.BRANCH_LEFT,
+              "the branch turned back through its folds and came back past its start"),
+    BranchEnd("not_followed", codes.BRANCH_LOST,
+              "the orbit could not be followed from its start (not a fixed point of the "
+              "period map to the solver's precision there)"),
+)
+
+
+def kind_named(name: str) -> BifurcationKind:
+    """The :class:`BifurcationKind` called ``name``; a ValueError lists the names."""
+    for kind in KINDS:
+        if kind.name == name:
+            return kind
+    raise ValueError(f"unknown bifurcation kind {name!r}; allowed: "
+                     f"{', '.join(k.name for k in KINDS)}")
+
+
+def kind_of_code(code: int) -> BifurcationKind:
+    """The :class:`BifurcationKind` of ``code``."""
+    for kind in KINDS:
+        if kind.code == code:
+            return kind
+    raise ValueError(f"unknown bifurcation code {code!r}; allowed: "
+                     f"{', '.join(str(k.code) for k in KINDS)}")
+
+
+def end_named(code: int) -> BranchEnd:
+    """The :class:`BranchEnd` of ``code``."""
+    for end in ENDS:
+        if end.code == code:
+            return end
+    raise ValueError(f"unknown branch end {code!r}; allowed: "
+                     f"{', '.join(str(e.code) for e in ENDS)}")
+
+
+def markdown_table() -> str:
+    """The kinds of bifurcation as a Markdown table (the documentation's)."""
+    lines = ["| kind | code | what happens | found and located by |", "|---|---|---|---|"]
+    for kind in KINDS:
+        lines.append(f"| `{kind.name}` | {kind.code} | {kind.meaning} | {kind.test} |")
+    return "\n".join(lines)
