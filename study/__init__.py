@@ -12,6 +12,7 @@ are imported on first use.
 
 from importlib import import_module as _import_module
 
+from study.analyses.branches import branch, doubled_branch
 from study.analyses.frontier import frontier
 from study.analyses.thresholds import minimum_threshold
 from study.engine.maps import compute_map
@@ -54,7 +55,9 @@ __all__ = [
     "StudyWarning",
     "SuspectInputWarning",
     "__version__",
+    "branch",
     "compute_map",
+    "doubled_branch",
     "force_amplitudes",
     "frontier",
     "lift_off_acceleration",

@@ -1,0 +1,297 @@
+"""Branches of periodic orbits as labelled datasets: a motion continued in one drive
+parameter through its folds, each bifurcation on it located exactly.
+
+:func:`branch` answers "where does this motion exist, where does it lose stability,
+where does a slow sweep jump off it?" with curves instead of grids: the orbit the
+start reaches at ``(f, a)`` is continued by pseudo-arclength continuation on the exact
+period map (:mod:`study.kernels.two_way.bifurcations`), through its folds onto the
+unstable part and on, and every fold, period doubling, torus, grazing, slip onset and
+lift-off on it is located to 1e-10 of the drive (docs/theory/branches.md).
+:func:`doubled_branch` follows the orbit of twice the period born at a period doubling.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from numpy.typing import NDArray
+
+from study.model.bifurcations import ENDS, KINDS, end_named
+from study.model.structure import Structure, check_structure
+from study.solvers.branch import (
+    DEFAULT_MAX_STEP,
+    DEFAULT_MAX_STEPS,
+    Trace,
+    doubled_trace,
+    trace,
+)
+from study.solvers.exact import Drop, SolverSettings
+from study.version import VERSION
+
+__all__ = ["branch", "doubled_branch", "event_signature"]
+
+#: The state's components on the section, with their units.
+STATE_NAMES = ("delta", "delta_rate", "speed", "gap", "gap_rate")
+STATE_UNITS = ("m", "m s-1", "m s-1", "m", "m s-1")
+
+
+def branch(structure: Structure, f: float, a: float, *, along: str, to: float,
+           start: str | Drop | NDArray[np.float64] = "release", coupling: str = "two-way",
+           flight: bool = False, settings: SolverSettings | None = None,
+           periods: int | None = None, max_steps: int = DEFAULT_MAX_STEPS,
+           max_step: float = DEFAULT_MAX_STEP) -> xr.Dataset:
+    """The branch of the periodic motion reached from ``start`` at ``(f, a)``, continued
+    along ``along`` towards ``to``, with its bifurcations located.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure.
+    f : float
+        Drive frequency at the start [Hz], > 0.
+    a : float
+        Drive acceleration at the start [m s-2], >= 0.
+    along : {"f", "a"}
+        The drive parameter the branch is continued in.
+    to : float
+        Where to continue it to [Hz for ``f``, m s-2 for ``a``], not the start's value.
+    start : {"release", "switch-on"}, Drop or array_like, default "release"
+        The motion to continue: the one this start reaches at ``(f, a)`` (as
+        :func:`study.steady_state` finds it; a static point continues as the static
+        motion), or an orbit's state at phase 0, ``(delta, delta', v[, h, h'])`` [m,
+        m s-1, m s-1, m, m s-1], polished by Newton's method (``periods`` its period).
+    coupling : {"two-way"}
+        The exact two-way model's period map is continued.
+    flight : bool, default False
+        The base may fly and land (the 5-state map); without it the branch ends in a
+        lift-off where its orbit would leave the table.
+    settings : SolverSettings, optional
+        The solver's budgets (``max_events``) and, for a named start, its start.
+    periods : int, optional
+        With a state given, the orbit's period in drive periods (default 1).
+    max_steps : int, default 400
+        The budget of steps [1], >= 2.
+    max_step : float, default 0.02
+        The longest step [1], in the space of the state (in its natural sizes at the
+        start) and the drive (the whole way from the start to ``to`` being 1).
+
+    Returns
+    -------
+    xarray.Dataset
+        Along ``step``: ``f`` [Hz], ``a`` [m s-2], ``velocity`` [m s-1], ``stable``,
+        the Floquet multipliers (``multiplier_modulus``, ``multiplier_angle`` [rad] over
+        ``multiplier``), ``largest_multiplier``, ``event_signature`` (the period's
+        events: its sticks, slips, flights and impacts), ``slips_per_period``,
+        ``impacts_per_period``, ``stick_fraction``, ``airborne_fraction``,
+        ``largest_hop`` [m], ``branch_direction`` (+1 where the branch runs towards
+        ``to``, -1 past a fold) and the state on the section. Along ``bifurcation``:
+        ``bifurcation_kind`` (a flag variable, :data:`study.model.bifurcations.KINDS`),
+        ``bifurcation_f``, ``bifurcation_a``, ``bifurcation_velocity``,
+        ``bifurcation_test`` (the test function's value there),
+        ``bifurcation_multiplier_modulus`` and ``_angle``, ``bifurcation_step`` and the
+        state and Jacobian there. Attributes: ``branch_end`` (why the trace stopped:
+        :data:`study.model.bifurcations.ENDS`), ``along``, ``to``, ``start``,
+        ``orbit_period``, the structure's parameters, the passes of the period map.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``along`` or ``coupling`` (naming the allowed values), ``to`` at the
+        start, a start whose motion is not a periodic orbit there (naming its status),
+        a state from which Newton's method reaches no orbit, or budgets out of range.
+    """
+    traced, label = trace(structure, f, a, along=along, to=to, start=start,
+                          coupling=coupling, flight=flight, settings=settings,
+                          periods=periods, max_steps=max_steps, max_step=max_step)
+    return branch_dataset(check_structure(structure), traced, along=along, to=to,
+                          start=label)
+
+
+def doubled_branch(structure: Structure, parent: xr.Dataset, bifurcation: int, *,
+                   to: float | None = None, settings: SolverSettings | None = None,
+                   max_steps: int = DEFAULT_MAX_STEPS,
+                   max_step: float = DEFAULT_MAX_STEP) -> xr.Dataset:
+    """The branch of the orbit of twice the period born at the period doubling
+    ``bifurcation`` (an index along ``parent``'s ``bifurcation`` dimension) of the
+    branch ``parent`` (a :func:`branch` result of ``structure``), continued towards
+    ``to`` [Hz or m s-2; default the parent's ``to``].
+
+    Raises
+    ------
+    ValueError
+        ``bifurcation`` is not a period doubling of ``parent`` (the message lists its
+        period doublings), or ``structure`` is not the parent's.
+    """
+    structure = check_structure(structure)
+    for name, value in structure.as_dict().items():
+        if f"structure_{name}" in parent.attrs and not np.isclose(
+                parent.attrs[f"structure_{name}"], value, rtol=1e-12, atol=0.0):
+            raise ValueError(f"doubled_branch: the structure's {name} = {value!r} is not "
+                             f"the parent branch's ({parent.attrs[f'structure_{name}']!r})")
+    traced = doubled_trace(structure, _trace_of(parent), int(bifurcation),
+                           to=to if to is not None else parent.attrs["to"],
+                           settings=settings, max_steps=max_steps, max_step=max_step)
+    return branch_dataset(structure, traced, along=parent.attrs["along"],
+                          to=to if to is not None else parent.attrs["to"],
+                          start=f"period doubling {int(bifurcation)} of a branch")
+
+
+def _trace_of(dataset: xr.Dataset) -> Trace:
+    """The :class:`Trace` a :func:`branch` result holds, as far as its bifurcations
+    need (a doubled branch starts from one)."""
+    attrs = dataset.attrs
+    return Trace.of_bifurcations(
+        kind=dataset["bifurcation_kind"].values, t=dataset["bifurcation_t"].values,
+        section=dataset["bifurcation_section"].values,
+        state=dataset["bifurcation_state"].values,
+        step=dataset["bifurcation_step"].values,
+        jacobians=dataset["bifurcation_jacobian"].values,
+        omega0=float(attrs["segment_omega0"]), a0=float(attrs["segment_a0"]),
+        omega1=float(attrs["segment_omega1"]), a1=float(attrs["segment_a1"]),
+        periods=int(attrs["orbit_period"]), flight=bool(attrs["flight"]),
+        reference=dataset["state_scale"].values)
+
+
+def event_signature(slips: float, impacts: float, stick: float, airborne: float) -> str:
+    """The events of an orbit's period in words: its stick, its slips, its flight and
+    its impacts per drive period (``"stick"`` for the static orbit)."""
+    parts = []
+    if stick > 0.0:
+        parts.append("stick")
+    if slips > 0.0:
+        parts.append(f"{slips:g} slip" + ("" if slips == 1 else "s"))
+    if airborne > 0.0:
+        parts.append("flight")
+    if impacts > 0.0:
+        parts.append(f"{impacts:g} impact" + ("" if impacts == 1 else "s"))
+    return " + ".join(parts) if parts else "slide"
+
+
+def branch_dataset(structure: Structure, traced: Trace, *, along: str, to: float,
+                   start: str) -> xr.Dataset:
+    """The labelled dataset of a :class:`~study.solvers.branch.Trace`."""
+    n = traced.multipliers.shape[1]
+    f, a = traced.drive(traced.column("t"))
+    multipliers = traced.multipliers
+    modulus = np.abs(multipliers)
+    radius = traced.column("radius")
+    rows = traced.bifurcations
+    b_t = traced.bifurcation_column("t")
+    b_f, b_a = traced.drive(b_t)
+    b_mu = (traced.bifurcation_column("multiplier_real")
+            + 1j * traced.bifurcation_column("multiplier_imag"))
+    signature = np.array([event_signature(*values) for values in zip(
+        traced.column("slips"), traced.column("impacts"), traced.column("stick"),
+        traced.column("airborne"), strict=True)], dtype=object)
+    state = traced.states()
+    b_state = traced.bifurcation_states()
+    flags = dict(flag_values=np.array([k.code for k in KINDS], dtype=np.int8),
+                 flag_meanings=" ".join(k.name for k in KINDS))
+    end = end_named(traced.end)
+    data = {
+        "f": ("step", f, {"units": "Hz", "long_name": "drive frequency"}),
+        "a": ("step", a, {"units": "m s-2", "long_name": "drive acceleration amplitude"}),
+        "velocity": ("step", traced.column("velocity"),
+                     {"units": "m s-1", "long_name": "mean velocity of the orbit"}),
+        "stable": ("step", (radius < 1.0).astype(np.int8),
+                   {"units": "1", "long_name": "whether the orbit attracts its "
+                    "neighbours (every Floquet multiplier inside the unit circle)",
+                    "flag_values": np.array([0, 1], dtype=np.int8),
+                    "flag_meanings": "unstable stable"}),
+        "largest_multiplier": ("step", radius,
+                               {"units": "1", "long_name": "largest modulus of the "
+                                "orbit's Floquet multipliers"}),
+        "multiplier_modulus": (("step", "multiplier"), modulus,
+                               {"units": "1", "long_name": "modulus of each Floquet "
+                                "multiplier of the orbit (the eigenvalues of the exact "
+                                "Jacobian of its period map)"}),
+        "multiplier_angle": (("step", "multiplier"), np.angle(multipliers),
+                             {"units": "rad", "long_name": "argument of each Floquet "
+                              "multiplier (0: real positive, pi: real negative)"}),
+        "event_signature": ("step", signature,
+                            {"long_name": "the events of the orbit's period: its stick, "
+                             "slips, flight and impacts per drive period"}),
+        "slips_per_period": ("step", traced.column("slips"),
+                             {"units": "1", "long_name": "slip events per drive period"}),
+        "impacts_per_period": ("step", traced.column("impacts"),
+                               {"units": "1", "long_name": "impacts per drive period"}),
+        "stick_fraction": ("step", traced.column("stick"),
+                           {"units": "1", "long_name": "fraction of the period the base "
+                            "is stuck"}),
+        "airborne_fraction": ("step", traced.column("airborne"),
+                              {"units": "1", "long_name": "fraction of the period the "
+                               "base spends off the table"}),
+        "largest_hop": ("step", traced.column("hop"),
+                        {"units": "m", "long_name": "largest gap between the base and "
+                         "the table over the orbit"}),
+        "branch_direction": ("step", np.sign(traced.column("tangent_t")).astype(np.int8),
+                             {"units": "1", "long_name": "the way the branch runs: +1 "
+                              "towards `to`, -1 back (past a fold)"}),
+        "section_phase": ("step", traced.column("section"),
+                          {"units": "1", "long_name": "the Poincare section's place in "
+                           "the orbit's period (a fraction of it from phase 0)"}),
+        "section_state": (("step", "state"), state,
+                          {"long_name": "the orbit's state on the section"}),
+        "bifurcation_kind": ("bifurcation",
+                             traced.bifurcation_column("kind").astype(np.int8),
+                             {"units": "1", "long_name": "kind of bifurcation",
+                              **flags}),
+        "bifurcation_f": ("bifurcation", b_f, {"units": "Hz",
+                                               "long_name": "drive frequency there"}),
+        "bifurcation_a": ("bifurcation", b_a, {"units": "m s-2",
+                                               "long_name": "drive acceleration there"}),
+        "bifurcation_t": ("bifurcation", b_t,
+                          {"units": "1", "long_name": "its place on the segment from "
+                           "the start (0) to `to` (1)"}),
+        "bifurcation_velocity": ("bifurcation", traced.bifurcation_column("velocity"),
+                                 {"units": "m s-1", "long_name": "mean velocity of the "
+                                  "orbit there"}),
+        "bifurcation_test": ("bifurcation", traced.bifurcation_column("test"),
+                             {"units": "1", "long_name": "the test function's value "
+                              "there (0 where located by bisection)"}),
+        "bifurcation_multiplier_modulus": ("bifurcation", np.abs(b_mu),
+                                           {"units": "1", "long_name": "modulus of the "
+                                            "multiplier that crosses there"}),
+        "bifurcation_multiplier_angle": ("bifurcation", np.angle(b_mu),
+                                         {"units": "rad", "long_name": "its argument"}),
+        "bifurcation_step": ("bifurcation", traced.bifurcation_column("step").astype(np.int32),
+                             {"units": "1", "long_name": "the step before it"}),
+        "bifurcation_section": ("bifurcation", traced.bifurcation_column("section"),
+                                {"units": "1", "long_name": "the section's place in the "
+                                 "orbit's period there"}),
+        "bifurcation_state": (("bifurcation", "state"), b_state,
+                              {"long_name": "the orbit's state on the section there"}),
+        "bifurcation_jacobian": (("bifurcation", "state", "state_from"),
+                                 traced.jacobians,
+                                 {"units": "1", "long_name": "the Jacobian of the period "
+                                  "map there, in SI units of the state"}),
+        "state_scale": ("state", traced.reference,
+                        {"long_name": "natural size of each state component at the "
+                         "start (the continuation's scaling)"}),
+    }
+    coords = {"step": np.arange(traced.steps.shape[0]),
+              "multiplier": np.arange(n),
+              "bifurcation": np.arange(rows.shape[0]),
+              "state": list(STATE_NAMES[:n]), "state_from": list(STATE_NAMES[:n])}
+    dataset = xr.Dataset({name: xr.Variable(dims, values, attrs)
+                          for name, (dims, values, attrs) in data.items()}, coords=coords)
+    dataset["state"].attrs["units_of_each"] = ", ".join(STATE_UNITS[:n])
+    dataset.attrs.update({
+        "title": "branch of a periodic orbit continued on the exact period map",
+        "branch_end": end.name,
+        "branch_end_meaning": end.meaning,
+        "branch_ends": ", ".join(e.name for e in ENDS),
+        "along": along,
+        "to": float(to),
+        "start": start,
+        "coupling": "two-way",
+        "flight": int(traced.flight),
+        "orbit_period": int(traced.periods),
+        "newton_passes": traced.newton_passes,
+        "map_passes": traced.map_passes,
+        "segment_omega0": traced.omega0, "segment_a0": traced.a0,
+        "segment_omega1": traced.omega1, "segment_a1": traced.a1,
+        "study_version": VERSION,
+        **{f"structure_{name}": value for name, value in structure.as_dict().items()},
+    })
+    return dataset
