@@ -73,8 +73,8 @@ KINDS = (
         "lift_off", codes.BIFURCATION_LIFT_OFF,
         "without flight the orbit's normal force reaches 0: the base would leave the "
         "table, where the contact model stops applying; the branch ends",
-        "the end of the steps the branch can be followed by, located to the shortest "
-        "step", "v"),
+        "the corrector refused by a lift-off past the last step, located by bisection "
+        "between the last orbit in contact and the first refused", "v"),
     BifurcationKind(
         "slip_onset", codes.BIFURCATION_SLIP_ONSET,
         "on the table a stick first slips (or the last slip vanishes): the static "
