@@ -148,10 +148,21 @@ def _index(columns: tuple[tuple[str, str, str], ...], name: str) -> int:
 
 def check_along(along: object) -> str:
     """``along`` if it is one of :data:`BRANCH_AXES`, else a ValueError naming them."""
-    if along not in BRANCH_AXES:
+    if not isinstance(along, str) or along not in BRANCH_AXES:
         raise ValueError(f"branch: 'along' must be one of {list(BRANCH_AXES)}, got "
                          f"{along!r}")
     return str(along)
+
+
+def _drive_value(name: str, value: object, check: object) -> float:
+    """A drive value, one number checked by ``check`` (``as_frequency`` or
+    ``as_acceleration``), its refusal naming the argument ``name``."""
+    if np.ndim(value) != 0:
+        raise ValueError(f"branch: {name!r} must be one number, got {value!r}")
+    try:
+        return float(check(value))
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"branch: {name!r}: {err}") from None
 
 
 def _check_count(name: str, value: object, low: float, high: float) -> float:
@@ -190,7 +201,10 @@ def start_orbit(structure: Structure, f: float, a: float, start: str | Drop | Ar
         state = np.array(orbit.phase_state, dtype=float).reshape(5)
         state[~np.isfinite(state)] = 0.0
         return state, int(orbit.orbit_period), start_label(settings.start)
-    state = np.asarray(start, dtype=float).ravel()
+    try:
+        state = np.asarray(start, dtype=float).ravel()
+    except (TypeError, ValueError):
+        state = np.zeros(0)
     if state.size not in (3, 5) or not np.all(np.isfinite(state)):
         raise ValueError("branch: start must be 'release', 'switch-on', a Drop, or the "
                          "orbit's state at phase 0, (delta, delta', v[, h, h']) [m, m s-1, "
@@ -228,9 +242,9 @@ def trace(structure: Structure, f: float, a: float, *, along: str, to: float,
     flight = check_flight(flight, coupling, structure)
     settings = check_settings(settings, coupling)
     along = check_along(along)
-    f = float(as_frequency(f))
-    a = float(as_acceleration(a))
-    to = float(as_frequency(to) if along == "f" else as_acceleration(to))
+    f = _drive_value("f", f, as_frequency)
+    a = _drive_value("a", a, as_acceleration)
+    to = _drive_value("to", to, as_frequency if along == "f" else as_acceleration)
     here = f if along == "f" else a
     if to == here:
         raise ValueError(f"branch: 'to' must differ from the start's {along} = {here:g}")

@@ -141,6 +141,7 @@ CALLS = {
                      settings=None, coupling="one-way"),
     "minimum_threshold": call(study.minimum_threshold, S, (12.0, 16.0), tolerance=1e-6,
                               coupling="one-way"),
+    "branch": call(study.branch, S, 14.0, 8.0, along="a", to=9.0),
     "compute_map": call(study.compute_map, S, [13.0, 14.0], [8.0], workers=1,
                         observables=("velocity",), coupling="one-way", settings=None),
     "open_result": call(study.open_result, "/nonexistent/result.nc"),
@@ -271,6 +272,8 @@ NOT_FUZZED = {
     "design": "takes a DesignSpec, made only by the design spec parser (fuzzed above)",
     "design_dataset": "takes a DesignSpec and a DesignResult",
     "evaluate": "takes a DesignSpec",
+    "doubled_branch": "takes a branch's dataset (branch, fuzzed above) and the index of "
+                      "one of its period doublings",
     "max_steady_periods": "takes no argument",
     "integrator_budget_maxima": "takes no argument",
     **{name: "a validator, run by every call above" for name in (
