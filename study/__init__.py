@@ -12,7 +12,7 @@ are imported on first use.
 
 from importlib import import_module as _import_module
 
-from study.analyses.branches import branch, doubled_branch
+from study.analyses.branches import bifurcation_curve, branch, doubled_branch
 from study.analyses.frontier import frontier
 from study.analyses.thresholds import minimum_threshold
 from study.engine.maps import compute_map
@@ -55,6 +55,7 @@ __all__ = [
     "StudyWarning",
     "SuspectInputWarning",
     "__version__",
+    "bifurcation_curve",
     "branch",
     "compute_map",
     "doubled_branch",

@@ -16,7 +16,23 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
-from study.model.bifurcations import ENDS, KINDS, end_named
+from study.model import as_acceleration, as_frequency
+from study.model.bifurcations import (
+    CURVE_ENDS,
+    ENDS,
+    KINDS,
+    curve_end_named,
+    end_named,
+    kind_of_code,
+)
+from study.model.codes import (
+    BRANCH_ENDED,
+    BRANCH_REACHED,
+    CURVE_ENDED,
+    CURVE_LOST,
+    CURVE_REACHED,
+    CURVE_VANISHED,
+)
 from study.model.structure import Structure, check_structure
 from study.solvers.branch import (
     DEFAULT_MAX_STEP,
@@ -24,11 +40,12 @@ from study.solvers.branch import (
     Trace,
     doubled_trace,
     trace,
+    trace_from_section,
 )
 from study.solvers.exact import Drop, SolverSettings
 from study.version import VERSION
 
-__all__ = ["branch", "doubled_branch", "event_signature"]
+__all__ = ["bifurcation_curve", "branch", "doubled_branch", "event_signature"]
 
 #: The state's components on the section, with their units.
 STATE_NAMES = ("delta", "delta_rate", "speed", "gap", "gap_rate")
@@ -122,18 +139,281 @@ def doubled_branch(structure: Structure, parent: xr.Dataset, bifurcation: int, *
         ``bifurcation`` is not a period doubling of ``parent`` (the message lists its
         period doublings), or ``structure`` is not the parent's.
     """
-    structure = check_structure(structure)
-    for name, value in structure.as_dict().items():
-        if f"structure_{name}" in parent.attrs and not np.isclose(
-                parent.attrs[f"structure_{name}"], value, rtol=1e-12, atol=0.0):
-            raise ValueError(f"doubled_branch: the structure's {name} = {value!r} is not "
-                             f"the parent branch's ({parent.attrs[f'structure_{name}']!r})")
+    structure = _parents_structure(structure, parent, "doubled_branch")
     traced = doubled_trace(structure, _trace_of(parent), int(bifurcation),
                            to=to if to is not None else parent.attrs["to"],
                            settings=settings, max_steps=max_steps, max_step=max_step)
     return branch_dataset(structure, traced, along=parent.attrs["along"],
                           to=to if to is not None else parent.attrs["to"],
                           start=f"period doubling {int(bifurcation)} of a branch")
+
+
+def _parents_structure(structure: Structure, parent: xr.Dataset, caller: str) -> Structure:
+    """``structure``, checked, if it is the one ``parent`` was traced on."""
+    structure = check_structure(structure)
+    for name, value in structure.as_dict().items():
+        if f"structure_{name}" in parent.attrs and not np.isclose(
+                parent.attrs[f"structure_{name}"], value, rtol=1e-12, atol=0.0):
+            raise ValueError(f"{caller}: the structure's {name} = {value!r} is not "
+                             f"the parent branch's ({parent.attrs[f'structure_{name}']!r})")
+    return structure
+
+
+#: A curve's points by default, and the window its bifurcation is sought in at the
+#: next point (a fraction of the parameter's value along the branch).
+DEFAULT_CURVE_POINTS = 11
+DEFAULT_CURVE_WINDOW = 0.02
+
+
+def bifurcation_curve(structure: Structure, parent: xr.Dataset, bifurcation: int, *,
+                      to: float, num: int = DEFAULT_CURVE_POINTS,
+                      settings: SolverSettings | None = None,
+                      window: float = DEFAULT_CURVE_WINDOW,
+                      end_tolerance: float = 1e-6,
+                      max_step: float = DEFAULT_MAX_STEP) -> xr.Dataset:
+    """The curve of a located bifurcation over the drive plane: the bifurcation
+    ``bifurcation`` (an index along ``parent``'s ``bifurcation`` dimension) of the
+    branch ``parent`` (a :func:`branch` result of ``structure``, continued along one
+    drive parameter), followed in the other one to ``to``.
+
+    At each of ``num`` values of the other parameter, evenly spaced from the
+    bifurcation's to ``to``, the orbit of the last point found (a point of the branch
+    before its bifurcation) is corrected at the new drive and continued along the first
+    parameter through a window past the last location, and the same kind of bifurcation
+    is located on it as :func:`branch` locates it (to 1e-10 of the drive). Each point of
+    the curve is so exact; the curve between points is not interpolated. Where the
+    bifurcation is no longer met (a fold's cusp, where it meets the branch's other fold;
+    a curve cut by another bifurcation), the end is bracketed by bisection in the other
+    parameter to ``end_tolerance``.
+
+    Parameters
+    ----------
+    structure : Structure
+        The structure ``parent`` was traced on.
+    parent : xarray.Dataset
+        A :func:`branch` result.
+    bifurcation : int
+        The index of the bifurcation along ``parent``'s ``bifurcation`` dimension.
+    to : float
+        Where to follow it to in the other drive parameter [m s-2 for a branch along
+        ``f``, Hz for one along ``a``].
+    num : int, default 11
+        Points of the curve [1], >= 2, the bifurcation's own the first.
+    settings : SolverSettings, optional
+        The solver's budgets.
+    window : float, default 0.02
+        How far past the last location the bifurcation is sought at the next point, and
+        how far before it the next point's branch starts [1, a fraction of the first
+        parameter's value there], in (0, 0.5].
+    end_tolerance : float, default 1e-6
+        The relative width [1] to which a curve's end is bracketed in the other
+        parameter, in [1e-12, 0.1].
+    max_step : float, default 0.02
+        The longest step of each branch [1], as in :func:`branch`.
+
+    Returns
+    -------
+    xarray.Dataset
+        Along ``point``: ``f`` [Hz] and ``a`` [m s-2] of the bifurcation,
+        ``velocity`` [m s-1] of the orbit there, ``multiplier_modulus`` and
+        ``multiplier_angle`` [rad] of the multiplier that crosses, ``test`` (the test
+        function's value). Attributes: ``curve_kind``, ``curve_end`` (why it stopped:
+        :data:`study.model.bifurcations.CURVE_ENDS`) with its meaning, and where a curve
+        ended early ``curve_end_low`` and ``curve_end_high``, the values of the other
+        parameter between which the bifurcation stops being met.
+
+    Raises
+    ------
+    ValueError
+        ``bifurcation`` not an index of ``parent``'s bifurcations, ``to`` at the
+        bifurcation's value or out of range, ``num``, ``window`` or ``end_tolerance``
+        out of range, or ``structure`` not the parent's.
+    """
+    structure = _parents_structure(structure, parent, "bifurcation_curve")
+    along = str(parent.attrs["along"])
+    other = "a" if along == "f" else "f"
+    count = parent.sizes["bifurcation"]
+    if isinstance(bifurcation, bool) or not isinstance(bifurcation, int | np.integer) or (
+            not 0 <= int(bifurcation) < count):
+        raise ValueError(f"bifurcation_curve: 'bifurcation' must be an index of the "
+                         f"branch's {count} bifurcations, got {bifurcation!r}")
+    index = int(bifurcation)
+    kind = int(parent["bifurcation_kind"].values[index])
+    x_found = float(parent[f"bifurcation_{along}"].values[index])
+    v_start = float(parent[f"bifurcation_{other}"].values[index])
+    check = as_acceleration if other == "a" else as_frequency
+    if np.ndim(to) != 0:
+        raise ValueError(f"bifurcation_curve: 'to' must be one number, got {to!r}")
+    try:
+        to = float(check(to))
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"bifurcation_curve: 'to': {err}") from None
+    if to == v_start:
+        raise ValueError(f"bifurcation_curve: 'to' must differ from the bifurcation's "
+                         f"{other} = {v_start:g}")
+    num = int(_check_number("num", num, 2, 10_000, integer=True))
+    window = _check_number("window", window, 1e-9, 0.5)
+    end_tolerance = _check_number("end_tolerance", end_tolerance, 1e-12, 0.1)
+    step = int(parent["bifurcation_step"].values[index])
+    way = np.sign(x_found - float(parent[along].values[step])) or float(
+        parent["branch_direction"].values[step])
+    periods = int(parent.attrs["orbit_period"])
+    flight = bool(parent.attrs["flight"])
+
+    def anchor_before(x_steps, states, sections, before, x_here, value):
+        """The point of a branch half a window before its bifurcation at ``x_here``
+        (among its steps up to ``before``), where the next point's search starts."""
+        far = np.flatnonzero(way * (x_here - x_steps[:before + 1])
+                             >= 0.5 * window * abs(x_here))
+        k = int(far[-1]) if far.size else 0
+        return float(x_steps[k]), np.asarray(states[k]), float(sections[k]), value
+
+    def locate(anchor, value, reach):
+        """The bifurcation on the branch through ``anchor`` at the other parameter's
+        ``value``, sought up to ``reach`` windows past ``x_last``: ``(code, row,
+        next_anchor)``."""
+        x_start, state, section, v_from = anchor
+        # The anchor's orbit first continued in the other parameter to ``value`` (its
+        # own branch, so that the state arrives exact), then along the first.
+        f, a = (x_start, v_from) if along == "f" else (v_from, x_start)
+        moved_over = trace_from_section(
+            structure, f, a, along=other, to=value, state=state, section=section,
+            periods=periods, flight=flight, settings=settings, max_step=max_step)
+        if moved_over.end != BRANCH_REACHED or np.any(
+                moved_over.bifurcation_column("kind").astype(int) == kind):
+            # The anchor's orbit does not reach the new drive, or the curve passed the
+            # anchor on the way: the curve moves faster than the sampling.
+            return CURVE_LOST, None, None
+        state = moved_over.states()[-1]
+        section = float(moved_over.column("section")[-1])
+        f, a = (x_start, value) if along == "f" else (value, x_start)
+        behind = x_last - way * window * abs(x_last)
+        if way * (behind - x_start) < 0.0:
+            # Back to a whole window before the last location first, where the orbit
+            # is farther from the bifurcation than the curve moves in a step.
+            back = trace_from_section(
+                structure, f, a, along=along, to=behind, state=state, section=section,
+                periods=periods, flight=flight, settings=settings, max_step=max_step)
+            if back.end == BRANCH_REACHED and not np.any(
+                    back.bifurcation_column("kind").astype(int) == kind):
+                state = back.states()[-1]
+                section = float(back.column("section")[-1])
+                f, a = (behind, value) if along == "f" else (value, behind)
+        traced = trace_from_section(
+            structure, f, a, along=along, to=x_last + way * reach * window * abs(x_last),
+            state=state, section=section, periods=periods, flight=flight,
+            settings=settings, max_step=max_step)
+        kinds = traced.bifurcation_column("kind").astype(int)
+        hits = np.flatnonzero(kinds == kind)
+        if hits.size == 0:
+            return (CURVE_ENDED if traced.end == BRANCH_ENDED else CURVE_VANISHED,
+                    None, None)
+        hit = int(hits[0])
+        b_f, b_a = traced.drive(traced.bifurcation_column("t")[hit])
+        mu = (traced.bifurcation_column("multiplier_real")[hit]
+              + 1j * traced.bifurcation_column("multiplier_imag")[hit])
+        row = (float(b_f), float(b_a), float(traced.bifurcation_column("velocity")[hit]),
+               mu, float(traced.bifurcation_column("test")[hit]))
+        x_steps = np.asarray(traced.drive(traced.column("t"))[0 if along == "f" else 1])
+        return CURVE_REACHED, row, anchor_before(
+            x_steps, traced.states(), traced.column("section"),
+            int(traced.bifurcation_column("step")[hit]), row[0] if along == "f" else row[1],
+            value)
+
+    mu0 = parent["bifurcation_multiplier_modulus"].values[index] * np.exp(
+        1j * parent["bifurcation_multiplier_angle"].values[index])
+    rows = [(float(parent["bifurcation_f"].values[index]),
+             float(parent["bifurcation_a"].values[index]),
+             float(parent["bifurcation_velocity"].values[index]), mu0,
+             float(parent["bifurcation_test"].values[index]))]
+    x_last = x_found
+    anchor = anchor_before(parent[along].values, parent["section_state"].values,
+                           parent["section_phase"].values, step, x_found, v_start)
+    samples = np.linspace(v_start, to, num)[1:]
+    spacing = samples[0] - v_start
+    current, h, i = v_start, spacing, 0
+    end, low, high = CURVE_REACHED, np.nan, np.nan
+    while i < samples.size:
+        # Towards the next sample, in steps halved where the curve is lost or ends and
+        # grown back after each point found: an end is bracketed where they cannot be
+        # halved further.
+        target = samples[i]
+        value = target if abs(target - current) <= abs(h) * (1 + 1e-12) else current + h
+        code, row, moved = locate(anchor, value, 1.0)
+        if code == CURVE_VANISHED:
+            code, row, moved = locate(anchor, value, 4.0)  # moved farther?
+        if code == CURVE_REACHED:
+            rows.append(row)
+            anchor, x_last, current = moved, (row[0] if along == "f" else row[1]), value
+            i += value == target
+            h = spacing if abs(2.0 * h) >= abs(spacing) else 2.0 * h
+            continue
+        if abs(value - current) <= end_tolerance * max(abs(current), abs(value)):
+            end, low, high = code, float(current), float(value)
+            break
+        h = 0.5 * (value - current)
+    return _curve_dataset(structure, parent, kind, rows, along, end, low, high)
+
+
+def _check_number(name: str, value: object, low: float, high: float,
+                  integer: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer
+                                                 | np.floating) or (
+            integer and not float(value).is_integer()):
+        what = "an integer" if integer else "a number"
+        raise ValueError(f"bifurcation_curve: {name!r} must be {what} in [{low:g}, "
+                         f"{high:g}], got {value!r}")
+    if not low <= float(value) <= high:
+        raise ValueError(f"bifurcation_curve: {name!r} must be in [{low:g}, {high:g}], "
+                         f"got {value!r}")
+    return float(value)
+
+
+def _curve_dataset(structure: Structure, parent: xr.Dataset, kind: int,
+                   rows: list[tuple[float, float, float, complex, float]], along: str,
+                   end: int, low: float, high: float) -> xr.Dataset:
+    """The labelled dataset of a bifurcation's curve."""
+    # In the order found: the samples, then those found while bracketing an end, all
+    # running from the bifurcation towards `to`.
+    f, a, velocity, mu, test = (np.array(column) for column in zip(*rows, strict=True))
+    named = kind_of_code(kind)
+    finish = curve_end_named(end)
+    data = {
+        "f": ("point", f, {"units": "Hz", "long_name": "drive frequency of the "
+                           f"{named.name}"}),
+        "a": ("point", a, {"units": "m s-2", "long_name": "drive acceleration of the "
+                           f"{named.name}"}),
+        "velocity": ("point", velocity, {"units": "m s-1", "long_name": "mean velocity "
+                                         "of the orbit there"}),
+        "multiplier_modulus": ("point", np.abs(mu), {"units": "1", "long_name":
+                                                     "modulus of the multiplier that "
+                                                     "crosses there"}),
+        "multiplier_angle": ("point", np.angle(mu), {"units": "rad",
+                                                     "long_name": "its argument"}),
+        "test": ("point", test, {"units": "1", "long_name": "the test function's value "
+                                 "there (0 where located by bisection)"}),
+    }
+    dataset = xr.Dataset({name: xr.Variable(dims, values, attrs)
+                          for name, (dims, values, attrs) in data.items()},
+                         coords={"point": np.arange(f.size)})
+    dataset.attrs.update({
+        "title": f"curve of a {named.name} over the drive plane",
+        "curve_kind": named.name,
+        "curve_kind_meaning": named.meaning,
+        "curve_end": finish.name,
+        "curve_end_meaning": finish.meaning,
+        "curve_ends": ", ".join(e.name for e in CURVE_ENDS),
+        "along": along,
+        "continued_in": "a" if along == "f" else "f",
+        "curve_end_low": low,
+        "curve_end_high": high,
+        "coupling": "two-way",
+        "flight": int(parent.attrs["flight"]),
+        "orbit_period": int(parent.attrs["orbit_period"]),
+        "study_version": VERSION,
+        **{f"structure_{name}": value for name, value in structure.as_dict().items()},
+    })
+    return dataset
 
 
 def _trace_of(dataset: xr.Dataset) -> Trace:

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 from study.model import codes
 
-__all__ = ["ENDS", "KINDS", "BifurcationKind", "BranchEnd", "end_named", "kind_named",
-           "kind_of_code", "markdown_table"]
+__all__ = ["CURVE_ENDS", "ENDS", "KINDS", "BifurcationKind", "BranchEnd", "curve_end_named",
+           "end_named", "kind_named", "kind_of_code", "markdown_table"]
 
 
 @dataclass(frozen=True)
@@ -122,6 +122,32 @@ ENDS = (
               "the orbit could not be followed from its start (not a fixed point of the "
               "period map to the solver's precision there)"),
 )
+
+
+#: The ends of a bifurcation's curve over the drive plane, in code order.
+CURVE_ENDS = (
+    BranchEnd("reached", codes.CURVE_REACHED,
+              "the curve reached the drive asked for (`to`)"),
+    BranchEnd("vanished", codes.CURVE_VANISHED,
+              "the branch runs on past where the bifurcation was without meeting it: "
+              "for a fold, a cusp, where it meets the branch's other fold and the "
+              "coexistence of two orbits is born or dies"),
+    BranchEnd("ended", codes.CURVE_ENDED,
+              "the branch's orbit ceases to exist before the bifurcation (another "
+              "bifurcation, a grazing or a lift-off, cuts the curve)"),
+    BranchEnd("lost", codes.CURVE_LOST,
+              "the last point's orbit could not be corrected at the next drive: the "
+              "curve moves faster than its sampling (more points follow it further)"),
+)
+
+
+def curve_end_named(code: int) -> BranchEnd:
+    """The curve end (:data:`CURVE_ENDS`) of ``code``."""
+    for end in CURVE_ENDS:
+        if end.code == code:
+            return end
+    raise ValueError(f"unknown curve end {code!r}; allowed: "
+                     f"{', '.join(str(e.code) for e in CURVE_ENDS)}")
 
 
 def kind_named(name: str) -> BifurcationKind:

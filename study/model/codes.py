@@ -64,3 +64,9 @@ BRANCH_ENDED = 2
 BRANCH_BUDGET = 3
 BRANCH_LEFT = 4
 BRANCH_LOST = 5
+
+# Why a bifurcation's curve over the drive plane ended (study.model.bifurcations).
+CURVE_REACHED = 1
+CURVE_VANISHED = 2
+CURVE_ENDED = 3
+CURVE_LOST = 4

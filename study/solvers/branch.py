@@ -259,6 +259,34 @@ def trace(structure: Structure, f: float, a: float, *, along: str, to: float,
                 -1.0, flight, settings, count, longest), label
 
 
+def trace_from_section(structure: Structure, f: float, a: float, *, along: str,
+                       to: float, state: ArrayLike, section: float, periods: int,
+                       flight: bool, settings: SolverSettings | None = None,
+                       max_steps: int = DEFAULT_MAX_STEPS,
+                       max_step: float = DEFAULT_MAX_STEP) -> Trace:
+    """The branch through the orbit near ``state`` on the section at ``section`` (a
+    fraction of the period of ``periods`` drive periods from phase 0) at ``(f, a)``
+    [Hz, m s-2], traced along ``along`` towards ``to``: a neighbour's orbit (the same
+    section, a nearby drive) corrected by Newton's method there, then continued. The
+    trace's ``end`` is ``BRANCH_LOST`` where the correction does not converge."""
+    structure = check_structure(structure)
+    settings = check_settings(settings, "two-way")
+    along = check_along(along)
+    count = int(_check_count("max_steps", max_steps, 2, 1e6))
+    longest = _check_count("max_step", max_step, 1e-6, 1.0)
+    f = _drive_value("f", f, as_frequency)
+    a = _drive_value("a", a, as_acceleration)
+    to = _drive_value("to", to, as_frequency if along == "f" else as_acceleration)
+    full = np.zeros(5)
+    given = np.asarray(state, dtype=float).ravel()
+    full[:given.size] = given
+    omega0 = 2.0 * np.pi * f
+    segment = branch_kernel.Segment(omega0, a, 2.0 * np.pi * to if along == "f" else omega0,
+                                    a if along == "f" else to)
+    return _run(structure, segment, full, int(periods), np.zeros(trace_kernel.N_EXTENDED),
+                float(section), bool(flight), settings, count, longest)
+
+
 def _run(structure: Structure, segment: object, state: NDArray[np.float64], periods: int,
          start_tangent: NDArray[np.float64], section: float, flight: bool,
          settings: SolverSettings, max_steps: int, max_step: float) -> Trace:

@@ -272,6 +272,8 @@ NOT_FUZZED = {
     "design": "takes a DesignSpec, made only by the design spec parser (fuzzed above)",
     "design_dataset": "takes a DesignSpec and a DesignResult",
     "evaluate": "takes a DesignSpec",
+    "bifurcation_curve": "takes a branch's dataset (branch, fuzzed above) and the index "
+                         "of one of its bifurcations",
     "doubled_branch": "takes a branch's dataset (branch, fuzzed above) and the index of "
                       "one of its period doublings",
     "max_steady_periods": "takes no argument",

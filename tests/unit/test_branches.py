@@ -11,6 +11,9 @@ closed forms and second methods.
   without flight at the lift-off acceleration of the base at rest.
 - A fold of a hop near M = 1 against the slow sweep on a fine grid, and the unstable
   orbit past it against the integrator's period map.
+- Curves over the drive plane (study.bifurcation_curve): the bouncing block's fold and
+  period doubling at constant Gamma whatever f, the slip onset on a*(f) of eq. 5, and
+  the fold curve of the hop at M = 0.99 against slow sweeps on both sides of its end.
 """
 
 from __future__ import annotations
@@ -156,7 +159,6 @@ def test_without_flight_the_static_motion_ends_at_lift_off():
 M099 = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
 
 
-@pytest.mark.slow  # a slow sweep on a 0.002 Hz grid: about 2 minutes
 def test_a_fold_of_a_hop_brackets_the_slow_sweeps_jump_and_its_unstable_orbit_is_real():
     # The forward hop as a slow sweep up brings the structure to 15.9 Hz (the release
     # there reaches the backward hop).
@@ -228,3 +230,72 @@ def test_bad_branch_requests_are_refused_naming_the_key():
         study.branch(paper, 13.0, 5.0, along="a", to=5.0)
     with pytest.raises(ValueError, match="lift_off, not a periodic orbit"):
         study.branch(paper, 14.3, 12.0, along="a", to=11.0)
+
+
+@pytest.mark.parametrize("e", [0.5])
+def test_the_bouncing_blocks_fold_and_doubling_curves_keep_gamma_whatever_f(e):
+    f = 10.0
+    a = 0.5 * (_ball_fold(e) + _ball_doubling(e)) * G
+    state = _ball_orbit(e, f, a)
+    down = study.branch(_ball(e), f, a, along="a", to=0.8 * _ball_fold(e) * G,
+                        start=state, flight=True)
+    fold = int(np.flatnonzero(down.bifurcation_kind.values == FOLD)[0])
+    curve = study.bifurcation_curve(_ball(e), down, fold, to=13.0, num=7)
+    assert curve.attrs["curve_end"] == "reached" and curve.attrs["curve_kind"] == "fold"
+    assert_allclose(curve.f.values[[0, -1]], [f, 13.0], rtol=1e-12, atol=0)
+    assert curve.sizes["point"] >= 7
+    assert_allclose(curve.a.values / G, _ball_fold(e), rtol=1e-9, atol=0)
+    assert_allclose(curve.multiplier_modulus.values, 1.0, rtol=0, atol=1e-8)
+    up = study.branch(_ball(e), f, a, along="a", to=1.1 * _ball_doubling(e) * G,
+                      start=state, flight=True)
+    doubling = int(np.flatnonzero(up.bifurcation_kind.values == DOUBLING)[0])
+    curve = study.bifurcation_curve(_ball(e), up, doubling, to=8.0, num=5)
+    assert curve.attrs["curve_end"] == "reached"
+    assert_allclose(curve.a.values / G, _ball_doubling(e), rtol=1e-9, atol=0)
+    assert_allclose(np.cos(curve.multiplier_angle.values), -1.0, rtol=0, atol=1e-10)
+
+
+def test_the_slip_onset_curve_is_eq_5s_threshold_over_f():
+    paper = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
+    static = study.branch(paper, 13.0, 2.0, along="a", to=8.0)
+    onset = int(np.flatnonzero(static.bifurcation_kind.values == SLIP_ONSET)[0])
+    curve = study.bifurcation_curve(paper, static, onset, to=15.0, num=5)
+    assert curve.attrs["curve_end"] == "reached"
+    closed = np.array([min(study.thresholds(paper, x)) for x in curve.f.values])
+    assert_allclose(curve.a.values, closed, rtol=1e-9, atol=0)
+    # Bad requests name the argument.
+    with pytest.raises(ValueError, match="'bifurcation' must be an index"):
+        study.bifurcation_curve(paper, static, 7, to=15.0)
+    with pytest.raises(ValueError, match="'to' must differ"):
+        study.bifurcation_curve(paper, static, onset, to=13.0)
+    with pytest.raises(ValueError, match="'num' must be"):
+        study.bifurcation_curve(paper, static, onset, to=15.0, num=1)
+    with pytest.raises(ValueError, match="structure's M"):
+        study.bifurcation_curve(study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.5,
+                                                cs=0.25), static, onset, to=15.0)
+
+
+def test_the_fold_curve_of_the_hop_ends_where_slow_sweeps_stop_jumping():
+    lead = slow_sweep(M099, [14.8, 15.4, 15.9], [10.0], along="f", direction="up",
+                      flight=True)
+    hop = study.branch(M099, 15.9, 10.0, along="f", to=16.2, flight=True,
+                       start=lead.state.phase_state[-1, 0],
+                       periods=int(lead.state.orbit_period[-1, 0]))
+    fold = int(np.flatnonzero(hop.bifurcation_kind.values == FOLD)[0])
+    curve = study.bifurcation_curve(M099, hop, fold, to=7.0, num=13)
+    # Towards small a the fold moves up in f until it vanishes: a cusp, bracketed.
+    assert curve.attrs["curve_end"] == "vanished"
+    low, high = curve.attrs["curve_end_low"], curve.attrs["curve_end_high"]
+    assert 7.85 < high < low < 8.0 and low - high <= 1e-6 * low
+    assert_allclose(curve.multiplier_modulus.values, 1.0, rtol=0, atol=1e-7)
+    at_8 = float(curve.f.values[np.flatnonzero(curve.a.values == 8.0)[0]])
+    # Slow sweeps up on a 0.01 Hz grid: at 8 m s-2 the forward hop jumps at the first
+    # point past the fold; below the cusp (7.85) it never jumps.
+    f = np.round(np.concatenate([np.arange(14.8, 20.6, 0.4),
+                                 np.arange(20.6, 21.6, 0.01)]), 6)
+    swept = slow_sweep(M099, f, [7.85, 8.0], along="f", direction="up", flight=True)
+    jumps = np.flatnonzero(swept.jumped[:, 1])
+    assert jumps.size == 1 and f[jumps[0] - 1] < at_8 < f[jumps[0]]
+    assert swept.state.velocity[jumps[0] - 1, 1] > 0.0 > swept.state.velocity[jumps[0], 1]
+    assert not swept.jumped[:, 0].any()
+    assert np.all(swept.state.velocity[:, 0] > 0.0)
