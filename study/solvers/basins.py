@@ -47,11 +47,13 @@ FACTOR_RANGE = (0.0, 2.0)
 NO_ATTRACTOR = -1
 #: The coarse slow sweeps whose end states seed each point (:func:`sweep_seeds`): the
 #: swept axis and where the sweep begins, as a multiple of the point's value of that
-#: axis [1]: down along ``f`` from 1.5 times the point's frequency, up from half of it.
-#: (Sweeps down along ``a`` from twice the point's acceleration found nothing more on
-#: the M = 0.9 line of docs/theory/basins.md and cost 70x as much: strong drives
-#: are irregular motions, averaged to their budget.)
-SEED_PATHS = (("f", 1.5), ("f", 0.5))
+#: axis [1]: down along ``f`` from 1.5 times the point's frequency. Measured on the
+#: M = 0.9 line and the basins-flight grid (docs/theory/basins.md): a sweep up along
+#: ``f`` from 0.5 or 0.75 f found no motion more (the drawn starts at rest reach what it
+#: carries) and cost 1.5-2.7x the 24 starts; down along ``a`` from 2 a found nothing
+#: more and cost 70x the sweep down along ``f`` (strong drives are irregular motions,
+#: averaged to their budget).
+SEED_PATHS = (("f", 1.5),)
 #: Steps of each seeding sweep from its first drive to the point's [1].
 SEED_STEPS = 8
 
@@ -110,6 +112,28 @@ def basin_starts(starts: int = DEFAULT_STARTS, *, seed: int = 0, flight: bool = 
     return BasinStarts(phase=np.concatenate([[first[0]], phase]),
                        factor=np.concatenate([[first[1]], factor]),
                        height=np.concatenate([[first[2]], height]))
+
+
+def sampling_reach(flight: bool, sweep_steps: int = SEED_STEPS) -> str:
+    """What the starts of :func:`basins` reach, in words (a result file's
+    ``study_basins_reach``): the ranges of the drawn starts and the seeded states, and
+    what a fraction's interval is an interval of."""
+    low, high = FACTOR_RANGE
+    drawn = (f"drawn starts: the base at rest on the table at a drive phase drawn "
+             f"uniformly from [0, 1) periods, the mode at rest on {low:g} to {high:g} times "
+             "its steady stick response")
+    if flight:
+        drawn += (f"; every third one dropped at rest from {1e3 * DROP_HEIGHT_RANGE[0]:g} to "
+                  f"{1e3 * DROP_HEIGHT_RANGE[1]:g} mm (log-uniform)")
+    if sweep_steps > 0:
+        seeded = (f"seeded: the state a slow sweep down along f, from {SEED_PATHS[0][1]:g} f "
+                  f"(the release there) in {sweep_steps} steps, settles on at the point, "
+                  "counted among the attractors, not in the fractions")
+    else:
+        seeded = "no seeded state"
+    return (f"{drawn}; {seeded}. A motion none of these reaches is not found; a fraction "
+            "and its 95 % Wilson interval are over the drawn starts, not over the state "
+            "space")
 
 
 def wilson_interval(successes: ArrayLike, trials: ArrayLike) -> tuple[NDArray[np.float64],
