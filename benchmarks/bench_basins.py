@@ -5,8 +5,10 @@ run), per point of a map: the two-way ``steady_state`` from the release (one sta
 unit) and ``basins`` with 24 starts, on the M = 0.99 flight map and on the paper's
 two-way map without flight (f 5..30 Hz x a 0..12 m s-2); then each status's points (by
 the single start's status) as one call of each, so that the ratio is seen where the
-time goes. Writes results/bench-basins.md and the documentation's table
-docs/speed/basins.md.
+time goes; and ``basins`` with the seeded state of its slow sweep down along f
+(``seeds="sweeps"``, the ``[basins]`` default of a study since issue 47 item 2), with the
+points where it finds more attractors than the drawn starts. Writes
+results/bench-basins.md and the documentation's table docs/speed/basins.md.
 
 Goal of the issue: ``basins`` with 24 starts within 6x the single-start map per point.
 """
@@ -63,24 +65,30 @@ def measure(structure: study.Structure, flight: bool, size: int,
         return lambda: steady_state(structure, f[mask], a[mask], coupling="two-way",
                                     flight=flight, parallel=False)
 
-    def many(mask):
-        return lambda: basins(structure, f[mask], a[mask], flight=flight, parallel=False)
+    def many(mask, seeds=None):
+        return lambda: basins(structure, f[mask], a[mask], flight=flight, parallel=False,
+                              seeds=seeds)
 
     everywhere = np.ones(f.size, dtype=bool)
     single(everywhere)()  # compile or load the numba cache
     many(everywhere)()
+    many(np.arange(f.size) == 0, "sweeps")()  # the seeding kernels too
     status = np.asarray(steady_state(structure, f, a, coupling="two-way",
                                      flight=flight).status)
     found = basins(structure, f, a, flight=flight)
+    seeded = basins(structure, f, a, flight=flight, seeds="sweeps")
     rows = []
     whole = np.nan
     groups = [(study.Status(code).name, status == code) for code in np.unique(status)]
     for name, mask in [*groups, ("whole map", everywhere)]:
         one = _best(single(mask), repeats) / mask.sum()
         all_starts = _best(many(mask), repeats) / mask.sum()
+        with_seed = _best(many(mask, "sweeps"), repeats) / mask.sum()
         multistable = int(np.sum(found.count[mask] > 1))
+        more = int(np.sum(seeded.count[mask] > found.count[mask]))
         rows.append(f"| {name} | {mask.sum()} | {multistable} | {one * 1e6:.1f} | "
-                    f"{all_starts * 1e6:.1f} | {all_starts / one:.1f}x |")
+                    f"{all_starts * 1e6:.1f} | {all_starts / one:.1f}x | "
+                    f"{with_seed * 1e6:.1f} | {with_seed / all_starts:.2f}x | {more} |")
         whole = all_starts / one
     return rows, whole
 
@@ -100,14 +108,18 @@ def main(argv: list[str] | None = None) -> int:
         rows, whole = measure(structure, flight, args.size, args.repeats)
         table += [f"**{name}: {args.size} x {args.size} points, {DEFAULT_STARTS} starts**",
                   "", "| points (status of the release) | points | multistable | one "
-                  "start [us] | basins [us] | ratio |", "|---|---|---|---|---|---|", *rows,
+                  "start [us] | basins [us] | ratio | with the seeded sweep [us] | its "
+                  "ratio to basins | points with more attractors |",
+                  "|---|---|---|---|---|---|---|---|---|", *rows,
                   "", f"Basins cost {whole:.1f}x the single-start map per point (goal <= "
                   f"{GOAL:g}x: {'met' if whole <= GOAL else 'not met'}).", ""]
         print("\n".join(table[-(len(rows) + 6):]), flush=True)
     loads.append(load_average())
     notes = ("Every start is followed to the attractor it reaches and verified, as a "
              "single start is; a start on the table that provably stays stuck and every "
-             "start on a still table (a = 0) are decided static in closed form. One numba "
+             "start on a still table (a = 0) are decided static in closed form. The seeded "
+             "sweep: 8 steps down along f from 1.5 f, each followed to its verified reach "
+             "(study.solvers.basins.sweep_seeds). One numba "
              f"thread, CPU time, the minimum of {args.repeats} rounds in this one run; "
              f"load average {loads[0]} before, {loads[1]} after.")
     measured = f"{machine()}, commit {git_state().get('git_commit', '?')[:7]}"

@@ -25,6 +25,7 @@ from study.engine.variables import GRID_SIZES, GRIDS, VARIABLES
 from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS, Friction
 from study.model.parameters import STRUCTURE
 from study.model.units import DIMENSIONLESS, KILOGRAM
+from study.solvers.basins import sampling_reach
 from study.solvers.exact import start_attributes
 
 __all__ = [
@@ -307,13 +308,19 @@ def protocol_attributes(spec: StudySpec) -> dict[str, str | float]:
     return found
 
 
-def basins_attributes(spec: StudySpec) -> dict[str, int]:
+def basins_attributes(spec: StudySpec) -> dict[str, int | str]:
     """How the ``basins`` observable sampled each point, in a study that asks for it:
-    ``study_basins_starts``, ``study_basins_seed`` and ``study_basins_max_attractors``
-    (``[basins]``, its defaults where absent); nothing in any other study."""
+    ``study_basins_starts``, ``study_basins_seed``, ``study_basins_max_attractors`` and
+    ``study_basins_sweep_steps`` (``[basins]``, its defaults where absent), and
+    ``study_basins_reach``, what the starts reach in words
+    (:func:`study.solvers.basins.sampling_reach`); nothing in any other study."""
     if spec.basins is None:
         return {}
-    return {f"study_basins_{key}": value for key, value in spec.basins.canonical().items()}
+    found: dict[str, int | str] = {
+        f"study_basins_{key}": value for key, value in spec.basins.canonical().items()}
+    found["study_basins_reach"] = sampling_reach(bool(spec.flight),
+                                                 spec.basins.sweep_steps)
+    return found
 
 
 def contact_law_attributes(coupling: str, friction: Friction | str | None = None,

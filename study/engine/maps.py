@@ -232,10 +232,11 @@ def compute_map(
         from its start.
     basins : dict, optional
         How the observable ``"basins"`` samples each point, as ``[basins]`` of a spec:
-        ``{"starts": 24, "seed": 0, "max_attractors": 8}`` (any of them; those are the
-        defaults). Only with ``"basins"`` among ``observables``; the dataset records
-        ``study_basins_starts``, ``study_basins_seed`` and
-        ``study_basins_max_attractors``, and its per-attractor variables
+        ``{"starts": 24, "seed": 0, "max_attractors": 8, "sweep_steps": 8}`` (any of
+        them; those are the defaults). Only with ``"basins"`` among ``observables``; the
+        dataset records ``study_basins_starts``, ``study_basins_seed``,
+        ``study_basins_max_attractors``, ``study_basins_sweep_steps`` and
+        ``study_basins_reach`` (what the starts reach), and its per-attractor variables
         (``basin_velocity``, ``basin_fraction``, ...) have a last dimension
         ``attractor`` of ``max_attractors`` slots.
 

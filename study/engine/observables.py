@@ -25,7 +25,13 @@ from study.kernels.time_average import Z_95
 from study.model import lift_off_acceleration, mode_response, thresholds
 from study.model.contact import COUPLINGS, DEFAULT_FRICTION, Friction, check_friction
 from study.model.structure import Structure
-from study.solvers.basins import DEFAULT_STARTS, NO_ATTRACTOR, basins
+from study.solvers.basins import (
+    DEFAULT_STARTS,
+    NO_ATTRACTOR,
+    SEED_STEPS,
+    basins,
+    sweep_seeds,
+)
 from study.solvers.exact import (
     DEFAULT_COUPLING,
     SECTION_PERIODS,
@@ -59,7 +65,7 @@ __all__ = [
 METHODS = ("exact", "integrator")
 
 #: The keys of a spec's ``[basins]`` table (:class:`BasinSettings`).
-BASIN_KEYS = ("starts", "seed", "max_attractors")
+BASIN_KEYS = ("starts", "seed", "max_attractors", "sweep_steps")
 
 
 @dataclass(frozen=True)
@@ -78,14 +84,21 @@ class BasinSettings:
         Attractor slots per point (the ``attractor`` dimension), >= 1; default 8. A
         point with more attractors keeps the first ones its starts reach;
         ``attractor_count`` stays exact.
+    sweep_steps : int
+        Steps of the slow sweep down along ``f`` whose end state seeds each point
+        (:func:`study.solvers.basins.sweep_seeds`: from 1.5 times the point's
+        frequency), >= 0; default 8; 0: no seeded state (the drawn starts alone, as
+        before study 0.5).
     """
 
     starts: int = DEFAULT_STARTS
     seed: int = 0
     max_attractors: int = DEFAULT_MAX_ATTRACTORS
+    sweep_steps: int = SEED_STEPS
 
     def __post_init__(self) -> None:
-        for key, lowest in (("starts", 1), ("seed", 0), ("max_attractors", 1)):
+        for key, lowest in (("starts", 1), ("seed", 0), ("max_attractors", 1),
+                            ("sweep_steps", 0)):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
                     or value < lowest:
@@ -562,9 +575,14 @@ def _basins(work: PointWork) -> dict[str, NDArray[Any]]:
     ``max_attractors`` slots (the first ones reached; empty slots filled), the count
     exact."""
     settings = basin_settings(work.method)
+    seeds = None
+    if settings.sweep_steps > 0:  # each point's own sweep: no value depends on a unit
+        seeds = sweep_seeds(work.structure, work.f, work.a, flight=work.method.flight,
+                            settings=work.method.solver, parallel=False,
+                            steps=settings.sweep_steps)
     found = basins(work.structure, work.f, work.a, starts=settings.starts,
                    seed=settings.seed, flight=work.method.flight,
-                   settings=work.method.solver, parallel=False)
+                   settings=work.method.solver, parallel=False, seeds=seeds)
     slots = settings.max_attractors
     width = min(found.status.shape[-1], slots)
     present = np.arange(slots) < np.minimum(found.count, slots)[..., None]
@@ -653,10 +671,12 @@ _DECLARED = (
                "starting states"),
     Observable("basins", "every attractor at each point and its basin fraction: the motions "
                "that seeded starts reach ([basins] starts, 24 by default: the solver's "
-               "start, then drive phases, mode amplitudes and, with flight, drops), each "
+               "start, then drive phases, mode amplitudes and, with flight, drops) and the "
+               "state a slow sweep down along f settles on ([basins] sweep_steps), each "
                "one's status, velocity, largest hop, period, Floquet multiplier or Lyapunov "
-               "exponent, and the share of the starts that reach it with its 95 % Wilson "
-               "interval (exact two-way solver; one solve per start and point)", "point",
+               "exponent, and the share of the drawn starts that reach it with its 95 % "
+               "Wilson interval over those starts (exact two-way solver; one solve per "
+               "start and point, and one per sweep step)", "point",
                ("basin_status", "basin_velocity", "basin_velocity_error", "basin_largest_hop",
                 "basin_period", "basin_multiplier", "basin_exponent", "basin_fraction",
                 "basin_fraction_low", "basin_fraction_high", "attractor_count",

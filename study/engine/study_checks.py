@@ -283,6 +283,8 @@ def _basins_problems(check: Checker, meta: StoredFile, spec: Any, good: set[str]
     problems = []
     for key, value in settings.canonical().items():
         name = f"study_basins_{key}"
+        if key == "sweep_steps" and name not in meta.attrs:
+            continue  # written before study 0.5: no seeded state (sweep_steps = 0)
         if name not in meta.attrs:
             problems.append(f"{name} is missing: a study with the observable basins "
                             f"records its [basins] {key} ({value!r})")

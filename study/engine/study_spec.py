@@ -137,7 +137,8 @@ INTEGRATOR_KEYS = (
 #: ``[basins]``: the largest values a spec may give (starts: each costs a solve per
 #: point; seed: the draws' generator takes any, 32 bits are plenty; max_attractors:
 #: slots per point, each a value of every per-attractor variable).
-MAX_BASIN_SETTINGS = {"starts": 100_000, "seed": 2**32 - 1, "max_attractors": 1_000}
+MAX_BASIN_SETTINGS = {"starts": 100_000, "seed": 2**32 - 1, "max_attractors": 1_000,
+                      "sweep_steps": 1_000}
 
 #: ``[sweep] protocol`` keys and the directions it takes ("both": up, then down).
 PROTOCOL_KEYS = ("along", "direction")
@@ -400,7 +401,7 @@ def spec_schema() -> dict[str, Any]:
 def _basins_schema() -> dict[str, Any]:
     """``[basins]``: the basins observable's sampling (:class:`BasinSettings`)."""
     defaults = BasinSettings()
-    lowest = {"starts": 1, "seed": 0, "max_attractors": 1}
+    lowest = {"starts": 1, "seed": 0, "max_attractors": 1, "sweep_steps": 0}
     words = {
         "starts": "starts followed at each drive point: the solver's start ([solver] "
                   "start), then seeded draws (the base at rest at a drive phase drawn "
@@ -412,6 +413,11 @@ def _basins_schema() -> dict[str, Any]:
         "max_attractors": "attractor slots per point (the attractor dimension): a point "
                           "with more attractors keeps the first ones its starts reach "
                           "(attractor_count stays exact)",
+        "sweep_steps": "steps of the slow sweep down along f, from 1.5 times each point's "
+                       "frequency (the release there) to the point, whose end state is "
+                       "followed as one more start: it reaches the motions born at faster "
+                       "drives that no drawn start reaches, counted among the attractors "
+                       "but not in the fractions (shares of the drawn starts); 0: none",
     }
     return {
         "type": "object",
@@ -1300,7 +1306,7 @@ def _basins(table: Any, observables: tuple[str, ...], protocol: bool,
         return BasinSettings(**table)
     except ValueError as err:
         raise SpecError(f"{path}: [basins] {err}; allowed: starts, max_attractors "
-                        "integers >= 1, seed an integer >= 0") from None
+                        "integers >= 1, seed, sweep_steps integers >= 0") from None
 
 
 def _check_start(solver: SolverSettings | None, coupling: str, flight: bool | None,

@@ -345,7 +345,9 @@ _DECLARED = (
              "and mean velocity, the friction paradox one outcome; 1 where static; > 1: "
              "multistable (the motion depends on how the structure is put down); 0: no "
              "start converged",
-             observable_texts=(("basins", f"attractors reached from {_BASIN_STARTS}",
+             observable_texts=(("basins", f"attractors reached from {_BASIN_STARTS} and "
+                                "from the state a slow sweep down along f settles on "
+                                "([basins] sweep_steps)",
                                 "exact: every attractor found, also beyond the attractor "
                                 "slots (a point with more attractors than [basins] "
                                 "max_attractors keeps the first ones reached in its slots, "
@@ -396,15 +398,23 @@ _DECLARED = (
     Variable("basin_fraction", "attractor", "float64", DIMENSIONLESS,
              "basin fraction of each attractor: the share of the starts drawn at the "
              "point that reach it",
-             comment="the chance that the structure put down by a start drawn at random "
-             "performs this motion; the fractions of a point add up to 1 (less where "
-             f"attractor_count exceeds the slots); {_EMPTY_SLOT}"),
+             comment="the chance that the structure put down by a start drawn as the "
+             "draws are (study_basins_reach) performs this motion, not a share of the "
+             "state space; 0 for an attractor only the slow sweep's seeded state reaches; "
+             "the fractions of a point add up to 1 (less where attractor_count exceeds "
+             f"the slots); {_EMPTY_SLOT}"),
     Variable("basin_fraction_low", "attractor", "float64", DIMENSIONLESS,
-             "lower bound of the 95 % Wilson score interval of the basin fraction",
-             comment=f"binomial, of starts_drawn trials; {_EMPTY_SLOT}"),
+             "lower bound of the 95 % Wilson score interval of the basin fraction over "
+             "the drawn starts",
+             comment="binomial, of starts_drawn trials: an interval over the sampled starts "
+             "(study_basins_reach), not over the state space; a motion no draw reaches "
+             f"is outside it; {_EMPTY_SLOT}"),
     Variable("basin_fraction_high", "attractor", "float64", DIMENSIONLESS,
-             "upper bound of the 95 % Wilson score interval of the basin fraction",
-             comment=f"binomial, of starts_drawn trials; {_EMPTY_SLOT}"),
+             "upper bound of the 95 % Wilson score interval of the basin fraction over "
+             "the drawn starts",
+             comment="binomial, of starts_drawn trials: an interval over the sampled starts "
+             "(study_basins_reach), not over the state space; a motion no draw reaches "
+             f"is outside it; {_EMPTY_SLOT}"),
     Variable("default_attractor", "point", "int32", DIMENSIONLESS,
              "the attractor the solver's start ([solver] start, the release by default) "
              "reaches: its index along the attractor dimension",

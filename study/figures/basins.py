@@ -6,9 +6,10 @@ Drawn from a study with the ``basins`` observable (the ``attractor`` dimension, 
 where it holds one, so that a line selected from a labelled map keeps the map's
 labels); each label has one colour in both drawings. Over (f, a), both axes of at least
 :data:`~study.figures.common.MIN_CELLS` values: one panel per label, most points first
-(at most :data:`MAX_PANELS`), its region coloured by its basin fraction (from grey, a
-basin too small to be seen, to the label's colour, every start; white where the motion
-is not found), each point a cell (:func:`~study.figures.common.map_mesh`: a listed
+(at most :data:`MAX_PANELS`), its region coloured by its basin fraction of the drawn
+starts (from grey, a basin too small to be seen or a motion only the seeded sweep state
+reaches, to the label's colour, every start; white where the motion is not found),
+each point a cell (:func:`~study.figures.common.map_mesh`: a listed
 axis's cells only as wide as its smallest step). Along one drive axis (the other of one
 value, or selected with ``--sel``): the velocity of each label above, and the basin
 fractions stacked beneath, a bar per grid point, as Attractors.jl's basins-fractions
@@ -157,7 +158,7 @@ def _map(dataset: xr.Dataset, summary: xr.Dataset) -> tuple[plt.Figure, str]:
                                                  [(0.85, 0.85, 0.85), colour])
         mesh = map_mesh(ax, f, a, shares.sel(label=label).values.T, cmap=cmap,
                         vmin=0.0, vmax=1.0)
-        fig.colorbar(mesh, ax=ax, label="basin fraction", shrink=0.85)
+        fig.colorbar(mesh, ax=ax, label="basin fraction of the drawn starts", shrink=0.85)
         points = int(summary["points"].sel(label=label))
         ax.set_title(f"label {label}: {_describe(summary, label)}\n{points} points",
                      fontsize=9, color=colour)
@@ -169,7 +170,8 @@ def _map(dataset: xr.Dataset, summary: xr.Dataset) -> tuple[plt.Figure, str]:
         ax.set_ylabel(_AXES["a"])
     count = dataset["attractor_label"].max("attractor") >= 0
     most = int((dataset["attractor_label"] >= 0).sum("attractor").max())
-    head = ("Each motion followed over (f, a), coloured by its basin fraction\n"
+    head = ("Each motion followed over (f, a), coloured by its basin fraction of the drawn "
+            "starts (grey: found, no draw reaches it)\n"
             f"{order.size} motions over {int(count.sum())} points, at most {most} at one "
             f"point; the {shown.size} with most points drawn")
     return fig, _titles(fig, dataset, head, "Basins over (f, a)")
@@ -259,7 +261,7 @@ def _line(top: plt.Axes, bottom: plt.Axes, dataset: xr.Dataset, summary: xr.Data
     bottom.set_ylim(0.0, 1.0)
     bottom.set_xlim(float(x.min()) - width, float(x.max()) + width)
     bottom.set_xlabel(_AXES[axis])
-    bottom.set_ylabel("basin fraction (stacked)")
+    bottom.set_ylabel("basin fraction of the\ndrawn starts (stacked)")
     most = int((label_of >= 0).sum(axis=1).max())
     return present, most
 

@@ -45,6 +45,17 @@ DROP_HEIGHT_RANGE = (1e-4, 5e-3)
 FACTOR_RANGE = (0.0, 2.0)
 #: The status of an attractor slot that holds none (a point with fewer attractors).
 NO_ATTRACTOR = -1
+#: The coarse slow sweeps whose end states seed each point (:func:`sweep_seeds`): the
+#: swept axis and where the sweep begins, as a multiple of the point's value of that
+#: axis [1]: down along ``f`` from 1.5 times the point's frequency. Measured on the
+#: M = 0.9 line and the basins-flight grid (docs/theory/basins.md): a sweep up along
+#: ``f`` from 0.5 or 0.75 f found no motion more (the drawn starts at rest reach what it
+#: carries) and cost 1.5-2.7x the 24 starts; down along ``a`` from 2 a found nothing
+#: more and cost 70x the sweep down along ``f`` (strong drives are irregular motions,
+#: averaged to their budget).
+SEED_PATHS = (("f", 1.5),)
+#: Steps of each seeding sweep from its first drive to the point's [1].
+SEED_STEPS = 8
 
 
 @dataclass(frozen=True)
@@ -103,6 +114,28 @@ def basin_starts(starts: int = DEFAULT_STARTS, *, seed: int = 0, flight: bool = 
                        height=np.concatenate([[first[2]], height]))
 
 
+def sampling_reach(flight: bool, sweep_steps: int = SEED_STEPS) -> str:
+    """What the starts of :func:`basins` reach, in words (a result file's
+    ``study_basins_reach``): the ranges of the drawn starts and the seeded states, and
+    what a fraction's interval is an interval of."""
+    low, high = FACTOR_RANGE
+    drawn = (f"drawn starts: the base at rest on the table at a drive phase drawn "
+             f"uniformly from [0, 1) periods, the mode at rest on {low:g} to {high:g} times "
+             "its steady stick response")
+    if flight:
+        drawn += (f"; every third one dropped at rest from {1e3 * DROP_HEIGHT_RANGE[0]:g} to "
+                  f"{1e3 * DROP_HEIGHT_RANGE[1]:g} mm (log-uniform)")
+    if sweep_steps > 0:
+        seeded = (f"seeded: the state a slow sweep down along f, from {SEED_PATHS[0][1]:g} f "
+                  f"(the release there) in {sweep_steps} steps, settles on at the point, "
+                  "counted among the attractors, not in the fractions")
+    else:
+        seeded = "no seeded state"
+    return (f"{drawn}; {seeded}. A motion none of these reaches is not found; a fraction "
+            "and its 95 % Wilson interval are over the drawn starts, not over the state "
+            "space")
+
+
 def wilson_interval(successes: ArrayLike, trials: ArrayLike) -> tuple[NDArray[np.float64],
                                                                        NDArray[np.float64]]:
     """The :data:`CONFIDENCE` Wilson score interval ``(low, high)`` of a binomial
@@ -140,6 +173,90 @@ def _checked_starts(starts: BasinStarts, flight: bool) -> BasinStarts:
     return BasinStarts(phase=phase, factor=factor, height=height)
 
 
+def sweep_seeds(structure: Structure, f: ArrayLike, a: ArrayLike, *, flight: bool = False,
+                settings: SolverSettings | None = None, parallel: bool | None = None,
+                steps: int = SEED_STEPS) -> NDArray[np.float64]:
+    """The states that slow sweeps ending at each drive point settle on there: the seeded
+    states of :func:`basins`.
+
+    For each point and each path of :data:`SEED_PATHS` a coarse slow sweep of ``steps``
+    steps (equal in the swept value) runs from the path's first drive (the release
+    there) to the point, the state carried from step to step as
+    :func:`study.solvers.protocol.slow_sweep` carries it, each motion followed to its
+    verified reach; the state at phase 0 of the motion it settles on at the point is
+    that path's seed. A sweep down from above reaches the motions born at stronger or
+    faster drives (a big backward hop that no start at rest, drop or ringing plate of
+    :func:`basin_starts` reaches), one up from below those born at weaker ones. A
+    point's seeds depend on its own drive alone (never on a neighbour of a grid), so a
+    map's values do not depend on how its points are grouped.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(*shape, len(SEED_PATHS), 5)``: ``(delta [m], delta' [m s-1], v [m s-1],
+        h [m], h' [m s-1])`` at phase 0; NaN where the path has no state at the point
+        (outside the model, not converged) or no extent (along ``a`` at ``a = 0``).
+    """
+    structure = check_structure(structure)
+    coupling = check_coupling("two-way")
+    flight = check_flight(flight, coupling, structure)
+    settings = check_settings(settings, coupling)
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
+        raise ValueError(f"basins: 'steps' of the seeding sweeps must be an integer >= 1, "
+                         f"got {steps!r}")
+    shape, f_flat, a_flat = flat_drive(f, a)
+    n, paths = f_flat.size, len(SEED_PATHS)
+    fraction = np.arange(steps + 1) / steps
+    path_f = np.empty((n, paths, steps + 1))
+    path_a = np.empty((n, paths, steps + 1))
+    for p, (axis, begin) in enumerate(SEED_PATHS):
+        ramp = begin + (1.0 - begin) * fraction
+        path_f[:, p] = f_flat[:, None] * (ramp if axis == "f" else 1.0)
+        path_a[:, p] = a_flat[:, None] * (ramp if axis == "a" else 1.0)
+        path_f[:, p, -1] = f_flat  # the point itself, to the bit
+        path_a[:, p, -1] = a_flat
+    flat_f = np.ascontiguousarray(path_f.ravel())
+    flat_a = np.ascontiguousarray(path_a.ravel())
+    bounds = np.arange(0, flat_f.size + 1, steps + 1, dtype=np.int64)
+    states = np.empty((n * paths, 5))
+    if parallel is None:
+        parallel = n >= 16
+    kernel = basin_kernel.seed_paths if parallel else basin_kernel.seed_paths_serial
+    kernel(structure_vector(structure, coupling, flight), 2.0 * np.pi * flat_f, flat_a,
+           past_lift_off(structure, flat_f, flat_a), kernel_budget(settings), bounds,
+           states)
+    states = states.reshape(n, paths, 5)
+    for p, (axis, _) in enumerate(SEED_PATHS):
+        if axis == "a":
+            states[a_flat == 0.0, p] = np.nan
+    return states.reshape(*shape, paths, 5)
+
+
+def _checked_seeds(seeds: object, shape: tuple[int, ...], flight: bool
+                   ) -> NDArray[np.float64]:
+    """``basins``' seeded states as a C-contiguous ``(points, m, 5)`` float64 array
+    (``m = 0`` for None), checked: the drive's shape, 5 components, finite or NaN rows,
+    off the table only with flight."""
+    n = int(np.prod(shape, dtype=np.int64))
+    if seeds is None:
+        return np.empty((n, 0, 5))
+    if isinstance(seeds, str):
+        raise ValueError(f"basins: 'seeds' must be \"sweeps\", an array of states or "
+                         f"None, got {seeds!r}")
+    array = np.asarray(seeds, dtype=np.float64)
+    if array.ndim < 2 or array.shape[-1] != 5 or array.shape[:-2] != tuple(shape):
+        raise ValueError(f"basins: 'seeds' must have shape (*{tuple(shape)}, m, 5), got "
+                         f"{array.shape}")
+    array = np.ascontiguousarray(array.reshape(n, array.shape[-2], 5))
+    bad = ~np.isfinite(array) & ~np.isnan(array)
+    if bad.any():
+        raise ValueError("basins: a seeded state must be finite (NaN: none)")
+    if not flight and np.any(np.nan_to_num(array[..., 3:]) != 0.0):
+        raise ValueError("basins: a seeded state off the table (h or h' not 0) needs "
+                         "flight=True")
+    return array
+
+
 @dataclass(frozen=True)
 class Basins:
     """The attractors at each drive point and their basin fractions.
@@ -168,9 +285,15 @@ class Basins:
     lyapunov_exponent : numpy.ndarray
         Largest Lyapunov exponent per drive period [1].
     fraction : numpy.ndarray
-        Basin fraction [1]: the share of the drawn starts that reach the attractor.
+        Basin fraction [1]: the share of the drawn starts that reach the attractor
+        (the seeded states are not draws and do not enter it).
     fraction_low, fraction_high : numpy.ndarray
-        Its :data:`CONFIDENCE` Wilson interval [1].
+        Its :data:`CONFIDENCE` Wilson interval [1]: an interval over the drawn starts,
+        for the chance that a start drawn as they are reaches the attractor; it says
+        nothing of the states the draws never reach.
+    seeded : numpy.ndarray of int32
+        Seeded states (``seeds``) that reached the attractor [1]: an attractor with
+        ``seeded > 0`` and fraction 0 is one the slow sweeps reach and no drawn start.
     count : numpy.ndarray of int32
         Attractors at each point [1].
     default_attractor : numpy.ndarray of int32
@@ -182,6 +305,10 @@ class Basins:
         flight.
     reached : numpy.ndarray of int32
         For each point and start, the attractor it reached (-1: not drawn).
+    seeds_followed : numpy.ndarray of int32
+        Seeded states followed at each point [1] (those with a state).
+    seeded_reached : numpy.ndarray of int32
+        For each point and seeded state, the attractor it reached (-1: none).
     starts : BasinStarts
         The starts.
     """
@@ -201,6 +328,9 @@ class Basins:
     starts_drawn: NDArray[np.int32]
     reached: NDArray[np.int32]
     starts: BasinStarts
+    seeded: NDArray[np.int32]
+    seeds_followed: NDArray[np.int32]
+    seeded_reached: NDArray[np.int32]
 
 
 def basins(
@@ -213,6 +343,7 @@ def basins(
     flight: bool = False,
     settings: SolverSettings | None = None,
     parallel: bool | None = None,
+    seeds: str | ArrayLike | None = None,
 ) -> Basins:
     """Every attractor the starts reach at each drive point, with its basin fraction.
 
@@ -237,6 +368,14 @@ def basins(
         start is followed from its own state).
     parallel : bool, optional
         Spread points over all cores; by default with at least 16 points.
+    seeds : {"sweeps"} or array_like, optional
+        States followed at each point after the drawn starts, to find the motions the
+        draws do not reach: ``"sweeps"`` the end states of the coarse slow sweeps of
+        :func:`sweep_seeds`, or an array of shape ``(*shape, m, 5)`` of states at phase
+        0 (``(delta, delta', v, h, h')`` [m, m s-1, m s-1, m, m s-1]; a row with a NaN
+        is none). Each is followed to its verified reach as a start is; the attractors
+        they reach are counted (``count``, ``seeded``) but not in the fractions, which
+        stay shares of the drawn starts. None (default): no seeded state.
 
     Returns
     -------
@@ -264,17 +403,23 @@ def basins(
                              first=(first.phase, first.factor, first.height))
     shape, f_flat, a_flat = flat_drive(f, a)
     n, k = f_flat.size, len(table)
-    out = np.empty((n, k, basin_kernel.N_BASIN))
-    reached = np.empty((n, k), dtype=np.int64)
-    counts = np.zeros(n, dtype=np.int64)
     if parallel is None:
         parallel = n >= 16
+    seeded_states = _checked_seeds(
+        sweep_seeds(structure, f, a, flight=flight, settings=settings, parallel=parallel)
+        if isinstance(seeds, str) and seeds == "sweeps" else seeds, shape, flight)
+    m = seeded_states.shape[1]
+    out = np.empty((n, k + m, basin_kernel.N_BASIN))
+    reached = np.empty((n, k + m), dtype=np.int64)
+    counts = np.zeros(n, dtype=np.int64)
     kernel = basin_kernel.basins_points if parallel else basin_kernel.basins_points_serial
     kernel(structure_vector(structure, coupling, flight), 2.0 * np.pi * f_flat, a_flat,
            past_lift_off(structure, f_flat, a_flat), kernel_budget(settings),
-           table.phase, table.factor, table.height, out, reached, counts)
+           table.phase, table.factor, table.height, seeded_states, out, reached, counts)
     width = max(int(counts.max(initial=0)), 1)
     out = out[:, :width]
+    seeded_reached = reached[:, k:]
+    reached = reached[:, :k]
     drawn = (reached >= 0).sum(axis=1)
     present = np.arange(width)[None, :] < counts[:, None]
     hits = np.where(present, out[..., basin_kernel.B_STARTS], 0.0)
@@ -302,4 +447,7 @@ def basins(
         starts_drawn=drawn.astype(np.int32).reshape(shape),
         reached=reached.astype(np.int32).reshape(*shape, k),
         starts=table,
+        seeded=per_attractor(basin_kernel.B_SEEDED, np.int32, 0),
+        seeds_followed=(seeded_reached >= 0).sum(axis=1).astype(np.int32).reshape(shape),
+        seeded_reached=seeded_reached.astype(np.int32).reshape(*shape, m),
     )

@@ -17,7 +17,7 @@ from study.engine.runner import StudyInterrupted, run_study
 from study.engine.store import open_result
 from study.engine.validation.files import seal, validate_file
 from study.engine.validation.reading import ResultError
-from study.solvers.basins import basins
+from study.solvers.basins import basins, sampling_reach, sweep_seeds
 
 SPEC = """\
 [study]
@@ -44,6 +44,7 @@ chunk_points = 2
 starts = {starts}
 seed = {seed}
 max_attractors = {slots}
+sweep_steps = {steps}
 """
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
@@ -54,10 +55,10 @@ STARTS = 8
 
 
 def write(folder: Path, f=F, a=A, starts=STARTS, seed=0, slots=3, name="b",
-          observables='["velocity", "basins"]') -> Path:
+          observables='["velocity", "basins"]', steps=8) -> Path:
     path = folder / f"{name}.toml"
     path.write_text(SPEC.format(f=list(f), a=list(a), starts=starts, seed=seed, slots=slots,
-                                observables=observables))
+                                observables=observables, steps=steps))
     return path
 
 
@@ -69,10 +70,11 @@ PER_ATTRACTOR = {"basin_status": "status", "basin_velocity": "velocity",
                  "basin_fraction_low": "fraction_low", "basin_fraction_high": "fraction_high"}
 
 
-def expected(f, a, starts=STARTS, seed=0):
+def expected(f, a, starts=STARTS, seed=0, steps=8):
     grid_f, grid_a = np.meshgrid(f, a, indexing="ij")
+    seeds = sweep_seeds(STRUCTURE, grid_f, grid_a, flight=True, steps=steps) if steps else None
     return basins(STRUCTURE, grid_f, grid_a, starts=starts, seed=seed, flight=True,
-                  parallel=False)
+                  parallel=False, seeds=seeds)
 
 
 def assert_holds(ds: xr.Dataset, found, slots: int) -> None:
@@ -169,6 +171,13 @@ def test_the_basins_settings_key_only_the_basins_values(tmp_path):
     report = run_study(write(tmp_path, seed=5, name="s"), tmp_path / "s.nc", progress=False)
     assert report.points_computed == len(F) * len(A)
     assert_holds(open_result(tmp_path / "s.nc"), expected(F, A, seed=5), 3)
+    # No seeding sweep: the drawn starts alone, as before study 0.5.
+    report = run_study(write(tmp_path, steps=0, name="n"), tmp_path / "n.nc", progress=False)
+    assert report.points_computed == len(F) * len(A)
+    unseeded = open_result(tmp_path / "n.nc")
+    assert_holds(unseeded, expected(F, A, steps=0), 3)
+    assert unseeded.attrs["study_basins_sweep_steps"] == 0
+    assert unseeded.attrs["study_basins_reach"] == sampling_reach(True, 0)
     # A study without basins reuses the velocity kept beside them.
     plain = tmp_path / "v.toml"
     plain.write_text(write(tmp_path, name="v", observables='["velocity"]').read_text()
@@ -192,8 +201,10 @@ def test_compute_map_gives_the_dataset_of_the_study_file(tmp_path):
         for key in ("units", "long_name"):
             assert in_memory[name].attrs[key] == from_file[name].attrs[key], (name, key)
     np.testing.assert_array_equal(in_memory["attractor"].values, from_file["attractor"].values)
-    for key in ("study_basins_starts", "study_basins_seed", "study_basins_max_attractors"):
+    for key in ("study_basins_starts", "study_basins_seed", "study_basins_max_attractors",
+                "study_basins_sweep_steps", "study_basins_reach"):
         assert in_memory.attrs[key] == from_file.attrs[key]
+    assert from_file.attrs["study_basins_reach"] == sampling_reach(True, 8)
     # Its equivalent spec, run as a study, writes the same values.
     spec = tmp_path / "map.toml"
     spec.write_text(in_memory.attrs["study_spec"])

@@ -47,12 +47,13 @@ def text(observables='["basins"]', basins="", solver="", num=6) -> str:
 
 def test_the_defaults_and_given_settings_are_read():
     spec = parse_spec(text(), PATH)
-    assert spec.basins == BasinSettings(24, 0, 8)
-    assert spec.canonical["basins"] == {"starts": 24, "seed": 0, "max_attractors": 8}
+    assert spec.basins == BasinSettings(24, 0, 8, 8)
+    assert spec.canonical["basins"] == {"starts": 24, "seed": 0, "max_attractors": 8,
+                                        "sweep_steps": 8}
     assert spec.observables == ("basins",)
-    given = parse_spec(text(basins="[basins]\nstarts = 12\nseed = 3\nmax_attractors = 2\n"),
-                       PATH)
-    assert given.basins == BasinSettings(starts=12, seed=3, max_attractors=2)
+    given = parse_spec(text(basins="[basins]\nstarts = 12\nseed = 3\nmax_attractors = 2\n"
+                                   "sweep_steps = 0\n"), PATH)
+    assert given.basins == BasinSettings(starts=12, seed=3, max_attractors=2, sweep_steps=0)
     assert given.dimension_sizes == {"attractor": 2}
     assert given.sha256 != spec.sha256
 
