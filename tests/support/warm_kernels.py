@@ -7,8 +7,9 @@ the two-way solver alone, during collection already: a test module draws its poi
 with it), and both write the same cache entries. Here the controller runs the jobs
 below in as many processes as there are workers, each job its own family of kernels,
 before the workers start: the workers then load the kernels from the cache (the
-summary of :mod:`tests.support.numba_compiles` counts what each still compiled). On a
-warm cache each job loads its kernels in a second or two.
+summary of :mod:`tests.support.numba_compiles` counts what each still compiled). A
+finished warm-up leaves a stamp beside the cache (:func:`warm_stamp`): the next runs
+skip it until a kernel source, this file, numba or Python changes.
 
 A job calls the public functions on a few points, as the tests do (same argument
 types, so the same compiled signatures); its results are not checked (the tests do).
@@ -18,6 +19,7 @@ types, so the same compiled signatures); its results are not checked (the tests 
 
 from __future__ import annotations
 
+import hashlib
 import os
 import subprocess
 import sys
@@ -152,7 +154,8 @@ def run_jobs(names: list[str]) -> None:
                 warnings.simplefilter("ignore")
                 JOBS[name]()
         except Exception as error:  # the tests report what fails
-            print(f"warm-up {name}: {type(error).__name__}: {error}", flush=True)
+            print(f"warm-up {name} failed: {type(error).__name__}: {error}", flush=True)
+            continue
         finally:
             event.unregister("numba:compile", counter)
         c = counter.compiles
@@ -202,7 +205,19 @@ def pytest_sessionstart(session) -> None:
     if os.environ.get("STUDY_WARM_KERNELS", "1") == "0" or config.option.collectonly:
         return
     reporter = config.pluginmanager.get_plugin("terminalreporter")
+    stamp = warm_stamp()
+    if stamp.exists():
+        if reporter is not None:
+            reporter.write_line(f"numba warm-up: done before for these kernels ({stamp})")
+        return
     seconds, said = warm(workers)
+    finished = [line for line in said if " compiled in " in line]
+    if len(finished) == len(JOBS):  # every job ran to its end
+        try:
+            stamp.parent.mkdir(parents=True, exist_ok=True)
+            stamp.write_text("\n".join(said) + "\n")
+        except OSError:
+            pass
     if reporter is not None:
         reporter.write_line(
             f"numba warm-up: the kernels most tests use, compiled or loaded from the "
@@ -210,3 +225,17 @@ def pytest_sessionstart(session) -> None:
             "(tests/support/warm_kernels.py; STUDY_WARM_KERNELS=0 skips it)")
         for line in said:
             reporter.write_line(f"  {line}")
+
+
+def warm_stamp() -> Path:
+    """The file a finished warm-up leaves beside numba's cache of the kernels: named by
+    the kernel sources, these jobs and the numba and Python versions, so that any change
+    of them (or a removed cache folder) warms up again."""
+    import numba
+
+    from study.kernels import KERNEL_SOURCES_SHA256, KERNELS_DIR
+
+    digest = hashlib.sha256(Path(__file__).read_bytes())
+    digest.update(f"{KERNEL_SOURCES_SHA256} {numba.__version__} {sys.version}".encode())
+    folder = os.environ.get("NUMBA_CACHE_DIR") or KERNELS_DIR / "__pycache__"
+    return Path(folder) / f"tests-warm-{digest.hexdigest()[:16]}"
