@@ -129,12 +129,38 @@ def integrator() -> None:
     integrated_steady_state(s, 14.5, 9.0, coupling="two-way")
 
 
+def continuation() -> None:
+    """The two-way solver with each orbit continued along the sweep, and the kernels'
+    single-point entries as tests call them."""
+    import math
+
+    import study
+    from study.kernels.two_way import points as kernel
+    from study.kernels.two_way.continuation import new_neighbours, remember
+    from study.solvers.exact import DEFAULT_SETTINGS, kernel_budget, structure_vector
+
+    s = _paper()
+    study.steady_state(s, np.full(3, 14.5), np.array([8.0, 8.5, 9.0]), coupling="two-way",
+                       settings=study.SolverSettings(continuation=True))
+    vector = structure_vector(s, "two-way")
+    budget = kernel_budget(DEFAULT_SETTINGS)
+    omega = 2.0 * math.pi * 14.5
+    cold = np.empty(kernel.N_OUT)
+    kernel.solve_point(vector, omega, 6.0, False, budget, 0.0, 1.0, cold)
+    neighbours = new_neighbours()
+    remember(neighbours, omega, 5.9, cold[kernel.OUT_DELTA:kernel.OUT_SPEED + 1], 4.0, 2.0)
+    out = np.empty(kernel.N_OUT)
+    kernel.solve_point_along(vector, omega, 6.0, False, budget, 0.0, 1.0, out, neighbours,
+                             kernel.new_workspace(vector), True)
+
+
 #: The jobs, dearest first (each process takes the next job when it is free).
 JOBS: dict[str, Callable[[], None]] = {
     "two_way": two_way,
     "flight": flight,
     "basins_and_sweeps": basins_and_sweeps,
     "integrator": integrator,
+    "continuation": continuation,
     "one_way": one_way,
 }
 
