@@ -35,6 +35,10 @@ ROOT = Path(__file__).resolve().parents[2]
 
 F = np.array([13.0, 14.5])  # Hz
 A = np.array([8.5, 9.0])    # m s-2
+#: A grid big enough for the parallel velocity drivers (256 points; most below the
+#: thresholds, so cheap): f [Hz], a [m s-2], flat.
+GRID = tuple(np.array(np.meshgrid(np.linspace(12.0, 16.0, 16), np.linspace(1.0, 9.0, 16)))
+             .reshape(2, -1))
 
 
 def _paper():
@@ -58,6 +62,7 @@ def one_way() -> None:
         study.steady_state(s, F, A, parallel=parallel)
     study.steady_velocity(s, 13.0, 8.5)
     study.steady_velocity(s, F, A)
+    study.steady_velocity(s, *GRID)  # the parallel driver
     study.minimum_threshold(s)
     study.frontier(s, np.array([8.0, 9.0]), f_range=(13.5, 15.5))
     study.compute_map(s, F, A, observables=["resonance", "thresholds", "lift_off",
@@ -74,7 +79,9 @@ def two_way() -> None:
         study.steady_state(s, F, A, coupling="two-way", parallel=parallel)
     study.steady_state(s, 14.5, 9.0, coupling="two-way", start="switch-on")
     study.steady_velocity(s, F, A, coupling="two-way")
-    attractors(s, 14.5, 9.0, coupling="two-way")
+    study.steady_velocity(s, *GRID, coupling="two-way")  # the parallel driver
+    for parallel in (False, True):
+        attractors(s, F, A, coupling="two-way", parallel=parallel)
     phase_section(s, 14.5, 9.0)
     study.frontier(s, np.array([8.0, 9.0]), f_range=(13.5, 15.5), coupling="two-way")
     study.compute_map(s, F, A, coupling="two-way",
@@ -109,9 +116,10 @@ def basins_and_sweeps() -> None:
     s, heavy = _paper(), _heavy()
     basins(s, F, A, starts=4)
     basins(heavy, np.array([12.0, 14.0]), np.array([9.5, 11.0]), starts=4, flight=True)
-    slow_sweep(s, F, A, along="f", direction="up")
-    slow_sweep(heavy, np.array([12.0, 14.0]), np.array([9.5, 11.0]), along="f",
-               direction="down", flight=True)
+    for parallel in (False, True):
+        slow_sweep(s, F, A, along="f", direction="up", parallel=parallel)
+        slow_sweep(heavy, np.array([12.0, 14.0]), np.array([9.5, 11.0]), along="f",
+                   direction="down", flight=True, parallel=parallel)
 
 
 def integrator() -> None:
