@@ -165,12 +165,17 @@ def continuation() -> None:
 #: The jobs, dearest first (each process takes the next job when it is free).
 JOBS: dict[str, Callable[[], None]] = {
     "two_way": two_way,
+    "integrator": integrator,
+    "one_way": one_way,
     "flight": flight,
     "basins_and_sweeps": basins_and_sweeps,
-    "integrator": integrator,
     "continuation": continuation,
-    "one_way": one_way,
 }
+
+#: The jobs that start only once these have ended: they call the two-way solver's
+#: kernels, which two processes would otherwise compile side by side (a kernel compiled
+#: by a caller in another file is loaded from the cache once it is there).
+AFTER = {"two_way": ("flight", "basins_and_sweeps", "continuation")}
 
 
 def run_jobs(names: list[str]) -> None:
@@ -202,22 +207,29 @@ def warm(processes: int) -> tuple[float, list[str]]:
     they said."""
     began = time.perf_counter()
     queue = list(JOBS)
-    running: list[tuple[subprocess.Popen, object]] = []
+    running: list[tuple[str, subprocess.Popen, object]] = []
     said: list[str] = []
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
+    after = {job: first for first, jobs in AFTER.items() for job in jobs}
     while queue or running:
-        while queue and len(running) < max(1, processes):
+        busy = {name for name, _, _ in running}
+        ready = [job for job in queue
+                 if job not in after or (after[job] not in queue and after[job] not in busy)]
+        while ready and len(running) < max(1, processes):
+            name = ready.pop(0)
+            queue.remove(name)
             out = tempfile.TemporaryFile("w+")
-            running.append((subprocess.Popen(
-                [sys.executable, "-m", "tests.support.warm_kernels", queue.pop(0)],
+            running.append((name, subprocess.Popen(
+                [sys.executable, "-m", "tests.support.warm_kernels", name],
                 cwd=ROOT, env=env, stdout=out, stderr=subprocess.STDOUT), out))
-        done = [(p, out) for p, out in running if p.poll() is not None]
-        for p, out in done:
+        done = [entry for entry in running if entry[1].poll() is not None]
+        for entry in done:
+            out = entry[2]
             out.seek(0)
             said += out.read().splitlines()[-20:]
             out.close()
-            running.remove((p, out))
+            running.remove(entry)
         if not done:
             time.sleep(0.2)
     return time.perf_counter() - began, said
