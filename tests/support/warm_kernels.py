@@ -70,14 +70,23 @@ def one_way() -> None:
 
 
 def two_way() -> None:
-    """The exact two-way solver: orbits, Floquet multipliers, attractors, sections."""
+    """The exact two-way solver (serial and parallel drivers): orbits, Floquet
+    multipliers."""
     import study
-    from study.solvers.exact import attractors, phase_section
 
     s = _paper()
     for parallel in (False, True):
         study.steady_state(s, F, A, coupling="two-way", parallel=parallel)
     study.steady_state(s, 14.5, 9.0, coupling="two-way", start="switch-on")
+
+
+def two_way_more() -> None:
+    """The drivers around the exact two-way solver: velocity only, attractors, sections,
+    frontier, the labelled map's observables."""
+    import study
+    from study.solvers.exact import attractors, phase_section
+
+    s = _paper()
     study.steady_velocity(s, F, A, coupling="two-way")
     study.steady_velocity(s, *GRID, coupling="two-way")  # the parallel driver
     for parallel in (False, True):
@@ -166,6 +175,7 @@ def continuation() -> None:
 JOBS: dict[str, Callable[[], None]] = {
     "two_way": two_way,
     "integrator": integrator,
+    "two_way_more": two_way_more,
     "one_way": one_way,
     "flight": flight,
     "basins_and_sweeps": basins_and_sweeps,
@@ -175,7 +185,7 @@ JOBS: dict[str, Callable[[], None]] = {
 #: The jobs that start only once these have ended: they call the two-way solver's
 #: kernels, which two processes would otherwise compile side by side (a kernel compiled
 #: by a caller in another file is loaded from the cache once it is there).
-AFTER = {"two_way": ("flight", "basins_and_sweeps", "continuation")}
+AFTER = {"two_way": ("two_way_more", "flight", "basins_and_sweeps", "continuation")}
 
 
 def run_jobs(names: list[str]) -> None:
