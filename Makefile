@@ -4,9 +4,12 @@
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
 #   make docs       the documentation site, build/html/index.html (Sphinx, warnings are
 #                   errors; runs the example gallery); needs the figures, so `make` first
-#   make test       set up .venv on a fresh machine, lint, run the test suite
-#   make test-unit  the fast tier only (tests/unit: no process, install, cluster or docs run)
-#   make test-integration  the tier that runs processes, installs, clusters and the docs
+#   make test       set up .venv on a fresh machine, lint, run the default test tier (every
+#                   module and capability with its headline checks; not the slow and fuzz marks)
+#   make test-unit  the default tier's tests/unit only (no process, install, cluster or docs run)
+#   make test-integration  the default tier's processes, installs, clusters and the docs
+#   make test-slow  the tests marked slow (long reference integrations, big grids; CI runs them)
+#   make test-all   everything: the default tier, the slow tier and the fuzz tiers
 #   make fuzz       seeded fuzz tiers: corrupted result files must be refused, never crash;
 #                   counts of what they tried -> results/reliability.md
 #   make bench      benchmarks (timings; never pass/fail); work-precision -> results/bench.nc,
@@ -41,7 +44,7 @@ WORKFLOWS := $(wildcard workflows/*.toml)
 RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs docs-html test test-unit test-integration test-slow fuzz \
+.PHONY: all results figures docs docs-html test test-unit test-integration test-slow test-all fuzz \
         lint bench compare cf-check list clean \
         schemas designs FORCE
 
@@ -189,15 +192,19 @@ list: $(STAMP)
 lint: $(STAMP)
 	$(PY) -m ruff check study tests benchmarks docs
 
-# Every tier: unit, integration, paper, hard_cases, property, golden (the result files of
-# every release, tests/golden/) (the fuzz tiers are marked
-# fuzz and run by `make fuzz`; slow tests by `make test-slow`).
+# The default tier (`make test`): every folder (unit, integration, paper, hard_cases,
+# property, golden: the result files of every release, tests/golden/), every module and
+# capability with at least its headline checks; the heavier checks are marked slow
+# (`make test-slow`), the fuzz tiers fuzz (`make fuzz`); CI runs all three (.ci/run),
+# `make test-all` too. Each tier's time and its slowest tests: docs/developer/testing.md.
 # The tests run in one process per core (pytest-xdist), at most 4 so that a shared
-# machine is not taken over; on 2 cores 5.6 min warm, 8.1-10.0 min in CI's fresh clone
-# on a shared machine (numba compiles; 11.6 min while another job used a core), against
-# 10.9-12.2 min in one process.
+# machine is not taken over. Before the workers start, the controller compiles the
+# kernels most tests use into numba's on-disk cache, one process per worker
+# (tests/support/warm_kernels.py; a second run loads them in seconds); at the end each
+# worker says what it still compiled (0 on a warm cache). The goal: `make test` within
+# 6 minutes on a fresh clone of a 2-core machine, compile included.
 # PYTEST_WORKERS=0 runs them in this process, in order. The 20 slowest tests are listed
-# at the end: what to move to `make test-slow` when the tier grows past 10 minutes.
+# at the end: what to move to `make test-slow` when the tier grows past 6 minutes.
 PYTEST_WORKERS ?= auto
 XDIST := --numprocesses=$(PYTEST_WORKERS) --maxprocesses=4
 
@@ -211,7 +218,10 @@ test-integration: $(STAMP)
 	$(PY) -m pytest $(XDIST) tests/integration -m "not slow and not fuzz"
 
 test-slow: $(STAMP)
-	$(PY) -m pytest $(XDIST) -m slow
+	$(PY) -m pytest $(XDIST) -m "slow and not fuzz" --durations=20
+
+# Everything: the default tier (with lint), the slow tier, the fuzz tiers.
+test-all: test test-slow fuzz
 
 # Seeded fuzz tiers (corrupted result files, damaged caches, mutated specs, measurement
 # files, command lines): CI runs them. Each passed tier records what it tried; the

@@ -1,4 +1,8 @@
-"""Shared fixtures: the paper's structure (Fig. 1-2)."""
+"""Shared fixtures: the paper's structure (Fig. 1-2). Plugins: numba's compilations
+counted in each test process and said at the end (:mod:`tests.support.numba_compiles`);
+before pytest-xdist's workers start, the kernels most tests use compiled once into
+numba's on-disk cache or loaded from it (:mod:`tests.support.warm_kernels`), so that
+the workers do not each compile them again."""
 
 from __future__ import annotations
 
@@ -6,6 +10,14 @@ import pytest
 
 import study
 from study.model.paper import paper_structure as papers_structure
+from tests.support.numba_compiles import (  # noqa: F401 (hooks)
+    pytest_configure,
+    pytest_sessionfinish,
+    pytest_terminal_summary,
+    pytest_testnodedown,
+    pytest_unconfigure,
+)
+from tests.support.warm_kernels import pytest_sessionstart  # noqa: F401 (a hook)
 
 
 @pytest.fixture(scope="session")

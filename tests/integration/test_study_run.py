@@ -258,6 +258,9 @@ def test_a_second_writer_of_the_same_result_is_refused(tmp_path):
     assert output.exists()
 
 
+# Slow tier: the resume computes the other 20000 points' attractors (78 s in CI); the
+# default tier keeps the in-process interrupt and resume (test_interrupted_run_resumes_...).
+@pytest.mark.slow
 def test_ctrl_c_keeps_every_computed_point_of_a_one_chunk_study(tmp_path):
     """A real SIGINT to `study run` of a study in one chunk, then a second `study run`.
 

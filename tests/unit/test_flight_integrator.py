@@ -283,6 +283,9 @@ def test_bouncing_orbits_match_the_reference(M, e, f, a):
 POINTS = Path(reference.__file__).parent / "data" / "flight_points.json"
 
 
+# Slow tier (35 s in CI): the default tier keeps the cached motions from a drop or from
+# stillness (test_cached_reference_motions_from_a_drop_or_from_stillness).
+@pytest.mark.slow
 def test_every_cached_reference_motion_from_rest():
     # The reference's file: every steady motion from rest (the integrator's start), by
     # structure (one call each, the points in parallel).

@@ -84,6 +84,9 @@ def test_the_m_to_1_structure_shows_hysteresis():
         2 * np.pi * 16.1)
 
 
+# Slow tier (54 s in CI): the default tier keeps the sweep against the integrator and the
+# hysteresis at M -> 1.
+@pytest.mark.slow
 def test_a_monostable_structure_sweeps_alike_both_ways():
     paper = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
     f = np.linspace(12.0, 16.0, 9)
