@@ -47,12 +47,19 @@ PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
 all: results
 
+# Every `study run` appends its wall time and point counts to RUN_LOG; `make` ends with
+# the table of the slowest runs it started (those begun after RUN_SINCE, the time make
+# read this file).
+RUN_LOG   := results/run-times.jsonl
+RUN_SINCE := $(shell date +%s)
+
 results: $(RESULTS)
+	@$(PY) -m study.engine.run_log $(RUN_LOG) --since $(RUN_SINCE)
 
 # make asks whenever the spec or the package is newer; `study run` recomputes only
 # when the spec's canonical hash or the computing code really changed.
 results/%.nc: workflows/%.toml $(PACKAGE) | $(STAMP)
-	$(STUDY) run $< -o $@
+	$(STUDY) run $< -o $@ --log-times $(RUN_LOG)
 
 # Designs (study design): the structure parameters that achieve target behaviours.
 DESIGNS := $(patsubst designs/%.toml,results/design-%.nc,$(wildcard designs/*.toml))
