@@ -38,11 +38,27 @@ STUDY  := $(VENV)/bin/study
 STAMP  := $(VENV)/.installed
 
 WORKFLOWS := $(wildcard workflows/*.toml)
-RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
+# `make` runs RESULT_JOBS studies at a time (default 2, the cores of the machine it was
+# timed on; RESULT_JOBS=1: one after another). On a fresh clone most of a study's time
+# is numba compiling its kernels, on one core: two at a time, one study compiles while
+# the other computes. They start in this order (the others follow in file order): a
+# two-way study first (it compiles the two-way kernels), then the one-way studies and
+# the steering scenes, whose kernels are others, so that the second job never waits
+# for or repeats that compile; then the studies that compile kernels of their own
+# (slow sweeps, attractors, basins, sections).
+RESULT_JOBS ?= 2
+RESULTS_FIRST := irregular-bouncing \
+    regime-map frontier mass-ratio mass-ratio-limit thresholds threshold-collapse \
+    velocity-curves steering steering-calibration steering-calibration-two-way \
+    steering-plan \
+    hysteresis-flight regime-map-flight basins-flight bifurcation-along-a
+STEMS     := $(patsubst workflows/%.toml,%,$(WORKFLOWS))
+RESULTS   := $(patsubst %,results/%.nc,$(foreach name,$(RESULTS_FIRST),$(filter $(name),$(STEMS))) \
+                 $(filter-out $(RESULTS_FIRST),$(STEMS)))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs docs-html test test-unit test-integration test-slow fuzz \
-        lint bench compare cf-check list clean \
+.PHONY: all results result-files figures docs docs-html test test-unit test-integration test-slow fuzz \
+        lint bench bench-quick compare cf-check list clean \
         schemas designs FORCE
 
 all: results
@@ -53,8 +69,11 @@ all: results
 RUN_LOG   := results/run-times.jsonl
 RUN_SINCE := $(shell date +%s)
 
-results: $(RESULTS)
+results: | $(STAMP)
+	@$(MAKE) --no-print-directory -j$(RESULT_JOBS) result-files
 	@$(PY) -m study.engine.run_log $(RUN_LOG) --since $(RUN_SINCE)
+
+result-files: $(RESULTS)
 
 # make asks whenever the spec or the package is newer; `study run` recomputes only
 # when the spec's canonical hash or the computing code really changed.
@@ -234,24 +253,40 @@ fuzz: $(STAMP)
 	{ echo "*Written by \`make fuzz\` on $$(date -u +%Y-%m-%d) ($$(nproc) cores); the next run overwrites this file.*"; \
 	  echo; cat results/reliability.md; } > docs/speed/reliability.md
 
+# The benchmarks, in one list for `make bench` and `make bench-quick`: $(1) is
+# `--quick` or nothing; $(2) the basins benchmark's options in quick mode.
+define BENCHMARKS
+	$(PY) benchmarks/bench_velocity_map.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/floor_one_way.py $(1)
+	$(PY) benchmarks/bench_study_overhead.py $(1)
+	$(PY) benchmarks/bench_work_precision.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_work_precision.py --coupling two-way $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_two_way_map.py $(1)
+	$(PY) benchmarks/bench_planar.py $(1)
+	$(PY) benchmarks/two_way_agreement.py $(1)
+	$(PY) benchmarks/bench_measurements.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_flight.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_orbit_sweeps.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_small_calls.py $(1)
+	$(PY) benchmarks/bench_frontier_reuse.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_protocol.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_basins.py $(2)
+endef
+
 bench: $(STAMP)
-	$(PY) benchmarks/bench_velocity_map.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/floor_one_way.py
-	$(PY) benchmarks/bench_study_overhead.py
-	$(PY) benchmarks/bench_work_precision.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_work_precision.py --coupling two-way
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_two_way_map.py
-	$(PY) benchmarks/bench_planar.py
-	$(PY) benchmarks/two_way_agreement.py
-	$(PY) benchmarks/bench_measurements.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_flight.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_orbit_sweeps.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_small_calls.py
-	$(PY) benchmarks/bench_frontier_reuse.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_protocol.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_basins.py
+	$(call BENCHMARKS,,)
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
+
+# A change's before and after in a minute or two (asv's quick mode): every benchmark
+# with --quick (fewer rounds, smaller sizes); tables and reports go to
+# results/bench-quick/, never docs/speed/ (the documentation's numbers are those of a
+# full `make bench`). Compare two checkouts' results/bench-quick/ (same machine, same
+# load), not a quick table with a full one.
+bench-quick: $(STAMP)
+	$(call BENCHMARKS,--quick,--size 15 --repeats 1 --no-docs \
+	    --output results/bench-quick/bench-basins.md)
+	@echo "quick tables and reports: results/bench-quick/"
 
 # A refactor keeps results bit-identical: `make compare BEFORE=other/results` checks
 # every file of that folder against results/, variable by variable.

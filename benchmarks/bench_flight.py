@@ -42,7 +42,14 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from docs_tables import load_average, machine, write_docs_table  # noqa: E402
+from docs_tables import (  # noqa: E402
+    load_average,
+    machine,
+    output,
+    quick_option,
+    use_quick,
+    write_docs_table,
+)
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
@@ -487,7 +494,11 @@ def main(argv: list[str] | None = None) -> int:
                         help="bouncing points checked against the reference (0: none)")
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--output", type=Path, default=ROOT / "results" / "bench-flight.md")
+    quick_option(parser)
     args = parser.parse_args(argv)
+    if use_quick(args.quick):  # 41 x 41 points, one round, two reference points
+        args.size, args.repeats, args.sample = min(args.size, 41), 1, min(args.sample, 2)
+    args.output = output(args.output)
     load_start = load_average()
     print(f"machine: {machine()}; load average {load_start}", flush=True)
     part = _map_part(args)

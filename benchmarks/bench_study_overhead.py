@@ -46,7 +46,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from docs_tables import write_docs_table
+from docs_tables import output, quick_option, use_quick, write_docs_table
 
 F_RANGE = (10.0, 20.0)  # Hz
 A_RANGE = (0.0, 12.0)  # m s-2
@@ -294,6 +294,7 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=Path("results/bench-study.md"))
     parser.add_argument("--scratch", type=Path, default=None,
                         help="folder for the temporary studies (default: system temp)")
+    quick_option(parser)
     parser.add_argument("--child", choices=KINDS, help=argparse.SUPPRESS)
     parser.add_argument("--side", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
@@ -301,6 +302,9 @@ def main() -> None:
     if args.child:
         child(args.child, args.side, args.folder, args.block_points)
         return
+    if use_quick(args.quick):  # one study of 1e6 points, one process per measurement
+        args.sizes, args.repeats, args.repeats_large = [1e6], 1, 1
+    args.output = output(args.output)
     rows = []
     load = os.getloadavg()[0]
     for points in args.sizes:

@@ -46,7 +46,15 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from docs_tables import exponent, load_average, machine, write_docs_table  # noqa: E402
+from docs_tables import (  # noqa: E402
+    exponent,
+    load_average,
+    machine,
+    output,
+    quick_option,
+    use_quick,
+    write_docs_table,
+)
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
@@ -150,7 +158,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="the integrator's tolerance for that check")
     parser.add_argument("--output", type=Path,
                         default=ROOT / "results" / "bench-two-way-map.md")
+    quick_option(parser)
     args = parser.parse_args(argv)
+    if use_quick(args.quick):  # 200 x 200 points, one round, smaller checks
+        args.size, args.repeats = min(args.size, 200), 1
+        args.sample, args.check_stride = min(args.sample, 5), max(args.check_stride, 20)
+    args.output = output(args.output)
 
     load_start = load_average()
     print(f"machine: {machine()}; load average {load_start}", flush=True)

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numba
 import numpy as np
-from docs_tables import per_point, write_docs_table
+from docs_tables import output, per_point, quick_option, use_quick, write_docs_table
 from numba import njit
 
 import study
@@ -203,7 +203,11 @@ def main() -> None:
     parser.add_argument("--size", type=int, default=1000, help="points per axis")
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--output", type=Path, default=ROOT / "results" / "bench-floor.md")
+    quick_option(parser)
     args = parser.parse_args()
+    if use_quick(args.quick):  # 300 x 300 points, two rounds
+        args.size, args.repeats = min(args.size, 300), 2
+    args.output = output(args.output)
     numba.set_num_threads(1)
 
     structure = study.Structure(**PAPER)
