@@ -18,7 +18,7 @@ unless given), after warm-up (compilation or cache load):
 Writes ``results/bench-flight.md`` and the documentation's table ``docs/speed/flight.md``.
 Timings are reported, never asserted.
 
-Usage: ``python benchmarks/bench_flight.py [--size 121] [--repeats 3] [--sample 8]``
+Usage: ``python benchmarks/bench_flight.py [--size 121] [--repeats 2] [--sample 8]``
 """
 
 from __future__ import annotations
@@ -489,7 +489,7 @@ def _bouncing_text(bouncing: dict) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=SIZE, help="points per axis")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--sample", type=int, default=8,
                         help="bouncing points checked against the reference (0: none)")
     parser.add_argument("--seed", type=int, default=2026)

@@ -56,7 +56,7 @@ Writes ``results/bench-orbit-sweeps.md`` (the full report) and the documentation
 tables, ``docs/speed/orbit-sweeps.md``. Timings are reported, never asserted.
 
 Usage: ``python benchmarks/bench_orbit_sweeps.py [--maps paper m1 flight] [--size 1000]
-[--m1-stride 1] [--flight-size 121] [--repeats 3] [--point-calls 2000]
+[--m1-stride 1] [--flight-size 121] [--repeats 2] [--point-calls 2000]
 [--pass-sample 20000]``
 """
 
@@ -1035,7 +1035,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="every k-th f and a of the M = 1 workflow's grid")
     parser.add_argument("--flight-size", type=int, default=FLIGHT_SIZE,
                         help="points per axis of the flight map")
-    parser.add_argument("--repeats", type=int, default=3, help="rounds; minimum taken")
+    parser.add_argument("--repeats", type=int, default=2, help="rounds; minimum taken")
     parser.add_argument("--point-calls", type=int, default=2000,
                         help="calls a round of the one-point part (0: skip it)")
     parser.add_argument("--pass-sample", type=int, default=20000,

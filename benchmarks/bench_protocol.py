@@ -105,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="points per axis of the paper's map (default 1001: 1e6 points)")
     parser.add_argument("--size-m1", type=int, default=301,
                         help="points per axis of the M = 1 map (default 301)")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--output", type=Path, default=Path("results/bench-protocol.md"))
     parser.add_argument("--docs", action=argparse.BooleanOptionalAction, default=True,
                         help="also write the documentation's table docs/speed/protocol.md")

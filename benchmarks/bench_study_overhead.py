@@ -26,7 +26,7 @@ largest seen (``ru_maxrss`` of the child). Timings are reported, never asserted.
 table goes to ``results/bench-study.md`` and to the documentation's
 ``docs/speed/study-overhead.md``.
 
-Usage: ``python benchmarks/bench_study_overhead.py [--sizes 1e6 1e7 1e8] [--repeats 3]
+Usage: ``python benchmarks/bench_study_overhead.py [--sizes 1e6 1e7 1e8] [--repeats 2]
 [--repeats-large 1]``
 """
 
@@ -285,7 +285,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", nargs="+", type=float, default=[1e6, 1e7, 1e8],
                         help="grid points per study (square grids)")
-    parser.add_argument("--repeats", type=int, default=3,
+    parser.add_argument("--repeats", type=int, default=2,
                         help="processes per measurement up to 3e7 points")
     parser.add_argument("--repeats-large", type=int, default=1,
                         help="processes per measurement above 3e7 points")

@@ -23,7 +23,7 @@ at <= 1e-12 relative error where the velocity is well conditioned (here: cond <=
 Writes ``results/bench-two-way-map.md`` and the documentation's table,
 ``docs/speed/two-way-map.md`` (CPU time per point).
 
-Usage: ``python benchmarks/bench_two_way_map.py [--size 1000] [--repeats 3] [--sample 30]``
+Usage: ``python benchmarks/bench_two_way_map.py [--size 1000] [--repeats 2] [--sample 30]``
 """
 
 from __future__ import annotations
@@ -147,7 +147,7 @@ def _status_check(f: np.ndarray, a: np.ndarray, status: np.ndarray, stride: int,
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000, help="points per axis")
-    parser.add_argument("--repeats", type=int, default=3, help="rounds of the three calls")
+    parser.add_argument("--repeats", type=int, default=2, help="rounds of the three calls")
     parser.add_argument("--sample", type=int, default=30,
                         help="moving points checked against the mpmath orbit (0: none)")
     parser.add_argument("--seed", type=int, default=2026)

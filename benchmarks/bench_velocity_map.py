@@ -122,7 +122,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000, help="points per axis")
     parser.add_argument("--sample", type=int, default=60, help="points checked with mpmath")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=2)
     quick_option(parser)
     args = parser.parse_args()
     if use_quick(args.quick):  # 300 x 300 points, one round, no cold compile

@@ -20,7 +20,7 @@ bit-identical to ``steady_state``'s (asserted). Timings are reported, never asse
 The table goes to ``results/bench-floor.md`` and, in CPU time, to the documentation's
 ``docs/speed/floor.md``.
 
-Usage: ``python benchmarks/floor_one_way.py [--size 1000] [--repeats 5]``
+Usage: ``python benchmarks/floor_one_way.py [--size 1000] [--repeats 3]``
 """
 
 from __future__ import annotations
@@ -201,7 +201,7 @@ def _machine() -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000, help="points per axis")
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--output", type=Path, default=ROOT / "results" / "bench-floor.md")
     quick_option(parser)
     args = parser.parse_args()
