@@ -1,6 +1,8 @@
 # study: make-driven parameter studies of stick-slip locomotion.
 #   make            run every workflow whose spec or package changed: results/<name>.nc
-#                   (parameter studies and the steering scenes alike)
+#                   (parameter studies and the steering scenes alike), two at a time
+#                   (RESULT_JOBS=1: one after another); ends with the table of the
+#                   slowest runs (wall time, points computed and reused)
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
 #   make docs       the documentation site, build/html/index.html (Sphinx, warnings are
 #                   errors; runs the example gallery); needs the figures, so `make` first
@@ -25,7 +27,10 @@
 #                   slow sweeps and verified starts against the one-way map
 #                   -> results/bench-protocol.md,
 #                   basins (24 starts) against a single-start map -> results/bench-basins.md,
-#                   reading a million-row measurement file (printed)
+#                   reading a million-row measurement file -> docs/speed/measurements.md
+#   make bench-quick  every benchmark with --quick (fewer rounds, smaller sizes; a
+#                   change's before and after): tables to results/bench-quick/, never
+#                   docs/speed/
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas,
 #                   and the generated tables of docs/user-guide/specs.md
