@@ -1,6 +1,8 @@
 # study: make-driven parameter studies of stick-slip locomotion.
 #   make            run every workflow whose spec or package changed: results/<name>.nc
-#                   (parameter studies and the steering scenes alike)
+#                   (parameter studies and the steering scenes alike), two at a time
+#                   (RESULT_JOBS=1: one after another); ends with the table of the
+#                   slowest runs (wall time, points computed and reused)
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
 #   make docs       the documentation site, build/html/index.html (Sphinx, warnings are
 #                   errors; runs the example gallery); needs the figures, so `make` first
@@ -28,7 +30,10 @@
 #                   slow sweeps and verified starts against the one-way map
 #                   -> results/bench-protocol.md,
 #                   basins (24 starts) against a single-start map -> results/bench-basins.md,
-#                   reading a million-row measurement file (printed)
+#                   reading a million-row measurement file -> docs/speed/measurements.md
+#   make bench-quick  every benchmark with --quick (fewer rounds, smaller sizes; a
+#                   change's before and after): tables to results/bench-quick/, never
+#                   docs/speed/
 #   make cf-check   CF-1.11 compliance of every result file (IOOS compliance-checker, offline)
 #   make schemas    refresh results_schema/, the repo's copy of the package's JSON schemas,
 #                   and the generated tables of docs/user-guide/specs.md
@@ -41,21 +46,47 @@ STUDY  := $(VENV)/bin/study
 STAMP  := $(VENV)/.installed
 
 WORKFLOWS := $(wildcard workflows/*.toml)
-RESULTS   := $(patsubst workflows/%.toml,results/%.nc,$(WORKFLOWS))
+# `make` runs RESULT_JOBS studies at a time (default 2, the cores of the machine it was
+# timed on; RESULT_JOBS=1: one after another). On a fresh clone most of a study's time
+# is numba compiling its kernels, on one core: two at a time, one study compiles while
+# the other computes. They start in this order (the others follow in file order): a
+# two-way study first (it compiles the two-way kernels), then the one-way studies and
+# the steering scenes, whose kernels are others, so that the second job never waits
+# for or repeats that compile; then the studies that compile kernels of their own
+# (slow sweeps, attractors, basins, sections).
+RESULT_JOBS ?= 2
+RESULTS_FIRST := irregular-bouncing \
+    regime-map frontier mass-ratio mass-ratio-limit thresholds threshold-collapse \
+    velocity-curves steering steering-calibration steering-calibration-two-way \
+    steering-plan \
+    hysteresis-flight regime-map-flight basins-flight bifurcation-along-a
+STEMS     := $(patsubst workflows/%.toml,%,$(WORKFLOWS))
+RESULTS   := $(patsubst %,results/%.nc,$(foreach name,$(RESULTS_FIRST),$(filter $(name),$(STEMS))) \
+                 $(filter-out $(RESULTS_FIRST),$(STEMS)))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results figures docs docs-html test test-unit test-integration test-slow test-all fuzz \
-        lint bench compare cf-check list clean \
+.PHONY: all results result-files figures docs docs-html test test-unit test-integration \
+        test-slow test-all fuzz lint bench bench-quick compare cf-check list clean \
         schemas designs FORCE
 
 all: results
 
-results: $(RESULTS)
+# Every `study run` appends its wall time and point counts to RUN_LOG; `make` ends with
+# the table of the slowest runs it started (those begun after RUN_SINCE, the time make
+# read this file).
+RUN_LOG   := results/run-times.jsonl
+RUN_SINCE := $(shell date +%s)
+
+results: | $(STAMP)
+	@$(MAKE) --no-print-directory -j$(RESULT_JOBS) result-files
+	@$(PY) -m study.engine.run_log $(RUN_LOG) --since $(RUN_SINCE)
+
+result-files: $(RESULTS)
 
 # make asks whenever the spec or the package is newer; `study run` recomputes only
 # when the spec's canonical hash or the computing code really changed.
 results/%.nc: workflows/%.toml $(PACKAGE) | $(STAMP)
-	$(STUDY) run $< -o $@
+	$(STUDY) run $< -o $@ --log-times $(RUN_LOG)
 
 # Designs (study design): the structure parameters that achieve target behaviours.
 DESIGNS := $(patsubst designs/%.toml,results/design-%.nc,$(wildcard designs/*.toml))
@@ -237,24 +268,40 @@ fuzz: $(STAMP)
 	{ echo "*Written by \`make fuzz\` on $$(date -u +%Y-%m-%d) ($$(nproc) cores); the next run overwrites this file.*"; \
 	  echo; cat results/reliability.md; } > docs/speed/reliability.md
 
+# The benchmarks, in one list for `make bench` and `make bench-quick`: $(1) is
+# `--quick` or nothing; $(2) the basins benchmark's options in quick mode.
+define BENCHMARKS
+	$(PY) benchmarks/bench_velocity_map.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/floor_one_way.py $(1)
+	$(PY) benchmarks/bench_study_overhead.py $(1)
+	$(PY) benchmarks/bench_work_precision.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_work_precision.py --coupling two-way $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_two_way_map.py $(1)
+	$(PY) benchmarks/bench_planar.py $(1)
+	$(PY) benchmarks/two_way_agreement.py $(1)
+	$(PY) benchmarks/bench_measurements.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_flight.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_orbit_sweeps.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_small_calls.py $(1)
+	$(PY) benchmarks/bench_frontier_reuse.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_protocol.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_basins.py $(2)
+endef
+
 bench: $(STAMP)
-	$(PY) benchmarks/bench_velocity_map.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/floor_one_way.py
-	$(PY) benchmarks/bench_study_overhead.py
-	$(PY) benchmarks/bench_work_precision.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_work_precision.py --coupling two-way
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_two_way_map.py
-	$(PY) benchmarks/bench_planar.py
-	$(PY) benchmarks/two_way_agreement.py
-	$(PY) benchmarks/bench_measurements.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_flight.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_orbit_sweeps.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_small_calls.py
-	$(PY) benchmarks/bench_frontier_reuse.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_protocol.py
-	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_basins.py
+	$(call BENCHMARKS,,)
 	mkdir -p docs/images && cp figures/work-precision.png figures/work-precision-two-way.png \
 	    docs/images/
+
+# A change's before and after in a minute or two (asv's quick mode): every benchmark
+# with --quick (fewer rounds, smaller sizes); tables and reports go to
+# results/bench-quick/, never docs/speed/ (the documentation's numbers are those of a
+# full `make bench`). Compare two checkouts' results/bench-quick/ (same machine, same
+# load), not a quick table with a full one.
+bench-quick: $(STAMP)
+	$(call BENCHMARKS,--quick,--size 15 --repeats 1 --no-docs \
+	    --output results/bench-quick/bench-basins.md)
+	@echo "quick tables and reports: results/bench-quick/"
 
 # A refactor keeps results bit-identical: `make compare BEFORE=other/results` checks
 # every file of that folder against results/, variable by variable.

@@ -18,7 +18,7 @@ unless given), after warm-up (compilation or cache load):
 Writes ``results/bench-flight.md`` and the documentation's table ``docs/speed/flight.md``.
 Timings are reported, never asserted.
 
-Usage: ``python benchmarks/bench_flight.py [--size 121] [--repeats 3] [--sample 8]``
+Usage: ``python benchmarks/bench_flight.py [--size 121] [--repeats 2] [--sample 8]``
 """
 
 from __future__ import annotations
@@ -42,7 +42,14 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from docs_tables import load_average, machine, write_docs_table  # noqa: E402
+from docs_tables import (  # noqa: E402
+    load_average,
+    machine,
+    output,
+    quick_option,
+    use_quick,
+    write_docs_table,
+)
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
@@ -482,12 +489,16 @@ def _bouncing_text(bouncing: dict) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=SIZE, help="points per axis")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--sample", type=int, default=8,
                         help="bouncing points checked against the reference (0: none)")
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--output", type=Path, default=ROOT / "results" / "bench-flight.md")
+    quick_option(parser)
     args = parser.parse_args(argv)
+    if use_quick(args.quick):  # 41 x 41 points, one round, two reference points
+        args.size, args.repeats, args.sample = min(args.size, 41), 1, min(args.sample, 2)
+    args.output = output(args.output)
     load_start = load_average()
     print(f"machine: {machine()}; load average {load_start}", flush=True)
     part = _map_part(args)

@@ -14,9 +14,20 @@ Usage: ``python benchmarks/bench_measurements.py [--rows 1000000] [--repeats 3]`
 from __future__ import annotations
 
 import argparse
+import os
+import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from docs_tables import (
+    load_average,
+    machine,
+    quick_option,
+    use_quick,
+    write_docs_table,
+)
 
 from study.analyses.measurements import read_measurements
 
@@ -37,7 +48,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rows", type=int, default=1_000_000)
     parser.add_argument("--repeats", type=int, default=3)
+    quick_option(parser)
     args = parser.parse_args()
+    if use_quick(args.quick):  # 1e5 rows, one round
+        args.rows, args.repeats = min(args.rows, 100_000), 1
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "measured.csv"
         write_rows(path, args.rows)
@@ -49,8 +63,17 @@ def main() -> None:
             walls.append(time.perf_counter() - wall)
             cpus.append(time.process_time() - cpu)
         assert data.sizes["measurement"] == args.rows
-        print(f"read_measurements: {args.rows} rows ({path.stat().st_size / 2**20:.1f} MiB) "
+        size = path.stat().st_size / 2**20
+        print(f"read_measurements: {args.rows} rows ({size:.1f} MiB) "
               f"in {min(walls):.2f} s (CPU {min(cpus):.2f} s; {args.repeats} repeats)")
+    table = "\n".join([
+        "| read_measurements | rows | file | time | CPU time | per row |",
+        "|---|---|---|---|---|---|",
+        f"| a CSV file of valid rows | {args.rows} | {size:.1f} MiB | {min(walls):.2f} s | "
+        f"{min(cpus):.2f} s | {min(cpus) / args.rows * 1e6:.1f} us |"])
+    write_docs_table("measurements", "bench_measurements.py",
+                     f"{machine()}; load average {load_average()}; the minimum of "
+                     f"{args.repeats} reads", table)
 
 
 if __name__ == "__main__":

@@ -56,7 +56,7 @@ Writes ``results/bench-orbit-sweeps.md`` (the full report) and the documentation
 tables, ``docs/speed/orbit-sweeps.md``. Timings are reported, never asserted.
 
 Usage: ``python benchmarks/bench_orbit_sweeps.py [--maps paper m1 flight] [--size 1000]
-[--m1-stride 1] [--flight-size 121] [--repeats 3] [--point-calls 2000]
+[--m1-stride 1] [--flight-size 121] [--repeats 2] [--point-calls 2000]
 [--pass-sample 20000]``
 """
 
@@ -84,7 +84,15 @@ from bench_flight import SIZE as FLIGHT_SIZE  # noqa: E402
 from bench_flight import STRUCTURE as FLIGHT_STRUCTURE  # noqa: E402
 from bench_flight import grid as flight_grid  # noqa: E402
 from bench_two_way_map import STRUCTURE as PAPER_STRUCTURE  # noqa: E402
-from docs_tables import exponent, load_average, machine, write_docs_table  # noqa: E402
+from docs_tables import (  # noqa: E402
+    exponent,
+    load_average,
+    machine,
+    output,
+    quick_option,
+    use_quick,
+    write_docs_table,
+)
 from floor_one_way import A_RANGE as PAPER_A  # noqa: E402
 from floor_one_way import F_RANGE as PAPER_F  # noqa: E402
 
@@ -1027,7 +1035,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="every k-th f and a of the M = 1 workflow's grid")
     parser.add_argument("--flight-size", type=int, default=FLIGHT_SIZE,
                         help="points per axis of the flight map")
-    parser.add_argument("--repeats", type=int, default=3, help="rounds; minimum taken")
+    parser.add_argument("--repeats", type=int, default=2, help="rounds; minimum taken")
     parser.add_argument("--point-calls", type=int, default=2000,
                         help="calls a round of the one-point part (0: skip it)")
     parser.add_argument("--pass-sample", type=int, default=20000,
@@ -1037,7 +1045,14 @@ def main(argv: list[str] | None = None) -> int:
                         default=ROOT / "results" / "bench-orbit-sweeps.md")
     parser.add_argument("--no-docs-table", action="store_true",
                         help="do not write docs/speed/orbit-sweeps.md (smoke tests)")
+    quick_option(parser)
     args = parser.parse_args(argv)
+    if use_quick(args.quick):  # smaller maps, one round, fewer calls and passes
+        args.size, args.m1_stride = min(args.size, 200), max(args.m1_stride, 4)
+        args.flight_size, args.repeats = min(args.flight_size, 41), 1
+        args.point_calls, args.pass_sample = min(args.point_calls, 200), min(
+            args.pass_sample, 2000)
+    args.output = output(args.output)
 
     load_start = load_average()
     print(f"machine: {machine()}; load average {load_start}", flush=True)

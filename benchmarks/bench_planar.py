@@ -15,6 +15,7 @@ Writes ``results/bench-planar.md`` and the documentation's table,
 
 from __future__ import annotations
 
+import argparse
 import os
 import platform
 import sys
@@ -22,7 +23,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from docs_tables import exponent, write_docs_table
+from docs_tables import exponent, output, quick_option, use_quick, write_docs_table
 
 from study.scenes.planar_model import rest_state, simulate_planar
 from study.scenes.scene_kind import load_scene
@@ -66,10 +67,14 @@ def _milliseconds(seconds: float) -> str:
     return f"{ms:.2g} ms" if ms < 100 else f"{ms:.0f} ms"
 
 
+#: Repeats of each timed call (1 with --quick).
+REPEATS = {"count": 3}
+
+
 def _timed(function, *args):
     best = np.inf
     result = None
-    for _ in range(3):
+    for _ in range(REPEATS["count"]):
         started = time.perf_counter()
         result = function(*args)
         best = min(best, time.perf_counter() - started)
@@ -77,14 +82,21 @@ def _timed(function, *args):
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    quick_option(parser)
+    args = parser.parse_args()
+    tolerances, slavings, rtols = (1e-6, 1e-8, 1e-10, 1e-12), (1e-3, 1e-4, 1e-5), (1e-8, 1e-10)
+    if use_quick(args.quick):  # two tolerances, one slaving, the looser reference, once
+        tolerances, slavings, rtols = (1e-6, 1e-10), (1e-4,), (1e-8,)
+        REPEATS["count"] = 1
     disk = load_scene(ROOT / "workflows" / "steering.toml").disk
     truth = {}
     for name, f in COMMANDS.items():
         state, _ = _package(disk, f, 1e-13, 1e-7)
         truth[name] = state
     rows = []
-    for tolerance in (1e-6, 1e-8, 1e-10, 1e-12):
-        for slaving in (1e-3, 1e-4, 1e-5):
+    for tolerance in tolerances:
+        for slaving in slavings:
             errors, seconds, steps = [], [], []
             for name, f in COMMANDS.items():
                 (state, count), spent = _timed(_package, disk, f, tolerance, slaving)
@@ -95,7 +107,7 @@ def main() -> None:
             rows.append(("package", f"tolerance {exponent(tolerance)}, slaving "
                          f"{exponent(slaving)}", max(errors), float(np.mean(seconds)),
                          float(np.mean(steps))))
-    for rtol in (1e-8, 1e-10):
+    for rtol in rtols:
         errors, seconds = [], []
         for name, f in COMMANDS.items():
             pose, spent = _timed(_reference, disk, f, rtol)
@@ -119,9 +131,9 @@ def main() -> None:
         lines.append(f"| {method} | {setting} | {error:.1e} | {seconds:.2e} | "
                      + ("" if np.isnan(steps) else f"{steps:.0f}") + " |")
     text = "\n".join(lines) + "\n"
-    output = ROOT / "results" / "bench-planar.md"
-    output.parent.mkdir(exist_ok=True)
-    output.write_text(text)
+    report = output(ROOT / "results" / "bench-planar.md")
+    report.parent.mkdir(exist_ok=True)
+    report.write_text(text)
     print(text)
     docs = ["| method | setting | error | time per drive period |", "|---|---|---|---|"]
     docs += [f"| {method} | {setting} | {error:.1e} | {_milliseconds(seconds)} |"

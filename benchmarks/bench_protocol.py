@@ -27,7 +27,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from docs_tables import load_average, machine, write_docs_table
+from docs_tables import load_average, machine, output, quick_option, use_quick, write_docs_table
 
 import study
 from study.engine.provenance import git_state, utc_now
@@ -105,11 +105,15 @@ def main(argv: list[str] | None = None) -> int:
                         help="points per axis of the paper's map (default 1001: 1e6 points)")
     parser.add_argument("--size-m1", type=int, default=301,
                         help="points per axis of the M = 1 map (default 301)")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--output", type=Path, default=Path("results/bench-protocol.md"))
     parser.add_argument("--docs", action=argparse.BooleanOptionalAction, default=True,
                         help="also write the documentation's table docs/speed/protocol.md")
+    quick_option(parser)
     args = parser.parse_args(argv)
+    if use_quick(args.quick):  # 201 x 201 and 61 x 61 points, one round
+        args.size, args.size_m1, args.repeats = min(args.size, 201), min(args.size_m1, 61), 1
+    args.output = output(args.output)
     loads = [load_average()]
     table = []
     notes = []

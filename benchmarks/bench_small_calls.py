@@ -47,7 +47,14 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from docs_tables import load_average, machine, write_docs_table  # noqa: E402
+from docs_tables import (  # noqa: E402
+    load_average,
+    machine,
+    output,
+    quick_option,
+    use_quick,
+    write_docs_table,
+)
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
@@ -177,7 +184,11 @@ def main(argv: list[str] | None = None) -> int:
                         help="seconds of calls in one batch")
     parser.add_argument("--output", type=Path,
                         default=ROOT / "results" / "bench-small-calls.md")
+    quick_option(parser)
     args = parser.parse_args(argv)
+    if use_quick(args.quick):  # 5 rounds
+        args.repeats = min(args.repeats, 5)
+    args.output = output(args.output)
 
     load_start = load_average()
     print(f"machine: {machine()}; load average {load_start}", flush=True)

@@ -26,7 +26,7 @@ largest seen (``ru_maxrss`` of the child). Timings are reported, never asserted.
 table goes to ``results/bench-study.md`` and to the documentation's
 ``docs/speed/study-overhead.md``.
 
-Usage: ``python benchmarks/bench_study_overhead.py [--sizes 1e6 1e7 1e8] [--repeats 3]
+Usage: ``python benchmarks/bench_study_overhead.py [--sizes 1e6 1e7 1e8] [--repeats 2]
 [--repeats-large 1]``
 """
 
@@ -46,7 +46,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from docs_tables import write_docs_table
+from docs_tables import output, quick_option, use_quick, write_docs_table
 
 F_RANGE = (10.0, 20.0)  # Hz
 A_RANGE = (0.0, 12.0)  # m s-2
@@ -285,7 +285,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", nargs="+", type=float, default=[1e6, 1e7, 1e8],
                         help="grid points per study (square grids)")
-    parser.add_argument("--repeats", type=int, default=3,
+    parser.add_argument("--repeats", type=int, default=2,
                         help="processes per measurement up to 3e7 points")
     parser.add_argument("--repeats-large", type=int, default=1,
                         help="processes per measurement above 3e7 points")
@@ -294,6 +294,7 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=Path("results/bench-study.md"))
     parser.add_argument("--scratch", type=Path, default=None,
                         help="folder for the temporary studies (default: system temp)")
+    quick_option(parser)
     parser.add_argument("--child", choices=KINDS, help=argparse.SUPPRESS)
     parser.add_argument("--side", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
@@ -301,6 +302,9 @@ def main() -> None:
     if args.child:
         child(args.child, args.side, args.folder, args.block_points)
         return
+    if use_quick(args.quick):  # one study of 1e6 points, one process per measurement
+        args.sizes, args.repeats, args.repeats_large = [1e6], 1, 1
+    args.output = output(args.output)
     rows = []
     load = os.getloadavg()[0]
     for points in args.sizes:

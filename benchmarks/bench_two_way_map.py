@@ -23,7 +23,7 @@ at <= 1e-12 relative error where the velocity is well conditioned (here: cond <=
 Writes ``results/bench-two-way-map.md`` and the documentation's table,
 ``docs/speed/two-way-map.md`` (CPU time per point).
 
-Usage: ``python benchmarks/bench_two_way_map.py [--size 1000] [--repeats 3] [--sample 30]``
+Usage: ``python benchmarks/bench_two_way_map.py [--size 1000] [--repeats 2] [--sample 30]``
 """
 
 from __future__ import annotations
@@ -46,7 +46,15 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from docs_tables import exponent, load_average, machine, write_docs_table  # noqa: E402
+from docs_tables import (  # noqa: E402
+    exponent,
+    load_average,
+    machine,
+    output,
+    quick_option,
+    use_quick,
+    write_docs_table,
+)
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
@@ -139,7 +147,7 @@ def _status_check(f: np.ndarray, a: np.ndarray, status: np.ndarray, stride: int,
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000, help="points per axis")
-    parser.add_argument("--repeats", type=int, default=3, help="rounds of the three calls")
+    parser.add_argument("--repeats", type=int, default=2, help="rounds of the three calls")
     parser.add_argument("--sample", type=int, default=30,
                         help="moving points checked against the mpmath orbit (0: none)")
     parser.add_argument("--seed", type=int, default=2026)
@@ -150,7 +158,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="the integrator's tolerance for that check")
     parser.add_argument("--output", type=Path,
                         default=ROOT / "results" / "bench-two-way-map.md")
+    quick_option(parser)
     args = parser.parse_args(argv)
+    if use_quick(args.quick):  # 200 x 200 points, one round, smaller checks
+        args.size, args.repeats = min(args.size, 200), 1
+        args.sample, args.check_stride = min(args.sample, 5), max(args.check_stride, 20)
+    args.output = output(args.output)
 
     load_start = load_average()
     print(f"machine: {machine()}; load average {load_start}", flush=True)

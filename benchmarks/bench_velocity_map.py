@@ -15,6 +15,7 @@ Usage: ``python benchmarks/bench_velocity_map.py [--size 1000] [--sample 60]``
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import platform
 import subprocess
@@ -25,7 +26,7 @@ from pathlib import Path
 
 import numba
 import numpy as np
-from docs_tables import per_point, write_docs_table
+from docs_tables import per_point, quick_option, use_quick, write_docs_table
 
 import study
 from study.kernels import one_way as kernel
@@ -121,8 +122,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000, help="points per axis")
     parser.add_argument("--sample", type=int, default=60, help="points checked with mpmath")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=2)
+    quick_option(parser)
     args = parser.parse_args()
+    if use_quick(args.quick):  # 300 x 300 points, one round, no cold compile
+        args.size, args.sample, args.repeats = min(args.size, 300), min(args.sample, 5), 1
 
     structure = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
     f = np.linspace(10.0, 20.0, args.size)[:, None]
@@ -155,7 +159,9 @@ def main() -> None:
     print(f"same map at M = 1: statuses {counts_1}")
     print(f"kernel, parallel:   {parallel_1:.3f} s  ({parallel_1 / n * 1e9:.0f} ns per point)")
 
-    cold, cached = _first_calls(cold=True), _first_calls(cold=False)
+    # A cold compile takes minutes on a busy machine: not in quick mode (NaN).
+    cold = math.nan if args.quick else _first_calls(cold=True)
+    cached = _first_calls(cold=False)
     print(f"first calls of a fresh process: {cold:.1f} s cold, {cached:.1f} s from the cache")
     threads = numba.config.NUMBA_NUM_THREADS
     sliding_share = np.mean(outputs_1[0].status == study.Status.CONTINUOUS_SLIDING)

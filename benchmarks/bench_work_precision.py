@@ -64,7 +64,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from baselines import naive_velocity, solve_ivp_velocity  # noqa: E402
-from docs_tables import write_docs_table  # noqa: E402
+from docs_tables import output as quick_output  # noqa: E402
+from docs_tables import use_quick, write_docs_table  # noqa: E402
 
 import study  # noqa: E402
 from study.engine.provenance import code_sha256, git_state, utc_now  # noqa: E402
@@ -632,7 +633,9 @@ def figure(dataset: xr.Dataset, stem: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="fewer, cheaper settings")
+    parser.add_argument("--quick", action="store_true",
+                        help="fewer, cheaper settings; the table, report and figure go to "
+                        "results/bench-quick/, never docs/speed/")
     parser.add_argument("--coupling", choices=("one-way", "two-way"), default="one-way")
     parser.add_argument("--output", type=Path, default=None,
                         help="default results/bench.nc (two-way: results/bench-two-way.nc)")
@@ -641,8 +644,9 @@ def main(argv: list[str] | None = None) -> int:
                              "figures/work-precision-two-way)")
     args = parser.parse_args(argv)
     suffix = "-two-way" if args.coupling == "two-way" else ""
-    output = args.output or ROOT / "results" / f"bench{suffix}.nc"
-    stem = args.figure or ROOT / "figures" / f"work-precision{suffix}"
+    use_quick(args.quick)
+    output = args.output or quick_output(ROOT / "results" / f"bench{suffix}.nc")
+    stem = args.figure or quick_output(ROOT / "figures" / f"work-precision{suffix}")
     dataset = run(args.quick, args.coupling)
     write_atomic(dataset, output)
     markdown = table(dataset)

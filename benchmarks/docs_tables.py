@@ -20,6 +20,42 @@ import numpy as np
 #: Where the documentation's benchmark tables live.
 DOCS_SPEED = Path(__file__).resolve().parent.parent / "docs" / "speed"
 
+#: Where a quick run (``--quick``, ``make bench-quick``) writes its tables and reports:
+#: never ``docs/speed/`` nor the full run's reports, whose numbers stay those of a full
+#: ``make bench``.
+QUICK_OUTPUT = Path(__file__).resolve().parent.parent / "results" / "bench-quick"
+
+_QUICK = {"on": False}
+
+
+def quick_option(parser) -> None:
+    """Add ``--quick`` to a benchmark's ``argparse`` parser (asv's quick mode: fewer
+    rounds, smaller sizes, for a change's before and after; the tables go to
+    :data:`QUICK_OUTPUT`)."""
+    parser.add_argument("--quick", action="store_true",
+                        help="fewer rounds and smaller sizes (a minute or so); tables "
+                        "and reports go to results/bench-quick/, never docs/speed/")
+
+
+def use_quick(on: bool) -> bool:
+    """Switch this process to quick mode (``--quick``); returns ``on``."""
+    _QUICK["on"] = bool(on)
+    if on:
+        QUICK_OUTPUT.mkdir(parents=True, exist_ok=True)
+    return bool(on)
+
+
+def is_quick() -> bool:
+    """Whether this process runs in quick mode."""
+    return _QUICK["on"]
+
+
+def output(path: str | Path) -> Path:
+    """Where a report goes: ``path``, or in quick mode the same name in
+    :data:`QUICK_OUTPUT`."""
+    path = Path(path)
+    return QUICK_OUTPUT / path.name if _QUICK["on"] else path
+
 
 def written_by(script: str, measured: str, date: str | None = None) -> str:
     """The first line of a table file: who wrote it, when and where it was measured.
@@ -63,7 +99,11 @@ def write_docs_table(name: str, script: str, measured: str, table: str,
     text = f"{written_by(script, measured)}\n\n{table.rstrip()}\n"
     if notes:
         text += f"\n{notes.rstrip()}\n"
-    path = DOCS_SPEED / f"{name}.md"
+    path = (QUICK_OUTPUT / f"docs-{name}.md") if _QUICK["on"] else DOCS_SPEED / f"{name}.md"
+    if _QUICK["on"]:
+        text = text.replace("*Written by `make bench`", "*Written by `make bench-quick` "
+                            "(fewer rounds, smaller sizes: not the documentation's numbers)",
+                            1)
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = path.with_name(f".{path.name}.tmp")
     temporary.write_text(text, encoding="utf-8")

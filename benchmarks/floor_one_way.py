@@ -20,7 +20,7 @@ bit-identical to ``steady_state``'s (asserted). Timings are reported, never asse
 The table goes to ``results/bench-floor.md`` and, in CPU time, to the documentation's
 ``docs/speed/floor.md``.
 
-Usage: ``python benchmarks/floor_one_way.py [--size 1000] [--repeats 5]``
+Usage: ``python benchmarks/floor_one_way.py [--size 1000] [--repeats 3]``
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numba
 import numpy as np
-from docs_tables import per_point, write_docs_table
+from docs_tables import output, per_point, quick_option, use_quick, write_docs_table
 from numba import njit
 
 import study
@@ -201,9 +201,13 @@ def _machine() -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000, help="points per axis")
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--output", type=Path, default=ROOT / "results" / "bench-floor.md")
+    quick_option(parser)
     args = parser.parse_args()
+    if use_quick(args.quick):  # 300 x 300 points, two rounds
+        args.size, args.repeats = min(args.size, 300), 2
+    args.output = output(args.output)
     numba.set_num_threads(1)
 
     structure = study.Structure(**PAPER)

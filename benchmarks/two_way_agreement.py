@@ -37,11 +37,22 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from docs_tables import (
+    load_average,
+    machine,
+    output,
+    quick_option,
+    use_quick,
+    write_docs_table,
+)
 
 from study.model import thresholds
 from study.model.status import Status
@@ -178,15 +189,23 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--points", type=int, default=400)
     parser.add_argument("--seed", type=int, default=1)
+    quick_option(parser)
     args = parser.parse_args()
+    if use_quick(args.quick):  # 40 points
+        args.points = min(args.points, 40)
     start = time.perf_counter()
     rows = run(args.points, args.seed)
     text = report(rows, args.seed, time.perf_counter() - start)
-    out = ROOT / "results" / "bench-two-way-agreement.md"
+    out = output(ROOT / "results" / "bench-two-way-agreement.md")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)
-    print(text.split("## All compared points")[0])
+    summary = text.split("## All compared points")[0]
+    print(summary)
     print(f"wrote {out}")
+    # The documentation's table: the summary without its title (the page has its own).
+    write_docs_table("two-way-agreement", "two_way_agreement.py",
+                     f"{machine()}; load average {load_average()} at the end",
+                     summary.split("\n", 2)[2].strip())
 
 
 if __name__ == "__main__":

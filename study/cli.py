@@ -10,6 +10,7 @@ import argparse
 import os
 import shlex
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -53,6 +54,7 @@ def _run(args: argparse.Namespace) -> int:
 
     spec = _load_telling_warnings(args.spec)
     command = "study " + " ".join(shlex.quote(a) for a in args.argv)
+    started = time.time()
     try:
         report = run(
             spec,
@@ -96,6 +98,15 @@ def _run(args: argparse.Namespace) -> int:
     if report.reason:
         print(f"{report.output}: rewritten because {report.reason} (values the cache kept "
               "were reused); the file it replaces was kept until the new one was sealed")
+    if args.log_times is not None:
+        from study.engine.run_log import append_record, record_of
+
+        try:
+            append_record(args.log_times,
+                          record_of(report, getattr(spec, "name", args.spec.stem), started))
+        except OSError as err:  # the log is a report: the result is written all the same
+            print(f"study: warning: --log-times {args.log_times}: cannot append "
+                  f"({err.strerror or err})", file=sys.stderr)
     return 0
 
 
@@ -512,6 +523,10 @@ def _add_run_command(commands: Any) -> None:
     run.add_argument("--cache", type=_folder_path, metavar="DIR",
                      help="kept values to reuse and extend (default: $STUDY_CACHE, else "
                      "RESULT_FOLDER/.study-cache)")
+    run.add_argument("--log-times", type=Path, metavar="FILE",
+                     help="append a line of this run's wall time and point counts to FILE "
+                     "(make: results/run-times.jsonl; python -m study.engine.run_log FILE "
+                     "prints the slowest)")
     _overwrite_option(run, "result", ", or the result of another study (another "
                       "recorded name)")
     run.set_defaults(handler=_run)

@@ -761,18 +761,32 @@ def _fly_plans(spec: SceneSpec, commands: dict[str, Any], routes: dict[str, Any]
     count = options["realisations"] + 1
     waypoints = options["waypoints"]
     noise = _heading_noise(options["heading_drift_deg"], disk)
-    runs = {}
-    for s, strategy in enumerate(strategies):
-        for r in range(count):
-            runs[s, r] = run_plan(
-                disk, options["start"], waypoints, commands, strategy=strategy,
-                heading_noise=noise if r > 0 else 0.0, seed=options["seed"] * 1000 + r,
-                settings=spec.settings, sample_interval=options["sample_interval"],
-                slaving=spec.slaving, route=routes[strategy],
-            )
+
+    def fly(flight: tuple[int, int]) -> Any:
+        s, r = flight
+        strategy = strategies[s]
+        return run_plan(
+            disk, options["start"], waypoints, commands, strategy=strategy,
+            heading_noise=noise if r > 0 else 0.0, seed=options["seed"] * 1000 + r,
+            settings=spec.settings, sample_interval=options["sample_interval"],
+            slaving=spec.slaving, route=routes[strategy],
+        )
+
+    # Each flight is a function of its own strategy, noise and seed alone (its own
+    # random generator; the commands and routes are only read), so the flights run side
+    # by side on threads (the kernel releases the GIL) and every value is the same as
+    # flown one after another. The dearest (closed-loop: each leg corrected) go first.
+    flights = [(s, r) for s in range(len(strategies)) for r in range(count)]
+    dearest_first = sorted(flights, key=lambda k: strategies[k[0]] != "closed_loop")
+    flown: dict[tuple[int, int], Any] = {}
+    with ThreadPoolExecutor() as pool:
+        futures = {pool.submit(fly, flight): flight for flight in dearest_first}
+        for future in as_completed(futures):
+            flight = futures[future]
+            flown[flight] = future.result()
             # A closed-loop run corrects each leg as the open-loop route was corrected.
-            report(1.0 + (_CORRECTIONS if strategy == "closed_loop" else 0))
-    return runs
+            report(1.0 + (_CORRECTIONS if strategies[flight[0]] == "closed_loop" else 0))
+    return {flight: flown[flight] for flight in flights}
 
 
 def _plan_variables(spec: SceneSpec, commands: dict[str, Any], routes: dict[str, Any],
