@@ -171,6 +171,16 @@ def continuation() -> None:
                              kernel.new_workspace(vector), True)
 
 
+def branches() -> None:
+    """The branch tracer (study.branch) on the table and with flight."""
+    import study
+
+    study.branch(_paper(), 13.0, 2.0, along="a", to=8.0)
+    ball = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=1e-12, cs=0.25,
+                           restitution=0.5)
+    study.branch(ball, 10.0, 12.0, along="a", to=11.0, flight=True)
+
+
 #: The jobs, dearest first (each process takes the next job when it is free).
 JOBS: dict[str, Callable[[], None]] = {
     "two_way": two_way,
@@ -180,12 +190,14 @@ JOBS: dict[str, Callable[[], None]] = {
     "flight": flight,
     "basins_and_sweeps": basins_and_sweeps,
     "continuation": continuation,
+    "branches": branches,
 }
 
 #: The jobs that start only once these have ended: they call the two-way solver's
 #: kernels, which two processes would otherwise compile side by side (a kernel compiled
 #: by a caller in another file is loaded from the cache once it is there).
-AFTER = {"two_way": ("two_way_more", "flight", "basins_and_sweeps", "continuation")}
+AFTER = {"two_way": ("two_way_more", "flight", "basins_and_sweeps", "continuation",
+                     "branches")}
 
 
 def run_jobs(names: list[str]) -> None:

@@ -161,6 +161,7 @@ def test_bad_arguments_are_refused_naming_the_key(kwargs, text):
         basins(PAPER, 15.0, 5.0, **kwargs)
 
 
+@pytest.mark.slow  # about 35 s: the flight and no-flight maps past lift-off
 def test_past_lift_off_without_flight_the_solver_start_is_still_followed():
     """Past the stick's lift-off threshold the release is no state the model can hold on
     the table, yet the solver follows it (lift-off, or an orbit that stays on the
