@@ -248,7 +248,7 @@ def bifurcation_curve(structure: Structure, parent: xr.Dataset, bifurcation: int
         to = float(check(to))
     except (TypeError, ValueError) as err:
         raise ValueError(f"bifurcation_curve: 'to': {err}") from None
-    if to == v_start:
+    if abs(to - v_start) <= 1e-9 * abs(v_start):
         raise ValueError(f"bifurcation_curve: 'to' must differ from the bifurcation's "
                          f"{other} = {v_start:g}")
     num = int(_check_number("num", num, 2, 10_000, integer=True))
@@ -339,6 +339,9 @@ def bifurcation_curve(structure: Structure, parent: xr.Dataset, bifurcation: int
         # halved further.
         target = samples[i]
         value = target if abs(target - current) <= abs(h) * (1 + 1e-12) else current + h
+        if value == current:  # no step left in floating point: the curve cannot go on
+            end, low, high = CURVE_LOST, float(current), float(target)
+            break
         code, row, moved = locate(anchor, value, 1.0)
         if code == CURVE_VANISHED:
             code, row, moved = locate(anchor, value, 4.0)  # moved farther?
