@@ -18,6 +18,7 @@ __all__ = [
     "METRE",
     "METRE_PER_SECOND",
     "METRE_PER_SECOND_SQUARED",
+    "RADIAN",
     "SECOND",
     "UNITS",
     "spoken",
@@ -31,12 +32,14 @@ METRE_PER_SECOND_SQUARED = "m s-2"
 KILOGRAM = "kg"
 DEGREE = "degree"
 DEGREE_PER_SECOND = "degree s-1"
+#: The argument of a complex number (a Floquet multiplier's).
+RADIAN = "rad"
 #: A ratio, a count, a coefficient, a flag (CF's ``1``).
 DIMENSIONLESS = "1"
 
 #: Every unit string the package writes or declares.
 UNITS = frozenset({HERTZ, SECOND, METRE, METRE_PER_SECOND, METRE_PER_SECOND_SQUARED,
-                   KILOGRAM, DEGREE, DEGREE_PER_SECOND, DIMENSIONLESS})
+                   KILOGRAM, DEGREE, DEGREE_PER_SECOND, RADIAN, DIMENSIONLESS})
 
 
 def spoken(units: str) -> str:
