@@ -141,40 +141,33 @@ CURVE_ENDS = (
 )
 
 
+def _find(family, field, value, what):
+    """The member of ``family`` whose ``field`` is ``value``; a ValueError lists them."""
+    for member in family:
+        if getattr(member, field) == value:
+            return member
+    raise ValueError(f"unknown {what} {value!r}; allowed: "
+                     f"{', '.join(str(getattr(m, field)) for m in family)}")
+
+
 def curve_end_named(code: int) -> BranchEnd:
     """The curve end (:data:`CURVE_ENDS`) of ``code``."""
-    for end in CURVE_ENDS:
-        if end.code == code:
-            return end
-    raise ValueError(f"unknown curve end {code!r}; allowed: "
-                     f"{', '.join(str(e.code) for e in CURVE_ENDS)}")
+    return _find(CURVE_ENDS, "code", code, "curve end")
 
 
 def kind_named(name: str) -> BifurcationKind:
     """The :class:`BifurcationKind` called ``name``; a ValueError lists the names."""
-    for kind in KINDS:
-        if kind.name == name:
-            return kind
-    raise ValueError(f"unknown bifurcation kind {name!r}; allowed: "
-                     f"{', '.join(k.name for k in KINDS)}")
+    return _find(KINDS, "name", name, "bifurcation kind")
 
 
 def kind_of_code(code: int) -> BifurcationKind:
     """The :class:`BifurcationKind` of ``code``."""
-    for kind in KINDS:
-        if kind.code == code:
-            return kind
-    raise ValueError(f"unknown bifurcation code {code!r}; allowed: "
-                     f"{', '.join(str(k.code) for k in KINDS)}")
+    return _find(KINDS, "code", code, "bifurcation code")
 
 
 def end_named(code: int) -> BranchEnd:
     """The :class:`BranchEnd` of ``code``."""
-    for end in ENDS:
-        if end.code == code:
-            return end
-    raise ValueError(f"unknown branch end {code!r}; allowed: "
-                     f"{', '.join(str(e.code) for e in ENDS)}")
+    return _find(ENDS, "code", code, "branch end")
 
 
 def markdown_table() -> str:
