@@ -230,8 +230,11 @@ def test_mass_ratio_towards_one_orbits_close_in_reference(M):
     assert bouncing >= 30
 
 
-#: Points where the exact solver finds no periodic orbit (NO_PERIODIC_ORBIT): four of the
-#: seeded sample above (e = 0.5) and e = 0.9 at M = 0.6, 15 Hz, 9 m s-2.
+#: Points where the exact solver finds no periodic orbit: four of the seeded sample above
+#: (e = 0.5) and e = 0.9 at M = 0.6, 15 Hz, 9 m s-2. Since the solver follows irregular
+#: motions (issue 35) two of them are CHAOTIC or QUASI_PERIODIC with a time-averaged
+#: velocity and three end NOT_CONVERGED (AVERAGE_BUDGET: the mean's standard error stayed
+#: above the velocity tolerance over the averaged periods).
 IRREGULAR = [
     ({"M": 0.4791, "restitution": 0.5}, 14.621, 17.737),
     ({"M": 0.7509, "restitution": 0.5}, 23.214, 16.400),
@@ -244,16 +247,30 @@ IRREGULAR = [
 @pytest.mark.slow
 @pytest.mark.parametrize(("changes", "f", "a"), IRREGULAR)
 def test_no_periodic_orbit_is_irregular_in_reference(changes, f, a):
-    """Where the exact solver reports NO_PERIODIC_ORBIT (no velocity), the reference
-    followed from rest finds no orbit of up to 8 periods in 400 periods either (5-16 s
-    each)."""
+    """Where the exact solver finds no periodic orbit, the reference followed from rest
+    finds no orbit of up to 8 periods in 400 periods either (5-16 s each), and the
+    solver says so: an irregular motion (CHAOTIC or QUASI_PERIODIC, no multiplier) whose
+    averaged velocity the reference's own 64-period mean confirms, or NOT_CONVERGED with
+    AVERAGE_BUDGET and no velocity.
+
+    The two means are of different trajectories over different spans, so they agree to
+    their statistical error: within 5 standard errors of the reference's shorter mean,
+    the solver's error scaled by sqrt(averaged periods / 64) (measured: 5.9e-5 m s-1 at
+    the chaotic point, 0.5 of that bound; 1.1e-5 at the quasi-periodic one). A
+    wrong time average (a term or a sign) is off by a fraction of the velocity."""
     s = study.Structure(**{**PAPER, **changes})
     r = steady_state(s, f, a, coupling="two-way", flight=True, parallel=False)
-    assert Status(int(r.status)) == Status.NOT_CONVERGED
-    assert NonConvergence(int(r.reason)) == NonConvergence.NO_PERIODIC_ORBIT
-    assert math.isnan(float(r.velocity))
     motion = steady_motion(s, f, a, max_periods=400)
     assert motion.status == "not-periodic" and motion.period == 0
+    status = Status(int(r.status))
+    assert math.isnan(float(r.floquet_multiplier))
+    if status == Status.NOT_CONVERGED:
+        assert NonConvergence(int(r.reason)) == NonConvergence.AVERAGE_BUDGET
+        assert math.isnan(float(r.velocity))
+        return
+    assert status in (Status.CHAOTIC, Status.QUASI_PERIODIC)
+    error = float(r.velocity_error) * math.sqrt(1.0 + int(r.averaged_periods) / 64)
+    assert_allclose(motion.velocity, float(r.velocity), rtol=0.0, atol=5.0 * error)
 
 
 def always_airborne_velocity(structure, f):
