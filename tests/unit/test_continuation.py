@@ -338,14 +338,25 @@ def test_workflow_rows_continue_to_the_cold_orbits(name):
         assert found["moving"] == 0 or found["continued"] >= 0.5 * found["moving"], found
 
 
+#: The share of moving points a whole grid continues, where a workflow's grid is not a
+#: typical one. basins-flight's grid (M = 0.99, 12-17 Hz, 9-12 m s-2), solved on the
+#: contact path, lies wholly past lift-off (663 LIFT_OFF points) in rows of only 13
+#: accelerations: each row's first point is cold and 19 continuations fail (the event
+#: sequence changes, or a residual stops contracting) and restart cold; measured 536 of
+#: 663 (0.81) since the workflow was added (issue 37), the orbits still equal to the cold
+#: ones.
+CONTINUED_SHARE = {"basins-flight": 0.78}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", TWO_WAY_WORKFLOWS)
 def test_workflow_grid_continues_to_the_cold_orbits(name):
     """The workflow's whole grid, every structure: continued == cold."""
+    # 0.9 before the verified start; 0.889 measured after it on irregular-bouncing (a
+    # cold orbit found by the cycle search is not remembered for the next point).
+    share = CONTINUED_SHARE.get(name, 0.85)
     for found in check_workflow(name, None):
-        # 0.9 before the verified start; 0.889 measured after it on irregular-bouncing
-        # (a cold orbit found by the cycle search is not remembered for the next point).
-        assert found["moving"] == 0 or found["continued"] >= 0.85 * found["moving"], found
+        assert found["moving"] == 0 or found["continued"] >= share * found["moving"], found
 
 
 def paper_rows():
