@@ -112,9 +112,10 @@ $(STAMP): pyproject.toml
 # The package reads study/schemas/ (package data, shipped in the wheel); results_schema/
 # keeps an identical copy at the top of the repo (a test checks they agree).
 # The spec schema's observables are exported from study/engine/observables.py, the
-# parameters of the study, fit and design spec schemas from study/model/parameters.py; results_schema/
+# parameters of the study, fit and design spec schemas from study/model/parameters.py, the
+# starts (spec and result schemas) from study/model/starts.py; results_schema/
 # is the repository's copy of the package's schemas (a test checks both). The tables
-# of docs/user-guide/specs.md (parameters, observables, contact laws) are written into
+# of docs/user-guide/specs.md (parameters, observables, contact laws, starts) are written into
 # the page from the same declarations (docs/generate_tables.py; a test checks them).
 schemas: | $(STAMP)
 	$(PY) -c "from study.engine.study_spec import export_spec_schema as e; text = e(); \
@@ -125,6 +126,8 @@ schemas: | $(STAMP)
 	open('study/schemas/study-fit-spec-v1.schema.json', 'w').write(text)"
 	$(PY) -c "from study.analyses.design import export_design_spec_schema as e; text = e(); \
 	open('study/schemas/study-design-spec-v1.schema.json', 'w').write(text)"
+	$(PY) -c "from study.engine.validation.header import export_result_schema as e; text = e(); \
+	open('study/schemas/study-result-v1.schema.json', 'w').write(text)"
 	$(MAKE) $(patsubst study/schemas/%,results_schema/%,$(wildcard study/schemas/*.json))
 	$(PY) docs/generate_tables.py
 

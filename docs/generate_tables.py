@@ -61,6 +61,7 @@ TABLES = (
     Table("observables", "user-guide/specs.md", "study.engine.observables.markdown_table"),
     Table("contact laws", "user-guide/specs.md", "study.model.contact.markdown_table"),
     Table("parameters", "user-guide/specs.md", "study.model.parameters.markdown_table"),
+    Table("starts", "user-guide/specs.md", "study.model.starts.markdown_table"),
     Table("bifurcations", "theory/branches.md", "study.model.bifurcations.markdown_table"),
 )
 

@@ -33,6 +33,7 @@ from study.model.codes import (
     CURVE_REACHED,
     CURVE_VANISHED,
 )
+from study.model.starts import Drop
 from study.model.structure import Structure, check_structure
 from study.solvers.branch import (
     DEFAULT_MAX_STEP,
@@ -42,7 +43,7 @@ from study.solvers.branch import (
     trace,
     trace_from_section,
 )
-from study.solvers.exact import Drop, SolverSettings
+from study.solvers.exact import SolverSettings
 from study.version import VERSION
 
 __all__ = ["bifurcation_curve", "branch", "doubled_branch", "event_signature"]

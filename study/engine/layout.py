@@ -24,9 +24,9 @@ from study.engine.sweep import Chunk, plan_chunks
 from study.engine.variables import GRID_SIZES, GRIDS, VARIABLES
 from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS, Friction
 from study.model.parameters import STRUCTURE
+from study.model.starts import start_attributes
 from study.model.units import DIMENSIONLESS, KILOGRAM
 from study.solvers.basins import sampling_reach
-from study.solvers.exact import start_attributes
 
 __all__ = [
     "Coordinate",
@@ -291,7 +291,7 @@ def protocol_attributes(spec: StudySpec) -> dict[str, str | float]:
 
     What this returns joins :func:`method_attributes`, and so is written into every
     result and compared with the embedded spec by validation: the start
-    (:func:`study.solvers.exact.start_attributes`): ``study_start``, its label
+    (:func:`study.model.starts.start_attributes`): ``study_start``, its label
     (``"release"``, ``"switch-on"``, ``"drop 0.002 m at phase 0.25"``),
     ``study_start_kind`` (``release``, ``switch-on`` or ``drop``) and for a drop the
     floats ``study_start_height`` [m] and ``study_start_phase`` [periods]. A file

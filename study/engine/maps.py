@@ -43,10 +43,10 @@ from study.model.inputs import (
     tilt_looks_like_radians,
 )
 from study.model.parameters import STRUCTURE as STRUCTURE_TABLE
+from study.model.starts import DEFAULT_START, Drop, toml_value
 from study.model.structure import Structure
 from study.solvers.exact import (
     DEFAULT_COUPLING,
-    Drop,
     SolverSettings,
     check_coupling,
     check_flight,
@@ -127,12 +127,8 @@ def map_spec_text(structure: Structure, f: NDArray[np.float64], a: NDArray[np.fl
     if "max_average_periods" in averaging:
         lines += [f"max_average_periods = {int(averaging['max_average_periods'])}"]
     # And the start, where not the release.
-    start = settings.start
-    if isinstance(start, Drop):
-        lines += [f"start = {{ drop = {_toml_number(start.height)}, phase = "
-                  f"{_toml_number(start.phase)} }}"]
-    elif start != "release":
-        lines += [f'start = "{start}"']
+    if settings.start != DEFAULT_START:
+        lines += [f"start = {toml_value(settings.start, _toml_number)}"]
     if basins is not None:
         lines += ["", "[basins]"]
         lines += [f"{key} = {_toml_scalar(key, value, 'basins')}"

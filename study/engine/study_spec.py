@@ -66,6 +66,7 @@ from study.engine.spec_files import (
     schema_problems,
 )
 from study.engine.variables import DEFAULT_MAX_ATTRACTORS
+from study.model import starts
 from study.model.contact import (
     DEFAULT_FRICTION,
     DEFAULT_LIFT_OFF,
@@ -89,15 +90,10 @@ from study.model.parameters import (
     schema_definition,
     schema_properties,
 )
+from study.model.starts import Drop
 from study.model.structure import Structure, tilt_warnings
 from study.solvers.basins import DROP_HEIGHT_RANGE, FACTOR_RANGE
-from study.solvers.exact import (
-    DEFAULT_COUPLING,
-    MAX_SOLVER_BUDGET,
-    Drop,
-    SolverSettings,
-    start_label,
-)
+from study.solvers.exact import DEFAULT_COUPLING, MAX_SOLVER_BUDGET, SolverSettings
 from study.solvers.frontier import finest_tolerance
 from study.solvers.integrator import MAX_INTEGRATOR_BUDGET, IntegratorSettings
 from study.solvers.protocol import SWEEP_AXES, SWEEP_DIRECTIONS
@@ -434,30 +430,10 @@ def _basins_schema() -> dict[str, Any]:
 
 
 def _start_schema() -> dict[str, Any]:
-    """``[solver] start``: a named start or a drop's table (the values
-    :func:`study.solvers.exact.as_start` takes; it also checks them, with the messages
-    the API gives)."""
-    return {
-        "anyOf": [
-            {"enum": ["release", "switch-on"]},
-            {"type": "object", "additionalProperties": False, "required": ["drop"],
-             "properties": {
-                 "drop": {"type": "number", "exclusiveMinimum": 0,
-                          "description": "height of the base above the table [m], > 0"},
-                 "phase": {"type": "number", "minimum": 0, "exclusiveMaximum": 1,
-                           "description": "drive phase of the release [periods], in "
-                                          "[0, 1) (default 0)"}}},
-        ],
-        "default": "release",
-        "description": (
-            "exact solver, two-way coupling: the state each point's motion starts from, a "
-            "physical protocol (docs/theory/starts.md): \"release\" (default: the base at "
-            "rest on the table at drive phase 0, the mode on its steady stick response), "
-            "\"switch-on\" (base and mode at rest, the drive switched on at phase 0) or "
-            "{ drop = height_m, phase = fraction_of_period } (the base held at rest above "
-            "the table, the mode at rest, let go at that phase; height > 0, phase in "
-            "[0, 1); needs flight = true)"),
-    }
+    """``[solver] start``: a named start or a start's table, from the declared kinds
+    (:func:`study.model.starts.spec_schema`; :func:`study.model.starts.as_start` checks
+    them, with the messages the API gives)."""
+    return starts.spec_schema()
 
 
 def _flight_schema() -> dict[str, Any]:
@@ -1311,33 +1287,15 @@ def _basins(table: Any, observables: tuple[str, ...], protocol: bool,
 
 def _check_start(solver: SolverSettings | None, coupling: str, flight: bool | None,
                  observables: tuple[str, ...], path: str, problems: _Problems) -> None:
-    """``[solver] start`` where the model can take it: other than the release needs
-    coupling = "two-way" (the one-way model's mode has no state to start), a drop needs
-    flight = true (the base starts above the table) and no ``without_flight``
-    observable (the same start with the run stopped at lift-off: no state of that
-    model)."""
-    if solver is None or solver.start == "release":
+    """``[solver] start`` where the model can take it, in the API's wording
+    (:func:`study.model.starts.refusal`): other than the release needs coupling =
+    "two-way", a drop needs flight = true and no ``without_flight`` observable."""
+    if solver is None:
         return
-    start = solver.start
-    shown = (f"{{ drop = {start.height!r}, phase = {start.phase!r} }}"
-             if isinstance(start, Drop) else f'"{start}"')
-    if coupling != "two-way":
-        problems.add(
-            f'{path}: [solver] start = {shown} ({start_label(start)}) needs coupling = '
-            f'"two-way": the one-way model\'s mode is driven by the table alone and has no '
-            f'state to start; got coupling = "{coupling}" (allowed: coupling = "two-way", '
-            'or start = "release")')
-    elif isinstance(start, Drop) and flight is False:
-        problems.add(
-            f"{path}: [solver] start = {shown} ({start_label(start)}) needs flight = true: "
-            "the base starts above the table and must fly to it (allowed: flight = true, "
-            'or start = "release" or "switch-on")')
-    elif isinstance(start, Drop) and "without_flight" in observables:
-        problems.add(
-            f"{path}: [solver] start = {shown} ({start_label(start)}) with the observable "
-            "without_flight: that observable solves the same start with the run stopped at "
-            "lift-off, and a base above the table is no state of that model (allowed: "
-            'start = "release" or "switch-on" with without_flight, or remove it)')
+    problem = starts.refusal(solver.start, coupling=coupling, flight=flight,
+                             observables=observables, syntax="toml")
+    if problem is not None:
+        problems.add(f"{path}: {problem}")
 
 
 #: Why flight needs two-way coupling (the decision of issue 21).

@@ -19,17 +19,16 @@ from study.kernels.two_way import bifurcations as trace_kernel
 from study.kernels.two_way import branch as branch_kernel
 from study.model import as_acceleration, as_frequency
 from study.model.codes import BIFURCATION_PERIOD_DOUBLING
+from study.model.starts import START_ALLOWED, START_TYPES, Drop, start_label
 from study.model.status import Status
 from study.model.structure import Structure, check_structure
 from study.solvers.exact import (
-    Drop,
     SolverSettings,
     check_coupling,
     check_flight,
     check_settings,
     check_start,
     kernel_budget,
-    start_label,
     steady_state,
     structure_vector,
 )
@@ -184,7 +183,7 @@ def start_orbit(structure: Structure, f: float, a: float, start: str | Drop | Ar
     the named ``start`` reaches at ``(f, a)`` [Hz, m s-2] (an orbit, or the static
     point's steady stick response), or a state given (an array of 5, or 3 without
     flight), with ``periods`` (default 1), polished by Newton's method."""
-    if isinstance(start, str | Drop):
+    if isinstance(start, START_TYPES):
         settings = check_start(settings, start, "two-way", flight)
         orbit = steady_state(structure, f, a, settings, coupling="two-way", flight=flight)
         status = Status(int(orbit.status))
@@ -206,7 +205,7 @@ def start_orbit(structure: Structure, f: float, a: float, start: str | Drop | Ar
     except (TypeError, ValueError):
         state = np.zeros(0)
     if state.size not in (3, 5) or not np.all(np.isfinite(state)):
-        raise ValueError("branch: start must be 'release', 'switch-on', a Drop, or the "
+        raise ValueError(f"branch: start must be {START_ALLOWED}, or the "
                          "orbit's state at phase 0, (delta, delta', v[, h, h']) [m, m s-1, "
                          f"m s-1, m, m s-1], finite; got {start!r}")
     full = np.zeros(5)

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels import one_way as one_way_kernel
 from study.kernels import structure_vector as sv
 from study.kernels.budget import Budget
-from study.kernels.start import RELEASE, SWITCH_ON, Start
+from study.kernels.start import Start
 from study.kernels.two_way import attractors as attractor_kernel
 from study.kernels.two_way import points as orbit_kernel
 from study.kernels.two_way import section as section_kernel
@@ -45,6 +45,15 @@ from study.model.contact import (
     check_friction,
 )
 from study.model.inputs import InputTypeError, instance_of
+from study.model.starts import (
+    DEFAULT_START,
+    START_NAMES,
+    Drop,
+    as_start,
+    canonical,
+    kernel_fields,
+    refusal,
+)
 from study.model.status import Status
 from study.model.structure import Structure, check_structure
 
@@ -90,120 +99,10 @@ VELOCITY_TOLERANCE_RANGE = (0.0, 1.0)
 #: Inputs with at least this many points are solved by the parallel kernel.
 PARALLEL_THRESHOLD = 2048
 
-#: The named starts (docs/theory/starts.md), the default first: ``"release"`` (the base
-#: at rest on the table at drive phase 0, the mode on its steady stick response) and
-#: ``"switch-on"`` (the base at rest on the table, the mode at rest at ``delta = delta'
-#: = 0``, the drive switched on at phase 0). A :class:`Drop` is the third kind.
-START_NAMES = ("release", "switch-on")
-#: The allowed values of ``start``, as the error messages name them.
-START_ALLOWED = ('"release" (default), "switch-on", or a drop { drop = height_m, phase = '
-                 'fraction_of_period } (height > 0, phase in [0, 1))')
-#: The keys of a drop's table (``phase`` optional, default 0).
-DROP_KEYS = ("drop", "phase")
-
-
-@dataclass(frozen=True)
-class Drop:
-    """The drop start: the structure held at rest ``height`` above the vibrating table,
-    the mode at rest at ``delta = delta' = 0`` (the static deflection of a held base),
-    let go at drive phase ``phase``.
-
-    Not the drops of :func:`attractors`, whose mode starts at rest at its flight
-    equilibrium ``g cos(alpha) / k`` (a structure already falling freely): this one is
-    held, then let go, so the mode starts its free oscillation about that equilibrium.
-
-    Parameters
-    ----------
-    height : float
-        Height of the base above the table [m], finite and > 0.
-    phase : float, default 0
-        Drive phase of the release [periods] (fraction of ``1/f``), in [0, 1): the
-        table's acceleration is then ``-a cos(2 pi phase)``.
-
-    Raises
-    ------
-    ValueError
-        A height or phase that is not a finite number in range, naming the key
-        ``start`` and the allowed values.
-    """
-
-    height: float
-    phase: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name, value in (("drop", self.height), ("phase", self.phase)):
-            if isinstance(value, bool) or not isinstance(value, int | float | np.integer
-                                                          | np.floating):
-                raise InputTypeError(
-                    f"solver setting 'start': {name} must be a number, got {value!r}; "
-                    f"allowed: {START_ALLOWED}")
-        height, phase = float(self.height), float(self.phase)
-        if not (np.isfinite(height) and height > 0.0):
-            raise ValueError(
-                f"solver setting 'start': drop = {self.height!r} m: the height must be "
-                f"finite and > 0; allowed: {START_ALLOWED}")
-        if not (np.isfinite(phase) and 0.0 <= phase < 1.0):
-            raise ValueError(
-                f"solver setting 'start': phase = {self.phase!r}: the drive phase must be "
-                f"in [0, 1) (a fraction of the period); allowed: {START_ALLOWED}")
-        object.__setattr__(self, "height", height)
-        object.__setattr__(self, "phase", phase)
-
-    def canonical(self) -> dict[str, float]:
-        """As a spec writes it: ``{"drop": height, "phase": phase}``."""
-        return {"drop": self.height, "phase": self.phase}
-
-    def label(self) -> str:
-        """``"drop 0.002 m at phase 0.25"``: what a result's ``start`` attribute says."""
-        return f"drop {self.height!r} m at phase {self.phase!r}"
-
-
-def as_start(value: object) -> str | Drop:
-    """``value`` as a start: one of :data:`START_NAMES`, a :class:`Drop`, or a mapping
-    ``{"drop": height, "phase": phase}`` (a spec's table) made a :class:`Drop`; else a
-    ValueError (an InputTypeError for a wrong type) naming ``start`` and the allowed
-    values."""
-    if isinstance(value, Drop):
-        return value
-    if isinstance(value, str):
-        if value not in START_NAMES:
-            raise ValueError(f"solver setting 'start' must be {START_ALLOWED}; got "
-                             f"{value!r}")
-        return value
-    if isinstance(value, dict):
-        unknown = sorted(str(k) for k in value if k not in DROP_KEYS)
-        if unknown or "drop" not in value:
-            problem = (f"unknown key {', '.join(map(repr, unknown))}" if unknown
-                       else "no key 'drop' (the height [m])")
-            raise ValueError(f"solver setting 'start' = {value!r}: {problem}; allowed: "
-                             f"{START_ALLOWED}")
-        return Drop(value["drop"], value.get("phase", 0.0))
-    raise InputTypeError(f"solver setting 'start' must be {START_ALLOWED}; got "
-                         f"{type(value).__name__}: {value!r}")
-
-
-def start_label(start: str | Drop) -> str:
-    """A start as a result's ``start`` attribute names it: ``"release"``,
-    ``"switch-on"``, ``"drop 0.002 m at phase 0.25"``."""
-    return start.label() if isinstance(start, Drop) else start
-
-
-def start_attributes(start: str | Drop) -> dict[str, str | float]:
-    """The attributes a result records its start in: ``start`` (:func:`start_label`),
-    ``start_kind`` (``release``, ``switch-on`` or ``drop``), and for a drop
-    ``start_height`` [m] and ``start_phase`` [periods]. A file without them started by
-    the release."""
-    if isinstance(start, Drop):
-        return {"start": start.label(), "start_kind": "drop", "start_height": start.height,
-                "start_phase": start.phase}
-    return {"start": start, "start_kind": start}
-
-
 def kernel_start(start: str | Drop) -> Any:
-    """The kernels' :data:`~study.kernels.start.Start` of a checked ``start``."""
-    if isinstance(start, Drop):
-        return Start(start.phase, 0.0, start.height)
-    return RELEASE if start == "release" else SWITCH_ON
+    """The kernels' :data:`~study.kernels.start.Start` of a checked ``start`` (its
+    declared :func:`~study.model.starts.kernel_fields`)."""
+    return Start(*kernel_fields(start))
 
 
 @dataclass(frozen=True)
@@ -267,7 +166,7 @@ class SolverSettings:
     continuation: bool = False
     velocity_tolerance: float = 1e-3
     max_average_periods: int = 20_000
-    start: str | Drop = "release"
+    start: str | Drop = DEFAULT_START
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "start", as_start(self.start))
@@ -316,10 +215,9 @@ class SolverSettings:
         phase}``) when the start is not the release, else nothing: canonical specs and
         cache keys name it only then, so that those written before starts were named
         keep their fingerprints."""
-        if self.start == "release":
+        if self.start == DEFAULT_START:
             return {}
-        return {"start": (self.start.canonical() if isinstance(self.start, Drop)
-                          else self.start)}
+        return {"start": canonical(self.start)}
 
 
 #: Why continuation and a start other than the release exclude each other.
@@ -484,18 +382,9 @@ def check_start(settings: SolverSettings, start: object, coupling: str,
             if settings.continuation and start != "release":
                 raise ValueError(_CONTINUED_START.format(start=start))
             settings = dataclasses.replace(settings, start=start)
-    start = settings.start
-    if start != "release" and coupling != "two-way":
-        raise ValueError(
-            f"start {start_label(start)!r} needs coupling='two-way', got "
-            f"coupling={coupling!r}: the one-way model's mode is driven by the table alone "
-            f"and has no state to start (only the release applies); allowed: "
-            f"{START_ALLOWED}, the last two with coupling='two-way'")
-    if isinstance(start, Drop) and not flight:
-        raise ValueError(
-            f"start {start.label()!r} needs flight=True (the lift-off law 'flight'): the "
-            "base starts above the table and must fly to it; allowed: \"release\", "
-            "\"switch-on\", or a drop with flight=True")
+    problem = refusal(settings.start, coupling=coupling, flight=flight)
+    if problem is not None:
+        raise ValueError(problem)
     return settings
 
 

@@ -36,15 +36,14 @@ from study.kernels.event_loop import EventLog, Samples, Segments, State, StepCon
 from study.model import as_acceleration, as_frequency, codes, mode_response
 from study.model.contact import DEFAULT_FRICTION, LAWS, Friction, check_friction
 from study.model.inputs import as_real_array, bounded_integer, instance_of, real_number
+from study.model.starts import START_ALLOWED, Drop, as_start, kernel_fields, start_label
 from study.model.structure import Structure
 from study.model.units import DEGREE, SECOND
 from study.solvers.exact import (
     DEFAULT_COUPLING,
     DEFAULT_SETTINGS,
     PARALLEL_THRESHOLD,
-    Drop,
     SteadyState,
-    as_start,
     check_coupling,
     check_flight,
     check_start,
@@ -641,7 +640,7 @@ def integrated_steady_state(
         The state the motion starts from, as the exact solver's ``start``
         (:class:`study.solvers.exact.SolverSettings`, docs/theory/starts.md): the same
         states, so that the integrator checks the exact solver from each.
-        ``"switch-on"``: every state 0 at phase 0; a :class:`~study.solvers.exact.Drop`
+        ``"switch-on"``: every state 0 at phase 0; a :class:`~study.model.starts.Drop`
         (needs ``flight=True``): at rest at its height, the mode at rest, at its phase
         (a drop at a phase other than 0 is first integrated by :func:`simulate` to the
         next phase 0, one point at a time). Other than ``"release"`` needs two-way
@@ -673,14 +672,23 @@ def integrated_steady_state(
                         flight).start
     y0 = np.zeros((n, size))
     failed = np.full(n, -1, dtype=np.int8)
-    if start == "release":
-        y0[:, :_kernel.STATE_SIZE] = steady_mode_state(structure, f_flat, a_flat).reshape(
-            n, 4)
-    elif isinstance(start, Drop):
-        y0[:, _kernel.GAP] = start.height
-        if start.phase != 0.0:
-            y0, failed = _to_phase_zero(structure, f_flat, a_flat, y0, start.phase,
-                                        coupling, friction, settings)
+    # The declared initial state (study.model.starts), as the exact solver's kernels
+    # read it: the mode on a multiple of its steady stick response, the base at a
+    # height, at a drive phase.
+    phase, factor, height = kernel_fields(start)
+    if factor != 0.0:
+        if phase != 0.0:
+            raise ValueError(
+                f"start {start_label(start)!r}: the integrator starts the mode on its "
+                "steady stick response at drive phase 0 only; allowed: "
+                f"{START_ALLOWED}")
+        mode = steady_mode_state(structure, f_flat, a_flat).reshape(n, 4)
+        y0[:, :_kernel.STATE_SIZE] = mode if factor == 1.0 else factor * mode
+    if height != 0.0:
+        y0[:, _kernel.GAP] = height
+    if phase != 0.0:
+        y0, failed = _to_phase_zero(structure, f_flat, a_flat, y0, phase, coupling,
+                                    friction, settings)
     scale = np.ascontiguousarray(_scales(structure, omega, flight).reshape(n, size))
     if settings.steps_per_period:
         fixed = period / settings.steps_per_period

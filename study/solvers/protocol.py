@@ -19,9 +19,9 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels.two_way import points as orbit_kernel
 from study.kernels.two_way import protocol as protocol_kernel
 from study.model import as_acceleration, as_frequency
+from study.model.starts import Drop
 from study.model.structure import Structure, check_structure
 from study.solvers.exact import (
-    Drop,
     SolverSettings,
     SteadyState,
     check_coupling,

@@ -12,10 +12,12 @@ import xarray as xr
 
 from study.engine.spec_files import SCHEMA_DIR
 from study.engine.validation.reading import StoredFile, jsonable
+from study.model import starts
 
 __all__ = ["DESIGN_SCHEMA", "DESIGN_SCHEMA_PATH", "FIT_SCHEMA", "FIT_SCHEMA_PATH",
            "PROVENANCE_SCHEMA_PATH", "RESULT_SCHEMA", "RESULT_SCHEMA_PATH", "SCENE_SCHEMA",
-           "SCENE_SCHEMA_PATH", "file_header", "header", "schema_problems", "short"]
+           "SCENE_SCHEMA_PATH", "export_result_schema", "file_header", "header",
+           "schema_problems", "short"]
 
 #: Parameter studies (study.engine.runner).
 RESULT_SCHEMA = "study-result-v1"
@@ -31,6 +33,43 @@ DESIGN_SCHEMA = "study-design-v1"
 DESIGN_SCHEMA_PATH = SCHEMA_DIR / f"{DESIGN_SCHEMA}.schema.json"
 #: The structure every result's ``provenance`` attribute (a JSON document) has.
 PROVENANCE_SCHEMA_PATH = SCHEMA_DIR / "study-provenance-v1.schema.json"
+
+
+def export_result_schema(text: str | None = None) -> str:
+    """The result schema as written to ``study/schemas`` (``make schemas``): the
+    committed file (or ``text``) with the parts the declarations decide rewritten from
+    them, the start attributes of :func:`study.model.starts.result_schema` (the kinds'
+    enum, each parameter's attribute with its bounds, which go together, and which kind
+    records which). The rest of the schema is written by hand."""
+    schema = json.loads(RESULT_SCHEMA_PATH.read_text(encoding="utf-8") if text is None
+                        else text)
+    attrs = schema["properties"]["attrs"]
+    declared = starts.result_schema()
+    stale = [key for key in attrs["properties"] if key.startswith("study_start_")]
+    # Rebuilt in place (the order of the other attributes kept): the kinds' enum first,
+    # then the parameters, where the start attributes stood.
+    properties = {}
+    for key, value in attrs["properties"].items():
+        if key == "study_start_kind":
+            properties.update(declared["properties"])
+        elif key not in stale:
+            properties[key] = value
+    attrs["properties"] = properties
+    dependent: dict[str, Any] = {}
+    for key, value in attrs.get("dependentRequired", {}).items():
+        if key in stale:
+            dependent.update(declared["dependentRequired"])
+        else:
+            dependent[key] = value
+    attrs["dependentRequired"] = {**dependent, **declared["dependentRequired"]}
+    others = [rule for rule in attrs.get("allOf", []) if not _is_start_rule(rule)]
+    attrs["allOf"] = declared["allOf"] + others
+    return json.dumps(schema, indent=2) + "\n"
+
+
+def _is_start_rule(rule: dict[str, Any]) -> bool:
+    """A rule of ``allOf`` that :func:`study.model.starts.result_schema` writes."""
+    return "study_start_kind" in rule.get("if", {}).get("properties", {})
 
 
 def header(dataset: xr.Dataset) -> dict[str, Any]:
