@@ -74,14 +74,7 @@ def _kernel_inputs(structure, f, a):
     b_plus, b_minus = slip_amplitudes(structure, f_flat, a_flat)
     lifted = a_flat > lift_off_acceleration(structure, f_flat)
     n = f_flat.size
-    outputs = (
-        kernel.SteadyOutputs(
-            np.empty(n), np.empty(n, np.int8), np.empty(n, np.int8),
-            np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.int32),
-        ),
-        kernel.AverageOutputs(np.empty(n), np.empty(n), np.empty(n, np.int32),
-                              np.empty(n), np.empty(n)),
-    )
+    outputs = (np.empty((n, kernel.N_OUTPUTS)),)
     inputs = (
         kernel.Amplitudes(a_plus, a_minus, b_plus, b_minus), a_flat, lifted,
         2 * np.pi * f_flat,
@@ -155,7 +148,8 @@ def main() -> None:
     inputs_1, outputs_1 = _kernel_inputs(sliding, f, a)
     kernel.solve_points_averaged(*inputs_1, *outputs_1)
     parallel_1 = _best_of(args.repeats, lambda: kernel.solve_points_averaged(*inputs_1, *outputs_1))
-    counts_1 = {s.name: int(np.sum(outputs_1[0].status == s)) for s in study.Status}
+    counts_1 = {s.name: int(np.sum(outputs_1[0][:, kernel.OUT_STATUS] == s))
+                for s in study.Status}
     print(f"same map at M = 1: statuses {counts_1}")
     print(f"kernel, parallel:   {parallel_1:.3f} s  ({parallel_1 / n * 1e9:.0f} ns per point)")
 

@@ -17,10 +17,11 @@ which ``s tau - cs n > 0``).
 status only), with their arguments grouped in the named tuples below; a small call calls
 :func:`steady_points_small`, :func:`velocity_points_small` and :func:`lift_off_small`,
 which take the named tuples' fields as plain tuples (numba's dispatch types those in
-C, named tuples in Python). Continuous sliding whose circle map has no cycle within
-reach is followed and time-averaged (:func:`_average_sliding`: ``QUASI_PERIODIC`` or
-``CHAOTIC``, docs/theory/irregular.md). :func:`sin_minus_x` is shared with the orbit
-kernel.
+C, named tuples in Python). The outputs of every orbit are one row of
+:data:`OUTPUT_COLUMNS` a point, written and read by column name. Continuous sliding
+whose circle map has no cycle within reach is followed and time-averaged
+(:func:`_average_sliding`: ``QUASI_PERIODIC`` or ``CHAOTIC``, docs/theory/irregular.md).
+:func:`sin_minus_x` is shared with the orbit kernel.
 Results are written to ``out`` arrays; nothing is allocated per point on the common
 (stick-slip) path.
 """
@@ -91,24 +92,47 @@ SLIP_END_ULPS = 4.0
 Amplitudes = namedtuple("Amplitudes", ("a_plus", "a_minus", "b_plus", "b_minus"))
 #: The friction levels ``cs g`` (``static``) and ``ck g`` (``kinetic``) [m s-2].
 FrictionLevels = namedtuple("FrictionLevels", ("static", "kinetic"))
-#: The output arrays of :func:`solve_points_averaged`, one value per point: velocity [m s-1],
-#: status and reason codes (int8), slips per period [1], forward and backward slip
-#: fractions [1], orbit period in drive periods (int32).
-SteadyOutputs = namedtuple(
-    "SteadyOutputs",
-    ("velocity", "status", "reason", "slips", "forward", "backward", "period"))
-#: The time averages of :func:`solve_points_averaged`, one value per point: the
-#: time-averaged velocity [m s-1] of a continuous sliding without a cycle within reach
-#: (``QUASI_PERIODIC``, ``CHAOTIC``; the partial mean of ``NOT_CONVERGED`` with
-#: ``AVERAGE_BUDGET``; NaN elsewhere), its standard error [m s-1] (0 for an orbit or a
-#: static point, NaN where nothing was averaged and there is no orbit), the drive
-#: periods averaged (int32, 0 for an orbit), the Lyapunov exponent per drive period and
-#: its error (a continuous-sliding cycle: ``log|multiplier| / period``, error 0; NaN for
-#: stick-slip, static and lift-off points, which have no multiplier).
-AverageOutputs = namedtuple(
-    "AverageOutputs",
-    ("averaged_velocity", "velocity_error", "averaged_periods", "exponent",
-     "exponent_error"))
+#: The outputs of :func:`solve_points_averaged`, one row a point and one column each,
+#: ``(name, units, meaning)``, read by name (``OUT_<NAME>``) by the wrapper. Integer
+#: codes and counts are stored exactly in the float64 table. The names are those of the
+#: two-way orbit kernel's columns (:data:`study.kernels.two_way.points.OUTPUT_COLUMNS`)
+#: that mean the same.
+OUTPUT_COLUMNS = (
+    ("status", "1", "study.model.status.Status code"),
+    ("reason", "1", "study.model.status.NonConvergence code"),
+    ("velocity", "m s-1", "mean velocity over the orbit (NaN where not converged)"),
+    ("slips", "1", "slip events per drive period"),
+    ("forward", "1", "fraction of the drive period spent slipping forward"),
+    ("backward", "1", "fraction of the drive period spent slipping backward"),
+    ("period", "1", "the orbit's period in drive periods (0: no orbit)"),
+    ("averaged_velocity", "m s-1",
+     "time-averaged velocity of continuous sliding without a cycle within reach "
+     "(QUASI_PERIODIC, CHAOTIC; the partial mean of NOT_CONVERGED with AVERAGE_BUDGET; "
+     "NaN elsewhere)"),
+    ("velocity_error", "m s-1",
+     "its standard error (0 for an orbit or a static point, NaN where nothing was "
+     "averaged and there is no orbit)"),
+    ("averaged_periods", "1", "drive periods averaged (0 for an orbit)"),
+    ("exponent", "1",
+     "Lyapunov exponent per drive period (a continuous-sliding cycle: log|multiplier| / "
+     "period; NaN for stick-slip, static and lift-off points, which have no multiplier)"),
+    ("exponent_error", "1", "its error (0 for a cycle)"),
+)
+_NAMES = tuple(name for name, _, _ in OUTPUT_COLUMNS)
+#: Columns of :data:`OUTPUT_COLUMNS`.
+N_OUTPUTS = len(OUTPUT_COLUMNS)
+OUT_STATUS = _NAMES.index("status")
+OUT_REASON = _NAMES.index("reason")
+OUT_VELOCITY = _NAMES.index("velocity")
+OUT_SLIPS = _NAMES.index("slips")
+OUT_FORWARD = _NAMES.index("forward")
+OUT_BACKWARD = _NAMES.index("backward")
+OUT_PERIOD = _NAMES.index("period")
+OUT_AVERAGED_VELOCITY = _NAMES.index("averaged_velocity")
+OUT_VELOCITY_ERROR = _NAMES.index("velocity_error")
+OUT_AVERAGED_PERIODS = _NAMES.index("averaged_periods")
+OUT_EXPONENT = _NAMES.index("exponent")
+OUT_EXPONENT_ERROR = _NAMES.index("exponent_error")
 #: The structure as the velocity path reads it, operation for operation as numpy
 #: evaluates ``study.model`` (see :func:`_lift_off`): ``Structure.omega0`` [rad s-1],
 #: ``1 / Q``, ``M``, numpy's cos and sin of the tilt, ``cs``, ``ck``, ``g`` [m s-2].
@@ -633,35 +657,32 @@ def _constants(a_plus, a_minus, b_plus, b_minus, cs_g, ck_g):
 
 
 @njit(cache=True, nogil=True)
-def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget, natural):
+def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget, natural, omega, row):
     """Periodic orbit reached from rest at phase 0, for one drive point of amplitudes
     ``a_plus`` ... ``b_minus`` [m s-2], friction ``levels`` (:data:`FrictionLevels`),
-    within ``budget`` (a :data:`~study.kernels.budget.Budget`); continuous sliding
-    without a cycle within reach is averaged (:func:`_average_sliding`) with the
+    within ``budget`` (a :data:`~study.kernels.budget.Budget`), written into ``row`` (one
+    row of :data:`OUTPUT_COLUMNS`) at angular frequency ``omega`` [rad s-1]; continuous
+    sliding without a cycle within reach is averaged (:func:`_average_sliding`) with the
     tolerance ``velocity_tolerance * natural``, ``natural`` the drive acceleration ``a``
     [m s-2] (NaN: not averaged, ``NO_PERIODIC_ORBIT`` as without averaging).
 
-    Returns
-    -------
-    status, reason, mean, slips, forward, backward, period, error, turns, exponent,
-    exponent_error
-        ``mean`` is the orbit's mean of ``w v`` [m s-2] (divide by ``w``),
-        ``slips`` the slip events per drive period, ``forward``/``backward`` the
-        fractions of the period spent slipping each way, ``period`` the orbit's
-        period in drive periods. ``error`` is the standard error of ``mean`` [m s-2]
-        (0 for an orbit or a static point, NaN when not converged but for
-        ``AVERAGE_BUDGET``), ``turns`` the drive periods averaged (0 for an orbit),
-        ``exponent`` the Lyapunov exponent per drive period with its error: for a
-        continuous-sliding cycle ``log|multiplier| / period`` (the circle map's
-        derivative over the cycle) with error 0; for an averaged motion the time
-        average; NaN elsewhere (a stick forgets the phase: there is no multiplier).
-        A point averaged to the budget (``NOT_CONVERGED``, ``AVERAGE_BUDGET``) keeps its
-        partial ``mean``.
+    Each way out writes the columns it knows by name, over the defaults of an orbit
+    (no average, no exponent); a point averaged to the budget (``NOT_CONVERGED``,
+    ``AVERAGE_BUDGET``) keeps its partial mean in ``averaged_velocity``.
     """
+    row[OUT_REASON] = REASON_NONE
+    row[OUT_PERIOD] = 0
+    row[OUT_AVERAGED_VELOCITY] = np.nan
+    row[OUT_VELOCITY_ERROR] = 0.0
+    row[OUT_AVERAGED_PERIODS] = 0
+    row[OUT_EXPONENT] = np.nan
+    row[OUT_EXPONENT_ERROR] = np.nan
     max_events = budget.max_events
     k = _constants(a_plus, a_minus, b_plus, b_minus, levels.static, levels.kinetic)
     if not k.ok_p and not k.ok_m:
-        return STATIC, REASON_NONE, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, np.nan, np.nan
+        row[OUT_STATUS] = STATIC
+        _write_slipping(row, 0.0, 0.0, 0.0, 0.0, omega)
+        return
     wait, sign = _next_release(0.0, 0, k)
     theta = wait
     # State at the two possible releases after a stick: (phase, distance, fwd, bwd, slips).
@@ -684,19 +705,13 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget, natural):
             turns = round((theta - previous[0]) / TWO_PI)
             if seen and turns >= 1:
                 span = TWO_PI * turns
-                return (
-                    STICK_SLIP,
-                    REASON_NONE,
-                    (distance - previous[1]) / span,
-                    (slips - previous[4]) / turns,
-                    (forward - previous[2]) / span,
-                    (backward - previous[3]) / span,
-                    int(turns),
-                    0.0,
-                    0.0,
-                    np.nan,
-                    np.nan,
-                )
+                row[OUT_STATUS] = STICK_SLIP
+                _write_slipping(row, (distance - previous[1]) / span,
+                                (slips - previous[4]) / turns,
+                                (forward - previous[2]) / span,
+                                (backward - previous[3]) / span, omega)
+                row[OUT_PERIOD] = int(turns)
+                return
             if sign > 0:
                 seen_p = True
                 rec_p = now
@@ -708,18 +723,35 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget, natural):
                 theta, k, budget.max_map_iterations, max_events
             )
             if flag == _ROUND_OK:
-                return (CONTINUOUS_SLIDING, REASON_NONE, mean, per, fwd, bwd, period, 0.0,
-                        0.0, np.log(abs(multiplier)) / period, 0.0)
+                row[OUT_STATUS] = CONTINUOUS_SLIDING
+                _write_slipping(row, mean, per, fwd, bwd, omega)
+                row[OUT_PERIOD] = period
+                row[OUT_EXPONENT] = np.log(abs(multiplier)) / period
+                row[OUT_EXPONENT_ERROR] = 0.0
+                return
             if flag == _ROUND_NO_CYCLE and natural > 0.0:
                 (flag, theta_c, sign_c, st, why, mean, per, fwd, bwd, error, turns,
                  exponent, exponent_error) = _average_sliding(
                     theta_c, k, budget, natural, budget.max_map_iterations)
                 if flag == _ROUND_OK:
-                    return (st, why, mean, per, fwd, bwd, 0, error, turns, exponent,
-                            exponent_error)
+                    row[OUT_STATUS] = st
+                    row[OUT_REASON] = why
+                    if st == NOT_CONVERGED:
+                        _write_not_converged(row)
+                    else:
+                        _write_slipping(row, mean, per, fwd, bwd, omega)
+                    row[OUT_AVERAGED_VELOCITY] = mean / omega
+                    row[OUT_VELOCITY_ERROR] = error / omega
+                    row[OUT_AVERAGED_PERIODS] = round(turns)
+                    row[OUT_EXPONENT] = exponent
+                    row[OUT_EXPONENT_ERROR] = exponent_error
+                    return
             if flag == _ROUND_BUDGET or flag == _ROUND_NO_CYCLE:
-                return (NOT_CONVERGED, REASON_NO_PERIODIC_ORBIT, np.nan, 0.0, 0.0, 0.0, 0,
-                        np.nan, 0.0, np.nan, np.nan)
+                row[OUT_STATUS] = NOT_CONVERGED
+                row[OUT_REASON] = REASON_NO_PERIODIC_ORBIT
+                _write_not_converged(row)
+                row[OUT_VELOCITY_ERROR] = np.nan
+                return
             # A stick ended the sliding transient: restart the bookkeeping there.
             theta = theta_c
             sign = sign_c
@@ -740,80 +772,54 @@ def _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget, natural):
         sign = sign_next
         genuine = wait > 0.0
         since_stick += 1
-    return (NOT_CONVERGED, REASON_EVENT_BUDGET, np.nan, 0.0, 0.0, 0.0, 0, np.nan, 0.0, np.nan,
-            np.nan)
+    row[OUT_STATUS] = NOT_CONVERGED
+    row[OUT_REASON] = REASON_EVENT_BUDGET
+    _write_not_converged(row)
+    row[OUT_VELOCITY_ERROR] = np.nan
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _write_slipping(row, mean, slips, forward, backward, omega):
+    """The motion's columns of ``row``: its mean of ``w v`` [m s-2] as the velocity
+    (over ``omega`` [rad s-1]), slips per period and the slipping fractions."""
+    row[OUT_VELOCITY] = mean / omega
+    row[OUT_SLIPS] = slips
+    row[OUT_FORWARD] = forward
+    row[OUT_BACKWARD] = backward
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _write_not_converged(row):
+    """The motion's columns of ``row`` where no motion was found: NaN."""
+    row[OUT_VELOCITY] = np.nan
+    row[OUT_SLIPS] = np.nan
+    row[OUT_FORWARD] = np.nan
+    row[OUT_BACKWARD] = np.nan
 
 
 @njit(cache=True, nogil=True)
-def _write_lifted(i, out):
-    """The row of a point past lift-off into the :data:`SteadyOutputs` ``out``."""
-    out.velocity[i] = np.nan
-    out.status[i] = LIFT_OFF
-    out.reason[i] = REASON_NONE
-    out.slips[i] = np.nan
-    out.forward[i] = np.nan
-    out.backward[i] = np.nan
-    out.period[i] = 0
+def _write_lifted(row):
+    """``row`` of a point past lift-off: no motion, no average."""
+    row[OUT_STATUS] = LIFT_OFF
+    row[OUT_REASON] = REASON_NONE
+    _write_not_converged(row)
+    row[OUT_PERIOD] = 0
+    row[OUT_AVERAGED_VELOCITY] = np.nan
+    row[OUT_VELOCITY_ERROR] = np.nan
+    row[OUT_AVERAGED_PERIODS] = 0
+    row[OUT_EXPONENT] = np.nan
+    row[OUT_EXPONENT_ERROR] = np.nan
 
 
 @njit(cache=True, nogil=True)
-def _write_lifted_averages(i, averages):
-    """The averages of a point past lift-off into the :data:`AverageOutputs`
-    ``averages``."""
-    averages.averaged_velocity[i] = np.nan
-    averages.velocity_error[i] = np.nan
-    averages.averaged_periods[i] = 0
-    averages.exponent[i] = np.nan
-    averages.exponent_error[i] = np.nan
-
-
-@njit(cache=True, nogil=True)
-def _write_averages(i, orbit, omega, averages):
-    """The averages of ``orbit`` (what :func:`_solve_point` returns) at angular frequency
-    ``omega`` [rad s-1] into the :data:`AverageOutputs` ``averages``."""
-    st, why, mean, _, _, _, _, error, turns, exponent, exponent_error = orbit
-    averaged = st == CHAOTIC or st == QUASI_PERIODIC or why == REASON_AVERAGE_BUDGET
-    averages.averaged_velocity[i] = mean / omega if averaged else np.nan
-    averages.velocity_error[i] = error / omega
-    averages.averaged_periods[i] = round(turns)
-    averages.exponent[i] = exponent
-    averages.exponent_error[i] = exponent_error
-
-
-@njit(cache=True, nogil=True)
-def _write_orbit(i, orbit, omega, out):
-    """The row of ``orbit`` (what :func:`_solve_point` returns) at angular frequency
-    ``omega`` [rad s-1] into the :data:`SteadyOutputs` ``out``."""
-    st, why, mean, per, fwd, bwd, n_period = orbit[:7]
-    out.status[i] = st
-    out.reason[i] = why
-    if st == NOT_CONVERGED:
-        out.velocity[i] = np.nan
-        out.slips[i] = np.nan
-        out.forward[i] = np.nan
-        out.backward[i] = np.nan
-    else:
-        out.velocity[i] = mean / omega
-        out.slips[i] = per
-        out.forward[i] = fwd
-        out.backward[i] = bwd
-    out.period[i] = n_period
-
-
-@njit(cache=True, nogil=True)
-def _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out, averages):
-    """Solve point ``i`` of drive acceleration ``a[i]`` [m s-2] and write its results into
-    the :data:`SteadyOutputs` ``out`` and the :data:`AverageOutputs` ``averages``."""
+def _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out):
+    """Solve point ``i`` of drive acceleration ``a[i]`` [m s-2] into row ``i`` of ``out``
+    (:data:`OUTPUT_COLUMNS`)."""
     if lifted[i]:
-        _write_lifted(i, out)
-        _write_lifted_averages(i, averages)
+        _write_lifted(out[i])
         return
-    orbit = _solve_point(
-        amplitudes.a_plus[i], amplitudes.a_minus[i], amplitudes.b_plus[i],
-        amplitudes.b_minus[i], levels, budget, a[i]
-    )
-    _write_orbit(i, orbit, omega[i], out)
-    _write_averages(i, orbit, omega[i], averages)
+    _solve_point(amplitudes.a_plus[i], amplitudes.a_minus[i], amplitudes.b_plus[i],
+                 amplitudes.b_minus[i], levels, budget, a[i], omega[i], out[i])
 
 
 #: Points a thread takes at a time in the parallel kernels: whole cache lines of every
@@ -822,13 +828,12 @@ POINT_BLOCK = 64
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def solve_points_averaged(amplitudes, a, lifted, omega, levels, budget, out, averages):
-    """Fill the :data:`SteadyOutputs` ``out`` and the :data:`AverageOutputs`
-    ``averages`` at points of :data:`Amplitudes` ``amplitudes``, drive accelerations
-    ``a`` [m s-2], ``lifted`` (past lift-off) and ``omega`` [rad s-1], friction
-    ``levels`` (:data:`FrictionLevels`), within ``budget`` (a
-    :data:`~study.kernels.budget.Budget`), in parallel over points (threads, GIL
-    released). Continuous sliding without a cycle within reach is averaged
+def solve_points_averaged(amplitudes, a, lifted, omega, levels, budget, out):
+    """Fill ``out`` (one row of :data:`OUTPUT_COLUMNS` a point) at points of
+    :data:`Amplitudes` ``amplitudes``, drive accelerations ``a`` [m s-2], ``lifted``
+    (past lift-off) and ``omega`` [rad s-1], friction ``levels`` (:data:`FrictionLevels`),
+    within ``budget`` (a :data:`~study.kernels.budget.Budget`), in parallel over points
+    (threads, GIL released). Continuous sliding without a cycle within reach is averaged
     (:func:`_average_sliding`, the tolerance ``velocity_tolerance * a``).
 
     Points are dealt to threads in blocks of :data:`POINT_BLOCK` consecutive points,
@@ -844,17 +849,14 @@ def solve_points_averaged(amplitudes, a, lifted, omega, levels, budget, out, ave
     for lane in prange(lanes):
         for block in range(lane, blocks, lanes):
             for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
-                _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out,
-                                     averages)
+                _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out)
 
 
 @njit(cache=True, nogil=True)
-def solve_points_averaged_serial(amplitudes, a, lifted, omega, levels, budget, out,
-                                 averages):
+def solve_points_averaged_serial(amplitudes, a, lifted, omega, levels, budget, out):
     """Same as :func:`solve_points_averaged` on one thread."""
     for i in range(omega.shape[0]):
-        _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out,
-                             averages)
+        _solve_averaged_into(i, amplitudes, a, lifted, omega, levels, budget, out)
 
 
 # Velocity only (``study.solvers.exact.steady_velocity``): the same orbits, nothing else,
@@ -959,7 +961,7 @@ def _forces(a, k_re, k_im, one_re, one_im, sin_a, cs, ck):
 
 
 @njit(cache=True, nogil=True)
-def _velocity_into(i, f, a, constants, levels, budget, out, given):
+def _velocity_into(i, f, a, constants, levels, budget, out, given, row):
     """Solve point ``i`` for its velocity and status only, into the
     :data:`VelocityOutputs` ``out``.
 
@@ -987,11 +989,12 @@ def _velocity_into(i, f, a, constants, levels, budget, out, given):
         out.velocity[i] = 0.0
         out.status[i] = STATIC
         return
-    # The diagnostics _solve_point also returns are dead code here, and compiled away.
-    st, _, mean, _, _, _, _, _, _, _, _ = _solve_point(a_plus, a_minus, b_plus, b_minus,
-                                                       levels, budget, a[i])
+    # ``row`` is a scratch row of OUTPUT_COLUMNS, one a thread: nothing is allocated
+    # per point.
+    _solve_point(a_plus, a_minus, b_plus, b_minus, levels, budget, a[i], w, row)
+    st = row[OUT_STATUS]
     out.status[i] = st
-    out.velocity[i] = np.nan if st == NOT_CONVERGED else mean / w
+    out.velocity[i] = np.nan if st == NOT_CONVERGED else row[OUT_VELOCITY]
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -1005,24 +1008,28 @@ def velocity_points(f, a, constants, levels, budget, out):
     blocks = (n + POINT_BLOCK - 1) // POINT_BLOCK
     lanes = min(blocks, 256)
     for lane in prange(lanes):
+        row = np.empty(N_OUTPUTS)
         for block in range(lane, blocks, lanes):
             for i in range(block * POINT_BLOCK, min(n, (block + 1) * POINT_BLOCK)):
-                _velocity_into(i, f, a, constants, levels, budget, out, LIFT_UNDECIDED)
+                _velocity_into(i, f, a, constants, levels, budget, out, LIFT_UNDECIDED,
+                               row)
 
 
 @njit(cache=True, nogil=True)
 def velocity_points_serial(f, a, constants, levels, budget, out):
     """Same as :func:`velocity_points` on one thread."""
+    row = np.empty(N_OUTPUTS)
     for i in range(f.shape[0]):
-        _velocity_into(i, f, a, constants, levels, budget, out, LIFT_UNDECIDED)
+        _velocity_into(i, f, a, constants, levels, budget, out, LIFT_UNDECIDED, row)
 
 
 @njit(cache=True, nogil=True)
 def velocity_points_given(f, a, lifted, constants, levels, budget, out):
     """Same as :func:`velocity_points_serial` with the lift-off decisions ``lifted``
     given."""
+    row = np.empty(N_OUTPUTS)
     for i in range(f.shape[0]):
-        _velocity_into(i, f, a, constants, levels, budget, out, 1 if lifted[i] else 0)
+        _velocity_into(i, f, a, constants, levels, budget, out, 1 if lifted[i] else 0, row)
 
 
 # Small calls (a fit's few velocity rows, thousands of times): numba types a plain tuple
@@ -1044,22 +1051,21 @@ def velocity_points_small(f, a, constants, levels, budget, velocity, status):
     friction = FrictionLevels(*levels)
     limits = Budget(*budget)
     undecided = 0
+    row = np.empty(N_OUTPUTS)
     for i in range(f.shape[0]):
-        _velocity_into(i, f, a, force, friction, limits, out, LIFT_UNDECIDED)
+        _velocity_into(i, f, a, force, friction, limits, out, LIFT_UNDECIDED, row)
         if status[i] == LIFT_UNDECIDED:
             undecided += 1
     return undecided
 
 
 @njit(cache=True, nogil=True)
-def steady_points_small(f, a, constants, levels, budget, velocity, status, reason, slips,
-                        forward, backward, period, averaged_velocity, velocity_error,
-                        averaged_periods, exponent, exponent_error):
+def steady_points_small(f, a, constants, levels, budget, out):
     """:func:`solve_points_averaged_serial` at ``f`` [Hz], ``a`` [m s-2], the force amplitudes
     and the lift-off decision evaluated point by point as :func:`velocity_points`
     does (bit-identical to ``study.model``'s arrays, without their temporaries), with
-    plain-tuple arguments as :func:`velocity_points_small` and the outputs of
-    :data:`SteadyOutputs`, then of :data:`AverageOutputs`, one by one.
+    plain-tuple arguments as :func:`velocity_points_small`, into ``out`` (one row of
+    :data:`OUTPUT_COLUMNS` a point).
 
     A point within 1e-13 of the lift-off threshold gets the status ``LIFT_UNDECIDED``
     (its other outputs unset), for the caller to solve with numpy's decision. Returns
@@ -1068,25 +1074,20 @@ def steady_points_small(f, a, constants, levels, budget, velocity, status, reaso
     force = ForceConstants(*constants)
     friction = FrictionLevels(*levels)
     limits = Budget(*budget)
-    out = SteadyOutputs(velocity, status, reason, slips, forward, backward, period)
-    averages = AverageOutputs(averaged_velocity, velocity_error, averaged_periods, exponent,
-                              exponent_error)
     undecided = 0
     for i in range(f.shape[0]):
         lift, w, k_re, k_im, one_re, one_im = _lift_off(f[i], a[i], force)
         if lift == LIFT_UNDECIDED:
-            status[i] = LIFT_UNDECIDED
+            out[i, OUT_STATUS] = LIFT_UNDECIDED
             undecided += 1
         elif lift == 1:
-            _write_lifted(i, out)
-            _write_lifted_averages(i, averages)
+            _write_lifted(out[i])
         else:
             a_plus, a_minus, b_plus, b_minus = _forces(
                 a[i], k_re, k_im, one_re, one_im, force.sin_alpha, force.static_friction,
                 force.kinetic_friction)
-            orbit = _solve_point(a_plus, a_minus, b_plus, b_minus, friction, limits, a[i])
-            _write_orbit(i, orbit, w, out)
-            _write_averages(i, orbit, w, averages)
+            _solve_point(a_plus, a_minus, b_plus, b_minus, friction, limits, a[i], w,
+                         out[i])
     return undecided
 
 

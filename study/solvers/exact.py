@@ -591,35 +591,53 @@ def _orbit_steady_state(
     return steady_state_from_rows(out, shape, flight)
 
 
+#: Each :class:`SteadyState` field a kernel's output table holds: the column's name (in
+#: the kernel's ``OUTPUT_COLUMNS``) and the field's dtype (None: float64 as stored). A
+#: kernel without a column leaves the field None; the flight columns are read only
+#: with flight.
+STEADY_FIELDS = {
+    "velocity": ("velocity", None),
+    "status": ("status", np.int8),
+    "reason": ("reason", np.int8),
+    "slips_per_period": ("slips", None),
+    "forward_fraction": ("forward", None),
+    "backward_fraction": ("backward", None),
+    "orbit_period": ("period", np.int32),
+    "floquet_multiplier": ("multiplier", None),
+    "airborne_fraction": ("airborne", None),
+    "largest_hop": ("hop", None),
+    "impacts_per_period": ("impacts", None),
+    "averaged_velocity": ("averaged_velocity", None),
+    "velocity_error": ("velocity_error", None),
+    "averaged_periods": ("averaged_periods", np.int32),
+    "lyapunov_exponent": ("exponent", None),
+    "lyapunov_error": ("exponent_error", None),
+}
+#: The fields of a flight (read only with ``flight=True``).
+FLIGHT_FIELDS = ("airborne_fraction", "largest_hop", "impacts_per_period")
+
+
+def steady_fields(out: NDArray[np.float64], columns: tuple[tuple[str, str, str], ...],
+                  shape: tuple[int, ...], flight: bool) -> dict[str, Any]:
+    """The :class:`SteadyState` fields of a kernel's rows ``out`` (one a point, the
+    kernel's ``columns``), each shaped ``shape``, read by name (:data:`STEADY_FIELDS`)."""
+    names = [name for name, _, _ in columns]
+    fields = {}
+    for field, (name, dtype) in STEADY_FIELDS.items():
+        if name not in names or (field in FLIGHT_FIELDS and not flight):
+            continue
+        values = out[:, names.index(name)]
+        fields[field] = _shaped(values if dtype is None else values.astype(dtype), shape)
+    return fields
+
+
 def steady_state_from_rows(out: NDArray[np.float64], shape: tuple[int, ...],
                            flight: bool) -> SteadyState:
     """The :class:`SteadyState` of the orbit kernel's rows ``out``
     (:data:`study.kernels.two_way.points.OUTPUT_COLUMNS`, one a point), each field
     shaped ``shape``; the flight fields only with ``flight``."""
-
-    def column(index: int, dtype: type | None = None) -> Any:
-        values = out[:, index] if dtype is None else out[:, index].astype(dtype)
-        return _shaped(values, shape)
-
-    return SteadyState(
-        velocity=column(orbit_kernel.OUT_VELOCITY),
-        status=column(orbit_kernel.OUT_STATUS, np.int8),
-        reason=column(orbit_kernel.OUT_REASON, np.int8),
-        slips_per_period=column(orbit_kernel.OUT_SLIPS),
-        forward_fraction=column(orbit_kernel.OUT_FORWARD),
-        backward_fraction=column(orbit_kernel.OUT_BACKWARD),
-        orbit_period=column(orbit_kernel.OUT_PERIOD, np.int32),
-        floquet_multiplier=column(orbit_kernel.OUT_MULTIPLIER),
-        airborne_fraction=column(orbit_kernel.OUT_AIRBORNE) if flight else None,
-        largest_hop=column(orbit_kernel.OUT_HOP) if flight else None,
-        impacts_per_period=column(orbit_kernel.OUT_IMPACTS) if flight else None,
-        averaged_velocity=column(orbit_kernel.OUT_AVERAGED_VELOCITY),
-        velocity_error=column(orbit_kernel.OUT_VELOCITY_ERROR),
-        averaged_periods=column(orbit_kernel.OUT_AVERAGED_PERIODS, np.int32),
-        lyapunov_exponent=column(orbit_kernel.OUT_EXPONENT),
-        lyapunov_error=column(orbit_kernel.OUT_EXPONENT_ERROR),
-        phase_state=_phase_state(out, shape),
-    )
+    return SteadyState(**steady_fields(out, orbit_kernel.OUTPUT_COLUMNS, shape, flight),
+                       phase_state=_phase_state(out, shape))
 
 
 #: The output columns of the state at phase 0, in :attr:`SteadyState.phase_state`'s
@@ -654,59 +672,27 @@ def _one_way_steady_state(
 ) -> SteadyState:
     """:func:`steady_state` by the one-way kernel on flat ``f``, ``a``."""
     n = f_flat.size
-    out = one_way_kernel.SteadyOutputs(
-        velocity=np.empty(n),
-        status=np.empty(n, dtype=np.int8),
-        reason=np.empty(n, dtype=np.int8),
-        slips=np.empty(n),
-        forward=np.empty(n),
-        backward=np.empty(n),
-        period=np.empty(n, dtype=np.int32),
-    )
-    averages = one_way_kernel.AverageOutputs(
-        averaged_velocity=np.empty(n),
-        velocity_error=np.empty(n),
-        averaged_periods=np.empty(n, dtype=np.int32),
-        exponent=np.empty(n),
-        exponent_error=np.empty(n),
-    )
+    out = np.empty((n, one_way_kernel.N_OUTPUTS))
     # Launching the thread pool costs milliseconds: small inputs run on this thread.
     if parallel is None:
         parallel = n >= PARALLEL_THRESHOLD
     if parallel or n >= PARALLEL_THRESHOLD:
-        _solve_one_way(structure, f_flat, a_flat, settings, parallel, out, averages)
+        _solve_one_way(structure, f_flat, a_flat, settings, parallel, out)
     else:
         # The kernel evaluates the forces point by point, bit-identical to numpy's
         # arrays, whose temporaries cost a small call ten times its solve.
         kept = _kept(structure)
         if one_way_kernel.steady_points_small(f_flat, a_flat, kept.force, kept.levels,
-                                              tuple(kernel_budget(settings)), *out,
-                                              *averages):
+                                              tuple(kernel_budget(settings)), out):
             # Points within 1e-13 of the lift-off threshold: solved the long way, where
             # numpy decides their lift-off.
-            undecided = np.flatnonzero(out.status == one_way_kernel.LIFT_UNDECIDED)
-            rows = one_way_kernel.SteadyOutputs(*(x[undecided] for x in out))
-            rows_averages = one_way_kernel.AverageOutputs(
-                *(x[undecided] for x in averages))
+            undecided = np.flatnonzero(
+                out[:, one_way_kernel.OUT_STATUS] == one_way_kernel.LIFT_UNDECIDED)
+            rows = np.empty((undecided.size, one_way_kernel.N_OUTPUTS))
             _solve_one_way(structure, f_flat[undecided], a_flat[undecided], settings,
-                           False, rows, rows_averages)
-            for whole, part in zip((*out, *averages), (*rows, *rows_averages),
-                                   strict=True):
-                whole[undecided] = part
-    return SteadyState(
-        velocity=_shaped(out.velocity, shape),
-        status=_shaped(out.status, shape),
-        reason=_shaped(out.reason, shape),
-        slips_per_period=_shaped(out.slips, shape),
-        forward_fraction=_shaped(out.forward, shape),
-        backward_fraction=_shaped(out.backward, shape),
-        orbit_period=_shaped(out.period, shape),
-        averaged_velocity=_shaped(averages.averaged_velocity, shape),
-        velocity_error=_shaped(averages.velocity_error, shape),
-        averaged_periods=_shaped(averages.averaged_periods, shape),
-        lyapunov_exponent=_shaped(averages.exponent, shape),
-        lyapunov_error=_shaped(averages.exponent_error, shape),
-    )
+                           False, rows)
+            out[undecided] = rows
+    return SteadyState(**steady_fields(out, one_way_kernel.OUTPUT_COLUMNS, shape, False))
 
 
 def _solve_one_way(
@@ -715,13 +701,11 @@ def _solve_one_way(
     a_flat: NDArray[np.float64],
     settings: SolverSettings,
     parallel: bool,
-    out: Any,
-    averages: Any,
+    out: NDArray[np.float64],
 ) -> None:
-    """The one-way kernel at flat ``f``, ``a`` into the
-    :data:`~study.kernels.one_way.SteadyOutputs` ``out`` and
-    :data:`~study.kernels.one_way.AverageOutputs` ``averages``, the forces and the
-    lift-off decisions computed by ``study.model`` (numpy)."""
+    """The one-way kernel at flat ``f``, ``a`` into ``out`` (one row of
+    :data:`study.kernels.one_way.OUTPUT_COLUMNS` a point), the forces and the lift-off
+    decisions computed by ``study.model`` (numpy)."""
     a_plus, a_minus, b_plus, b_minus = (
         *release_amplitudes(structure, f_flat, a_flat),
         *slip_amplitudes(structure, f_flat, a_flat))
@@ -733,7 +717,7 @@ def _solve_one_way(
     kernel = (one_way_kernel.solve_points_averaged if parallel
               else one_way_kernel.solve_points_averaged_serial)
     kernel(amplitudes, np.ascontiguousarray(a_flat, dtype=np.float64), lifted, omega,
-           _friction_levels(structure), kernel_budget(settings), out, averages)
+           _friction_levels(structure), kernel_budget(settings), out)
 
 
 def steady_state(
