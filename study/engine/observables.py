@@ -21,9 +21,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from study.engine.variables import DEFAULT_MAX_ATTRACTORS, GRIDS, VARIABLES, Variable
-from study.kernels.time_average import Z_95
 from study.model import lift_off_acceleration, mode_response, thresholds
 from study.model.contact import COUPLINGS, DEFAULT_FRICTION, Friction, check_friction
+from study.model.statistics import Z_95
 from study.model.structure import Structure
 from study.solvers.basins import (
     DEFAULT_STARTS,
@@ -505,7 +505,7 @@ def velocity_interval(mean: ArrayLike, error: ArrayLike
     """The 95 % confidence interval ``(low, high)`` [m s-1] of an averaged velocity
     ``mean`` [m s-1] with standard error ``error`` [m s-1]: ``mean -+ Z_95 error``, the
     normal quantile of the averaging's own tolerance
-    (:data:`study.kernels.time_average.Z_95`; batch means of at least 32 batches). NaN
+    (:data:`study.model.statistics.Z_95`; batch means of at least 32 batches). NaN
     where either is."""
     mean = np.asarray(mean, dtype=np.float64)
     half = Z_95 * np.asarray(error, dtype=np.float64)

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from study.engine.kinds import ResultFormat
-from study.kernels.time_average import Z_95
+from study.model.statistics import Z_95
 from study.model.status import NonConvergence, Status
 from study.model.units import (
     DEGREE,

@@ -31,7 +31,7 @@ from study.figures.common import (
     structure_text,
 )
 from study.figures.lyapunov import EXPONENT_FLOOR
-from study.kernels.time_average import Z_95
+from study.model.statistics import Z_95
 from study.model.status import Status
 
 __all__ = ["compose", "draw", "swept_axis"]

@@ -20,11 +20,12 @@ from numba.core import caching
 KERNELS_DIR = Path(__file__).resolve().parent
 
 #: The sources whose code the compiled kernels hold: every module of this folder, the
-#: status codes and the contact laws' codes (numba bakes module-level ints in as
-#: constants).
+#: status codes, the contact laws' codes and the statistical constants (numba bakes
+#: module-level numbers in as constants).
 KERNEL_SOURCES = (*sorted(KERNELS_DIR.rglob("*.py")),
                   KERNELS_DIR.parent / "model" / "codes.py",
-                  KERNELS_DIR.parent / "model" / "contact.py")
+                  KERNELS_DIR.parent / "model" / "contact.py",
+                  KERNELS_DIR.parent / "model" / "statistics.py")
 
 
 def kernel_sources_sha256(sources: tuple[Path, ...] = KERNEL_SOURCES) -> str:

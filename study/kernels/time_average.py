@@ -22,13 +22,14 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+# Z_95: the confidence half-width is it times the standard error (the batch means
+# number at least MIN_BATCHES).
+from study.model.statistics import Z_95
+
 #: Batch means whose lag-1 autocorrelation is at most this are taken as independent.
 BATCH_CORRELATION = 0.1
 #: The fewest batches a standard error is computed from.
 MIN_BATCHES = 32
-#: The two-sided 95 % quantile of the normal distribution: the confidence half-width
-#: is this times the standard error (the batch means number at least MIN_BATCHES).
-Z_95 = 1.959963984540054
 
 # --- following an irregular motion on a period map ------------------------------------
 #: Periods of the map's iteration discarded before its time averages start: the cycles
