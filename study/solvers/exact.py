@@ -22,7 +22,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import one_way as one_way_kernel
-from study.kernels import structure_vector as sv
 from study.kernels.budget import Budget
 from study.kernels.start import Start
 from study.kernels.two_way import attractors as attractor_kernel
@@ -40,7 +39,6 @@ from study.model.contact import (
     DEFAULT_COUPLING,
     DEFAULT_FRICTION,
     DEFAULT_LIFT_OFF,
-    LAWS,
     Friction,
     check_friction,
 )
@@ -56,6 +54,7 @@ from study.model.starts import (
 )
 from study.model.status import Status
 from study.model.structure import Structure, check_structure
+from study.solvers.packing import structure_entries, with_laws
 
 __all__ = [
     "COUPLINGS",
@@ -470,17 +469,7 @@ def _kept_by_value(structure: Structure, exact: bytes) -> _Kept:
     """:func:`_kept`, computed once per key. ``exact`` is the parameters' bytes: equal
     structures may differ in the sign of a zero (``alpha=-0.0 == 0.0``, and they hash
     alike), which the constants keep (``np.sin(-0.0)`` is -0.0)."""
-    vector = np.zeros(sv.SIZE)
-    w0 = structure.omega0
-    vector[sv.DAMPING] = w0 / structure.Q
-    vector[sv.STIFFNESS] = w0 * w0
-    vector[sv.COS_ALPHA] = np.cos(structure.alpha_rad)
-    vector[sv.SIN_ALPHA] = np.sin(structure.alpha_rad)
-    vector[sv.MASS_RATIO] = structure.M
-    vector[sv.STATIC_FRICTION] = structure.cs
-    vector[sv.KINETIC_FRICTION] = structure.ck
-    vector[sv.GRAVITY] = structure.g
-    vector[sv.RESTITUTION] = structure.restitution
+    vector = structure_entries(structure)
     vector.flags.writeable = False
     return _Kept(tuple(_force_constants(structure)), tuple(_friction_levels(structure)),
                  vector)
@@ -492,10 +481,9 @@ def structure_vector(structure: Structure, coupling: str,
     lift-off law (``flight``: 1, else 0, stop with LIFT_OFF): a new array each call,
     from the entries kept for the structure (a writable copy: numba would compile a
     kernel again for a read-only array)."""
-    vector = _kept(structure).vector.copy()
-    vector[sv.TWO_WAY] = 1.0 if check_coupling(coupling) == "two-way" else 0.0
-    vector[sv.LIFT_OFF_LAW] = LAWS["lift_off"]["flight" if flight else DEFAULT_LIFT_OFF].code
-    return vector
+    return with_laws(_kept(structure).vector.copy(),
+                     two_way=check_coupling(coupling) == "two-way",
+                     lift_off="flight" if flight else DEFAULT_LIFT_OFF)
 
 
 @functools.lru_cache(maxsize=64)

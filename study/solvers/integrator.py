@@ -50,6 +50,7 @@ from study.solvers.exact import (
     check_structure,
     scalar_if_0d,
 )
+from study.solvers.packing import structure_entries, with_laws
 
 __all__ = [
     "EVENT_KINDS",
@@ -383,24 +384,8 @@ def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING,
     two_way = coupling == "two-way"
     flight = check_flight(flight, coupling, structure)
     friction = check_friction(friction, "integrator")
-    p = np.empty(sv.SIZE)
-    w0 = structure.omega0
-    p[sv.DAMPING] = w0 / structure.Q
-    p[sv.STIFFNESS] = w0 * w0
-    p[sv.COS_ALPHA] = math.cos(structure.alpha_rad)
-    p[sv.SIN_ALPHA] = math.sin(structure.alpha_rad)
-    p[sv.MASS_RATIO] = structure.M
-    p[sv.STATIC_FRICTION] = structure.cs
-    p[sv.KINETIC_FRICTION] = structure.ck
-    p[sv.GRAVITY] = structure.g
-    p[sv.TWO_WAY] = 1.0 if two_way else 0.0
-    p[sv.RESTITUTION] = structure.restitution
-    p[sv.LIFT_OFF_LAW] = float(LAWS["lift_off"]["flight" if flight else "stop"].code)
-    # Parameters of laws not chosen are never read: NaN says so.
-    p[sv.FRICTION_LAW + 1:] = np.nan
-    for name, value in friction.vector_entries().items():
-        p[sv.index(name)] = value
-    return p
+    return with_laws(structure_entries(structure), two_way=two_way,
+                     lift_off="flight" if flight else "stop", friction=friction)
 
 
 def _scales(structure: Structure, omega: NDArray[np.float64],
