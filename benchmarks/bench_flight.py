@@ -56,13 +56,9 @@ from study.engine.provenance import git_state, utc_now  # noqa: E402
 from study.kernels.start import RELEASE  # noqa: E402
 from study.kernels.two_way import flight, points  # noqa: E402
 from study.kernels.two_way.modes import TWO_PI, DrivePoint, mode_row  # noqa: E402
-from study.solvers.exact import (  # noqa: E402
-    DEFAULT_SETTINGS,
-    kernel_budget,
-    steady_state,
-    steady_velocity,
-    structure_vector,
-)
+from study.solvers.exact import steady_state, steady_velocity  # noqa: E402
+from study.solvers.settings import DEFAULT_SETTINGS, kernel_budget  # noqa: E402
+from study.solvers.structure_constants import structure_vector  # noqa: E402
 
 #: The M -> 1 structure of the flight workflows (M = 1 is refused with flight).
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)

@@ -106,13 +106,9 @@ from study.kernels.two_way import points as orbit  # noqa: E402
 from study.kernels.two_way.modes import N_MODE, TWO_PI, DrivePoint, mode_row  # noqa: E402
 from study.kernels.two_way.orbit import A_EVENTS, N_ACC, PassRecord, run  # noqa: E402
 from study.kernels.two_way.points import start_state  # noqa: E402
-from study.solvers.exact import (  # noqa: E402
-    DEFAULT_SETTINGS,
-    SolverSettings,
-    kernel_budget,
-    steady_velocity,
-    structure_vector,
-)
+from study.solvers.exact import steady_velocity  # noqa: E402
+from study.solvers.settings import DEFAULT_SETTINGS, SolverSettings, kernel_budget  # noqa: E402
+from study.solvers.structure_constants import structure_vector  # noqa: E402
 
 #: The two-way solver's settings with each orbit continued along the sweep.
 CONTINUED = SolverSettings(continuation=True)

@@ -31,8 +31,9 @@ from docs_tables import load_average, machine, output, quick_option, use_quick, 
 
 import study
 from study.engine.provenance import git_state, utc_now
-from study.solvers.exact import SolverSettings, steady_state, steady_velocity
+from study.solvers.exact import steady_state, steady_velocity
 from study.solvers.protocol import slow_sweep
+from study.solvers.settings import SolverSettings
 
 #: The issue's goal: a swept map at most this many one-way maps per point.
 GOAL_SWEPT = 5.0

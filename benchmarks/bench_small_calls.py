@@ -62,7 +62,8 @@ from study.kernels import one_way  # noqa: E402
 from study.kernels.budget import Budget  # noqa: E402
 from study.kernels.start import RELEASE  # noqa: E402
 from study.kernels.two_way import points as orbit_kernel  # noqa: E402
-from study.solvers.exact import steady_state, steady_velocity, structure_vector  # noqa: E402
+from study.solvers.exact import steady_state, steady_velocity  # noqa: E402
+from study.solvers.structure_constants import structure_vector  # noqa: E402
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 #: The point sets: (label, points, f, a).

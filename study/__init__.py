@@ -30,7 +30,9 @@ from study.model.inputs import StudyWarning, SuspectInputWarning
 from study.model.starts import Drop
 from study.model.status import NonConvergence, Status
 from study.model.structure import Structure
-from study.solvers.exact import SolverSettings, SteadyState, steady_state, steady_velocity
+from study.solvers.exact import steady_state, steady_velocity
+from study.solvers.settings import SolverSettings
+from study.solvers.steady import SteadyState
 from study.version import VERSION as __version__
 
 # The result kinds register themselves (study.engine.kinds) when their modules are

@@ -43,7 +43,7 @@ from study.solvers.branch import (
     trace,
     trace_from_section,
 )
-from study.solvers.exact import SolverSettings
+from study.solvers.settings import SolverSettings
 from study.version import VERSION
 
 __all__ = ["bifurcation_curve", "branch", "doubled_branch", "event_signature"]

@@ -93,6 +93,7 @@ from study.engine.spec_files import (
     read_spec_text,
 )
 from study.model import lift_off_acceleration, mode_response, thresholds
+from study.model.contact import DEFAULT_COUPLING
 from study.model.inputs import bounded_integer
 from study.model.parameters import STRUCTURE, Parameter, schema_properties, units_list
 from study.model.status import Status
@@ -115,7 +116,7 @@ from study.scenes.planar_model import (
     periodic_motion,
 )
 from study.scenes.scene_kind import disk_from_spec
-from study.solvers.exact import DEFAULT_COUPLING, steady_velocity
+from study.solvers.exact import steady_velocity
 
 __all__ = [
     "BEHAVIOURS",

@@ -72,12 +72,13 @@ from study.engine.spec_files import (
     read_spec_text,
 )
 from study.model import thresholds
+from study.model.contact import DEFAULT_COUPLING
 from study.model.inputs import bounded_integer, instance_of, real_number
 from study.model.parameters import PARAMETERS as PARAMETER_TABLE
 from study.model.parameters import STRUCTURE, Parameter, schema_properties, units_list
 from study.model.structure import Structure, tilt_warnings
 from study.model.units import DIMENSIONLESS, KILOGRAM, spoken
-from study.solvers.exact import DEFAULT_COUPLING, steady_velocity
+from study.solvers.exact import steady_velocity
 
 __all__ = [
     "FIT_FORMAT",

@@ -14,18 +14,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.engine.variables import VARIABLES
 from study.model import as_acceleration
+from study.model.contact import DEFAULT_COUPLING
 from study.model.inputs import bounded_integer
-from study.model.structure import Structure
+from study.model.structure import Structure, check_structure
 from study.model.units import METRE_PER_SECOND_SQUARED
-from study.solvers.exact import (
-    DEFAULT_COUPLING,
-    SolverSettings,
-    SteadyState,
-    check_coupling,
-    check_settings,
-    check_structure,
-    steady_state,
-)
+from study.solvers.exact import steady_state
 from study.solvers.frontier import (
     MAX_SCAN_POINTS,
     Frontier,
@@ -33,6 +26,8 @@ from study.solvers.frontier import (
     check_tolerance,
     frontier_from_grid,
 )
+from study.solvers.settings import SolverSettings, check_coupling, check_settings
+from study.solvers.steady import SteadyState
 
 __all__ = ["frontier", "frontier_dataset"]
 

@@ -7,10 +7,11 @@ import xarray as xr
 
 from study.engine.variables import VARIABLES
 from study.model import thresholds
-from study.model.structure import Structure
+from study.model.contact import DEFAULT_COUPLING
+from study.model.structure import Structure, check_structure
 from study.model.units import HERTZ, METRE_PER_SECOND_SQUARED
-from study.solvers.exact import DEFAULT_COUPLING, check_coupling, check_structure
 from study.solvers.frontier import check_f_range, check_tolerance
+from study.solvers.settings import check_coupling
 
 __all__ = ["collapse_variable", "lowest_threshold", "minimum_threshold",
            "resonance_threshold"]

@@ -35,6 +35,7 @@ from study.engine.observables import OBSERVABLES, UNSWEPT_VARIABLES, BasinSettin
 from study.engine.study_spec import STRUCTURE_PARAMETERS, StudySpec, parse_spec
 from study.engine.sweep import Rectangle, Task, compute_task
 from study.engine.variables import GRID_SIZES
+from study.model.contact import DEFAULT_COUPLING
 from study.model.inputs import (
     SuspectInputWarning,
     as_real_array,
@@ -44,15 +45,8 @@ from study.model.inputs import (
 )
 from study.model.parameters import STRUCTURE as STRUCTURE_TABLE
 from study.model.starts import DEFAULT_START, Drop, toml_value
-from study.model.structure import Structure
-from study.solvers.exact import (
-    DEFAULT_COUPLING,
-    SolverSettings,
-    check_coupling,
-    check_flight,
-    check_start,
-    check_structure,
-)
+from study.model.structure import Structure, check_structure
+from study.solvers.settings import SolverSettings, check_coupling, check_flight, check_start
 from study.version import VERSION
 
 __all__ = ["MAP_SPEC_SOURCE", "compute_map", "map_spec_text"]

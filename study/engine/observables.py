@@ -22,9 +22,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.engine.variables import DEFAULT_MAX_ATTRACTORS, GRIDS, VARIABLES, Variable
 from study.model import lift_off_acceleration, mode_response, thresholds
-from study.model.contact import COUPLINGS, DEFAULT_FRICTION, Friction, check_friction
+from study.model.contact import (
+    COUPLINGS,
+    DEFAULT_COUPLING,
+    DEFAULT_FRICTION,
+    Friction,
+    check_friction,
+)
 from study.model.statistics import Z_95
 from study.model.structure import Structure
+from study.solvers.attractors import attractors
 from study.solvers.basins import (
     DEFAULT_STARTS,
     NO_ATTRACTOR,
@@ -32,18 +39,13 @@ from study.solvers.basins import (
     basins,
     sweep_seeds,
 )
-from study.solvers.exact import (
-    DEFAULT_COUPLING,
-    SECTION_PERIODS,
-    SolverSettings,
-    SteadyState,
-    attractors,
-    phase_section,
-    steady_state,
-)
+from study.solvers.exact import steady_state
 from study.solvers.frontier import frontier_from_grid
 from study.solvers.integrator import IntegratorSettings, integrated_steady_state
 from study.solvers.protocol import SweptState, slow_sweep
+from study.solvers.section import SECTION_PERIODS, phase_section
+from study.solvers.settings import SolverSettings
+from study.solvers.steady import SteadyState
 
 __all__ = [
     "BASIN_KEYS",

@@ -68,6 +68,7 @@ from study.engine.spec_files import (
 from study.engine.variables import DEFAULT_MAX_ATTRACTORS
 from study.model import starts
 from study.model.contact import (
+    DEFAULT_COUPLING,
     DEFAULT_FRICTION,
     DEFAULT_LIFT_OFF,
     LAWS,
@@ -93,10 +94,10 @@ from study.model.parameters import (
 from study.model.starts import Drop
 from study.model.structure import Structure, tilt_warnings
 from study.solvers.basins import DROP_HEIGHT_RANGE, FACTOR_RANGE
-from study.solvers.exact import DEFAULT_COUPLING, MAX_SOLVER_BUDGET, SolverSettings
 from study.solvers.frontier import finest_tolerance
 from study.solvers.integrator import MAX_INTEGRATOR_BUDGET, IntegratorSettings
 from study.solvers.protocol import SWEEP_AXES, SWEEP_DIRECTIONS
+from study.solvers.settings import MAX_SOLVER_BUDGET, SolverSettings
 
 __all__ = [
     "METHODS",
@@ -336,7 +337,7 @@ def spec_schema() -> dict[str, Any]:
 
     The parameters' ranges and descriptions come from :mod:`study.model.parameters`, the
     observables allowed and their descriptions from :mod:`study.engine.observables`,
-    the solvers' budgets' maxima from :data:`study.solvers.exact.MAX_SOLVER_BUDGET` and
+    the solvers' budgets' maxima from :data:`study.solvers.settings.MAX_SOLVER_BUDGET` and
     :data:`study.solvers.integrator.MAX_INTEGRATOR_BUDGET` (the file on disk is their
     export, see :func:`export_spec_schema`).
     """

@@ -23,8 +23,9 @@ from study.model.units import (
     METRE_PER_SECOND,
     METRE_PER_SECOND_SQUARED,
 )
+from study.solvers.attractors import ATTRACTOR_DROPS, ATTRACTOR_STARTS
 from study.solvers.basins import NO_ATTRACTOR
-from study.solvers.exact import ATTRACTOR_DROPS, ATTRACTOR_STARTS, SECTION_PERIODS
+from study.solvers.section import SECTION_PERIODS
 
 __all__ = ["BASIN_STATUS_FLAGS", "DEFAULT_MAX_ATTRACTORS", "FRONTIER_KINDS", "GRIDS",
            "GRID_SIZES", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "STUDY_FORMATS", "VARIABLES",

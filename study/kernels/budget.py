@@ -1,6 +1,6 @@
 """The budgets the exact kernels take, as one named tuple.
 
-:class:`study.solvers.exact.SolverSettings` validates them; the kernels read them by
+:class:`study.solvers.settings.SolverSettings` validates them; the kernels read them by
 name.
 """
 

@@ -1,7 +1,7 @@
 """The state a point's motion starts from, as one named tuple the kernels take.
 
-:class:`study.solvers.exact.SolverSettings` ``start`` names the protocol (release,
-switch-on, a drop; docs/theory/starts.md); :func:`study.solvers.exact.kernel_start`
+:class:`study.solvers.settings.SolverSettings` ``start`` names the protocol (release,
+switch-on, a drop; docs/theory/starts.md); :func:`study.solvers.settings.kernel_start`
 packs it into a :data:`Start`, which the two-way drivers
 (:mod:`study.kernels.two_way.points`) read by name.
 """

@@ -158,7 +158,7 @@ class Drop:
     the mode at rest at ``delta = delta' = 0`` (the static deflection of a held base),
     let go at drive phase ``phase``.
 
-    Not the drops of :func:`study.solvers.exact.attractors`, whose mode starts at rest
+    Not the drops of :func:`study.solvers.attractors.attractors`, whose mode starts at rest
     at its flight equilibrium ``g cos(alpha) / k`` (a structure already falling
     freely): this one is held, then let go, so the mode starts its free oscillation
     about that equilibrium.

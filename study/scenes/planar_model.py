@@ -39,7 +39,7 @@ from study.engine.spec_files import load_schema
 from study.kernels import planar_integrator as _kernel
 from study.kernels.event_loop import EventLog, Samples, Segments, State, StepControl
 from study.model import codes, mode_response
-from study.model.contact import check_law
+from study.model.contact import COUPLINGS, DEFAULT_COUPLING, check_law
 from study.model.inputs import (
     InputTypeError,
     as_real_array,
@@ -60,7 +60,6 @@ from study.model.units import (
     SECOND,
     spoken,
 )
-from study.solvers.exact import COUPLINGS, DEFAULT_COUPLING
 from study.solvers.integrator import (
     MAX_RECORDED_EVENTS,
     IntegratorSettings,

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from study.kernels.two_way import basins as basin_kernel
 from study.model.structure import Structure, check_structure
-from study.solvers.exact import (
+from study.solvers.settings import (
     SolverSettings,
     check_coupling,
     check_flight,
@@ -28,9 +28,8 @@ from study.solvers.exact import (
     flat_drive,
     kernel_budget,
     kernel_start,
-    past_lift_off,
-    structure_vector,
 )
+from study.solvers.structure_constants import past_lift_off, structure_vector
 
 #: Starts at each drive point by default.
 DEFAULT_STARTS = 24

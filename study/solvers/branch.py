@@ -22,17 +22,17 @@ from study.model.codes import BIFURCATION_PERIOD_DOUBLING
 from study.model.starts import START_ALLOWED, START_TYPES, Drop, start_label
 from study.model.status import Status
 from study.model.structure import Structure, check_structure
-from study.solvers.exact import (
+from study.solvers.exact import steady_state
+from study.solvers.integrator import steady_mode_state
+from study.solvers.settings import (
     SolverSettings,
     check_coupling,
     check_flight,
     check_settings,
     check_start,
     kernel_budget,
-    steady_state,
-    structure_vector,
 )
-from study.solvers.integrator import steady_mode_state
+from study.solvers.structure_constants import structure_vector
 
 #: The drive parameters a branch is continued in: frequency [Hz] or acceleration [m s-2].
 BRANCH_AXES = ("f", "a")

@@ -21,12 +21,9 @@ from study.model.inputs import InputTypeError, bounded_number, real_number
 from study.model.status import INVALID_STATUSES, Status
 from study.model.structure import Structure
 from study.model.units import HERTZ
-from study.solvers.exact import (
-    SolverSettings,
-    SteadyState,
-    check_settings,
-    steady_state,
-)
+from study.solvers.exact import steady_state
+from study.solvers.settings import SolverSettings, check_settings
+from study.solvers.steady import SteadyState
 
 __all__ = [
     "FRONTIER_CROSSING",

@@ -17,7 +17,8 @@ from study.kernels import impact as impact_kernel
 from study.model.inputs import as_real_array
 from study.model.structure import Structure, check_structure
 from study.model.units import METRE_PER_SECOND
-from study.solvers.exact import scalar_if_0d, structure_vector
+from study.solvers.steady import scalar_if_0d
+from study.solvers.structure_constants import structure_vector
 
 __all__ = ["Impact", "impact"]
 

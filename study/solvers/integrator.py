@@ -18,7 +18,7 @@ Two entry points:
 * :func:`simulate` follows one structure through a :class:`Schedule` and returns a
   :class:`Trajectory` (samples at requested times and every contact event);
 * :func:`integrated_steady_state` integrates whole drive periods from the canonical
-  start until the orbit repeats and returns the same :class:`~study.solvers.exact.SteadyState`
+  start until the orbit repeats and returns the same :class:`~study.solvers.steady.SteadyState`
   as the exact solver.
 """
 
@@ -34,23 +34,15 @@ from study.kernels import integrator as _kernel
 from study.kernels import structure_vector as sv
 from study.kernels.event_loop import EventLog, Samples, Segments, State, StepControl
 from study.model import as_acceleration, as_frequency, codes, mode_response
-from study.model.contact import DEFAULT_FRICTION, LAWS, Friction, check_friction
+from study.model.contact import DEFAULT_COUPLING, DEFAULT_FRICTION, LAWS, Friction, check_friction
 from study.model.inputs import as_real_array, bounded_integer, instance_of, real_number
 from study.model.starts import START_ALLOWED, Drop, as_start, kernel_fields, start_label
-from study.model.structure import Structure
+from study.model.structure import Structure, check_structure
 from study.model.units import DEGREE, SECOND
-from study.solvers.exact import (
-    DEFAULT_COUPLING,
-    DEFAULT_SETTINGS,
-    PARALLEL_THRESHOLD,
-    SteadyState,
-    check_coupling,
-    check_flight,
-    check_start,
-    check_structure,
-    scalar_if_0d,
-)
+from study.solvers.exact import PARALLEL_THRESHOLD
 from study.solvers.packing import structure_entries, with_laws
+from study.solvers.settings import DEFAULT_SETTINGS, check_coupling, check_flight, check_start
+from study.solvers.steady import SteadyState, scalar_if_0d
 
 __all__ = [
     "EVENT_KINDS",
@@ -376,7 +368,7 @@ def model_parameters(structure: Structure, coupling: str = DEFAULT_COUPLING,
                      friction: str | Friction = DEFAULT_FRICTION,
                      flight: bool = False) -> NDArray[np.float64]:
     """Parameter vector of the integrator kernel for ``structure``, ``coupling``,
-    ``friction`` and the lift-off law (``flight``, :func:`study.solvers.exact.check_flight`:
+    ``friction`` and the lift-off law (``flight``, :func:`study.solvers.settings.check_flight`:
     two-way coupling and ``M < 1`` only)
     (:mod:`study.kernels.structure_vector`)."""
     structure = check_structure(structure)
@@ -623,7 +615,7 @@ def integrated_steady_state(
         an orbit with flight is ``BOUNCING``, with its velocity.
     start : {"release", "switch-on"} or Drop, default "release"
         The state the motion starts from, as the exact solver's ``start``
-        (:class:`study.solvers.exact.SolverSettings`, docs/theory/starts.md): the same
+        (:class:`study.solvers.settings.SolverSettings`, docs/theory/starts.md): the same
         states, so that the integrator checks the exact solver from each.
         ``"switch-on"``: every state 0 at phase 0; a :class:`~study.model.starts.Drop`
         (needs ``flight=True``): at rest at its height, the mode at rest, at its phase

@@ -21,19 +21,18 @@ from study.kernels.two_way import protocol as protocol_kernel
 from study.model import as_acceleration, as_frequency
 from study.model.starts import Drop
 from study.model.structure import Structure, check_structure
-from study.solvers.exact import (
+from study.solvers.exact import steady_state_from_rows
+from study.solvers.settings import (
     SolverSettings,
-    SteadyState,
     check_coupling,
     check_flight,
     check_settings,
     check_start,
     kernel_budget,
     kernel_start,
-    past_lift_off,
-    steady_state_from_rows,
-    structure_vector,
 )
+from study.solvers.steady import SteadyState
+from study.solvers.structure_constants import past_lift_off, structure_vector
 
 #: The drive axes a sweep can step along: frequency [Hz] or acceleration [m s-2].
 SWEEP_AXES = ("f", "a")

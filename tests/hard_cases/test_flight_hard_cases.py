@@ -22,7 +22,8 @@ import pytest
 import study
 from study.kernels.two_way.points import start_state
 from study.model.status import NonConvergence, Status
-from study.solvers.exact import attractors, steady_state
+from study.solvers.attractors import attractors
+from study.solvers.exact import steady_state
 from study.solvers.integrator import Schedule, simulate
 from tests.unit.test_flight_exact import drive_point, period_map
 

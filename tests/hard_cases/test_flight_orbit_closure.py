@@ -33,7 +33,8 @@ from study.kernels.two_way.flight import CHATTER
 from study.kernels.two_way.flight_orbit import solve_flight
 from study.kernels.two_way.points import FLIGHT_COLUMNS, OUTPUT_COLUMNS, start_state
 from study.model.status import NonConvergence, Status
-from study.solvers.exact import DEFAULT_SETTINGS, kernel_budget, steady_state
+from study.solvers.exact import steady_state
+from study.solvers.settings import DEFAULT_SETTINGS, kernel_budget
 from tests.hard_cases.test_flight_hard_cases import _threshold
 from tests.reference.flight import FlightModel, simulate, steady_motion
 from tests.unit.test_flight_exact import drive_point

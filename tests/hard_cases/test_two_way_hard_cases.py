@@ -393,7 +393,7 @@ def test_velocity_kinks_at_regime_edges_are_orbits_of_the_reference(params, f, a
         OUT_STATUS,
         OUT_VELOCITY,
     )
-    from study.solvers.exact import structure_vector
+    from study.solvers.structure_constants import structure_vector
     from tests.reference.two_way_exact import TwoWayModel, period_map
 
     s = Structure(**params)

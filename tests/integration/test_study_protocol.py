@@ -13,8 +13,8 @@ from study.engine.spec_files import SpecError
 from study.engine.store import open_result
 from study.engine.study_spec import load_spec
 from study.model.structure import Structure
-from study.solvers.exact import SolverSettings
 from study.solvers.protocol import slow_sweep
+from study.solvers.settings import SolverSettings
 
 SPEC = """\
 [study]

@@ -328,5 +328,5 @@ def test_ctrl_c_keeps_every_computed_point_of_a_one_chunk_study(tmp_path):
     np.testing.assert_array_equal(ds["status"].values, status)
     # the attractor counts of a row kept before the interrupt and one computed on resume
     for row in (0, f.size - 1):
-        found = study.solvers.exact.attractors(s, f[row], a, coupling="two-way")
+        found = study.solvers.attractors.attractors(s, f[row], a, coupling="two-way")
         np.testing.assert_array_equal(ds["attractor_count"].values[row], found.count)

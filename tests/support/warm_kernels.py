@@ -84,7 +84,8 @@ def two_way_more() -> None:
     """The drivers around the exact two-way solver: velocity only, attractors, sections,
     frontier, the labelled map's observables."""
     import study
-    from study.solvers.exact import attractors, phase_section
+    from study.solvers.attractors import attractors
+    from study.solvers.section import phase_section
 
     s = _paper()
     study.steady_velocity(s, F, A, coupling="two-way")
@@ -101,7 +102,7 @@ def two_way_more() -> None:
 def flight() -> None:
     """The two-way solver with flight: the base flies past lift-off and lands."""
     import study
-    from study.solvers.exact import attractors
+    from study.solvers.attractors import attractors
 
     s = _heavy()
     f, a = np.array([12.0, 14.0]), np.array([9.5, 11.0])
@@ -154,7 +155,8 @@ def continuation() -> None:
     import study
     from study.kernels.two_way import points as kernel
     from study.kernels.two_way.continuation import new_neighbours, remember
-    from study.solvers.exact import DEFAULT_SETTINGS, kernel_budget, structure_vector
+    from study.solvers.settings import DEFAULT_SETTINGS, kernel_budget
+    from study.solvers.structure_constants import structure_vector
 
     s = _paper()
     study.steady_state(s, np.full(3, 14.5), np.array([8.0, 8.5, 9.0]), coupling="two-way",

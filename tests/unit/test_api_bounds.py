@@ -16,13 +16,13 @@ import study
 from study.analyses.thresholds import lowest_threshold
 from study.engine.study_spec import spec_schema
 from study.model.inputs import InputTypeError
-from study.solvers.exact import MAX_SOLVER_BUDGET
 from study.solvers.frontier import (
     MAX_SCAN_POINTS,
     TOLERANCE_SPACINGS,
     finest_tolerance,
     frontier_from_grid,
 )
+from study.solvers.settings import MAX_SOLVER_BUDGET
 
 S = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 

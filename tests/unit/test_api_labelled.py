@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 
 import study
 from study.analyses.thresholds import lowest_threshold
-from study.solvers.exact import DEFAULT_COUPLING
+from study.model.contact import DEFAULT_COUPLING
 
 PAPER = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 
@@ -159,7 +159,7 @@ def test_one_coupling_default_everywhere() -> None:
     from study.engine.observables import Method
     from study.engine.study_spec import StudySpec
     from study.scenes.planar_model import Disk
-    from study.solvers.exact import attractors
+    from study.solvers.attractors import attractors
     from study.solvers.integrator import integrated_steady_state, simulate
 
     assert DEFAULT_COUPLING == "one-way"

@@ -19,8 +19,9 @@ from numpy.testing import assert_allclose, assert_array_equal
 import study
 from study.model import mode_response
 from study.solvers.basins import BasinStarts, basin_starts, basins, wilson_interval
-from study.solvers.exact import SolverSettings, past_lift_off
 from study.solvers.integrator import Schedule, simulate
+from study.solvers.settings import SolverSettings
+from study.solvers.structure_constants import past_lift_off
 
 #: The M -> 1 structure of the flight workflows: two hops coexist at 13 Hz, 12 m s-2
 #: (+0.0800 m/s after the release, -0.1640 m/s after a switch-on).

@@ -206,7 +206,7 @@ def _phase_zero_state(dataset, k):
     """The state at phase 0 of step ``k``'s orbit: its state on the section followed
     by the exact solver's own map to the end of the period."""
     from study.kernels.two_way import branch as kernel
-    from study.solvers.exact import structure_vector
+    from study.solvers.structure_constants import structure_vector
 
     vector = structure_vector(M099, "two-way", True)
     work = kernel.new_branch_work(vector)

@@ -85,14 +85,10 @@ from study.model import lift_off_acceleration, thresholds
 from study.model.codes import CONTINUOUS_SLIDING, LIFT_OFF, STATIC, STICK_SLIP
 from study.model.paper import paper_structure
 from study.model.structure import Structure, tilt_warnings
-from study.solvers.exact import (
-    DEFAULT_SETTINGS,
-    SolverSettings,
-    attractors,
-    kernel_budget,
-    steady_state,
-    structure_vector,
-)
+from study.solvers.attractors import attractors
+from study.solvers.exact import steady_state
+from study.solvers.settings import DEFAULT_SETTINGS, SolverSettings, kernel_budget
+from study.solvers.structure_constants import structure_vector
 
 #: The two-way solver with each orbit continued along the sweep.
 CONTINUED = SolverSettings(continuation=True)

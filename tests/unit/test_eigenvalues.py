@@ -19,7 +19,7 @@ from study.kernels.budget import Budget
 from study.kernels.two_way import flight, flight_orbit, modes
 from study.kernels.two_way.cycles import MAX_PERIOD
 from study.kernels.two_way.points import start_state
-from study.solvers.exact import structure_vector
+from study.solvers.structure_constants import structure_vector
 
 
 def _exact_radius(matrix: np.ndarray) -> float:

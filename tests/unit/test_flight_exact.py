@@ -34,7 +34,9 @@ from study.kernels.two_way import flight, flight_orbit
 from study.kernels.two_way.modes import DrivePoint
 from study.kernels.two_way.points import start_state
 from study.model.status import Status
-from study.solvers.exact import attractors, steady_state, steady_velocity, structure_vector
+from study.solvers.attractors import attractors
+from study.solvers.exact import steady_state, steady_velocity
+from study.solvers.structure_constants import structure_vector
 from tests.reference.flight import CODE_VERSION, steady_motion
 from tests.reference.rigid_block import rigid_block
 from tests.support.flight_points import flight_table

@@ -18,7 +18,8 @@ import pytest
 import study
 from study.kernels.two_way import flight, flight_orbit, points
 from study.model.status import Status
-from study.solvers.exact import DEFAULT_SETTINGS, kernel_budget, structure_vector
+from study.solvers.settings import DEFAULT_SETTINGS, kernel_budget
+from study.solvers.structure_constants import structure_vector
 from tests.support.flight_points import flight_table
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)

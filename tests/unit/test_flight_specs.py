@@ -18,7 +18,7 @@ from study.engine.study_spec import SPEC_SCHEMA_PATH, SpecError, load_spec, pars
 from study.engine.variables import VARIABLES
 from study.model.contact import LAWS
 from study.model.status import Status
-from study.solvers.exact import SolverSettings
+from study.solvers.settings import SolverSettings
 
 REPO = Path(__file__).resolve().parents[2]
 FLIGHT_VARIABLES = ("airborne_fraction", "largest_hop", "impacts_per_period")

@@ -13,7 +13,7 @@ from numpy.testing import assert_allclose
 import study
 from study.kernels.budget import Budget
 from study.kernels.two_way import modes, newton, orbit, points
-from study.solvers.exact import structure_vector
+from study.solvers.structure_constants import structure_vector
 
 
 def _lapack_radius(matrix: np.ndarray) -> float:

@@ -7,8 +7,9 @@ import numpy as np
 
 import study
 from study.model.status import Status
-from study.solvers.exact import SteadyState, steady_velocity
+from study.solvers.exact import steady_velocity
 from study.solvers.frontier import frontier_from_grid
+from study.solvers.steady import SteadyState
 
 NEAR_ONE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
 

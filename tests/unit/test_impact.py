@@ -17,8 +17,8 @@ from study.kernels import impact as kernel
 from study.model.codes import IMPACT_PARADOX, IMPACT_SLIP, IMPACT_STICK
 from study.model.inputs import InputTypeError
 from study.model.structure import tilt_warnings
-from study.solvers.exact import structure_vector
 from study.solvers.impact import impact
+from study.solvers.structure_constants import structure_vector
 
 
 def structure(alpha, M, cs, ck, restitution=0.0):

@@ -37,8 +37,9 @@ from study.kernels.two_way import flight, flight_orbit, modes
 from study.kernels.two_way.cycles import MAX_PERIOD
 from study.kernels.two_way.points import start_state
 from study.model.codes import BOUNCING, CHAOTIC, QUASI_PERIODIC, STICK_SLIP
-from study.solvers.exact import steady_state, structure_vector
+from study.solvers.exact import steady_state
 from study.solvers.integrator import Schedule, simulate, steady_mode_state
+from study.solvers.structure_constants import structure_vector
 
 #: The structure of the known irregular points (issue 35), all two-way with flight.
 BASE = dict(f0=14.44, Q=17.5, alpha=64.0, cs=0.25)

@@ -14,7 +14,7 @@ from study.kernels.budget import Budget
 from study.kernels.two_way import flight, flight_orbit, modes, orbit, points
 from study.model.codes import BOUNCING
 from study.model.structure import Structure
-from study.solvers.exact import structure_vector
+from study.solvers.structure_constants import structure_vector
 
 #: The release sinusoids' columns (forward, backward) and the slip speed's.
 RELEASE = (modes.M_SIN_P, modes.M_AMP_P, modes.M_ARG_P,

@@ -50,8 +50,9 @@ from study.model.codes import (
     STATIC,
     STICK_SLIP,
 )
-from study.solvers.exact import SolverSettings, steady_state, steady_velocity
+from study.solvers.exact import steady_state, steady_velocity
 from study.solvers.integrator import Schedule, simulate, steady_mode_state
+from study.solvers.settings import SolverSettings
 
 #: A structure with continuous sliding at moderate drive (from the seeded search,
 #: rounded): its cycles contract by exp(-0.1) a period, so the averaging's transient

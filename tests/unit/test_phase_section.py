@@ -1,4 +1,4 @@
-"""The phase-0 Poincare section (issue 35, item 4): ``study.solvers.exact.phase_section``
+"""The phase-0 Poincare section (issue 35, item 4): ``study.solvers.section.phase_section``
 and the ``section`` observable.
 
 Checked against something independent:
@@ -23,8 +23,9 @@ from numpy.testing import assert_allclose
 
 import study
 from study.model.status import Status
-from study.solvers.exact import SECTION_PERIODS, phase_section, steady_state
+from study.solvers.exact import steady_state
 from study.solvers.integrator import Schedule, simulate
+from study.solvers.section import SECTION_PERIODS, phase_section
 
 BASE = dict(f0=14.44, Q=17.5, alpha=64.0, cs=0.25)
 #: A period-1 bouncing orbit, a chaotic bouncing motion (M = 0.99, with flight) and a

@@ -33,12 +33,8 @@ from study.model import as_acceleration, as_frequency, lift_off_acceleration
 from study.model.contact import LAWS
 from study.model.drive import SMALL_ARRAY, as_time
 from study.model.inputs import SuspectInputWarning
-from study.solvers.exact import (
-    STRUCTURES_KEPT,
-    steady_state,
-    steady_velocity,
-    structure_vector,
-)
+from study.solvers.exact import steady_state, steady_velocity
+from study.solvers.structure_constants import STRUCTURES_KEPT, structure_vector
 
 PAPER = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 

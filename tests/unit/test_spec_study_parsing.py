@@ -34,7 +34,7 @@ from study.engine.study_spec import (
     parse_spec,
 )
 from study.model.structure import Structure
-from study.solvers.exact import SolverSettings
+from study.solvers.settings import SolverSettings
 
 REPO = Path(__file__).resolve().parents[2]
 

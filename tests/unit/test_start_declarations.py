@@ -36,8 +36,9 @@ from study.model.starts import (
     start_label,
     toml_value,
 )
-from study.solvers.exact import SolverSettings, kernel_start, steady_state
+from study.solvers.exact import steady_state
 from study.solvers.integrator import integrated_steady_state
+from study.solvers.settings import SolverSettings, kernel_start
 
 REPO = Path(__file__).resolve().parents[2]
 PAPER = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)

@@ -25,8 +25,9 @@ from study.engine.study_spec import SpecError, parse_spec
 from study.kernels.start import RELEASE, SWITCH_ON, Start
 from study.model.starts import START_ALLOWED, Drop, start_attributes, start_label
 from study.model.status import Status
-from study.solvers.exact import SolverSettings, kernel_start, steady_state, steady_velocity
+from study.solvers.exact import steady_state, steady_velocity
 from study.solvers.integrator import integrated_steady_state
+from study.solvers.settings import SolverSettings, kernel_start
 from tests.reference.flight import steady_motion
 
 #: Two stable motions (the issue's point): a small forward hop and a big backward one.

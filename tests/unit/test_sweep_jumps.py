@@ -20,9 +20,9 @@ from numpy.testing import assert_allclose
 
 import study
 from study.kernels.two_way import branch
-from study.solvers.exact import structure_vector
 from study.solvers.integrator import Schedule, simulate, steady_mode_state
 from study.solvers.protocol import JUMP_FRACTION, slow_sweep
+from study.solvers.structure_constants import structure_vector
 
 #: A user's structure near M = 1 (the issue's): forward and backward hops coexist.
 USER = study.Structure(f0=18.0, Q=25.0, alpha=55.0, M=0.9, cs=0.35)

@@ -17,8 +17,8 @@ import study
 from study.kernels import structure_vector as sv
 from study.kernels.two_way.modes import N_MODE, mode_table
 from study.kernels.two_way.points import stays_static
-from study.solvers.exact import past_lift_off, structure_vector
 from study.solvers.protocol import slow_sweep
+from study.solvers.structure_constants import past_lift_off, structure_vector
 
 PAPER = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 M_TO_1 = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)

@@ -43,7 +43,9 @@ from study.kernels.two_way.points import (
 from study.model import lift_off_acceleration, thresholds
 from study.model.status import INVALID_STATUSES, Status
 from study.model.structure import Structure, tilt_warnings
-from study.solvers.exact import attractors, steady_state, steady_velocity, structure_vector
+from study.solvers.attractors import attractors
+from study.solvers.exact import steady_state, steady_velocity
+from study.solvers.structure_constants import structure_vector
 from tests.reference.two_way_exact import reference_points
 
 POINTS = reference_points()

@@ -29,7 +29,8 @@ from study.kernels.two_way import modes, newton, points, propagation
 from study.model import lift_off_acceleration, thresholds
 from study.model.codes import LIFT_OFF, REASON_NONE, STATIC
 from study.model.inputs import SuspectInputWarning
-from study.solvers.exact import steady_state, structure_vector
+from study.solvers.exact import steady_state
+from study.solvers.structure_constants import structure_vector
 
 BUDGET = Budget(10_000, 5_000, 1e-3, 20_000)
 # Columns of a static row that are not computed: no orbit, no state at phase 0.

@@ -25,8 +25,9 @@ from study.engine.runner import run_study
 from study.engine.store import open_result
 from study.engine.sweep import GRAINS, Rectangle, UnitSizer, cut_unit, unit_grain
 from study.solvers.basins import basins
-from study.solvers.exact import SolverSettings, steady_state
+from study.solvers.exact import steady_state
 from study.solvers.protocol import slow_sweep
+from study.solvers.settings import SolverSettings
 
 BASE = dict(f0=14.44, Q=17.5, alpha=64.0, M=0.3, cs=0.25)
 STRUCTURE = study.Structure(**BASE)

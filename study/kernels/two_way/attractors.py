@@ -2,7 +2,7 @@
 
 :func:`attractors_point` fills one row of :data:`ATTRACTOR_COLUMNS`;
 :func:`attractors_points` (in parallel) and :func:`attractors_points_serial` fill a
-table of them for the validating wrapper :func:`study.solvers.exact.attractors`.
+table of them for the validating wrapper :func:`study.solvers.attractors.attractors`.
 """
 
 from __future__ import annotations
