@@ -28,6 +28,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from study.model.inputs import InputTypeError
+from study.model.units import DIMENSIONLESS, METRE
 
 __all__ = [
     "DEFAULT_START",
@@ -74,6 +75,8 @@ class StartParameter:
         Its range; ``lower_open`` / ``upper_open`` exclude the bound.
     default : float or None
         Its value where a table leaves it out; None: required.
+    fraction_of : str
+        What a dimensionless parameter is a fraction of (``"period"``), for the words.
     """
 
     key: str
@@ -86,6 +89,7 @@ class StartParameter:
     lower_open: bool = False
     upper_open: bool = False
     default: float | None = None
+    fraction_of: str = ""
 
     @property
     def noun(self) -> str:
@@ -222,10 +226,11 @@ START_KINDS: dict[str, StartKind] = {kind.name: kind for kind in (
         "phase",
         _drop,
         parameters=(
-            StartParameter("drop", "height", "m", "height of the base above the table",
+            StartParameter("drop", "height", METRE, "height of the base above the table",
                            "height_m", 0.0, math.inf, lower_open=True),
-            StartParameter("phase", "phase", "periods", "drive phase of the release",
-                           "fraction_of_period", 0.0, 1.0, upper_open=True, default=0.0),
+            StartParameter("phase", "phase", DIMENSIONLESS, "drive phase of the release",
+                           "fraction_of_period", 0.0, 1.0, upper_open=True, default=0.0,
+                           fraction_of="period"),
         ),
         value_type=Drop, needs_flight=True,
         excluded_observables={
@@ -276,7 +281,7 @@ def _check_values(value: object, kind: StartKind) -> None:
     for parameter in kind.parameters:
         given = getattr(value, parameter.attribute)
         if not parameter.within(float(given)):
-            units = "" if parameter.units in ("", "periods", "1") else f" {parameter.units}"
+            units = "" if parameter.units in ("", DIMENSIONLESS) else f" {parameter.units}"
             raise ValueError(
                 f"solver setting 'start': {parameter.key} = {given!r}{units}: the "
                 f"{parameter.noun} must be {_range_words(parameter)}; "
@@ -288,7 +293,8 @@ def _range_words(parameter: StartParameter) -> str:
     if math.isinf(parameter.upper):
         return f"finite and {'>' if parameter.lower_open else '>='} {parameter.lower:g}"
     text = parameter.range_text().removeprefix(f"{parameter.attribute} ")
-    return text + (" (a fraction of the period)" if parameter.units == "periods" else "")
+    return text + (f" (a fraction of the {parameter.fraction_of})" if parameter.fraction_of
+                   else "")
 
 
 def _is_number(value: object) -> bool:
@@ -460,9 +466,16 @@ def spec_schema() -> dict[str, Any]:
     return {"anyOf": forms, "default": DEFAULT_START, "description": _description()}
 
 
+def _words(parameter: StartParameter) -> str:
+    """``height of the base above the table [m]``, ``drive phase of the release, a
+    fraction of the period [1]``."""
+    fraction = f", a fraction of the {parameter.fraction_of}" if parameter.fraction_of else ""
+    return f"{parameter.words}{fraction} [{parameter.units}]"
+
+
 def _described(parameter: StartParameter) -> str:
     default = "" if parameter.default is None else f" (default {parameter.default:g})"
-    return f"{parameter.words} [{parameter.units}], {parameter.range_text()}{default}"
+    return f"{_words(parameter)}, {parameter.range_text()}{default}"
 
 
 def _description() -> str:
@@ -498,7 +511,7 @@ def result_schema() -> dict[str, Any]:
         mine = [f"study_start_{p.attribute}" for p in kind.parameters]
         for p, key in zip(kind.parameters, mine, strict=True):
             properties[key] = {**p.schema(),
-                               "description": f"a {kind.name}'s {p.words} [{p.units}]"}
+                               "description": f"a {kind.name}'s {_words(p)}"}
             dependent[key] = [other for other in mine if other != key]
         conditions.append({
             "if": {"properties": {"study_start_kind": {"const": kind.name}},
