@@ -118,7 +118,7 @@ $(STAMP): pyproject.toml
 # of docs/user-guide/specs.md (parameters, observables, contact laws, starts) are written into
 # the page from the same declarations (docs/generate_tables.py; a test checks them).
 schemas: | $(STAMP)
-	$(PY) -c "from study.engine.study_spec import export_spec_schema as e; text = e(); \
+	$(PY) -c "from study.engine.study_schema import export_spec_schema as e; text = e(); \
 	open('study/schemas/study-spec-v1.schema.json', 'w').write(text)"
 	$(PY) -c "from study.analyses.measurements import export_measurement_schema as e; text = e(); \
 	open('study/schemas/study-measurements-v1.schema.json', 'w').write(text)"

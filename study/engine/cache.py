@@ -89,7 +89,7 @@ _ENCODING = "shuffle-deflate-rle"
 #: Decompressed blocks kept in memory while a chunk's values are gathered.
 _BLOCKS_IN_MEMORY = 8
 #: Largest file read as a block or axis file [bytes]: a task holds at most
-#: ``study.engine.study_spec.MAX_CHUNK_BYTES`` (256 MiB) of values, deflate adds a few bytes per
+#: ``study.engine.study_size.MAX_CHUNK_BYTES`` (256 MiB) of values, deflate adds a few bytes per
 #: 16 KiB and the zip its headers. A larger file is not a block (a sparse file...).
 MAX_BLOCK_BYTES = 2**30
 #: Largest ``entry.json`` read [bytes] (an entry's content is under 1 KiB).

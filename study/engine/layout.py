@@ -19,7 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from study.engine.observables import UNSWEPT_VARIABLES, Method, Observable, resolve
-from study.engine.study_spec import STRUCTURE_PARAMETERS, SWEEPABLE, StudySpec
+from study.engine.study_spec import StudySpec
+from study.engine.study_types import STRUCTURE_PARAMETERS, SWEEPABLE
 from study.engine.sweep import Chunk, plan_chunks
 from study.engine.variables import GRID_SIZES, GRIDS, VARIABLES
 from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS, Friction

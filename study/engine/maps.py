@@ -32,7 +32,8 @@ from study.engine.layout import (
     plan_study,
 )
 from study.engine.observables import OBSERVABLES, UNSWEPT_VARIABLES, BasinSettings
-from study.engine.study_spec import STRUCTURE_PARAMETERS, StudySpec, parse_spec
+from study.engine.study_spec import StudySpec, parse_spec
+from study.engine.study_types import STRUCTURE_PARAMETERS
 from study.engine.sweep import Rectangle, Task, compute_task
 from study.engine.variables import GRID_SIZES
 from study.model.contact import DEFAULT_COUPLING

@@ -455,7 +455,7 @@ def run_study(
 
     Parameters
     ----------
-    spec : study.engine.study_spec.StudySpec or path
+    spec : study.engine.study_types.StudySpec or path
         The study (a spec file is read and validated first).
     output : path, optional
         Result file; default ``results/<spec file stem>.nc``.

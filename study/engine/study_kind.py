@@ -61,7 +61,8 @@ from study.engine.store import (
     advice,
     new_temporary,
 )
-from study.engine.study_spec import SPEC_SCHEMA, StudySpec, load_spec, parse_spec
+from study.engine.study_spec import StudySpec, load_spec, parse_spec
+from study.engine.study_types import SPEC_SCHEMA
 from study.engine.sweep import (
     Chunk,
     Task,

@@ -36,8 +36,6 @@ from __future__ import annotations
 import itertools
 import math
 import warnings
-from collections.abc import Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -47,23 +45,35 @@ from numpy.typing import NDArray
 from study.engine.observables import (
     BASIN_KEYS,
     METHODS,
-    UNSWEPT_VARIABLES,
     BasinSettings,
     unmet_needs,
-    variables_of,
 )
-from study.engine.observables import OBSERVABLES as OBSERVABLE_REGISTRY
 from study.engine.spec_files import (
-    SCHEMA_DIR,
     SpecError,
     axis_length,
     axis_values,
-    canonical_sha256,
-    load_schema,
     parse_toml,
     read_spec_text,
     schema_error,
     schema_problems,
+)
+from study.engine.study_schema import spec_schema
+from study.engine.study_size import MAX_CHUNKS, check_size, default_chunk_points
+from study.engine.study_types import (
+    DRIVE_PARAMETERS,
+    EXACT_KEYS,
+    INTEGRATOR_KEYS,
+    OBSERVABLES,
+    PROTOCOL_DIRECTIONS,
+    PROTOCOL_KEYS,
+    SOLVER_OBSERVABLES,
+    SPEC_SCHEMA_PATH,
+    STRUCTURE_PARAMETERS,
+    SWEEPABLE,
+    Axis,
+    MassModel,
+    StudySpec,
+    build_structure,
 )
 from study.engine.variables import DEFAULT_MAX_ATTRACTORS
 from study.model import starts
@@ -85,20 +95,17 @@ from study.model.inputs import (
     tilt_looks_like_radians,
 )
 from study.model.parameters import (
-    DRIVE,
-    MASS,
     STRUCTURE,
-    schema_definition,
-    schema_properties,
 )
 from study.model.starts import Drop
-from study.model.structure import Structure, tilt_warnings
-from study.solvers.basins import DROP_HEIGHT_RANGE, FACTOR_RANGE
+from study.model.structure import Structure
 from study.solvers.frontier import finest_tolerance
-from study.solvers.integrator import MAX_INTEGRATOR_BUDGET, IntegratorSettings
-from study.solvers.protocol import SWEEP_AXES, SWEEP_DIRECTIONS
-from study.solvers.settings import MAX_SOLVER_BUDGET, SolverSettings
+from study.solvers.integrator import IntegratorSettings
+from study.solvers.protocol import SWEEP_AXES
+from study.solvers.settings import SolverSettings
 
+#: The public names, as before the spec layer was split (types, schema and size guard
+#: have their own modules; these are re-exported).
 __all__ = [
     "METHODS",
     "OBSERVABLES",
@@ -112,383 +119,6 @@ __all__ = [
     "load_spec",
     "parse_spec",
 ]
-
-SPEC_SCHEMA = "study-spec-v1"
-#: The JSON schema of study specs (package data; ``results_schema/`` holds a copy).
-SPEC_SCHEMA_PATH = SCHEMA_DIR / f"{SPEC_SCHEMA}.schema.json"
-
-#: Observables a study can ask for, in the order they appear in a dataset (declared
-#: in :mod:`study.engine.observables`).
-OBSERVABLES = tuple(OBSERVABLE_REGISTRY)
-#: Observables that need the steady-state solver (and hence the drive acceleration a).
-SOLVER_OBSERVABLES = tuple(
-    name for name, o in OBSERVABLE_REGISTRY.items() if o.needs_acceleration
-)
-#: ``[solver]`` keys of the exact solver and of the time integrator.
-EXACT_KEYS = ("max_events", "max_map_iterations", "continuation", "velocity_tolerance",
-              "max_average_periods", "start")
-INTEGRATOR_KEYS = (
-    "tolerance", "steps_per_period", "max_periods", "max_orbit_period", "period_tolerance",
-)
-
-#: ``[basins]``: the largest values a spec may give (starts: each costs a solve per
-#: point; seed: the draws' generator takes any, 32 bits are plenty; max_attractors:
-#: slots per point, each a value of every per-attractor variable).
-MAX_BASIN_SETTINGS = {"starts": 100_000, "seed": 2**32 - 1, "max_attractors": 1_000,
-                      "sweep_steps": 1_000}
-
-#: ``[sweep] protocol`` keys and the directions it takes ("both": up, then down).
-PROTOCOL_KEYS = ("along", "direction")
-PROTOCOL_DIRECTIONS = (*SWEEP_DIRECTIONS, "both")
-
-#: Structure parameters: units and long names (SI inside), from the parameter table
-#: (:mod:`study.model.parameters`), as are the drive's and the swept mass's.
-STRUCTURE_PARAMETERS = {name: (p.units, p.long_name) for name, p in STRUCTURE.items()}
-DRIVE_PARAMETERS = {name: (p.units, p.long_name) for name, p in DRIVE.items()}
-MASS_PARAMETERS = {name: (MASS[name].units, MASS[name].long_name) for name in ("m_add",)}
-SWEEPABLE = {**STRUCTURE_PARAMETERS, **MASS_PARAMETERS, **DRIVE_PARAMETERS}
-
-
-@dataclass(frozen=True)
-class Axis:
-    """One swept parameter: a dimension of the result dataset.
-
-    Attributes
-    ----------
-    name : str
-        Parameter name, also the dimension and coordinate name.
-    values : numpy.ndarray
-        The values, in the parameter's SI units.
-    units, long_name : str
-        CF ``units`` and ``long_name`` of the coordinate.
-    """
-
-    name: str
-    values: NDArray[np.float64] = field(repr=False)
-    units: str
-    long_name: str
-
-    def __len__(self) -> int:
-        return self.values.size
-
-
-@dataclass(frozen=True)
-class MassModel:
-    """The mass ratio in the paper's terms: ``M = m1 / (m0 + m_add)`` (masses in kg)."""
-
-    m0: float
-    m1: float
-
-    def mass_ratio(self, m_add: float) -> float:
-        """``M`` for an added non-resonant mass ``m_add`` [kg]."""
-        return self.m1 / (self.m0 + m_add)
-
-
-@dataclass(frozen=True)
-class StudySpec:
-    """A validated study spec.
-
-    Attributes
-    ----------
-    name : str
-        Study name (also the default result file stem).
-    observables : tuple of str
-        Requested observables, in :data:`OBSERVABLES` order.
-    fixed : dict
-        Fixed structure parameters (``m_add`` included when fixed).
-    mass : MassModel or None
-        Set when the mass ratio is declared through masses.
-    axes : tuple of Axis
-        Swept parameters in dataset dimension order: structure axes as declared,
-        then ``f``, then ``a`` (the fastest-varying dimension).
-    solver : SolverSettings
-        Budgets of the exact solver.
-    method : {"exact", "integrator"}
-        Velocity solver: the exact steady-state solver, or time integration until
-        the orbit repeats.
-    coupling : {"one-way", "two-way"}
-        Whether the sliding base also forces the mode (two-way; either method); default
-        :data:`study.solvers.exact.DEFAULT_COUPLING`.
-    integrator : IntegratorSettings
-        Accuracy and budgets of the time integrator (used with ``method = "integrator"``).
-    friction : Friction
-        The friction law (``[solver] friction``).
-    protocol : tuple of str or None
-        ``[sweep] protocol``: ``(along, direction)`` of a slow sweep
-        (:func:`study.solvers.protocol.slow_sweep`; direction ``"both"``: up and down,
-        a leading ``direction`` dimension); None: every point from its start.
-    basins : BasinSettings or None
-        ``[basins]``: how the ``basins`` observable samples each point (its defaults
-        where the table is absent); None: the study does not ask for ``basins``.
-    flight : bool
-        ``[solver] flight = true``: past lift-off the base flies and lands by impacts
-        (the lift-off law ``flight`` of :mod:`study.model.contact`); default false, the
-        run stops with ``LIFT_OFF`` there. Needs two-way coupling and ``M < 1``.
-    chunk_points : int
-        Target number of grid points per parallel task (default
-        :func:`default_chunk_points`).
-    frontier_tolerance : float
-        Bracket width at which frontier roots are accepted [Hz].
-    text : str
-        The spec file's text, kept verbatim for provenance.
-    path : str
-        Where it was read from.
-    warnings : tuple of str
-        What looks like a mistake but is allowed (a tilt that looks like radians, a drop
-        start that looks like millimetres, drive frequencies that look like angular
-        ones), one message each naming the file, the key and the value;
-        :func:`load_spec` warns of each.
-    """
-
-    name: str
-    title: str
-    description: str
-    observables: tuple[str, ...]
-    fixed: dict[str, float]
-    mass: MassModel | None
-    axes: tuple[Axis, ...]
-    solver: SolverSettings
-    chunk_points: int
-    frontier_tolerance: float
-    text: str = field(repr=False)
-    path: str
-    canonical: dict[str, Any] = field(repr=False)
-    method: str = "exact"
-    coupling: str = DEFAULT_COUPLING
-    integrator: IntegratorSettings = field(default_factory=IntegratorSettings)
-    friction: Friction = field(default_factory=Friction)
-    flight: bool = False
-    protocol: tuple[str, str] | None = None
-    basins: BasinSettings | None = None
-    warnings: tuple[str, ...] = field(default=(), repr=False, compare=False)
-
-    @property
-    def lift_off(self) -> str:
-        """The lift-off law's name (:data:`study.model.contact.LIFT_OFF_LAWS`)."""
-        return "flight" if self.flight else DEFAULT_LIFT_OFF
-
-    @property
-    def sha256(self) -> str:
-        """Hash of the canonical form: formatting, comments and key order do not count."""
-        return canonical_sha256(self.canonical)
-
-    @property
-    def structure_axes(self) -> tuple[Axis, ...]:
-        """Swept parameters that change the structure (everything but f and a)."""
-        return tuple(axis for axis in self.axes if axis.name not in DRIVE_PARAMETERS)
-
-    def axis(self, name: str) -> Axis | None:
-        """The swept axis called ``name``, if any."""
-        return next((axis for axis in self.axes if axis.name == name), None)
-
-    @property
-    def directions(self) -> tuple[str, ...]:
-        """The slow sweep's directions, ``("up", "down")`` for ``"both"``; ``()``
-        without a protocol."""
-        if self.protocol is None:
-            return ()
-        return SWEEP_DIRECTIONS if self.protocol[1] == "both" else (self.protocol[1],)
-
-    @property
-    def both_directions(self) -> bool:
-        """Whether point variables have a leading ``direction`` dimension."""
-        return len(self.directions) == 2
-
-    @property
-    def dimension_sizes(self) -> dict[str, int]:
-        """Lengths of the dimensions after a drive point's
-        (:data:`study.engine.variables.GRID_SIZES`, the attractor slots set by
-        ``[basins] max_attractors``): the ``sizes`` of
-        :meth:`study.engine.variables.Variable.trailing`."""
-        slots = self.basins.max_attractors if self.basins is not None \
-            else DEFAULT_MAX_ATTRACTORS
-        return {"attractor": slots}
-
-    @property
-    def needs_solver(self) -> bool:
-        """Whether any requested observable needs the velocity solver."""
-        return any(o in self.observables for o in SOLVER_OBSERVABLES)
-
-    def structure_at(self, index: tuple[int, ...]) -> Structure:
-        """The structure at one point of the structure axes (``index`` in their order)."""
-        params = dict(self.fixed)
-        for axis, i in zip(self.structure_axes, index, strict=True):
-            params[axis.name] = float(axis.values[i])
-        return _build_structure(params, self.mass)
-
-    def structures(self) -> Iterator[tuple[tuple[int, ...], Structure]]:
-        """Every structure of the study with its index along the structure axes."""
-        ranges = [range(len(axis)) for axis in self.structure_axes]
-        for index in itertools.product(*ranges):
-            yield index, self.structure_at(index)
-
-
-def _build_structure(params: dict[str, float], mass: MassModel | None) -> Structure:
-    params = dict(params)
-    m_add = params.pop("m_add", None)
-    if mass is not None:
-        params["M"] = mass.mass_ratio(0.0 if m_add is None else m_add)
-    with tilt_warnings(False):  # a spec's tilts are in degree by its schema
-        return Structure(**params)
-
-
-def spec_schema() -> dict[str, Any]:
-    """The JSON schema of study specs (``study/schemas/study-spec-v1.schema.json``).
-
-    The parameters' ranges and descriptions come from :mod:`study.model.parameters`, the
-    observables allowed and their descriptions from :mod:`study.engine.observables`,
-    the solvers' budgets' maxima from :data:`study.solvers.settings.MAX_SOLVER_BUDGET` and
-    :data:`study.solvers.integrator.MAX_INTEGRATOR_BUDGET` (the file on disk is their
-    export, see :func:`export_spec_schema`).
-    """
-    schema = load_schema(SPEC_SCHEMA)
-    schema["$defs"]["parameter"] = {name: schema_definition(name) for name in SWEEPABLE}
-    structure = schema["properties"]["structure"]
-    mass = structure["properties"]["mass"]
-    mass["properties"] = {**schema_properties(name for name in MASS if name != "m_add"),
-                          "m_add": {"$ref": "#/$defs/parameter/m_add"}}
-    structure["properties"] = {
-        **{name: {"$ref": f"#/$defs/parameter/{name}"} for name in STRUCTURE}, "mass": mass}
-    schema["properties"]["sweep"]["properties"] = {
-        **{name: {"$ref": "#/$defs/axis"} for name in (*DRIVE, *STRUCTURE, "m_add")},
-        "protocol": {
-            "type": "object",
-            "additionalProperties": False,
-            "required": ["along"],
-            "properties": {
-                "along": {"enum": list(SWEEP_AXES), "description": "the drive axis stepped"},
-                "direction": {"enum": list(PROTOCOL_DIRECTIONS), "default": "up",
-                              "description": "up: increasing values; down: decreasing"},
-            },
-            "description": (
-                "exact solver, two-way coupling: a slow sweep (docs/theory/starts.md): "
-                "along the axis the drive steps to the next value at phase 0 with the "
-                "state carried, one run for each value of the other drive axis, the "
-                "first point of a run started by [solver] start; absent: every point "
-                "from its start"),
-        },
-    }
-    listed = schema["properties"]["study"]["properties"]["observables"]
-    listed["description"] = ("a non-empty list of distinct names from: "
-                             + ", ".join(OBSERVABLES))
-    items = listed["items"]
-    items["enum"] = list(OBSERVABLES)
-    items["description"] = "; ".join(
-        f"{name}: {o.summary}" for name, o in OBSERVABLE_REGISTRY.items())
-    solver = schema["properties"]["solver"]["properties"]
-    for name, largest in {**MAX_SOLVER_BUDGET, **MAX_INTEGRATOR_BUDGET}.items():
-        solver[name]["maximum"] = largest
-    solver["friction"] = _friction_schema()
-    solver["flight"] = _flight_schema()
-    solver["continuation"] = {
-        "type": "boolean",
-        "default": False,
-        "description": (
-            "exact solver, two-way coupling: true: each orbit's Newton search starts from "
-            "the fixed points of the points before it along its line of the sweep (2-4x "
-            "faster on fine maps; where several motions are stable it follows its "
-            "neighbours' branch, as a slowly swept drive, and a point's value depends on "
-            "its grid); false (default): every point from rest"),
-    }
-    solver["start"] = _start_schema()
-    schema["properties"]["basins"] = _basins_schema()
-    return schema
-
-
-def _basins_schema() -> dict[str, Any]:
-    """``[basins]``: the basins observable's sampling (:class:`BasinSettings`)."""
-    defaults = BasinSettings()
-    lowest = {"starts": 1, "seed": 0, "max_attractors": 1, "sweep_steps": 0}
-    words = {
-        "starts": "starts followed at each drive point: the solver's start ([solver] "
-                  "start), then seeded draws (the base at rest at a drive phase drawn "
-                  "uniformly, the mode at rest on a multiple of its steady response drawn "
-                  f"from [{FACTOR_RANGE[0]:g}, {FACTOR_RANGE[1]:g}); with flight every third "
-                  "draw dropped from a height drawn log-uniformly from "
-                  f"{1e3 * DROP_HEIGHT_RANGE[0]:g} to {1e3 * DROP_HEIGHT_RANGE[1]:g} mm)",
-        "seed": "seed of the draws: the same starts at every point and on every machine",
-        "max_attractors": "attractor slots per point (the attractor dimension): a point "
-                          "with more attractors keeps the first ones its starts reach "
-                          "(attractor_count stays exact)",
-        "sweep_steps": "steps of the slow sweep down along f, from 1.5 times each point's "
-                       "frequency (the release there) to the point, whose end state is "
-                       "followed as one more start: it reaches the motions born at faster "
-                       "drives that no drawn start reaches, counted among the attractors "
-                       "but not in the fractions (shares of the drawn starts); 0: none",
-    }
-    return {
-        "type": "object",
-        "additionalProperties": False,
-        "properties": {
-            key: {"type": "integer", "minimum": lowest[key],
-                  "maximum": MAX_BASIN_SETTINGS[key], "default": getattr(defaults, key),
-                  "description": f"{words[key]} (default {getattr(defaults, key)})"}
-            for key in BASIN_KEYS},
-        "description": (
-            "only with the observable basins (exact solver, two-way coupling): how each "
-            "drive point is sampled; absent: the defaults"),
-    }
-
-
-def _start_schema() -> dict[str, Any]:
-    """``[solver] start``: a named start or a start's table, from the declared kinds
-    (:func:`study.model.starts.spec_schema`; :func:`study.model.starts.as_start` checks
-    them, with the messages the API gives)."""
-    return starts.spec_schema()
-
-
-def _flight_schema() -> dict[str, Any]:
-    """``[solver] flight`` from the lift-off laws' declarations
-    (:data:`study.model.contact.LAWS`)."""
-    law = LAWS["lift_off"]["flight"]
-    stop = LAWS["lift_off"][DEFAULT_LIFT_OFF]
-    return {
-        "type": "boolean",
-        "default": False,
-        "description": (
-            f"true: the lift-off law 'flight': {law.description} (methods: "
-            f"{', '.join(law.solvers)}; needs coupling = \"two-way\" and M < 1); false "
-            f"(default): '{stop.name}', {stop.description}"),
-    }
-
-
-def _friction_schema() -> dict[str, Any]:
-    """``[solver] friction`` from the friction laws' declarations
-    (:data:`study.model.contact.LAWS`): a law's name, or a table of the law and its
-    parameters."""
-    laws = LAWS["friction"]
-    forms: list[dict[str, Any]] = [
-        {"enum": [name for name, law in laws.items() if not law.parameters]}]
-    for name, law in laws.items():
-        if law.parameters:
-            forms.append({
-                "type": "object",
-                "additionalProperties": False,
-                "required": ["law", *(p.name for p in law.parameters)],
-                "properties": {
-                    "law": {"const": name},
-                    **{p.name: {"type": "number", "exclusiveMinimum": p.lower,
-                                "description": f"{p.long_name} [{p.units}]"}
-                       for p in law.parameters},
-                },
-            })
-    return {
-        "default": DEFAULT_FRICTION,
-        "oneOf": forms,
-        "description": "friction law: " + "; ".join(
-            f"{name}{' (default)' if name == DEFAULT_FRICTION else ''}: {law.description}"
-            + (f" (solvers: {', '.join(law.solvers)}; give "
-               f"{{ law = \"{name}\", {', '.join(p.name + ' = ...' for p in law.parameters)} }})"
-               if law.parameters else "")
-            for name, law in laws.items()),
-    }
-
-
-def export_spec_schema() -> str:
-    """The spec schema as written to ``study/schemas`` (``make schemas``)."""
-    import json
-
-    return json.dumps(spec_schema(), indent=2) + "\n"
 
 
 def load_spec(path: str | Path) -> StudySpec:
@@ -517,24 +147,6 @@ def load_spec(path: str | Path) -> StudySpec:
     for message in spec.warnings:
         warnings.warn(message, SuspectInputWarning, stacklevel=2)
     return spec
-
-
-#: Grid points per chunk without ``[solver] chunk_points``: at least ...
-CHUNK_POINTS_MIN = 20_000
-#: ... and at most.
-CHUNK_POINTS_MAX = 100_000
-
-
-def default_chunk_points(points: int) -> int:
-    """Points per chunk for a study of ``points`` grid points in all.
-
-    A sixteenth of the study, within [:data:`CHUNK_POINTS_MIN`,
-    :data:`CHUNK_POINTS_MAX`]: a small study keeps enough chunks to share among
-    threads, and a large one pays the fixed cost of a chunk (a task, a cache block
-    file, an HDF5 chunk: 2-3 ms) on fewer chunks (a 1e7-point velocity study: 8.1
-    instead of 9.2 s of CPU with 100 000 instead of 20 000 points per chunk).
-    """
-    return int(min(CHUNK_POINTS_MAX, max(CHUNK_POINTS_MIN, points // 16)))
 
 
 def parse_spec(text: str, path: str = "<string>") -> StudySpec:
@@ -587,135 +199,6 @@ def _parameter_bounds(name: str) -> tuple[str, Any]:
         return ok
 
     return text, inside
-
-
-# ---------------------------------------------------------------------------
-# Size guard: refuse a study whose output or memory would be absurd, before any work
-
-#: Grid points of a study at most: 20 times the 1e8-point benchmark study (at about
-#: 1e6 points per second and core, 2e9 points already take hours on a workstation).
-MAX_POINTS = 2_000_000_000
-#: Result file size at most [bytes] (uncompressed values).
-MAX_OUTPUT_BYTES = 64 * 2**30
-#: Values one chunk (one parallel task) holds at most [bytes]: every worker thread
-#: holds one or two chunks, so a 16-thread run stays within a few GiB.
-MAX_CHUNK_BYTES = 256 * 2**20
-#: Chunks (parallel tasks) of a study at most: the plan, the progress and the kept
-#: chunks scale with it.
-MAX_CHUNKS = 1_000_000
-
-def _size(n: float) -> str:
-    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB"):
-        if n < 1024 or unit == "PiB":
-            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.3g} {unit}"
-        n /= 1024
-    return f"{n:.3g} EiB"  # pragma: no cover
-
-
-def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_points: int,
-               path: str, flight: bool = False,
-               protocol: tuple[object, object] | None = None,
-               max_attractors: int = DEFAULT_MAX_ATTRACTORS) -> None:
-    """Refuse a study whose output or memory would be absurd, before any work.
-
-    Parameters
-    ----------
-    lengths : dict
-        Swept parameter -> number of values, in dataset dimension order (``f`` and
-        ``a`` last).
-    observables : tuple of str
-        Requested observables.
-    chunk_points : int
-        ``[solver] chunk_points``.
-    path : str
-        The spec file, for messages.
-    flight : bool
-        ``[solver] flight``: the velocity observable writes its flight variables too.
-    protocol : tuple, optional
-        ``(along, direction)`` of ``[sweep] protocol`` as given (checked later): a slow
-        sweep writes ``jumped`` too; ``direction = "both"`` computes and writes every
-        per-point variable twice (but the unswept ones) in twice the chunks; along
-        ``f`` one chunk holds every ``f`` and ``a`` of a structure.
-    max_attractors : int
-        ``[basins] max_attractors``: the attractor slots of each point of the basins
-        observable's per-attractor variables.
-
-    Raises
-    ------
-    SpecError
-        Naming the sweep keys (or ``chunk_points``), the size and the limit, when the
-        study has more than :data:`MAX_POINTS` points, more than :data:`MAX_OUTPUT_BYTES`
-        of output, a chunk larger than :data:`MAX_CHUNK_BYTES` or more than
-        :data:`MAX_CHUNKS` chunks.
-    """
-    needs_solver = any(o in observables for o in SOLVER_OBSERVABLES)
-    structures = math.prod(n for name, n in lengths.items() if name not in DRIVE_PARAMETERS)
-    n_f = lengths.get("f", 1)
-    n_a = lengths.get("a", 1) if needs_solver else 1
-    # What each variable holds per point, from its declaration (a phase section's
-    # periods too).
-    variables = variables_of(observables, flight, protocol is not None)
-    per_f_bytes = sum(np.dtype(v.dtype).itemsize for v in variables if v.grid == "row")
-    sizes = {"attractor": max_attractors}
-    point_bytes = {v.name: np.dtype(v.dtype).itemsize * math.prod(v.trailing(sizes))
-                   for v in variables if v.grid in ("point", "section", "attractor")}
-    per_point_bytes = sum(point_bytes.values())
-    # A slow sweep both ways: every point computed and written once each way, but the
-    # values of each point from its start alone (no direction dimension).
-    directions = 2 if protocol is not None and protocol[1] == "both" else 1
-    written_point_bytes = per_point_bytes + (directions - 1) * sum(
-        size for name, size in point_bytes.items() if name not in UNSWEPT_VARIABLES)
-    swept = [name for name in lengths if needs_solver or name != "a"]
-    keys = " x ".join(swept)
-    sizes = " x ".join(str(lengths[name]) for name in swept)
-    points = structures * n_f * n_a * directions
-    output = structures * n_f * (per_f_bytes + n_a * written_point_bytes)
-    if points > MAX_POINTS or output > MAX_OUTPUT_BYTES:
-        both = (' x 2 directions ([sweep] protocol direction = "both")'
-                if directions == 2 else "")
-        raise SpecError(
-            f"{path}: [sweep] {keys} = {sizes}{both} = {points:.3g} points "
-            f"({_size(output)} of output); allowed at most {MAX_POINTS:.3g} points and "
-            f"{_size(MAX_OUTPUT_BYTES)}: sweep fewer values"
-        )
-    # How study.engine.sweep cuts the grid: whole frequency rows (every a), about
-    # chunk_points points per chunk; a slow sweep along f holds every f in one chunk
-    # (its runs whole).
-    along_f = needs_solver and protocol is not None and protocol[0] == "f"
-    if along_f:
-        chunk_bytes = n_f * (per_f_bytes + n_a * per_point_bytes)
-        if chunk_bytes > MAX_CHUNK_BYTES:
-            raise SpecError(
-                f'{path}: [sweep] protocol along = "f": one task holds every f and a of a '
-                f"structure ({n_f} x {n_a} points), {_size(chunk_bytes)}, more than one "
-                f"task may hold ({_size(MAX_CHUNK_BYTES)}); allowed: at most "
-                f"{MAX_CHUNK_BYTES // max(per_point_bytes, 1)} points (f x a), or "
-                'along = "a"'
-            )
-    f_per_chunk = n_f if along_f else max(1, min(n_f, chunk_points // n_a))
-    chunk_bytes = f_per_chunk * (per_f_bytes + n_a * per_point_bytes)
-    if chunk_bytes > MAX_CHUNK_BYTES:
-        if f_per_chunk == 1:
-            raise SpecError(
-                f"{path}: [sweep] a: one frequency row of {n_a} accelerations holds "
-                f"{_size(chunk_bytes)}, more than one task may hold "
-                f"({_size(MAX_CHUNK_BYTES)}); allowed: at most "
-                f"{MAX_CHUNK_BYTES // max(per_point_bytes, 1)} values of a"
-            )
-        per_chunk_point = chunk_bytes / (f_per_chunk * n_a)
-        raise SpecError(
-            f"{path}: [solver] chunk_points = {chunk_points} makes tasks of "
-            f"{_size(chunk_bytes)}; allowed: at most {int(MAX_CHUNK_BYTES // per_chunk_point)} "
-            "points per chunk"
-        )
-    chunks = structures * math.ceil(n_f / f_per_chunk) * directions
-    if chunks > MAX_CHUNKS:
-        smallest = math.ceil(points / MAX_CHUNKS)
-        raise SpecError(
-            f"{path}: [solver] chunk_points = {chunk_points} cuts [sweep] {keys} into "
-            f"{chunks:.3g} chunks; allowed at most {MAX_CHUNKS:.3g}: raise chunk_points to "
-            f"at least {smallest} or sweep fewer structures"
-        )
 
 
 #: A location that stands for the key names of a table (whether a key is given), not
@@ -1409,7 +892,7 @@ def _check_structures(fixed: dict[str, float], mass: MassModel | None,
         for axis, i in zip(structure_axes, index, strict=True):
             params[axis.name] = float(axis.values[i])
         try:
-            structure = _build_structure(params, mass)
+            structure = build_structure(params, mass)
         except ValueError as err:
             raise SpecError(f"{path}: invalid structure at {_where(structure_axes, index)}: "
                             f"{err}") from None

@@ -14,7 +14,7 @@ import pytest
 
 import study
 from study.analyses.thresholds import lowest_threshold
-from study.engine.study_spec import spec_schema
+from study.engine.study_schema import spec_schema
 from study.model.inputs import InputTypeError
 from study.solvers.frontier import (
     MAX_SCAN_POINTS,

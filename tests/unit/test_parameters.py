@@ -12,7 +12,7 @@ import pytest
 
 import study
 from study.analyses import design, fit
-from study.engine import study_spec
+from study.engine import study_schema, study_types
 from study.model import paper
 from study.model.drive import as_acceleration, as_frequency
 from study.model.parameters import (
@@ -56,7 +56,7 @@ def test_every_parameter_declares_units_symbol_range_and_reason(name: str) -> No
 def test_structure_accepts_exactly_what_the_spec_schema_accepts(name: str) -> None:
     """Structure (the table's inside()) against jsonschema's reading of the generated
     spec schema, at and on both sides of every bound."""
-    definition = study_spec.spec_schema()["$defs"]["parameter"][name]
+    definition = study_schema.spec_schema()["$defs"]["parameter"][name]
     p = STRUCTURE[name]
     for value in _probes(p.lower, p.upper):
         params = dict(PAPER, **{name: value})
@@ -95,20 +95,20 @@ def test_defaults_come_from_the_table() -> None:
     s = Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.3)
     assert s.g == STRUCTURE["g"].default == 9.8
     assert s.ck == s.cs
-    assert study_spec.Structure.__dataclass_fields__["g"].default == 9.8
+    assert study_types.Structure.__dataclass_fields__["g"].default == 9.8
 
 
 @pytest.mark.parametrize(("name", "group"), [
-    *((n, study_spec.STRUCTURE_PARAMETERS) for n in STRUCTURE),
-    *((n, study_spec.DRIVE_PARAMETERS) for n in DRIVE),
-    ("m_add", study_spec.MASS_PARAMETERS),
+    *((n, study_types.STRUCTURE_PARAMETERS) for n in STRUCTURE),
+    *((n, study_types.DRIVE_PARAMETERS) for n in DRIVE),
+    ("m_add", study_types.MASS_PARAMETERS),
 ])
 def test_the_spec_layer_reads_units_and_long_names_from_the_table(name, group) -> None:
     assert group[name] == (PARAMETERS[name].units, PARAMETERS[name].long_name)
 
 
 @pytest.mark.parametrize(("schema", "export"), [
-    ("study-spec-v1", study_spec.export_spec_schema),
+    ("study-spec-v1", study_schema.export_spec_schema),
     ("study-fit-spec-v1", fit.export_fit_spec_schema),
     ("study-design-spec-v1", design.export_design_spec_schema),
 ])
@@ -145,7 +145,7 @@ def test_paper_tolerance_is_half_a_unit_of_the_last_stated_digit(name: str) -> N
 
 
 def test_the_drive_limits_are_the_tables() -> None:
-    spec = study_spec.spec_schema()["$defs"]["parameter"]
+    spec = study_schema.spec_schema()["$defs"]["parameter"]
     for name, check in (("f", as_frequency), ("a", as_acceleration)):
         upper = DRIVE[name].upper
         assert spec[name]["maximum"] == upper == 1e6

@@ -52,7 +52,7 @@ def test_the_spec_schema_file_is_the_export_of_the_observable_declarations() -> 
     """Adding an observable touches study/engine/observables.py only; `make schemas` writes
     the file, and this test says so when it has not been run."""
     from study.engine.observables import OBSERVABLES
-    from study.engine.study_spec import export_spec_schema, spec_schema
+    from study.engine.study_schema import export_spec_schema, spec_schema
 
     on_disk = (Path(study.__file__).parent / "schemas" / "study-spec-v1.schema.json")
     assert on_disk.read_text(encoding="utf-8") == export_spec_schema(), "run `make schemas`"

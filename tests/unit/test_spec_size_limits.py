@@ -1,6 +1,6 @@
 """Study specs that would hang or be absurdly large are refused before any work.
 
-The size guard (:func:`study.engine.study_spec.check_size`) refuses on the axis lengths alone,
+The size guard (:func:`study.engine.study_size.check_size`) refuses on the axis lengths alone,
 before a value is generated; budgets a user could make endless have maxima in the
 schema; the frontier tolerance must be one doubles can reach.
 """
@@ -15,15 +15,14 @@ import numpy as np
 import pytest
 
 import study.engine.study_spec
-from study.engine.study_spec import (
+from study.engine.study_size import (
     MAX_CHUNK_BYTES,
     MAX_CHUNKS,
     MAX_OUTPUT_BYTES,
     MAX_POINTS,
-    SpecError,
     check_size,
-    parse_spec,
 )
+from study.engine.study_spec import SpecError, parse_spec
 from study.model.status import Status
 from study.model.structure import Structure
 from study.solvers.frontier import frontier_from_grid

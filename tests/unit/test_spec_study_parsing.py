@@ -516,7 +516,7 @@ def _mass(**keys: Any) -> dict[str, Any]:
 _OBS_ALLOWED = ", ".join(repr(name) for name in study.engine.observables.OBSERVABLES)
 # The [solver] keys, from the spec schema the package exports.
 _SOLVER_KEYS = ", ".join(sorted(
-    study.engine.study_spec.spec_schema()["properties"]["solver"]["properties"]))
+    study.engine.study_schema.spec_schema()["properties"]["solver"]["properties"]))
 _FORMS = "allowed forms: { start = x, stop = y, num = n }"
 
 REFUSALS = [

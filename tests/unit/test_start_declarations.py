@@ -19,7 +19,8 @@ import jsonschema
 import pytest
 
 import study
-from study.engine.study_spec import SpecError, parse_spec, spec_schema
+from study.engine.study_schema import spec_schema
+from study.engine.study_spec import SpecError, parse_spec
 from study.engine.validation.header import RESULT_SCHEMA_PATH, export_result_schema
 from study.model import starts
 from study.model.starts import (
