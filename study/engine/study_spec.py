@@ -57,6 +57,7 @@ from study.engine.spec_files import (
     schema_error,
     schema_problems,
 )
+from study.engine.study_canonical import canonical_form
 from study.engine.study_schema import spec_schema
 from study.engine.study_size import MAX_CHUNKS, check_size, default_chunk_points
 from study.engine.study_types import (
@@ -98,7 +99,6 @@ from study.model.parameters import (
     STRUCTURE,
 )
 from study.model.starts import Drop
-from study.model.structure import Structure
 from study.solvers.frontier import finest_tolerance
 from study.solvers.integrator import IntegratorSettings
 from study.solvers.protocol import SWEEP_AXES
@@ -379,8 +379,8 @@ def _build(raw: dict[str, Any], text: str, path: str) -> StudySpec:
     sweep, axes, chunk_points, flight = parts.sweep, parts.axes, parts.chunk_points, parts.flight
     protocol, basins = parts.protocol, parts.basins
     method, coupling, friction, solver, integrator, frontier_tolerance = parts.settings
-    canonical = _canonical(study, observables, fixed, mass, sweep, axes, method, coupling,
-                           friction, solver, integrator, frontier_tolerance, flight)
+    canonical = canonical_form(study, observables, fixed, mass, sweep, axes, method, coupling,
+                               friction, solver, integrator, frontier_tolerance, flight)
     if protocol is not None:  # only when given: every fingerprint without it is kept
         canonical["protocol"] = {"along": protocol[0], "direction": protocol[1]}
     if basins is not None:  # likewise: only in a study that asks for basins
@@ -809,65 +809,6 @@ def _flight(solver_table: dict[str, Any], method: str, coupling: str, path: str)
             f'"{coupling}": {FLIGHT_NEEDS_TWO_WAY} (allowed: coupling = "two-way", or '
             "flight = false)")
     return True
-
-
-def _canonical(study: dict[str, Any], observables: tuple[str, ...], fixed: dict[str, float],
-               mass: MassModel | None, sweep: dict[str, Any], axes: list[Axis], method: str,
-               coupling: str, friction: Friction, solver: SolverSettings,
-               integrator: IntegratorSettings, frontier_tolerance: float,
-               flight: bool = False) -> dict[str, Any]:
-    """What the numbers depend on, in a canonical form (hashed); defaults written out,
-    so a spec that spells them out is the same study.
-
-    Thirteen arguments: the parts of a spec, each computed and checked by its own step
-    of :func:`_build`; gathering them into an object would only rename them.
-    """
-    structure_canonical = dict(fixed)
-    if "g" not in fixed and "g" not in sweep:
-        structure_canonical["g"] = Structure.__dataclass_fields__["g"].default
-    if "ck" not in fixed and "ck" not in sweep and "cs" in fixed:
-        structure_canonical["ck"] = fixed["cs"]
-    canonical = {
-        "name": study["name"],
-        "observables": list(observables),
-        "structure": {k: structure_canonical[k] for k in sorted(structure_canonical)},
-        "mass": None if mass is None else {"m0": mass.m0, "m1": mass.m1},
-        # A list, not a mapping: the order of the axes is the layout of the result.
-        "sweep": [[axis.name, axis.values.tolist()] for axis in axes],
-        "solver": {
-            "method": method,
-            "coupling": coupling,
-            **(
-                {
-                    "max_events": solver.max_events,
-                    "max_map_iterations": solver.max_map_iterations,
-                }
-                if method == "exact"
-                else {
-                    "tolerance": integrator.tolerance,
-                    "steps_per_period": integrator.steps_per_period,
-                    "max_periods": integrator.max_periods,
-                    "max_orbit_period": integrator.max_orbit_period,
-                    "period_tolerance": integrator.resolved_period_tolerance,
-                }
-            ),
-            **({"frontier_tolerance": frontier_tolerance} if "frontier" in observables else {}),
-            # Coulomb friction, the default, is left out: specs written before friction
-            # laws were named keep their fingerprints.
-            **({"friction": friction.canonical()}
-               if friction.law != DEFAULT_FRICTION else {}),
-            # Likewise flight only when on: specs without it keep their fingerprints.
-            **({"flight": True} if flight else {}),
-            # And continuation.
-            **({"continuation": True} if method == "exact" and solver.continuation
-               else {}),
-            # And the averaging of irregular motions, where not the default.
-            **(solver.averaging_changes() if method == "exact" else {}),
-            # And the start, where not the release.
-            **(solver.start_changes() if method == "exact" else {}),
-        },
-    }
-    return canonical
 
 
 def _check_bounds(axis: Axis, path: str) -> None:
