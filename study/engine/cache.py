@@ -795,7 +795,17 @@ class ResultCache:
                     fcntl.flock(lock, mode | fcntl.LOCK_NB)
                     break
                 except BlockingIOError:
-                    holders = "; ".join(self.live_runs()) or "another process"
+                    runs = self.live_runs()
+                    if not runs:
+                        # A holder removes its record only after letting go of the lock:
+                        # no record left means it has just let go, so the lock is free
+                        # now (unless a process without a record holds it).
+                        try:
+                            fcntl.flock(lock, mode | fcntl.LOCK_NB)
+                            break
+                        except BlockingIOError:
+                            runs = self.live_runs()
+                    holders = "; ".join(runs) or "another process"
                     if time.monotonic() >= deadline:
                         raise CacheBusy(f"{self.root}: "
                                         + busy.format(holders=holders, root=self.root)

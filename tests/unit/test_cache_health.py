@@ -219,3 +219,26 @@ def test_the_block_size_limit_holds_any_block_a_spec_allows():
     # A block holds at most one task's values (study.engine.study_size.MAX_CHUNK_BYTES), deflated
     # (at worst a little larger than the input) plus its zip headers.
     assert MAX_BLOCK_BYTES >= 2 * MAX_CHUNK_BYTES
+
+
+def test_a_run_that_ends_while_a_prune_is_refused_lets_the_prune_in(tmp_path, monkeypatch):
+    """A run lets go of the cache's lock, then removes its record. A prune refused by
+    the lock that then finds no record has met a run just ending: the lock is free, and
+    the prune goes ahead, instead of refusing with an unnamed "another process" (CI's
+    race: the refusal named no pid)."""
+    run, prune = ResultCache(tmp_path / "cache"), ResultCache(tmp_path / "cache")
+    session = contextlib.ExitStack()
+    session.enter_context(run.session("study run long.toml"))
+    real = prune.live_runs
+
+    def ending() -> list[str]:
+        session.close()  # the run ends between the prune's try and its look at records
+        return real()
+
+    monkeypatch.setattr(prune, "live_runs", ending)
+    with prune.maintenance("cache prune", wait=0.0):
+        pass
+    # A live run is still named when it holds on.
+    with run.session("study run long.toml"), pytest.raises(Exception, match="pid"):
+        with ResultCache(tmp_path / "cache").maintenance("cache prune", wait=0.0):
+            pass
