@@ -116,15 +116,20 @@ def test_prunes_against_a_live_run_never_break_it(tmp_path, reference, trial, ca
             run_study(tmp_path / "long.toml", tmp_path / "first.nc", progress=False,
                       cache=cache, stop_after=10 * trial, workers=1)
     run = started(tmp_path, cache)
-    outcomes = []
-    # Until one prune finds the cache free: the run has let go of it (it is ending).
-    while run.poll() is None and 0 not in outcomes and len(outcomes) < 10_000:
-        outcomes.append(main(["cache", "prune", "--all", "--cache", str(cache),
-                              "--wait", "0"]))
-        _, err = capsys.readouterr()
-        if outcomes[-1] == 1:
-            assert err.count("\n") == 1 and "pid" in err and "--wait" in err, err
-    run_status, _, run_err = finish(run)
+    outcomes, refusals = [], []
+    try:
+        # Until one prune finds the cache free: the run has let go of it (it is ending).
+        while run.poll() is None and 0 not in outcomes and len(outcomes) < 10_000:
+            outcomes.append(main(["cache", "prune", "--all", "--cache", str(cache),
+                                  "--wait", "0"]))
+            _, err = capsys.readouterr()
+            if outcomes[-1] == 1:
+                refusals.append(err)
+    finally:
+        # Waited for even when a check fails: a run left behind would warn in later tests.
+        run_status, _, run_err = finish(run)
+    for err in refusals:
+        assert err.count("\n") == 1 and "pid" in err and "--wait" in err, err
     assert run_status == 0 and "Traceback" not in run_err, run_err
     assert set(outcomes) <= {0, 1}
     assert_reference(tmp_path, reference)
