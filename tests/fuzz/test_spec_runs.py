@@ -106,9 +106,11 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         # where the motion was averaged (irregular statuses, and not_converged with
         # average_budget), else NaN.
         "floquet_multiplier": ("status", _INVALID + _IRREGULAR),
-        "averaged_velocity": ("status", tuple(int(s) for s in Status
-                                              if s not in (Status.CHAOTIC,
-                                                           Status.QUASI_PERIODIC))),
+        **{name: ("status", tuple(int(s) for s in Status
+                                  if s not in (Status.CHAOTIC, Status.QUASI_PERIODIC)))
+           # The interval's ends are NaN where the average is (their comment says so).
+           for name in ("averaged_velocity", "averaged_velocity_low",
+                        "averaged_velocity_high")},
         "velocity_error": ("status", _INVALID),
         "lyapunov_exponent": ("status", _INVALID),
         "lyapunov_error": ("status", _INVALID),
