@@ -71,7 +71,10 @@ SEED = int(os.environ.get("STUDY_FUZZ_SEED", "20261122"))
 CASES = int(os.environ.get("STUDY_FUZZ_SPECS", "1200"))
 #: Time limit of one case [s]. Accepted tiny specs take 0.05-0.5 s; a mutation may
 #: make a spec legitimately larger (more points, a longer scene) but never near this.
-LIMIT = float(os.environ.get("STUDY_FUZZ_LIMIT", "20"))
+#: A mutation may also reach a kernel the base specs did not compile (a flight study
+#: switched to the integrator: about 30 s of compile on a fresh clone), so the limit
+#: leaves room for one compile; a hang still ends the case.
+LIMIT = float(os.environ.get("STUDY_FUZZ_LIMIT", "90"))
 #: A file to append one line per case to (time, outcome, mutations), to watch a run.
 LOG = os.environ.get("STUDY_FUZZ_LOG")
 #: Time limit of a base spec's first run [s]: it compiles the numba kernels unless
