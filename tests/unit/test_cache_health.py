@@ -69,6 +69,10 @@ def kept(folder: Path) -> list[Path]:
 
 
 def garble(data: bytes, rng: random.Random) -> bytes:
+    # An empty file (an earlier fuzz case may have truncated it to nothing) is garbled
+    # into a few random bytes: there is no byte to overwrite.
+    if not data:
+        return bytes(rng.randrange(256) for _ in range(rng.randint(1, 8)))
     out = bytearray(data)
     for _ in range(rng.randint(1, 8)):
         out[rng.randrange(len(out))] = rng.randrange(256)
