@@ -25,6 +25,7 @@ from study.model.status import NonConvergence, Status
 from study.solvers.attractors import attractors
 from study.solvers.exact import steady_state
 from study.solvers.integrator import Schedule, simulate
+from tests.support.tiers import headline
 from tests.unit.test_flight_exact import drive_point, period_map
 
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08, "cs": 0.25}
@@ -149,8 +150,9 @@ def test_q_from_half_to_ten_thousand():
     assert abs(velocities[1e3] - 0.03697488142968275) <= 1e-12
 
 
-@pytest.mark.parametrize(("f", "a", "period"), [(10.0, 13.0, 3), (11.5, 10.0, 2),
-                                                (12.0, 8.0, 2)])
+@pytest.mark.parametrize(("f", "a", "period"), headline([(10.0, 13.0, 3), (11.5, 10.0, 2),
+                                                         (12.0, 8.0, 2)],
+                                                        per=lambda f, a, period: period))
 def test_subharmonic_bouncing(f, a, period):
     """Period-2 and period-3 bouncing at M = 0.99 (the reference finds the same periods):
     the orbit's state closes after its period and not after any divisor."""

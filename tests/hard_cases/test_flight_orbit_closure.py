@@ -182,6 +182,9 @@ def test_grazing_take_off_against_reference(M, f, lo, hi):
 
 
 
+# Slow tier: the random bouncing orbits keep closure's headline in the default tier
+# (issue 46).
+@pytest.mark.slow
 def test_random_chattering_orbits_close_in_reference():
     """A second seeded sample with restitution (M 0.02-0.98, Q 0.7-300, e in {0.2, 0.5,
     0.7, 0.85}, f 6-25 Hz, a 6-22 m s-2): every bouncing orbit (79 of 150) closes in the

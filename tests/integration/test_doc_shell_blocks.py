@@ -113,6 +113,9 @@ def test_the_readme_own_structure_example_runs_as_printed(tmp_path: Path,
     assert not (tmp_path / "results").exists() and not (tmp_path / "figures").exists()
 
 
+# Slow tier: the tutorial's flight map; README's own-structure example keeps the shell
+# blocks' headline check in the default tier (issue 46).
+@pytest.mark.slow
 def test_the_flight_tutorial_runs_as_printed(tmp_path: Path, monkeypatch, capsys) -> None:
     """docs/getting-started/flight.md: its spec saved where the page says, every
     ``study`` command of its shell blocks run in order (run, validate, info, figures,

@@ -20,6 +20,7 @@ import pytest
 from study.cli import main
 from study.engine.runner import StudyInterrupted, run_study
 from study.engine.store import exclusive, new_temporary, open_result
+from tests.support.tiers import headline
 from tests.unit.test_incremental import spec_text
 
 TIMEOUT = 300
@@ -104,7 +105,7 @@ def assert_reference(folder: Path, reference) -> None:
         np.testing.assert_array_equal(result[name].values, values)
 
 
-@pytest.mark.parametrize("trial", range(3))
+@pytest.mark.parametrize("trial", headline(range(3)))
 def test_prunes_against_a_live_run_never_break_it(tmp_path, reference, trial, capsys):
     """``cache prune --all`` again and again while a run computes: each one refuses
     (one line naming the run) or finds the cache free; the run ends with the reference

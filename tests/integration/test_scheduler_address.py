@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from study.engine.executors import ClusterError, check_address
+from tests.support.tiers import headline
 
 SPEC = """\
 [study]
@@ -66,7 +67,7 @@ def test_an_empty_cache_folder_is_a_usage_error(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["spec.toml"]
 
 
-@pytest.mark.parametrize("value", ["0", "-1", "nan", "inf", "soon"])
+@pytest.mark.parametrize("value", headline(["0", "-1", "nan", "inf", "soon"]))
 def test_a_task_timeout_is_a_positive_number_of_seconds(tmp_path: Path, value: str) -> None:
     (tmp_path / "spec.toml").write_text(SPEC)
     done = subprocess.run(

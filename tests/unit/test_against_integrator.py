@@ -17,6 +17,7 @@ from numpy.testing import assert_allclose
 import study
 from study import Status
 from tests.reference.integrator import reference_velocity
+from tests.support.tiers import headline
 
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "cs": 0.25}
 STATUS_NAMES = {
@@ -65,7 +66,7 @@ def _points():
     return points
 
 
-@pytest.mark.parametrize(("M", "ck", "f", "a"), _points())
+@pytest.mark.parametrize(("M", "ck", "f", "a"), headline(_points(), keep=4))
 def test_steady_velocity_agrees_with_solve_ivp(M, ck, f, a):
     s = study.Structure(M=M, ck=ck, **PAPER)
     v, status = study.steady_velocity(s, f, a)

@@ -89,6 +89,7 @@ from study.solvers.attractors import attractors
 from study.solvers.exact import steady_state
 from study.solvers.settings import DEFAULT_SETTINGS, SolverSettings, kernel_budget
 from study.solvers.structure_constants import structure_vector
+from tests.support.tiers import headline
 
 #: The two-way solver with each orbit continued along the sweep.
 CONTINUED = SolverSettings(continuation=True)
@@ -326,7 +327,7 @@ def test_the_two_way_workflows_are_found():
     assert "steering-calibration-two-way" not in TWO_WAY_WORKFLOWS
 
 
-@pytest.mark.parametrize("name", TWO_WAY_WORKFLOWS)
+@pytest.mark.parametrize("name", headline(TWO_WAY_WORKFLOWS, keep=2))
 def test_workflow_rows_continue_to_the_cold_orbits(name):
     """About FAST_ROWS frequency rows of each structure of the workflow, each with every
     acceleration (a complete continuation run): continued == cold (module docstring)."""

@@ -15,6 +15,7 @@ from study.figures import FIGURES, draw_figure
 from study.figures.force_traces import region_of
 from study.figures.velocity_curves import frequency_position
 from study.model.status import Status
+from tests.support.tiers import headline
 
 STRUCTURE = """\
 [structure]
@@ -83,7 +84,7 @@ def test_the_small_specs_hold_what_their_figures_require(results):
         assert not missing, (figure, missing)
 
 
-@pytest.mark.parametrize("figure", sorted(SOURCES))
+@pytest.mark.parametrize("figure", headline(sorted(SOURCES)))
 def test_figure_command_writes_png_and_pdf_with_provenance(figure, results, tmp_path, capsys):
     source = results[SOURCES[figure]]
     stem = tmp_path / figure

@@ -16,6 +16,7 @@ from study.engine.runner import run_study
 from study.engine.store import open_result
 from study.figures import FIGURES, FigureError, common, draw_figure
 from study.model.paper import PAPER_STRUCTURE, is_paper_structure, paper_structure
+from tests.support.tiers import headline
 
 #: The issue's new user: f0 = 22 Hz, Q = 30, alpha = 45, M = 0.15, cs = 0.35, ck = 0.3.
 OWN = """\
@@ -176,8 +177,8 @@ def test_the_paper_structure_is_in_one_place():
     assert PAPER_STRUCTURE["f0"] == 14.44
 
 
-@pytest.mark.parametrize("figure", ["regime-map", "thresholds", "velocity-curves",
-                                    "force-traces"])
+@pytest.mark.parametrize("figure", headline(["regime-map", "thresholds", "velocity-curves",
+                                             "force-traces"]))
 def test_a_swept_study_of_its_own_structure_draws_with_sel(figure, files, tmp_path):
     stem = tmp_path / figure
     assert main(["figure", figure, str(files["own"]), "-o", str(stem),

@@ -17,6 +17,7 @@ from study.figures import FIGURES, FigureError, draw_figure
 from study.figures.bouncing import bouncing_share, row_indices
 from study.figures.common import VALID, coupling_label
 from study.model.status import Status
+from tests.support.tiers import headline
 
 SPEC = """\
 [study]
@@ -99,7 +100,7 @@ def test_the_bouncing_figure_is_registered_with_the_flight_workflow():
     assert {"largest_hop", "airborne_fraction"} <= set(figure.requires)
 
 
-@pytest.mark.parametrize("figure", sorted(DRAWN))
+@pytest.mark.parametrize("figure", headline(sorted(DRAWN)))
 def test_each_figure_of_a_flight_file_says_it_flies(figure, flight_file, tmp_path):
     stem = tmp_path / figure
     arguments = ["figure", figure, str(flight_file), "-o", str(stem)]
@@ -115,7 +116,7 @@ def test_each_figure_of_a_flight_file_says_it_flies(figure, flight_file, tmp_pat
     assert coupling_label(open_result(flight_file)) in title
 
 
-@pytest.mark.parametrize("figure", ["bouncing", "mass-ratio-limit", "regime-map"])
+@pytest.mark.parametrize("figure", headline(["bouncing", "mass-ratio-limit", "regime-map"]))
 def test_a_bouncing_region_gets_its_edge_in_the_legend(figure, bouncing_dataset, tmp_path,
                                                        monkeypatch):
     _, labels = _drawn(figure, bouncing_dataset, tmp_path, monkeypatch)
@@ -201,7 +202,7 @@ def test_each_colour_bar_label_reads_as_its_own_maps(bouncing_dataset):
         plt.close(fig)
 
 
-@pytest.mark.parametrize("figure", ["bouncing", "mass-ratio-limit", "regime-map"])
+@pytest.mark.parametrize("figure", headline(["bouncing", "mass-ratio-limit", "regime-map"]))
 def test_irregular_points_are_their_own_class_with_their_velocity(
         figure, bouncing_dataset, tmp_path, monkeypatch):
     """Chaotic and quasi-periodic points keep their velocity on the maps and are named in
@@ -221,7 +222,7 @@ def test_irregular_points_are_their_own_class_with_their_velocity(
     assert Status.CHAOTIC in VALID and Status.QUASI_PERIODIC in VALID
 
 
-@pytest.mark.parametrize("figure", ["bouncing", "mass-ratio-limit"])
+@pytest.mark.parametrize("figure", headline(["bouncing", "mass-ratio-limit"]))
 def test_no_two_panel_titles_overlap(figure, bouncing_dataset, tmp_path, monkeypatch):
     """Each panel's title stays over its own panel, even with every count a title can
     carry (chaotic, quasi-periodic, not converged): titles of neighbouring panels must
@@ -372,6 +373,9 @@ def test_the_bifurcation_figure_draws_the_section_along_one_axis(tmp_path):
                  "-o", str(tmp_path / "bifurcation")]) == 0
 
 
+# Slow tier: test_a_bouncing_region_gets_its_edge_in_the_legend keeps the legend's
+# headline check in the default tier (issue 46).
+@pytest.mark.slow
 def test_the_bouncing_legend_names_only_what_is_drawn(bouncing_dataset, tmp_path,
                                                       monkeypatch):
     """Drawn before a frontier is computed (no frontier observable), the legend has no

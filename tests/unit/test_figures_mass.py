@@ -16,6 +16,7 @@ from study.engine.store import open_result
 from study.figures import mass_ratio_limit
 from study.figures.common import grid_minimum, structure_from_dataset
 from study.model.status import Status
+from tests.support.tiers import headline
 
 G = 9.8
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "cs": 0.25}
@@ -83,7 +84,7 @@ def results(tmp_path_factory):
     return files
 
 
-@pytest.mark.parametrize("name", sorted(SPECS))
+@pytest.mark.parametrize("name", headline(sorted(SPECS)))
 def test_figure_command_writes_png_and_pdf_with_provenance(results, tmp_path, name):
     stem = tmp_path / name
     assert main(["figure", name, str(results[name]), "-o", str(stem)]) == 0
@@ -222,7 +223,7 @@ def _plain_title(png) -> str:
         return dict(image.text)["Title"]
 
 
-@pytest.mark.parametrize("name", sorted(SPECS))
+@pytest.mark.parametrize("name", headline(sorted(SPECS)))
 def test_titles_name_every_parameter_the_data_depend_on(results, tmp_path, name):
     """Each parameter the file holds appears with its value (a swept one with its range),
     read back from the file itself; ck where velocities are drawn (thresholds do not

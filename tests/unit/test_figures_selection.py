@@ -22,6 +22,7 @@ from study.cli import main
 from study.engine.runner import run_study
 from study.engine.store import open_result
 from study.figures import FIGURES, FigureError, common, draw_figure
+from tests.support.tiers import headline
 from tests.unit.test_figures_steering import (
     calibration_dataset,
     plan_dataset,
@@ -328,8 +329,8 @@ def _texts(fig: Figure) -> str:
 # --- one value left: the reduced figure ------------------------------------------------
 
 
-@pytest.mark.parametrize("figure", ["thresholds", "velocity-curves", "regime-map",
-                                    "force-traces"])
+@pytest.mark.parametrize("figure", headline(["thresholds", "velocity-curves", "regime-map",
+                                             "force-traces"]))
 def test_a_structure_axis_kept_with_one_value_is_one_structure(figure, files, tmp_path,
                                                               drawn):
     fig = _draw(figure, files, "own", ["Q=30:30", "M=0.15:0.15"], tmp_path, drawn)
@@ -573,7 +574,8 @@ def test_every_figure_is_registered_here():
     assert set(SOURCES) == set(FIGURES)
 
 
-@pytest.mark.parametrize(("figure", "source", "base", "dim"), list(_cases()))
+@pytest.mark.parametrize(("figure", "source", "base", "dim"),
+                         headline(_cases(), per=lambda figure, *_: figure))
 def test_one_value_of_any_dimension_draws_or_says_why_not(figure, source, base, dim, files,
                                                          tmp_path, monkeypatch):
     """Dropped to a scalar (``--sel KEY=VALUE``) and kept with length 1

@@ -15,6 +15,7 @@ from study.engine.store import open_result
 from study.figures import FIGURES, draw_figure
 from study.figures.common import coupling_label
 from study.model.status import Status
+from tests.support.tiers import headline
 
 STRUCTURE = """\
 [structure]
@@ -121,7 +122,7 @@ def test_every_velocity_figure_is_covered():
                                                "bifurcation", "hysteresis"}
 
 
-@pytest.mark.parametrize("figure", sorted(SOURCES))
+@pytest.mark.parametrize("figure", headline(sorted(SOURCES)))
 def test_figure_of_a_two_way_file_says_two_way(figure, results, tmp_path):
     source = results[SOURCES[figure]]
     stem = tmp_path / figure

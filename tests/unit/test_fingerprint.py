@@ -96,6 +96,9 @@ def test_walker_follows_every_import_form(tmp_path: Path):
     ))
 
 
+# Slow tier: an edit per closure module; the default tier keeps the headline
+# (tests/integration/test_fingerprint_cli.py and test_kernel_cache.py, issue 46).
+@pytest.mark.slow
 def test_every_closure_module_edit_changes_its_kind_hash(copy: Path):
     for kind, entries in RESULT_KIND_ENTRIES.items():
         before = result_code_sha256(kind, copy)

@@ -40,6 +40,7 @@ from study.model.codes import BOUNCING, CHAOTIC, QUASI_PERIODIC, STICK_SLIP
 from study.solvers.exact import steady_state
 from study.solvers.integrator import Schedule, simulate, steady_mode_state
 from study.solvers.structure_constants import structure_vector
+from tests.support.tiers import headline
 
 #: The structure of the known irregular points (issue 35), all two-way with flight.
 BASE = dict(f0=14.44, Q=17.5, alpha=64.0, cs=0.25)
@@ -323,9 +324,10 @@ def _integrated_mean(structure, f, a, with_flight):
     return mean, error
 
 
-@pytest.mark.parametrize("key, status", [(CHAOTIC_099, CHAOTIC),
-                                         (QUASI_099, QUASI_PERIODIC),
-                                         (CHAOTIC_06, CHAOTIC)])
+@pytest.mark.parametrize("key, status", headline([(CHAOTIC_099, CHAOTIC),
+                                                  (QUASI_099, QUASI_PERIODIC),
+                                                  (CHAOTIC_06, CHAOTIC)],
+                                                 per=lambda key, status: status))
 def test_mean_velocity_against_the_integrators_long_run(solved, key, status):
     """The solver's averaged velocity (its 256 to 384 periods on the exact map) against
     the time integrator's 2000-period mean from the same start, with flight: within 4

@@ -19,6 +19,7 @@ from study.scenes.planar_model import periodic_motion, rest_state, simulate_plan
 from study.scenes.planner import arc_displacement, calibrate_commands, plan_leg
 from study.scenes.scene_kind import SceneError, load_scene, parse_scene
 from study.solvers.integrator import IntegratorSettings, Schedule
+from tests.support.tiers import headline
 
 WORKFLOWS = Path(__file__).resolve().parents[2] / "workflows"
 
@@ -310,12 +311,12 @@ CALIBRATION = ("[scene]\nname = \"cal\"\nkind = \"calibration\"\n" + DISK
                + "\n[calibration]\nf = { values = [7.2, 14.2] }\na = { values = [7.0] }\n")
 
 
-@pytest.mark.parametrize(("text", "unit"), [
+@pytest.mark.parametrize(("text", "unit"), headline([
     (TRAJECTORY, "s"),
     (TRAJECTORY.replace("[trajectory]", "[trajectory]\nheading_drift_deg = 5.73"), "s"),
     (CALIBRATION, "pt"),
     (PLAN, "flight"),
-])
+], per=lambda text, unit: unit))
 def test_a_scene_reports_all_its_work_as_it_runs(text, unit):
     """What the scene reports adds up to the work its progress bar counts, in order, and
     the result is the same with or without a report."""
