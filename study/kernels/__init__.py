@@ -15,7 +15,7 @@ import hashlib
 from pathlib import Path
 from typing import Any
 
-from numba.core import caching
+from numba.core import caching, types
 
 KERNELS_DIR = Path(__file__).resolve().parent
 
@@ -68,3 +68,30 @@ if isinstance(_LOCATORS, list) and not any(c.__name__.startswith("Kernel")
     _LOCATORS[:0] = [_stamped(c) for c in (caching.UserProvidedCacheLocator,
                                            caching.InTreeCacheLocator,
                                            caching.UserWideCacheLocator)]
+
+
+# One compiled specialisation per kernel signature, not one per constant argument.
+# Numba types a constant passed from one kernel to another (``fly(..., True)``,
+# ``record(log, t, 4, y)``) as a literal and compiles the callee again for each value:
+# on a fresh clone ``fly`` was compiled 4 times, ``_pass`` and ``_deferred_cycle`` 4,
+# ``run`` 3, and such copies took 64 s of the 202 s that ``hysteresis-flight`` spent
+# compiling. A call from a kernel to a kernel of this package is therefore typed by its
+# arguments' types alone (``types.unliteral``), as a call from Python is; the values
+# stay runtime arguments, so every result is bit for bit the same (the compare of every
+# workflow's file, issue 46). Calls into any other package's numba code are untouched.
+_KERNEL_PACKAGE = __name__ + "."
+
+
+def _typed_by_type(get_call_type: Any) -> Any:
+    def get_call_type_by_type(self: Any, context: Any, args: Any, kws: Any) -> Any:
+        if getattr(self.dispatcher.py_func, "__module__", "").startswith(_KERNEL_PACKAGE):
+            args = tuple(types.unliteral(a) for a in args)
+            kws = {key: types.unliteral(value) for key, value in kws.items()}
+        return get_call_type(self, context, args, kws)
+
+    get_call_type_by_type.typed_by_type = True  # type: ignore[attr-defined]
+    return get_call_type_by_type
+
+
+if not getattr(types.Dispatcher.get_call_type, "typed_by_type", False):
+    types.Dispatcher.get_call_type = _typed_by_type(types.Dispatcher.get_call_type)
