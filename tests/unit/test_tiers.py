@@ -56,3 +56,24 @@ def test_the_unit_tier_starts_no_process_and_no_cluster() -> None:
     found = {path.name: forbidden(imported(path))
              for path in sorted((TESTS / "unit").glob("*.py"))}
     assert {name: modules for name, modules in found.items() if modules} == {}
+
+
+def _is_slow(case) -> bool:
+    return any(getattr(mark, "name", None) == "slow" for mark in case.marks)
+
+
+def test_headline_keeps_the_first_case_of_each_group_in_the_default_tier() -> None:
+    import pytest
+
+    from tests.support.tiers import headline
+
+    cases = headline([("regime-map", "f"), ("regime-map", "a"), ("thresholds", "f"),
+                      pytest.param("thresholds", "a", id="named")],
+                     per=lambda figure, dim: figure)
+    assert [_is_slow(c) for c in cases] == [False, True, False, True]
+    assert [c.values for c in cases] == [("regime-map", "f"), ("regime-map", "a"),
+                                         ("thresholds", "f"), ("thresholds", "a")]
+    assert cases[3].id == "named"  # a case's own id survives
+    # A case already slow keeps no place: the next one is the group's headline.
+    cases = headline([pytest.param(1, marks=pytest.mark.slow), 2, 3], keep=1)
+    assert [_is_slow(c) for c in cases] == [True, False, True]
