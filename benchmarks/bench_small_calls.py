@@ -58,7 +58,7 @@ from docs_tables import (  # noqa: E402
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
-from study.kernels import one_way  # noqa: E402
+from study.kernels import one_way_velocity  # noqa: E402
 from study.kernels.budget import Budget  # noqa: E402
 from study.kernels.start import RELEASE  # noqa: E402
 from study.kernels.two_way import points as orbit_kernel  # noqa: E402
@@ -95,8 +95,8 @@ def _kernels(f: float, a: float, points: int) -> dict[str, Callable[[], object]]
     table = np.empty((points, orbit_kernel.N_OUT))
     budget = Budget(10_000, 5_000, 1e-3, 20_000)
     return {
-        "one-way": lambda: one_way.velocity_points_small(f_flat, a_flat, constants, levels,
-                                                         tuple(budget), velocity, status),
+        "one-way": lambda: one_way_velocity.velocity_points_small(
+            f_flat, a_flat, constants, levels, tuple(budget), velocity, status),
         "two-way": lambda: orbit_kernel.solve_points_serial(vector, omega, a_flat, lifted,
                                                             budget, False, RELEASE,
                                                             table),

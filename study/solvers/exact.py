@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from study.kernels import one_way as one_way_kernel
+from study.kernels import one_way_velocity as velocity_kernel
 from study.kernels.two_way import points as orbit_kernel
 from study.model import (
     lift_off_acceleration,
@@ -173,12 +174,12 @@ def _one_way_steady_state(
         # The kernel evaluates the forces point by point, bit-identical to numpy's
         # arrays, whose temporaries cost a small call ten times its solve.
         kept = kept_constants(structure)
-        if one_way_kernel.steady_points_small(f_flat, a_flat, kept.force, kept.levels,
+        if velocity_kernel.steady_points_small(f_flat, a_flat, kept.force, kept.levels,
                                               tuple(kernel_budget(settings)), out):
             # Points within 1e-13 of the lift-off threshold: solved the long way, where
             # numpy decides their lift-off.
             undecided = np.flatnonzero(
-                out[:, one_way_kernel.OUT_STATUS] == one_way_kernel.LIFT_UNDECIDED)
+                out[:, one_way_kernel.OUT_STATUS] == velocity_kernel.LIFT_UNDECIDED)
             rows = np.empty((undecided.size, one_way_kernel.N_OUTPUTS))
             _solve_one_way(structure, f_flat[undecided], a_flat[undecided], settings,
                            False, rows)
@@ -396,26 +397,26 @@ def _velocity_only(
     diagnostics: the same velocity and status, bit for bit, without the temporaries.
     """
     n = f.size
-    out = one_way_kernel.VelocityOutputs(np.empty(n), np.empty(n, dtype=np.int8))
+    out = velocity_kernel.VelocityOutputs(np.empty(n), np.empty(n, dtype=np.int8))
     constants, levels, _ = kept_constants(structure)
     budget = kernel_budget(settings)
     if n >= PARALLEL_THRESHOLD:
-        one_way_kernel.velocity_points(f, a, one_way_kernel.ForceConstants(*constants),
-                                       one_way_kernel.FrictionLevels(*levels), budget, out)
-        undecided = np.flatnonzero(out.status == one_way_kernel.LIFT_UNDECIDED)
-    elif one_way_kernel.velocity_points_small(f, a, constants, levels, tuple(budget), *out):
-        undecided = np.flatnonzero(out.status == one_way_kernel.LIFT_UNDECIDED)
+        velocity_kernel.velocity_points(f, a, velocity_kernel.ForceConstants(*constants),
+                                        one_way_kernel.FrictionLevels(*levels), budget, out)
+        undecided = np.flatnonzero(out.status == velocity_kernel.LIFT_UNDECIDED)
+    elif velocity_kernel.velocity_points_small(f, a, constants, levels, tuple(budget), *out):
+        undecided = np.flatnonzero(out.status == velocity_kernel.LIFT_UNDECIDED)
     else:  # the small kernel counted no undecided point: no scan of the status
         undecided = np.empty(0, dtype=np.intp)
     # Points within 1e-13 of the lift-off threshold: numpy's rounding of |z| decides,
     # as in steady_state.
     if undecided.size:
         f_u, a_u = f[undecided], a[undecided]
-        out_u = one_way_kernel.VelocityOutputs(np.empty(undecided.size),
-                                               np.empty(undecided.size, dtype=np.int8))
-        one_way_kernel.velocity_points_given(
+        out_u = velocity_kernel.VelocityOutputs(np.empty(undecided.size),
+                                                np.empty(undecided.size, dtype=np.int8))
+        velocity_kernel.velocity_points_given(
             f_u, a_u, a_u > lift_off_acceleration(structure, f_u),
-            one_way_kernel.ForceConstants(*constants), one_way_kernel.FrictionLevels(*levels),
+            velocity_kernel.ForceConstants(*constants), one_way_kernel.FrictionLevels(*levels),
             budget, out_u)
         out.velocity[undecided] = out_u.velocity
         out.status[undecided] = out_u.status

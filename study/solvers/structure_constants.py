@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from study.kernels import one_way as one_way_kernel
+from study.kernels import one_way_velocity as velocity_kernel
 from study.model import (
     lift_off_acceleration,
 )
@@ -46,7 +47,7 @@ _PACKED = struct.Struct(f"<{len(dataclasses.fields(Structure))}d")
 class Kept(NamedTuple):
     """What the kernels read of one structure, computed once and kept."""
 
-    #: The fields of :data:`~study.kernels.one_way.ForceConstants` (plain tuples are
+    #: The fields of :data:`~study.kernels.one_way_velocity.ForceConstants` (plain tuples are
     #: what the small-call kernels take).
     force: tuple[float, ...]
     #: The fields of :data:`~study.kernels.one_way.FrictionLevels`.
@@ -95,8 +96,8 @@ def structure_vector(structure: Structure, coupling: str,
 
 
 def force_constants(structure: Structure) -> Any:
-    """The one-way kernel's :data:`~study.kernels.one_way.ForceConstants`."""
-    return one_way_kernel.ForceConstants(
+    """The one-way kernel's :data:`~study.kernels.one_way_velocity.ForceConstants`."""
+    return velocity_kernel.ForceConstants(
         float(structure.omega0), 1.0 / structure.Q, float(structure.M),
         float(np.cos(structure.alpha_rad)), float(np.sin(structure.alpha_rad)),
         float(structure.cs), float(structure.ck), float(structure.g),
@@ -111,11 +112,11 @@ def past_lift_off(
     than its solve), and by numpy where it is within 1e-13 of the threshold."""
     constants = kept_constants(structure).force
     lifted = np.empty(f_flat.size, dtype=np.bool_)
-    if one_way_kernel.lift_off_small(f_flat, a_flat, constants, lifted):
+    if velocity_kernel.lift_off_small(f_flat, a_flat, constants, lifted):
         decisions = np.empty(f_flat.size, dtype=np.int8)
-        one_way_kernel.lift_off_decisions(f_flat, a_flat,
-                                          one_way_kernel.ForceConstants(*constants), decisions)
-        undecided = np.flatnonzero(decisions == one_way_kernel.LIFT_UNDECIDED)
+        velocity_kernel.lift_off_decisions(f_flat, a_flat,
+                                           velocity_kernel.ForceConstants(*constants), decisions)
+        undecided = np.flatnonzero(decisions == velocity_kernel.LIFT_UNDECIDED)
         lifted[undecided] = a_flat[undecided] > lift_off_acceleration(structure,
                                                                       f_flat[undecided])
     return lifted

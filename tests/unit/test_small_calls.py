@@ -1,9 +1,9 @@
 """The shortcuts of a small call give what the long way gives.
 
-* The kernel's lift-off decisions (:func:`study.kernels.one_way.lift_off_decisions`)
+* The kernel's lift-off decisions (:func:`study.kernels.one_way_velocity.lift_off_decisions`)
   against numpy's ``a > lift_off_acceleration(f)``, at and around the threshold:
   decided points agree, undecided ones lie within 1e-12 of it; the small-call driver
-  :func:`study.kernels.one_way.lift_off_small` decides as it does and counts the rest.
+  :func:`study.kernels.one_way_velocity.lift_off_small` decides as it does and counts the rest.
 * The drive checks' fast acceptance: the same refusals as before for every kind of bad
   value, scalar or array, short (checked as Python floats) or long (numpy's min and
   max), and a NaN that Python's min and max would miss.
@@ -27,7 +27,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 import study
-from study.kernels import one_way
+from study.kernels import one_way_velocity
 from study.kernels import structure_vector as sv
 from study.model import as_acceleration, as_frequency, lift_off_acceleration
 from study.model.contact import LAWS
@@ -54,7 +54,7 @@ def _random_structures(count, seed):
 
 
 def _constants(structure):
-    return one_way.ForceConstants(
+    return one_way_velocity.ForceConstants(
         float(structure.omega0), 1.0 / structure.Q, float(structure.M),
         float(np.cos(structure.alpha_rad)), float(np.sin(structure.alpha_rad)),
         float(structure.cs), float(structure.ck), float(structure.g))
@@ -72,9 +72,9 @@ def test_lift_off_decisions_are_numpys():
                             rng.uniform(0.0, 3.0, 16) * threshold])
         ff = np.concatenate([np.repeat(f, steps.size), f, f, f])
         decisions = np.empty(ff.size, dtype=np.int8)
-        one_way.lift_off_decisions(ff, a, _constants(structure), decisions)
+        one_way_velocity.lift_off_decisions(ff, a, _constants(structure), decisions)
         numpy_says = a > lift_off_acceleration(structure, ff)
-        decided = decisions != one_way.LIFT_UNDECIDED
+        decided = decisions != one_way_velocity.LIFT_UNDECIDED
         assert_array_equal(decisions[decided] == 1, numpy_says[decided])
         near = np.abs(a / lift_off_acceleration(structure, ff) - 1.0) <= 1e-12
         assert np.all(near[~decided])
@@ -145,11 +145,11 @@ def test_lift_off_small_decides_as_lift_off_decisions():
     for structure in structures:
         f, a = _threshold_points(structure, rng, 8)
         decisions = np.empty(f.size, dtype=np.int8)
-        one_way.lift_off_decisions(f, a, _constants(structure), decisions)
+        one_way_velocity.lift_off_decisions(f, a, _constants(structure), decisions)
         lifted = np.empty(f.size, dtype=np.bool_)
-        count = one_way.lift_off_small(f, a, tuple(_constants(structure)), lifted)
+        count = one_way_velocity.lift_off_small(f, a, tuple(_constants(structure)), lifted)
         assert_array_equal(lifted, decisions == 1)
-        assert count == np.count_nonzero(decisions == one_way.LIFT_UNDECIDED)
+        assert count == np.count_nonzero(decisions == one_way_velocity.LIFT_UNDECIDED)
         undecided_seen += count
     assert undecided_seen > 0
 
