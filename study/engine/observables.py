@@ -58,6 +58,7 @@ __all__ = [
     "PointWork",
     "markdown_table",
     "resolve",
+    "solution_values",
     "unmet_needs",
     "variables_of",
     "velocity_interval",
@@ -484,22 +485,32 @@ def _lift_off(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray
     return {"lift_off_acceleration": lift_off_acceleration(structure, f)}
 
 
+def solution_values(work: PointWork, names: tuple[str, ...]) -> dict[str, NDArray[Any]]:
+    """The result variables ``names``, each read from the study's solution by the
+    :class:`~study.solvers.steady.SteadyState` field it declares
+    (:attr:`study.engine.variables.Variable.field`)."""
+    return {name: getattr(work.solution, VARIABLES[name].field) for name in names}
+
+
+#: The variables of the velocity observable, of its flight and of the diagnostics: each
+#: a solver output (:func:`study.engine.variables.solver_output`).
+_VELOCITY = ("velocity", "status")
+_VELOCITY_FLIGHT = ("airborne_fraction", "largest_hop", "impacts_per_period")
+_DIAGNOSTICS = ("slips_per_period", "forward_slip_fraction", "backward_slip_fraction",
+                "orbit_period", "nonconvergence")
+
+
 def _velocity(work: PointWork) -> dict[str, NDArray[Any]]:
-    s = work.solution
-    values = {"velocity": s.velocity, "status": s.status}
+    values = solution_values(work, _VELOCITY)
     if work.method.protocol is not None:
         values["jumped"] = work.swept.jumped.astype(np.int8)
     if work.method.flight:
-        values.update({"airborne_fraction": s.airborne_fraction, "largest_hop": s.largest_hop,
-                       "impacts_per_period": s.impacts_per_period})
+        values.update(solution_values(work, _VELOCITY_FLIGHT))
     return values
 
 
 def _diagnostics(work: PointWork) -> dict[str, NDArray[Any]]:
-    s = work.solution
-    return {"slips_per_period": s.slips_per_period, "forward_slip_fraction": s.forward_fraction,
-            "backward_slip_fraction": s.backward_fraction, "orbit_period": s.orbit_period,
-            "nonconvergence": s.reason}
+    return solution_values(work, _DIAGNOSTICS)
 
 
 def velocity_interval(mean: ArrayLike, error: ArrayLike
@@ -515,18 +526,19 @@ def velocity_interval(mean: ArrayLike, error: ArrayLike
 
 
 def _floquet(work: PointWork) -> dict[str, NDArray[Any]]:
-    return {"floquet_multiplier": work.solution.floquet_multiplier}
+    return solution_values(work, ("floquet_multiplier",))
 
 
 def _irregular(work: PointWork) -> dict[str, NDArray[Any]]:
-    solution = work.solution
-    low, high = velocity_interval(solution.averaged_velocity, solution.velocity_error)
-    return {"averaged_velocity": solution.averaged_velocity,
-            "velocity_error": solution.velocity_error,
+    values = solution_values(work, ("averaged_velocity", "velocity_error", "averaged_periods",
+                                    "lyapunov_exponent", "lyapunov_error"))
+    low, high = velocity_interval(values["averaged_velocity"], values["velocity_error"])
+    # The file's order: the interval after the error.
+    return {"averaged_velocity": values["averaged_velocity"],
+            "velocity_error": values["velocity_error"],
             "averaged_velocity_low": low, "averaged_velocity_high": high,
-            "averaged_periods": solution.averaged_periods,
-            "lyapunov_exponent": solution.lyapunov_exponent,
-            "lyapunov_error": solution.lyapunov_error}
+            **{name: values[name]
+               for name in ("averaged_periods", "lyapunov_exponent", "lyapunov_error")}}
 
 
 def _section(work: PointWork) -> dict[str, NDArray[Any]]:
@@ -633,13 +645,11 @@ _DECLARED = (
                ("lift_off_acceleration",), _lift_off),
     Observable("velocity", "steady mean velocity and the solver's status (with flight also "
                "the airborne fraction, largest hop and impacts per period)", "point",
-               ("velocity", "status"), _velocity, cached=True,
-               flight_variables=("airborne_fraction", "largest_hop", "impacts_per_period"),
+               _VELOCITY, _velocity, cached=True, flight_variables=_VELOCITY_FLIGHT,
                protocol_variables=("jumped",)),
     Observable("diagnostics", "slips per period, slip fractions, orbit period, why not "
                "converged", "point",
-               ("slips_per_period", "forward_slip_fraction", "backward_slip_fraction",
-                "orbit_period", "nonconvergence"), _diagnostics, requires=("velocity",),
+               _DIAGNOSTICS, _diagnostics, requires=("velocity",),
                cached=True),
     Observable("floquet", "largest Floquet multiplier of the orbit (exact two-way solver "
                "only)", "point", ("floquet_multiplier",), _floquet, requires=("velocity",),

@@ -26,10 +26,11 @@ from study.model.units import (
 from study.solvers.attractors import ATTRACTOR_DROPS, ATTRACTOR_STARTS
 from study.solvers.basins import NO_ATTRACTOR
 from study.solvers.section import SECTION_PERIODS
+from study.solvers.steady import FIELD_DTYPES, FIELD_UNITS
 
 __all__ = ["BASIN_STATUS_FLAGS", "DEFAULT_MAX_ATTRACTORS", "FRONTIER_KINDS", "GRIDS",
            "GRID_SIZES", "RESULT_FORMAT", "STALE_RESULT_FORMATS", "STUDY_FORMATS", "VARIABLES",
-           "Variable"]
+           "Variable", "solver_output"]
 
 #: Every layout study results were written in (global attribute ``study_result_format``),
 #: oldest first; the last is the one this version writes. Files without the attribute
@@ -123,6 +124,11 @@ class Variable:
         observables write (never in one study), in a study that asks for that
         observable (``attractor_count``: the ``attractors`` observable's count of 12
         starts, or the ``basins`` observable's of its own starts).
+    field : str
+        The :class:`~study.solvers.steady.SteadyState` field whose values it holds, at
+        each drive point of the study's solution ("": none); such a variable is made
+        by :func:`solver_output`, which takes its dtype and units from the field's
+        kernel column.
     optional : bool
         Whether a file whose observables write it may lack it: a variable added to an
         observable after files of it were written (the averaged velocity's interval),
@@ -145,6 +151,7 @@ class Variable:
     flight_long_name: str = ""
     flight_comment: str = ""
     observable_texts: tuple[tuple[str, str, str], ...] = ()
+    field: str = ""
     optional: bool = False
 
     def __post_init__(self) -> None:
@@ -229,6 +236,16 @@ _BASIN_STARTS = ("the seeded starts of [basins] (the solver's start, then the ba
                  "at drawn drive phases with the mode at drawn multiples of its steady "
                  "response, with flight every third one dropped from a drawn height)")
 
+def solver_output(name: str, field: str, long_name: str, **declared: Any) -> Variable:
+    """The result variable ``name`` holding the solution's
+    :class:`~study.solvers.steady.SteadyState` field ``field`` at each drive point, with
+    ``long_name`` and the other ``declared`` attributes of :class:`Variable`: its dtype
+    and units are the field's, as its kernel column declares them
+    (:data:`study.solvers.steady.FIELD_UNITS`), and are declared nowhere else."""
+    return Variable(name, "point", FIELD_DTYPES[field], FIELD_UNITS[field], long_name,
+                    field=field, **declared)
+
+
 _DECLARED = (
     Variable("mode_gain", "row", "float64", DIMENSIONLESS,
              "amplification |w0^2 G| of the plate's first mode (1 at low frequency)"),
@@ -240,62 +257,62 @@ _DECLARED = (
              "drive acceleration at which backward slips start (paper eq. 5)"),
     Variable("lift_off_acceleration", "row", "float64", METRE_PER_SECOND_SQUARED,
              "drive acceleration above which the normal force becomes negative"),
-    Variable("velocity", "point", "float64", METRE_PER_SECOND,
-             "mean velocity of the steady periodic orbit, positive forward",
-             comment="exactly 0 when static; NaN (missing) where status is lift_off, "
-             "not_converged or friction_paradox", invalid_where="status"),
-    Variable("status", "point", "int8", DIMENSIONLESS, "outcome of the steady-state solver",
-             flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
-    Variable("airborne_fraction", "point", "float64", DIMENSIONLESS,
-             "fraction of the steady orbit's period the base spends off the table",
-             comment="with flight only; 0 where the orbit never leaves the table, NaN "
-             "(missing) where status is lift_off, not_converged or friction_paradox",
-             invalid_where="status"),
-    Variable("largest_hop", "point", "float64", METRE,
-             "largest height of the base above the table over the steady orbit",
-             comment="with flight only; 0 where the orbit never leaves the table, NaN "
-             "(missing) where status is lift_off, not_converged or friction_paradox",
-             invalid_where="status"),
-    Variable("impacts_per_period", "point", "float64", DIMENSIONLESS,
-             "impacts of the base on the table per drive period on the steady orbit",
-             comment="with flight only; 0 where the orbit never leaves the table, NaN "
-             "(missing) where status is lift_off, not_converged or friction_paradox",
-             invalid_where="status"),
-    Variable("slips_per_period", "point", "float64", DIMENSIONLESS,
-             "slip events per drive period on the periodic orbit"),
-    Variable("forward_slip_fraction", "point", "float64", DIMENSIONLESS,
-             "fraction of the drive period spent slipping forward"),
-    Variable("backward_slip_fraction", "point", "float64", DIMENSIONLESS,
-             "fraction of the drive period spent slipping backward"),
-    Variable("orbit_period", "point", "int32", DIMENSIONLESS,
-             "period of the steady orbit in drive periods (0: no orbit)"),
-    Variable("nonconvergence", "point", "int8", DIMENSIONLESS,
-             "why the solver found no periodic orbit",
-             flags=tuple(r.name.lower() for r in NonConvergence),
-             flag_values=tuple(int(r) for r in NonConvergence)),
-    Variable("floquet_multiplier", "point", "float64", DIMENSIONLESS,
-             "largest modulus of the Floquet multipliers of the steady orbit on the state "
-             "(plate deflection, its rate, sliding velocity)",
-             comment="below 1: the orbit attracts nearby states; where static, the mode's "
-             "free decay over one drive period; NaN (missing) where status is lift_off, "
-             "not_converged or friction_paradox, and for the irregular motions (chaotic, "
-             "quasi_periodic: no orbit)", invalid_where="status",
-             zero_when_static=False, missing_where=_IRREGULAR,
-             flight_long_name="largest modulus of the Floquet multipliers of the steady "
-             "orbit on the state (plate deflection, its rate, sliding velocity, height of "
-             "the base above the table, its rate), flights and impacts included"),
-    Variable("averaged_velocity", "point", "float64", METRE_PER_SECOND,
-             "time-averaged velocity of a motion followed on the period map (no stable "
-             "cycle within reach)",
-             comment="the velocity of a chaotic or quasi_periodic point; the partial mean of "
-             "a point not_converged after the most periods allowed (nonconvergence "
-             "average_budget), whose velocity is NaN; NaN (missing) elsewhere"),
-    Variable("velocity_error", "point", "float64", METRE_PER_SECOND,
-             "standard error of the mean velocity",
-             comment="0 for an orbit or a static point (exact); for an averaged motion the "
-             "batch-means standard error of averaged_velocity (95 % confidence half-width: "
-             f"{Z_95:.7g} times it, averaged_velocity_low to averaged_velocity_high); NaN "
-             "(missing) where no velocity was found"),
+    solver_output("velocity", "velocity",
+                  "mean velocity of the steady periodic orbit, positive forward",
+                  comment="exactly 0 when static; NaN (missing) where status is lift_off, "
+                  "not_converged or friction_paradox", invalid_where="status"),
+    solver_output("status", "status", "outcome of the steady-state solver",
+                  flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    solver_output("airborne_fraction", "airborne_fraction",
+                  "fraction of the steady orbit's period the base spends off the table",
+                  comment="with flight only; 0 where the orbit never leaves the table, NaN "
+                  "(missing) where status is lift_off, not_converged or friction_paradox",
+                  invalid_where="status"),
+    solver_output("largest_hop", "largest_hop",
+                  "largest height of the base above the table over the steady orbit",
+                  comment="with flight only; 0 where the orbit never leaves the table, NaN "
+                  "(missing) where status is lift_off, not_converged or friction_paradox",
+                  invalid_where="status"),
+    solver_output("impacts_per_period", "impacts_per_period",
+                  "impacts of the base on the table per drive period on the steady orbit",
+                  comment="with flight only; 0 where the orbit never leaves the table, NaN "
+                  "(missing) where status is lift_off, not_converged or friction_paradox",
+                  invalid_where="status"),
+    solver_output("slips_per_period", "slips_per_period",
+                  "slip events per drive period on the periodic orbit"),
+    solver_output("forward_slip_fraction", "forward_fraction",
+                  "fraction of the drive period spent slipping forward"),
+    solver_output("backward_slip_fraction", "backward_fraction",
+                  "fraction of the drive period spent slipping backward"),
+    solver_output("orbit_period", "orbit_period",
+                  "period of the steady orbit in drive periods (0: no orbit)"),
+    solver_output("nonconvergence", "reason",
+                  "why the solver found no periodic orbit",
+                  flags=tuple(r.name.lower() for r in NonConvergence),
+                  flag_values=tuple(int(r) for r in NonConvergence)),
+    solver_output("floquet_multiplier", "floquet_multiplier",
+                  "largest modulus of the Floquet multipliers of the steady orbit on the state "
+                  "(plate deflection, its rate, sliding velocity)",
+                  comment="below 1: the orbit attracts nearby states; where static, the mode's "
+                  "free decay over one drive period; NaN (missing) where status is lift_off, "
+                  "not_converged or friction_paradox, and for the irregular motions (chaotic, "
+                  "quasi_periodic: no orbit)", invalid_where="status",
+                  zero_when_static=False, missing_where=_IRREGULAR,
+                  flight_long_name="largest modulus of the Floquet multipliers of the steady "
+                  "orbit on the state (plate deflection, its rate, sliding velocity, height of "
+                  "the base above the table, its rate), flights and impacts included"),
+    solver_output("averaged_velocity", "averaged_velocity",
+                  "time-averaged velocity of a motion followed on the period map (no stable "
+                  "cycle within reach)",
+                  comment="the velocity of a chaotic or quasi_periodic point; the partial mean of "
+                  "a point not_converged after the most periods allowed (nonconvergence "
+                  "average_budget), whose velocity is NaN; NaN (missing) elsewhere"),
+    solver_output("velocity_error", "velocity_error",
+                  "standard error of the mean velocity",
+                  comment="0 for an orbit or a static point (exact); for an averaged motion the "
+                  "batch-means standard error of averaged_velocity (95 % confidence half-width: "
+                  f"{Z_95:.7g} times it, averaged_velocity_low to averaged_velocity_high); NaN "
+                  "(missing) where no velocity was found"),
     Variable("averaged_velocity_low", "point", "float64", METRE_PER_SECOND,
              "lower end of the 95 % confidence interval of the averaged velocity",
              comment=f"averaged_velocity - {Z_95:.7g} velocity_error (the normal quantile: "
@@ -306,18 +323,18 @@ _DECLARED = (
              comment=f"averaged_velocity + {Z_95:.7g} velocity_error (the normal quantile: "
              "batch means of at least 32 batches); NaN (missing) where averaged_velocity "
              "is", optional=True),
-    Variable("averaged_periods", "point", "int32", DIMENSIONLESS,
-             "drive periods a motion was averaged over (0: an orbit, exact)"),
-    Variable("lyapunov_exponent", "point", "float64", DIMENSIONLESS,
-             "largest Lyapunov exponent per drive period",
-             comment="> 0: chaotic (nearby states separate by exp(exponent) per period); "
-             "for an averaged motion from a tangent vector carried through the period "
-             "map's exact Jacobians, saltations included; for an orbit log(floquet "
-             "multiplier) / orbit_period (exact, < 0 when stable); NaN (missing) where "
-             "neither applies"),
-    Variable("lyapunov_error", "point", "float64", DIMENSIONLESS,
-             "standard error of the largest Lyapunov exponent",
-             comment="0 for an orbit (exact); batch means over the averaged periods"),
+    solver_output("averaged_periods", "averaged_periods",
+                  "drive periods a motion was averaged over (0: an orbit, exact)"),
+    solver_output("lyapunov_exponent", "lyapunov_exponent",
+                  "largest Lyapunov exponent per drive period",
+                  comment="> 0: chaotic (nearby states separate by exp(exponent) per period); "
+                  "for an averaged motion from a tangent vector carried through the period "
+                  "map's exact Jacobians, saltations included; for an orbit log(floquet "
+                  "multiplier) / orbit_period (exact, < 0 when stable); NaN (missing) where "
+                  "neither applies"),
+    solver_output("lyapunov_error", "lyapunov_error",
+                  "standard error of the largest Lyapunov exponent",
+                  comment="0 for an orbit (exact); batch means over the averaged periods"),
     Variable("section_delta", "section", "float64", METRE,
              "the mode's deflection at drive phase 0 in consecutive periods of the motion",
              comment="the phase-0 Poincare section: an orbit of period p repeats every p "

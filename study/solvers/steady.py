@@ -9,10 +9,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from study.kernels import one_way as one_way_kernel
+from study.kernels.two_way import points as orbit_kernel
+
 __all__ = [
+    "FIELD_DTYPES",
+    "FIELD_UNITS",
     "FLIGHT_FIELDS",
     "STEADY_FIELDS",
     "SteadyState",
+    "declared_units",
     "scalar_if_0d",
     "shaped",
     "steady_fields",
@@ -161,6 +167,39 @@ STEADY_FIELDS = {
 }
 #: The fields of a flight (read only with ``flight=True``).
 FLIGHT_FIELDS = ("airborne_fraction", "largest_hop", "impacts_per_period")
+
+
+def declared_units(fields: dict[str, tuple[str, Any]],
+                   tables: tuple[tuple[tuple[str, str, str], ...], ...]) -> dict[str, str]:
+    """The units of each of ``fields`` (field: ``(column, dtype)``, as
+    :data:`STEADY_FIELDS`) as the kernels' output ``tables`` (rows ``(name, units,
+    meaning)``) declare its column.
+
+    Raises
+    ------
+    ValueError
+        Naming the field, where no table or tables with different units declare its
+        column: a disagreement between the kernels' declarations.
+    """
+    units: dict[str, str] = {}
+    for field, (column, _) in fields.items():
+        declared = {u for table in tables for name, u, _ in table if name == column}
+        if len(declared) != 1:
+            raise ValueError(f"SteadyState field {field!r}: its column {column!r} is declared "
+                             f"with units {sorted(declared)} by the kernels' OUTPUT_COLUMNS; "
+                             "exactly one is needed")
+        units[field] = declared.pop()
+    return units
+
+
+#: The units of each :class:`SteadyState` field, read from its kernel column's
+#: declaration: the result variables that hold a field take theirs from here
+#: (:func:`study.engine.variables.solver_output`).
+FIELD_UNITS = declared_units(STEADY_FIELDS, (one_way_kernel.OUTPUT_COLUMNS,
+                                             orbit_kernel.OUTPUT_COLUMNS))
+#: The numpy dtype name of each field as :func:`steady_fields` returns it.
+FIELD_DTYPES = {field: np.dtype(dtype or np.float64).name
+                for field, (_, dtype) in STEADY_FIELDS.items()}
 
 
 def steady_fields(out: NDArray[np.float64], columns: tuple[tuple[str, str, str], ...],
