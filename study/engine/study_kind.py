@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from study.engine.cache import ResultCache, encode_block, entry_key
+from study.engine.cache import ResultCache
+from study.engine.cache_format import encode_block, entry_key
 from study.engine.compiling import compile_notices
 from study.engine.executors import TASK_TIMEOUT, Executor, executor
 from study.engine.interrupts import RunInterrupted, stop_requests

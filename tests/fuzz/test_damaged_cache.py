@@ -1,4 +1,5 @@
-"""Seeded damage fuzz of the cache of kept values (study.engine.cache).
+"""Seeded damage fuzz of the cache of kept values (study.engine.cache and its
+study.engine.cache_* modules).
 
 Each case damages one to three files of a finished study's cache at random (every
 kind of block damage of tests/unit/test_cache_health.py, plus damaged axis files,

@@ -247,8 +247,9 @@ def test_computing_modules_do_not_depend_on_storage_display_or_running():
     cache, the store and the executors; figures and the CLI come after."""
     edges = graph()
     later = {"study.engine.runner", "study.engine.store", "study.engine.cache",
-             "study.engine.executors", "study.cli", "study.engine.validation",
-             "study.engine.progress"}
+             "study.engine.cache_format", "study.engine.cache_sharing",
+             "study.engine.cache_health", "study.engine.executors", "study.cli",
+             "study.engine.validation", "study.engine.progress"}
     for name in ("study.engine.sweep", "study.engine.observables", "study.scenes.scene_kind",
                  "study.engine.study_spec", "study.engine.spec_files", "study.solvers.exact",
                  "study.solvers.integrator", "study.scenes.planar_model"):

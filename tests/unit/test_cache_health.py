@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from study.cli import main
-from study.engine.cache import MAX_BLOCK_BYTES, ResultCache
+from study.engine.cache import ResultCache
+from study.engine.cache_format import MAX_BLOCK_BYTES
 from study.engine.runner import run_study
 from study.engine.store import open_result
 from study.engine.study_size import MAX_CHUNK_BYTES

@@ -17,7 +17,7 @@ import pytest
 
 import study
 from study.cli import main
-from study.engine.cache import decode_array, encode_array
+from study.engine.cache_format import decode_array, encode_array
 from study.engine.progress import Progress
 from study.engine.runner import run_study
 from study.engine.store import open_result

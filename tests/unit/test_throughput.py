@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 import study
-from study.engine.cache import ResultCache, decode_array, encode_array, encode_block, entry_key
+from study.engine.cache import ResultCache
+from study.engine.cache_format import decode_array, encode_array, encode_block, entry_key
 from study.engine.observables import Method, PointWork
 from study.engine.study_spec import default_chunk_points
 
