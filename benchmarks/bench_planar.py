@@ -26,7 +26,7 @@ import numpy as np
 from docs_tables import exponent, output, quick_option, use_quick, write_docs_table
 
 from study.scenes.planar_model import rest_state, simulate_planar
-from study.scenes.scene_kind import load_scene
+from study.scenes.scene_spec import load_scene
 from study.solvers.integrator import IntegratorSettings, Schedule
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -115,7 +115,7 @@ from study.scenes.planar_model import (
     contact_margins,
     periodic_motion,
 )
-from study.scenes.scene_kind import disk_from_spec
+from study.scenes.scene_spec import disk_from_spec
 from study.solvers.exact import steady_velocity
 
 __all__ = [

@@ -410,7 +410,7 @@ def run_scene(spec: Any, output: str | Path | None = None, *, force: bool = Fals
 
     Parameters
     ----------
-    spec : study.scenes.scene_kind.SceneSpec or path
+    spec : study.scenes.scene_spec.SceneSpec or path
     output : path, optional
         Result file; default ``results/<spec file stem>.nc``.
     force : bool
@@ -423,7 +423,7 @@ def run_scene(spec: Any, output: str | Path | None = None, *, force: bool = Fals
         never replaced).
     progress : bool, optional
         Force progress output on or off; default: a bar on a terminal, log lines
-        otherwise (work in the units of :func:`study.scenes.scene_kind.scene_work`).
+        otherwise (work in the units of :func:`study.scenes.scene_run.scene_work`).
     """
     kind = kind_named("scene")
     spec = _spec_of(kind, spec)

@@ -11,7 +11,7 @@ and what is allowed, before anything is computed:
 3. :func:`check_schema`: the kind's JSON schema (package data in ``study/schemas/``),
    every violation explained as ``'FILE: [table] key: problem; allowed: ...'``.
 4. The kind's own cross-field checks (:mod:`study.engine.study_spec`,
-   :mod:`study.scenes.scene_kind`), with
+   :mod:`study.scenes.scene_spec`), with
    :func:`axis_values` for the axis grammar both share.
 
 :func:`canonical_sha256` hashes the canonical form of a spec (what the numbers depend

@@ -351,7 +351,7 @@ def check_disk(disk: object) -> Disk:
 
 
 #: The spec schema whose ``$defs/parameter`` ranges of ``f`` and ``a`` bound a disk's
-#: drive (study.scenes.scene_kind reads its specs against it): the API takes the same drives.
+#: drive (study.scenes.scene_spec reads its specs against it): the API takes the same drives.
 DRIVE_SCHEMA = "study-scene-spec-v1"
 
 

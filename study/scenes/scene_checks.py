@@ -32,7 +32,8 @@ from study.engine.validation.header import (
     schema_problems,
 )
 from study.engine.validation.reading import StoredFile
-from study.scenes.scene_kind import SCENE_FORMAT, disk_method_attributes, parse_scene
+from study.scenes.scene_kind import SCENE_FORMAT, disk_method_attributes
+from study.scenes.scene_spec import parse_scene
 
 __all__ = ["scene_problems"]
 

@@ -48,7 +48,7 @@ from study.engine.validation import (
     validate_file,
 )
 from study.figures import draw_figure
-from study.scenes.scene_kind import parse_scene
+from study.scenes.scene_spec import parse_scene
 from tests.support.reliability import record
 from tests.support.sealed_results import make_sealed_results, rewrite
 

@@ -60,7 +60,7 @@ from study.engine.runner import load_any
 from study.engine.spec_files import SpecError
 from study.model.inputs import StudyWarning
 from study.model.status import INVALID_STATUSES, Status
-from study.scenes.scene_kind import SceneSpec
+from study.scenes.scene_spec import SceneSpec
 from tests.support.reliability import record
 
 pytestmark = pytest.mark.fuzz

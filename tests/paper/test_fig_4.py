@@ -15,7 +15,7 @@ from numpy.testing import assert_allclose
 
 from study.model.status import Status
 from study.scenes.planar_model import periodic_motion, rest_state, simulate_planar
-from study.scenes.scene_kind import load_scene
+from study.scenes.scene_spec import load_scene
 from study.solvers.integrator import IntegratorSettings, Schedule
 
 WORKFLOW = "workflows/steering.toml"

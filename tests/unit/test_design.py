@@ -30,7 +30,7 @@ from study.model import lift_off_acceleration, thresholds
 from study.model.status import Status
 from study.model.structure import Structure
 from study.scenes.planar_model import Disk, Plate, periodic_motion
-from study.scenes.scene_kind import load_scene
+from study.scenes.scene_spec import load_scene
 from study.solvers.exact import steady_velocity
 
 REPO = Path(__file__).resolve().parents[2]

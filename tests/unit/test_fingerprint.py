@@ -56,9 +56,10 @@ def test_study_closure_holds_every_computing_module():
 
 def test_scene_closure_holds_the_planar_model():
     modules = code_fingerprint(RESULT_KIND_ENTRIES["scene"]).modules
-    for name in ("study.scenes.scene_kind", "study.scenes.planar_model",
-                 "study.kernels.planar_integrator", "study.scenes.planner",
-                 "study.model.forces", "study.solvers.integrator", "study.model.status"):
+    for name in ("study.scenes.scene_kind", "study.scenes.scene_spec", "study.scenes.scene_run",
+                 "study.scenes.planar_model", "study.kernels.planar_integrator",
+                 "study.scenes.planner", "study.model.forces", "study.solvers.integrator",
+                 "study.model.status"):
         assert name in modules, name
     assert not [m for m in modules if m.startswith(NOT_COMPUTING)], modules
 

@@ -20,7 +20,7 @@ from study.scenes.planar_model import (
     periodic_motion,
     simulate_planar,
 )
-from study.scenes.scene_kind import SceneError, load_scene, parse_scene
+from study.scenes.scene_spec import SceneError, load_scene, parse_scene
 from study.solvers.integrator import IntegratorSettings, Schedule, integrated_steady_state, simulate
 
 R = 0.02

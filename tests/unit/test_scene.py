@@ -17,7 +17,7 @@ from study.engine.runner import run_scene
 from study.engine.store import ResultError, open_result
 from study.scenes.planar_model import periodic_motion, rest_state, simulate_planar
 from study.scenes.planner import arc_displacement, calibrate_commands, plan_leg
-from study.scenes.scene_kind import SceneError, load_scene, parse_scene
+from study.scenes.scene_spec import SceneError, load_scene, parse_scene
 from study.solvers.integrator import IntegratorSettings, Schedule
 from tests.support.tiers import headline
 
@@ -320,7 +320,8 @@ CALIBRATION = ("[scene]\nname = \"cal\"\nkind = \"calibration\"\n" + DISK
 def test_a_scene_reports_all_its_work_as_it_runs(text, unit):
     """What the scene reports adds up to the work its progress bar counts, in order, and
     the result is the same with or without a report."""
-    from study.scenes.scene_kind import scene_dataset, scene_work
+    from study.scenes.scene_kind import scene_dataset
+    from study.scenes.scene_run import scene_work
 
     spec = parse_scene(text, "scene.toml")
     work, named = scene_work(spec)

@@ -11,14 +11,16 @@ from pathlib import Path
 import pytest
 
 import study.scenes.scene_kind
+import study.scenes.scene_run
+import study.scenes.scene_spec
 from study.engine.spec_files import SpecError
-from study.scenes.scene_kind import (
+from study.scenes.scene_kind import scene_dataset
+from study.scenes.scene_run import MAX_PLAN_DRIVE_SECONDS
+from study.scenes.scene_spec import (
     MAX_CALIBRATION_PERIODS,
-    MAX_PLAN_DRIVE_SECONDS,
     MAX_SCENE_SAMPLES,
     SceneError,
     parse_scene,
-    scene_dataset,
 )
 
 REPO = Path(__file__).resolve().parents[2]
@@ -190,8 +192,8 @@ def test_an_absurd_plan_is_refused_before_any_flight(monkeypatch, old, new, frag
     def no_flight(*args, **kwargs):
         raise AssertionError("a flight was simulated before the size was checked")
 
-    monkeypatch.setattr(study.scenes.scene_kind, "refined_route", no_flight)
-    monkeypatch.setattr(study.scenes.scene_kind, "run_plan", no_flight)
+    monkeypatch.setattr(study.scenes.scene_run, "refined_route", no_flight)
+    monkeypatch.setattr(study.scenes.scene_run, "run_plan", no_flight)
     with pytest.raises(SceneError) as excinfo:
         scene_dataset(spec)
     message = str(excinfo.value)
@@ -200,16 +202,17 @@ def test_an_absurd_plan_is_refused_before_any_flight(monkeypatch, old, new, frag
 
 
 def test_the_scene_module_computes_and_does_not_store():
-    """study.scenes.scene_kind must not import the store, the runner, provenance, the CLI or
-    figures,
+    """The scene's modules (study.scenes.scene_spec, scene_run, scene_kind) must not import
+    the store, the runner, provenance, the CLI or figures,
     not even inside a function: computing a scene does not depend on how it is kept."""
-    tree = ast.parse(Path(study.scenes.scene_kind.__file__).read_text(encoding="utf-8"))
     imported = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            imported |= {alias.name for alias in node.names}
-        elif isinstance(node, ast.ImportFrom):
-            imported.add(node.module or "")
+    for module in (study.scenes.scene_spec, study.scenes.scene_run, study.scenes.scene_kind):
+        tree = ast.parse(Path(module.__file__).read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                imported |= {alias.name for alias in node.names}
+            elif isinstance(node, ast.ImportFrom):
+                imported.add(node.module or "")
     forbidden = {"study.engine.store", "study.engine.runner", "study.engine.provenance",
                  "study.cli",
                  "study.figures"}

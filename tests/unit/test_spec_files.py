@@ -31,7 +31,7 @@ from study.engine.spec_files import (
     where,
 )
 from study.engine.study_spec import load_spec, parse_spec
-from study.scenes.scene_kind import load_scene, parse_scene
+from study.scenes.scene_spec import load_scene, parse_scene
 from tests.unit.test_cache_health import deadline
 
 REPO = Path(__file__).resolve().parents[2]

@@ -13,7 +13,7 @@ import pytest
 from study.cli import main
 from study.engine.spec_files import SpecError
 from study.engine.study_spec import parse_spec
-from study.scenes.scene_kind import MAX_TRAJECTORY_PERIODS, parse_scene, period_weight
+from study.scenes.scene_spec import MAX_TRAJECTORY_PERIODS, parse_scene, period_weight
 
 REPO = Path(__file__).resolve().parents[2]
 
