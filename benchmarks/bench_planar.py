@@ -2,7 +2,7 @@
 
 For the steering disk of ``workflows/steering.toml`` at the four paper commands
 (7.2, 8.2, 14.2, 15.2 Hz at a = 7 m s^-2), integrates three drive periods from the
-plates' steady response with ``study.scenes.planar_model.simulate_planar`` over a grid of
+plates' steady response with ``study.solvers.planar.simulate_planar`` over a grid of
 tolerances and slaving thresholds, and with the independent reference of the tests
 (``tests/reference/planar.py``: scipy Radau/DOP853). The error is the largest
 distance of the final position from the tightest package run (tolerance 1e-13,
@@ -25,9 +25,10 @@ from pathlib import Path
 import numpy as np
 from docs_tables import exponent, output, quick_option, use_quick, write_docs_table
 
-from study.scenes.planar_model import rest_state, simulate_planar
+from study.scenes.planar_model import rest_state
 from study.scenes.scene_spec import load_scene
 from study.solvers.integrator import IntegratorSettings, Schedule
+from study.solvers.planar import simulate_planar
 
 ROOT = Path(__file__).resolve().parent.parent
 # The repo root, for tests.reference: the independent oracles are not installed.

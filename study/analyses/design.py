@@ -94,6 +94,7 @@ from study.engine.spec_files import (
 )
 from study.model import lift_off_acceleration, mode_response, thresholds
 from study.model.contact import DEFAULT_COUPLING
+from study.model.disk import Disk, check_disk
 from study.model.inputs import bounded_integer
 from study.model.parameters import STRUCTURE, Parameter, schema_properties, units_list
 from study.model.status import Status
@@ -109,8 +110,6 @@ from study.model.units import (
 )
 from study.scenes.planar_model import (
     MAX_MARGIN_SAMPLES,
-    Disk,
-    check_disk,
     check_drive,
     contact_margins,
     periodic_motion,

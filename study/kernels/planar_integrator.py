@@ -37,7 +37,8 @@ The loop is :func:`study.kernels.event_loop.make_loop` (shared with the single p
 steps are :mod:`study.kernels.dopri`'s; events are located by
 :mod:`study.kernels.events`: sampled on the dense output, watched at their minima,
 refined by the Illinois method. This module gives the loop the disk as hooks;
-:mod:`study.scenes.planar_model` validates, allocates and calls :func:`integrate`.
+:mod:`study.solvers.planar` packs the disk (:data:`PLATE_ENTRIES`, :data:`DISK_ENTRIES`),
+validates, allocates and calls :func:`integrate`.
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ import math
 import numpy as np
 from numba import njit
 
+from study.kernels import structure_vector as sv
 from study.kernels.dopri import dense_output, step, table_drive
 from study.kernels.event_loop import Hooks, make_loop
 from study.kernels.events import record
@@ -75,27 +77,60 @@ SPIN = 5
 PATH = 6
 MODES = 7
 
-# Columns of the plate parameter table.
-PL_DAMPING = 0  # w0/Q [s-1]
-PL_STIFFNESS = 1  # w0^2 [s-2]
-PL_COS = 2  # cos(alpha)
-PL_SIN = 3  # sin(alpha)
-PL_MASS = 4  # M
-PL_EX = 5  # body-frame direction, forward component
-PL_EY = 6  # body-frame direction, left component
-PL_LEVER = 7  # r x e [m]
-PL_REACH = 8  # r . e [m]
-N_PLATE_PARAMETERS = 9
+
+def _shared(*names):
+    """The single plate's structure-vector entries ``names`` (name, units, meaning)."""
+    return tuple(sv.ENTRIES[sv.index(name)] for name in names)
+
+
+#: The columns of the plate parameter table, in order, with their units: a plate's mode
+#: is the single plate's (the structure vector's entries of the same names), then where
+#: and along what the plate acts on the disk. The solvers pack them by these names
+#: (:func:`study.solvers.planar.disk_parameters`).
+PLATE_ENTRIES = (
+    *_shared("damping", "stiffness", "cos_alpha", "sin_alpha", "mass_ratio"),
+    ("direction_forward", "1", "body-frame direction e of the plate's mode, forward component"),
+    ("direction_left", "1", "body-frame direction e of the plate's mode, left component"),
+    ("lever", "m", "r x e, the moment arm of the plate's horizontal force about the centre"),
+    ("reach", "m", "r . e, the attachment point r along the plate's direction e"),
+)
+
+#: The entries of the disk parameter vector, in order, with their units: the friction
+#: coefficients, gravity and the coupling are the single plate's (the structure vector's
+#: entries of the same names), the limit surface, the inertia and the slaving threshold
+#: the disk's own.
+DISK_ENTRIES = (
+    *_shared("static_friction", "kinetic_friction", "gravity"),
+    ("friction_length", "m", "length c of the ellipsoidal limit surface"),
+    ("gyration_radius_squared", "m2", "rho^2, the disk's radius of gyration squared"),
+    ("slaved_twist", "m s-1", "twist below which a slip's direction is the slaved one"),
+    *_shared("two_way"),
+)
+_PLATE_NAMES = tuple(name for name, _, _ in PLATE_ENTRIES)
+_DISK_NAMES = tuple(name for name, _, _ in DISK_ENTRIES)
+
+# Columns of the plate parameter table (numba reads module-level integers as
+# compile-time constants).
+PL_DAMPING = _PLATE_NAMES.index("damping")  # w0/Q [s-1]
+PL_STIFFNESS = _PLATE_NAMES.index("stiffness")  # w0^2 [s-2]
+PL_COS = _PLATE_NAMES.index("cos_alpha")  # cos(alpha)
+PL_SIN = _PLATE_NAMES.index("sin_alpha")  # sin(alpha)
+PL_MASS = _PLATE_NAMES.index("mass_ratio")  # M
+PL_EX = _PLATE_NAMES.index("direction_forward")  # body-frame direction, forward component
+PL_EY = _PLATE_NAMES.index("direction_left")  # body-frame direction, left component
+PL_LEVER = _PLATE_NAMES.index("lever")  # r x e [m]
+PL_REACH = _PLATE_NAMES.index("reach")  # r . e [m]
+N_PLATE_PARAMETERS = len(PLATE_ENTRIES)
 
 # Entries of the disk parameter vector.
-DK_CS = 0
-DK_CK = 1
-DK_G = 2
-DK_LENGTH = 3  # limit-surface length c [m]
-DK_GYRATION2 = 4  # rho^2 [m^2]
-DK_SLAVED = 5  # twist below which its direction is the slaved one [m s-1]
-DK_TWO_WAY = 6  # 1.0 for two-way coupling of the plates
-N_DISK_PARAMETERS = 7
+DK_CS = _DISK_NAMES.index("static_friction")
+DK_CK = _DISK_NAMES.index("kinetic_friction")
+DK_G = _DISK_NAMES.index("gravity")
+DK_LENGTH = _DISK_NAMES.index("friction_length")  # limit-surface length c [m]
+DK_GYRATION2 = _DISK_NAMES.index("gyration_radius_squared")  # rho^2 [m^2]
+DK_SLAVED = _DISK_NAMES.index("slaved_twist")  # twist below which its direction is slaved [m s-1]
+DK_TWO_WAY = _DISK_NAMES.index("two_way")  # 1.0 for two-way coupling of the plates
+N_DISK_PARAMETERS = len(DISK_ENTRIES)
 
 # Event functions: release (stick) or slip end (slip), lift-off (always).
 EVENTS = 2

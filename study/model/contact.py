@@ -58,7 +58,7 @@ __all__ = [
 #: The solvers that implement contact laws: the exact steady-state solver
 #: (:mod:`study.solvers.exact`), the single-plate time integrator
 #: (:mod:`study.solvers.integrator`) and the planar integrator
-#: (:mod:`study.scenes.planar_model`).
+#: (:mod:`study.solvers.planar`).
 SOLVERS = {
     "exact": "the exact steady-state solver",
     "integrator": "the time integrator",

@@ -57,7 +57,7 @@ def mode_response(structure: Structure, f: ArrayLike) -> NDArray[np.complex128]:
         ``numpy.complex128`` for a scalar ``f``).
     """
     if not all(hasattr(structure, name) for name in ("omega0", "Q")):
-        check_structure(structure)  # study.scenes.planar_model's plates have a mode too: duck-typed
+        check_structure(structure)  # study.model.disk's plates have a mode too: duck-typed
     w = _omega(f)
     w0 = structure.omega0
     return 1.0 / (w0 * w0 - w * w + 1j * w0 * w / structure.Q)

@@ -16,338 +16,57 @@ the exact solver model flight). See
 :mod:`study.kernels.planar_integrator` for the equations and docs/user-guide/steering.md
 for the choices.
 
+The model lives in three stages: the disk and its plates are declared in
+:mod:`study.model.disk`, the time integration (:func:`study.solvers.planar.simulate_planar`,
+the periodic-orbit search) is :mod:`study.solvers.planar`'s, and this module holds the
+model at the drives a scene spec allows: the drive checks against the scene spec
+schema (:func:`check_drive`), the steady plate states and rest states at a drive, the
+steady motion under a constant drive (:func:`periodic_motion`) and the contact margins.
+
 Per unit total mass, SI units: lengths in m; every angle a caller passes or gets back
-is in degrees (the plates' tilt and direction, as in :class:`study.model.structure.Structure`;
-headings, spins and turn rates in degree and degree s-1; the heading noise in degree
-m^-1/2), including the heading and spin of the state vectors (``initial_state``,
-``final_state``, :func:`rest_state`). The kernel (:mod:`study.kernels.planar_integrator`) works in
-radians; the conversion is made here, at the boundary (:func:`_to_kernel`,
-:func:`_from_kernel`).
+is in degrees (headings and turn rates in degree and degree s-1), including the
+heading and spin of the state vectors (:func:`rest_state`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Iterable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from study.engine.spec_files import load_schema
-from study.kernels import planar_integrator as _kernel
-from study.kernels.event_loop import EventLog, Samples, Segments, State, StepControl
-from study.model import codes, mode_response
-from study.model.contact import COUPLINGS, DEFAULT_COUPLING, check_law
+from study.model.disk import Disk, check_disk, mode_amplitude, steady_plate_response
 from study.model.inputs import (
     InputTypeError,
     as_real_array,
     bounded_integer,
     bounded_number,
-    instance_of,
 )
-from study.model.status import NonConvergence, Status
-from study.model.structure import require_finite
-from study.model.units import (
-    DEGREE,
-    DEGREE_PER_SECOND,
-    DIMENSIONLESS,
-    HERTZ,
-    METRE,
-    METRE_PER_SECOND,
-    METRE_PER_SECOND_SQUARED,
-    SECOND,
-    spoken,
-)
-from study.solvers.integrator import (
-    MAX_RECORDED_EVENTS,
-    IntegratorSettings,
-    Schedule,
-    check_integrator_settings,
-    check_samples,
-    integrator_budget_maxima,
+from study.model.units import HERTZ, METRE_PER_SECOND_SQUARED
+from study.solvers.integrator import IntegratorSettings, check_integrator_settings
+from study.solvers.planar import (
+    MIN_DISK_FREQUENCY,
+    POSE_STATE,
+    SLAVING,
+    PeriodicMotion,
+    integrated_periodic_motion,
 )
 
 __all__ = [
     "DRIVE_SCHEMA",
-    "EVENT_KINDS",
-    "FRICTION_LENGTH_RATIO",
     "MAX_MARGIN_SAMPLES",
-    "MIN_DISK_FREQUENCY",
-    "OUTCOMES",
-    "PLANAR_VERSION",
-    "SLAVING",
-    "Disk",
-    "PeriodicMotion",
-    "PlanarTrajectory",
-    "Plate",
-    "check_disk",
     "check_drive",
     "contact_margins",
-    "describe_disk",
-    "disk_parameters",
     "max_steady_periods",
     "periodic_motion",
     "rest_state",
-    "simulate_planar",
-    "state_names",
     "steady_plate_states",
 ]
 
-#: Bumped whenever the planar model or its numerics change the numbers it returns
-#: (2: headings, spins and turn rates in degree, no longer rad).
-PLANAR_VERSION = "2"
-
-#: How a run ended, by kernel return code.
-OUTCOMES = {
-    codes.RUN_DONE: "completed",
-    codes.RUN_LIFT_OFF: "lift_off",
-    codes.RUN_BUDGET: "step_budget",
-    codes.RUN_PARADOX: "friction_paradox",
-}
-
-#: Event kinds recorded in trajectories.
-EVENT_KINDS = {
-    codes.EVENT_RELEASE: "release",
-    codes.EVENT_SLIP_END: "slip_end",
-    codes.EVENT_LIFT_OFF: "lift_off",
-    codes.EVENT_PARADOX: "friction_paradox",
-}
-
-#: Default slaving threshold of a slip's onset, in units of ``ck g / w`` [1].
-SLAVING = 1e-4
-
-#: Names of the state components (``delta_i``, ``delta_i'`` follow, plate by plate).
-POSE_STATE = ("x", "y", "heading", "vx", "vy", "spin", "path")
-
-#: Units of the state components a caller sees (the kernel's heading and spin are in
-#: rad and rad s-1).
-POSE_UNITS = (METRE, METRE, DEGREE, METRE_PER_SECOND, METRE_PER_SECOND, DEGREE_PER_SECOND, METRE)
-
-
-def _to_kernel(state: NDArray[np.float64]) -> NDArray[np.float64]:
-    """A state vector in the caller's units (heading [degree], spin [degree s-1]) as
-    the kernel's (rad, rad s-1); a copy."""
-    out = np.array(state, dtype=float)
-    out[[_kernel.HEADING, _kernel.SPIN]] = np.radians(out[[_kernel.HEADING, _kernel.SPIN]])
-    return out
-
-
-def _from_kernel(state: NDArray[np.float64]) -> NDArray[np.float64]:
-    """A kernel state vector (rad, rad s-1) in the caller's units (degree, degree
-    s-1); a copy."""
-    out = np.array(state, dtype=float)
-    out[[_kernel.HEADING, _kernel.SPIN]] = np.degrees(out[[_kernel.HEADING, _kernel.SPIN]])
-    return out
-
-
-@dataclass(frozen=True)
-class Plate:
-    """One resonant plate on the disk.
-
-    Parameters
-    ----------
-    f0 : float
-        Resonance frequency of the plate's first mode [Hz], > 0.
-    Q : float
-        Quality factor [1], > 0.
-    alpha : float
-        Tilt of the mode's direction from the horizontal [degree], in [0, 90].
-    M : float
-        Mass ratio of the plate's modal mass to the whole structure's mass [1], in (0, 1].
-    direction : float
-        Direction of the mode's horizontal component in the body frame, counterclockwise
-        from the heading [degree].
-    attachment : tuple of float
-        Point where the plate acts, body frame ``(forward, left)`` from the disk's
-        centre [m].
-    name : str
-        Label.
-    """
-
-    f0: float
-    Q: float
-    alpha: float
-    M: float
-    direction: float = 0.0
-    attachment: tuple[float, float] = (0.0, 0.0)
-    name: str = "plate"
-
-    def __post_init__(self) -> None:
-        checks = (
-            ("f0", HERTZ, lambda v: v > 0.0, "> 0"),
-            ("Q", DIMENSIONLESS, lambda v: v > 0.0, "> 0"),
-            ("alpha", DEGREE, lambda v: 0.0 <= v <= 90.0, "in [0, 90]"),
-            ("M", DIMENSIONLESS, lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
-            ("direction", DEGREE, lambda v: True, "finite"),
-        )
-        for name, units, ok, allowed in checks:
-            value = require_finite(f"Plate.{name}", getattr(self, name))
-            if not ok(value):
-                raise ValueError(
-                    f"Plate {self.name!r}: {name} = {value!r}{spoken(units)} is out of range; "
-                    f"allowed: {allowed}"
-                )
-            object.__setattr__(self, name, value)
-        point = (tuple(self.attachment) if isinstance(self.attachment, Iterable)
-                 and not isinstance(self.attachment, str) else ())
-        if len(point) != 2:
-            raise ValueError(
-                f"Plate {self.name!r}: attachment must be (forward, left) [m], got "
-                f"{self.attachment!r}"
-            )
-        object.__setattr__(self, "attachment", tuple(
-            require_finite(f"Plate.attachment[{i}]", v) for i, v in enumerate(point)
-        ))
-
-    @property
-    def unit_direction(self) -> tuple[float, float]:
-        """Body-frame unit vector of the mode's horizontal component (forward, left)."""
-        angle = math.radians(self.direction)
-        return math.cos(angle), math.sin(angle)
-
-    @property
-    def omega0(self) -> float:
-        """Angular resonance frequency of the plate's mode [rad s-1]."""
-        return 2.0 * math.pi * self.f0
-
-    @property
-    def lever(self) -> float:
-        """Moment arm ``r x e`` of the plate's horizontal force about the centre [m]."""
-        ex, ey = self.unit_direction
-        return self.attachment[0] * ey - self.attachment[1] * ex
-
-
-#: Friction length over the disk's radius [1]. At most 1: the friction torque's lever
-#: cannot exceed the contact's radius (uniform pressure gives 2/3). At least 1e-3: the
-#: kernel divides the friction torque by the length, and a shorter one makes the spin
-#: a stiff, nearly frictionless mode (a 1 s two-plate schedule: 3.5e3 steps at 2/3,
-#: 1e5 at 1e-3, 9.4e4 and 17 times the time at 1e-9, over 5 minutes at 1e-12, a
-#: ZeroDivisionError at 1e-300). Declared here only; the scene and design specs refuse
-#: a [disk] friction_length outside it through :class:`Disk`.
-FRICTION_LENGTH_RATIO = (1e-3, 1.0)
-
-
-@dataclass(frozen=True)
-class Disk:
-    """The rigid disk, its contact with the table and its plates.
-
-    Parameters
-    ----------
-    radius : float
-        Disk radius [m], > 0.
-    plates : tuple of Plate
-        The plates (at least one); their mass ratios sum to at most 1.
-    cs : float
-        Static friction coefficient [1], > 0.
-    ck : float, optional
-        Kinetic friction coefficient [1], in (0, cs]; default ``cs``.
-    g : float
-        Gravitational acceleration [m s-2].
-    gyration_radius : float, optional
-        Radius of gyration about the vertical axis [m]; default ``radius / sqrt(2)``
-        (a uniform disk).
-    friction_length : float, optional
-        Length ``c`` of the ellipsoidal limit surface, the maximum friction torque
-        over the maximum friction force [m]; default ``2 radius / 3`` (uniform
-        pressure on the full disk); ``radius / 1000 <= c <= radius``
-        (:data:`FRICTION_LENGTH_RATIO`).
-    coupling : {"one-way", "two-way"}
-        ``"one-way"`` (default, :data:`study.solvers.exact.DEFAULT_COUPLING`): each plate's mode
-        is forced by the table only.
-        ``"two-way"``: while the disk slides, the acceleration of each plate's
-        attachment point projected on its direction, ``b_i``, forces it too,
-        ``delta_i'' = F_i - sin(alpha_i) b_i`` (as :func:`study.solvers.integrator.simulate`'s
-        two-way model); a slip whose coupled equations have no unique solution
-        (Painleve's paradox) stops a run with outcome ``friction_paradox``.
-    flight : bool
-        The lift-off law: False (the only value allowed) ends a run with outcome
-        ``lift_off`` where the normal force would turn negative; True (flight and
-        impacts) is refused: the planar model does not implement it.
-    """
-
-    radius: float
-    plates: tuple[Plate, ...]
-    cs: float
-    ck: float | None = None
-    g: float = 9.8
-    gyration_radius: float | None = None
-    friction_length: float | None = None
-    coupling: str = DEFAULT_COUPLING
-    flight: bool = False
-    _names: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
-
-    def __post_init__(self) -> None:
-        radius = require_finite("Disk.radius", self.radius)
-        if radius <= 0.0:
-            raise ValueError(f"Disk: radius = {radius!r} [m] must be > 0")
-        if isinstance(self.plates, Plate | str) or not isinstance(self.plates, Iterable):
-            raise InputTypeError("Disk: plates must be a non-empty sequence of "
-                                 f"study.scenes.planar_model.Plate, got {self.plates!r}")
-        plates = tuple(self.plates)
-        if not plates or not all(isinstance(p, Plate) for p in plates):
-            raise ValueError("Disk: plates must be a non-empty sequence of "
-                             "study.scenes.planar_model.Plate")
-        total = sum(p.M for p in plates)
-        if total > 1.0 + 1e-12:
-            raise ValueError(
-                f"Disk: the plates' mass ratios sum to {total:g} > 1; allowed: a sum <= 1 "
-                "(each M is a share of the whole structure's mass)"
-            )
-        cs = require_finite("Disk.cs", self.cs)
-        if cs <= 0.0:
-            raise ValueError(f"Disk: cs = {cs!r} must be > 0")
-        ck = cs if self.ck is None else require_finite("Disk.ck", self.ck)
-        if not 0.0 < ck <= cs:
-            raise ValueError(f"Disk: ck = {ck!r} must be in (0, cs = {cs!r}]")
-        g = require_finite("Disk.g", self.g)
-        if g <= 0.0:
-            raise ValueError(f"Disk: g = {g!r} [m s-2] must be > 0")
-        gyration = radius / math.sqrt(2.0) if self.gyration_radius is None else (
-            require_finite("Disk.gyration_radius", self.gyration_radius))
-        length = 2.0 * radius / 3.0 if self.friction_length is None else (
-            require_finite("Disk.friction_length", self.friction_length))
-        if self.coupling not in COUPLINGS:
-            raise ValueError(f"Disk: coupling = {self.coupling!r} must be one of {COUPLINGS}")
-        if not isinstance(self.flight, bool):
-            raise ValueError(f"Disk: flight must be true or false, got {self.flight!r}")
-        try:
-            check_law("lift_off", "flight" if self.flight else "stop", "planar")
-        except ValueError as err:
-            raise ValueError(
-                f"Disk: flight = {self.flight!r}: {err} (the planar model ends a run with "
-                "outcome 'lift_off' where the normal force would turn negative; flight is "
-                "modelled for the single plate by the exact solver and the time "
-                "integrator)") from None
-        for name, value in (("gyration_radius", gyration), ("friction_length", length)):
-            if value <= 0.0:
-                raise ValueError(f"Disk: {name} = {value!r} [m] must be > 0")
-        low, high = FRICTION_LENGTH_RATIO
-        if not low * radius <= length <= high * radius:
-            raise ValueError(
-                f"Disk: friction_length = {length!r} m is out of range; allowed: "
-                f"radius/{1 / low:g} to radius ({low * radius:g} to {high * radius:g} m; "
-                "uniform pressure gives 2 radius/3)")
-        for name, value in (("radius", radius), ("plates", plates), ("cs", cs), ("ck", ck),
-                            ("g", g), ("gyration_radius", gyration),
-                            ("friction_length", length)):
-            object.__setattr__(self, name, value)
-
-    @property
-    def diameter(self) -> float:
-        """Disk diameter [m]."""
-        return 2.0 * self.radius
-
-
 #: Phases :func:`contact_margins` samples at most (one array of them per plate).
 MAX_MARGIN_SAMPLES = 1_000_000
-
-
-def check_disk(disk: object) -> Disk:
-    """``disk`` if it is a :class:`Disk`, else a TypeError
-    (:class:`study.model.inputs.InputTypeError`) naming the argument."""
-    return instance_of("disk", disk, Disk, "a study.scenes.planar_model.Disk")
 
 
 #: The spec schema whose ``$defs/parameter`` ranges of ``f`` and ``a`` bound a disk's
@@ -360,13 +79,6 @@ def max_steady_periods() -> int:
     ``[calibration] max_periods`` maximum (1e5, about 100 s of one core)."""
     schema = load_schema(DRIVE_SCHEMA)
     return int(schema["properties"]["calibration"]["properties"]["max_periods"]["maximum"])
-
-
-#: Lowest drive frequency of a disk [Hz]: the integrator's scales go as
-#: ``g / (2 pi f)^2``, which overflows near 1e-154 Hz (1e-300 Hz ended in a
-#: ZeroDivisionError); 1e-100 Hz keeps them finite with a wide margin. Far below any
-#: drive: a scene's work budget refuses frequencies long before (1e-30 Hz).
-MIN_DISK_FREQUENCY = 1e-100
 
 
 def check_drive(f: object, a: object) -> tuple[float, float]:
@@ -382,54 +94,6 @@ def check_drive(f: object, a: object) -> tuple[float, float]:
     return f_value, a_value
 
 
-def disk_parameters(disk: Disk) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The kernel's plate table ``(P, 9)`` and disk vector ``(7,)``."""
-    check_disk(disk)
-    plates = np.empty((len(disk.plates), _kernel.N_PLATE_PARAMETERS))
-    for i, plate in enumerate(disk.plates):
-        w0 = plate.omega0
-        alpha = math.radians(plate.alpha)
-        ex, ey = plate.unit_direction
-        plates[i, _kernel.PL_DAMPING] = w0 / plate.Q
-        plates[i, _kernel.PL_STIFFNESS] = w0 * w0
-        plates[i, _kernel.PL_COS] = math.cos(alpha)
-        plates[i, _kernel.PL_SIN] = math.sin(alpha)
-        plates[i, _kernel.PL_MASS] = plate.M
-        plates[i, _kernel.PL_EX] = ex
-        plates[i, _kernel.PL_EY] = ey
-        plates[i, _kernel.PL_LEVER] = plate.lever
-        plates[i, _kernel.PL_REACH] = plate.attachment[0] * ex + plate.attachment[1] * ey
-    vector = np.empty(_kernel.N_DISK_PARAMETERS)
-    vector[_kernel.DK_CS] = disk.cs
-    vector[_kernel.DK_CK] = disk.ck
-    vector[_kernel.DK_G] = disk.g
-    vector[_kernel.DK_LENGTH] = disk.friction_length
-    vector[_kernel.DK_GYRATION2] = disk.gyration_radius**2
-    vector[_kernel.DK_SLAVED] = 0.0
-    vector[_kernel.DK_TWO_WAY] = 1.0 if disk.coupling == "two-way" else 0.0
-    return plates, vector
-
-
-def _scales(disk: Disk, omega: float) -> NDArray[np.float64]:
-    """Absolute-tolerance scale of each state component at drive pulsation ``omega``."""
-    g = disk.g
-    size = g / omega**2
-    scale = [size, size, size / disk.radius, g / omega, g / omega, g / omega / disk.radius,
-             size]
-    for plate in disk.plates:
-        fastest = max(omega, plate.omega0)
-        scale += [g / fastest**2, g / fastest]
-    return np.array(scale)
-
-
-def _mode_amplitude(plate: Plate, f: float, a: float) -> complex:
-    """Complex amplitude of the plate's steady response ``delta`` to ``a cos(2 pi f t)``
-    [m]: the single-plate model's (:func:`study.model.mode_response`)."""
-    # mode_response needs only the mode's omega0 and Q, which a Plate has too.
-    response = mode_response(plate, float(f))  # type: ignore[arg-type]
-    return complex(float(a) * math.cos(math.radians(plate.alpha)) * response)
-
-
 def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
                         ) -> NDArray[np.float64]:
     """Plate states ``(delta_1, delta_1', ...)`` on their steady response to
@@ -438,22 +102,15 @@ def steady_plate_states(disk: Disk, f: float, a: float, phase: float = 0.0
     check_disk(disk)
     f, a = check_drive(f, a)
     phase = bounded_number("phase", phase)
-    omega = 2.0 * math.pi * float(f)
-    out = np.empty(2 * len(disk.plates))
-    for i, plate in enumerate(disk.plates):
-        rotating = _mode_amplitude(plate, f, a) * complex(math.cos(phase),
-                                                                math.sin(phase))
-        out[2 * i] = rotating.real
-        out[2 * i + 1] = (1j * omega * rotating).real
-    return out
+    return steady_plate_response(disk, f, a, phase)
 
 
 def rest_state(disk: Disk, pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
                drive: tuple[float, float] | None = None) -> NDArray[np.float64]:
-    """A state vector (see :func:`state_names`; heading [degree], spin [degree s-1])
-    with the disk at rest at ``pose`` ``(x [m], y [m], heading [degree])``: the plates at
-    rest, or, with ``drive = (f [Hz], a [m s-2])``, on their steady response to it at
-    drive phase 0."""
+    """A state vector (see :func:`study.solvers.planar.state_names`; heading [degree],
+    spin [degree s-1]) with the disk at rest at ``pose`` ``(x [m], y [m], heading
+    [degree])``: the plates at rest, or, with ``drive = (f [Hz], a [m s-2])``, on their
+    steady response to it at drive phase 0."""
     check_disk(disk)
     state = np.zeros(len(POSE_STATE) + 2 * len(disk.plates))
     where = as_real_array("pose", pose)
@@ -464,323 +121,8 @@ def rest_state(disk: Disk, pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
                               or len(tuple(drive)) != 2):
         raise InputTypeError(f"drive must be (f [Hz], a [m s-2]), got {drive!r}")
     if drive is not None:
-        state[_kernel.MODES:] = steady_plate_states(disk, *drive)
+        state[len(POSE_STATE):] = steady_plate_states(disk, *drive)
     return state
-
-
-@dataclass(frozen=True)
-class PlanarTrajectory:
-    """A planar run: samples, events and how it ended.
-
-    Attributes
-    ----------
-    time : numpy.ndarray
-        Sample times [s].
-    x, y : numpy.ndarray
-        Position of the disk's centre [m].
-    heading : numpy.ndarray
-        Heading, counterclockwise from the x axis, unwrapped [degree].
-    vx, vy : numpy.ndarray
-        Velocity [m s-1].
-    spin : numpy.ndarray
-        Angular velocity, counterclockwise positive [degree s-1].
-    path : numpy.ndarray
-        Distance slid since the start [m].
-    plate_states : numpy.ndarray
-        ``(time, plate, 2)``: each plate's ``delta`` [m] and ``delta'`` [m s-1].
-    slipping : numpy.ndarray
-        True where the disk slides at the sample.
-    event_time, event_kind : numpy.ndarray
-        Recorded events (kinds in :data:`EVENT_KINDS`).
-    outcome : str
-        One of :data:`OUTCOMES`' values; ``"lift_off"`` means the normal force fell
-        below zero at ``end_time`` (the model stops holding there).
-    end_time : float
-        Time the run reached [s].
-    steps, rejected_steps, slips : int
-        Work done.
-    final_state : numpy.ndarray
-        State vector at ``end_time`` (see :func:`state_names`; heading [degree], spin
-        [degree s-1]), to continue a run from.
-    heading_kicks : numpy.ndarray
-        Heading noise added at the end of each drive period [degree] (zeros without
-        noise).
-    """
-
-    time: NDArray[np.float64]
-    x: NDArray[np.float64]
-    y: NDArray[np.float64]
-    heading: NDArray[np.float64]
-    vx: NDArray[np.float64]
-    vy: NDArray[np.float64]
-    spin: NDArray[np.float64]
-    path: NDArray[np.float64]
-    plate_states: NDArray[np.float64] = field(repr=False)
-    slipping: NDArray[np.bool_] = field(repr=False)
-    event_time: NDArray[np.float64] = field(repr=False)
-    event_kind: NDArray[np.int8] = field(repr=False)
-    outcome: str
-    end_time: float
-    steps: int
-    rejected_steps: int
-    slips: int
-    final_state: NDArray[np.float64] = field(repr=False)
-    heading_kicks: NDArray[np.float64] = field(repr=False)
-
-
-def _check_slaving(slaving: float) -> float:
-    # Without slaving (0) a slip's onset is stiff for the explicit integrator: tiny
-    # steps until the budget runs out.
-    value = require_finite("slaving", slaving)
-    if not 0.0 < value <= 0.1:
-        raise ValueError(f"slaving = {slaving!r} [1] is out of range; allowed: (0, 0.1]")
-    return value
-
-
-def _kick_times(schedule: Schedule) -> NDArray[np.float64]:
-    """End of every whole drive period of every segment (and each segment's end)."""
-    times = []
-    for start, end, f in zip(schedule.starts, schedule.ends, schedule.frequency, strict=True):
-        count = math.floor((end - start) * f * (1.0 + 1e-12))
-        times.append(start + np.arange(1, count + 1) / f)
-        times.append([end])
-    merged = np.unique(np.concatenate(times))
-    return merged[merged <= schedule.ends[-1]]
-
-
-def simulate_planar(
-    disk: Disk,
-    schedule: Schedule,
-    *,
-    initial_state: ArrayLike | None = None,
-    output_times: ArrayLike | None = None,
-    settings: IntegratorSettings | None = None,
-    heading_noise: float = 0.0,
-    rng: np.random.Generator | int | None = None,
-    max_events: int = 0,
-    slaving: float = SLAVING,
-    on_progress: Callable[[float], None] | None = None,
-) -> PlanarTrajectory:
-    """Integrate the planar model through a drive schedule.
-
-    Parameters
-    ----------
-    disk : Disk
-        The disk and its plates.
-    schedule : study.solvers.integrator.Schedule
-        The drive; the run ends at the end of its last segment (or at lift-off).
-    initial_state : array_like, optional
-        ``(x [m], y [m], heading [degree], vx [m s-1], vy [m s-1], spin [degree s-1],
-        path [m], delta_1 [m], delta_1' [m s-1], ...)`` at ``t = 0``; default all
-        zero (at rest, plates at rest). With a non-zero twist the run starts sliding.
-    output_times : array_like, optional
-        Sorted sample times within the schedule [s]; default 16 per shortest drive
-        period.
-    settings : IntegratorSettings, optional
-        ``tolerance``, ``event_tolerance``, ``samples_per_step``, ``max_step`` and
-        ``max_steps`` apply (periods are the schedule's shortest); fixed steps are not
-        offered here.
-    heading_noise : float
-        Phenomenological heading diffusion [degree m^-1/2]: at the end of every drive
-        period the heading gets a Gaussian kick of variance ``heading_noise^2 * s``,
-        ``s`` the distance slid in that period. ``5.73 / sqrt(diameter)`` gives the
-        paper's measured drift of 0.1 rad (5.73 degree) per diameter travelled.
-    rng : numpy.random.Generator or int, optional
-        Source (or seed) of the heading kicks.
-    max_events : int
-        Events to record (0: none).
-    slaving : float
-        A slip that starts from rest moves along its slaved direction until its twist
-        exceeds ``slaving * ck * g / (2 pi f_max)`` [1]: this removes the stiffness of
-        the direction's relaxation (rate ``ck n / |u|``) at the cost of an error of
-        order ``slaving^2`` relative (measured; see docs/user-guide/steering.md). Exact
-        for motion along one axis.
-    on_progress : callable, optional
-        Called with the drive time reached [s] each time the integration stops (at every
-        heading kick with noise, else at the end); the integration is the same with or
-        without it.
-
-    Returns
-    -------
-    PlanarTrajectory
-    """
-    plates, disk_vector = disk_parameters(disk)
-    if not isinstance(schedule, Schedule):
-        raise TypeError("schedule must be a study.solvers.integrator.Schedule, "
-                        f"got {type(schedule)}")
-    settings = check_integrator_settings(settings)
-    if settings.steps_per_period is not None:
-        raise ValueError("simulate_planar: fixed steps (steps_per_period) are not offered; "
-                         "set tolerance instead")
-    noise = require_finite("heading_noise", heading_noise)
-    if noise < 0.0:
-        raise ValueError(f"heading_noise = {noise!r} [degree m^-1/2] must be >= 0")
-    noise = math.radians(noise)  # the kernel's heading is in rad
-    names = state_names(disk)
-    size = len(names)
-    y = np.zeros(size) if initial_state is None else np.array(initial_state, dtype=float)
-    if y.shape != (size,) or not np.all(np.isfinite(y)):
-        raise ValueError(
-            f"initial_state must be {size} finite numbers ({', '.join(names)}; heading "
-            f"[degree], spin [degree s-1]), got {initial_state!r}"
-        )
-    y = _to_kernel(y)
-    end = float(schedule.ends[-1])
-    shortest = float(1.0 / np.max(schedule.frequency))
-    out_t = _output_times(output_times, end, shortest)
-    omega = 2.0 * np.pi * schedule.frequency
-    scale = _scales(disk, float(np.max(omega)))
-    disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / float(
-        np.max(omega))
-    moving = bool(np.any(y[[_kernel.VX, _kernel.VY, _kernel.SPIN]] != 0.0))
-    state = State(y, np.array([_kernel.SLIP if moving else _kernel.STICK], dtype=np.int64),
-                  np.array([0.0, settings.max_step * shortest]))
-    segments = Segments(schedule.starts, omega, schedule.acceleration,
-                        schedule.start_phases_rad, schedule.ends)
-    control = StepControl(settings.tolerance, settings.tolerance, scale, 0.0,
-                          settings.max_step * shortest, settings.event_tolerance * shortest,
-                          settings.samples_per_step, settings.max_steps)
-    samples = Samples(out_t, np.empty((out_t.size, size)), np.empty(out_t.size, dtype=np.int64),
-                      np.zeros(1, dtype=np.int64))
-    capacity = bounded_integer("max_events", max_events, 0, MAX_RECORDED_EVENTS)
-    events = EventLog(np.empty(capacity), np.empty(capacity, dtype=np.int64),
-                      np.empty((capacity, size)), np.zeros(1, dtype=np.int64))
-    stats = np.zeros(_kernel.STATS_SIZE)
-    stops = _kick_times(schedule) if noise > 0.0 else np.array([end])
-    kicks = np.zeros(stops.size)
-    generator = np.random.default_rng(rng) if noise > 0.0 else None
-    code = codes.RUN_DONE
-    for j, stop in enumerate(stops):
-        path_before = y[_kernel.PATH]
-        code = _kernel.integrate(plates, disk_vector, segments, state, float(stop), control,
-                                 samples, events, stats)
-        if on_progress is not None:
-            on_progress(float(state.clock[0]))
-        if code != codes.RUN_DONE:
-            break
-        if generator is not None:
-            slid = y[_kernel.PATH] - path_before
-            kicks[j] = noise * math.sqrt(slid) * generator.standard_normal()
-            y[_kernel.HEADING] += kicks[j]
-    return _trajectory(disk, samples, events, capacity, stats, code, state, kicks)
-
-
-
-def _output_times(output_times: ArrayLike | None, end: float, shortest: float
-                  ) -> NDArray[np.float64]:
-    """The sampling times [s]: ``output_times`` checked, or 16 a shortest drive period."""
-    if output_times is None:
-        count = max(2, math.ceil(end / shortest * 16) + 1)
-        check_samples(count, "the default output_times (16 a period of the schedule)")
-        return np.linspace(0.0, end, count)
-    out_t = as_real_array("output_times", output_times, SECOND).ravel()
-    check_samples(out_t.size, "output_times")
-    if np.any(~np.isfinite(out_t)) or np.any(out_t < 0) or np.any(out_t > end):
-        raise ValueError(f"output_times must lie within the schedule [0, {end}] s")
-    if np.any(np.diff(out_t) < 0):
-        raise ValueError("output_times must be sorted")
-    return out_t
-
-
-def _trajectory(disk: Disk, samples: Samples, events: EventLog, capacity: int,
-                stats: NDArray[np.float64], code: int, state: State,
-                kicks: NDArray[np.float64]) -> PlanarTrajectory:
-    """The run's samples and events as a :class:`PlanarTrajectory` (angles in degree)."""
-    out_t = samples.t
-    y = state.y
-    m = int(samples.count[0])
-    e = min(int(events.count[0]), capacity)
-    states = samples.y[:m]
-    angles = [_kernel.HEADING, _kernel.SPIN]
-    states[:, angles] = np.degrees(states[:, angles])
-    return PlanarTrajectory(
-        time=out_t[:m].copy(),
-        x=states[:, _kernel.X].copy(),
-        y=states[:, _kernel.Y].copy(),
-        heading=states[:, _kernel.HEADING].copy(),
-        vx=states[:, _kernel.VX].copy(),
-        vy=states[:, _kernel.VY].copy(),
-        spin=states[:, _kernel.SPIN].copy(),
-        path=states[:, _kernel.PATH].copy(),
-        plate_states=states[:, _kernel.MODES:].reshape(m, len(disk.plates), 2).copy(),
-        slipping=samples.mode[:m] != _kernel.STICK,
-        event_time=events.t[:e].copy(),
-        event_kind=events.kind[:e].astype(np.int8),
-        outcome=OUTCOMES[int(code)],
-        end_time=float(state.clock[0]),
-        steps=int(stats[_kernel.STEPS]),
-        rejected_steps=int(stats[_kernel.REJECTED]),
-        slips=int(stats[_kernel.SLIPS]),
-        final_state=_from_kernel(y),
-        heading_kicks=np.degrees(kicks),
-    )
-
-
-def state_names(disk: Disk) -> tuple[str, ...]:
-    """Names of the components of a planar state vector (units: :data:`POSE_UNITS`,
-    then each plate's ``delta`` [m] and ``delta'`` [m s-1])."""
-    check_disk(disk)
-    names: list[str] = list(POSE_STATE)
-    for plate in disk.plates:
-        names += [f"delta_{plate.name}", f"delta_rate_{plate.name}"]
-    return tuple(names)
-
-
-def describe_disk(disk: Disk) -> dict[str, Any]:
-    """The disk's parameters as plain numbers (for provenance)."""
-    check_disk(disk)
-    return {
-        "radius": disk.radius, "cs": disk.cs, "ck": disk.ck, "g": disk.g,
-        "gyration_radius": disk.gyration_radius, "friction_length": disk.friction_length,
-        # Named only when two-way, so a one-way disk's description (and the hash of
-        # every scene spec written before the option) stays as it was.
-        **({"coupling": disk.coupling} if disk.coupling != "one-way" else {}),
-        "plates": [
-            {"name": p.name, "f0": p.f0, "Q": p.Q, "alpha": p.alpha, "M": p.M,
-             "direction": p.direction, "attachment": list(p.attachment)}
-            for p in disk.plates
-        ],
-    }
-
-
-@dataclass(frozen=True)
-class PeriodicMotion:
-    """Steady motion of the disk under a constant drive, per drive period.
-
-    The motion is periodic in the body frame (friction is isotropic and the plates
-    turn with the disk), so the pose advances by the same body-frame displacement
-    every period once the orbit is reached.
-
-    Attributes
-    ----------
-    forward_speed, lateral_speed : float
-        Mean velocity along the heading and to its left, in the body frame at the
-        period's start [m s-1].
-    turn_rate : float
-        Mean angular velocity, counterclockwise positive [degree s-1].
-    status : int
-        A :class:`study.model.status.Status` code.
-    reason : int
-        A :class:`study.model.status.NonConvergence` code (why not converged).
-    periods : int
-        Drive periods integrated.
-    slips_per_period : float
-        Slips per drive period over the orbit.
-    stuck_fraction : float
-        Fraction of the orbit's time spent stuck [1].
-    orbit_period : int
-        Drive periods after which the motion repeats (0 if it does not).
-    """
-
-    forward_speed: float
-    lateral_speed: float
-    turn_rate: float
-    status: int
-    reason: int
-    periods: int
-    slips_per_period: float
-    stuck_fraction: float
-    orbit_period: int
 
 
 def periodic_motion(
@@ -819,129 +161,19 @@ def periodic_motion(
         Periodicity test [1]; default ``max(100 * tolerance, 1e-12)`` (integration
         noise must not hide the repetition).
     slaving : float
-        See :func:`simulate_planar`.
+        See :func:`study.solvers.planar.simulate_planar`.
 
     Returns
     -------
     PeriodicMotion
     """
-    plates, disk_vector = disk_parameters(disk)
+    check_disk(disk)
     settings = check_integrator_settings(settings)
     f, a = check_drive(f, a)
     max_periods = bounded_integer("max_periods", max_periods, 1, max_steady_periods())
-    max_orbit_period = bounded_integer("max_orbit_period", max_orbit_period, 1,
-                                       integrator_budget_maxima()["max_orbit_period"])
-    if repeat_tolerance is not None:
-        repeat_tolerance = bounded_number("repeat_tolerance", repeat_tolerance, lower=0.0,
-                                          lower_open=True)
-    omega = 2.0 * math.pi * f
-    period = 1.0 / f
-    disk_vector[_kernel.DK_SLAVED] = _check_slaving(slaving) * disk.ck * disk.g / omega
-    scale = _scales(disk, omega)
-    size = scale.size
-    y = _to_kernel(rest_state(disk, drive=(f, a)))
-    segments = Segments(np.zeros(1), np.full(1, omega), np.full(1, float(a)), np.zeros(1),
-                        np.full(1, np.inf))
-    state = State(y, np.zeros(1, dtype=np.int64), np.array([0.0, settings.max_step * period]))
-    control = StepControl(settings.tolerance, settings.tolerance, scale, 0.0,
-                          settings.max_step * period, settings.event_tolerance * period,
-                          settings.samples_per_step, settings.max_steps)
-    # Nothing is sampled or recorded: one count serves both empty logs.
-    count = np.zeros(1, dtype=np.int64)
-    samples = Samples(np.empty(0), np.empty((0, size)), np.empty(0, dtype=np.int64), count)
-    events = EventLog(np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, size)), count)
-    history: list[tuple[Any, ...]] = []
-    if repeat_tolerance is None:
-        repeat_tolerance = max(100.0 * settings.tolerance, 1e-12)
-    length_unit = disk.g / omega**2
-    speed_unit = disk.g / omega
-    tolerance = repeat_tolerance * np.array([
-        length_unit, length_unit, length_unit / disk.radius,
-        speed_unit, speed_unit, speed_unit / disk.radius,
-    ])
-    for count in range(1, max_periods + 1):
-        start = y.copy()
-        stats = np.zeros(_kernel.STATS_SIZE)
-        # Time restarts each period (phase 2 pi k is phase 0): no loss of precision.
-        state.clock[0] = 0.0
-        code = _kernel.integrate(plates, disk_vector, segments, state, period, control,
-                                 samples, events, stats)
-        if code != codes.RUN_DONE:
-            return _ended_early(code, count)
-        history.append((_body_frame_change(start, y), start[:3].copy(), y[:3].copy(),
-                        stats.copy()))
-        del history[:-2 * max_orbit_period]
-        orbit = _orbit_period(history, tolerance, max_orbit_period)
-        if orbit:
-            return _motion_of_orbit(history[-orbit:], f, period, count)
-    return PeriodicMotion(math.nan, math.nan, math.nan, int(Status.NOT_CONVERGED),
-                          int(NonConvergence.NO_PERIODIC_ORBIT), max_periods, math.nan,
-                          math.nan, 0)
-
-
-def _ended_early(code: int, count: int) -> PeriodicMotion:
-    """The motion of a search whose period ``count`` ended before its end: lift-off, a
-    friction paradox, or the step budget spent."""
-    if code == codes.RUN_LIFT_OFF:
-        status, reason = Status.LIFT_OFF, NonConvergence.NONE
-    elif code == codes.RUN_PARADOX:
-        status, reason = Status.FRICTION_PARADOX, NonConvergence.NONE
-    else:
-        status, reason = Status.NOT_CONVERGED, NonConvergence.EVENT_BUDGET
-    return PeriodicMotion(math.nan, math.nan, math.nan, int(status), int(reason), count,
-                          math.nan, math.nan, 0)
-
-
-def _body_frame_change(start: NDArray[np.float64], y: NDArray[np.float64]
-                       ) -> NDArray[np.float64]:
-    """One period's displacement, twist and end velocities in the body frame of its start
-    (what repeats on a periodic orbit whatever the heading)."""
-    heading = start[_kernel.HEADING]
-    c, s = math.cos(heading), math.sin(heading)
-    dx = y[_kernel.X] - start[_kernel.X]
-    dy = y[_kernel.Y] - start[_kernel.Y]
-    return np.array([
-        c * dx + s * dy, -s * dx + c * dy, y[_kernel.HEADING] - heading,
-        c * y[_kernel.VX] + s * y[_kernel.VY], -s * y[_kernel.VX] + c * y[_kernel.VY],
-        y[_kernel.SPIN],
-    ])
-
-
-def _motion_of_orbit(window: list[tuple[Any, ...]], f: float, period: float, count: int
-                     ) -> PeriodicMotion:
-    """The mean motion over the periods of one orbit (``window``: each period's body-frame
-    change, start and end pose, statistics)."""
-    orbit = len(window)
-    stuck = sum(h[3][3] for h in window) / (orbit * period)
-    slips = sum(h[3][2] for h in window) / orbit
-    first, last = window[0][1], window[-1][2]
-    c, s = math.cos(first[2]), math.sin(first[2])
-    dx, dy = last[0] - first[0], last[1] - first[1]
-    rate = f / orbit
-    if slips == 0 and dx == 0.0 and dy == 0.0 and last[2] == first[2]:
-        status = Status.STATIC
-    elif stuck > 0.0:
-        status = Status.STICK_SLIP
-    else:
-        status = Status.CONTINUOUS_SLIDING
-    return PeriodicMotion(
-        float((c * dx + s * dy) * rate), float((-s * dx + c * dy) * rate),
-        math.degrees((last[2] - first[2]) * rate), int(status), int(NonConvergence.NONE),
-        count, float(slips), float(stuck), orbit,
-    )
-
-
-def _orbit_period(history: list[tuple[Any, ...]], tolerance: NDArray[np.float64],
-                  longest: int) -> int:
-    """Smallest ``q <= longest`` for which the last ``q`` periods repeat the ``q`` before
-    (body-frame displacement and end twist within ``tolerance``), else 0."""
-    for q in range(1, longest + 1):
-        if len(history) < 2 * q:
-            return 0
-        if all(np.all(np.abs(history[-1 - j][0] - history[-1 - j - q][0]) <= tolerance)
-               for j in range(q)):
-            return q
-    return 0
+    return integrated_periodic_motion(disk, f, a, settings=settings, max_periods=max_periods,
+                                      max_orbit_period=max_orbit_period,
+                                      repeat_tolerance=repeat_tolerance, slaving=slaving)
 
 
 def contact_margins(disk: Disk, f: float, a: float, samples: int = 512
@@ -982,7 +214,7 @@ def contact_margins(disk: Disk, f: float, a: float, samples: int = 512
     normal = disk.g - float(a) * np.cos(phase)
     moment = np.zeros((2, samples))
     for plate in disk.plates:
-        amplitude = _mode_amplitude(plate, f, a)
+        amplitude = mode_amplitude(plate, f, a)
         acceleration = (-(omega**2) * amplitude * np.exp(1j * phase)).real
         vertical = plate.M * math.cos(math.radians(plate.alpha)) * acceleration
         normal = normal + vertical

@@ -26,20 +26,19 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from study.model.disk import Disk
 from study.model.inputs import as_real_array, bounded_integer, bounded_number, instance_of
 from study.model.status import Status
 from study.model.units import METRE, SECOND
-from study.scenes.planar_model import (
+from study.scenes.planar_model import periodic_motion, rest_state
+from study.solvers.integrator import IntegratorSettings, Schedule
+from study.solvers.planar import (
     POSE_STATE,
     SLAVING,
-    Disk,
     PeriodicMotion,
     PlanarTrajectory,
-    periodic_motion,
-    rest_state,
     simulate_planar,
 )
-from study.solvers.integrator import IntegratorSettings, Schedule
 
 __all__ = [
     "COMMANDS",
@@ -408,7 +407,7 @@ def refined_legs(disk: Disk, state: NDArray[np.float64], phase: float,
                  settings: IntegratorSettings | None = None, iterations: int = 5,
                  tolerance: float = 1e-4, slaving: float = SLAVING) -> list[Leg]:
     """Legs to ``target`` corrected by simulating the model itself (``state``: a
-    :mod:`study.scenes.planar_model` state vector, heading in degree; ``phase``: the
+    :mod:`study.solvers.planar` state vector, heading in degree; ``phase``: the
     drive's [degree]).
 
     The calibration knows only steady motion; after a command switch the plate modes
@@ -474,7 +473,7 @@ def run_plan(disk: Disk, start: tuple[float, float, float], waypoints: NDArray[n
         ``(x [m], y [m], heading [degree])``, the disk at rest.
     heading_noise : float
         Heading diffusion of the flown run [degree m^-1/2] (see
-        :func:`study.scenes.planar_model.simulate_planar`); the planner's own simulations are
+        :func:`study.solvers.planar.simulate_planar`); the planner's own simulations are
         noise-free.
     sample_interval : float
         Spacing of the returned path samples [s].

@@ -17,8 +17,8 @@ import xarray as xr
 
 from study.engine.kinds import ResultFormat, ResultKind, register
 from study.engine.layout import contact_law_attributes
+from study.model.disk import Disk
 from study.model.units import DEGREE, DIMENSIONLESS, HERTZ
-from study.scenes.planar_model import Disk
 from study.scenes.scene_run import Report, scene_compute, scene_var, scene_work
 from study.scenes.scene_spec import SCENE_SPEC_SCHEMA, SceneSpec, load_scene, parse_scene
 

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from study.model.disk import Disk
 from study.model.status import Status
 from study.model.units import (
     DEGREE,
@@ -28,13 +29,7 @@ from study.model.units import (
     METRE_PER_SECOND_SQUARED,
     SECOND,
 )
-from study.scenes.planar_model import (
-    Disk,
-    contact_margins,
-    periodic_motion,
-    rest_state,
-    simulate_planar,
-)
+from study.scenes.planar_model import contact_margins, periodic_motion, rest_state
 from study.scenes.planner import (
     STRATEGIES,
     PlanError,
@@ -45,6 +40,7 @@ from study.scenes.planner import (
 )
 from study.scenes.scene_spec import MAX_SCENE_SAMPLES, SceneError, SceneSpec
 from study.solvers.integrator import Schedule
+from study.solvers.planar import simulate_planar
 
 __all__ = [
     "MAX_PLAN_DRIVE_SECONDS",

@@ -63,7 +63,7 @@ from study.engine.spec_files import (
     parse_toml,
     read_spec_text,
 )
-from study.scenes.planar_model import Disk, Plate, describe_disk
+from study.model.disk import Disk, Plate, describe_disk
 from study.scenes.planner import COMMANDS
 from study.solvers.integrator import IntegratorSettings
 

@@ -105,7 +105,7 @@ def integrator_budget_maxima() -> dict[str, int]:
     return {**MAX_INTEGRATOR_BUDGET, "max_steps": MAX_INTEGRATOR_STEPS}
 
 
-#: Events :func:`simulate` (and :func:`study.scenes.planar_model.simulate_planar`) record at most:
+#: Events :func:`simulate` (and :func:`study.solvers.planar.simulate_planar`) record at most:
 #: the arrays are allocated up front (about 50 bytes an event for the single plate).
 MAX_RECORDED_EVENTS = 10_000_000
 

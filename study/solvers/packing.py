@@ -5,7 +5,11 @@ Every solver that hands a structure to a kernel as the float64 vector of
 structure's own entries (damping, stiffness, tilt, mass ratio, friction coefficients,
 gravity, restitution), computed the same way for every kernel, and the laws' entries
 (coupling, lift-off law, friction law and its parameters) left 0 for the solver to set
-from its chosen laws (:func:`with_laws`).
+from its chosen laws (:func:`with_laws`). A plate's mode (:func:`mode_entries`), the
+friction and gravity (:func:`contact_entries`) and the coupling (:func:`coupling_entry`)
+are computed here for the planar disk's vectors too
+(:func:`study.solvers.planar.disk_parameters`), whose entries of the same names mean
+the same.
 """
 
 from __future__ import annotations
@@ -17,7 +21,46 @@ from study.kernels import structure_vector as sv
 from study.model.contact import LAWS, Friction
 from study.model.structure import Structure
 
-__all__ = ["structure_entries", "with_laws"]
+__all__ = ["contact_entries", "coupling_entry", "mode_entries", "structure_entries",
+           "with_laws"]
+
+
+def mode_entries(omega0: float, Q: float, M: float, cos_alpha: float, sin_alpha: float
+                 ) -> dict[str, float]:
+    """A plate's first mode as structure-vector entries, by name.
+
+    Parameters
+    ----------
+    omega0 : float
+        Angular resonance frequency ``w0`` of the mode [rad s-1].
+    Q : float
+        Quality factor [1].
+    M : float
+        Modal mass over the whole structure's mass [1].
+    cos_alpha, sin_alpha : float
+        Cosine and sine of the mode's tilt from the horizontal [1], computed by the
+        caller (each solver keeps its own trigonometry, so its numbers stay bit for bit
+        as they were).
+
+    Returns
+    -------
+    dict of str to float
+        ``damping`` ``w0 / Q`` [s-1], ``stiffness`` ``w0^2`` [s-2], ``cos_alpha``,
+        ``sin_alpha`` and ``mass_ratio`` [1].
+    """
+    return {"damping": omega0 / Q, "stiffness": omega0 * omega0, "cos_alpha": cos_alpha,
+            "sin_alpha": sin_alpha, "mass_ratio": M}
+
+
+def contact_entries(cs: float, ck: float, g: float) -> dict[str, float]:
+    """The contact's structure-vector entries, by name: ``static_friction`` ``cs`` and
+    ``kinetic_friction`` ``ck`` [1], ``gravity`` ``g`` [m s-2]."""
+    return {"static_friction": cs, "kinetic_friction": ck, "gravity": g}
+
+
+def coupling_entry(two_way: bool) -> float:
+    """The ``two_way`` entry [1]: 1.0 for two-way coupling, 0.0 for one-way."""
+    return 1.0 if two_way else 0.0
 
 
 def structure_entries(structure: Structure) -> NDArray[np.float64]:
@@ -37,16 +80,14 @@ def structure_entries(structure: Structure) -> NDArray[np.float64]:
         of a zero tilt is kept (``sin(-0.0)`` is -0.0).
     """
     vector = np.zeros(sv.SIZE)
-    w0 = structure.omega0
-    vector[sv.DAMPING] = w0 / structure.Q
-    vector[sv.STIFFNESS] = w0 * w0
-    vector[sv.COS_ALPHA] = np.cos(structure.alpha_rad)
-    vector[sv.SIN_ALPHA] = np.sin(structure.alpha_rad)
-    vector[sv.MASS_RATIO] = structure.M
-    vector[sv.STATIC_FRICTION] = structure.cs
-    vector[sv.KINETIC_FRICTION] = structure.ck
-    vector[sv.GRAVITY] = structure.g
-    vector[sv.RESTITUTION] = structure.restitution
+    entries = {
+        **mode_entries(structure.omega0, structure.Q, structure.M,
+                       np.cos(structure.alpha_rad), np.sin(structure.alpha_rad)),
+        **contact_entries(structure.cs, structure.ck, structure.g),
+        "restitution": structure.restitution,
+    }
+    for name, value in entries.items():
+        vector[sv.index(name)] = value
     return vector
 
 
@@ -56,7 +97,7 @@ def with_laws(vector: NDArray[np.float64], *, two_way: bool, lift_off: str,
     (``two_way``), the lift-off law's code (``"stop"`` or ``"flight"``) and, where a
     ``friction`` law is given, its code and parameters, the parameters of the laws not
     chosen NaN (never read)."""
-    vector[sv.TWO_WAY] = 1.0 if two_way else 0.0
+    vector[sv.TWO_WAY] = coupling_entry(two_way)
     vector[sv.LIFT_OFF_LAW] = float(LAWS["lift_off"][lift_off].code)
     if friction is not None:
         vector[sv.FRICTION_LAW + 1:] = np.nan

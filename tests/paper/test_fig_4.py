@@ -14,9 +14,10 @@ import pytest
 from numpy.testing import assert_allclose
 
 from study.model.status import Status
-from study.scenes.planar_model import periodic_motion, rest_state, simulate_planar
+from study.scenes.planar_model import periodic_motion, rest_state
 from study.scenes.scene_spec import load_scene
 from study.solvers.integrator import IntegratorSettings, Schedule
+from study.solvers.planar import simulate_planar
 
 WORKFLOW = "workflows/steering.toml"
 A_OPERATING = 7.0  # m s-2

@@ -30,10 +30,12 @@ import study
 from study.analyses import export as export_module
 from study.analyses import fit, selection
 from study.analyses.design import disk_limits, load_design_spec, parse_design_spec
+from study.model import disk as disk_model
 from study.model.structure import tilt_warnings
 from study.scenes import planar_model as planar
 from study.scenes import planner
 from study.solvers import integrator as transient
+from study.solvers import planar as planar_solver
 from tests.support.tiers import headline
 
 #: Seconds one case may take: a call that has not returned by then hangs (the slowest
@@ -105,8 +107,8 @@ ANY_VALUE = st.one_of(WRONG_TYPES, NUMBERS)
 # -- the calls --------------------------------------------------------------------------
 
 S = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
-PLATE = planar.Plate(14.44, 17.5, 64.0, 0.08, 0.0, (0.005, 0.0), "head")
-DISK = planar.Disk(radius=0.02, plates=(PLATE,), cs=0.25)
+PLATE = disk_model.Plate(14.44, 17.5, 64.0, 0.08, 0.0, (0.005, 0.0), "head")
+DISK = disk_model.Disk(radius=0.02, plates=(PLATE,), cs=0.25)
 SCHEDULE = transient.Schedule(np.array([14.2]), np.array([7.0]), np.array([0.2]))
 COMMANDS = {
     "forward": planner.Command("forward", 14.2, 7.0, 0.01, 0.001, 0.01),
@@ -146,16 +148,19 @@ CALLS = {
     "compute_map": call(study.compute_map, S, [13.0, 14.0], [8.0], workers=1,
                         observables=("velocity",), coupling="one-way", settings=None),
     "open_result": call(study.open_result, "/nonexistent/result.nc"),
-    "Plate": call(planar.Plate, 14.44, 17.5, 64.0, 0.08, 0.0, (0.005, 0.0), "head"),
-    "Disk": call(planar.Disk, 0.02, (PLATE,), 0.25, None, 9.8, None, None),
+    "Plate": call(disk_model.Plate, 14.44, 17.5, 64.0, 0.08, 0.0, (0.005, 0.0), "head"),
+    "Disk": call(disk_model.Disk, 0.02, (PLATE,), 0.25, None, 9.8, None, None),
     "contact_margins": call(planar.contact_margins, DISK, 14.0, 7.0, samples=16),
     "steady_plate_states": call(planar.steady_plate_states, DISK, 14.0, 7.0, 0.0),
     "rest_state": call(planar.rest_state, DISK, (0.0, 0.0, 0.0), None),
-    "state_names": call(planar.state_names, DISK),
-    "describe_disk": call(planar.describe_disk, DISK),
+    "state_names": call(planar_solver.state_names, DISK),
+    "describe_disk": call(disk_model.describe_disk, DISK),
     "periodic_motion": call(planar.periodic_motion, DISK, 14.0, 7.0, max_periods=3,
                             max_orbit_period=2, settings=None),
-    "simulate_planar": call(planar.simulate_planar, DISK, SCHEDULE, max_events=10,
+    "integrated_periodic_motion": call(planar_solver.integrated_periodic_motion, DISK, 14.0,
+                                       7.0, max_periods=3, max_orbit_period=2,
+                                       settings=None),
+    "simulate_planar": call(planar_solver.simulate_planar, DISK, SCHEDULE, max_events=10,
                             heading_noise=0.0, settings=None),
     "arc_displacement": call(planner.arc_displacement, COMMANDS["left"], 1.0),
     "plan_leg": call(planner.plan_leg, (0.0, 0.0, 90.0), (0.0, 0.01), COMMANDS, 20),
@@ -169,7 +174,7 @@ CALLS = {
     "model_parameters": call(transient.model_parameters, S, "one-way"),
     "integrated_steady_state": call(transient.integrated_steady_state, S, 14.0, 8.0,
                                     settings=transient.IntegratorSettings(max_periods=50)),
-    "disk_parameters": call(planar.disk_parameters, DISK),
+    "disk_parameters": call(planar_solver.disk_parameters, DISK),
     "load_fit_spec": call(fit.load_fit_spec, "/nonexistent/fit.toml"),
     "load_design_spec": call(load_design_spec, "/nonexistent/design.toml"),
     "bound_side": call(fit.bound_side, 1.0, 0.0, 2.0),
@@ -282,6 +287,9 @@ NOT_FUZZED = {
     "doubled_branch": "takes a branch's dataset (branch, fuzzed above) and the index of "
                       "one of its period doublings",
     "max_steady_periods": "takes no argument",
+    **{name: "the plates' steady response at a drive already checked (by "
+             "steady_plate_states, contact_margins and integrated_periodic_motion, fuzzed "
+             "above)" for name in ("mode_amplitude", "steady_plate_response")},
     "integrator_budget_maxima": "takes no argument",
     **{name: "a validator, run by every call above" for name in (
         "check_commands", "check_disk", "check_drive", "check_integrator_settings",
@@ -294,11 +302,14 @@ def test_every_public_function_is_fuzzed_or_says_why_not():
 
     from study.analyses import design, selection
     from study.analyses import export as export_module
+    from study.model import disk as disk_model
     from study.scenes import planar_model as planar
     from study.scenes import planner
     from study.solvers import integrator as transient
+    from study.solvers import planar as planar_solver
 
-    modules = [study, planar, planner, transient, fit, design, selection, export_module]
+    modules = [study, disk_model, planar, planar_solver, planner, transient, fit, design,
+               selection, export_module]
     public = {name for module in modules for name in module.__all__
               if inspect.isfunction(getattr(module, name))}
     covered = {name.split()[0] for name in CALLS}

@@ -204,7 +204,7 @@ def test_the_force_functions_name_structure(bad) -> None:
 # -- the disk, the integrator and the planner ---------------------------------------------
 
 def _disk():
-    from study.scenes.planar_model import Disk, Plate
+    from study.model.disk import Disk, Plate
 
     return Disk(radius=0.02, plates=(Plate(14.44, 17.5, 64.0, 0.08, 0.0, (0.005, 0.0)),),
                 cs=0.25)
@@ -226,7 +226,8 @@ def test_a_disk_drive_outside_the_finite_physics_names_f(f) -> None:
 
 
 def test_the_lowest_disk_drive_is_computed() -> None:
-    from study.scenes.planar_model import MIN_DISK_FREQUENCY, contact_margins
+    from study.scenes.planar_model import contact_margins
+    from study.solvers.planar import MIN_DISK_FREQUENCY
 
     rim, normal = contact_margins(_disk(), MIN_DISK_FREQUENCY, 7.0, samples=8)
     assert math.isfinite(rim) and math.isfinite(normal)
@@ -257,8 +258,8 @@ def test_integrator_budgets_are_bounded_as_in_a_spec(name, value, largest) -> No
 @pytest.mark.parametrize("max_events", [2**40, -1, 1.5, math.inf, "10"])
 def test_recorded_events_are_bounded(max_events) -> None:
     """2**40 allocated terabytes; inf ended in an OverflowError."""
-    from study.scenes.planar_model import simulate_planar
     from study.solvers.integrator import Schedule, simulate
+    from study.solvers.planar import simulate_planar
 
     schedule = Schedule(np.array([14.2]), np.array([7.0]), np.array([0.1]))
     with pytest.raises(ValueError, match="max_events"):
@@ -288,8 +289,8 @@ def test_the_planner_bounds_its_loops_and_names_its_arguments() -> None:
     lambda: __import__("study.analyses.selection", fromlist=["x"]).select(None, ["f=1"]),
     lambda: __import__("study.analyses.selection", fromlist=["x"]).available(None),
     lambda: __import__("study.analyses.export", fromlist=["x"]).tables(None),
-    lambda: __import__("study.scenes.planar_model", fromlist=["x"]).state_names(None),
-    lambda: __import__("study.scenes.planar_model", fromlist=["x"]).describe_disk(None),
+    lambda: __import__("study.solvers.planar", fromlist=["x"]).state_names(None),
+    lambda: __import__("study.model.disk", fromlist=["x"]).describe_disk(None),
     lambda: __import__("study.solvers.integrator",
                        fromlist=["x"]).steady_mode_state(None, 14.0, 8.0),
 ], ids=["select", "available", "tables", "state_names", "describe_disk", "steady_mode_state"])
@@ -313,8 +314,8 @@ def test_a_spec_text_that_is_not_text_is_refused(parse) -> None:
 def test_a_default_output_grid_too_large_to_hold_is_refused(duration) -> None:
     """A 1e12 s schedule asked simulate for 6.4 PiB (MemoryError); 1e300 s ended in
     numpy's "Maximum allowed size exceeded"."""
-    from study.scenes.planar_model import simulate_planar
     from study.solvers.integrator import MAX_OUTPUT_SAMPLES, Schedule, simulate
+    from study.solvers.planar import simulate_planar
 
     schedule = Schedule(np.array([14.0]), np.array([8.0]), np.array([duration]))
     for run in (lambda: simulate(S, schedule), lambda: simulate_planar(_disk(), schedule)):

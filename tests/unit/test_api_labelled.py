@@ -158,7 +158,7 @@ def test_one_coupling_default_everywhere() -> None:
     from study.analyses.fit import FitSpec
     from study.engine.observables import Method
     from study.engine.study_spec import StudySpec
-    from study.scenes.planar_model import Disk
+    from study.model.disk import Disk
     from study.solvers.attractors import attractors
     from study.solvers.integrator import integrated_steady_state, simulate
 

@@ -27,9 +27,10 @@ from study.engine.spec_files import SpecError
 from study.engine.store import write_atomic
 from study.engine.validation import open_result
 from study.model import lift_off_acceleration, thresholds
+from study.model.disk import Disk, Plate
 from study.model.status import Status
 from study.model.structure import Structure
-from study.scenes.planar_model import Disk, Plate, periodic_motion
+from study.scenes.planar_model import periodic_motion
 from study.scenes.scene_spec import load_scene
 from study.solvers.exact import steady_velocity
 

@@ -38,8 +38,8 @@ from numpy.testing import assert_allclose
 
 from study import Structure
 from study.kernels import integrator as kernel
+from study.model.disk import Disk, Plate
 from study.model.status import Status
-from study.scenes.planar_model import Disk, Plate
 from study.solvers.exact import steady_state
 from study.solvers.integrator import (
     EVENT_KINDS,

@@ -13,17 +13,13 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from study.kernels import planar_integrator as kernel
+from study.model.disk import Disk, Plate
 from study.model.status import Status
 from study.model.structure import Structure
-from study.scenes.planar_model import (
-    Disk,
-    Plate,
-    periodic_motion,
-    rest_state,
-    simulate_planar,
-)
+from study.scenes.planar_model import periodic_motion, rest_state
 from study.solvers.exact import steady_state
 from study.solvers.integrator import IntegratorSettings, Schedule, simulate
+from study.solvers.planar import simulate_planar
 
 R = 0.02
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08}

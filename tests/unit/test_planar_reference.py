@@ -18,7 +18,7 @@ that share nothing with its formulation:
   Radau) through a linear and a quadratic slip onset;
 * mirror symmetry and rotation invariance.
 
-Part 2 compares ``study.scenes.planar_model.simulate_planar`` with the reference: the 1-D
+Part 2 compares ``study.solvers.planar.simulate_planar`` with the reference: the 1-D
 reduction, the paper's two-plate steering disk (forward, backward, turning, and a
 frequency switch mid-run), symmetries, and the free-slide closed forms.
 
@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -478,9 +479,10 @@ def test_reference_mirror_symmetry_and_rotation_invariance():
 
 @pytest.fixture(scope="module")
 def planar():
-    from study.scenes import planar_model as module
+    from study.model.disk import Disk, Plate
+    from study.solvers.planar import simulate_planar
 
-    return module
+    return SimpleNamespace(Disk=Disk, Plate=Plate, simulate_planar=simulate_planar)
 
 
 def pkg_disk(planar, plates, **kw):

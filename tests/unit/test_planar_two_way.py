@@ -10,18 +10,13 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from study.model.disk import Disk, Plate, describe_disk
 from study.model.status import Status
 from study.model.structure import Structure
-from study.scenes.planar_model import (
-    EVENT_KINDS,
-    Disk,
-    Plate,
-    describe_disk,
-    periodic_motion,
-    simulate_planar,
-)
+from study.scenes.planar_model import periodic_motion
 from study.scenes.scene_spec import SceneError, load_scene, parse_scene
 from study.solvers.integrator import IntegratorSettings, Schedule, integrated_steady_state, simulate
+from study.solvers.planar import EVENT_KINDS, simulate_planar
 
 R = 0.02
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08}

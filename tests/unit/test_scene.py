@@ -15,10 +15,11 @@ from numpy.testing import assert_allclose
 from study.cli import main
 from study.engine.runner import run_scene
 from study.engine.store import ResultError, open_result
-from study.scenes.planar_model import periodic_motion, rest_state, simulate_planar
+from study.scenes.planar_model import periodic_motion, rest_state
 from study.scenes.planner import arc_displacement, calibrate_commands, plan_leg
 from study.scenes.scene_spec import SceneError, load_scene, parse_scene
 from study.solvers.integrator import IntegratorSettings, Schedule
+from study.solvers.planar import simulate_planar
 from tests.support.tiers import headline
 
 WORKFLOWS = Path(__file__).resolve().parents[2] / "workflows"

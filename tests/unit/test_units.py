@@ -63,7 +63,7 @@ def _declared() -> dict[str, str]:
     from study.analyses import design, fit, measurements
     from study.engine import study_spec as spec
     from study.engine import variables
-    from study.scenes import planar_model as planar
+    from study.solvers import planar
 
     found: dict[str, str] = {}
     found.update({f"study variable {n}": v.units for n, v in variables.VARIABLES.items()})
