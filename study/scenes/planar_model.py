@@ -17,8 +17,9 @@ the exact solver model flight). See
 for the choices.
 
 The model lives in three stages: the disk and its plates are declared in
-:mod:`study.model.disk`, the time integration (:func:`study.solvers.planar.simulate_planar`,
-the periodic-orbit search) is :mod:`study.solvers.planar`'s, and this module holds the
+:mod:`study.model.disk`, the time integration is :mod:`study.solvers.planar`'s
+(:func:`~study.solvers.planar.simulate_planar`) and :mod:`study.solvers.planar_periodic`'s
+(the periodic-orbit search), and this module holds the
 model at the drives a scene spec allows: the drive checks against the scene spec
 schema (:func:`check_drive`), the steady plate states and rest states at a drive, the
 steady motion under a constant drive (:func:`periodic_motion`) and the contact margins.
@@ -46,13 +47,8 @@ from study.model.inputs import (
 )
 from study.model.units import HERTZ, METRE_PER_SECOND_SQUARED
 from study.solvers.integrator import IntegratorSettings, check_integrator_settings
-from study.solvers.planar import (
-    MIN_DISK_FREQUENCY,
-    POSE_STATE,
-    SLAVING,
-    PeriodicMotion,
-    integrated_periodic_motion,
-)
+from study.solvers.planar import MIN_DISK_FREQUENCY, POSE_STATE, SLAVING
+from study.solvers.planar_periodic import PeriodicMotion, integrated_periodic_motion
 
 __all__ = [
     "DRIVE_SCHEMA",

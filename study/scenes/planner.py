@@ -32,13 +32,8 @@ from study.model.status import Status
 from study.model.units import METRE, SECOND
 from study.scenes.planar_model import periodic_motion, rest_state
 from study.solvers.integrator import IntegratorSettings, Schedule
-from study.solvers.planar import (
-    POSE_STATE,
-    SLAVING,
-    PeriodicMotion,
-    PlanarTrajectory,
-    simulate_planar,
-)
+from study.solvers.planar import POSE_STATE, SLAVING, PlanarTrajectory, simulate_planar
+from study.solvers.planar_periodic import PeriodicMotion
 
 __all__ = [
     "COMMANDS",

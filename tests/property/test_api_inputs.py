@@ -36,6 +36,7 @@ from study.scenes import planar_model as planar
 from study.scenes import planner
 from study.solvers import integrator as transient
 from study.solvers import planar as planar_solver
+from study.solvers import planar_periodic
 from tests.support.tiers import headline
 
 #: Seconds one case may take: a call that has not returned by then hangs (the slowest
@@ -157,8 +158,8 @@ CALLS = {
     "describe_disk": call(disk_model.describe_disk, DISK),
     "periodic_motion": call(planar.periodic_motion, DISK, 14.0, 7.0, max_periods=3,
                             max_orbit_period=2, settings=None),
-    "integrated_periodic_motion": call(planar_solver.integrated_periodic_motion, DISK, 14.0,
-                                       7.0, max_periods=3, max_orbit_period=2,
+    "integrated_periodic_motion": call(planar_periodic.integrated_periodic_motion, DISK,
+                                       14.0, 7.0, max_periods=3, max_orbit_period=2,
                                        settings=None),
     "simulate_planar": call(planar_solver.simulate_planar, DISK, SCHEDULE, max_events=10,
                             heading_noise=0.0, settings=None),
@@ -290,10 +291,13 @@ NOT_FUZZED = {
     **{name: "the plates' steady response at a drive already checked (by "
              "steady_plate_states, contact_margins and integrated_periodic_motion, fuzzed "
              "above)" for name in ("mode_amplitude", "steady_plate_response")},
+    "tolerance_scales": "the integrators' tolerance scales of a disk and drive already "
+                        "checked (by simulate_planar and integrated_periodic_motion, fuzzed "
+                        "above)",
     "integrator_budget_maxima": "takes no argument",
     **{name: "a validator, run by every call above" for name in (
         "check_commands", "check_disk", "check_drive", "check_integrator_settings",
-        "check_samples")},
+        "check_samples", "check_slaving")},
 }
 
 
@@ -307,9 +311,10 @@ def test_every_public_function_is_fuzzed_or_says_why_not():
     from study.scenes import planner
     from study.solvers import integrator as transient
     from study.solvers import planar as planar_solver
+    from study.solvers import planar_periodic
 
-    modules = [study, disk_model, planar, planar_solver, planner, transient, fit, design,
-               selection, export_module]
+    modules = [study, disk_model, planar, planar_solver, planar_periodic, planner, transient,
+               fit, design, selection, export_module]
     public = {name for module in modules for name in module.__all__
               if inspect.isfunction(getattr(module, name))}
     covered = {name.split()[0] for name in CALLS}

@@ -249,7 +249,7 @@ def test_computing_modules_do_not_depend_on_storage_display_or_running():
     for name in ("study.engine.sweep", "study.engine.observables", "study.scenes.scene_kind",
                  "study.engine.study_spec", "study.engine.spec_files", "study.solvers.exact",
                  "study.solvers.integrator", "study.solvers.planar",
-                 "study.scenes.planar_model"):
+                 "study.solvers.planar_periodic", "study.scenes.planar_model"):
         reached, todo = set(), [name]
         while todo:
             for nxt in edges[todo.pop()]:
