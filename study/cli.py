@@ -368,7 +368,8 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def _fit(args: argparse.Namespace) -> int:
-    from study.analyses.fit import FIT_KIND, PARAMETERS
+    from study.analyses.fit import FIT_KIND
+    from study.analyses.fit_spec import PARAMETERS
     from study.engine.outputs import check_output
     from study.engine.runner import run_kind
 

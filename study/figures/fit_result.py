@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from study.analyses.fit import PARAMETERS, fitted_structure, structure_groups
+from study.analyses.fit_model import fitted_structure, structure_groups
+from study.analyses.fit_spec import PARAMETERS
 from study.figures import FigureError
 from study.figures.common import plt, restore_dim, save, selection_text, structure_text
 from study.model import thresholds

@@ -300,7 +300,7 @@ def test_none_for_the_main_argument_names_it(call) -> None:
         call()
 
 
-@pytest.mark.parametrize("parse", ["study.analyses.fit.parse_fit_spec",
+@pytest.mark.parametrize("parse", ["study.analyses.fit_spec.parse_fit_spec",
                                    "study.analyses.design.parse_design_spec"])
 def test_a_spec_text_that_is_not_text_is_refused(parse) -> None:
     import importlib

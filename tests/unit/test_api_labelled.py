@@ -155,7 +155,7 @@ def test_scalar_results_are_the_array_results() -> None:
 
 def test_one_coupling_default_everywhere() -> None:
     from study.analyses.design import DesignSpec
-    from study.analyses.fit import FitSpec
+    from study.analyses.fit_spec import FitSpec
     from study.engine.observables import Method
     from study.engine.study_spec import StudySpec
     from study.model.disk import Disk

@@ -12,7 +12,10 @@ import pytest
 import xarray as xr
 
 from study import Structure
-from study.analyses.fit import fit, fit_dataset, model_values, parse_fit_spec
+from study.analyses.fit import fit_dataset
+from study.analyses.fit_model import model_values
+from study.analyses.fit_search import fit
+from study.analyses.fit_spec import parse_fit_spec
 from study.analyses.measurements import SpecError
 from study.cli import main
 from study.engine.validation import ResultError, open_result, validate_file
@@ -56,7 +59,7 @@ def test_threshold_derivatives_are_the_closed_form_differentiated(tmp_path: Path
                      for d in ("forward", "backward", "unknown")))
     spec = make_spec(tmp_path, csv, "f0 = [10, 20], Q = [5, 50], alpha = [30, 80], "
                      "M = [0.01, 0.5], cs = [0.1, 1.0]")
-    from study.analyses.fit import _Problem
+    from study.analyses.fit_search import _Problem
 
     problem = _Problem(spec.start, spec.free, spec.measurements, spec.coupling)
     x = problem.start()

@@ -141,7 +141,8 @@ def test_frontier_work_counts_every_solve_of_the_bisection() -> None:
 def test_a_fit_says_each_phase() -> None:
     from pathlib import Path
 
-    from study.analyses.fit import fit, load_fit_spec
+    from study.analyses.fit_search import fit
+    from study.analyses.fit_spec import load_fit_spec
 
     spec = load_fit_spec(Path(__file__).resolve().parents[1] / "golden" / "specs" / "fit.toml")
     lines: list[str] = []

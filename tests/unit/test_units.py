@@ -60,7 +60,7 @@ def test_dimensionless_is_spoken_as_nothing():
 
 def _declared() -> dict[str, str]:
     """Every unit a result kind's declarations give: where -> units."""
-    from study.analyses import design, fit, measurements
+    from study.analyses import design, fit_spec, measurements
     from study.engine import study_spec as spec
     from study.engine import variables
     from study.solvers import planar
@@ -68,7 +68,7 @@ def _declared() -> dict[str, str]:
     found: dict[str, str] = {}
     found.update({f"study variable {n}": v.units for n, v in variables.VARIABLES.items()})
     found.update({f"study axis {n}": u for n, (u, _) in spec.SWEEPABLE.items()})
-    found.update({f"fit parameter {n}": p.units for n, p in fit.PARAMETERS.items()})
+    found.update({f"fit parameter {n}": p.units for n, p in fit_spec.PARAMETERS.items()})
     found.update({f"design plate parameter {n}": p.units
                   for n, p in design.PLATE_PARAMETERS.items()})
     found.update({f"design parameter {n}": p.units
@@ -150,7 +150,7 @@ def unit_findings(source: str, namespace: dict[str, Any], where: str) -> list[st
 
 def test_the_source_check_finds_a_wrong_spelling():
     """The scan below is not void: old spellings in each position it reads are found."""
-    from study.analyses.fit import Parameter
+    from study.analyses.fit_spec import Parameter
 
     source = '''
 ALPHA = "deg"
@@ -229,7 +229,9 @@ def test_a_study_file_holds_the_one_spelling(tmp_path: Path):
 
 
 def _fit_file(tmp_path: Path) -> Path:
-    from study.analyses.fit import fit, fit_dataset, parse_fit_spec
+    from study.analyses.fit import fit_dataset
+    from study.analyses.fit_search import fit
+    from study.analyses.fit_spec import parse_fit_spec
     from study.engine.store import write_atomic
     from study.model import thresholds
     from study.model.structure import Structure
