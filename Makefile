@@ -124,7 +124,7 @@ schemas: | $(STAMP)
 	open('study/schemas/study-measurements-v1.schema.json', 'w').write(text)"
 	$(PY) -c "from study.analyses.fit_spec import export_fit_spec_schema as e; text = e(); \
 	open('study/schemas/study-fit-spec-v1.schema.json', 'w').write(text)"
-	$(PY) -c "from study.analyses.design import export_design_spec_schema as e; text = e(); \
+	$(PY) -c "from study.analyses.design_spec import export_design_spec_schema as e; text = e(); \
 	open('study/schemas/study-design-spec-v1.schema.json', 'w').write(text)"
 	$(PY) -c "from study.engine.validation.header import export_result_schema as e; text = e(); \
 	open('study/schemas/study-result-v1.schema.json', 'w').write(text)"

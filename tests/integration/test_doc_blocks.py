@@ -11,7 +11,7 @@ The pages are README.md and every docs/**/*.md page (MyST markdown). In each pag
   ``[design]`` table) is read by the project's parser of that kind
   (:func:`study.engine.study_spec.parse_spec`, :func:`study.scenes.scene_spec.parse_scene`,
   :func:`study.analyses.fit_spec.parse_fit_spec`,
-  :func:`study.analyses.design.parse_design_spec`) and must be
+  :func:`study.analyses.design_spec.parse_design_spec`) and must be
   valid. A fit spec names measurement files, which a page does not ship: each is
   stood in for by a one-row valid file, so that the spec itself is checked in full.
   TOML blocks without such a table (fragments, ``pyproject.toml``) are not specs.
@@ -117,7 +117,7 @@ def check_spec(code: str, where: str, folder: Path) -> None:
     """Parse a spec block with the project's parser of its kind (raises if invalid)."""
     import tomllib
 
-    from study.analyses.design import parse_design_spec
+    from study.analyses.design_spec import parse_design_spec
     from study.analyses.fit_spec import parse_fit_spec
     from study.engine.study_spec import parse_spec
     from study.scenes.scene_spec import parse_scene

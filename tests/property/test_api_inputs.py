@@ -29,7 +29,8 @@ from hypothesis import strategies as st
 import study
 from study.analyses import export as export_module
 from study.analyses import fit, fit_model, fit_search, fit_spec, selection
-from study.analyses.design import disk_limits, load_design_spec, parse_design_spec
+from study.analyses.design_margins import disk_limits
+from study.analyses.design_spec import load_design_spec, parse_design_spec
 from study.model import disk as disk_model
 from study.model.structure import tilt_warnings
 from study.scenes import planar_model as planar
@@ -304,7 +305,7 @@ NOT_FUZZED = {
 def test_every_public_function_is_fuzzed_or_says_why_not():
     import inspect
 
-    from study.analyses import design, selection
+    from study.analyses import design, design_margins, design_search, design_spec, selection
     from study.analyses import export as export_module
     from study.model import disk as disk_model
     from study.scenes import planar_model as planar
@@ -314,7 +315,8 @@ def test_every_public_function_is_fuzzed_or_says_why_not():
     from study.solvers import planar_periodic
 
     modules = [study, disk_model, planar, planar_solver, planar_periodic, planner, transient,
-               fit, fit_spec, fit_model, fit_search, design, selection, export_module]
+               fit, fit_spec, fit_model, fit_search, design, design_spec, design_margins,
+               design_search, selection, export_module]
     public = {name for module in modules for name in module.__all__
               if inspect.isfunction(getattr(module, name))}
     covered = {name.split()[0] for name in CALLS}

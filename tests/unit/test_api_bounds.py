@@ -214,7 +214,7 @@ def _disk():
 def test_a_disk_drive_outside_the_finite_physics_names_f(f) -> None:
     """periodic_motion(f=1e-300) ended in a ZeroDivisionError, f=1e300 in an
     OverflowError; contact_margins and disk_limits in an OverflowError."""
-    from study.analyses.design import disk_limits
+    from study.analyses.design_margins import disk_limits
     from study.scenes.planar_model import contact_margins, periodic_motion
 
     for call in (lambda: periodic_motion(_disk(), f, 7.0, max_periods=2),
@@ -301,7 +301,7 @@ def test_none_for_the_main_argument_names_it(call) -> None:
 
 
 @pytest.mark.parametrize("parse", ["study.analyses.fit_spec.parse_fit_spec",
-                                   "study.analyses.design.parse_design_spec"])
+                                   "study.analyses.design_spec.parse_design_spec"])
 def test_a_spec_text_that_is_not_text_is_refused(parse) -> None:
     import importlib
 

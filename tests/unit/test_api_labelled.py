@@ -154,7 +154,7 @@ def test_scalar_results_are_the_array_results() -> None:
 
 
 def test_one_coupling_default_everywhere() -> None:
-    from study.analyses.design import DesignSpec
+    from study.analyses.design_spec import DesignSpec
     from study.analyses.fit_spec import FitSpec
     from study.engine.observables import Method
     from study.engine.study_spec import StudySpec

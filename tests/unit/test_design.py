@@ -11,17 +11,11 @@ import pytest
 import xarray as xr
 from numpy.testing import assert_allclose
 
-import study.analyses.design as design_module
-from study.analyses.design import (
-    DESIGN_RESULT_SCHEMA,
-    MIN_MARGIN,
-    design,
-    design_dataset,
-    disk_limits,
-    evaluate,
-    load_design_spec,
-    parse_design_spec,
-)
+import study.analyses.design_search as search_module
+from study.analyses.design import DESIGN_RESULT_SCHEMA, design_dataset
+from study.analyses.design_margins import MIN_MARGIN, disk_limits, evaluate
+from study.analyses.design_search import design
+from study.analyses.design_spec import load_design_spec, parse_design_spec
 from study.cli import main
 from study.engine.spec_files import SpecError
 from study.engine.store import write_atomic
@@ -148,13 +142,13 @@ def test_targets_that_conflict_are_reported_as_such():
 def test_every_trial_point_is_inside_the_bounds_and_valid(monkeypatch):
     """cs and ck both free (the search runs on ck/cs), M and alpha free too."""
     seen = []
-    original = design_module.evaluate
+    original = search_module.evaluate
 
     def spy(spec, params, which=None):
         seen.append(dict(params))
         return original(spec, params, which)
 
-    monkeypatch.setattr(design_module, "evaluate", spy)
+    monkeypatch.setattr(search_module, "evaluate", spy)
     spec = _plate_spec("cs = [0.15, 0.4]\nck = [0.1, 0.3]\nM = [0.04, 0.12]\n"
                        "alpha = [40.0, 75.0]",
                        _target(13.0, 8.0, "forward") + _target(16.5, 8.5, "backward"),

@@ -14,7 +14,8 @@ import xarray as xr
 from numpy.testing import assert_allclose
 
 import study
-from study.analyses.design import DESIGN_KIND, DesignSpec
+from study.analyses.design import DESIGN_KIND
+from study.analyses.design_spec import DesignSpec
 from study.analyses.fit import FIT_KIND, fit_dataset
 from study.analyses.fit_search import fit
 from study.analyses.fit_spec import FitSpec
@@ -64,7 +65,7 @@ def test_the_four_kinds_register_from_their_own_modules():
     assert list(RESULT_KINDS) == ["study", "scene", "fit", "design"]
     where = {name: kind.spec_type.__module__ for name, kind in RESULT_KINDS.items()}
     assert where == {"study": "study.engine.study_types", "scene": "study.scenes.scene_spec",
-                     "fit": "study.analyses.fit_spec", "design": "study.analyses.design"}
+                     "fit": "study.analyses.fit_spec", "design": "study.analyses.design_spec"}
     assert [STUDY_KIND, SCENE_KIND, FIT_KIND, DESIGN_KIND] == list(RESULT_KINDS.values())
     assert (STUDY_KIND.spec_type, SCENE_KIND.spec_type) == (StudySpec, SceneSpec)
     assert (FIT_KIND.spec_type, DESIGN_KIND.spec_type) == (FitSpec, DesignSpec)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import study
-from study.analyses import design, fit_spec
+from study.analyses import design_spec, fit_spec
 from study.engine import study_schema, study_types
 from study.model import paper
 from study.model.drive import as_acceleration, as_frequency
@@ -81,8 +81,8 @@ def test_fit_and_design_bounds_are_the_table_ranges(name: str) -> None:
     for value in _probes(p.lower, p.upper):
         assert fit_spec.PARAMETERS[name].inside(value) == jsonschema.Draft202012Validator(
             schema_definition(name)).is_valid(value)
-    if name in design.STRUCTURE_PARAMETERS:
-        assert design.STRUCTURE_PARAMETERS[name] is p
+    if name in design_spec.STRUCTURE_PARAMETERS:
+        assert design_spec.STRUCTURE_PARAMETERS[name] is p
 
 
 def test_ck_may_not_exceed_cs() -> None:
@@ -110,7 +110,7 @@ def test_the_spec_layer_reads_units_and_long_names_from_the_table(name, group) -
 @pytest.mark.parametrize(("schema", "export"), [
     ("study-spec-v1", study_schema.export_spec_schema),
     ("study-fit-spec-v1", fit_spec.export_fit_spec_schema),
-    ("study-design-spec-v1", design.export_design_spec_schema),
+    ("study-design-spec-v1", design_spec.export_design_spec_schema),
 ])
 def test_the_committed_schema_is_the_generated_one(schema, export) -> None:
     on_disk = (SCHEMAS / f"{schema}.schema.json").read_text(encoding="utf-8")
@@ -119,7 +119,7 @@ def test_the_committed_schema_is_the_generated_one(schema, export) -> None:
 
 def test_the_fit_and_design_schemas_hold_structures_to_the_table() -> None:
     schemas = [fit_spec.fit_spec_schema()["properties"]["structure"]["properties"],
-               design.design_spec_schema()["properties"]["structure"]["properties"]]
+               design_spec.design_spec_schema()["properties"]["structure"]["properties"]]
     for properties in schemas:
         for name in STRUCTURE:
             assert properties[name] == schema_definition(name)

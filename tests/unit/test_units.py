@@ -60,7 +60,7 @@ def test_dimensionless_is_spoken_as_nothing():
 
 def _declared() -> dict[str, str]:
     """Every unit a result kind's declarations give: where -> units."""
-    from study.analyses import design, fit_spec, measurements
+    from study.analyses import design_spec, fit_spec, measurements
     from study.engine import study_spec as spec
     from study.engine import variables
     from study.solvers import planar
@@ -70,9 +70,9 @@ def _declared() -> dict[str, str]:
     found.update({f"study axis {n}": u for n, (u, _) in spec.SWEEPABLE.items()})
     found.update({f"fit parameter {n}": p.units for n, p in fit_spec.PARAMETERS.items()})
     found.update({f"design plate parameter {n}": p.units
-                  for n, p in design.PLATE_PARAMETERS.items()})
+                  for n, p in design_spec.PLATE_PARAMETERS.items()})
     found.update({f"design parameter {n}": p.units
-                  for n, p in design.STRUCTURE_PARAMETERS.items()})
+                  for n, p in design_spec.STRUCTURE_PARAMETERS.items()})
     found.update({f"measured {n}": q.units for n, q in measurements.QUANTITIES.items()})
     found.update({f"measurement column {c.name}": c.units
                   for c in measurements.COLUMNS.values() if c.units not in NOT_UNITS})
