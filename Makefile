@@ -111,14 +111,14 @@ $(STAMP): pyproject.toml
 
 # The package reads study/schemas/ (package data, shipped in the wheel); results_schema/
 # keeps an identical copy at the top of the repo (a test checks they agree).
-# The spec schema's observables are exported from study/engine/observables.py, the
+# The spec schema's observables are exported from study/studies/observables.py, the
 # parameters of the study, fit and design spec schemas from study/model/parameters.py, the
 # starts (spec and result schemas) from study/model/starts.py; results_schema/
 # is the repository's copy of the package's schemas (a test checks both). The tables
 # of docs/user-guide/specs.md (parameters, observables, contact laws, starts) are written into
 # the page from the same declarations (docs/generate_tables.py; a test checks them).
 schemas: | $(STAMP)
-	$(PY) -c "from study.engine.study_schema import export_spec_schema as e; text = e(); \
+	$(PY) -c "from study.studies.schema import export_spec_schema as e; text = e(); \
 	open('study/schemas/study-spec-v1.schema.json', 'w').write(text)"
 	$(PY) -c "from study.analyses.measurements import export_measurement_schema as e; text = e(); \
 	open('study/schemas/study-measurements-v1.schema.json', 'w').write(text)"

@@ -98,7 +98,6 @@ from floor_one_way import F_RANGE as PAPER_F  # noqa: E402
 
 import study  # noqa: E402
 from study.engine.provenance import git_state, utc_now  # noqa: E402
-from study.engine.study_spec import load_spec  # noqa: E402
 from study.kernels.start import RELEASE  # noqa: E402
 from study.kernels.structure_vector import LIFT_OFF_LAW  # noqa: E402
 from study.kernels.two_way import continuation  # noqa: E402
@@ -109,6 +108,7 @@ from study.kernels.two_way.points import start_state  # noqa: E402
 from study.solvers.exact import steady_velocity  # noqa: E402
 from study.solvers.settings import DEFAULT_SETTINGS, SolverSettings, kernel_budget  # noqa: E402
 from study.solvers.structure_constants import structure_vector  # noqa: E402
+from study.studies.spec import load_spec  # noqa: E402
 
 #: The two-way solver's settings with each orbit continued along the sweep.
 CONTINUED = SolverSettings(continuation=True)

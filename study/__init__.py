@@ -15,7 +15,6 @@ from importlib import import_module as _import_module
 from study.analyses.branches import bifurcation_curve, branch, doubled_branch
 from study.analyses.frontier import frontier
 from study.analyses.thresholds import minimum_threshold
-from study.engine.maps import compute_map
 from study.engine.spec_files import SpecError
 from study.model import (
     force_amplitudes,
@@ -33,6 +32,7 @@ from study.model.structure import Structure
 from study.solvers.exact import steady_state, steady_velocity
 from study.solvers.settings import SolverSettings
 from study.solvers.steady import SteadyState
+from study.studies.maps import compute_map
 from study.version import VERSION as __version__
 
 # The result kinds register themselves (study.engine.kinds) when their modules are
@@ -40,7 +40,7 @@ from study.version import VERSION as __version__
 # them up there and imports no scene or analysis module. Through an alias the code
 # fingerprint does not follow, on purpose: registering one kind changes no other kind's
 # numbers, so each kind's code hash stays its own modules' (study.engine.fingerprint).
-_import_module("study.engine.study_kind")
+_import_module("study.studies.kind")
 _import_module("study.scenes.scene_kind")
 _import_module("study.analyses.fit")
 _import_module("study.analyses.design")

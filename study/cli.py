@@ -432,7 +432,7 @@ def _design(args: argparse.Namespace) -> int:
 
 def _list(args: argparse.Namespace) -> int:
     from study.engine.runner import is_up_to_date, load_any
-    from study.engine.study_spec import SpecError
+    from study.studies.spec import SpecError
 
     specs = sorted(Path(args.workflows).glob("*.toml"))
     if not specs:
@@ -671,9 +671,9 @@ def main(argv: list[str] | None = None) -> int:
     from study.engine.executors import ClusterError
     from study.engine.outputs import OutputError
     from study.engine.store import StoreBusy, StoreError
-    from study.engine.study_spec import SpecError
     from study.engine.validation import ResultError
     from study.figures import FigureError
+    from study.studies.spec import SpecError
 
     parser = _parser()
     argv = sys.argv[1:] if argv is None else list(argv)

@@ -31,8 +31,8 @@ from study.analyses.design_spec import (
     load_design_spec,
     parse_design_spec,
 )
+from study.engine.contact_attributes import contact_law_attributes
 from study.engine.kinds import ResultFormat, ResultKind, register
-from study.engine.layout import contact_law_attributes
 from study.model.status import Status
 from study.model.units import (
     DEGREE_PER_SECOND,

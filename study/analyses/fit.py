@@ -30,8 +30,8 @@ from study.analyses.fit_spec import (
     load_fit_spec,
     parse_fit_spec,
 )
+from study.engine.contact_attributes import contact_law_attributes
 from study.engine.kinds import ResultFormat, ResultKind, register
-from study.engine.layout import contact_law_attributes
 from study.model.units import DIMENSIONLESS
 
 __all__ = [

@@ -12,7 +12,6 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
-from study.engine.variables import VARIABLES
 from study.model import as_acceleration
 from study.model.contact import DEFAULT_COUPLING
 from study.model.inputs import bounded_integer
@@ -28,6 +27,7 @@ from study.solvers.frontier import (
 )
 from study.solvers.settings import SolverSettings, check_coupling, check_settings
 from study.solvers.steady import SteadyState
+from study.studies.variables import VARIABLES
 
 __all__ = ["frontier", "frontier_dataset"]
 

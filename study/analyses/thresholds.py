@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from study.engine.variables import VARIABLES
 from study.model import thresholds
 from study.model.contact import DEFAULT_COUPLING
 from study.model.structure import Structure, check_structure
 from study.model.units import HERTZ, METRE_PER_SECOND_SQUARED
 from study.solvers.frontier import check_f_range, check_tolerance
 from study.solvers.settings import check_coupling
+from study.studies.variables import VARIABLES
 
 __all__ = ["collapse_variable", "lowest_threshold", "minimum_threshold",
            "resonance_threshold"]

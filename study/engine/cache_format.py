@@ -72,7 +72,7 @@ _META = "meta.json"
 #: How arrays are stored in blocks and axis files (recorded in each block).
 _ENCODING = "shuffle-deflate-rle"
 #: Largest file read as a block or axis file [bytes]: a task holds at most
-#: ``study.engine.study_size.MAX_CHUNK_BYTES`` (256 MiB) of values, deflate adds a few bytes per
+#: ``study.studies.size.MAX_CHUNK_BYTES`` (256 MiB) of values, deflate adds a few bytes per
 #: 16 KiB and the zip its headers. A larger file is not a block (a sparse file...).
 MAX_BLOCK_BYTES = 2**30
 #: Largest ``entry.json`` read [bytes] (an entry's content is under 1 KiB).

@@ -185,7 +185,7 @@ def import_closure(entry_modules: tuple[str, ...], root: Path | None = None) -> 
     Parameters
     ----------
     entry_modules : tuple of str
-        Dotted names of ``study.*`` modules, e.g. ``("study.engine.sweep",)``.
+        Dotted names of ``study.*`` modules, e.g. ``("study.studies.sweep",)``.
     root : Path, optional
         The ``study`` package folder to read; default: the one that is running.
 

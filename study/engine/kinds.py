@@ -9,7 +9,7 @@ whose import closure computes it (the code fingerprint). The modules that regist
 are imported by ``import study`` (``study/__init__.py``):
 
 ==========  ====================================
-study       :mod:`study.engine.study_kind`
+study       :mod:`study.studies.kind`
 scene       :mod:`study.scenes.scene_kind`
 fit         :mod:`study.analyses.fit`
 design      :mod:`study.analyses.design`

@@ -47,7 +47,7 @@ def kind_code_sha256(kind: str) -> str:
 def code_sha256() -> str:
     """Hash of the code behind parameter-study results (see :mod:`study.engine.fingerprint`).
 
-    It covers every module that ``study.engine.sweep`` and ``study.solvers.frontier`` import, found
+    It covers every module that ``study.studies.sweep`` and ``study.solvers.frontier`` import, found
     from the import graph, so the solver and integrator versions are in it too.
     """
     return kind_code_sha256("study")

@@ -5,7 +5,7 @@ A run of any kind (:mod:`study.engine.kinds`) goes down one path: read the spec
 (same spec numbers and code: nothing is computed; only the spec's text changed: the
 metadata is rewritten), take the output's lock, compute (the kind's computation and
 dataset builder, or its own streaming writer: a study writes chunk by chunk, see
-:mod:`study.engine.study_kind`), add the provenance and write the file atomically
+:mod:`study.studies.kind`), add the provenance and write the file atomically
 through :mod:`study.engine.store` (sealed with its content checksum and validated
 before it replaces the output). The runner never branches on a kind: it calls the
 kind's hooks.
@@ -451,11 +451,11 @@ def run_study(
 
     The public entry of a study run (thirteen documented keywords, the options of
     ``study run``): it reads the spec and hands it down to :func:`run_kind`, the
-    options travelling on as the job's (:func:`study.engine.study_kind.stream_study`).
+    options travelling on as the job's (:func:`study.studies.kind.stream_study`).
 
     Parameters
     ----------
-    spec : study.engine.study_types.StudySpec or path
+    spec : study.studies.spec_types.StudySpec or path
         The study (a spec file is read and validated first).
     output : path, optional
         Result file; default ``results/<spec file stem>.nc``.
@@ -477,7 +477,7 @@ def run_study(
         Called with the chunk number each time a computed chunk is written.
     cache : path, optional
         Folder of kept values (default
-        :func:`study.engine.study_kind.default_cache`).
+        :func:`study.studies.kind.default_cache`).
     on_start : callable, optional
         Called with the :class:`study.engine.executors.Executor` once it is ready, before any
         chunk is computed (to show where the run goes, e.g. the dashboard).

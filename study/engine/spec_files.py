@@ -10,7 +10,7 @@ and what is allowed, before anything is computed:
    no infinite or NaN numbers (TOML allows ``inf`` and ``nan``; no spec key does).
 3. :func:`check_schema`: the kind's JSON schema (package data in ``study/schemas/``),
    every violation explained as ``'FILE: [table] key: problem; allowed: ...'``.
-4. The kind's own cross-field checks (:mod:`study.engine.study_spec`,
+4. The kind's own cross-field checks (:mod:`study.studies.spec`,
    :mod:`study.scenes.scene_spec`), with
    :func:`axis_values` for the axis grammar both share.
 
@@ -443,7 +443,7 @@ def schema_problems(raw: Mapping[str, Any], schema: Mapping[str, Any]
     :func:`check_schema` and the location it leaves unknown (the value's own path; the
     whole table for an unknown or missing key, which may be any of its keys misspelt).
     A spec's other checks run on what no violation taints
-    (:func:`study.engine.study_spec.parse_spec`)."""
+    (:func:`study.studies.spec.parse_spec`)."""
     validator = _validator_class()(schema)
     errors = sorted(validator.iter_errors(raw), key=lambda e: list(map(str, e.absolute_path)))
     return [(_explain(error), tuple(error.absolute_path)) for error in errors]

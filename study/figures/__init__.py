@@ -154,8 +154,8 @@ _OPTION_FLAGS = {"points": "--point", "measurements": "--measurements"}
 def _missing_message(name: str, dataset: xr.Dataset, missing: Sequence[str]) -> str:
     """Why figure ``name`` cannot be drawn from ``dataset``, and the observables to add
     to the study's spec (from the registry's declared variables) when a spec can."""
-    from study.engine.observables import OBSERVABLES
     from study.engine.validation import RESULT_SCHEMA
+    from study.studies.observables import OBSERVABLES
 
     figure = FIGURES[name]
     message = (f"figure {name!r} needs {', '.join(missing)}, which this file does not hold "

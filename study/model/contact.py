@@ -122,7 +122,7 @@ class ContactLaw:
     structure_parameters : tuple of str
         Parameters of the structure (:data:`study.model.parameters.STRUCTURE`) that only
         this law reads (the restitution of the lift-off law ``flight``): a result
-        records them with the law (:func:`study.engine.layout.method_attributes`).
+        records them with the law (:func:`study.studies.layout.method_attributes`).
     """
 
     kind: str

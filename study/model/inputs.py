@@ -74,7 +74,7 @@ def tilt_looks_like_radians(alpha: float) -> bool:
 def radian_tilt_note(alpha: float) -> str:
     """Why a tilt ``alpha`` [degree] that :func:`tilt_looks_like_radians` is suspect, and
     the value in degree it would be if it were radians: the one text of the warning of
-    :class:`study.Structure` and of a spec's tilt (:mod:`study.engine.study_spec`)."""
+    :class:`study.Structure` and of a spec's tilt (:mod:`study.studies.spec`)."""
     return (f"{radian_like_range()} looks like an angle in radians; alpha is in degree "
             f"(for {alpha!r} rad give alpha = {math.degrees(alpha):.6g})")
 
@@ -116,7 +116,7 @@ def drop_height_note(height: float, f_min: float, g: float) -> str | None:
     """Why a drop from ``height`` [m] onto a table driven from ``f_min`` [Hz] up looks
     like a height in millimetres (above :data:`SUSPECT_DROP_HEIGHT` or
     :data:`SUSPECT_DROP_HOPS` natural hop scales at ``f_min``), or None: the text of a
-    spec's warning (:mod:`study.engine.study_spec`)."""
+    spec's warning (:mod:`study.studies.spec`)."""
     hop = natural_hop(f_min, g)
     if height <= SUSPECT_DROP_HEIGHT and height <= SUSPECT_DROP_HOPS * hop:
         return None

@@ -7,7 +7,7 @@ digits the paper states it with. Everything else derives from this table:
 - :class:`study.Structure` (its checks, defaults, units and messages);
 - the parameter definitions of the study, fit and design spec schemas
   (:func:`schema_definition`; ``make schemas`` writes the files, a test checks them);
-- the parameter lists of the spec layer (:mod:`study.engine.study_spec`), of fits and
+- the parameter lists of the spec layer (:mod:`study.studies.spec`), of fits and
   of designs (:mod:`study.analyses.fit`, :mod:`study.analyses.design`);
 - the paper's structure and the tolerance of :func:`study.model.paper.is_paper_structure`
   (half a unit of the last stated digit, :attr:`Parameter.paper_tolerance`);

@@ -2,7 +2,7 @@
 
 Declared here, below every stage, so that the kernels that average
 (:mod:`study.kernels.time_average`), the result variables that state the confidence
-interval (:mod:`study.engine.variables`) and the figures that draw it read one value.
+interval (:mod:`study.studies.variables`) and the figures that draw it read one value.
 """
 
 __all__ = ["Z_95"]

@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from study.engine.contact_attributes import contact_law_attributes
 from study.engine.kinds import ResultFormat, ResultKind, register
-from study.engine.layout import contact_law_attributes
 from study.model.disk import Disk
 from study.model.units import DEGREE, DIMENSIONLESS, HERTZ
 from study.scenes.scene_run import Report, scene_compute, scene_var, scene_work
@@ -90,7 +90,7 @@ def scene_dataset(spec: SceneSpec, report: Report | None = None) -> xr.Dataset:
 
 def disk_method_attributes(disk: Disk) -> dict[str, str | float]:
     """The global attributes naming the contact laws of a scene's disk
-    (:func:`study.engine.layout.contact_law_attributes`, as every result's).
+    (:func:`study.engine.contact_attributes.contact_law_attributes`, as every result's).
 
     ``study_coupling`` is the disk's coupling of the plates' modes (one-way or two-way,
     its ``[disk] coupling``); ``study_friction_law`` is ``coulomb``, the only friction

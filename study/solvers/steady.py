@@ -194,7 +194,7 @@ def declared_units(fields: dict[str, tuple[str, Any]],
 
 #: The units of each :class:`SteadyState` field, read from its kernel column's
 #: declaration: the result variables that hold a field take theirs from here
-#: (:func:`study.engine.variables.solver_output`).
+#: (:func:`study.studies.variables.solver_output`).
 FIELD_UNITS = declared_units(STEADY_FIELDS, (one_way_kernel.OUTPUT_COLUMNS,
                                              orbit_kernel.OUTPUT_COLUMNS))
 #: The numpy dtype name of each field as :func:`steady_fields` returns it.

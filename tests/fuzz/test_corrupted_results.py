@@ -38,7 +38,6 @@ import netCDF4
 import numpy as np
 import pytest
 
-from study.engine.study_spec import parse_spec
 from study.engine.validation import (
     ResultError,
     content_sha256,
@@ -49,6 +48,7 @@ from study.engine.validation import (
 )
 from study.figures import draw_figure
 from study.scenes.scene_spec import parse_scene
+from study.studies.spec import parse_spec
 from tests.support.reliability import record
 from tests.support.sealed_results import make_sealed_results, rewrite
 

@@ -348,7 +348,7 @@ start = "switch-on"
 
 
 def test_the_current_study_format_is_5_and_4_is_frozen_as_0_3_0_wrote_it():
-    from study.engine.variables import RESULT_FORMAT, STUDY_FORMATS
+    from study.studies.variables import RESULT_FORMAT, STUDY_FORMATS
 
     assert RESULT_FORMAT == 5
     assert [f.number for f in STUDY_FORMATS] == [1, 2, 3, 4, 5]
@@ -414,7 +414,7 @@ def test_a_format_5_file_written_today_validates_and_0_3_0_s_rules_are_not_its(t
     from study.engine.validation.formats import schema_path
     from study.engine.validation.header import file_header, schema_problems
     from study.engine.validation.reading import file_metadata, open_netcdf
-    from study.engine.variables import STUDY_FORMATS
+    from study.studies.variables import STUDY_FORMATS
 
     spec = tmp_path / "format-5.toml"
     spec.write_text(FORMAT_5_SPEC)

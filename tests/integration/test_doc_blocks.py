@@ -9,7 +9,7 @@ The pages are README.md and every docs/**/*.md page (MyST markdown). In each pag
   error, as a reader would see them.
 * Each ```toml block that is a spec (it has a ``[study]``, ``[scene]``, ``[fit]`` or
   ``[design]`` table) is read by the project's parser of that kind
-  (:func:`study.engine.study_spec.parse_spec`, :func:`study.scenes.scene_spec.parse_scene`,
+  (:func:`study.studies.spec.parse_spec`, :func:`study.scenes.scene_spec.parse_scene`,
   :func:`study.analyses.fit_spec.parse_fit_spec`,
   :func:`study.analyses.design_spec.parse_design_spec`) and must be
   valid. A fit spec names measurement files, which a page does not ship: each is
@@ -119,8 +119,8 @@ def check_spec(code: str, where: str, folder: Path) -> None:
 
     from study.analyses.design_spec import parse_design_spec
     from study.analyses.fit_spec import parse_fit_spec
-    from study.engine.study_spec import parse_spec
     from study.scenes.scene_spec import parse_scene
+    from study.studies.spec import parse_spec
 
     kind = spec_kind(code)
     if kind == "study":

@@ -124,11 +124,11 @@ duration = 0.5
 # Run inside the new venv: where study comes from, and what else is on the path.
 PROBE = """\
 import importlib.util, json, sys
-import numpy, study, study.engine.study_spec
+import numpy, study, study.studies.spec
 print(json.dumps({
     "study": study.__file__,
-    "spec_schema": str(study.engine.study_spec.SPEC_SCHEMA_PATH),
-    "spec_schema_exists": study.engine.study_spec.SPEC_SCHEMA_PATH.is_file(),
+    "spec_schema": str(study.studies.spec.SPEC_SCHEMA_PATH),
+    "spec_schema_exists": study.studies.spec.SPEC_SCHEMA_PATH.is_file(),
     "numpy": numpy.__file__,
     "editable_modules": sorted(m for m in sys.modules if "editable" in m),
     "editable_finders": [repr(f) for f in sys.meta_path if "editable" in repr(f).lower()],

@@ -11,10 +11,10 @@ import pytest
 from study.engine.runner import StudyInterrupted, run_study
 from study.engine.spec_files import SpecError
 from study.engine.store import open_result
-from study.engine.study_spec import load_spec
 from study.model.structure import Structure
 from study.solvers.protocol import slow_sweep
 from study.solvers.settings import SolverSettings
+from study.studies.spec import load_spec
 
 SPEC = """\
 [study]
@@ -214,7 +214,7 @@ def without_protocol(path: Path) -> Path:
 
 
 def test_unswept_is_the_same_study_without_its_protocol_bit_for_bit(tmp_path):
-    from study.engine.variables import VARIABLES
+    from study.studies.variables import VARIABLES
 
     a = (9.0, 10.0)
     spec = with_unswept(write(tmp_path, '{ along = "f", direction = "both" }', a=a))
@@ -318,7 +318,7 @@ def test_compute_map_refuses_a_protocol_as_a_spec_does(tmp_path, protocol, solve
     import tomllib
 
     from study import compute_map
-    from study.engine.maps import MAP_SPEC_SOURCE
+    from study.studies.maps import MAP_SPEC_SOURCE
 
     table = tomllib.loads(f"p = {protocol}")["p"]
     one_way = solver.get("coupling") == '"one-way"'
@@ -361,7 +361,7 @@ def test_the_equivalent_spec_keeps_the_averaging_settings(tmp_path):
     import xarray as xr
 
     from study import compute_map
-    from study.engine.study_spec import parse_spec
+    from study.studies.spec import parse_spec
 
     settings = SolverSettings(velocity_tolerance=2e-2, max_average_periods=300)
     f, a = np.array([5.5, 7.0, 8.5]), np.array([12.0])  # chaos of bifurcation-along-f

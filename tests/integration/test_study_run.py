@@ -19,7 +19,7 @@ from study.engine.cache import ResultCache
 from study.engine.provenance import code_sha256, fingerprint
 from study.engine.runner import StudyInterrupted, run_study
 from study.engine.store import open_result
-from study.engine.study_spec import load_spec
+from study.studies.spec import load_spec
 
 SPEC = """\
 # a small regime map
@@ -123,8 +123,8 @@ def test_thresholds_only_study_runs_no_solver(tmp_path, monkeypatch):
     def no_solver(*args, **kwargs):
         raise AssertionError("the solver ran for a thresholds-only study")
 
-    monkeypatch.setattr("study.engine.observables.steady_state", no_solver)
-    monkeypatch.setattr("study.engine.observables.integrated_steady_state", no_solver)
+    monkeypatch.setattr("study.studies.observables.steady_state", no_solver)
+    monkeypatch.setattr("study.studies.observables.integrated_steady_state", no_solver)
     spec_path = write_spec(tmp_path, observables='"thresholds"')
     run_study(spec_path, tmp_path / "t.nc", progress=False)
     ds = open_result(tmp_path / "t.nc")

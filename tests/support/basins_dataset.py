@@ -9,7 +9,7 @@ from __future__ import annotations
 import xarray as xr
 
 import study
-from study.engine.maps import compute_map
+from study.studies.maps import compute_map
 
 
 def computed(structure: study.Structure, f, a, *, starts: int = 8, flight: bool = False,

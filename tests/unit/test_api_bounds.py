@@ -14,7 +14,6 @@ import pytest
 
 import study
 from study.analyses.thresholds import lowest_threshold
-from study.engine.study_schema import spec_schema
 from study.model.inputs import InputTypeError
 from study.solvers.frontier import (
     MAX_SCAN_POINTS,
@@ -23,6 +22,7 @@ from study.solvers.frontier import (
     frontier_from_grid,
 )
 from study.solvers.settings import MAX_SOLVER_BUDGET
+from study.studies.schema import spec_schema
 
 S = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 
@@ -75,7 +75,7 @@ def test_frontier_from_grid_refuses_the_same() -> None:
 
 def test_a_spec_uses_the_same_rule() -> None:
     from study.engine.spec_files import SpecError
-    from study.engine.study_spec import parse_spec
+    from study.studies.spec import parse_spec
 
     text = ('[study]\nname = "x"\nobservables = ["frontier"]\n[structure]\n'
             "f0 = 14.44\nQ = 17.5\nalpha = 64.0\nM = 0.08\ncs = 0.25\n"

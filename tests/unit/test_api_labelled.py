@@ -156,11 +156,11 @@ def test_scalar_results_are_the_array_results() -> None:
 def test_one_coupling_default_everywhere() -> None:
     from study.analyses.design_spec import DesignSpec
     from study.analyses.fit_spec import FitSpec
-    from study.engine.observables import Method
-    from study.engine.study_spec import StudySpec
     from study.model.disk import Disk
     from study.solvers.attractors import attractors
     from study.solvers.integrator import integrated_steady_state, simulate
+    from study.studies.observables import Method
+    from study.studies.spec import StudySpec
 
     assert DEFAULT_COUPLING == "one-way"
     functions = (study.steady_state, study.steady_velocity, attractors, study.frontier,

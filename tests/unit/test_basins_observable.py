@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from study.engine.observables import OBSERVABLES, BasinSettings, markdown_table
 from study.engine.spec_files import SpecError
-from study.engine.study_spec import load_spec, parse_spec
-from study.engine.variables import VARIABLES
+from study.studies.observables import OBSERVABLES, BasinSettings, markdown_table
+from study.studies.spec import load_spec, parse_spec
+from study.studies.variables import VARIABLES
 
 REPO = Path(__file__).resolve().parents[2]
 PATH = "own/basins.toml"

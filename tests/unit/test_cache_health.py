@@ -24,7 +24,7 @@ from study.engine.cache import ResultCache
 from study.engine.cache_format import MAX_BLOCK_BYTES
 from study.engine.runner import run_study
 from study.engine.store import open_result
-from study.engine.study_size import MAX_CHUNK_BYTES
+from study.studies.size import MAX_CHUNK_BYTES
 from tests.unit.test_incremental import spec_text
 
 #: Seconds a case may take (a run of 45 points takes well under one).
@@ -221,7 +221,7 @@ def test_a_block_of_the_previous_release_is_still_read(finished):
 
 
 def test_the_block_size_limit_holds_any_block_a_spec_allows():
-    # A block holds at most one task's values (study.engine.study_size.MAX_CHUNK_BYTES), deflated
+    # A block holds at most one task's values (study.studies.size.MAX_CHUNK_BYTES), deflated
     # (at worst a little larger than the input) plus its zip headers.
     assert MAX_BLOCK_BYTES >= 2 * MAX_CHUNK_BYTES
 

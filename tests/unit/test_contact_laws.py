@@ -10,8 +10,6 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.integrate import quad
 
-from study.engine.observables import Method
-from study.engine.study_spec import SpecError, parse_spec
 from study.kernels import structure_vector as sv
 from study.model import codes
 from study.model.contact import LAWS, SOLVERS, Friction, check_friction, check_law
@@ -25,6 +23,8 @@ from study.solvers.integrator import (
     model_parameters,
     simulate,
 )
+from study.studies.observables import Method
+from study.studies.spec import SpecError, parse_spec
 
 PAPER = paper_structure()
 TIGHT = IntegratorSettings(tolerance=1e-11)

@@ -31,7 +31,7 @@ What is compared (:func:`assert_same_orbits`), point by point, continued against
   slip fractions within ``FRACTION_TOLERANCE`` (measured: 1.2e-12 and 6.7e-10).
 
 Every workflow with two-way coupling and the exact solver is read with the package's
-own parser (:func:`study.engine.study_spec.load_spec`), so these tests follow the
+own parser (:func:`study.studies.spec.load_spec`), so these tests follow the
 workflows: the fast tier solves every acceleration of a strided subset of frequency rows
 (each row a complete continuation run, as the engine solves it), the ``slow`` tier the
 whole grid. The flight workflows' grids are solved without flight (the contact path;
@@ -75,7 +75,6 @@ from numpy.testing import assert_allclose, assert_array_equal
 
 import study
 from study.engine.spec_files import detect_kind
-from study.engine.study_spec import load_spec
 from study.kernels.budget import Budget
 from study.kernels.start import RELEASE
 from study.kernels.two_way import continuation, modes, newton, orbit
@@ -89,6 +88,7 @@ from study.solvers.attractors import attractors
 from study.solvers.exact import steady_state
 from study.solvers.settings import DEFAULT_SETTINGS, SolverSettings, kernel_budget
 from study.solvers.structure_constants import structure_vector
+from study.studies.spec import load_spec
 from tests.support.tiers import headline
 
 #: The two-way solver with each orbit continued along the sweep.

@@ -180,7 +180,7 @@ def test_a_refusal_names_the_observables_to_add(tmp_path, capsys):
     """The README's example spec (thresholds, velocity) drawn as regime-map: the message
     names lift_off, the observable the registry says writes the missing variable, and
     the spec so extended holds everything the figure needs (the frontier is optional)."""
-    from study.engine.observables import variables_of
+    from study.studies.observables import variables_of
 
     spec = tmp_path / "own.toml"
     spec.write_text(README_SPEC.format(structure=STRUCTURE))

@@ -23,9 +23,9 @@ from matplotlib.collections import PolyCollection, QuadMesh
 from numpy.testing import assert_allclose, assert_array_equal
 
 import study
-from study.engine.maps import compute_map
 from study.figures import draw_figure
 from study.model.status import Status
+from study.studies.maps import compute_map
 
 #: The issue's structure (f0 = 18 Hz, Q = 25, alpha = 55 degree, M = 0.9, cs = 0.35).
 USER = study.Structure(f0=18.0, Q=25.0, alpha=55.0, M=0.9, cs=0.35)
@@ -239,9 +239,9 @@ def test_a_file_without_a_sweep_is_told_to_add_the_protocol(tmp_path, capsys):
     """The issue: 'needs jumped' said nothing of [sweep] protocol. The message names it,
     and a spec with the protocol writes what the figure needs."""
     from study.cli import main
-    from study.engine.observables import variables_of
     from study.engine.runner import run_study
     from study.figures import FIGURES
+    from study.studies.observables import variables_of
 
     spec = tmp_path / "map.toml"
     spec.write_text('[study]\nname = "no-sweep"\nobservables = ["velocity"]\n'

@@ -45,7 +45,7 @@ def _source(root: Path, module: str) -> Path:
 
 def test_study_closure_holds_every_computing_module():
     modules = code_fingerprint(RESULT_KIND_ENTRIES["study"]).modules
-    for name in ("study.engine.sweep", "study.solvers.frontier", "study.solvers.exact",
+    for name in ("study.studies.sweep", "study.solvers.frontier", "study.solvers.exact",
                  "study.kernels.one_way",
                  "study.model.forces", "study.model.structure", "study.solvers.integrator",
                  "study.kernels.integrator", "study.model.status", "study", "study.kernels",
@@ -146,7 +146,7 @@ def test_deterministic_and_order_free():
     assert first.sha256 == code_sha256() == result_code_sha256("study")
     assert result_code_sha256("scene") == scene_code_sha256()
     # Other entry tuples reaching the same modules hash the same modules.
-    for other in (entries[::-1], (*entries, "study.solvers.exact", "study.engine.sweep")):
+    for other in (entries[::-1], (*entries, "study.solvers.exact", "study.studies.sweep")):
         again = code_fingerprint(other, PACKAGE)
         assert again.modules == first.modules
         assert again.sha256 == first.sha256

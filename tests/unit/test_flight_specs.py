@@ -11,14 +11,14 @@ import numpy as np
 import pytest
 
 import study
-from study.engine.layout import data_variables, method_of, observables_by_grid
-from study.engine.maps import map_spec_text
-from study.engine.observables import OBSERVABLES, Method, variables_of
-from study.engine.study_spec import SPEC_SCHEMA_PATH, SpecError, load_spec, parse_spec
-from study.engine.variables import VARIABLES
 from study.model.contact import LAWS
 from study.model.status import Status
 from study.solvers.settings import SolverSettings
+from study.studies.layout import data_variables, method_of, observables_by_grid
+from study.studies.maps import map_spec_text
+from study.studies.observables import OBSERVABLES, Method, variables_of
+from study.studies.spec import SPEC_SCHEMA_PATH, SpecError, load_spec, parse_spec
+from study.studies.variables import VARIABLES
 
 REPO = Path(__file__).resolve().parents[2]
 FLIGHT_VARIABLES = ("airborne_fraction", "largest_hop", "impacts_per_period")
@@ -140,7 +140,7 @@ def test_flight_variables_declare_units_and_are_nan_where_the_status_is_invalid(
 
 
 def test_a_study_without_flight_writes_no_flight_variable_and_says_it_stops():
-    from study.engine.study_kind import _standard_attrs
+    from study.studies.kind import _standard_attrs
 
     spec = parse('coupling = "two-way"')
     _, points, _ = observables_by_grid(spec)

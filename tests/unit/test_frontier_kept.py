@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 import study
-from study.engine import observables
+from study.studies import observables
 
 SPEC = """
 [study]

@@ -118,7 +118,7 @@ def test_other_structure_solver_or_code_never_reuses(tmp_path, monkeypatch):
     text = spec_text() + "max_events = 5000\n"
     report, _ = run(tmp_path, text)
     assert report.points_reused == 0
-    monkeypatch.setattr("study.engine.study_kind.code_sha256", lambda: "0" * 64)
+    monkeypatch.setattr("study.studies.kind.code_sha256", lambda: "0" * 64)
     report, _ = run(tmp_path, spec_text(), force=True)
     assert report.points_reused == 0
 

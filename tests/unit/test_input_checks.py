@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import study
-from study.engine.study_spec import parse_spec
 from study.model.inputs import RADIAN_LIKE_TILT, InputTypeError, tilt_looks_like_radians
 from study.model.structure import tilt_warnings
+from study.studies.spec import parse_spec
 
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08, "cs": 0.25}
 STRUCTURE = study.Structure(**PAPER)

@@ -33,11 +33,11 @@ from study.engine.outputs import OutputError
 from study.engine.runner import StudyBusy, load_any, run
 from study.engine.spec_files import SpecError, detect_kind
 from study.engine.store import exclusive
-from study.engine.study_kind import STUDY_KIND
-from study.engine.study_spec import StudySpec
 from study.engine.validation import validate_file
 from study.scenes.scene_kind import SCENE_KIND
 from study.scenes.scene_spec import SceneSpec
+from study.studies.kind import STUDY_KIND
+from study.studies.spec import StudySpec
 
 PACKAGE = Path(study.__file__).parent
 ROOT = PACKAGE.parent
@@ -64,7 +64,7 @@ FIT_CSV = ("quantity,f,a,value,sigma\n"
 def test_the_four_kinds_register_from_their_own_modules():
     assert list(RESULT_KINDS) == ["study", "scene", "fit", "design"]
     where = {name: kind.spec_type.__module__ for name, kind in RESULT_KINDS.items()}
-    assert where == {"study": "study.engine.study_types", "scene": "study.scenes.scene_spec",
+    assert where == {"study": "study.studies.spec_types", "scene": "study.scenes.scene_spec",
                      "fit": "study.analyses.fit_spec", "design": "study.analyses.design_spec"}
     assert [STUDY_KIND, SCENE_KIND, FIT_KIND, DESIGN_KIND] == list(RESULT_KINDS.values())
     assert (STUDY_KIND.spec_type, SCENE_KIND.spec_type) == (StudySpec, SceneSpec)

@@ -1,6 +1,6 @@
 """The whole method in every result (issue 33, item 6): the solver, the coupling, the
 friction law with its parameters and the lift-off law with its restitution, written by
-one function (``study.engine.layout.method_attributes``) into the runner's files and
+one function (``study.studies.layout.method_attributes``) into the runner's files and
 ``study.compute_map``'s datasets, shown by ``study info`` and checked by validation."""
 
 from __future__ import annotations
@@ -15,11 +15,12 @@ import xarray as xr
 
 import study
 from study.cli import main
-from study.engine.layout import method_attributes, method_summary, protocol_attributes
-from study.engine.study_checks import method_problems
-from study.engine.study_spec import parse_spec
+from study.engine.contact_attributes import method_summary
 from study.engine.validation import ResultError, describe, read_attributes, validate_file
 from study.model.contact import LAWS
+from study.studies.checks import method_problems
+from study.studies.layout import method_attributes, protocol_attributes
+from study.studies.spec import parse_spec
 
 STRUCTURE = """\
 [structure]

@@ -1,6 +1,6 @@
 """Every kind of result records its method (issue 33): a fit's, a design's and a scene's
 contact laws (coupling, friction law, lift-off law) are global attributes written by one
-function (``study.engine.layout.contact_law_attributes``, which a study's
+function (``study.engine.contact_attributes.contact_law_attributes``, which a study's
 ``method_attributes`` uses too) and a ``method:`` line of ``study info``. The attributes
 are optional: files written before them still validate and describe themselves."""
 
@@ -13,9 +13,10 @@ import netCDF4
 import pytest
 
 import study
-from study.engine.layout import contact_law_attributes, method_attributes, method_summary
-from study.engine.study_spec import parse_spec
+from study.engine.contact_attributes import contact_law_attributes, method_summary
 from study.engine.validation import ResultError, describe, read_attributes, validate_file
+from study.studies.layout import method_attributes
+from study.studies.spec import parse_spec
 
 GOLDEN = Path(__file__).resolve().parents[1] / "golden"
 

@@ -1,5 +1,5 @@
 """What each observable needs of ``[solver]`` (method, coupling, flight), declared once
-with it (:class:`study.engine.observables.Observable`) and enforced from there: by the
+with it (:class:`study.studies.observables.Observable`) and enforced from there: by the
 spec reader (every problem at once, one line each) and by the observable itself for a
 direct caller. Spec parsing only: nothing is solved."""
 
@@ -10,11 +10,11 @@ import json
 
 import pytest
 
-from study.engine.observables import METHODS, OBSERVABLES, Method, Observable, unmet_needs
-from study.engine.observables import markdown_table as observables_table
-from study.engine.study_spec import SpecError, parse_spec
 from study.model.contact import COUPLINGS
 from study.model.contact import markdown_table as laws_table
+from study.studies.observables import METHODS, OBSERVABLES, Method, Observable, unmet_needs
+from study.studies.observables import markdown_table as observables_table
+from study.studies.spec import SpecError, parse_spec
 
 PATH = "specs/needs-under-test.toml"
 

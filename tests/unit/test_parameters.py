@@ -12,7 +12,6 @@ import pytest
 
 import study
 from study.analyses import design_spec, fit_spec
-from study.engine import study_schema, study_types
 from study.model import paper
 from study.model.drive import as_acceleration, as_frequency
 from study.model.parameters import (
@@ -25,6 +24,8 @@ from study.model.parameters import (
 )
 from study.model.structure import Structure, tilt_warnings
 from study.model.units import UNITS
+from study.studies import schema as study_schema
+from study.studies import spec_types as study_types
 
 SCHEMAS = Path(study.__file__).resolve().parent / "schemas"
 PAPER = {"f0": 14.44, "Q": 17.5, "alpha": 64.0, "M": 0.08, "cs": 0.25, "ck": 0.25, "g": 9.8}

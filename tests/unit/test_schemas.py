@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import study
-from study.engine.study_spec import SPEC_SCHEMA_PATH
+from study.studies.spec import SPEC_SCHEMA_PATH
 
 REPO = Path(__file__).resolve().parents[2]
 PACKAGE_SCHEMAS = Path(study.__file__).resolve().parent / "schemas"
@@ -49,10 +49,10 @@ def test_the_code_reads_the_package_folder() -> None:
 
 
 def test_the_spec_schema_file_is_the_export_of_the_observable_declarations() -> None:
-    """Adding an observable touches study/engine/observables.py only; `make schemas` writes
+    """Adding an observable touches study/studies/observables.py only; `make schemas` writes
     the file, and this test says so when it has not been run."""
-    from study.engine.observables import OBSERVABLES
-    from study.engine.study_schema import export_spec_schema, spec_schema
+    from study.studies.observables import OBSERVABLES
+    from study.studies.schema import export_spec_schema, spec_schema
 
     on_disk = (Path(study.__file__).parent / "schemas" / "study-spec-v1.schema.json")
     assert on_disk.read_text(encoding="utf-8") == export_spec_schema(), "run `make schemas`"

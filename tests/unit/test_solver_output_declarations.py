@@ -9,8 +9,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from study.engine.observables import OBSERVABLES, PointWork, solution_values
-from study.engine.variables import VARIABLES, solver_output
 from study.kernels import one_way
 from study.kernels.two_way import points
 from study.solvers.steady import (
@@ -20,6 +18,8 @@ from study.solvers.steady import (
     SteadyState,
     declared_units,
 )
+from study.studies.observables import OBSERVABLES, PointWork, solution_values
+from study.studies.variables import VARIABLES, solver_output
 
 TABLES = (one_way.OUTPUT_COLUMNS, points.OUTPUT_COLUMNS)
 

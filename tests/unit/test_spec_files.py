@@ -30,8 +30,8 @@ from study.engine.spec_files import (
     read_spec_text,
     where,
 )
-from study.engine.study_spec import load_spec, parse_spec
 from study.scenes.scene_spec import load_scene, parse_scene
+from study.studies.spec import load_spec, parse_spec
 from tests.unit.test_cache_health import deadline
 
 REPO = Path(__file__).resolve().parents[2]

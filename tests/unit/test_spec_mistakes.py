@@ -14,8 +14,8 @@ import pytest
 import study
 from study.cli import main
 from study.engine.spec_files import SpecError
-from study.engine.study_spec import load_spec
 from study.model.contact import LAWS
+from study.studies.spec import load_spec
 
 BASE = """\
 [study]

@@ -25,9 +25,9 @@ from pathlib import Path
 import pytest
 
 from study.engine.spec_files import SpecError, detect_kind
-from study.engine.study_spec import StudySpec, load_spec
 from study.model.inputs import SuspectInputWarning
 from study.scenes.scene_spec import SceneSpec, load_scene
+from study.studies.spec import StudySpec, load_spec
 
 WORKFLOWS = sorted((Path(__file__).resolve().parents[2] / "workflows").glob("*.toml"))
 

@@ -12,8 +12,8 @@ import pytest
 
 from study.cli import main
 from study.engine.spec_files import SpecError
-from study.engine.study_spec import parse_spec
 from study.scenes.scene_spec import MAX_TRAJECTORY_PERIODS, parse_scene, period_weight
+from study.studies.spec import parse_spec
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -1,6 +1,6 @@
 """Study specs that would hang or be absurdly large are refused before any work.
 
-The size guard (:func:`study.engine.study_size.check_size`) refuses on the axis lengths alone,
+The size guard (:func:`study.studies.size.check_size`) refuses on the axis lengths alone,
 before a value is generated; budgets a user could make endless have maxima in the
 schema; the frontier tolerance must be one doubles can reach.
 """
@@ -14,18 +14,18 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import study.engine.study_spec
-from study.engine.study_size import (
+import study.studies.spec
+from study.model.status import Status
+from study.model.structure import Structure
+from study.solvers.frontier import frontier_from_grid
+from study.studies.size import (
     MAX_CHUNK_BYTES,
     MAX_CHUNKS,
     MAX_OUTPUT_BYTES,
     MAX_POINTS,
     check_size,
 )
-from study.engine.study_spec import SpecError, parse_spec
-from study.model.status import Status
-from study.model.structure import Structure
-from study.solvers.frontier import frontier_from_grid
+from study.studies.spec import SpecError, parse_spec
 
 PATH = "workflows/big.toml"
 
@@ -60,7 +60,7 @@ def no_values(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("axis values generated before the size guard refused")
 
-    monkeypatch.setattr(study.engine.study_spec, "axis_values", forbidden)
+    monkeypatch.setattr(study.studies.spec, "axis_values", forbidden)
 
 
 def _refused(text: str) -> str:

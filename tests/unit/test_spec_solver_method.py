@@ -12,11 +12,11 @@ from numpy.testing import assert_allclose
 from study import Structure
 from study.engine.runner import run_study
 from study.engine.store import open_result
-from study.engine.study_spec import SpecError, parse_spec
 from study.model.status import Status
 from study.solvers.attractors import attractors
 from study.solvers.exact import steady_state
 from study.solvers.integrator import integrated_steady_state
+from study.studies.spec import SpecError, parse_spec
 
 BASE = """\
 [study]

@@ -1,4 +1,4 @@
-"""Study specs (``study.engine.study_spec``): parsing, axes, structures, the hash, refusals.
+"""Study specs (``study.studies.spec``): parsing, axes, structures, the hash, refusals.
 
 Specs are built from Python tables rendered to TOML by :func:`render`; :func:`spec_text`
 applies a few changes to the paper's minimal spec (:data:`MINIMAL`), so each test
@@ -19,13 +19,15 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-import study.engine.observables
-import study.engine.study_spec
-import study.engine.sweep
 import study.model
 import study.model.forces
 import study.solvers.exact
-from study.engine.study_spec import (
+import study.studies.observables
+import study.studies.spec
+import study.studies.sweep
+from study.model.structure import Structure
+from study.solvers.settings import SolverSettings
+from study.studies.spec import (
     OBSERVABLES,
     MassModel,
     SpecError,
@@ -33,8 +35,6 @@ from study.engine.study_spec import (
     load_spec,
     parse_spec,
 )
-from study.model.structure import Structure
-from study.solvers.settings import SolverSettings
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -194,7 +194,7 @@ def test_minimal_spec_has_one_structure_the_papers():
 def test_observables_are_kept_in_canonical_order():
     """Asked in any order, the observables are kept in their declared order (that of
     the registry, whose declarations the spec's list follows)."""
-    declared = tuple(study.engine.observables.OBSERVABLES)
+    declared = tuple(study.studies.observables.OBSERVABLES)
     # Every one but unswept (which needs a slow sweep, where the frontier is refused)
     # and basins (refused beside attractors, whose attractor_count it writes too, and
     # with a slow sweep).
@@ -227,7 +227,7 @@ def test_example_workflow_is_valid():
     # without flight, as each declares what it needs; an observable added to the
     # registry does not change this workflow.
     assert (spec.method, spec.coupling, spec.flight) == ("exact", "one-way", False)
-    assert study.engine.observables.unmet_needs(
+    assert study.studies.observables.unmet_needs(
         spec.observables, spec.method, spec.coupling, spec.flight) == []
     assert spec.observables == ("resonance", "thresholds", "lift_off", "velocity",
                                 "diagnostics", "frontier")
@@ -495,9 +495,9 @@ def no_computation(monkeypatch):
         (study.solvers.exact, ["steady_state", "steady_velocity"]),
         (study.model, ["thresholds", "lift_off_acceleration"]),
         (study.model.forces, ["thresholds", "lift_off_acceleration", "force_amplitudes"]),
-        (study.engine.observables, ["steady_state", "thresholds", "lift_off_acceleration",
+        (study.studies.observables, ["steady_state", "thresholds", "lift_off_acceleration",
                              "integrated_steady_state"]),
-        (study.engine.sweep, ["compute_task"]),
+        (study.studies.sweep, ["compute_task"]),
     ]:
         for name in names:
             monkeypatch.setattr(module, name, forbidden)
@@ -512,11 +512,11 @@ def _mass(**keys: Any) -> dict[str, Any]:
     return {"structure": {"M": None, "mass": keys}}
 
 
-# The observables in their declared order (study.engine.observables' registry).
-_OBS_ALLOWED = ", ".join(repr(name) for name in study.engine.observables.OBSERVABLES)
+# The observables in their declared order (study.studies.observables' registry).
+_OBS_ALLOWED = ", ".join(repr(name) for name in study.studies.observables.OBSERVABLES)
 # The [solver] keys, from the spec schema the package exports.
 _SOLVER_KEYS = ", ".join(sorted(
-    study.engine.study_schema.spec_schema()["properties"]["solver"]["properties"]))
+    study.studies.schema.spec_schema()["properties"]["solver"]["properties"]))
 _FORMS = "allowed forms: { start = x, stop = y, num = n }"
 
 REFUSALS = [

@@ -19,8 +19,6 @@ import jsonschema
 import pytest
 
 import study
-from study.engine.study_schema import spec_schema
-from study.engine.study_spec import SpecError, parse_spec
 from study.engine.validation.header import RESULT_SCHEMA_PATH, export_result_schema
 from study.model import starts
 from study.model.starts import (
@@ -40,6 +38,8 @@ from study.model.starts import (
 from study.solvers.exact import steady_state
 from study.solvers.integrator import integrated_steady_state
 from study.solvers.settings import SolverSettings, kernel_start
+from study.studies.schema import spec_schema
+from study.studies.spec import SpecError, parse_spec
 
 REPO = Path(__file__).resolve().parents[2]
 PAPER = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)

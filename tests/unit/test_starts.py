@@ -18,16 +18,16 @@ import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
 import study
-from study.engine.layout import method_attributes, protocol_attributes
-from study.engine.maps import compute_map
-from study.engine.study_checks import method_problems
-from study.engine.study_spec import SpecError, parse_spec
 from study.kernels.start import RELEASE, SWITCH_ON, Start
 from study.model.starts import START_ALLOWED, Drop, start_attributes, start_label
 from study.model.status import Status
 from study.solvers.exact import steady_state, steady_velocity
 from study.solvers.integrator import integrated_steady_state
 from study.solvers.settings import SolverSettings, kernel_start
+from study.studies.checks import method_problems
+from study.studies.layout import method_attributes, protocol_attributes
+from study.studies.maps import compute_map
+from study.studies.spec import SpecError, parse_spec
 from tests.reference.flight import steady_motion
 
 #: Two stable motions (the issue's point): a small forward hop and a big backward one.
@@ -346,7 +346,7 @@ def test_a_study_file_records_its_start_and_validates(tmp_path):
 def test_kept_values_of_one_start_are_never_lent_to_another():
     """The cache key (the method's canonical settings) names the start only when it is
     not the release: keys of values kept before starts were named are unchanged."""
-    from study.engine.observables import Method
+    from study.studies.observables import Method
 
     released = Method(coupling="two-way", solver=SolverSettings()).canonical()
     assert "start" not in released
@@ -358,7 +358,7 @@ def test_kept_values_of_one_start_are_never_lent_to_another():
 
 
 def test_the_method_line_names_a_start_other_than_the_release():
-    from study.engine.layout import method_summary
+    from study.engine.contact_attributes import method_summary
 
     released = method_attributes(_spec())
     assert "start" not in method_summary(released)

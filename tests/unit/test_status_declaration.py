@@ -14,10 +14,10 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from study.engine.variables import VARIABLES
 from study.figures.common import VALID, status_handles, status_layers
 from study.model import codes
 from study.model.status import INVALID_STATUSES, VELOCITY_KINDS, Status, markdown_table
+from study.studies.variables import VARIABLES
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 

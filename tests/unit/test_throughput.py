@@ -13,8 +13,8 @@ import pytest
 import study
 from study.engine.cache import ResultCache
 from study.engine.cache_format import decode_array, encode_array, encode_block, entry_key
-from study.engine.observables import Method, PointWork
-from study.engine.study_spec import default_chunk_points
+from study.studies.observables import Method, PointWork
+from study.studies.spec import default_chunk_points
 
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.08, cs=0.25)
 

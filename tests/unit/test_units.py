@@ -61,9 +61,8 @@ def test_dimensionless_is_spoken_as_nothing():
 def _declared() -> dict[str, str]:
     """Every unit a result kind's declarations give: where -> units."""
     from study.analyses import design_spec, fit_spec, measurements
-    from study.engine import study_spec as spec
-    from study.engine import variables
     from study.solvers import planar
+    from study.studies import spec, variables
 
     found: dict[str, str] = {}
     found.update({f"study variable {n}": v.units for n, v in variables.VARIABLES.items()})

@@ -386,7 +386,7 @@ def test_mode_phase_is_in_degree_and_a_file_with_it_in_rad_is_stale(sealed, tmp_
     ``study_result_format`` (format 1: mode_phase in rad) is refused as stale, while
     one that holds no changed variable stays valid."""
     from study.engine.runner import run_study
-    from study.engine.variables import RESULT_FORMAT
+    from study.studies.variables import RESULT_FORMAT
 
     spec = tmp_path / "resonance.toml"
     spec.write_text("""

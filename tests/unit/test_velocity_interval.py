@@ -19,13 +19,13 @@ from numpy.testing import assert_allclose
 from scipy.stats import norm
 
 import study
-from study.engine.observables import OBSERVABLES, velocity_interval
 from study.engine.runner import run_study
 from study.engine.validation import seal, validate_file
 from study.engine.validation.reading import ResultError
-from study.engine.variables import VARIABLES
 from study.model.status import Status
 from study.model.units import METRE_PER_SECOND
+from study.studies.observables import OBSERVABLES, velocity_interval
+from study.studies.variables import VARIABLES
 from tests.support.sealed_results import rewrite
 
 #: The known irregular points of tests/unit/test_irregular_motion.py (M = 0.99, flight)

@@ -16,18 +16,18 @@ import numpy as np
 import pytest
 
 import study
-import study.engine.study_kind as study_kind
+import study.studies.kind as study_kind
 from study.engine.compiling import COMPILING, compile_notices
 from study.engine.interrupts import RunInterrupted, stop_requests
-from study.engine.observables import Method
 from study.engine.progress import Progress
 from study.engine.runner import run_study
 from study.engine.store import open_result
-from study.engine.sweep import GRAINS, Rectangle, UnitSizer, cut_unit, unit_grain
 from study.solvers.basins import basins
 from study.solvers.exact import steady_state
 from study.solvers.protocol import slow_sweep
 from study.solvers.settings import SolverSettings
+from study.studies.observables import Method
+from study.studies.sweep import GRAINS, Rectangle, UnitSizer, cut_unit, unit_grain
 
 BASE = dict(f0=14.44, Q=17.5, alpha=64.0, M=0.3, cs=0.25)
 STRUCTURE = study.Structure(**BASE)

@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from study.engine.contact_attributes import method_summary
 from study.engine.kinds import kind_of_schema
-from study.engine.layout import method_summary
 from study.engine.validation.checks import is_number
 from study.engine.validation.formats import format_note, written_by
 from study.engine.validation.reading import slabs, unreadable
@@ -79,7 +79,8 @@ def _describe_dataset(dataset: xr.Dataset, path: str) -> str:
                  "spec sha256 "
                  f"{str(attrs.get('study_spec_sha256', ''))[:16]}, schema "
                  f"{attrs.get('study_result_schema')}")
-    # Every kind's method: its contact laws (study.engine.layout.contact_law_attributes);
+    # Every kind's method: its contact laws
+    # (study.engine.contact_attributes.contact_law_attributes);
     # only a study chooses a solver, the other kinds' models are fixed.
     lines.append(f"  method: {method_summary(attrs, dataset.dims, solver=what == 'study')}")
     try:

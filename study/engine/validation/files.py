@@ -31,7 +31,7 @@ def validate_file(path: str | Path) -> str:
     ``results_schema/study-result-v1.schema.json``; the embedded spec parses and
     its hash, name and title are the file's; ``study_fingerprint`` follows from
     the file's spec and code hashes; every variable the spec's observables
-    declare (:mod:`study.engine.variables`) is present with the declared dimensions,
+    declare (:mod:`study.studies.variables`) is present with the declared dimensions,
     dtype, units, long_name and flags, every flag value is declared, and
     ``velocity``-like variables are NaN exactly where their status is invalid
     and 0 where static; coordinates and fixed parameters equal the spec's; the

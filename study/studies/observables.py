@@ -1,10 +1,10 @@
 """The observables a study can ask for, each declared once.
 
-An :class:`Observable` names its variables (declared in :mod:`study.engine.variables`),
+An :class:`Observable` names its variables (declared in :mod:`study.studies.variables`),
 the grid it lives on, what it requires, whether its values are worth keeping for
 reuse, and how it is computed. The spec schema, the sweep, the result file and its
 validation all take it from here: adding an observable is one entry in
-:data:`OBSERVABLES` (and its variables in :mod:`study.engine.variables`).
+:data:`OBSERVABLES` (and its variables in :mod:`study.studies.variables`).
 
 Closed-form observables (``grid = "row"``) cost microseconds per frequency, less
 than reading them back, so they are recomputed and never cached; solver
@@ -20,7 +20,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from study.engine.variables import DEFAULT_MAX_ATTRACTORS, GRIDS, VARIABLES, Variable
 from study.model import lift_off_acceleration, mode_response, thresholds
 from study.model.contact import (
     COUPLINGS,
@@ -46,6 +45,7 @@ from study.solvers.protocol import SweptState, slow_sweep
 from study.solvers.section import SECTION_PERIODS, phase_section
 from study.solvers.settings import SolverSettings
 from study.solvers.steady import SteadyState
+from study.studies.variables import DEFAULT_MAX_ATTRACTORS, GRIDS, VARIABLES, Variable
 
 __all__ = [
     "BASIN_KEYS",
@@ -298,12 +298,12 @@ class Observable:
         ``row``: closed form per frequency; ``point``: per drive point, by the
         solver; ``frontier``: found from whole velocity rows after the grid.
     variables : tuple of str
-        Names of its variables in :data:`study.engine.variables.VARIABLES`.
+        Names of its variables in :data:`study.studies.variables.VARIABLES`.
     requires : tuple of str
         Observables it implies (their variables are written too).
     flight_variables : tuple of str
         Variables it also writes when the study flies (``[solver] flight = true``):
-        names in :data:`study.engine.variables.VARIABLES`.
+        names in :data:`study.studies.variables.VARIABLES`.
     protocol_variables : tuple of str
         Variables it also writes in a slow sweep (``[sweep] protocol``): ``jumped``
         beside the velocity, since every swept point has jumped or not (not an
@@ -488,12 +488,12 @@ def _lift_off(structure: Structure, f: NDArray[np.float64]) -> dict[str, NDArray
 def solution_values(work: PointWork, names: tuple[str, ...]) -> dict[str, NDArray[Any]]:
     """The result variables ``names``, each read from the study's solution by the
     :class:`~study.solvers.steady.SteadyState` field it declares
-    (:attr:`study.engine.variables.Variable.field`)."""
+    (:attr:`study.studies.variables.Variable.field`)."""
     return {name: getattr(work.solution, VARIABLES[name].field) for name in names}
 
 
 #: The variables of the velocity observable, of its flight and of the diagnostics: each
-#: a solver output (:func:`study.engine.variables.solver_output`).
+#: a solver output (:func:`study.studies.variables.solver_output`).
 _VELOCITY = ("velocity", "status")
 _VELOCITY_FLIGHT = ("airborne_fraction", "largest_hop", "impacts_per_period")
 _DIAGNOSTICS = ("slips_per_period", "forward_slip_fraction", "backward_slip_fraction",

@@ -3,7 +3,7 @@
 What a study's dataset holds follows from its spec alone: one coordinate per swept
 axis, the fixed structure parameters as scalar coordinates, and the variables of the
 requested observables over the structure axes and the drive grid, each with the
-attributes :mod:`study.engine.variables` declares. The runner writes this layout into a file
+attributes :mod:`study.studies.variables` declares. The runner writes this layout into a file
 chunk by chunk; :func:`study.compute_map` fills the same layout in memory. Both take
 the global attributes that say how the values were computed (solver, coupling, contact
 laws and their parameters) from :func:`method_attributes`.
@@ -11,29 +11,31 @@ laws and their parameters) from :func:`method_attributes`.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.observables import UNSWEPT_VARIABLES, Method, Observable, resolve
-from study.engine.study_spec import StudySpec
-from study.engine.study_types import STRUCTURE_PARAMETERS, SWEEPABLE
-from study.engine.sweep import Chunk, plan_chunks
-from study.engine.variables import GRID_SIZES, GRIDS, VARIABLES
-from study.model.contact import DEFAULT_FRICTION, DEFAULT_LIFT_OFF, LAWS, Friction
+from study.engine.contact_attributes import (
+    contact_law_attributes,
+    shortest_text,
+)
+from study.model.contact import LAWS
 from study.model.parameters import STRUCTURE
 from study.model.starts import start_attributes
 from study.model.units import DIMENSIONLESS, KILOGRAM
 from study.solvers.basins import sampling_reach
+from study.studies.observables import UNSWEPT_VARIABLES, Method, Observable, resolve
+from study.studies.spec import StudySpec
+from study.studies.spec_types import STRUCTURE_PARAMETERS, SWEEPABLE
+from study.studies.sweep import Chunk, plan_chunks
+from study.studies.variables import GRID_SIZES, GRIDS, VARIABLES
 
 __all__ = [
     "Coordinate",
     "DataVariable",
     "basins_attributes",
-    "contact_law_attributes",
     "coordinate_attrs",
     "coordinates",
     "data_variables",
@@ -41,7 +43,6 @@ __all__ = [
     "method_attributes",
     "method_description",
     "method_of",
-    "method_summary",
     "observables_by_grid",
     "pad_branches",
     "plan_study",
@@ -128,7 +129,7 @@ def coordinates(spec: StudySpec) -> tuple[Coordinate, ...]:
     return tuple(found)
 
 
-#: long_name of each dimension of :data:`~study.engine.variables.GRID_SIZES`.
+#: long_name of each dimension of :data:`~study.studies.variables.GRID_SIZES`.
 _TRAILING_NAMES = {"section_period": "drive periods of the phase section, counted from "
                    "the reported state",
                    "attractor": "attractors at the drive point, numbered from 0 in the order "
@@ -162,7 +163,7 @@ def variable_dims(spec: StudySpec, name: str, structure_dims: tuple[str, ...]
                   ) -> tuple[str, ...]:
     """A declared variable's dimensions in the study's result: with a slow sweep both
     ways, every per-point variable has a leading ``direction`` (up, down), but those of
-    each point from its start alone (:data:`study.engine.observables.UNSWEPT_VARIABLES`)."""
+    each point from its start alone (:data:`study.studies.observables.UNSWEPT_VARIABLES`)."""
     dims = VARIABLES[name].dims(structure_dims)
     if (spec.both_directions and VARIABLES[name].grid in ("point", "section", "attractor")
             and name not in UNSWEPT_VARIABLES):
@@ -197,7 +198,7 @@ def direction_methods(spec: StudySpec) -> tuple[Method, ...]:
 
 
 def plan_study(spec: StudySpec) -> list[Chunk]:
-    """The chunks of a study (:func:`study.engine.sweep.plan_chunks`), as a result file
+    """The chunks of a study (:func:`study.studies.sweep.plan_chunks`), as a result file
     and :func:`study.compute_map` cut it: a slow sweep's task holds whole runs (along a
     every chunk does, each holding every a; along f one chunk holds every f of its
     structure), and both ways every chunk comes once up, once down (the down chunks
@@ -253,7 +254,7 @@ def _solver_description(spec: StudySpec) -> str:
 
 def _friction_description(spec: StudySpec) -> str:
     law = spec.friction.declaration
-    values = "".join(f", {p.name} = {_number(spec.friction.values[p.name])} {p.units}"
+    values = "".join(f", {p.name} = {shortest_text(spec.friction.values[p.name])} {p.units}"
                      for p in law.parameters)
     return f"friction law '{law.name}'{values} ({law.description})"
 
@@ -262,15 +263,10 @@ def _lift_off_description(spec: StudySpec) -> str:
     law = LAWS["lift_off"][spec.lift_off]
     values = _lift_off_values(spec)
     shown = "".join(
-        f", {name} {STRUCTURE[name].symbol} = {_number(values[name])}" if name in values
+        f", {name} {STRUCTURE[name].symbol} = {shortest_text(values[name])}" if name in values
         else f", {name} {STRUCTURE[name].symbol} swept (its coordinate)"
         for name in law.structure_parameters)
     return f"lift-off law '{law.name}'{shown} ({law.description})"
-
-
-def _number(value: float) -> str:
-    """A float as its shortest exact text (``0.01``, not ``np.float64(0.01)``)."""
-    return repr(float(value))
 
 
 def _lift_off_values(spec: StudySpec) -> dict[str, float]:
@@ -279,12 +275,6 @@ def _lift_off_values(spec: StudySpec) -> dict[str, float]:
     law = LAWS["lift_off"][spec.lift_off]
     return {name: float(spec.fixed.get(name, STRUCTURE[name].default))
             for name in law.structure_parameters if spec.axis(name) is None}
-
-
-def _law_attribute(kind: str, parameter: str) -> str:
-    """The global attribute of a contact law's parameter: ``study_<kind>_<parameter>``
-    (``study_friction_stribeck_speed``, ``study_lift_off_restitution``)."""
-    return f"study_{kind}_{parameter}"
 
 
 def protocol_attributes(spec: StudySpec) -> dict[str, str | float]:
@@ -324,75 +314,12 @@ def basins_attributes(spec: StudySpec) -> dict[str, int | str]:
     return found
 
 
-def contact_law_attributes(coupling: str, friction: Friction | str | None = None,
-                           lift_off: str = DEFAULT_LIFT_OFF,
-                           lift_off_values: Mapping[str, float] | None = None
-                           ) -> dict[str, str | float]:
-    """The global attributes that name a result's contact laws, made from their
-    declarations (:data:`study.model.contact.LAWS`).
-
-    The one place they are made for every kind of result: a study's
-    (:func:`method_attributes`), a fit's, a design's and a scene's.
-
-    Parameters
-    ----------
-    coupling : str
-        A name of :data:`study.model.contact.COUPLINGS`.
-    friction : Friction or str, optional
-        The friction law with its parameters' values, or the name of a law that needs
-        none; default :data:`study.model.contact.DEFAULT_FRICTION`.
-    lift_off : str
-        A name of :data:`study.model.contact.LIFT_OFF_LAWS`; default
-        :data:`study.model.contact.DEFAULT_LIFT_OFF`.
-    lift_off_values : mapping, optional
-        Fixed values of the structure parameters the lift-off law reads
-        (``restitution`` with ``flight``); one left out is not recorded (a study
-        leaves out a swept one: its coordinate holds it).
-
-    Returns
-    -------
-    dict
-        ``study_coupling``, ``study_friction_law``, one float
-        ``study_friction_<parameter>`` per parameter of the friction law,
-        ``study_lift_off`` and one float ``study_lift_off_<parameter>`` per value of
-        ``lift_off_values``, in that order.
-
-    Raises
-    ------
-    ValueError
-        A law that is not declared, or a value the lift-off law does not read.
-    """
-    if coupling not in LAWS["coupling"]:
-        raise ValueError(f"coupling {coupling!r} is unknown; couplings are "
-                         f"{', '.join(map(repr, LAWS['coupling']))}")
-    friction = Friction() if friction is None else (
-        Friction(friction) if isinstance(friction, str) else friction)
-    law = LAWS["lift_off"].get(lift_off)
-    if law is None:
-        raise ValueError(f"lift-off law {lift_off!r} is unknown; lift-off laws are "
-                         f"{', '.join(map(repr, LAWS['lift_off']))}")
-    values = dict(lift_off_values or {})
-    unread = sorted(set(values) - set(law.structure_parameters))
-    if unread:
-        raise ValueError(f"lift-off law {lift_off!r} reads "
-                         f"{list(law.structure_parameters) or 'no parameter'}, not {unread}")
-    return {
-        "study_coupling": coupling,
-        "study_friction_law": friction.law,
-        **{_law_attribute("friction", p.name): float(friction.values[p.name])
-           for p in friction.declaration.parameters},
-        "study_lift_off": lift_off,
-        **{_law_attribute("lift_off", name): float(values[name])
-           for name in law.structure_parameters if name in values},
-    }
-
-
 def method_attributes(spec: StudySpec) -> dict[str, str | float]:
     """The global attributes that say how a study's values were computed.
 
-    The one place they are made: the runner's file (:mod:`study.engine.study_kind`) and
+    The one place they are made: the runner's file (:mod:`study.studies.kind`) and
     :func:`study.compute_map`'s dataset both take them from here, and validation
-    (:func:`study.engine.study_checks.method_problems`) compares a file's with its
+    (:func:`study.studies.checks.method_problems`) compares a file's with its
     embedded spec's.
 
     Returns
@@ -421,89 +348,3 @@ def method_attributes(spec: StudySpec) -> dict[str, str | float]:
 
 
 #: The words a method line uses for a contact law the attributes do not name.
-_NOT_RECORDED = "not recorded; the default"
-
-
-def method_summary(attrs: Mapping[str, Any], swept: Iterable[str] = (), *,
-                   solver: bool = True) -> str:
-    """A result's method in one line, from its global attributes (those of
-    :func:`method_attributes`): ``exact solver, one-way coupling, friction stribeck
-    (stribeck_speed=0.01 m s-1), lift-off flight, restitution e=0.5``, then the start
-    where it is not the release (``start switch-on``).
-
-    Files written before the method was recorded whole lack some attributes: the line
-    says what the file has, and a default it assumes as such (``friction coulomb (not
-    recorded; the default)``); a value of the wrong type is shown as it is.
-
-    Parameters
-    ----------
-    attrs : mapping
-        The result's global attributes.
-    swept : iterable of str
-        The result's dimensions: a law's structure parameter among them is said to be
-        swept.
-    solver : bool
-        Whether the kind of result chooses a solver (``study_solver_method``): a study
-        does; a fit, a design and a scene do not (their model is fixed), and their
-        line starts with the coupling (those of :func:`contact_law_attributes`).
-    """
-    swept = set(swept)
-    method = attrs.get("study_solver_method")
-    coupling = attrs.get("study_coupling")
-    parts = [f"{method} solver" if isinstance(method, str) else "solver not recorded"
-             ] if solver else []
-    parts += [f"{coupling} coupling" if isinstance(coupling, str) else "coupling not recorded",
-              _friction_summary(attrs), _lift_off_summary(attrs, swept)]
-    # The start only where it is not the release (absent: the release, as before starts
-    # were named), so that the line of every other result stays as it was.
-    start = attrs.get("study_start")
-    if solver and start is not None and start != "release":
-        parts.append(f"start {start}")
-    return ", ".join(parts)
-
-
-def _shown(value: Any) -> str:
-    """An attribute's value: a number as its shortest exact text, anything else as it is."""
-    if isinstance(value, int | float | np.integer | np.floating) and not isinstance(
-            value, bool | np.bool_):
-        return _number(value)
-    return repr(value)
-
-
-def _friction_summary(attrs: Mapping[str, Any]) -> str:
-    law = attrs.get("study_friction_law")
-    if law is None:
-        return f"friction {DEFAULT_FRICTION} ({_NOT_RECORDED})"
-    if not isinstance(law, str):
-        return f"friction {law!r}"
-    declared = LAWS["friction"].get(law)
-    units = {p.name: p.units for p in (declared.parameters if declared else ())}
-    prefix = _law_attribute("friction", "")
-    # The declared parameters, then any other the file holds (an unknown law's).
-    names = [*units, *(key[len(prefix):] for key in attrs
-                       if key.startswith(prefix) and key != "study_friction_law"
-                       and key[len(prefix):] not in units)]
-    shown = [f"{name}={_shown(attrs[prefix + name])}"
-             + (f" {units[name]}" if units.get(name, "1") != "1" else "")
-             if prefix + name in attrs else f"{name} not recorded" for name in names]
-    return f"friction {law}" + (f" ({', '.join(shown)})" if shown else "")
-
-
-def _lift_off_summary(attrs: Mapping[str, Any], swept: set[str]) -> str:
-    law = attrs.get("study_lift_off")
-    if law is None:
-        return f"lift-off {DEFAULT_LIFT_OFF} ({_NOT_RECORDED})"
-    if not isinstance(law, str):
-        return f"lift-off {law!r}"
-    declared = LAWS["lift_off"].get(law)
-    text = f"lift-off {law}"
-    for name in (declared.structure_parameters if declared else ()):
-        attribute = _law_attribute("lift_off", name)
-        symbol = STRUCTURE[name].symbol
-        if attribute in attrs:
-            text += f", {name} {symbol}={_shown(attrs[attribute])}"
-        elif name in swept:
-            text += f", {name} {symbol} swept"
-        else:
-            text += f", {name} not recorded"
-    return text

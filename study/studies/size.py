@@ -7,15 +7,15 @@ import math
 
 import numpy as np
 
-from study.engine.observables import (
-    UNSWEPT_VARIABLES,
-    variables_of,
-)
 from study.engine.spec_files import (
     SpecError,
 )
-from study.engine.study_types import DRIVE_PARAMETERS, SOLVER_OBSERVABLES
-from study.engine.variables import DEFAULT_MAX_ATTRACTORS
+from study.studies.observables import (
+    UNSWEPT_VARIABLES,
+    variables_of,
+)
+from study.studies.spec_types import DRIVE_PARAMETERS, SOLVER_OBSERVABLES
+from study.studies.variables import DEFAULT_MAX_ATTRACTORS
 
 __all__ = [
     "CHUNK_POINTS_MAX",
@@ -136,7 +136,7 @@ def check_size(lengths: dict[str, int], observables: tuple[str, ...], chunk_poin
             f"({_size(output)} of output); allowed at most {MAX_POINTS:.3g} points and "
             f"{_size(MAX_OUTPUT_BYTES)}: sweep fewer values"
         )
-    # How study.engine.sweep cuts the grid: whole frequency rows (every a), about
+    # How study.studies.sweep cuts the grid: whole frequency rows (every a), about
     # chunk_points points per chunk; a slow sweep along f holds every f in one chunk
     # (its runs whole).
     along_f = needs_solver and protocol is not None and protocol[0] == "f"

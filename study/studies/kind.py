@@ -1,12 +1,12 @@
 """The parameter-study kind: a spec's sweep computed chunk by chunk into its file.
 
 Registers the ``study`` kind (:mod:`study.engine.kinds`): its spec parser
-(:mod:`study.engine.study_spec`), its computation, which streams (the grid is planned
+(:mod:`study.studies.spec`), its computation, which streams (the grid is planned
 in chunks, looked up in the cache of kept values, the missing points cut into work
-units of about a second (:func:`study.engine.sweep.cut_unit`) and sent to the
+units of about a second (:func:`study.studies.sweep.cut_unit`) and sent to the
 executor; each unit's values go into the cache as it arrives, and each chunk into the
 result file once its units are all back; memory holds a bounded number of chunks,
-never the study), its validator (:mod:`study.engine.study_checks`) and its description. The
+never the study), its validator (:mod:`study.studies.checks`) and its description. The
 runner (:mod:`study.engine.runner`) decides whether to run at all, holds the lock and
 commits the file; this module is what a run of a study does once it runs.
 """
@@ -32,18 +32,6 @@ from study.engine.compiling import compile_notices
 from study.engine.executors import TASK_TIMEOUT, Executor, executor
 from study.engine.interrupts import RunInterrupted, stop_requests
 from study.engine.kinds import ResultKind, register
-from study.engine.layout import (
-    coordinates,
-    data_variables,
-    direction_methods,
-    method_attributes,
-    method_of,
-    observables_by_grid,
-    pad_branches,
-    plan_study,
-    study_summary,
-)
-from study.engine.observables import Observable
 from study.engine.progress import Progress
 from study.engine.provenance import (
     code_sha256,
@@ -62,9 +50,23 @@ from study.engine.store import (
     advice,
     new_temporary,
 )
-from study.engine.study_spec import StudySpec, load_spec, parse_spec
-from study.engine.study_types import SPEC_SCHEMA
-from study.engine.sweep import (
+from study.model.structure import Structure
+from study.solvers.frontier import frontier_branches, frontier_work
+from study.studies.layout import (
+    coordinates,
+    data_variables,
+    direction_methods,
+    method_attributes,
+    method_of,
+    observables_by_grid,
+    pad_branches,
+    plan_study,
+    study_summary,
+)
+from study.studies.observables import Observable
+from study.studies.spec import StudySpec, load_spec, parse_spec
+from study.studies.spec_types import SPEC_SCHEMA
+from study.studies.sweep import (
     Chunk,
     Task,
     UnitSizer,
@@ -73,9 +75,7 @@ from study.engine.sweep import (
     missing_rectangles,
     unit_grain,
 )
-from study.engine.variables import RESULT_FORMAT, STUDY_FORMATS, VARIABLES
-from study.model.structure import Structure
-from study.solvers.frontier import frontier_branches, frontier_work
+from study.studies.variables import RESULT_FORMAT, STUDY_FORMATS, VARIABLES
 
 __all__ = ["STUDY_KIND", "default_cache", "stream_study"]
 
@@ -170,7 +170,7 @@ def _standard_attrs(spec: StudySpec) -> dict[str, Any]:
 class _Job:
     """A work unit and the cache entries its computed values go to: what a worker gets.
 
-    The unit is a :class:`~study.engine.sweep.Task` of one chunk holding one piece of
+    The unit is a :class:`~study.studies.sweep.Task` of one chunk holding one piece of
     its missing points (or none: a chunk's closed-form rows alone); the chunk's first
     unit carries its rows."""
 
@@ -188,7 +188,7 @@ def _compute_and_encode(job: _Job) -> tuple[dict[str, np.ndarray], list[dict[str
     Returns
     -------
     rows, rectangles
-        As :func:`study.engine.sweep.compute_task`.
+        As :func:`study.studies.sweep.compute_task`.
     blocks : list of list of bytes
         For each rectangle, one encoded block per entry of ``job.entries``.
     seconds : float
@@ -326,7 +326,7 @@ class _Run:
 
     def _jobs(self, pending: dict[int, _OpenChunk]) -> Iterator[_Job]:
         """Look each chunk up in the cache; yield the work units of what needs
-        computing, each sized when it is drawn (:class:`study.engine.sweep.UnitSizer`).
+        computing, each sized when it is drawn (:class:`study.studies.sweep.UnitSizer`).
         Chunks found whole are written at once (``pending`` keeps a chunk's values until
         its last unit is back)."""
         for chunk in self.chunks:
@@ -719,9 +719,9 @@ def _study_chunks(spec: StudySpec) -> int:
 #: The parameter-study kind.
 STUDY_KIND = register(ResultKind(
     name="study", spec_table="study", spec_schema=SPEC_SCHEMA, result_schema=RESULT_SCHEMA,
-    entry_modules=("study.engine.sweep", "study.solvers.frontier", "study.engine.study_spec"),
+    entry_modules=("study.studies.sweep", "study.solvers.frontier", "study.studies.spec"),
     summary="parameter study: observables over swept structure and drive parameters",
     label="study result", spec_type=StudySpec, load=load_spec, parse=parse_spec,
-    validator="study.engine.study_checks:study_problems",
+    validator="study.studies.checks:study_problems",
     stream=stream_study, metadata=_metadata_attrs, size=_study_chunks, formats=STUDY_FORMATS,
 ))

@@ -6,20 +6,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from study.engine.observables import (
-    BASIN_KEYS,
-    BasinSettings,
-)
-from study.engine.observables import OBSERVABLES as OBSERVABLE_REGISTRY
 from study.engine.spec_files import (
     load_schema,
-)
-from study.engine.study_types import (
-    MAX_BASIN_SETTINGS,
-    OBSERVABLES,
-    PROTOCOL_DIRECTIONS,
-    SPEC_SCHEMA,
-    SWEEPABLE,
 )
 from study.model import starts
 from study.model.contact import (
@@ -38,6 +26,18 @@ from study.solvers.basins import DROP_HEIGHT_RANGE, FACTOR_RANGE
 from study.solvers.integrator import MAX_INTEGRATOR_BUDGET
 from study.solvers.protocol import SWEEP_AXES
 from study.solvers.settings import MAX_SOLVER_BUDGET
+from study.studies.observables import (
+    BASIN_KEYS,
+    BasinSettings,
+)
+from study.studies.observables import OBSERVABLES as OBSERVABLE_REGISTRY
+from study.studies.spec_types import (
+    MAX_BASIN_SETTINGS,
+    OBSERVABLES,
+    PROTOCOL_DIRECTIONS,
+    SPEC_SCHEMA,
+    SWEEPABLE,
+)
 
 __all__ = [
     "export_spec_schema",
@@ -49,7 +49,7 @@ def spec_schema() -> dict[str, Any]:
     """The JSON schema of study specs (``study/schemas/study-spec-v1.schema.json``).
 
     The parameters' ranges and descriptions come from :mod:`study.model.parameters`, the
-    observables allowed and their descriptions from :mod:`study.engine.observables`,
+    observables allowed and their descriptions from :mod:`study.studies.observables`,
     the solvers' budgets' maxima from :data:`study.solvers.settings.MAX_SOLVER_BUDGET` and
     :data:`study.solvers.integrator.MAX_INTEGRATOR_BUDGET` (the file on disk is their
     export, see :func:`export_spec_schema`).

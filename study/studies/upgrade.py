@@ -1,5 +1,5 @@
 """The study kind's format steps: rewrite an older study result in a newer format
-without recomputing a value (declared in :data:`study.engine.variables.STUDY_FORMATS`,
+without recomputing a value (declared in :data:`study.studies.variables.STUDY_FORMATS`,
 run by :func:`study.engine.upgrade.upgrade_result`)."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from study.engine.layout import method_attributes, protocol_attributes, study_summary
-from study.engine.study_spec import parse_spec
-from study.engine.variables import VARIABLES
+from study.studies.layout import method_attributes, protocol_attributes, study_summary
+from study.studies.spec import parse_spec
+from study.studies.variables import VARIABLES
 
 __all__ = ["to_format_3", "to_format_4", "to_format_5"]
 
@@ -57,7 +57,7 @@ def to_format_5(nc: Any) -> None:
     ``direction`` dimension), no ``unswept`` and no ``section`` variables. Format 5
     requires ``study_start`` and ``study_start_kind``: they are written from the
     embedded spec, which decided the numbers (``"release"`` for every file 0.3.0
-    wrote), as :func:`study.engine.layout.protocol_attributes` writes them for a new
+    wrote), as :func:`study.studies.layout.protocol_attributes` writes them for a new
     file. No value is read or written; the flags are already today's.
 
     Parameters

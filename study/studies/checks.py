@@ -1,5 +1,5 @@
 """The study kind's own checks of its result files (:func:`study_problems`, registered
-as its validator in :mod:`study.engine.study_kind`)."""
+as its validator in :mod:`study.studies.kind`)."""
 
 from __future__ import annotations
 
@@ -9,9 +9,6 @@ from typing import Any
 import numpy as np
 
 from study.engine.kinds import ResultFormat
-from study.engine.layout import method_attributes, variable_dims
-from study.engine.observables import variables_of
-from study.engine.study_spec import StudySpec, parse_spec
 from study.engine.validation.checks import (
     Checker,
     checksum_problems,
@@ -34,10 +31,13 @@ from study.engine.validation.header import (
     short,
 )
 from study.engine.validation.reading import StoredFile, read_slab, slabs
-from study.engine.variables import RESULT_FORMAT, STALE_RESULT_FORMATS, VARIABLES
 from study.model.contact import DEFAULT_LIFT_OFF
 from study.model.status import INVALID_STATUSES, Status
 from study.solvers.basins import NO_ATTRACTOR
+from study.studies.layout import method_attributes, variable_dims
+from study.studies.observables import variables_of
+from study.studies.spec import StudySpec, parse_spec
+from study.studies.variables import RESULT_FORMAT, STALE_RESULT_FORMATS, VARIABLES
 
 __all__ = ["declared_flag_problems", "method_problems", "study_problems"]
 
@@ -66,7 +66,7 @@ _ABSENT_MEANS = {"study_lift_off": DEFAULT_LIFT_OFF, "study_start": "release",
 def method_problems(attrs: Mapping[str, Any], spec: StudySpec) -> list[str]:
     """The method attributes a file holds that differ from its embedded spec's.
 
-    Every key of :func:`study.engine.layout.method_attributes` that the file has is
+    Every key of :func:`study.studies.layout.method_attributes` that the file has is
     compared with the spec's value (texts as texts, numbers exactly). A key the file
     lacks is no problem here (files of older versions do not have them all; the result
     schema decides which are required), except ``study_lift_off``, whose absence has
@@ -164,7 +164,7 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
                             current: bool = True) -> list[str]:
     """Coordinates and variables against the spec and the declarations (a file of an
     older format may declare fewer flags, see :func:`declared_flag_problems`; any file
-    may lack an optional variable, :attr:`study.engine.variables.Variable.optional`)."""
+    may lack an optional variable, :attr:`study.studies.variables.Variable.optional`)."""
     problems = []
     variables = meta.variables
     for axis in spec.axes:

@@ -3,8 +3,8 @@
 :func:`compute_map` writes the study spec its arguments describe (kept in the
 dataset's ``study_spec`` attribute: ``study run`` on that text writes the same
 values to a file), validates it as a spec file is validated, and computes it through
-the engine's own pieces: the chunks of :mod:`study.engine.sweep`, the observables of
-:mod:`study.engine.observables` and the result layout of :mod:`study.engine.layout`. Variables,
+the engine's own pieces: the chunks of :mod:`study.studies.sweep`, the observables of
+:mod:`study.studies.observables` and the result layout of :mod:`study.studies.layout`. Variables,
 dims, units, long names, flag attributes and status names are those of the file.
 """
 
@@ -21,21 +21,6 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
-from study.engine.layout import (
-    coordinates,
-    data_variables,
-    direction_methods,
-    method_attributes,
-    method_of,
-    observables_by_grid,
-    pad_branches,
-    plan_study,
-)
-from study.engine.observables import OBSERVABLES, UNSWEPT_VARIABLES, BasinSettings
-from study.engine.study_spec import StudySpec, parse_spec
-from study.engine.study_types import STRUCTURE_PARAMETERS
-from study.engine.sweep import Rectangle, Task, compute_task
-from study.engine.variables import GRID_SIZES
 from study.model.contact import DEFAULT_COUPLING
 from study.model.inputs import (
     SuspectInputWarning,
@@ -48,6 +33,21 @@ from study.model.parameters import STRUCTURE as STRUCTURE_TABLE
 from study.model.starts import DEFAULT_START, Drop, toml_value
 from study.model.structure import Structure, check_structure
 from study.solvers.settings import SolverSettings, check_coupling, check_flight, check_start
+from study.studies.layout import (
+    coordinates,
+    data_variables,
+    direction_methods,
+    method_attributes,
+    method_of,
+    observables_by_grid,
+    pad_branches,
+    plan_study,
+)
+from study.studies.observables import OBSERVABLES, UNSWEPT_VARIABLES, BasinSettings
+from study.studies.spec import StudySpec, parse_spec
+from study.studies.spec_types import STRUCTURE_PARAMETERS
+from study.studies.sweep import Rectangle, Task, compute_task
+from study.studies.variables import GRID_SIZES
 from study.version import VERSION
 
 __all__ = ["MAP_SPEC_SOURCE", "compute_map", "map_spec_text"]
@@ -184,11 +184,11 @@ def compute_map(
         Drive acceleration amplitudes [m s-2], 1-D, finite, >= 0, distinct.
     observables : list of str, default ("thresholds", "velocity")
         What to compute, any of a spec's ``[study] observables``
-        (:data:`study.engine.observables.OBSERVABLES`: ``"velocity"``,
+        (:data:`study.studies.observables.OBSERVABLES`: ``"velocity"``,
         ``"thresholds"``, ``"floquet"``, ...; ``"frontier"`` needs ascending ``f``).
         Some apply to one coupling or to flight only (``"floquet"``, ``"paper_model"``:
         two-way; ``"without_flight"``: flight), as each declares
-        (:attr:`study.engine.observables.Observable.couplings`, ``flight``; the user
+        (:attr:`study.studies.observables.Observable.couplings`, ``flight``; the user
         guide's table of observables lists them).
     coupling : {"one-way", "two-way"}, default "one-way"
         The paper's model, or the mode also forced by the sliding base
@@ -239,7 +239,7 @@ def compute_map(
         [m s-1], ``status``, ...), ``(*sweep, a, branch)`` for the frontier; the
         fixed structure parameters are scalar coordinates. Global attributes say how
         the values were computed, as a result file's do
-        (:func:`study.engine.layout.method_attributes`: ``study_solver_method``,
+        (:func:`study.studies.layout.method_attributes`: ``study_solver_method``,
         ``study_coupling``, ``study_friction_law``, ``study_lift_off``, with flight
         ``study_lift_off_restitution``, and ``source``), and hold the equivalent spec
         file (``study_spec``): ``study run`` on it writes this dataset's variables to a

@@ -42,12 +42,6 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.observables import (
-    BASIN_KEYS,
-    METHODS,
-    BasinSettings,
-    unmet_needs,
-)
 from study.engine.spec_files import (
     SpecError,
     axis_length,
@@ -57,26 +51,6 @@ from study.engine.spec_files import (
     schema_error,
     schema_problems,
 )
-from study.engine.study_canonical import canonical_form
-from study.engine.study_schema import spec_schema
-from study.engine.study_size import MAX_CHUNKS, check_size, default_chunk_points
-from study.engine.study_types import (
-    DRIVE_PARAMETERS,
-    EXACT_KEYS,
-    INTEGRATOR_KEYS,
-    OBSERVABLES,
-    PROTOCOL_DIRECTIONS,
-    PROTOCOL_KEYS,
-    SOLVER_OBSERVABLES,
-    SPEC_SCHEMA_PATH,
-    STRUCTURE_PARAMETERS,
-    SWEEPABLE,
-    Axis,
-    MassModel,
-    StudySpec,
-    build_structure,
-)
-from study.engine.variables import DEFAULT_MAX_ATTRACTORS
 from study.model import starts
 from study.model.contact import (
     DEFAULT_COUPLING,
@@ -103,6 +77,32 @@ from study.solvers.frontier import finest_tolerance
 from study.solvers.integrator import IntegratorSettings
 from study.solvers.protocol import SWEEP_AXES
 from study.solvers.settings import SolverSettings
+from study.studies.canonical import canonical_form
+from study.studies.observables import (
+    BASIN_KEYS,
+    METHODS,
+    BasinSettings,
+    unmet_needs,
+)
+from study.studies.schema import spec_schema
+from study.studies.size import MAX_CHUNKS, check_size, default_chunk_points
+from study.studies.spec_types import (
+    DRIVE_PARAMETERS,
+    EXACT_KEYS,
+    INTEGRATOR_KEYS,
+    OBSERVABLES,
+    PROTOCOL_DIRECTIONS,
+    PROTOCOL_KEYS,
+    SOLVER_OBSERVABLES,
+    SPEC_SCHEMA_PATH,
+    STRUCTURE_PARAMETERS,
+    SWEEPABLE,
+    Axis,
+    MassModel,
+    StudySpec,
+    build_structure,
+)
+from study.studies.variables import DEFAULT_MAX_ATTRACTORS
 
 #: The public names, as before the spec layer was split (types, schema and size guard
 #: have their own modules; these are re-exported).

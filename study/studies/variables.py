@@ -1,7 +1,7 @@
 """Every data variable a study result can hold, declared once.
 
 A :class:`Variable` carries what the file needs (dims, dtype, units, long_name, CF
-flags) and what validation checks; :mod:`study.engine.observables` groups them into the
+flags) and what validation checks; :mod:`study.studies.observables` groups them into the
 observables a spec asks for and says how each is computed. Nothing here computes.
 """
 
@@ -45,18 +45,18 @@ STUDY_FORMATS = (
     ResultFormat(3, "0.2.0", "the friction and lift-off laws with their parameters as "
                  "attributes, and every status declared (bouncing included)",
                  "study-result-v1.format-3",
-                 upgrade="study.engine.study_upgrade:to_format_3"),
+                 upgrade="study.studies.upgrade:to_format_3"),
     ResultFormat(4, "0.3.0", "irregular motions measured: statuses chaotic and "
                  "quasi_periodic, nonconvergence average_budget, the irregular observable's "
                  "variables", "study-result-v1.format-4",
-                 upgrade="study.engine.study_upgrade:to_format_4"),
+                 upgrade="study.studies.upgrade:to_format_4"),
     ResultFormat(5, "0.4.0", "the start recorded (study_start, study_start_kind, a drop's "
                  "height and phase), slow sweeps (study_protocol and its along and "
                  "direction, jumped, the unswept observable's variables, a direction "
                  "dimension both ways), the section observable's variables and the basins "
                  "observable's (study_basins_* attributes, an attractor dimension)",
                  "study-result-v1",
-                 upgrade="study.engine.study_upgrade:to_format_5"),
+                 upgrade="study.studies.upgrade:to_format_5"),
 )
 
 #: The format this version writes.

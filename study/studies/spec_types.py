@@ -1,6 +1,6 @@
 """The parsed study spec: its frozen types (:class:`StudySpec`, :class:`Axis`,
 :class:`MassModel`) and the vocabulary of keys they are built from
-(:mod:`study.engine.study_spec` parses a file into them)."""
+(:mod:`study.studies.spec` parses a file into them)."""
 
 from __future__ import annotations
 
@@ -12,15 +12,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.observables import OBSERVABLES as OBSERVABLE_REGISTRY
-from study.engine.observables import (
-    BasinSettings,
-)
 from study.engine.spec_files import (
     SCHEMA_DIR,
     canonical_sha256,
 )
-from study.engine.variables import DEFAULT_MAX_ATTRACTORS
 from study.model.contact import (
     DEFAULT_COUPLING,
     DEFAULT_LIFT_OFF,
@@ -35,6 +30,11 @@ from study.model.structure import Structure, tilt_warnings
 from study.solvers.integrator import IntegratorSettings
 from study.solvers.protocol import SWEEP_DIRECTIONS
 from study.solvers.settings import SolverSettings
+from study.studies.observables import OBSERVABLES as OBSERVABLE_REGISTRY
+from study.studies.observables import (
+    BasinSettings,
+)
+from study.studies.variables import DEFAULT_MAX_ATTRACTORS
 
 __all__ = [
     "DRIVE_PARAMETERS",
@@ -62,7 +62,7 @@ SPEC_SCHEMA = "study-spec-v1"
 SPEC_SCHEMA_PATH = SCHEMA_DIR / f"{SPEC_SCHEMA}.schema.json"
 
 #: Observables a study can ask for, in the order they appear in a dataset (declared
-#: in :mod:`study.engine.observables`).
+#: in :mod:`study.studies.observables`).
 OBSERVABLES = tuple(OBSERVABLE_REGISTRY)
 #: Observables that need the steady-state solver (and hence the drive acceleration a).
 SOLVER_OBSERVABLES = tuple(
@@ -241,9 +241,9 @@ class StudySpec:
     @property
     def dimension_sizes(self) -> dict[str, int]:
         """Lengths of the dimensions after a drive point's
-        (:data:`study.engine.variables.GRID_SIZES`, the attractor slots set by
+        (:data:`study.studies.variables.GRID_SIZES`, the attractor slots set by
         ``[basins] max_attractors``): the ``sizes`` of
-        :meth:`study.engine.variables.Variable.trailing`."""
+        :meth:`study.studies.variables.Variable.trailing`."""
         slots = self.basins.max_attractors if self.basins is not None \
             else DEFAULT_MAX_ATTRACTORS
         return {"attractor": slots}

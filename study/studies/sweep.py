@@ -27,8 +27,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from study.engine.observables import OBSERVABLES, Method, PointWork
 from study.model.structure import Structure
+from study.studies.observables import OBSERVABLES, Method, PointWork
 
 __all__ = [
     "GRAINS",
@@ -205,7 +205,7 @@ def unit_grain(method: Method, rectangle: Rectangle) -> str:
 
     A slow sweep (``method.protocol``) solves each line of its swept axis in order, the
     motion carried from point to point: along ``a`` a run is a row of ``f``, along
-    ``f`` a column of ``a`` (:func:`study.engine.study_kind.whole_runs` makes every
+    ``f`` a column of ``a`` (:func:`study.studies.kind.whole_runs` makes every
     missing rectangle hold whole runs). With ``[solver] continuation`` the two-way
     driver continues each orbit from the points before it on a line
     (:func:`study.kernels.two_way.points.sweep_runs`: a row of the rectangle if it has

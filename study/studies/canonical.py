@@ -7,11 +7,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from study.engine.study_types import Axis, MassModel
 from study.model.contact import DEFAULT_FRICTION, Friction
 from study.model.structure import Structure
 from study.solvers.integrator import IntegratorSettings
 from study.solvers.settings import SolverSettings
+from study.studies.spec_types import Axis, MassModel
 
 __all__ = ["canonical_form"]
 
@@ -25,7 +25,7 @@ def canonical_form(study: dict[str, Any], observables: tuple[str, ...],
     so a spec that spells them out is the same study.
 
     Thirteen arguments: the parts of a spec, each computed and checked by its own step
-    of :func:`study.engine.study_spec.parse_spec`; gathering them into an object would
+    of :func:`study.studies.spec.parse_spec`; gathering them into an object would
     only rename them.
     """
     structure_canonical = dict(fixed)
