@@ -489,7 +489,16 @@ def solution_values(work: PointWork, names: tuple[str, ...]) -> dict[str, NDArra
     """The result variables ``names``, each read from the study's solution by the
     :class:`~study.solvers.steady.SteadyState` field it declares
     (:attr:`study.studies.variables.Variable.field`)."""
-    return {name: getattr(work.solution, VARIABLES[name].field) for name in names}
+    values = {name: getattr(work.solution, VARIABLES[name].field) for name in names}
+    missing = [name for name, value in values.items() if value is None]
+    if missing:
+        # A declaration error, not a user's: tests/unit/test_solver_output_declarations.py
+        # checks that every kernel an observable runs on has each of its columns.
+        raise RuntimeError(
+            f"the solver computed no {', '.join(VARIABLES[n].field for n in missing)} for "
+            f"the variables {', '.join(missing)}: its kernel's OUTPUT_COLUMNS lack the "
+            "column (add it there, or restrict the observable's couplings)")
+    return values
 
 
 #: The variables of the velocity observable, of its flight and of the diagnostics: each

@@ -22,6 +22,9 @@ from study.studies.observables import OBSERVABLES, PointWork, solution_values
 from study.studies.variables import VARIABLES, solver_output
 
 TABLES = (one_way.OUTPUT_COLUMNS, points.OUTPUT_COLUMNS)
+#: The exact solver's kernel for each coupling: whose columns a study's solution has.
+KERNEL_COLUMNS = {"one-way": {name for name, _, _ in one_way.OUTPUT_COLUMNS},
+                  "two-way": {name for name, _, _ in points.OUTPUT_COLUMNS}}
 
 
 def column_units(column: str) -> set[str]:
@@ -79,3 +82,21 @@ def test_a_new_output_needs_only_its_column_field_and_variable() -> None:
     assert read["velocity"] is solution.velocity
     assert read["forward_slip_fraction"] is solution.forward_fraction
     assert read["nonconvergence"] is solution.reason
+
+
+@pytest.mark.parametrize("observable", sorted(OBSERVABLES))
+def test_every_kernel_an_observable_runs_on_computes_its_solver_outputs(
+        observable: str) -> None:
+    """An output that one kernel computes and another does not must be in both tables
+    or its observable restricted to the couplings that compute it (flight is two-way
+    only): else a study writes a variable its solver left unset."""
+    declared = OBSERVABLES[observable]
+    couplings = declared.couplings or tuple(KERNEL_COLUMNS)
+    for names, flying in ((declared.variables, False), (declared.flight_variables, True)):
+        for coupling in ("two-way",) if flying else couplings:
+            for name in names:
+                field = VARIABLES[name].field
+                if field:
+                    assert STEADY_FIELDS[field][0] in KERNEL_COLUMNS[coupling], (
+                        f"{observable}: {name} ({field}) is not computed by the "
+                        f"{coupling} kernel")
