@@ -539,15 +539,13 @@ def _floquet(work: PointWork) -> dict[str, NDArray[Any]]:
 
 
 def _irregular(work: PointWork) -> dict[str, NDArray[Any]]:
-    values = solution_values(work, ("averaged_velocity", "velocity_error", "averaged_periods",
-                                    "lyapunov_exponent", "lyapunov_error"))
+    # In the file's order: the 95 % interval right after the error it is made from.
+    values = solution_values(work, ("averaged_velocity", "velocity_error"))
     low, high = velocity_interval(values["averaged_velocity"], values["velocity_error"])
-    # The file's order: the interval after the error.
-    return {"averaged_velocity": values["averaged_velocity"],
-            "velocity_error": values["velocity_error"],
-            "averaged_velocity_low": low, "averaged_velocity_high": high,
-            **{name: values[name]
-               for name in ("averaged_periods", "lyapunov_exponent", "lyapunov_error")}}
+    values.update(averaged_velocity_low=low, averaged_velocity_high=high)
+    values.update(solution_values(work, ("averaged_periods", "lyapunov_exponent",
+                                         "lyapunov_error")))
+    return values
 
 
 def _section(work: PointWork) -> dict[str, NDArray[Any]]:
