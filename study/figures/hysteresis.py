@@ -5,7 +5,9 @@ Drawn from a study with a slow-sweep protocol in both directions (``[sweep] prot
 ``down``, the ``jumped`` flag beside the velocity). Along one line of the swept axis
 (the other drive axis of one value, or selected with ``--sel``): the mean velocity
 swept up and swept down against the swept value, the points where a sweep jumped
-marked, the points where it started again by the declared start (the point before had
+marked (and, where the file holds the ``jumps`` observable, the bifurcation each jump
+was located at, with the kind's marker and its drive written beside), the points where
+it started again by the declared start (the point before had
 no state to carry: not converged, lift-off without flight, the friction paradox;
 :func:`restarted`) and the points without a velocity marked on the axis, and where a
 file holds it the velocity each point reaches from its start alone
@@ -34,6 +36,7 @@ from study.figures.common import (
     selection_text,
     structure_text,
 )
+from study.model.bifurcations import kind_of_code
 from study.model.status import Status
 
 __all__ = ["compose", "differing", "draw", "restarted", "sweep_axis"]
@@ -219,6 +222,9 @@ def _line(ax: plt.Axes, dataset: xr.Dataset, axis: str,
             ax.plot(x[jumped], v[jumped], "o", markersize=9, markerfacecolor="none",
                     markeredgecolor=colour, markeredgewidth=1.5,
                     label=f"jumped (swept {direction})")
+        if "jump_bifurcation" in dataset:
+            _located_jumps(ax, dataset.sel(direction=direction), axis, x, v, colour,
+                           direction)
         if again.any():
             ax.plot(x[again], v[again], "s", markersize=8, markerfacecolor="none",
                     markeredgecolor=colour, markeredgewidth=1.2, zorder=4,
@@ -241,6 +247,28 @@ def _line(ax: plt.Axes, dataset: xr.Dataset, axis: str,
     ax.set_xlabel(_AXES[axis])
     ax.set_ylabel("mean velocity [mm s$^{-1}$]")
     return jumps, restarts
+
+
+def _located_jumps(ax: plt.Axes, dataset: xr.Dataset, axis: str, x: np.ndarray,
+                   v: np.ndarray, colour: str, direction: str) -> None:
+    """Each jump of one direction at the bifurcation where it was located (the
+    ``jumps`` observable): the kind's marker on the branch the sweep rode, at the drive
+    located, its value written beside, and a dotted line down (or up) to the motion the
+    sweep landed on."""
+    kinds = dataset["jump_bifurcation"].values
+    where = dataset[f"jump_{axis}"].values
+    velocity = 1e3 * dataset["jump_velocity"].values
+    units = "Hz" if axis == "f" else "m s$^{-2}$"
+    for index in np.flatnonzero(kinds > 0):
+        kind = kind_of_code(int(kinds[index]))
+        ax.plot([where[index], where[index], x[index]],
+                [velocity[index], v[index], v[index]], ":", color=colour, linewidth=1.0)
+        ax.plot(where[index], velocity[index], kind.marker, markersize=8, color=colour,
+                markeredgecolor="black", markeredgewidth=0.6, zorder=6,
+                label=f"{kind.name.replace('_', ' ')} located (swept {direction})")
+        ax.annotate(f"{where[index]:.5f} {units}", (where[index], velocity[index]),
+                    textcoords="offset points", xytext=(-6, 6 if direction == "up" else -12),
+                    ha="right", fontsize=7, color=colour)
 
 
 def _map(dataset: xr.Dataset, axis: str) -> tuple[plt.Figure, str]:

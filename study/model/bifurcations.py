@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 from study.model import codes
 
-__all__ = ["CURVE_ENDS", "ENDS", "KINDS", "BifurcationKind", "BranchEnd", "curve_end_named",
+__all__ = ["CURVE_ENDS", "ENDS", "JUMP_FLAGS", "JUMP_FLAG_VALUES", "JUMP_NONE",
+           "JUMP_UNLOCATED", "KINDS", "BifurcationKind", "BranchEnd", "curve_end_named",
            "end_named", "kind_named", "kind_of_code", "markdown_table"]
 
 
@@ -87,6 +88,18 @@ KINDS = (
         "mu - 1 for the real multiplier nearest +1, located by regula falsi", "X"),
 )
 
+
+#: A slow sweep's point that did not jump: no bifurcation to locate.
+JUMP_NONE = 0
+#: A point where the sweep jumped but the branch of the previous point's orbit shows no
+#: bifurcation between the two drives that ends its stable motion (it goes on stable
+#: and the carried state left its basin, or the motion before had no orbit to follow).
+JUMP_UNLOCATED = -1
+#: The flags of a located jump (``jump_bifurcation``): ``unlocated``, ``no_jump`` and
+#: every kind, by its name.
+JUMP_FLAGS = ("unlocated", "no_jump", *(kind.name for kind in KINDS))
+#: Their codes, in the order of :data:`JUMP_FLAGS`.
+JUMP_FLAG_VALUES = (JUMP_UNLOCATED, JUMP_NONE, *(kind.code for kind in KINDS))
 
 @dataclass(frozen=True)
 class BranchEnd:

@@ -41,6 +41,7 @@ from study.solvers.basins import (
 from study.solvers.exact import steady_state
 from study.solvers.frontier import frontier_from_grid
 from study.solvers.integrator import IntegratorSettings, integrated_steady_state
+from study.solvers.jumps import sweep_jumps
 from study.solvers.protocol import SweptState, slow_sweep
 from study.solvers.section import SECTION_PERIODS, phase_section
 from study.solvers.settings import SolverSettings
@@ -315,6 +316,10 @@ class Observable:
         once whatever the sweep's direction (no ``direction`` dimension), and kept
         under the key of a study without a protocol. Only with a protocol: without one
         they would be the velocity itself.
+    swept : bool
+        Its values are about the slow sweep's path (where it jumped), so it needs
+        ``[sweep] protocol``; with one it is computed in each direction, like the
+        velocity.
     cached : bool
         Whether computed values are kept for reuse by later runs.
     settings : callable or None
@@ -350,6 +355,7 @@ class Observable:
     flight_variables: tuple[str, ...] = ()
     protocol_variables: tuple[str, ...] = ()
     unswept: bool = False
+    swept: bool = False
     cached: bool = False
     settings: Callable[[Method], dict[str, Any]] | None = field(default=None, repr=False)
     methods: tuple[str, ...] | None = None
@@ -383,7 +389,7 @@ class Observable:
         """Whether it applies to some methods, couplings or flight only (or with a slow
         sweep only: :attr:`unswept`)."""
         return (self.methods, self.couplings, self.flight) != (None, None, None) \
-            or self.unswept
+            or self.unswept or self.swept
 
     def needs(self) -> str:
         """What it needs of ``[solver]``, in the words of a spec: ``coupling =
@@ -449,15 +455,17 @@ def unmet_needs(requested: tuple[str, ...] | list[str], method: str, coupling: s
     given = {"method": f'method = "{method}"', "coupling": f'coupling = "{coupling}"',
              "flight": f"flight = {'true' if flight else 'false'}"}
     lines = []
+    unprotocolled = ", ".join(n for n, other in OBSERVABLES.items()
+                              if not other.unswept and not other.swept)
     for name, o in OBSERVABLES.items():
         if name not in requested:
             continue
-        if o.unswept and not protocol:
+        if (o.unswept or o.swept) and not protocol:
             lines.append(
                 f'[study] observable "{name}" needs [sweep] protocol: {o.why}; got no '
                 f'protocol (allowed: with [sweep] protocol = {{ along = "f" or "a", '
                 f'direction = "up", "down" or "both" }}; observables without a protocol: '
-                f"{', '.join(n for n, other in OBSERVABLES.items() if not other.unswept)})")
+                f"{unprotocolled})")
             continue
         if ((o.methods is None or method in o.methods)
                 and (o.couplings is None or coupling in o.couplings)
@@ -619,6 +627,16 @@ def _basins(work: PointWork) -> dict[str, NDArray[Any]]:
     return values
 
 
+def _jumps(work: PointWork) -> dict[str, NDArray[Any]]:
+    # A task of a slow sweep holds whole runs: the point before each jump is in it.
+    located = sweep_jumps(work.structure, np.ravel(work.f), np.ravel(work.a), work.swept,
+                          flight=work.method.flight, settings=work.method.solver)
+    return {"jump_bifurcation": located.kind, "jump_f": located.f, "jump_a": located.a,
+            "jump_velocity": located.velocity,
+            "jump_multiplier_modulus": located.multiplier_modulus,
+            "jump_multiplier_angle": np.degrees(located.multiplier_angle)}
+
+
 def _unswept(work: PointWork) -> dict[str, NDArray[Any]]:
     s = work.unswept
     return {"velocity_unswept": s.velocity, "status_unswept": s.status}
@@ -721,6 +739,17 @@ _DECLARED = (
                requires=("velocity",), cached=True, unswept=True,
                why="it is each point's answer from its start alone beside the swept "
                "velocity; without a protocol the study's velocity already is that answer"),
+    Observable("jumps", "where a slow sweep jumps, located exactly: at each jumped point "
+               "the bifurcation (a fold, a lift-off, a non-smooth end, a loss of stability) "
+               "at which the branch of the previous point's orbit, followed by "
+               "pseudo-arclength continuation towards this drive, stops being the stable "
+               "motion the sweep rode, its drive to 1e-10, its velocity and multiplier "
+               "(one branch traced per jump)", "point",
+               ("jump_bifurcation", "jump_f", "jump_a", "jump_velocity",
+                "jump_multiplier_modulus", "jump_multiplier_angle"), _jumps,
+               requires=("velocity",), cached=True, swept=True,
+               why="it locates where the slow sweep jumped; without a protocol nothing "
+               "is swept"),
     Observable("frontier", "zero-velocity frontier f*(a), refined by bisection", "frontier",
                ("frontier_frequency", "frontier_kind", "frontier_direction",
                 "frontier_bracket"), _frontier, requires=("velocity",)),
@@ -764,7 +793,7 @@ def markdown_table() -> str:
     lines = ["| observable | what it computes | grid | needs | variables |",
              "|---|---|---|---|---|"]
     for name, o in OBSERVABLES.items():
-        needs = (f"`[sweep] protocol`: {o.why}" if o.unswept
+        needs = (f"`[sweep] protocol`: {o.why}" if o.unswept or o.swept
                  else f"`{o.needs()}`: {o.why}" if o.needs_anything
                  else "any method and coupling" if o.grid != "row" else "no solver")
         variables = ", ".join(f"`{v}`" for v in o.variables)

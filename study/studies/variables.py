@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from study.engine.kinds import ResultFormat
+from study.model.bifurcations import JUMP_FLAG_VALUES, JUMP_FLAGS
 from study.model.statistics import Z_95
 from study.model.status import NonConvergence, Status
 from study.model.units import (
@@ -235,6 +236,10 @@ _EMPTY_SLOT = "NaN (missing) exactly where basin_status is no_attractor (a slot 
 _BASIN_STARTS = ("the seeded starts of [basins] (the solver's start, then the base at rest "
                  "at drawn drive phases with the mode at drawn multiples of its steady "
                  "response, with flight every third one dropped from a drawn height)")
+
+#: What each located jump's value says where there is none.
+_NO_JUMP = "NaN (missing) exactly where jump_bifurcation is no_jump or unlocated"
+
 
 def solver_output(name: str, field: str, long_name: str, **declared: Any) -> Variable:
     """The result variable ``name`` holding the solution's
@@ -470,6 +475,36 @@ _DECLARED = (
              "on another motion, whatever the velocity does; the doubled orbit of a "
              "period doubling (and a period halving) is followed; the first point of a "
              "run, started by [solver] start, is followed"),
+    Variable("jump_bifurcation", "point", "int8", DIMENSIONLESS,
+             "the bifurcation at which the motion the slow sweep rode ends before this "
+             "point, where the sweep jumped ([sweep] protocol)",
+             flags=JUMP_FLAGS, flag_values=JUMP_FLAG_VALUES,
+             comment="the previous point's orbit followed along its branch towards this "
+             "drive by pseudo-arclength continuation on the exact period map: the first "
+             "located bifurcation after which it is no stable orbit going on (a fold, a "
+             "lift-off, a non-smooth end; a period doubling, torus, branch point or "
+             "grazing after which it is unstable); no_jump where jumped is followed; "
+             "unlocated where the sweep jumped but the branch goes on stable to this "
+             "drive (the carried state left the orbit's basin) or the motion before has "
+             "no orbit (an irregular one)"),
+    Variable("jump_f", "point", "float64", HERTZ,
+             "drive frequency of the bifurcation where the slow sweep's motion ends",
+             comment=f"located on the branch to 1e-10 of the drive; {_NO_JUMP}"),
+    Variable("jump_a", "point", "float64", METRE_PER_SECOND_SQUARED,
+             "drive acceleration of the bifurcation where the slow sweep's motion ends",
+             comment=f"located on the branch to 1e-10 of the drive; {_NO_JUMP}"),
+    Variable("jump_velocity", "point", "float64", METRE_PER_SECOND,
+             "mean velocity of the orbit the slow sweep rode at the bifurcation where it "
+             "ends, positive forward", comment=_NO_JUMP),
+    Variable("jump_multiplier_modulus", "point", "float64", DIMENSIONLESS,
+             "modulus of the Floquet multiplier that crosses at the bifurcation where the "
+             "slow sweep's motion ends",
+             comment=f"1 at a fold, a period doubling or a torus; the largest modulus "
+             f"where the bifurcation is located by bisection; {_NO_JUMP}"),
+    Variable("jump_multiplier_angle", "point", "float64", DEGREE,
+             "argument of that Floquet multiplier",
+             comment=f"0 at a fold (the multiplier +1), 180 at a period doubling (-1); "
+             f"{_NO_JUMP}"),
     Variable("velocity_unswept", "point", "float64", METRE_PER_SECOND,
              "mean steady velocity each point reaches from the declared start alone, "
              "beside a slow sweep ([sweep] protocol): the same study's velocity without "

@@ -117,6 +117,9 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         "velocity_error": ("status", _INVALID),
         "lyapunov_exponent": ("status", _INVALID),
         "lyapunov_error": ("status", _INVALID),
+        # A slow sweep's located jumps: none where it did not jump or none was found.
+        **{f"jump_{name}": ("jump_bifurcation", (-1, 0))
+           for name in ("f", "a", "velocity", "multiplier_modulus", "multiplier_angle")},
         "frontier_frequency": ("frontier_kind", (0,)),
         "frontier_bracket": ("frontier_kind", (0,)),
         # Basins: an empty attractor slot (basin_status no_attractor, -1) holds NaN, and

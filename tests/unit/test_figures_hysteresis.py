@@ -124,3 +124,36 @@ def test_a_computed_file_shows_each_points_answer_from_its_start_beside_the_swee
     assert np.all((np.abs(alone - up) <= scale) | (np.abs(alone - down) <= scale))
     paths = draw_figure("hysteresis", dataset, tmp_path / "figure")
     assert all(p.exists() and p.stat().st_size > 0 for p in paths)
+
+
+def test_each_located_jump_is_drawn_at_its_bifurcation(line):
+    # The jumps observable's values beside the sweeps: the fold the up sweep left the
+    # forward hop at, marked where it was located (not at a grid point) by the fold's
+    # declared marker, its drive written beside it.
+    from study.model.bifurcations import kind_named
+    from study.solvers.jumps import sweep_jumps
+
+    f, a = line["f"].values, line["a"].values
+    located = {d: sweep_jumps(STRUCTURE, f, a, slow_sweep(STRUCTURE, f, a, along="f",
+                                                          direction=d, flight=True),
+                              flight=True) for d in ("up", "down")}
+    dims = ("direction", "f", "a")
+    with_jumps = line.assign(
+        jump_bifurcation=(dims, np.stack([located[d].kind for d in ("up", "down")])),
+        jump_f=(dims, np.stack([located[d].f for d in ("up", "down")])),
+        jump_a=(dims, np.stack([located[d].a for d in ("up", "down")])),
+        jump_velocity=(dims, np.stack([located[d].velocity for d in ("up", "down")])))
+    fold = kind_named("fold")
+    where = float(np.nanmax(located["up"].f))
+    assert 16.0 < where < 16.4 and np.isnan(located["down"].f).all()
+    fig, _ = compose(with_jumps)
+    ax = fig.axes[0]
+    marks = [line_ for line_ in ax.get_lines() if line_.get_label() == "fold located (swept up)"]
+    assert len(marks) == 1 and marks[0].get_marker() == fold.marker
+    np.testing.assert_allclose(marks[0].get_xdata(), [where], rtol=0.0, atol=0.0)
+    np.testing.assert_allclose(marks[0].get_ydata(), [1e3 * np.nanmax(located["up"].velocity)],
+                               rtol=0.0, atol=0.0)
+    assert f"{where:.5f} Hz" in [text.get_text() for text in ax.texts]
+    # Without the observable's values the figure draws no located jump.
+    fig, _ = compose(line)
+    assert not [x for x in fig.axes[0].get_lines() if "located" in str(x.get_label())]

@@ -65,8 +65,8 @@ NEEDY = [name for name, o in OBSERVABLES.items() if o.needs_anything]
 
 def _applies(o: Observable, method: str, coupling: str, flight: bool) -> bool:
     """Whether ``o`` applies to a spec of these settings without a slow sweep (an
-    unswept observable needs one)."""
-    return (not o.unswept and (o.methods is None or method in o.methods)
+    unswept observable needs one, and so does one of the sweep's path)."""
+    return (not o.unswept and not o.swept and (o.methods is None or method in o.methods)
             and (o.couplings is None or coupling in o.couplings)
             and (o.flight is None or o.flight == flight))
 
@@ -91,6 +91,7 @@ def test_the_known_needs_are_declared():
     assert OBSERVABLES["paper_model"].couplings == ("two-way",)
     assert OBSERVABLES["without_flight"].flight is True
     assert OBSERVABLES["unswept"].unswept and OBSERVABLES["unswept"].needs_anything
+    assert OBSERVABLES["jumps"].swept and OBSERVABLES["jumps"].needs_anything
     for name in ("resonance", "thresholds", "lift_off", "velocity", "diagnostics",
                  "frontier"):
         assert not OBSERVABLES[name].needs_anything, name
@@ -110,7 +111,7 @@ def test_each_declared_need_is_enforced_by_the_spec(name, method, coupling, flig
     message = str(refused.value)
     # One problem: the observable's, alone on its line, naming the file and the key.
     assert "\n" not in message, message
-    if o.unswept:
+    if o.unswept or o.swept:
         assert message.startswith(f'{PATH}: [study] observable "{name}" needs [sweep] '
                                   "protocol: "), message
         assert "got no protocol (allowed: with [sweep] protocol = " in message
@@ -159,7 +160,8 @@ def test_every_unmet_need_is_reported_at_once_one_line_each():
 def test_unmet_needs_follow_the_registry_order_and_ignore_what_applies():
     assert unmet_needs(list(OBSERVABLES), "exact", "two-way", True, protocol=True) == []
     assert [line.split('"')[1] for line in
-            unmet_needs(list(OBSERVABLES), "exact", "two-way", True)] == ["unswept"]
+            unmet_needs(list(OBSERVABLES), "exact", "two-way", True)] == ["unswept",
+                                                                        "jumps"]
     names = [line.split('"')[1] for line in
              unmet_needs(list(reversed(OBSERVABLES)), "integrator", "one-way", False)]
     assert names == [n for n in OBSERVABLES if n in names]
