@@ -1,0 +1,374 @@
+"""A bifurcation diagram of branches: where a periodic motion exists, where it is stable
+and where it bifurcates, against the drive parameter it was continued in.
+
+Drawn from :func:`study.branch` (and :func:`study.doubled_branch`) results, not from a
+result file: no workflow writes branches yet, so this figure is not in
+:data:`study.figures.FIGURES` and is called from Python. Top: each branch's mean velocity
+against the swept drive, solid where its orbit is stable and dashed where it is not
+(a line split where ``stable`` changes, each piece of one style), each located
+bifurcation marked with its kind's declared marker
+(:data:`study.model.bifurcations.KINDS`) and named in the legend by its kind's name. With
+flight, below: the largest hop of the base above the table the same way. Slow sweeps
+(:func:`study.solvers.protocol.slow_sweep`) may be drawn over it: the velocity each
+point settles on, each jump an arrow from the velocity before it to the one after.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.lines import Line2D
+
+from study.figures.common import save, structure_text
+from study.model.bifurcations import KINDS, kind_of_code
+
+if TYPE_CHECKING:
+    from study.solvers.protocol import SweptState
+
+__all__ = ["BRANCH_VARIABLES", "compose", "draw", "kind_label", "stability_pieces"]
+
+#: What a dataset must hold to be drawn as a branch (a :func:`study.branch` result).
+BRANCH_VARIABLES = ("f", "a", "velocity", "stable", "bifurcation_kind", "bifurcation_f",
+                    "bifurcation_a", "bifurcation_velocity", "bifurcation_step")
+#: What each drive axis is, for labels.
+_AXES = {"f": "drive frequency f [Hz]", "a": "drive acceleration a [m s$^{-2}$]"}
+#: Short axis labels of the usual quantities (others: their ``long_name``).
+_LABELS = {"velocity": "mean velocity", "largest_hop": "largest hop above the table"}
+#: Units drawn in thousandths, and how they are then written.
+_MILLI = {"m": "mm", "m s-1": "mm s$^{-1}$"}
+#: The kinds at which an orbit changes its stability: a line's style switches there.
+_STABILITY_KINDS = {k.code for k in KINDS
+                    if k.name in ("fold", "period_doubling", "torus", "branch_point")}
+_STRUCTURE_UNITS = {"f0": "Hz", "alpha": "degree", "g": "m s-2"}
+
+
+def kind_label(code: int) -> str:
+    """A bifurcation kind's legend text: its declared name
+    (:data:`study.model.bifurcations.KINDS`), underscores as spaces."""
+    return kind_of_code(int(code)).name.replace("_", " ")
+
+
+def draw(branches: xr.Dataset | Sequence[xr.Dataset], output: str | Path, *,
+         sweeps: Sequence[tuple[np.ndarray, SweptState]] | None = None,
+         quantity: str = "velocity", labels: Sequence[str] | None = None) -> list[Path]:
+    """Draw the diagram of :func:`compose` into ``output.png`` and ``output.pdf``.
+
+    Parameters are those of :func:`compose`; ``output`` is the file stem (a ``.png`` or
+    ``.pdf`` suffix is replaced). Returns the PNG and the PDF.
+    """
+    branches = _branches(branches)
+    fig = compose(branches, sweeps=sweeps, quantity=quantity, labels=labels)
+    record = xr.Dataset(attrs={
+        "study_name": "study.branch (Python API)",
+        "study_version": branches[0].attrs.get("study_version", "?")})
+    return save(fig, output, record, fig.get_suptitle().replace("\n", ", "))
+
+
+def compose(branches: xr.Dataset | Sequence[xr.Dataset], *,
+            sweeps: Sequence[tuple[np.ndarray, SweptState]] | None = None,
+            quantity: str = "velocity", labels: Sequence[str] | None = None) -> plt.Figure:
+    """The bifurcation diagram of one or more branches, not saved.
+
+    Parameters
+    ----------
+    branches : xarray.Dataset or sequence of them
+        :func:`study.branch` or :func:`study.doubled_branch` results, all continued
+        along the same drive parameter (``along``), of the same structure.
+    sweeps : sequence of (array_like, SweptState), optional
+        Slow sweeps drawn over the branches: each the swept values [Hz or m s-2, along
+        the branches' parameter] and the :func:`study.solvers.protocol.slow_sweep`
+        result on them (one run: the other drive axis of one value). Each point is the
+        velocity it settles on; a jump (``jumped``) is an arrow at the jumped point,
+        from the velocity of the point before to its own.
+    quantity : str, default "velocity"
+        The variable along ``step`` drawn in the top panel (``"velocity"`` [m s-1],
+        ``"largest_multiplier"`` [1], ``"airborne_fraction"`` [1], ...), in thousandths
+        for m and m s-1. The bifurcations are marked where the branch holds their value
+        of it (``bifurcation_velocity``); in the other panels a dotted vertical line
+        marks each at its drive value.
+    labels : sequence of str, optional
+        The branches' legend names (default ``branch 1``, ``branch 2``, ...).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The top panel ``quantity``; with flight (any branch's ``flight`` attribute) and
+        ``quantity`` not ``largest_hop``, a second panel of ``largest_hop`` [mm]. Each
+        branch's pieces have ``gid`` ``"branch N stable"`` or ``"branch N unstable"``,
+        its bifurcation markers ``"branch N <kind name>"``; a sweep's path ``"sweep
+        N"`` and its jump arrows (annotations) ``"sweep N jump"``.
+
+    Raises
+    ------
+    ValueError
+        ``branches`` empty or holding a dataset that is not a branch (naming its index
+        and what it lacks), branches along different parameters, ``quantity`` not a
+        variable along ``step`` of every branch (naming those that are), ``labels`` of
+        the wrong length, or ``sweeps`` that are not (values, SweptState) pairs of one
+        run along the branches' parameter.
+    """
+    branches = _branches(branches)
+    along = str(branches[0].attrs["along"])
+    other = "a" if along == "f" else "f"
+    names = _labels(labels, len(branches))
+    _check_quantity(branches, quantity)
+    paths = _sweeps(sweeps, along)
+    flight = any(int(b.attrs.get("flight", 0)) for b in branches)
+    panels = [quantity] + (["largest_hop"] if flight and quantity != "largest_hop" else [])
+    fig, axes = plt.subplots(len(panels), 1, figsize=(8.5, 4.5 + 2.8 * (len(panels) - 1)),
+                             layout="constrained", sharex=True, squeeze=False,
+                             height_ratios=(3.0, 2.0)[:len(panels)])
+    axes = axes[:, 0]
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    kinds_seen: set[int] = set()
+    for ax, variable in zip(axes, panels, strict=True):
+        scale, units = _scale(branches[0][variable])
+        exact = all(f"bifurcation_{variable}" in b for b in branches)
+        for n, (dataset, name) in enumerate(zip(branches, names, strict=True)):
+            colour = colours[n % len(colours)]
+            _draw_branch(ax, dataset, along, variable, scale, colour, n,
+                         name if ax is axes[0] else None)
+            codes = dataset["bifurcation_kind"].values.astype(int)
+            x = dataset[f"bifurcation_{along}"].values
+            if exact:
+                y = scale * dataset[f"bifurcation_{variable}"].values
+                for kind in KINDS:
+                    chosen = codes == kind.code
+                    if chosen.any():
+                        ax.plot(x[chosen], y[chosen], ls="none", marker=kind.marker,
+                                ms=8, mfc=colour, mec="black", mew=0.8, zorder=5,
+                                gid=f"branch {n} {kind.name}")
+                        kinds_seen.add(kind.code)
+            else:
+                for value in x:
+                    ax.axvline(value, color=colour, ls=":", lw=0.7,
+                               gid=f"branch {n} bifurcation")
+        for m, (values, swept) in enumerate(paths):
+            held = getattr(swept.state, variable, None)
+            if held is not None:
+                _draw_sweep(ax, values, np.asarray(held, dtype=float).reshape(-1),
+                            np.asarray(swept.jumped).reshape(-1), scale, m,
+                            f"slow sweep {swept.direction}" if ax is axes[0] else None)
+        if variable == "velocity":
+            ax.axhline(0.0, color="0.6", lw=0.6, zorder=0)
+        long_name = _LABELS.get(variable) or branches[0][variable].attrs.get(
+            "long_name", variable)
+        ax.set_ylabel(f"{long_name} [{units}]" if units else long_name)
+    axes[-1].set_xlabel(_AXES[along])
+    axes[0].legend(handles=_legend(axes[0], kinds_seen, bool(paths)), fontsize=8,
+                   loc="best")
+    fixed = np.unique(np.concatenate([b[other].values for b in branches]))
+    where = ""
+    if fixed.size == 1:
+        where = (f" at a = {fixed[0]:g} m s$^{{-2}}$" if other == "a"
+                 else f" at f = {fixed[0]:g} Hz")
+    fig.suptitle(f"Branches along {along}{where}, solid stable, dashed unstable"
+                 f"{', with flight' if flight else ''}\n{_structure(branches[0])}",
+                 fontsize=11)
+    return fig
+
+
+def stability_pieces(x: np.ndarray, y: np.ndarray, stable: np.ndarray,
+                     inserted: dict[int, list[tuple[float, float, int]]] | None = None
+                     ) -> list[tuple[np.ndarray, np.ndarray, bool]]:
+    """A branch's line cut into pieces of one stability each.
+
+    Parameters
+    ----------
+    x, y : numpy.ndarray
+        The steps' drive values and drawn values.
+    stable : numpy.ndarray
+        Whether each step's orbit is stable.
+    inserted : dict, optional
+        Exact points to put on the line between step ``k`` and ``k + 1`` (key ``k``):
+        ``(x, y, kind code)`` each, in order (the located bifurcations).
+
+    Returns
+    -------
+    list of (x, y, stable)
+        One piece per run of equal ``stable``, in order; consecutive pieces share their
+        end point. Where the stability changes between two steps the line is cut at a
+        bifurcation inserted there (one of a kind that changes stability first), else
+        at the midpoint of the two steps, so that each run of steps is one piece.
+    """
+    inserted = inserted or {}
+    stable = np.asarray(stable).astype(bool)
+    pieces = []
+    xs, ys, current = [float(x[0])], [float(y[0])], bool(stable[0])
+    for k in range(len(x) - 1):
+        extra = [(float(p[0]), float(p[1])) for p in inserted.get(k, [])]
+        if bool(stable[k + 1]) == current:
+            xs += [p[0] for p in extra] + [float(x[k + 1])]
+            ys += [p[1] for p in extra] + [float(y[k + 1])]
+            continue
+        if extra:
+            codes = [int(p[2]) for p in inserted[k]]
+            cut = next((j for j, c in enumerate(codes) if c in _STABILITY_KINDS), 0)
+            before, after = extra[:cut + 1], extra[cut:]
+        else:
+            middle = (0.5 * float(x[k] + x[k + 1]), 0.5 * float(y[k] + y[k + 1]))
+            before, after = [middle], [middle]
+        xs += [p[0] for p in before]
+        ys += [p[1] for p in before]
+        pieces.append((np.array(xs), np.array(ys), current))
+        xs = [p[0] for p in after] + [float(x[k + 1])]
+        ys = [p[1] for p in after] + [float(y[k + 1])]
+        current = bool(stable[k + 1])
+    pieces.append((np.array(xs), np.array(ys), current))
+    return pieces
+
+
+def _draw_branch(ax: plt.Axes, dataset: xr.Dataset, along: str, variable: str,
+                 scale: float, colour: str, n: int, label: str | None) -> None:
+    """One branch's pieces on ``ax``: solid stable, dashed unstable, through its
+    located bifurcations where it holds their value of ``variable``."""
+    inserted: dict[int, list[tuple[float, float, int]]] = {}
+    if f"bifurcation_{variable}" in dataset:
+        for b in range(dataset.sizes["bifurcation"]):
+            inserted.setdefault(int(dataset["bifurcation_step"].values[b]), []).append(
+                (float(dataset[f"bifurcation_{along}"].values[b]),
+                 scale * float(dataset[f"bifurcation_{variable}"].values[b]),
+                 int(dataset["bifurcation_kind"].values[b])))
+    x = dataset[along].values
+    y = scale * dataset[variable].values.astype(float)
+    for xs, ys, stable in stability_pieces(x, y, dataset["stable"].values, inserted):
+        ax.plot(xs, ys, color=colour, lw=1.8 if stable else 1.3, zorder=3,
+                ls="-" if stable else "--", label=label,
+                gid=f"branch {n} {'stable' if stable else 'unstable'}")
+        label = None  # one legend entry per branch
+
+
+def _draw_sweep(ax: plt.Axes, x: np.ndarray, y: np.ndarray, jumped: np.ndarray,
+                scale: float, m: int, label: str | None) -> None:
+    """A slow sweep's path: its points joined where it did not jump, each jump an arrow
+    at the jumped point from the value before to its own."""
+    y = scale * y
+    ends = np.flatnonzero(jumped)
+    starts = np.concatenate([[0], ends])
+    stops = np.concatenate([ends, [x.size]])
+    for i0, i1 in zip(starts, stops, strict=True):
+        if i1 <= i0:
+            continue
+        ax.plot(x[i0:i1], y[i0:i1], color="0.25", lw=0.7, marker="o", ms=3.5,
+                mfc="none", zorder=2, label=label, gid=f"sweep {m}")
+        label = None
+    for j in ends:
+        if j == 0:
+            continue
+        ax.annotate("", xy=(x[j], y[j]), xytext=(x[j], y[j - 1]), zorder=2,
+                    arrowprops={"arrowstyle": "-|>", "color": "0.25", "lw": 0.9,
+                                "shrinkA": 0, "shrinkB": 0}, gid=f"sweep {m} jump")
+
+
+def _legend(ax: plt.Axes, kinds: set[int], swept: bool) -> list:
+    """The branches' entries, the two line styles, each kind marked, and the jumps."""
+    handles = [h for h in ax.get_legend_handles_labels()[0]]
+    handles += [Line2D([], [], color="0.3", ls="-", label="stable orbit"),
+                Line2D([], [], color="0.3", ls="--", label="unstable orbit")]
+    handles += [Line2D([], [], ls="none", marker=kind.marker, ms=7, mfc="white",
+                       mec="black", label=kind_label(kind.code))
+                for kind in KINDS if kind.code in kinds]
+    if swept:
+        handles.append(Line2D([], [], color="black", marker=r"$\downarrow$", ls="none",
+                              ms=9, label="jump of a slow sweep"))
+    return handles
+
+
+def _branches(branches: object) -> list[xr.Dataset]:
+    """``branches`` as a checked list of branch datasets along one parameter."""
+    listed = [branches] if isinstance(branches, xr.Dataset) else list(branches)  # type: ignore[call-overload]
+    if not listed:
+        raise ValueError("branch_diagram: 'branches' is empty; give one or more "
+                         "study.branch results")
+    for n, dataset in enumerate(listed):
+        where = "'branches'" if isinstance(branches, xr.Dataset) else f"'branches'[{n}]"
+        if not isinstance(dataset, xr.Dataset):
+            raise ValueError(f"branch_diagram: {where} must be a study.branch dataset, "
+                             f"got {type(dataset).__name__}")
+        if "curve_kind" in dataset.attrs:
+            raise ValueError(f"branch_diagram: {where} is a study.bifurcation_curve "
+                             "result (a bifurcation over the drive plane), not a branch")
+        missing = [v for v in BRANCH_VARIABLES if v not in dataset.variables]
+        if dataset.attrs.get("along") not in ("f", "a"):
+            missing.append("the attribute 'along' ('f' or 'a')")
+        if missing or "step" not in dataset.dims:
+            raise ValueError(f"branch_diagram: {where} is not a study.branch dataset: it "
+                             f"lacks {', '.join(missing) or 'the dimension step'}")
+        if dataset.sizes["step"] < 1:
+            raise ValueError(f"branch_diagram: {where} has no step")
+    alongs = sorted({str(d.attrs["along"]) for d in listed})
+    if len(alongs) > 1:
+        raise ValueError("branch_diagram: 'branches' run along different parameters ("
+                         + ", ".join(f"[{n}] along {d.attrs['along']}"
+                                     for n, d in enumerate(listed))
+                         + "); draw one diagram per parameter")
+    return listed
+
+
+def _labels(labels: Sequence[str] | None, count: int) -> list[str]:
+    if labels is None:
+        return [f"branch {n + 1}" for n in range(count)]
+    labels = [str(label) for label in labels]
+    if len(labels) != count:
+        raise ValueError(f"branch_diagram: 'labels' must name each of the {count} "
+                         f"branches, got {len(labels)}")
+    return labels
+
+
+def _check_quantity(branches: list[xr.Dataset], quantity: object) -> None:
+    common = set.intersection(*[
+        {str(v) for v in b.data_vars if b[v].dims == ("step",)
+         and np.issubdtype(b[v].dtype, np.number)} for b in branches])
+    if quantity not in common:
+        raise ValueError(f"branch_diagram: 'quantity' must be a number along step of "
+                         f"every branch ({', '.join(sorted(common))}), got {quantity!r}")
+
+
+def _sweeps(sweeps: object, along: str) -> list[tuple[np.ndarray, SweptState]]:
+    """The slow sweeps checked: (values, SweptState) pairs of one run along ``along``."""
+    if sweeps is None:
+        return []
+    checked = []
+    for m, pair in enumerate(sweeps):  # type: ignore[attr-defined]
+        where = f"'sweeps'[{m}]"
+        if not (isinstance(pair, tuple | list) and len(pair) == 2
+                and all(hasattr(pair[1], name) for name in ("state", "jumped", "along"))):
+            raise ValueError(f"branch_diagram: {where} must be a pair (swept values, "
+                             f"slow_sweep result), got {type(pair).__name__}")
+        values = np.asarray(pair[0], dtype=float)
+        swept = pair[1]
+        if swept.along != along:
+            raise ValueError(f"branch_diagram: {where} is swept along {swept.along}, the "
+                             f"branches run along {along}")
+        shape = np.shape(swept.jumped)
+        if values.ndim != 1 or np.prod(shape) != values.size or values.size not in shape:
+            raise ValueError(f"branch_diagram: {where} must be one run: its values (of "
+                             f"shape {values.shape}) the swept axis of its result (of "
+                             f"shape {shape}), the other drive axis of one value")
+        checked.append((values, swept))
+    return checked
+
+
+def _scale(variable: xr.DataArray) -> tuple[float, str]:
+    """The factor a variable is drawn with and its units as written."""
+    units = str(variable.attrs.get("units", ""))
+    if units in _MILLI:
+        return 1e3, _MILLI[units]
+    return 1.0, "" if units in ("", "1") else units
+
+
+def _structure(dataset: xr.Dataset) -> str:
+    """The structure's parameters a branch records (``structure_*``), as titles write
+    them."""
+    coords = {}
+    for name in ("f0", "Q", "alpha", "M", "cs", "ck", "g", "restitution"):
+        key = f"structure_{name}"
+        if key in dataset.attrs:
+            coords[name] = xr.Variable((), float(dataset.attrs[key]),
+                                       {"units": _STRUCTURE_UNITS.get(name, "1")})
+    return structure_text(xr.Dataset(coords=coords))
