@@ -156,6 +156,8 @@ FIGURES += hysteresis-flight hysteresis-paper
 # Basins: figures/basins-X.png is figure basins of results/basins-X.nc (workflows
 # basins-flight and basins-paper: every attractor of 24 starts and its basin fraction).
 FIGURES += basins-flight basins-paper
+# The folds of the forward and backward hops against M (workflow mass-ratio-folds).
+FIGURES += fold-curves
 figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 
 figures/thresholds.png: results/thresholds.nc
@@ -179,6 +181,7 @@ figures/mass-ratio-limit-flight.png: results/mass-ratio-limit-flight.nc
 figures/coupling-flight.png: results/coupling-flight.nc
 figures/bouncing.png: results/mass-ratio-limit-flight.nc
 figures/lyapunov.png: results/irregular-bouncing.nc
+figures/fold-curves.png: results/mass-ratio-folds.nc
 figures/bifurcation-along-%.png: results/bifurcation-along-%.nc $(PACKAGE) FORCE | $(STAMP)
 	$(STUDY) figure bifurcation $< -o figures/bifurcation-along-$* --if-changed
 figures/hysteresis-%.png: results/hysteresis-%.nc $(PACKAGE) FORCE | $(STAMP)

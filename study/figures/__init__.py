@@ -112,6 +112,12 @@ FIGURES: dict[str, Figure] = {
         "Slow sweeps up and down: the velocity against the swept drive with the jumps "
         "marked, or over a map where the two sweeps end on different motions",
     ),
+    "fold-curves": Figure(
+        "study.figures.fold_curves", "mass-ratio-folds",
+        ("velocity", "jump_bifurcation", "jump_f", "jump_velocity"),
+        "Where the forward and backward hops coexist: their fold curves f(a) located "
+        "exactly from slow sweeps both ways, per value of a structure axis (M)",
+    ),
     "basins": Figure(
         "study.figures.basins", "basins-flight",
         ("basin_status", "basin_velocity", "basin_largest_hop", "basin_period",

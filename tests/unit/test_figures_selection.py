@@ -159,6 +159,22 @@ protocol = {{ along = "f", direction = "both" }}
 coupling = "two-way"
 flight = true
 """,
+    # The two hops' folds from sweeps both ways with the jumps observable, over M.
+    "folds": f"""\
+[study]
+name = "folds-small"
+observables = ["velocity", "jumps"]
+[structure]
+{PAPER}
+[sweep]
+M = {{ values = [0.95, 0.99] }}
+f = {{ values = [14.8, 15.6, 16.4] }}
+a = {{ values = [9.0, 10.0] }}
+protocol = {{ along = "f", direction = "both" }}
+[solver]
+coupling = "two-way"
+flight = true
+""",
     # The phase-0 section of bouncing at M = 0.99 along f (a chaotic point among the
     # orbits).
     "section": f"""\
@@ -548,6 +564,7 @@ SOURCES = {
     "bifurcation": ("section", []),
     "hysteresis": ("hysteresis", []),
     "basins": ("basins", []),
+    "fold-curves": ("folds", []),
     "steering": ("trajectory", []),
     "steering-calibration": ("calibration", []),
     "steering-plan": ("plan", []),
@@ -561,6 +578,7 @@ def _cases():
             "coupling": ("M", "f", "a"), "flight": ("M", "f", "a", "branch"),
             "irregular": ("M", "f", "a"), "section": ("f", "a", "section_period"),
             "hysteresis": ("direction", "f", "a"),
+            "folds": ("direction", "M", "f", "a"),
             "basins": ("f", "a", "attractor"),
             "trajectory": ("t", "segment"),
             "calibration": ("f", "a"), "fit": ("measurement", "parameter", "profile_point"),

@@ -117,9 +117,10 @@ def test_every_velocity_figure_is_covered():
                         if "velocity" in figure.requires}
     # bouncing, lyapunov and bifurcation: drawn from studies with flight
     # (tests/unit/test_figures_flight.py); hysteresis from slow sweeps
-    # (tests/unit/test_figures_hysteresis.py, tests/unit/test_figures_selection.py).
+    # (tests/unit/test_figures_hysteresis.py, tests/unit/test_figures_selection.py),
+    # fold-curves from slow sweeps with jumps (tests/unit/test_hop_folds.py).
     assert velocity_figures <= set(SOURCES) | {"mass-ratio", "bouncing", "lyapunov",
-                                               "bifurcation", "hysteresis"}
+                                               "bifurcation", "hysteresis", "fold-curves"}
 
 
 @pytest.mark.parametrize("figure", headline(sorted(SOURCES)))
