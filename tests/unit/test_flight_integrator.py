@@ -289,12 +289,17 @@ POINTS = Path(reference.__file__).parent / "data" / "flight_points.json"
 @pytest.mark.slow
 def test_every_cached_reference_motion_from_rest():
     # The reference's file: every steady motion from rest (the integrator's start), by
-    # structure (one call each, the points in parallel).
+    # structure (one call each, the points in parallel). A point the reference did not
+    # settle (its refined rerun disagreed: today the two chaotic ones at 36 m s-2, near
+    # M = 1) has nothing to compare with and is not integrated: the integrator spent
+    # 20000 periods on each before NOT_CONVERGED, two thirds of this test's time.
+    rest = [point for point in json.loads(POINTS.read_text(encoding="utf-8"))["points"]
+            if point["start"] == "rest"]
+    assert len(rest) >= 70
     groups = defaultdict(list)
-    for point in json.loads(POINTS.read_text(encoding="utf-8"))["points"]:
-        if point["start"] == "rest":
+    for point in rest:
+        if point["settled"]:
             groups[tuple(sorted(point["structure"].items()))].append(point)
-    assert sum(map(len, groups.values())) >= 70
     compared = 0
     for key, points in groups.items():
         s = Structure(**dict(key))
@@ -305,10 +310,8 @@ def test_every_cached_reference_motion_from_rest():
         w = 2 * np.pi * f
         for i, point in enumerate(points):
             if point["status"] == "not-periodic":
-                # Chaotic bouncing (36 m s-2 near M = 1): no orbit either way (one
-                # unsettled point where the reference's rerun disagreed is left out).
-                if point["settled"]:
-                    assert ours.status[i] == Status.NOT_CONVERGED, point["name"]
+                # A settled irregular motion: no orbit either way.
+                assert ours.status[i] == Status.NOT_CONVERGED, point["name"]
                 continue
             assert point["status"] == "bouncing" and ours.status[i] == Status.BOUNCING
             tolerance = point["tolerance"]
