@@ -263,12 +263,16 @@ test-all: test test-slow fuzz
 # Seeded fuzz tiers (corrupted result files, damaged caches, mutated specs, measurement
 # files, command lines): CI runs them. Each passed tier records what it tried; the
 # table of counts (cases, faults injected, results lost) goes to results/reliability.md.
+# One pytest run: tests/fuzz (every test marked fuzz, and only those: test_tiers.py)
+# and every case of the API-input properties, in pytest-xdist workers a module at a
+# time (--dist loadfile: a module's last test reads the counts of the ones before it
+# in the same process; the workers' records merge under a lock), the longest modules
+# first (tests/support/schedule.py; --no-loadscope-reorder keeps that order).
 RELIABILITY_COUNTS := results/reliability-counts.json
 fuzz: $(STAMP)
 	mkdir -p results && rm -f $(RELIABILITY_COUNTS)
-	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -m fuzz
-	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest -q \
-	    tests/property/test_api_inputs.py
+	STUDY_RELIABILITY_COUNTS=$(RELIABILITY_COUNTS) $(PY) -m pytest $(XDIST) --dist loadfile \
+	    --no-loadscope-reorder tests/fuzz tests/property/test_api_inputs.py
 	$(PY) -m tests.support.reliability $(RELIABILITY_COUNTS) > results/reliability.md
 	cat results/reliability.md
 	{ echo "*Written by \`make fuzz\` on $$(date -u +%Y-%m-%d) ($$(nproc) cores); the next run overwrites this file.*"; \

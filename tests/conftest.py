@@ -2,7 +2,8 @@
 counted in each test process and said at the end (:mod:`tests.support.numba_compiles`);
 before pytest-xdist's workers start, the kernels most tests use compiled once into
 numba's on-disk cache or loaded from it (:mod:`tests.support.warm_kernels`), so that
-the workers do not each compile them again."""
+the workers do not each compile them again; the longest modules first in the
+collection, so that pytest-xdist starts them at once (:mod:`tests.support.schedule`)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from tests.support.numba_compiles import (  # noqa: F401 (hooks)
     pytest_testnodedown,
     pytest_unconfigure,
 )
+from tests.support.schedule import pytest_collection_modifyitems  # noqa: F401 (a hook)
 from tests.support.warm_kernels import pytest_sessionstart  # noqa: F401 (a hook)
 
 

@@ -6,7 +6,9 @@ hostile arguments) and finished results compared afterwards, of which none may b
 lost (a tier that loses one fails before it records). When the environment names a
 file in :data:`ENV` (``make fuzz`` does), the counts are merged into it as JSON;
 ``python -m tests.support.reliability COUNTS.json`` prints the page's table. Without the
-variable, :func:`record` does nothing: a plain ``pytest`` run writes no file.
+variable, :func:`record` does nothing: a plain ``pytest`` run writes no file. ``make
+fuzz`` runs the tiers in pytest-xdist workers (one module per worker at a time): each
+merge holds a lock beside the file, so that two workers recording at once keep both.
 """
 
 from __future__ import annotations
@@ -15,6 +17,11 @@ import json
 import os
 import sys
 from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # Windows: no fcntl; make fuzz runs on POSIX
+    fcntl = None  # type: ignore[assignment]
 
 #: Environment variable naming the JSON file the counts are merged into.
 ENV = "STUDY_RELIABILITY_COUNTS"
@@ -45,13 +52,18 @@ def record(tier: str, what: str, *, cases: int, faults: int, results_checked: in
     if not name:
         return
     path = Path(name)
-    counts = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}
-    counts[tier] = {"what": what, "cases": cases, "faults": faults,
-                    "results_checked": results_checked, "results_lost": results_lost}
     path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    temporary.write_text(json.dumps(counts, indent=2, sort_keys=True) + "\n", encoding="utf-8")
-    temporary.replace(path)
+    # Read, merge and replace under an exclusive lock: test workers record concurrently.
+    with open(path.with_name(f".{path.name}.lock"), "a", encoding="utf-8") as lock:
+        if fcntl is not None:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+        counts = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}
+        counts[tier] = {"what": what, "cases": cases, "faults": faults,
+                        "results_checked": results_checked, "results_lost": results_lost}
+        temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        temporary.write_text(json.dumps(counts, indent=2, sort_keys=True) + "\n",
+                             encoding="utf-8")
+        temporary.replace(path)
 
 
 def table(counts: dict[str, dict]) -> str:

@@ -14,10 +14,11 @@ Each test compares against something the integrator does not share code with:
   its own impact law and cut-off) on velocity, airborne fraction, largest hop and
   impacts at M in {0.08, 0.5, 0.9} and e in {0, 0.5, 0.9}, also for a transient after
   a frequency switch that passes through flight;
-* the reference's 77 cached steady motions from rest (``tests/reference/data/
+* the reference's 78 cached steady motions from rest (``tests/reference/data/
   flight_points.json``: stick-slip then bouncing, static then bouncing, M up to 0.99,
-  large drives with subharmonic and chaotic bouncing), and its 24 from a drop or from
-  stillness (two stable motions near M = 1, drops onto contact), by transients;
+  large drives with subharmonic and chaotic bouncing, a long chattering sequence at
+  e = 0.9), and its 24 from a drop or from stillness (two stable motions near M = 1,
+  drops onto contact), by transients;
 * the mirror ``alpha -> -alpha`` (velocity reversed, the rest unchanged);
 * one event sample per step (impacts then found only by the watch of the gap's minima)
   against four;
@@ -289,12 +290,17 @@ POINTS = Path(reference.__file__).parent / "data" / "flight_points.json"
 @pytest.mark.slow
 def test_every_cached_reference_motion_from_rest():
     # The reference's file: every steady motion from rest (the integrator's start), by
-    # structure (one call each, the points in parallel).
+    # structure (one call each, the points in parallel). A point the reference did not
+    # settle (its refined rerun disagreed: today the two chaotic ones at 36 m s-2, near
+    # M = 1) has nothing to compare with and is not integrated: the integrator spent
+    # 20000 periods on each before NOT_CONVERGED, two thirds of this test's time.
+    rest = [point for point in json.loads(POINTS.read_text(encoding="utf-8"))["points"]
+            if point["start"] == "rest"]
+    assert len(rest) >= 70
     groups = defaultdict(list)
-    for point in json.loads(POINTS.read_text(encoding="utf-8"))["points"]:
-        if point["start"] == "rest":
+    for point in rest:
+        if point["settled"]:
             groups[tuple(sorted(point["structure"].items()))].append(point)
-    assert sum(map(len, groups.values())) >= 70
     compared = 0
     for key, points in groups.items():
         s = Structure(**dict(key))
@@ -305,10 +311,8 @@ def test_every_cached_reference_motion_from_rest():
         w = 2 * np.pi * f
         for i, point in enumerate(points):
             if point["status"] == "not-periodic":
-                # Chaotic bouncing (36 m s-2 near M = 1): no orbit either way (one
-                # unsettled point where the reference's rerun disagreed is left out).
-                if point["settled"]:
-                    assert ours.status[i] == Status.NOT_CONVERGED, point["name"]
+                # A settled irregular motion: no orbit either way.
+                assert ours.status[i] == Status.NOT_CONVERGED, point["name"]
                 continue
             assert point["status"] == "bouncing" and ours.status[i] == Status.BOUNCING
             tolerance = point["tolerance"]
@@ -425,20 +429,39 @@ def test_chattering_terminates_and_is_counted(e, a):
     assert steady.impacts_per_period > 0.5 * expected
 
 
+def _cached_motion(name, structure, f, a):
+    """The reference's cached steady motion ``name`` (``POINTS``), checked to be of this
+    structure and drive."""
+    point = next(p for p in json.loads(POINTS.read_text(encoding="utf-8"))["points"]
+                 if p["name"] == name)
+    assert point["settled"] and point["start"] == "rest"
+    assert (point["f"], point["a"]) == (f, a)
+    for key, value in point["structure"].items():
+        assert getattr(structure, key) == value, (name, key)
+    return point
+
+
 @pytest.mark.parametrize(("e", "a"), [(0.5, 10.0),
                                       pytest.param(0.9, 9.0, marks=pytest.mark.slow)])
 def test_the_chattering_cut_off_does_not_move_the_velocity(e, a):
     # The reference cuts chattering off elsewhere (1e-9 a/w, and redoes the last impact
-    # plastically): the velocities agree to the integrator's error. (The reference
-    # takes about 3 minutes at e = 0.9: slow tier.)
+    # plastically): the velocities agree to the integrator's error. At e = 0.9 (slow
+    # tier) the reference takes 2 to 5 minutes (496 periods of 185 rebounds): its motion
+    # is the cached point chattering/M0.5/f12/a9/e0.9/rest of the reference's file
+    # (tests/reference/make_flight_points.py; --only NAME computes it again).
     s = _structure(0.5, e)
     f = 12.0
     ours = integrated_steady_state(s, f, a, coupling="two-way", flight=True, settings=SETTINGS)
-    theirs = reference.steady_motion(s, f, a)
-    assert ours.status == Status.BOUNCING and theirs.status == "bouncing"
-    assert_allclose(ours.velocity, theirs.velocity, rtol=0,
-                    atol=GLOBAL * s.g / (2 * math.pi * f))
-    assert abs(ours.impacts_per_period - theirs.impacts_per_period) <= 2.0
+    if e == 0.9:
+        cached = _cached_motion("chattering/M0.5/f12/a9/e0.9/rest", s, f, a)
+        status, velocity, impacts = (cached["status"], cached["velocity"],
+                                     cached["impacts_per_period"])
+    else:
+        theirs = reference.steady_motion(s, f, a)
+        status, velocity, impacts = theirs.status, theirs.velocity, theirs.impacts_per_period
+    assert ours.status == Status.BOUNCING and status == "bouncing"
+    assert_allclose(ours.velocity, velocity, rtol=0, atol=GLOBAL * s.g / (2 * math.pi * f))
+    assert abs(ours.impacts_per_period - impacts) <= 2.0
 
 
 # ---------------------------------------------------------------- a frequency switch

@@ -77,3 +77,19 @@ def test_headline_keeps_the_first_case_of_each_group_in_the_default_tier() -> No
     # A case already slow keeps no place: the next one is the group's headline.
     cases = headline([pytest.param(1, marks=pytest.mark.slow), 2, 3], keep=1)
     assert [_is_slow(c) for c in cases] == [True, False, True]
+
+
+def test_the_fuzz_mark_is_exactly_the_fuzz_folder() -> None:
+    """``make fuzz`` runs tests/fuzz by path (beside the API-input properties): every
+    module there is marked fuzz, and no module elsewhere is, so that the path and
+    ``-m fuzz`` select the same tests (``make test`` and ``make test-slow`` leave the
+    mark out)."""
+    def uses_the_mark(path: Path) -> bool:  # pytest.mark.fuzz anywhere in the module
+        return any(isinstance(node, ast.Attribute) and node.attr == "fuzz"
+                   and isinstance(node.value, ast.Attribute) and node.value.attr == "mark"
+                   for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))))
+
+    marked = {path.relative_to(TESTS).as_posix() for path in TESTS.rglob("test_*.py")
+              if uses_the_mark(path)}
+    folder = {path.relative_to(TESTS).as_posix() for path in (TESTS / "fuzz").glob("test_*.py")}
+    assert marked == folder
