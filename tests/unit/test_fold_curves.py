@@ -9,6 +9,8 @@ a rerun reuses it, another f axis computes it again.
 
 from __future__ import annotations
 
+import signal
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +19,8 @@ import xarray as xr
 from numpy.testing import assert_allclose
 
 import study
+from study.engine.interrupts import RunInterrupted
+from study.engine.runner import run_study
 from study.engine.spec_files import SpecError
 from study.engine.validation.files import validate_file
 from study.model.bifurcations import kind_named
@@ -158,3 +162,37 @@ def test_a_solver_that_cannot_compute_the_curves_is_refused_naming_the_key(tmp_p
     with pytest.raises(SpecError, match=r'\[sweep\] f has 1 value; the observable '
                        '"fold_curves"'):
         parse_spec(SPEC.format(num=1, coupling="two-way"), "one-f.toml")
+
+
+@pytest.fixture
+def python_sigint():
+    """SIGINT with Python's own handler, in the main thread (as tests/unit/
+    test_work_units.py's)."""
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signal handlers run in the main thread only")
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_in_the_curves_phase_keeps_the_map_and_the_rerun_finishes(
+        tmp_path, monkeypatch, python_sigint):
+    original = fold_module.slow_sweep
+
+    def interrupting(*args, **kwargs):
+        swept = original(*args, **kwargs)
+        signal.raise_signal(signal.SIGINT)  # as Ctrl-C, after the first sweep
+        return swept
+
+    monkeypatch.setattr(fold_module, "slow_sweep", interrupting)
+    spec, output, cache = _spec(tmp_path), tmp_path / "stop.nc", tmp_path / "cache"
+    with pytest.raises(RunInterrupted) as stopped:
+        study.run(spec, output, cache=cache, workers=1)
+    assert stopped.value.kept == stopped.value.points == 26
+    assert not output.exists()
+    monkeypatch.undo()
+    report = run_study(spec, output, cache=cache, progress=False, workers=1)
+    assert (report.points_reused, report.points_computed) == (26, 0)
+    with xr.open_dataset(output) as done:
+        assert_allclose(done.fold_f.sel(a=10.0).values, [15.0575, 12.1499], rtol=0,
+                        atol=1e-4)
