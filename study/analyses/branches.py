@@ -25,14 +25,6 @@ from study.model.bifurcations import (
     end_named,
     kind_of_code,
 )
-from study.model.codes import (
-    BRANCH_ENDED,
-    BRANCH_REACHED,
-    CURVE_ENDED,
-    CURVE_LOST,
-    CURVE_REACHED,
-    CURVE_VANISHED,
-)
 from study.model.starts import Drop
 from study.model.structure import Structure, check_structure
 from study.solvers.branch import (
@@ -41,8 +33,8 @@ from study.solvers.branch import (
     Trace,
     doubled_trace,
     trace,
-    trace_from_section,
 )
+from study.solvers.curves import DEFAULT_CURVE_WINDOW, CurveSeed, follow_curve
 from study.solvers.settings import SolverSettings
 from study.version import VERSION
 
@@ -160,10 +152,9 @@ def _parents_structure(structure: Structure, parent: xr.Dataset, caller: str) ->
     return structure
 
 
-#: A curve's points by default, and the window its bifurcation is sought in at the
-#: next point (a fraction of the parameter's value along the branch).
+#: A curve's points by default (the window its bifurcation is sought in at the next
+#: point is :data:`study.solvers.curves.DEFAULT_CURVE_WINDOW`).
 DEFAULT_CURVE_POINTS = 11
-DEFAULT_CURVE_WINDOW = 0.02
 
 
 def bifurcation_curve(structure: Structure, parent: xr.Dataset, bifurcation: int, *,
@@ -258,104 +249,22 @@ def bifurcation_curve(structure: Structure, parent: xr.Dataset, bifurcation: int
     step = int(parent["bifurcation_step"].values[index])
     way = np.sign(x_found - float(parent[along].values[step])) or float(
         parent["branch_direction"].values[step])
-    periods = int(parent.attrs["orbit_period"])
-    flight = bool(parent.attrs["flight"])
-
-    def anchor_before(x_steps, states, sections, before, x_here, value):
-        """The point of a branch half a window before its bifurcation at ``x_here``
-        (among its steps up to ``before``), where the next point's search starts."""
-        far = np.flatnonzero(way * (x_here - x_steps[:before + 1])
-                             >= 0.5 * window * abs(x_here))
-        k = int(far[-1]) if far.size else 0
-        return float(x_steps[k]), np.asarray(states[k]), float(sections[k]), value
-
-    def locate(anchor, value, reach):
-        """The bifurcation on the branch through ``anchor`` at the other parameter's
-        ``value``, sought up to ``reach`` windows past ``x_last``: ``(code, row,
-        next_anchor)``."""
-        x_start, state, section, v_from = anchor
-        # The anchor's orbit first continued in the other parameter to ``value`` (its
-        # own branch, so that the state arrives exact), then along the first.
-        f, a = (x_start, v_from) if along == "f" else (v_from, x_start)
-        moved_over = trace_from_section(
-            structure, f, a, along=other, to=value, state=state, section=section,
-            periods=periods, flight=flight, settings=settings, max_step=max_step)
-        if moved_over.end != BRANCH_REACHED or np.any(
-                moved_over.bifurcation_column("kind").astype(int) == kind):
-            # The anchor's orbit does not reach the new drive, or the curve passed the
-            # anchor on the way: the curve moves faster than the sampling.
-            return CURVE_LOST, None, None
-        state = moved_over.states()[-1]
-        section = float(moved_over.column("section")[-1])
-        f, a = (x_start, value) if along == "f" else (value, x_start)
-        behind = x_last - way * window * abs(x_last)
-        if way * (behind - x_start) < 0.0:
-            # Back to a whole window before the last location first, where the orbit
-            # is farther from the bifurcation than the curve moves in a step.
-            back = trace_from_section(
-                structure, f, a, along=along, to=behind, state=state, section=section,
-                periods=periods, flight=flight, settings=settings, max_step=max_step)
-            if back.end == BRANCH_REACHED and not np.any(
-                    back.bifurcation_column("kind").astype(int) == kind):
-                state = back.states()[-1]
-                section = float(back.column("section")[-1])
-                f, a = (behind, value) if along == "f" else (value, behind)
-        traced = trace_from_section(
-            structure, f, a, along=along, to=x_last + way * reach * window * abs(x_last),
-            state=state, section=section, periods=periods, flight=flight,
-            settings=settings, max_step=max_step)
-        kinds = traced.bifurcation_column("kind").astype(int)
-        hits = np.flatnonzero(kinds == kind)
-        if hits.size == 0:
-            return (CURVE_ENDED if traced.end == BRANCH_ENDED else CURVE_VANISHED,
-                    None, None)
-        hit = int(hits[0])
-        b_f, b_a = traced.drive(traced.bifurcation_column("t")[hit])
-        mu = (traced.bifurcation_column("multiplier_real")[hit]
-              + 1j * traced.bifurcation_column("multiplier_imag")[hit])
-        row = (float(b_f), float(b_a), float(traced.bifurcation_column("velocity")[hit]),
-               mu, float(traced.bifurcation_column("test")[hit]))
-        x_steps = np.asarray(traced.drive(traced.column("t"))[0 if along == "f" else 1])
-        return CURVE_REACHED, row, anchor_before(
-            x_steps, traced.states(), traced.column("section"),
-            int(traced.bifurcation_column("step")[hit]), row[0] if along == "f" else row[1],
-            value)
-
     mu0 = parent["bifurcation_multiplier_modulus"].values[index] * np.exp(
         1j * parent["bifurcation_multiplier_angle"].values[index])
-    rows = [(float(parent["bifurcation_f"].values[index]),
+    seed = CurveSeed(
+        kind=kind, along=along, x=x_found, value=v_start, way=float(way),
+        periods=int(parent.attrs["orbit_period"]), flight=bool(parent.attrs["flight"]),
+        x_steps=parent[along].values, states=parent["section_state"].values,
+        sections=parent["section_phase"].values, step=step,
+        row=(float(parent["bifurcation_f"].values[index]),
              float(parent["bifurcation_a"].values[index]),
              float(parent["bifurcation_velocity"].values[index]), mu0,
-             float(parent["bifurcation_test"].values[index]))]
-    x_last = x_found
-    anchor = anchor_before(parent[along].values, parent["section_state"].values,
-                           parent["section_phase"].values, step, x_found, v_start)
+             float(parent["bifurcation_test"].values[index])))
     samples = np.linspace(v_start, to, num)[1:]
-    spacing = samples[0] - v_start
-    current, h, i = v_start, spacing, 0
-    end, low, high = CURVE_REACHED, np.nan, np.nan
-    while i < samples.size:
-        # Towards the next sample, in steps halved where the curve is lost or ends and
-        # grown back after each point found: an end is bracketed where they cannot be
-        # halved further.
-        target = samples[i]
-        value = target if abs(target - current) <= abs(h) * (1 + 1e-12) else current + h
-        if value == current:  # no step left in floating point: the curve cannot go on
-            end, low, high = CURVE_LOST, float(current), float(target)
-            break
-        code, row, moved = locate(anchor, value, 1.0)
-        if code == CURVE_VANISHED:
-            code, row, moved = locate(anchor, value, 4.0)  # moved farther?
-        if code == CURVE_REACHED:
-            rows.append(row)
-            anchor, x_last, current = moved, (row[0] if along == "f" else row[1]), value
-            i += value == target
-            h = spacing if abs(2.0 * h) >= abs(spacing) else 2.0 * h
-            continue
-        if abs(value - current) <= end_tolerance * max(abs(current), abs(value)):
-            end, low, high = code, float(current), float(value)
-            break
-        h = 0.5 * (value - current)
+    followed = follow_curve(structure, seed, samples, samples[0] - v_start,
+                            settings=settings, window=window, end_tolerance=end_tolerance,
+                            max_step=max_step)
+    rows, end, low, high = followed.rows, followed.end, followed.low, followed.high
     return _curve_dataset(structure, parent, kind, rows, along, end, low, high)
 
 

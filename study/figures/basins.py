@@ -14,7 +14,11 @@ axis's cells only as wide as its smallest step). Along one drive axis (the other
 value, or selected with ``--sel``): the velocity of each label above, and the basin
 fractions stacked beneath, a bar per grid point, as Attractors.jl's basins-fractions
 plot; with a coarse second axis (fewer values, such as a listed ``a = [10, 12]``), one
-such column per value of it.
+such column per value of it. Where the file holds the fold curves (the ``fold_curves``
+observable), each hop's fold f_fold(a) is drawn over every panel as a black line at the
+accelerations where it was located (solid: the forward hop's, where a sweep up jumps;
+dashed: the backward hop's, where a sweep down jumps), and along f as a vertical line at
+its frequency: the edges of the region where both hops coexist.
 """
 
 from __future__ import annotations
@@ -42,12 +46,46 @@ from study.figures.common import (
     structure_text,
 )
 
-__all__ = ["MAX_PANELS", "bar_width", "compose", "draw", "label_colour", "labelled"]
+__all__ = ["FOLD_STYLES", "MAX_PANELS", "bar_width", "compose", "draw", "fold_lines",
+           "label_colour", "labelled"]
 
 #: Labels drawn over (f, a) at most, most points first.
 MAX_PANELS = 6
 _AXES = {"f": "drive frequency f [Hz]", "a": "drive acceleration a [m s$^{-2}$]"}
 _PALETTE = plt.get_cmap("tab10").colors
+#: How each hop's fold curve (the fold_curves observable) is drawn.
+FOLD_STYLES = {"forward": {"color": "black", "linestyle": "-"},
+               "backward": {"color": "black", "linestyle": "--"}}
+_FOLD_LABELS = {"forward": "forward hop's fold (a sweep up jumps there)",
+                "backward": "backward hop's fold (a sweep down jumps there)"}
+
+
+def fold_lines(ax: plt.Axes, dataset: xr.Dataset, along: str = "a") -> list[plt.Line2D]:
+    """Each hop's fold curve of the file (``fold_f``, the fold_curves observable) on
+    ``ax``: over (f, a) as the line f_fold(a) through the accelerations where it was
+    located (``along="a"``), or, at one acceleration, a vertical line at its frequency
+    (``along="f"``); the axes' limits kept. Returns the lines drawn (none where the file
+    holds no fold, or none was found)."""
+    if "fold_f" not in dataset or "hop" not in dataset["fold_f"].dims:
+        return []
+    limits = ax.get_xlim(), ax.get_ylim()
+    drawn = []
+    for hop in dataset["hop"].values:
+        name = str(hop)
+        f = np.atleast_1d(dataset["fold_f"].sel(hop=hop).values)
+        if not np.isfinite(f).any():
+            continue
+        style = {**FOLD_STYLES.get(name, FOLD_STYLES["forward"]), "zorder": 5,
+                 "label": _FOLD_LABELS.get(name, f"{name} fold")}
+        if along == "a":
+            a = np.atleast_1d(dataset["fold_f"].sel(hop=hop)["a"].values)
+            drawn.append(ax.plot(f, a, marker="o", markersize=2.5, linewidth=1.4,
+                                 **style)[0])
+        else:
+            drawn.append(ax.axvline(float(f[np.isfinite(f)][0]), linewidth=1.2, **style))
+    ax.set_xlim(*limits[0])
+    ax.set_ylim(*limits[1])
+    return drawn
 
 
 def label_colour(label: int) -> tuple[float, float, float]:
@@ -162,8 +200,11 @@ def _map(dataset: xr.Dataset, summary: xr.Dataset) -> tuple[plt.Figure, str]:
         points = int(summary["points"].sel(label=label))
         ax.set_title(f"label {label}: {_describe(summary, label)}\n{points} points",
                      fontsize=9, color=colour)
+        folds = fold_lines(ax, dataset)
     for ax in axes.flat[shown.size:]:
         ax.set_visible(False)
+    if folds:
+        fig.legend(handles=folds, loc="outside lower center", ncols=len(folds), fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel(_AXES["f"])
     for ax in axes[:, 0]:
@@ -205,6 +246,10 @@ def _lines(dataset: xr.Dataset, summary: xr.Dataset, axis: str,
         at = dataset.sel({other: value}) if other in dataset.dims else dataset
         top, bottom = axes[:, column]
         present, most = _line(top, bottom, at, summary, axis)
+        if axis == "f":  # the folds at this acceleration, where the file holds them
+            for ax in (top, bottom):
+                for line in fold_lines(ax, at, along="f"):
+                    handles.setdefault(line.get_label(), line)
         head = f"{_where(at, other)}: " if columns > 1 else ""
         top.set_title(f"{head}{len(present)} motions along {axis}, at most {most} at one "
                       "drive", fontsize=10 if columns == 1 else 9)

@@ -29,7 +29,7 @@ from study.solvers.branch import Trace, trace
 from study.solvers.protocol import SweptState
 from study.solvers.settings import SolverSettings
 
-__all__ = ["SweepJumps", "sweep_jumps"]
+__all__ = ["SweepJumps", "jump_branch", "sweep_jumps"]
 
 #: The statuses whose motion has an orbit (or the static point) to follow.
 _ORBITS = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING, Status.BOUNCING)
@@ -122,6 +122,31 @@ def _locate(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64]
             ) -> tuple[int, float, float, float, float, float] | None:
     """``(kind, f, a, velocity, modulus, angle)`` of the bifurcation where the branch of
     the orbit at ``before`` ends on its way to ``here`` (grid indices), or None."""
+    found = jump_branch(structure, f, a, swept, before, here, flight=flight,
+                        settings=settings)
+    if found is None:
+        return None
+    traced, cause = found
+    f0, a0 = float(f[before[0]]), float(a[before[1]])
+    f1, a1 = float(f[here[0]]), float(a[here[1]])
+    row = traced.bifurcations[cause]
+    t = float(row[trace_kernel.B_T])
+    multiplier = complex(row[trace_kernel.B_REAL],
+                         row[trace_kernel.B_IMAG])
+    return (int(row[trace_kernel.B_KIND]), f0 + t * (f1 - f0), a0 + t * (a1 - a0),
+            float(row[trace_kernel.B_VELOCITY]), abs(multiplier),
+            float(np.angle(multiplier)))
+
+
+def jump_branch(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+                swept: SweptState, before: tuple[int, int], here: tuple[int, int], *,
+                flight: bool = False, settings: SolverSettings | None = None
+                ) -> tuple[Trace, int] | None:
+    """The branch of the sweep's orbit at ``before`` traced towards ``here`` (grid
+    indices of ``f x a``) and the index of the bifurcation on it where the sweep's
+    motion ends (the jump :func:`sweep_jumps` locates); None where there is none (an
+    irregular motion before, an orbit Newton's method does not close, a branch that
+    goes on stable)."""
     state = swept.state
     status = Status(int(state.status[before]))
     if status not in _ORBITS:
@@ -143,13 +168,7 @@ def _locate(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64]
     cause = _cause(traced)
     if cause is None:
         return None
-    row = traced.bifurcations[cause]
-    t = float(row[trace_kernel.B_T])
-    multiplier = complex(row[trace_kernel.B_REAL],
-                         row[trace_kernel.B_IMAG])
-    return (int(row[trace_kernel.B_KIND]), f0 + t * (f1 - f0), a0 + t * (a1 - a0),
-            float(row[trace_kernel.B_VELOCITY]), abs(multiplier),
-            float(np.angle(multiplier)))
+    return traced, cause
 
 
 def _cause(traced: Trace) -> int | None:

@@ -31,9 +31,11 @@ from study.engine.validation.header import (
     short,
 )
 from study.engine.validation.reading import StoredFile, read_slab, slabs
+from study.model.codes import CURVE_ENDED, CURVE_LOST, CURVE_VANISHED
 from study.model.contact import DEFAULT_LIFT_OFF
 from study.model.status import INVALID_STATUSES, Status
 from study.solvers.basins import NO_ATTRACTOR
+from study.solvers.fold_curves import FOUND
 from study.studies.layout import method_attributes, variable_dims
 from study.studies.observables import variables_of
 from study.studies.spec import StudySpec, parse_spec
@@ -236,6 +238,32 @@ def _study_content_problems(check: Checker, meta: StoredFile, spec: Any,
         problems += _basins_problems(check, meta, spec, good)
     if {"averaged_velocity", *_VELOCITY_INTERVAL} <= good:
         problems += _interval_problems(check)
+    problems += _fold_problems(check, good)
+    return problems
+
+
+#: The fold curves' values and the flag that says where each is NaN, with the codes
+#: it holds where they are not (found, and a curve's end that has a bracket).
+_FOLD_NAN = {"fold_f": ("fold_status", (FOUND,)),
+             "fold_velocity": ("fold_status", (FOUND,)),
+             "fold_end_last": ("fold_end", (CURVE_VANISHED, CURVE_ENDED, CURVE_LOST)),
+             "fold_end_past": ("fold_end", (CURVE_VANISHED, CURVE_ENDED, CURVE_LOST))}
+
+
+def _fold_problems(check: Checker, good: set[str]) -> list[str]:
+    """The fold curves: each value NaN exactly where its flag says there is none
+    (fold_status not found; fold_end reached or not_found)."""
+    problems = []
+    for name, (flag, held) in _FOLD_NAN.items():
+        if name not in good or flag not in good:
+            continue
+        wrong = sum(int(np.count_nonzero(np.isnan(values) == np.isin(codes, held)))
+                    for values, codes in check.slabs(name, flag))
+        if wrong:
+            named = dict(zip(VARIABLES[flag].flag_values, VARIABLES[flag].flags, strict=True))
+            problems.append(f"{name} is NaN exactly where {flag} is not "
+                            f"{' or '.join(named[c] for c in held)} ({wrong} values "
+                            "disagree)")
     return problems
 
 

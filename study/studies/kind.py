@@ -51,9 +51,11 @@ from study.engine.store import (
     new_temporary,
 )
 from study.model.structure import Structure
+from study.solvers.fold_curves import HOPS, SIDES, fold_curve_work
 from study.solvers.frontier import frontier_branches, frontier_work
 from study.studies.layout import (
     coordinates,
+    curve_observable,
     data_variables,
     direction_methods,
     method_attributes,
@@ -63,7 +65,7 @@ from study.studies.layout import (
     plan_study,
     study_summary,
 )
-from study.studies.observables import Observable
+from study.studies.observables import CurveWork, Observable
 from study.studies.spec import StudySpec, load_spec, parse_spec
 from study.studies.spec_types import SPEC_SCHEMA
 from study.studies.sweep import (
@@ -247,6 +249,8 @@ class _Run:
         #: ``direction`` indexes it); else the study's method alone.
         self.methods = direction_methods(spec)
         self.rows, self.points, self.frontier = observables_by_grid(spec)
+        #: The fold curves, continued after the map (and the frontier), if asked for.
+        self.curves = curve_observable(spec)
         self.f = spec.axis("f").values
         a_axis = spec.axis("a")
         self.a = a_axis.values if (a_axis is not None and spec.needs_solver) else np.empty(0)
@@ -519,7 +523,8 @@ class _Run:
         try:
             self.writer = self._open(temporary)
             # "done" is said only of the whole run: the map is one phase of it.
-            then = "frontier next" if self.frontier is not None else "sealing the file"
+            then = ("frontier next" if self.frontier is not None else
+                    "fold curves next" if self.curves is not None else "sealing the file")
             self.progress = Progress(self._total(), self.spec.name, progress,
                                      finished=f"map done; {then}")
             pending: dict[int, _OpenChunk] = {}
@@ -555,6 +560,8 @@ class _Run:
                     raise self.interrupted()
                 if self.frontier is not None:
                     self._write_frontier(progress, stop)
+                if self.curves is not None:
+                    self._write_curves(progress, stop)
             gathering.join()
             self.writer.set_attributes(self._provenance_attrs())
             self.writer.close()
@@ -666,6 +673,104 @@ class _Run:
             return
         arrays = {name: np.ascontiguousarray(found[name].T) for name in self.frontier.variables}
         self._keep(key, content, self.a, encode_block(key, slots, self.a, arrays))
+
+    def _write_curves(self, progress: bool | None, stop: threading.Event) -> None:
+        """The fold curves of every structure (:mod:`study.solvers.fold_curves`: slow
+        sweeps along the study's f, each hop's fold continued over its a), with their
+        own progress. A structure's curves are kept once found, under a key of what
+        they follow from (the structure, the solver, the f and a axes, not the map); a
+        stop request (Ctrl-C) ends the phase after the step running."""
+        spec = self.spec
+        work = fold_curve_work(self.a)
+        shown = Progress(work * len(self.structures), f"{spec.name} fold curves", progress,
+                         unit="step", finished="fold curves done; sealing the file")
+
+        def advance(steps: int) -> None:
+            shown.update(steps)
+            if stop.is_set():
+                raise KeyboardInterrupt  # the curves of the structures done are kept
+
+        found = {}
+        reused = 0
+        try:
+            with shown.running(), compile_notices(shown):
+                for index, structure in self.structures.items():
+                    if stop.is_set():
+                        raise KeyboardInterrupt
+                    keys = self._curve_keys(index)
+                    kept = self._kept_curves(keys)
+                    if kept is not None:
+                        found[index] = kept
+                        reused += 1
+                        shown.update(work, 0)
+                        continue
+                    found[index] = self.curves.compute(
+                        CurveWork(structure, self.f, self.a, self.method), progress=advance)
+                    self._keep_curves(keys, found[index])
+            if reused:
+                shown.say(f"fold curves of {reused} of {len(self.structures)} structures "
+                          "reused from the cache (same structure, solver and axes)")
+        finally:
+            shown.close()
+        ones = (1,) * len(spec.structure_axes)
+        for variable in data_variables(spec, (self.curves,)):
+            last = self.a.size if VARIABLES[variable.name].grid == "curve" else len(SIDES)
+            self.writer.variable(variable.name, variable.dims, variable.dtype,
+                                 {**variable.attrs, "coordinates": self.auxiliary},
+                                 (*ones, len(HOPS), last))
+        for index, item in found.items():
+            for variable in data_variables(spec, (self.curves,)):
+                self.writer.write(variable.name, (*index, slice(None), slice(None)),
+                                  item[variable.name])
+
+    def _curve_keys(self, index: tuple[int, ...]
+                    ) -> dict[str, tuple[str, dict[str, Any], np.ndarray]]:
+        """For each part of a structure's fold curves (over ``(hop, a)`` and over
+        ``(hop, curve_end)``): its cache key, content and the block's columns. The
+        curves follow from the structure, the solver (not the protocol: they sweep on
+        their own) and the f and a axes, not from the map."""
+        method = replace(self.method, protocol=None).canonical()
+        keys = {}
+        for part, columns in (("curve", self.a),
+                              ("curve_end", np.arange(len(SIDES), dtype=np.float64))):
+            names = [v for v in self.curves.variables if VARIABLES[v].grid == part]
+            content = {
+                "observable": self.curves.name,
+                "part": part,
+                "variables": {v: VARIABLES[v].dtype for v in names},
+                "structure": _structure_content(self.structures[index]),
+                "method": method,
+                "code_sha256": self.code,
+                "f_sha256": hashlib.sha256(np.ascontiguousarray(self.f).tobytes()).hexdigest(),
+                "a_sha256": hashlib.sha256(np.ascontiguousarray(self.a).tobytes()).hexdigest(),
+            }
+            keys[part] = (entry_key(content), content, columns)
+        return keys
+
+    def _kept_curves(self, keys: dict[str, tuple[str, dict[str, Any], np.ndarray]]
+                     ) -> dict[str, np.ndarray] | None:
+        """A structure's fold curves kept by an earlier run (the hops the rows of each
+        block), or None."""
+        slots = np.arange(len(HOPS), dtype=np.float64)
+        found: dict[str, np.ndarray] = {}
+        for part, (key, _, columns) in keys.items():
+            dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in self.curves.variables
+                      if VARIABLES[v].grid == part}
+            values, present = self.cache.lookup(key, slots, columns, dtypes)
+            if not present.all():
+                return None
+            found.update(values)
+        return found
+
+    def _keep_curves(self, keys: dict[str, tuple[str, dict[str, Any], np.ndarray]],
+                     found: dict[str, np.ndarray]) -> None:
+        if not self.keeping:
+            return
+        slots = np.arange(len(HOPS), dtype=np.float64)
+        for part, (key, content, columns) in keys.items():
+            arrays = {v: np.ascontiguousarray(found[v]) for v in self.curves.variables
+                      if VARIABLES[v].grid == part}
+            self._keep(key, content, columns, encode_block(key, slots, columns, arrays))
 
     def _provenance_attrs(self) -> dict[str, Any]:
         spec = self.spec

@@ -26,6 +26,7 @@ from study.model.parameters import STRUCTURE
 from study.model.starts import start_attributes
 from study.model.units import DIMENSIONLESS, KILOGRAM
 from study.solvers.basins import sampling_reach
+from study.solvers.fold_curves import HOPS, SIDES
 from study.studies.observables import UNSWEPT_VARIABLES, Method, Observable, resolve
 from study.studies.spec import StudySpec
 from study.studies.spec_types import STRUCTURE_PARAMETERS, SWEEPABLE
@@ -38,6 +39,7 @@ __all__ = [
     "basins_attributes",
     "coordinate_attrs",
     "coordinates",
+    "curve_observable",
     "data_variables",
     "direction_methods",
     "method_attributes",
@@ -113,6 +115,14 @@ def coordinates(spec: StudySpec) -> tuple[Coordinate, ...]:
     for name in sorted(trailing):
         found.append(Coordinate(name, (name,), np.arange(sizes[name], dtype=np.int32),
                                 coordinate_attrs(DIMENSIONLESS, _TRAILING_NAMES[name])))
+    if curve_observable(spec) is not None:
+        found.append(Coordinate("hop", ("hop",), np.array(HOPS), coordinate_attrs(
+            DIMENSIONLESS, "the hop whose fold is followed: forward (a slow sweep up along "
+            "f rides it to its fold) or backward (a sweep down)")))
+        found.append(Coordinate("curve_end", ("curve_end",), np.array(SIDES),
+                                coordinate_attrs(DIMENSIONLESS, "the end of a fold curve: "
+                                                 "towards smaller (below) or larger "
+                                                 "(above) drive accelerations")))
     if spec.mass is not None:
         found.append(Coordinate("m0", (), np.float64(spec.mass.m0),
                                 coordinate_attrs(KILOGRAM, "mass of the structure")))
@@ -144,6 +154,13 @@ def observables_by_grid(spec: StudySpec) -> tuple[tuple[Observable, ...],
     return (tuple(o for o in observables if o.grid == "row"),
             tuple(o for o in observables if o.grid == "point"),
             next((o for o in observables if o.grid == "frontier"), None))
+
+
+def curve_observable(spec: StudySpec) -> Observable | None:
+    """The study's observable continued over the drive plane after the map (the fold
+    curves), if asked for."""
+    return next((o for o in resolve(spec.observables, spec.flight, spec.protocol is not None)
+                 if o.grid == "curves"), None)
 
 
 def data_variables(spec: StudySpec, observables: tuple[Observable, ...]

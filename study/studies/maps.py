@@ -35,6 +35,7 @@ from study.model.structure import Structure, check_structure
 from study.solvers.settings import SolverSettings, check_coupling, check_flight, check_start
 from study.studies.layout import (
     coordinates,
+    curve_observable,
     data_variables,
     direction_methods,
     method_attributes,
@@ -43,7 +44,12 @@ from study.studies.layout import (
     pad_branches,
     plan_study,
 )
-from study.studies.observables import OBSERVABLES, UNSWEPT_VARIABLES, BasinSettings
+from study.studies.observables import (
+    OBSERVABLES,
+    UNSWEPT_VARIABLES,
+    BasinSettings,
+    CurveWork,
+)
 from study.studies.spec import StudySpec, parse_spec
 from study.studies.spec_types import STRUCTURE_PARAMETERS
 from study.studies.sweep import Rectangle, Task, compute_task
@@ -356,6 +362,9 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
     data = {v.name: (v.dims, values[v.name], v.attrs) for v in variables}
     if frontier is not None:
         data.update(_frontier(spec, frontier, f, a, values, method))
+    curves = curve_observable(spec)
+    if curves is not None:
+        data.update(_curves(spec, curves, f, a, method))
     dataset = xr.Dataset(
         data, coords={c.name: (c.dims, c.values, c.attrs) for c in coordinates(spec)})
     dataset.attrs = {
@@ -384,5 +393,21 @@ def _frontier(spec: StudySpec, frontier: Any, f: NDArray[np.float64],
         array = np.empty((*shape, a.size, branches), dtype=variable.dtype)
         for index, item in found.items():
             array[index] = pad_branches(item[variable.name], branches, variable.dtype)
+        out[variable.name] = (variable.dims, array, variable.attrs)
+    return out
+
+
+def _curves(spec: StudySpec, curves: Any, f: NDArray[np.float64], a: NDArray[np.float64],
+            method: Any) -> dict[str, tuple[tuple[str, ...], NDArray[Any], dict[str, Any]]]:
+    """The fold curves of every structure (as the runner writes them)."""
+    found = {index: curves.compute(CurveWork(structure, f, a, method))
+             for index, structure in spec.structures()}
+    shape = tuple(len(axis) for axis in spec.structure_axes)
+    out = {}
+    for variable in data_variables(spec, (curves,)):
+        first = next(iter(found.values()))[variable.name]
+        array = np.empty((*shape, *first.shape), dtype=variable.dtype)
+        for index, item in found.items():
+            array[index] = item[variable.name]
         out[variable.name] = (variable.dims, array, variable.attrs)
     return out

@@ -39,6 +39,7 @@ from study.solvers.basins import (
     sweep_seeds,
 )
 from study.solvers.exact import steady_state
+from study.solvers.fold_curves import fold_curves
 from study.solvers.frontier import frontier_from_grid
 from study.solvers.integrator import IntegratorSettings, integrated_steady_state
 from study.solvers.jumps import sweep_jumps
@@ -54,6 +55,7 @@ __all__ = [
     "OBSERVABLES",
     "UNSWEPT_VARIABLES",
     "BasinSettings",
+    "CurveWork",
     "Method",
     "Observable",
     "PointWork",
@@ -295,9 +297,10 @@ class Observable:
     name : str
     summary : str
         One line for docs and error messages.
-    grid : {"row", "point", "frontier"}
+    grid : {"row", "point", "frontier", "curves"}
         ``row``: closed form per frequency; ``point``: per drive point, by the
-        solver; ``frontier``: found from whole velocity rows after the grid.
+        solver; ``frontier``: found from whole velocity rows after the grid;
+        ``curves``: continued over the drive plane after the grid, per structure.
     variables : tuple of str
         Names of its variables in :data:`study.studies.variables.VARIABLES`.
     requires : tuple of str
@@ -331,7 +334,9 @@ class Observable:
         (n_f,)}``; ``point``: ``function(work: PointWork) -> {name: array}``;
         ``frontier``: ``function(structure, f, a, velocity, status, method, tolerance,
         progress=None)``, each array ``(n_a, n_branch)`` (``progress(solves)`` after each
-        bisection step).
+        bisection step); ``curves``: ``function(work: CurveWork, progress=None)``,
+        arrays over ``(hop, a)`` and ``(hop, curve_end)`` (``progress(steps)`` after each
+        sweep and each acceleration of a curve).
     methods : tuple of str or None
         The velocity solvers (:data:`METHODS`, ``[solver] method``) that compute it;
         None: any.
@@ -376,7 +381,7 @@ class Observable:
         """Its values, by :attr:`function`; a point observable first refuses a method
         it does not apply to (the spec refuses it before; a direct caller gets the
         same words)."""
-        if self.grid == "point" and self.needs_anything:
+        if self.grid in ("point", "curves") and self.needs_anything:
             method = args[0].method
             unmet = unmet_needs((self.name,), method.name, method.coupling, method.flight,
                                 method.protocol is not None)
@@ -661,6 +666,26 @@ def _frontier(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float6
             "frontier_direction": found.direction, "frontier_bracket": found.width}
 
 
+@dataclass(frozen=True)
+class CurveWork:
+    """What a ``curves`` observable is computed from: one structure, the study's whole
+    drive axes ``f`` [Hz] and ``a`` [m s-2] (1-D) and its method."""
+
+    structure: Structure
+    f: NDArray[np.float64]
+    a: NDArray[np.float64]
+    method: Method
+
+
+def _fold_curves(work: CurveWork, progress: Callable[[int], None] | None = None
+                 ) -> dict[str, NDArray[Any]]:
+    found = fold_curves(work.structure, work.f, work.a, flight=work.method.flight,
+                        settings=work.method.solver, progress=progress)
+    return {"fold_f": found.f, "fold_velocity": found.velocity, "fold_status": found.status,
+            "fold_end": found.end, "fold_end_last": found.end_last,
+            "fold_end_past": found.end_past}
+
+
 _DECLARED = (
     Observable("resonance", "gain and phase of the plate's first mode", "row",
                ("mode_gain", "mode_phase"), _resonance),
@@ -753,6 +778,17 @@ _DECLARED = (
     Observable("frontier", "zero-velocity frontier f*(a), refined by bisection", "frontier",
                ("frontier_frequency", "frontier_kind", "frontier_direction",
                 "frontier_bracket"), _frontier, requires=("velocity",)),
+    Observable("fold_curves", "the folds that bound where the forward and the backward "
+               "hop coexist, as curves f_fold(a): slow sweeps up and down along the "
+               "study's f at each a locate where each hop's branch folds (the forward "
+               "hop's swept up, the backward hop's swept down), and one fold of each is "
+               "continued over the study's a axis both ways, exact at each a, its ends "
+               "(a cusp, another bifurcation) bracketed (after the map, per structure)",
+               "curves", ("fold_f", "fold_velocity", "fold_status", "fold_end",
+                          "fold_end_last", "fold_end_past"), _fold_curves,
+               requires=("velocity",), methods=("exact",), couplings=("two-way",),
+               why="the exact two-way solver's period map is what slow sweeps carry the "
+               "state on and branches are continued on"),
 )
 
 #: name -> Observable, in the order they appear in a dataset.
@@ -789,7 +825,8 @@ def markdown_table() -> str:
     declarations: name, what it computes, its grid, what it needs of ``[solver]`` and
     the variables it writes (with flight also its flight variables)."""
     grids = {"row": "per `f` (closed form)", "point": "per `(f, a)` (solver)",
-             "frontier": "per `a`, `branch` (bisection)"}
+             "frontier": "per `a`, `branch` (bisection)",
+             "curves": "per `hop`, `a` and `hop`, `curve_end` (continuation)"}
     lines = ["| observable | what it computes | grid | needs | variables |",
              "|---|---|---|---|---|"]
     for name, o in OBSERVABLES.items():

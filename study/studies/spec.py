@@ -605,6 +605,9 @@ def _sweep_axes(sweep: dict[str, Any], observables: tuple[str, ...],
     for axis in axes:
         if axis.name == "f" and np.any(axis.values <= 0):
             raise SpecError(f"{path}: [sweep] f: drive frequencies must be > 0 Hz")
+        if axis.name == "f" and "fold_curves" in observables and len(axis.values) < 2:
+            raise SpecError(f'{path}: [sweep] f has 1 value; the observable "fold_curves" '
+                            "sweeps along f slowly (allowed: at least 2 values)")
         if axis.name == "a" and np.any(axis.values < 0):
             raise SpecError(f"{path}: [sweep] a: drive accelerations must be >= 0 m s-2")
         if axis.name == "m_add" and np.any(axis.values < 0):

@@ -26,6 +26,7 @@ from study.model.units import (
 )
 from study.solvers.attractors import ATTRACTOR_DROPS, ATTRACTOR_STARTS
 from study.solvers.basins import NO_ATTRACTOR
+from study.solvers.fold_curves import FOLD_END_FLAGS, FOLD_END_VALUES, FOLD_STATUS_FLAGS
 from study.solvers.section import SECTION_PERIODS
 from study.solvers.steady import FIELD_DTYPES, FIELD_UNITS
 
@@ -68,10 +69,13 @@ STALE_RESULT_FORMATS: dict[int, dict[str, str]] = {1: {"mode_phase": "rad"}}
 
 #: Where a variable lives: over (structure..., f), (structure..., f, a), the
 #: frontier's (structure..., a, branch), a phase section's (structure..., f, a,
-#: section_period): consecutive drive periods of the motion at each point, or the
-#: basins' (structure..., f, a, attractor): the attractors at each point.
+#: section_period): consecutive drive periods of the motion at each point, the
+#: basins' (structure..., f, a, attractor): the attractors at each point, a fold
+#: curve's (structure..., hop, a): each hop's fold at each acceleration, or its ends'
+#: (structure..., hop, curve_end): towards smaller and larger accelerations.
 GRIDS = {"row": ("f",), "point": ("f", "a"), "frontier": ("a", "branch"),
-         "section": ("f", "a", "section_period"), "attractor": ("f", "a", "attractor")}
+         "section": ("f", "a", "section_period"), "attractor": ("f", "a", "attractor"),
+         "curve": ("hop", "a"), "curve_end": ("hop", "curve_end")}
 
 #: Attractor slots per point of the basins observable without ``[basins]
 #: max_attractors``.
@@ -236,6 +240,11 @@ _EMPTY_SLOT = "NaN (missing) exactly where basin_status is no_attractor (a slot 
 _BASIN_STARTS = ("the seeded starts of [basins] (the solver's start, then the base at rest "
                  "at drawn drive phases with the mode at drawn multiples of its steady "
                  "response, with flight every third one dropped from a drawn height)")
+
+#: What a fold curve's value says where there is none.
+_NO_FOLD = "NaN (missing) exactly where fold_status is not found"
+_NO_END = ("NaN (missing) exactly where fold_end is reached (the curve ran to the end of "
+           "the a axis) or not_found (nothing was followed)")
 
 #: What each located jump's value says where there is none.
 _NO_JUMP = "NaN (missing) exactly where jump_bifurcation is no_jump or unlocated"
@@ -515,6 +524,41 @@ _DECLARED = (
     Variable("status_unswept", "point", "int8", DIMENSIONLESS,
              "outcome of the solver from the declared start alone, beside a slow sweep",
              flags=_STATUS_FLAGS, flag_values=_STATUS_VALUES),
+    Variable("fold_f", "curve", "float64", HERTZ,
+             "drive frequency of the fold of each hop's branch at the drive acceleration: "
+             "where a slow sweep along f riding the hop jumps (forward hop: swept up; "
+             "backward hop: swept down)",
+             comment="each point located on the exact period map to 1e-10 of the drive, "
+             "the curve continued from a fold where a slow sweep of the study's f axis "
+             f"jumped from the hop to the other one (not interpolated); {_NO_FOLD}"),
+    Variable("fold_velocity", "curve", "float64", METRE_PER_SECOND,
+             "mean velocity of the hop's orbit at its fold, positive forward",
+             comment=_NO_FOLD),
+    Variable("fold_status", "curve", "int8", DIMENSIONLESS,
+             "whether the hop's fold was located at the drive acceleration, and why not",
+             flags=FOLD_STATUS_FLAGS,
+             comment="found: fold_f holds it; no_fold: past the curve's cusp (fold_end "
+             "vanished), where the hop's branch has no fold; beyond_end: past where the "
+             "curve ended at another bifurcation or was lost (fold_end ended or lost), "
+             "not followed there; not_found: no slow sweep along the study's f axis "
+             "jumped from this hop to the other at a fold at any acceleration, so no "
+             "curve was followed"),
+    Variable("fold_end", "curve_end", "int8", DIMENSIONLESS,
+             "how each hop's fold curve ends towards smaller (below) and larger (above) "
+             "drive accelerations",
+             flags=FOLD_END_FLAGS, flag_values=FOLD_END_VALUES,
+             comment="reached: located up to the a axis's end; vanished: the fold is no "
+             "longer met (a cusp, where the coexistence of the two hops is born or dies); "
+             "ended: the hop's orbit ceases to exist before the fold (another "
+             "bifurcation); lost: the orbit could not be carried to the next acceleration; "
+             "not_found: no curve (fold_status not_found)"),
+    Variable("fold_end_last", "curve_end", "float64", METRE_PER_SECOND_SQUARED,
+             "drive acceleration of the last point where the fold curve is met before "
+             "its end: one side of the end's bracket",
+             comment=f"bracketed by halving the step to 1e-6 of the acceleration; {_NO_END}"),
+    Variable("fold_end_past", "curve_end", "float64", METRE_PER_SECOND_SQUARED,
+             "drive acceleration past the fold curve's end, where the fold is not met: "
+             "the other side of the end's bracket", comment=_NO_END),
     Variable("frontier_frequency", "frontier", "float64", HERTZ,
              "drive frequency f*(a) where the mean velocity changes sign",
              comment="NaN-padded where an acceleration has fewer branches"),

@@ -120,6 +120,12 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         # A slow sweep's located jumps: none where it did not jump or none was found.
         **{f"jump_{name}": ("jump_bifurcation", (-1, 0))
            for name in ("f", "a", "velocity", "multiplier_modulus", "multiplier_angle")},
+        # Fold curves: no fold located at this a (fold_status other than found, 0), and
+        # no bracket where a curve reached the axis's end or was not followed.
+        "fold_f": ("fold_status", (1, 2, 3)),
+        "fold_velocity": ("fold_status", (1, 2, 3)),
+        "fold_end_last": ("fold_end", (0, 1)),
+        "fold_end_past": ("fold_end", (0, 1)),
         "frontier_frequency": ("frontier_kind", (0,)),
         "frontier_bracket": ("frontier_kind", (0,)),
         # Basins: an empty attractor slot (basin_status no_attractor, -1) holds NaN, and

@@ -112,3 +112,50 @@ def test_one_drive_point_is_refused(basins_map):
     assert int(basins_map["attractor_count"].max()) == 2
     with pytest.raises(FigureError, match=r"several values of attractor \(all its slots"):
         compose(basins_map.isel(attractor=[0]))
+
+
+def _with_folds(dataset):
+    """The map with fold curves as the fold_curves observable writes them: the forward
+    hop's fold at every a but the last, no backward fold found."""
+    a = dataset["a"].values
+    forward = 16.0 - 1.2 * (a - 10.0)
+    forward[-1] = np.nan
+    return dataset.assign_coords(hop=["forward", "backward"]).assign(
+        fold_f=(("hop", "a"), np.stack([forward, np.full(a.size, np.nan)])))
+
+
+def test_the_fold_curves_are_drawn_over_every_panel(basins_map):
+    folded = _with_folds(basins_map)
+    fig, _ = compose(folded)
+    panels = [ax for ax in fig.axes if ax.get_visible() and ax.get_title().startswith("label")]
+    limits = compose(basins_map)[0].axes[0].get_xlim()
+    for ax in panels:
+        lines = [line for line in ax.get_lines() if "fold" in line.get_label()]
+        assert [line.get_label() for line in lines] == [
+            "forward hop's fold (a sweep up jumps there)"]
+        assert lines[0].get_linestyle() == "-" and to_rgb(lines[0].get_color()) == (0, 0, 0)
+        assert_allclose(lines[0].get_xdata(), folded.fold_f.values[0], rtol=0, atol=0)
+        assert_allclose(lines[0].get_ydata(), folded.a.values, rtol=0, atol=0)
+        assert ax.get_xlim() == limits  # the map's extent kept
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == [
+        "forward hop's fold (a sweep up jumps there)"]
+    # Without the fold curves nothing of them is drawn.
+    bare, _ = compose(basins_map)
+    assert not [line for ax in bare.axes for line in ax.get_lines()
+                if "fold" in line.get_label()]
+
+
+def test_along_f_each_fold_is_a_vertical_line_at_its_frequency(basins_map):
+    folded = _with_folds(basins_map)
+    folded["fold_f"].values[1] = 13.3  # a backward fold too, at every a
+    labelled, _ = follow_attractors(folded)
+    fig, _ = compose(labelled.sel(a=10.5))
+    top, bottom = fig.axes
+    for ax in (top, bottom):
+        lines = {line.get_label(): line for line in ax.get_lines()
+                 if "fold" in line.get_label()}
+        forward = lines["forward hop's fold (a sweep up jumps there)"]
+        backward = lines["backward hop's fold (a sweep down jumps there)"]
+        assert_allclose(forward.get_xdata(), [16.0 - 1.2 * 0.5] * 2, rtol=0, atol=1e-12)
+        assert_allclose(backward.get_xdata(), [13.3, 13.3], rtol=0, atol=0)
+        assert backward.get_linestyle() == "--"

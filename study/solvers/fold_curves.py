@@ -1,0 +1,203 @@
+"""The folds that bound the coexistence of the forward and the backward hop, as curves
+f_fold(a) over a study's drive plane.
+
+A slow sweep up along ``f`` rides the forward hop until its branch folds back and jumps
+to the backward hop; a sweep down rides the backward hop until its fold. Between the two
+folds both motions are stable: the multistable region. :func:`fold_curves` finds each
+fold where the sweeps of the study's ``f`` axis jump (:func:`study.solvers.protocol.
+slow_sweep`, :func:`study.solvers.jumps.jump_branch`): the forward hop's, a jump of a
+sweep up from a forward motion (velocity > 0) to a backward one (< 0), the backward
+hop's, of a sweep down from a backward motion to a forward one. One such fold of each
+hop seeds its curve, which is continued over the study's whole ``a`` axis both ways
+(:func:`study.solvers.curves.follow_curve`) and located at each of its values exactly
+(to 1e-10 of the drive), its ends bracketed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from study.model import codes
+from study.model.structure import Structure
+from study.solvers.curves import FollowedCurve, follow_curve, seed_of_trace
+from study.solvers.jumps import jump_branch
+from study.solvers.protocol import slow_sweep
+from study.solvers.settings import SolverSettings
+
+__all__ = ["FOLD_END_FLAGS", "FOLD_END_VALUES", "FOLD_STATUS_FLAGS", "HOPS", "SIDES",
+           "FoldCurves", "fold_curve_work", "fold_curves"]
+
+#: The hops whose folds are followed, and the way a slow sweep along f rides each to
+#: its fold: the forward hop up, the backward hop down.
+HOPS = ("forward", "backward")
+_DIRECTIONS = {"forward": "up", "backward": "down"}
+#: The ends of a curve: towards the study's smaller accelerations, and larger ones.
+SIDES = ("below", "above")
+#: Why the fold of a hop has (or has not) a frequency at an acceleration.
+FOLD_STATUS_FLAGS = ("found", "no_fold", "beyond_end", "not_found")
+FOUND, NO_FOLD, BEYOND_END, NOT_FOUND = range(len(FOLD_STATUS_FLAGS))
+#: How a curve ends on each side: the curve ends of
+#: :data:`study.model.bifurcations.CURVE_ENDS` (their codes), or ``not_found`` (0): no
+#: sweep located the hop's fold, nothing was followed.
+FOLD_END_FLAGS = ("not_found", "reached", "vanished", "ended", "lost")
+FOLD_END_VALUES = (0, codes.CURVE_REACHED, codes.CURVE_VANISHED, codes.CURVE_ENDED,
+                   codes.CURVE_LOST)
+
+
+@dataclass(frozen=True)
+class FoldCurves:
+    """The fold curves of a structure over ``f x a``.
+
+    Attributes
+    ----------
+    f : numpy.ndarray
+        ``(2, n_a)``: the fold's drive frequency of each hop (:data:`HOPS`) at each
+        acceleration [Hz]; NaN where ``status`` is not ``found``.
+    velocity : numpy.ndarray
+        ``(2, n_a)``: the mean velocity of the hop's orbit at its fold [m s-1]; NaN
+        likewise.
+    status : numpy.ndarray of int8
+        ``(2, n_a)``: :data:`FOLD_STATUS_FLAGS` (found; no_fold: past the curve's cusp,
+        where the fold vanished; beyond_end: past where it ended at another bifurcation
+        or was lost; not_found: no sweep located the hop's fold).
+    end : numpy.ndarray of int8
+        ``(2, 2)``: how each hop's curve ends on each side (:data:`SIDES`),
+        :data:`FOLD_END_VALUES`.
+    end_last, end_past : numpy.ndarray
+        ``(2, 2)``: the accelerations between which it stops being met [m s-2]: the
+        last one where it is, and the first where it is not (the bracket of its end);
+        NaN where it reached the axis's end or was not followed.
+    seed : numpy.ndarray of int
+        ``(2,)``: the index along ``a`` of the sweep's jump that seeded each curve
+        (-1: none).
+    """
+
+    f: NDArray[np.float64]
+    velocity: NDArray[np.float64]
+    status: NDArray[np.int8]
+    end: NDArray[np.int8]
+    end_last: NDArray[np.float64]
+    end_past: NDArray[np.float64]
+    seed: NDArray[np.int64]
+
+
+def fold_curve_work(a: NDArray[np.float64]) -> int:
+    """The steps :func:`fold_curves` reports to its ``progress`` for an ``a`` axis:
+    each sweep, and each acceleration of each curve."""
+    return len(HOPS) * (1 + np.size(a))
+
+
+def fold_curves(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64], *,
+                flight: bool = False, settings: SolverSettings | None = None,
+                progress: Callable[[int], None] | None = None) -> FoldCurves:
+    """The forward and the backward hop's folds over the grid ``f x a``.
+
+    Parameters
+    ----------
+    structure : Structure
+    f : numpy.ndarray
+        Drive frequencies [Hz], 1-D, at least 2: the slow sweeps' steps.
+    a : numpy.ndarray
+        Drive accelerations [m s-2], 1-D: where each curve is located.
+    flight : bool, default False
+        Whether the base may fly (the sweeps and the branches).
+    settings : SolverSettings, optional
+        The solver's budgets and the sweeps' start (continuation is not used: a sweep
+        carries its state itself).
+    progress : callable, optional
+        ``progress(steps)`` after each sweep and each acceleration a curve is located
+        at or given up (:func:`fold_curve_work` in all).
+
+    Returns
+    -------
+    FoldCurves
+    """
+    f = np.asarray(f, dtype=np.float64)
+    a = np.asarray(a, dtype=np.float64)
+    settings = SolverSettings() if settings is None else settings
+    if settings.continuation:
+        settings = replace(settings, continuation=False)
+    report = progress if progress is not None else (lambda steps: None)
+    shape = (len(HOPS), a.size)
+    found = FoldCurves(f=np.full(shape, np.nan), velocity=np.full(shape, np.nan),
+                       status=np.full(shape, NOT_FOUND, dtype=np.int8),
+                       end=np.zeros((len(HOPS), len(SIDES)), dtype=np.int8),
+                       end_last=np.full((len(HOPS), len(SIDES)), np.nan),
+                       end_past=np.full((len(HOPS), len(SIDES)), np.nan),
+                       seed=np.full(len(HOPS), -1, dtype=np.int64))
+    order = np.argsort(a, kind="stable")
+    for h, hop in enumerate(HOPS):
+        direction = _DIRECTIONS[hop]
+        swept = slow_sweep(structure, f, a, along="f", direction=direction, flight=flight,
+                           settings=settings)
+        report(1)
+        seeded = _seed(structure, f, a, swept, hop, flight, settings)
+        if seeded is None:
+            report(a.size)
+            continue
+        j, traced, cause = seeded
+        seed = seed_of_trace(traced, cause, "f")
+        found.seed[h] = j
+        found.status[h, j] = FOUND
+        found.f[h, j], found.velocity[h, j] = seed.row[0], seed.row[2]
+        report(1)
+        position = int(np.flatnonzero(order == j)[0])
+        for side, indices in ((0, order[:position][::-1]), (1, order[position + 1:])):
+            if indices.size == 0:
+                found.end[h, side] = codes.CURVE_REACHED
+                continue
+            samples = a[indices]
+            followed = follow_curve(structure, seed, samples, float(samples[0] - a[j]),
+                                    settings=settings, progress=report)
+            _fill(found, h, side, indices, followed)
+            report(int(np.count_nonzero(found.status[h, indices] != FOUND)))
+    return found
+
+
+def _seed(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+          swept, hop: str, flight: bool, settings: SolverSettings
+          ) -> tuple[int, object, int] | None:
+    """``(j, trace, index)``: the jump of ``swept`` at the acceleration ``a[j]`` where
+    the hop's branch folds, the branch it rode and the fold's index on it; the columns
+    tried from the middle of the axis outwards, None where none has such a fold."""
+    velocity = swept.state.velocity
+    step = -1 if swept.direction == "up" else 1
+    middle = 0.5 * (a.size - 1)
+    for j in sorted(range(a.size), key=lambda k: (abs(k - middle), k)):
+        rows = np.flatnonzero(swept.jumped[:, j])
+        if swept.direction == "down":
+            rows = rows[::-1]  # in the order the sweep meets them
+        for i in rows:
+            before = velocity[i + step, j]
+            after = velocity[i, j]
+            reverses = (before > 0.0 > after) if hop == "forward" else (before < 0.0 < after)
+            if not reverses:
+                continue
+            located = jump_branch(structure, f, a, swept, (int(i + step), j), (int(i), j),
+                                  flight=flight, settings=settings)
+            if located is None:
+                continue
+            traced, cause = located
+            if int(traced.bifurcation_column("kind")[cause]) == codes.BIFURCATION_FOLD:
+                return j, traced, cause
+    return None
+
+
+def _fill(found: FoldCurves, h: int, side: int, indices: NDArray[np.int64],
+          followed: FollowedCurve) -> None:
+    """One side of a hop's curve into ``found``: the points at its samples (``indices``
+    along ``a``), the status past its end, the end and its bracket."""
+    for row, sample in zip(followed.rows, followed.sample, strict=True):
+        if sample >= 0:
+            k = indices[sample]
+            found.status[h, k] = FOUND
+            found.f[h, k], found.velocity[h, k] = row[0], row[2]
+    past = NO_FOLD if followed.end == codes.CURVE_VANISHED else BEYOND_END
+    reached = found.status[h, indices] == FOUND
+    found.status[h, indices[~reached]] = past
+    found.end[h, side] = followed.end
+    found.end_last[h, side], found.end_past[h, side] = followed.low, followed.high
