@@ -30,6 +30,8 @@
 #                   slow sweeps and verified starts against the one-way map
 #                   -> results/bench-protocol.md,
 #                   basins (24 starts) against a single-start map -> results/bench-basins.md,
+#                   a fold from a sweep's bracket and fold curves against basins lines
+#                   -> results/bench-branches.md,
 #                   reading a million-row measurement file -> docs/speed/measurements.md
 #   make bench-quick  every benchmark with --quick (fewer rounds, smaller sizes; a
 #                   change's before and after): tables to results/bench-quick/, never
@@ -295,6 +297,7 @@ define BENCHMARKS
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_small_calls.py $(1)
 	$(PY) benchmarks/bench_frontier_reuse.py $(1)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_protocol.py $(1)
+	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_branches.py $(1)
 	NUMBA_NUM_THREADS=1 $(PY) benchmarks/bench_basins.py $(2)
 endef
 
