@@ -25,7 +25,7 @@ from study.model import codes
 from study.model.structure import Structure
 from study.solvers.curves import FollowedCurve, follow_curve, seed_of_trace
 from study.solvers.jumps import jump_branch
-from study.solvers.protocol import slow_sweep
+from study.solvers.protocol import previous_points, slow_sweep
 from study.solvers.settings import SolverSettings
 
 __all__ = ["FOLD_END_FLAGS", "FOLD_END_VALUES", "FOLD_STATUS_FLAGS", "HOPS", "SIDES",
@@ -165,13 +165,18 @@ def _seed(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
     the hop's branch folds, the branch it rode and the fold's index on it; the columns
     tried from the middle of the axis outwards, None where none has such a fold."""
     velocity = swept.state.velocity
-    step = -1 if swept.direction == "up" else 1
+    previous = previous_points(f, swept.direction)
+    visit = np.argsort(np.argsort(f, kind="stable"), kind="stable")  # each f's rank
+    if swept.direction == "down":
+        visit = visit.size - 1 - visit
     middle = 0.5 * (a.size - 1)
     for j in sorted(range(a.size), key=lambda k: (abs(k - middle), k)):
         rows = np.flatnonzero(swept.jumped[:, j])
-        if swept.direction == "down":
-            rows = rows[::-1]  # in the order the sweep meets them
+        rows = rows[np.argsort(visit[rows], kind="stable")]  # in the order the sweep meets them
         for i in rows:
+            if previous[i] < 0:
+                continue
+            step = int(previous[i]) - int(i)
             before = velocity[i + step, j]
             after = velocity[i, j]
             reverses = (before > 0.0 > after) if hop == "forward" else (before < 0.0 < after)

@@ -26,7 +26,7 @@ from study.model.bifurcations import JUMP_NONE, JUMP_UNLOCATED
 from study.model.status import Status
 from study.model.structure import Structure
 from study.solvers.branch import Trace, trace
-from study.solvers.protocol import SweptState
+from study.solvers.protocol import SweptState, previous_points
 from study.solvers.settings import SolverSettings
 
 __all__ = ["SweepJumps", "jump_branch", "sweep_jumps"]
@@ -100,10 +100,13 @@ def sweep_jumps(structure: Structure, f: NDArray[np.float64], a: NDArray[np.floa
     kind = np.full(shape, JUMP_NONE, dtype=np.int8)
     found = {name: np.full(shape, np.nan) for name in ("f", "a", "velocity", "modulus",
                                                        "angle")}
-    step = -1 if swept.direction == "up" else 1
     axis = 0 if swept.along == "f" else 1
+    # The point visited just before each (an axis may be given in any order).
+    previous = previous_points(f if axis == 0 else a, swept.direction)
     for i, j in np.argwhere(swept.jumped):
-        before = (i + step, j) if axis == 0 else (i, j + step)
+        before = (int(previous[i]), j) if axis == 0 else (i, int(previous[j]))
+        if min(before) < 0:  # a run's first point follows nothing
+            continue
         located = _locate(structure, f, a, swept, before, (i, j), flight, settings)
         if located is None:
             kind[i, j] = JUMP_UNLOCATED

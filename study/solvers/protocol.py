@@ -108,6 +108,18 @@ def sweep_order(f: NDArray[np.float64], a: NDArray[np.float64], along: str,
     return order, bounds
 
 
+def previous_points(values: NDArray[np.float64], direction: str) -> NDArray[np.int64]:
+    """For each index of a swept axis ``values`` (in any order), the index of the value
+    a sweep in ``direction`` visits just before it (-1 for the run's first), as
+    :func:`sweep_order` orders them."""
+    ranks = np.argsort(np.asarray(values), kind="stable")
+    if direction == "down":
+        ranks = ranks[::-1]
+    previous = np.full(ranks.size, -1, dtype=np.int64)
+    previous[ranks[1:]] = ranks[:-1]
+    return previous
+
+
 def slow_sweep(
     structure: Structure,
     f: ArrayLike,

@@ -123,3 +123,17 @@ def test_a_period_doubling_the_sweep_follows_locates_nothing():
     swept, jumps = _located(M05, 18.5, a, "a", "up")
     assert not swept.jumped.any()
     assert (jumps.kind == JUMP_NONE).all()
+
+
+@pytest.mark.parametrize("direction", ["up", "down"])
+def test_an_axis_given_in_descending_order_locates_the_same_jumps(direction):
+    # A spec may give f from high to low; the sweep still visits it in its direction's
+    # order, and each jump is located from the point visited before it (found by a
+    # fuzzed spec: the point before was taken by index and ran off the axis).
+    f = np.round(np.arange(12.0, 16.31, 0.1), 6)
+    _, ascending = _located(M099, f, 10.0, "f", direction)
+    _, descending = _located(M099, f[::-1], 10.0, "f", direction)
+    if direction == "up":  # the forward hop's fold at 16.0545 Hz is among them
+        assert (ascending.kind == FOLD).sum() == 1
+    np.testing.assert_array_equal(descending.kind[::-1], ascending.kind)
+    assert_allclose(descending.f[::-1], ascending.f, rtol=0.0, atol=0.0)
