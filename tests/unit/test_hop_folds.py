@@ -24,6 +24,7 @@ from study.figures.fold_curves import compose, onset
 from study.model.bifurcations import JUMP_NONE, JUMP_UNLOCATED, kind_named
 from study.solvers.jumps import sweep_jumps
 from study.solvers.protocol import slow_sweep
+from tests.support.integrated import integrated_from
 
 FOLD = kind_named("fold").code
 DIMS = ("direction", "f", "a")
@@ -172,20 +173,11 @@ def test_the_figure_draws_each_fold_where_it_was_located(swept_m099):
 M095 = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.95, cs=0.25)
 
 
-def _integrated_from(structure, f, a, state, held=240, averaged=120):
-    """Mean velocity [m s-1] over the last ``averaged`` of ``held`` periods at ``(f, a)``
-    by the event-driven integrator with flight from a phase-0 state ``(delta, delta',
-    v, h, h')`` (the position x = 0)."""
-    from study.solvers.integrator import Schedule, simulate
-
-    start = np.array([state[0], state[1], 0.0, state[2], state[3], state[4]])
-    times = np.array([(held - averaged) / f, held / f])
-    trajectory = simulate(structure, Schedule(np.array([f]), np.array([a]),
-                                              np.array([held / f])),
-                          coupling="two-way", flight=True, initial_state=start,
-                          output_times=times)
-    assert trajectory.outcome == "completed"
-    return float((trajectory.x[1] - trajectory.x[0]) * f / averaged)
+def _integrated_from(structure, f, a, state):
+    """The integrator's mean velocity [m s-1] at ``(f, a)`` from a phase-0 state
+    ``(delta, delta', v, h, h')`` (the position x = 0)."""
+    return integrated_from(structure, f, a,
+                           np.array([state[0], state[1], 0.0, state[2], state[3], state[4]]))
 
 
 def test_inside_the_band_the_integrator_keeps_both_hops_and_below_it_one():

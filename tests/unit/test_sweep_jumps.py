@@ -23,6 +23,7 @@ from study.kernels.two_way import branch
 from study.solvers.integrator import Schedule, simulate, steady_mode_state
 from study.solvers.protocol import JUMP_FRACTION, slow_sweep
 from study.solvers.structure_constants import structure_vector
+from tests.support.integrated import integrated_from
 
 #: A user's structure near M = 1 (the issue's): forward and backward hops coexist.
 USER = study.Structure(f0=18.0, Q=25.0, alpha=55.0, M=0.9, cs=0.35)
@@ -54,16 +55,9 @@ def _integrated_sweep(structure: study.Structure, frequencies: np.ndarray,
 
 def _integrated_from(structure: study.Structure, f: float, a: float,
                      state: np.ndarray) -> float:
-    """Mean velocity [m s-1] over the last AVERAGED of HELD periods at ``(f, a)`` [Hz,
-    m s-2], by the integrator with flight from ``state`` ``(delta, delta', x, v, h,
-    h')`` at phase 0."""
-    times = np.array([(HELD - AVERAGED) / f, HELD / f])
-    trajectory = simulate(structure, Schedule(np.array([f]), np.array([a]),
-                                              np.array([HELD / f])),
-                          coupling="two-way", flight=True, initial_state=state,
-                          output_times=times)
-    assert trajectory.outcome == "completed"
-    return float((trajectory.x[1] - trajectory.x[0]) * f / AVERAGED)
+    """Mean velocity [m s-1] over the last AVERAGED of HELD periods (see
+    :func:`tests.support.integrated.integrated_from`)."""
+    return integrated_from(structure, f, a, state, held=HELD, averaged=AVERAGED)
 
 
 def _swept(frequencies, acceleration, direction):
