@@ -94,14 +94,18 @@ def fold_from_bracket(repeats: int) -> tuple[list[str], dict[str, float]]:
     fine_seconds, _ = _best(sweep_fine, repeats)
     coarse_seconds, _ = _best(sweep_coarse, repeats)
     bracket_seconds = fine_seconds - coarse_seconds
-    rows = ["| how | where the fold is [Hz] | passes (with Jacobian + without) | CPU [ms] |",
-            "|---|---|---|---|",
+    located = (float(traced.bifurcation_column("newton_passes")[fold]),
+               float(traced.bifurcation_column("map_passes")[fold]))
+    rows = ["| how | where the fold is [Hz] | passes (with Jacobian + without) | "
+            "of which locating the fold | CPU [ms] |",
+            "|---|---|---|---|---|",
             f"| the jump's trace from 16.0 Hz ({traced.steps.shape[0]} steps) | {where:.10f} | "
-            f"{traced.newton_passes:.0f} + {traced.map_passes:.0f} | {seconds * 1e3:.1f} |",
+            f"{traced.newton_passes:.0f} + {traced.map_passes:.0f} | "
+            f"{located[0]:.0f} + {located[1]:.0f} | {seconds * 1e3:.1f} |",
             f"| a sweep in 0.001 Hz steps through the bracket ({fine.size - SWEPT.size} "
-            f"points) | to 1e-3 | | {bracket_seconds * 1e3:.1f} |"]
+            f"points) | to 1e-3 | | | {bracket_seconds * 1e3:.1f} |"]
     return rows, {"passes": traced.newton_passes + traced.map_passes, "where": where,
-                  "trace": seconds, "fine": bracket_seconds}
+                  "trace": seconds, "fine": bracket_seconds, "located": sum(located)}
 
 
 def curve_against_basins(repeats: int, counts: tuple[int, ...]) -> tuple[list[str], dict]:
@@ -159,7 +163,9 @@ def main(argv: list[str] | None = None) -> int:
              f"the jump between {BRACKET[0]:g} and {BRACKET[1]:g} Hz)", "", *fold_rows, "",
              f"The trace locates the fold to 1e-10 of the drive in {fold['passes']:.0f} passes "
              f"of the period map, {fold['fine'] / fold['trace']:.0f} times faster than a "
-             "sweep that places it to 1e-3 Hz.", "",
+             "sweep that places it to 1e-3 Hz; the location itself (the regula falsi on the "
+             f"tangent's drive component, from the step that crossed it) takes "
+             f"{fold['located']:.0f} of them, beyond the branch's own steps.", "",
              "**A fold curve against a line of basins** (the fold above followed in a)", "",
              *curve_rows, "",
              f"A {longest}-value fold curve costs {times[longest]:.2f} s against "

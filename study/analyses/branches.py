@@ -34,7 +34,12 @@ from study.solvers.branch import (
     doubled_trace,
     trace,
 )
-from study.solvers.curves import DEFAULT_CURVE_WINDOW, CurveSeed, follow_curve
+from study.solvers.curves import (
+    DEFAULT_CURVE_MAX_STEP,
+    DEFAULT_CURVE_WINDOW,
+    CurveSeed,
+    follow_curve,
+)
 from study.solvers.settings import SolverSettings
 from study.version import VERSION
 
@@ -162,7 +167,7 @@ def bifurcation_curve(structure: Structure, parent: xr.Dataset, bifurcation: int
                       settings: SolverSettings | None = None,
                       window: float = DEFAULT_CURVE_WINDOW,
                       end_tolerance: float = 1e-6,
-                      max_step: float = DEFAULT_MAX_STEP) -> xr.Dataset:
+                      max_step: float = DEFAULT_CURVE_MAX_STEP) -> xr.Dataset:
     """The curve of a located bifurcation over the drive plane: the bifurcation
     ``bifurcation`` (an index along ``parent``'s ``bifurcation`` dimension) of the
     branch ``parent`` (a :func:`branch` result of ``structure``, continued along one
@@ -200,8 +205,9 @@ def bifurcation_curve(structure: Structure, parent: xr.Dataset, bifurcation: int
     end_tolerance : float, default 1e-6
         The relative width [1] to which a curve's end is bracketed in the other
         parameter, in [1e-12, 0.1].
-    max_step : float, default 0.02
-        The longest step of each branch [1], as in :func:`branch`.
+    max_step : float, default 0.25
+        The longest step of the branch each point is sought on [1], in the scaled space
+        of :func:`branch` (:data:`study.solvers.curves.DEFAULT_CURVE_MAX_STEP`).
 
     Returns
     -------

@@ -134,6 +134,9 @@ ENDS = (
     BranchEnd("not_followed", codes.BRANCH_LOST,
               "the orbit could not be followed from its start (not a fixed point of the "
               "period map to the solver's precision there)"),
+    BranchEnd("stopped", codes.BRANCH_STOPPED,
+              "stopped on the step past the first bifurcation of the kind asked for (a "
+              "curve's search for its next point needs no more of the branch)"),
 )
 
 

@@ -64,6 +64,7 @@ BRANCH_ENDED = 2
 BRANCH_BUDGET = 3
 BRANCH_LEFT = 4
 BRANCH_LOST = 5
+BRANCH_STOPPED = 6
 
 # Why a bifurcation's curve over the drive plane ended (study.model.bifurcations).
 CURVE_REACHED = 1

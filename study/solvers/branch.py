@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels.two_way import bifurcations as trace_kernel
 from study.kernels.two_way import branch as branch_kernel
 from study.model import as_acceleration, as_frequency
+from study.model.bifurcations import KINDS
 from study.model.codes import BIFURCATION_PERIOD_DOUBLING
 from study.model.starts import START_ALLOWED, START_TYPES, Drop, start_label
 from study.model.status import Status
@@ -262,12 +263,16 @@ def trace_from_section(structure: Structure, f: float, a: float, *, along: str,
                        to: float, state: ArrayLike, section: float, periods: int,
                        flight: bool, settings: SolverSettings | None = None,
                        max_steps: int = DEFAULT_MAX_STEPS,
-                       max_step: float = DEFAULT_MAX_STEP) -> Trace:
+                       max_step: float = DEFAULT_MAX_STEP, sought: int = 0) -> Trace:
     """The branch through the orbit near ``state`` on the section at ``section`` (a
     fraction of the period of ``periods`` drive periods from phase 0) at ``(f, a)``
     [Hz, m s-2], traced along ``along`` towards ``to``: a neighbour's orbit (the same
     section, a nearby drive) corrected by Newton's method there, then continued. The
-    trace's ``end`` is ``BRANCH_LOST`` where the correction does not converge."""
+    trace's ``end`` is ``BRANCH_LOST`` where the correction does not converge.
+
+    ``sought`` (a ``study.model.codes.BIFURCATION_*`` code) locates that kind of
+    bifurcation only and ends the trace on the step past the first one
+    (``BRANCH_STOPPED``); 0, the default, locates every kind and runs on."""
     structure = check_structure(structure)
     settings = check_settings(settings, "two-way")
     along = check_along(along)
@@ -282,13 +287,17 @@ def trace_from_section(structure: Structure, f: float, a: float, *, along: str,
     omega0 = 2.0 * np.pi * f
     segment = branch_kernel.Segment(omega0, a, 2.0 * np.pi * to if along == "f" else omega0,
                                     a if along == "f" else to)
+    if sought not in (0, *(kind.code for kind in KINDS)):
+        raise ValueError(f"trace_from_section: 'sought' must be 0 or a bifurcation's "
+                         f"code {[kind.code for kind in KINDS]}, got {sought!r}")
     return _run(structure, segment, full, int(periods), np.zeros(trace_kernel.N_EXTENDED),
-                float(section), bool(flight), settings, count, longest)
+                float(section), bool(flight), settings, count, longest, int(sought))
 
 
 def _run(structure: Structure, segment: object, state: NDArray[np.float64], periods: int,
          start_tangent: NDArray[np.float64], section: float, flight: bool,
-         settings: SolverSettings, max_steps: int, max_step: float) -> Trace:
+         settings: SolverSettings, max_steps: int, max_step: float,
+         sought: int = 0) -> Trace:
     """Allocate and call the kernel."""
     vector = structure_vector(structure, "two-way", flight)
     steps = np.full((max_steps, trace_kernel.N_STEP), np.nan)
@@ -301,7 +310,7 @@ def _run(structure: Structure, segment: object, state: NDArray[np.float64], peri
         vector, segment, np.ascontiguousarray(state, dtype=float), periods,
         np.ascontiguousarray(start_tangent, dtype=float), section, work,
         trace_kernel.new_trace_work(), int(kernel_budget(settings).max_events), max_steps,
-        max_step, steps, real, imag, bifurcations, jacobians)
+        max_step, sought, steps, real, imag, bifurcations, jacobians)
     n = 5 if flight else 3
     order = np.argsort(bifurcations[:n_bifurcations, trace_kernel.B_STEP], kind="stable")
     return Trace(steps=steps[:n_steps],

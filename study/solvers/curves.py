@@ -7,7 +7,10 @@ observable (:mod:`study.solvers.fold_curves`): at each sample of the other param
 orbit of the last point found (a point of the branch before its bifurcation) is moved
 to the new drive along its own branch, then continued along the first parameter through
 a window past the last location, and the same kind of bifurcation is located on it (to
-1e-10 of the drive, :mod:`study.kernels.two_way.bifurcations`). Where it is no longer
+1e-10 of the drive, :mod:`study.kernels.two_way.bifurcations`). Each of those traces
+locates that kind only and stops on the step past it (``sought``): the other kinds met
+on the way (a grazing near the curve costs about 100 passes of the period map to
+locate) and the branch beyond would be work thrown away. Where it is no longer
 met, the end is bracketed by halving the step in the other parameter.
 """
 
@@ -31,12 +34,22 @@ from study.model.structure import Structure
 from study.solvers.branch import DEFAULT_MAX_STEP, Trace, trace_from_section
 from study.solvers.settings import SolverSettings
 
-__all__ = ["DEFAULT_CURVE_WINDOW", "CurveSeed", "FollowedCurve", "follow_curve",
-           "seed_of_trace"]
+__all__ = ["DEFAULT_CURVE_MAX_STEP", "DEFAULT_CURVE_WINDOW", "MOVE_STEP", "CurveSeed",
+           "FollowedCurve", "follow_curve", "seed_of_trace"]
 
 #: The window a curve's bifurcation is sought in at the next point (a fraction of the
 #: parameter's value along the branch).
 DEFAULT_CURVE_WINDOW = 0.02
+
+#: The longest step of the branch a curve's next point is sought on [1, in the scaled
+#: space of state and drive, the window being 1]: the step control (the turn of the
+#: tangent, the change of the multipliers) shortens it where the branch bends, so a
+#: window needs no more than a few steps from its start to the bifurcation.
+DEFAULT_CURVE_MAX_STEP = 0.25
+#: ... and of the moves of an orbit to the next point's drive (a short way in the other
+#: parameter, then back along the first): the whole way in one step where the step
+#: control accepts it.
+MOVE_STEP = 1.0
 
 #: A point of a curve: ``(f, a, velocity, multiplier, test)`` [Hz, m s-2, m s-1, 1, 1].
 CurveRow = tuple[float, float, float, complex, float]
@@ -137,7 +150,7 @@ def seed_of_trace(traced: Trace, index: int, along: str) -> CurveSeed:
 def follow_curve(structure: Structure, seed: CurveSeed, samples: NDArray[np.float64],
                  spacing: float, *, settings: SolverSettings | None = None,
                  window: float = DEFAULT_CURVE_WINDOW, end_tolerance: float = 1e-6,
-                 max_step: float = DEFAULT_MAX_STEP,
+                 max_step: float = DEFAULT_CURVE_MAX_STEP,
                  progress: Callable[[int], None] | None = None) -> FollowedCurve:
     """The curve of ``seed``'s bifurcation at the ``samples`` of the other parameter.
 
@@ -161,8 +174,9 @@ def follow_curve(structure: Structure, seed: CurveSeed, samples: NDArray[np.floa
         parameter's value there].
     end_tolerance : float, default 1e-6
         The relative width [1] to which a curve's end is bracketed.
-    max_step : float, default 0.02
-        The longest step of each branch [1].
+    max_step : float, default 0.25
+        The longest step of the branch each point is sought on [1]
+        (:data:`DEFAULT_CURVE_MAX_STEP`).
     progress : callable, optional
         ``progress(1)`` after each sample reached.
 
@@ -182,17 +196,23 @@ def follow_curve(structure: Structure, seed: CurveSeed, samples: NDArray[np.floa
         k = int(far[-1]) if far.size else 0
         return float(x_steps[k]), np.asarray(states[k]), float(sections[k]), value
 
-    def locate(anchor, value, reach):
+    def locate(anchor, value, reach, careful=False):
         """The bifurcation on the branch through ``anchor`` at the other parameter's
         ``value``, sought up to ``reach`` windows past ``x_last``: ``(code, row,
-        next_anchor)``."""
+        next_anchor)``. ``careful`` traces as :func:`study.branch` does (its steps, every
+        kind located, the multipliers' bound on a step) where the quick search missed
+        it: near a cusp a long step can pass both folds at once."""
         x_start, state, section, v_from = anchor
+        careful_step = min(max_step, DEFAULT_MAX_STEP)
+        longest, move, wanted = ((careful_step, careful_step, 0) if careful
+                                 else (max_step, MOVE_STEP, kind))
         # The anchor's orbit first continued in the other parameter to ``value`` (its
         # own branch, so that the state arrives exact), then along the first.
         f, a = (x_start, v_from) if along == "f" else (v_from, x_start)
         moved_over = trace_from_section(
             structure, f, a, along=other, to=value, state=state, section=section,
-            periods=periods, flight=flight, settings=settings, max_step=max_step)
+            periods=periods, flight=flight, settings=settings, max_step=move,
+            sought=wanted)
         if moved_over.end != BRANCH_REACHED or np.any(
                 moved_over.bifurcation_column("kind").astype(int) == kind):
             # The anchor's orbit does not reach the new drive, or the curve passed the
@@ -207,7 +227,8 @@ def follow_curve(structure: Structure, seed: CurveSeed, samples: NDArray[np.floa
             # is farther from the bifurcation than the curve moves in a step.
             back = trace_from_section(
                 structure, f, a, along=along, to=behind, state=state, section=section,
-                periods=periods, flight=flight, settings=settings, max_step=max_step)
+                periods=periods, flight=flight, settings=settings, max_step=move,
+                sought=wanted)
             if back.end == BRANCH_REACHED and not np.any(
                     back.bifurcation_column("kind").astype(int) == kind):
                 state = back.states()[-1]
@@ -216,7 +237,7 @@ def follow_curve(structure: Structure, seed: CurveSeed, samples: NDArray[np.floa
         traced = trace_from_section(
             structure, f, a, along=along, to=x_last + way * reach * window * abs(x_last),
             state=state, section=section, periods=periods, flight=flight,
-            settings=settings, max_step=max_step)
+            settings=settings, max_step=longest, sought=wanted)
         kinds = traced.bifurcation_column("kind").astype(int)
         hits = np.flatnonzero(kinds == kind)
         if hits.size == 0:
@@ -254,6 +275,8 @@ def follow_curve(structure: Structure, seed: CurveSeed, samples: NDArray[np.floa
         code, row, moved = locate(anchor, value, 1.0)
         if code == CURVE_VANISHED:
             code, row, moved = locate(anchor, value, 4.0)  # moved farther?
+        if code == CURVE_VANISHED:
+            code, row, moved = locate(anchor, value, 4.0, careful=True)
         if code == CURVE_REACHED:
             rows.append(row)
             sample.append(i if value == target else -1)

@@ -18,8 +18,6 @@ closed forms and second methods.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -28,55 +26,27 @@ import study
 from study.model.bifurcations import kind_named
 from study.solvers.integrator import Schedule, simulate
 from study.solvers.protocol import slow_sweep
+from tests.support.bouncing_ball import G, ball, ball_doubling, ball_fold, ball_orbit
 
-G = 9.8
 FOLD = kind_named("fold").code
 DOUBLING = kind_named("period_doubling").code
 SLIP_ONSET = kind_named("slip_onset").code
 LIFT_OFF = kind_named("lift_off").code
 
 
-def _ball(e: float) -> study.Structure:
-    """The bouncing block: the paper's plate with a negligible mass ratio."""
-    return study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=1e-12, cs=0.25, restitution=e)
-
-
-def _ball_fold(e: float) -> float:
-    return math.pi * (1.0 - e) / (1.0 + e)
-
-
-def _ball_doubling(e: float) -> float:
-    return math.hypot(_ball_fold(e), 2.0 * (1.0 + e * e) / (1.0 + e) ** 2)
-
-
-def _ball_orbit(e: float, f: float, a: float) -> np.ndarray:
-    """The state at phase 0 of the stable period-1 orbit of the ball on the table
-    (closed form): it lands where the table rises and decelerates, sin(w t0) =
-    -Gamma_fold / Gamma, cos(w t0) > 0, and leaves at u = g T e / (1 + e)."""
-    w = 2.0 * np.pi * f
-    period = 1.0 / f
-    phase = 2.0 * np.pi - math.asin(_ball_fold(e) / (a / G))
-    u = G * period * e / (1.0 + e)
-    flown = period - phase / w
-    gap = (u * flown - 0.5 * G * flown ** 2 - a / w ** 2 * (1.0 - math.cos(phase))
-           - a / w * math.sin(phase) * flown)
-    rate = u - G * flown - a / w * math.sin(phase)
-    return np.array([0.0, 0.0, 0.0, gap, rate])
-
-
 @pytest.mark.parametrize("e", [0.3, 0.5, 0.7])
 def test_the_bouncing_block_folds_and_doubles_where_the_closed_forms_say(e):
     f = 10.0
-    a = 0.5 * (_ball_fold(e) + _ball_doubling(e)) * G
-    state = _ball_orbit(e, f, a)
-    down = study.branch(_ball(e), f, a, along="a", to=0.8 * _ball_fold(e) * G,
+    a = 0.5 * (ball_fold(e) + ball_doubling(e)) * G
+    state = ball_orbit(e, f, a)
+    down = study.branch(ball(e), f, a, along="a", to=0.8 * ball_fold(e) * G,
                         start=state, flight=True)
-    up = study.branch(_ball(e), f, a, along="a", to=1.1 * _ball_doubling(e) * G,
+    up = study.branch(ball(e), f, a, along="a", to=1.1 * ball_doubling(e) * G,
                       start=state, flight=True)
     assert set(down.event_signature.values[:3]) == {"flight + 1 impact"}
     folds = down.bifurcation_kind.values == FOLD
     assert np.count_nonzero(folds) == 1
-    assert_allclose(down.bifurcation_a.values[folds] / G, _ball_fold(e), rtol=1e-9, atol=0)
+    assert_allclose(down.bifurcation_a.values[folds] / G, ball_fold(e), rtol=1e-9, atol=0)
     # The multiplier that crosses is +1 there to 1e-8; past the fold the branch runs
     # back, unstable.
     assert_allclose(down.bifurcation_multiplier_modulus.values[folds], 1.0, rtol=0,
@@ -88,28 +58,28 @@ def test_the_bouncing_block_folds_and_doubles_where_the_closed_forms_say(e):
     assert np.all(down.stable.values[past:] == 0)
     doublings = up.bifurcation_kind.values == DOUBLING
     assert np.count_nonzero(doublings) == 1
-    assert_allclose(up.bifurcation_a.values[doublings] / G, _ball_doubling(e), rtol=1e-9,
+    assert_allclose(up.bifurcation_a.values[doublings] / G, ball_doubling(e), rtol=1e-9,
                     atol=0)
     assert_allclose(up.bifurcation_multiplier_modulus.values[doublings], 1.0, rtol=0,
                     atol=1e-8)
     assert_allclose(np.cos(up.bifurcation_multiplier_angle.values[doublings]), -1.0,
                     rtol=0, atol=1e-12)
     assert up.attrs["branch_end"] == "reached"
-    assert_allclose(up.a.values[-1], 1.1 * _ball_doubling(e) * G, rtol=1e-12, atol=0)
+    assert_allclose(up.a.values[-1], 1.1 * ball_doubling(e) * G, rtol=1e-12, atol=0)
     # Between the two, the orbit is the closed form's: its impact map's multipliers have
     # the modulus e (determinant e^2).
-    ball = np.abs(up.multiplier_modulus.values[0])
-    assert np.any(np.isclose(ball, e, rtol=1e-9, atol=0))
+    moduli = np.abs(up.multiplier_modulus.values[0])
+    assert np.any(np.isclose(moduli, e, rtol=1e-9, atol=0))
 
 
 def test_the_doubled_orbit_is_born_at_the_period_doubling():
     e = 0.5
     f = 10.0
-    a = 0.5 * (_ball_fold(e) + _ball_doubling(e)) * G
-    up = study.branch(_ball(e), f, a, along="a", to=1.05 * _ball_doubling(e) * G,
-                      start=_ball_orbit(e, f, a), flight=True)
+    a = 0.5 * (ball_fold(e) + ball_doubling(e)) * G
+    up = study.branch(ball(e), f, a, along="a", to=1.05 * ball_doubling(e) * G,
+                      start=ball_orbit(e, f, a), flight=True)
     index = int(np.flatnonzero(up.bifurcation_kind.values == DOUBLING)[0])
-    doubled = study.doubled_branch(_ball(e), up, index)
+    doubled = study.doubled_branch(ball(e), up, index)
     assert doubled.attrs["orbit_period"] == 2
     # Supercritical: the doubled orbit exists past the doubling, stable, its two impacts
     # drifting apart (two heights), and it starts on the period-1 orbit.
@@ -118,7 +88,7 @@ def test_the_doubled_orbit_is_born_at_the_period_doubling():
     assert set(doubled.event_signature.values[1:]) == {"flight + 1 impact"}
     assert_allclose(doubled.a.values[0], up.bifurcation_a.values[index], rtol=1e-12, atol=0)
     with pytest.raises(ValueError, match="not a period doubling"):
-        study.doubled_branch(_ball(e), up, index + 1)
+        study.doubled_branch(ball(e), up, index + 1)
 
 
 def test_the_static_motion_slips_at_the_threshold_of_eq_5():
@@ -235,23 +205,23 @@ def test_bad_branch_requests_are_refused_naming_the_key():
 @pytest.mark.parametrize("e", [0.5])
 def test_the_bouncing_blocks_fold_and_doubling_curves_keep_gamma_whatever_f(e):
     f = 10.0
-    a = 0.5 * (_ball_fold(e) + _ball_doubling(e)) * G
-    state = _ball_orbit(e, f, a)
-    down = study.branch(_ball(e), f, a, along="a", to=0.8 * _ball_fold(e) * G,
+    a = 0.5 * (ball_fold(e) + ball_doubling(e)) * G
+    state = ball_orbit(e, f, a)
+    down = study.branch(ball(e), f, a, along="a", to=0.8 * ball_fold(e) * G,
                         start=state, flight=True)
     fold = int(np.flatnonzero(down.bifurcation_kind.values == FOLD)[0])
-    curve = study.bifurcation_curve(_ball(e), down, fold, to=13.0, num=7)
+    curve = study.bifurcation_curve(ball(e), down, fold, to=13.0, num=7)
     assert curve.attrs["curve_end"] == "reached" and curve.attrs["curve_kind"] == "fold"
     assert_allclose(curve.f.values[[0, -1]], [f, 13.0], rtol=1e-12, atol=0)
     assert curve.sizes["point"] >= 7
-    assert_allclose(curve.a.values / G, _ball_fold(e), rtol=1e-9, atol=0)
+    assert_allclose(curve.a.values / G, ball_fold(e), rtol=1e-9, atol=0)
     assert_allclose(curve.multiplier_modulus.values, 1.0, rtol=0, atol=1e-8)
-    up = study.branch(_ball(e), f, a, along="a", to=1.1 * _ball_doubling(e) * G,
+    up = study.branch(ball(e), f, a, along="a", to=1.1 * ball_doubling(e) * G,
                       start=state, flight=True)
     doubling = int(np.flatnonzero(up.bifurcation_kind.values == DOUBLING)[0])
-    curve = study.bifurcation_curve(_ball(e), up, doubling, to=8.0, num=5)
+    curve = study.bifurcation_curve(ball(e), up, doubling, to=8.0, num=5)
     assert curve.attrs["curve_end"] == "reached"
-    assert_allclose(curve.a.values / G, _ball_doubling(e), rtol=1e-9, atol=0)
+    assert_allclose(curve.a.values / G, ball_doubling(e), rtol=1e-9, atol=0)
     assert_allclose(np.cos(curve.multiplier_angle.values), -1.0, rtol=0, atol=1e-10)
 
 
@@ -287,6 +257,12 @@ def test_the_fold_curve_of_the_hop_ends_where_slow_sweeps_stop_jumping():
     assert curve.attrs["curve_end"] == "vanished"
     low, high = curve.attrs["curve_end_low"], curve.attrs["curve_end_high"]
     assert 7.85 < high < low < 8.0 and low - high <= 1e-6 * low
+    # Where the two folds meet, a long step could pass both: the end is bracketed with
+    # the branch's own steps, so the short-stepped curve ends in the same place.
+    short = study.bifurcation_curve(M099, hop, fold, to=7.0, num=13, max_step=0.02)
+    assert short.attrs["curve_end"] == "vanished"
+    assert_allclose([short.attrs["curve_end_low"], short.attrs["curve_end_high"]],
+                    [low, high], rtol=3e-6, atol=0)
     assert_allclose(curve.multiplier_modulus.values, 1.0, rtol=0, atol=1e-7)
     at_8 = float(curve.f.values[np.flatnonzero(curve.a.values == 8.0)[0]])
     # Slow sweeps up on a 0.01 Hz grid: at 8 m s-2 the forward hop jumps at the first

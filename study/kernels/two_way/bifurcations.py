@@ -86,6 +86,7 @@ from study.model.codes import (
     BRANCH_LEFT,
     BRANCH_LOST,
     BRANCH_REACHED,
+    BRANCH_STOPPED,
 )
 
 #: The columns of a traced step's row, in order, with their units.
@@ -143,6 +144,9 @@ BIFURCATION_COLUMNS = (
     ("speed", "m s-1", "the sliding speed on the section"),
     ("gap", "m", "the base's height above the table on the section"),
     ("gap_rate", "m s-1", "the rate of that height on the section"),
+    ("newton_passes", "1", "passes of the period map with its Jacobian that locating it "
+     "took (beyond the branch's own steps)"),
+    ("map_passes", "1", "passes without the Jacobian that locating it took"),
 )
 _BIFURCATION = tuple(name for name, _, _ in BIFURCATION_COLUMNS)
 B_KIND = _BIFURCATION.index("kind")
@@ -154,6 +158,8 @@ B_IMAG = _BIFURCATION.index("multiplier_imag")
 B_STEP = _BIFURCATION.index("step")
 B_SECTION = _BIFURCATION.index("section")
 B_STATE = _BIFURCATION.index("delta")
+B_NEWTON_PASSES = _BIFURCATION.index("newton_passes")
+B_MAP_PASSES = _BIFURCATION.index("map_passes")
 #: Length of a bifurcation's row.
 N_BIFURCATION = len(BIFURCATION_COLUMNS)
 
@@ -517,7 +523,7 @@ def _locate_lift_off(structure, work, trace, segment, phase, periods, max_events
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def trace_branch(structure, segment, z0, periods, start_tangent, section, work, trace,
-                 max_events, max_steps, max_step, steps_out, real_out, imag_out,
+                 max_events, max_steps, max_step, sought, steps_out, real_out, imag_out,
                  bifurcations_out, jacobians_out):
     """Trace the branch of the fixed point ``z0`` (``N_STATE`` at phase 0) of
     ``P^periods`` from the start of ``segment`` towards its end (``t`` from 0 to 1), the
@@ -529,6 +535,11 @@ def trace_branch(structure, segment, z0, periods, start_tangent, section, work, 
     doubled orbit, whose branch leaves the period's orbit along the eigenvector of the
     multiplier -1 with the drive stationary) the first step is taken along it.
 
+    ``sought`` (a ``BIFURCATION_*`` code, or 0 for every kind) restricts the
+    bifurcations located to that kind and ends the trace on the step past the first one
+    (``BRANCH_STOPPED``): a curve's search for its next point needs no other kind and
+    nothing of the branch beyond it.
+
     Each accepted step's row goes to ``steps_out`` (:data:`STEP_COLUMNS`; at most
     ``max_steps`` rows), its multipliers to ``real_out`` and ``imag_out``; each located
     bifurcation's row to ``bifurcations_out`` (:data:`BIFURCATION_COLUMNS`) and its
@@ -538,8 +549,8 @@ def trace_branch(structure, segment, z0, periods, start_tangent, section, work, 
     -------
     steps, bifurcations, end, newton_passes, map_passes
         The rows written, the ``BRANCH_*`` code of why the trace ended (``t`` reached 1,
-        a non-smooth end, the budget of steps, ``t`` back below 0, not followed at all),
-        and the passes of the period map it took.
+        a non-smooth end, the budget of steps, ``t`` back below 0, not followed at all,
+        stopped past the bifurcation asked for), and the passes of the period map it took.
     """
     flying = structure[LIFT_OFF_LAW] != 0.0
     n = N_STATE if flying else 3
@@ -663,8 +674,11 @@ def trace_branch(structure, segment, z0, periods, start_tangent, section, work, 
             next_above, next_below, next_outside, next_radius = multiplier_signature(
                 work, flying)
             ok = next_above >= 0
-            moved = ok and not kink and (abs(next_radius - radius)
-                                         > MOST_MULTIPLIER_CHANGE)
+            # The multipliers' change bounds a step so that no crossing of the unit
+            # circle is stepped over; a search for a fold alone (its test is the
+            # tangent's, bounded by the turn below) needs no such bound.
+            moved = ok and not kink and sought != BIFURCATION_FOLD and (
+                abs(next_radius - radius) > MOST_MULTIPLIER_CHANGE)
         if ok and not moved:
             for i in range(N_EXTENDED):
                 work.tangent[i] = tangent[i]
@@ -681,12 +695,17 @@ def trace_branch(structure, segment, z0, periods, start_tangent, section, work, 
             bracketed = bracketed or moved
             if h < SMALLEST_TRACE_STEP:
                 end = BRANCH_ENDED
-                if not flying and bifurcations < max_bifurcations and (
+                newton_before, map_before = passes[0], passes[1]
+                if not flying and bifurcations < max_bifurcations and sought in (
+                        0, BIFURCATION_LIFT_OFF) and (
                         _locate_lift_off(structure, work, trace, segment, phase, periods,
                                          max_events, steps - 1, steps_out[steps - 1],
                                          bifurcations_out[bifurcations],
                                          jacobians_out[bifurcations])):
                     # The orbit leaves the table: the branch ends there.
+                    bifurcations_out[bifurcations, B_NEWTON_PASSES] = (
+                        passes[0] - newton_before)
+                    bifurcations_out[bifurcations, B_MAP_PASSES] = passes[1] - map_before
                     bifurcations += 1
                 break
             continue
@@ -709,11 +728,17 @@ def trace_branch(structure, segment, z0, periods, start_tangent, section, work, 
         old_row = steps_out[steps - 1]
         # The bifurcations on the step, each located from the accepted point.
         g_fold = tangent[N_STATE] * trace.new_tangent[N_STATE]
+        first_here = bifurcations
         events_changed = not _same_events(old_row, new_row)
         for kind in (BIFURCATION_FOLD, BIFURCATION_PERIOD_DOUBLING, BIFURCATION_TORUS,
                      BIFURCATION_GRAZING):
             if bifurcations >= max_bifurcations:
                 break
+            newton_before, map_before = passes[0], passes[1]
+            if sought > 0 and kind != sought and not (
+                    kind == BIFURCATION_GRAZING and sought == BIFURCATION_SLIP_ONSET):
+                # (the event sequence's locator finds slip onsets and grazings both)
+                continue
             if kind == BIFURCATION_FOLD and g_fold < 0.0:
                 found = _locate_smooth(structure, work, trace, segment, phase, periods,
                                        flying, max_events, kind, length, tangent[N_STATE],
@@ -756,12 +781,16 @@ def trace_branch(structure, segment, z0, periods, start_tangent, section, work, 
                         np.nan, steps - 1, work, flying, jacobians_out[bifurcations])
                 found = True
             if found:
+                bifurcations_out[bifurcations, B_NEWTON_PASSES] = passes[0] - newton_before
+                bifurcations_out[bifurcations, B_MAP_PASSES] = passes[1] - map_before
                 bifurcations += 1
         if (bifurcations < max_bifurcations and g_fold >= 0.0 and not events_changed
+                and sought in (0, BIFURCATION_BRANCH_POINT)
                 and _crosses_one(real_out[steps - 1], imag_out[steps - 1], real_out[steps],
                                  imag_out[steps], n)):
             # A real multiplier through +1 while the tangent keeps its way: another
             # branch crosses this one.
+            newton_before, map_before = passes[0], passes[1]
             if _locate_smooth(structure, work, trace, segment, phase, periods, flying,
                               max_events, BIFURCATION_BRANCH_POINT, length,
                               _edge_value(real_out[steps - 1], imag_out[steps - 1],
@@ -770,6 +799,8 @@ def trace_branch(structure, segment, z0, periods, start_tangent, section, work, 
                                           BIFURCATION_BRANCH_POINT),
                               steps - 1, bifurcations_out[bifurcations],
                               jacobians_out[bifurcations]):
+                bifurcations_out[bifurcations, B_NEWTON_PASSES] = passes[0] - newton_before
+                bifurcations_out[bifurcations, B_MAP_PASSES] = passes[1] - map_before
                 bifurcations += 1
         # The new point accepted (the locations moved the work's arrays).
         for i in range(N_EXTENDED):
@@ -779,6 +810,12 @@ def trace_branch(structure, segment, z0, periods, start_tangent, section, work, 
             trace.derivative[i] = trace.new_derivative[i]
         below, outside, radius = next_below, next_outside, next_radius
         steps += 1
+        stopped = False
+        for j in range(first_here, bifurcations):
+            stopped = stopped or (sought > 0 and bifurcations_out[j, B_KIND] == sought)
+        if stopped:
+            end = BRANCH_STOPPED
+            break
         if accepted[N_STATE] >= 1.0:
             end = BRANCH_REACHED
             break
