@@ -659,8 +659,7 @@ class _Run:
             values, present = self.cache.lookup(key, block.slots, block.columns, dtypes)
             if not present.all():
                 return None
-            found.update({name: np.ascontiguousarray(array.T) for name, array in
-                          values.items()} if block.transposed else values)
+            found.update({name: block.restored(array) for name, array in values.items()})
         return found
 
     def _keep_phase(self, blocks: list[tuple[Block, str, dict[str, Any]]],
@@ -670,9 +669,7 @@ class _Run:
         if not self.keeping or not all(block.keepable for block, _, _ in blocks):
             return
         for block, key, content in blocks:
-            arrays = {name: np.ascontiguousarray(found[name].T if block.transposed
-                                                 else found[name])
-                      for name in block.variables}
+            arrays = {name: block.kept(found[name]) for name in block.variables}
             self._keep(key, content, block.columns,
                        encode_block(key, block.slots, block.columns, arrays))
 

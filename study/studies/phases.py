@@ -32,14 +32,21 @@ from study.engine.cache_format import entry_key
 from study.model.structure import Structure
 from study.solvers.fold_curves import HOPS, SIDES, fold_curve_work
 from study.solvers.frontier import frontier_branches, frontier_work
+from study.solvers.sweep_branches import (
+    BRANCH_BIFURCATION_SLOTS,
+    BRANCH_STEP_SLOTS,
+    NO_STEP,
+    swept_pieces,
+)
 from study.studies.layout import pad_branches
 from study.studies.observables import CurveWork, Method, Observable, resolve
 from study.studies.spec import StudySpec
-from study.studies.variables import VARIABLES
+from study.studies.variables import GRIDS, VARIABLES
 
 __all__ = [
     "PHASES",
     "Block",
+    "BranchesPhase",
     "FoldCurvesPhase",
     "FrontierPhase",
     "PhaseInput",
@@ -109,6 +116,9 @@ class Block:
     transposed : bool
         The phase's values are ``(columns, slots)`` (a frontier's ``(a, branch)``) and
         are kept transposed.
+    single : bool
+        The phase's values are ``(slots,)``, kept as the one column of the block (whose
+        ``columns`` are one value).
     """
 
     part: str | None
@@ -116,6 +126,19 @@ class Block:
     slots: NDArray[np.float64]
     columns: NDArray[np.float64]
     transposed: bool = False
+    single: bool = False
+
+    def kept(self, values: NDArray[Any]) -> NDArray[Any]:
+        """A variable's values as the block keeps them, ``(slots, columns)``."""
+        if self.single:
+            values = values[:, None]
+        return np.ascontiguousarray(values.T if self.transposed else values)
+
+    def restored(self, block: NDArray[Any]) -> NDArray[Any]:
+        """A variable's values from the block's ``(slots, columns)``."""
+        if self.single:
+            block = block[:, 0]
+        return np.ascontiguousarray(block.T if self.transposed else block)
 
     @property
     def keepable(self) -> bool:
@@ -326,10 +349,97 @@ class FoldCurvesPhase(PostMapPhase):
                                                  item.method), progress=progress)
 
 
+#: What a slot a branch (or a structure) does not fill holds, where not NaN or 0.
+_BRANCH_PADDING = {"branch_sweep": -1, "branch_stable": NO_STEP,
+                   "branch_bifurcation_step": -1}
+#: The cache block of each grid of the branches: its columns (None: one value a branch).
+_BRANCH_COLUMNS = {"branch": None, "branch_step": BRANCH_STEP_SLOTS,
+                   "branch_bifurcation": BRANCH_BIFURCATION_SLOTS}
+
+
+class BranchesPhase(PostMapPhase):
+    """The branches the study's slow sweeps ride
+    (:func:`study.solvers.sweep_branches.swept_branches`), one per piece of each run on
+    one motion, over ``(branch,)``, ``(branch, step)`` and ``(branch, bifurcation)``,
+    each padded to the most of any structure.
+
+    The pieces are read off the map (where the sweeps jumped, where the status or the
+    orbit's period changes); the values follow from the structure, the method with its
+    protocol and the f and a axes (the map is theirs), so a rerun onto another output
+    reuses them. Kept in slots of the most steps and bifurcations a branch can have."""
+
+    name = "branches"
+    label = "branches"
+    unit = "branch"
+    reuse = "same structure, solver, protocol and axes"
+    reads = ("jumped", "status", "orbit_period")
+
+    def pieces(self, item: PhaseInput) -> int:
+        """The branches of the structure: the pieces of its sweeps' runs."""
+        along, direction = item.method.protocol  # type: ignore[misc]
+        ways = ("up", "down") if direction == "both" else (direction,)
+        count = 0
+        for k, way in enumerate(ways):
+            lead = (k,) if len(ways) > 1 else ()
+            count += len(swept_pieces(item.f, item.a, along, way,
+                                      item.map["jumped"][lead].astype(bool),
+                                      item.map["status"][lead],
+                                      item.map["orbit_period"][lead]))
+        return count
+
+    def work(self, item: PhaseInput) -> int:
+        return self.pieces(item)
+
+    def blocks(self, item: PhaseInput) -> tuple[Block, ...]:
+        slots = np.arange(self.pieces(item), dtype=np.float64)
+        return tuple(
+            Block(part, tuple(v for v in self.variables if VARIABLES[v].grid == part), slots,
+                  np.zeros(1) if width is None else np.arange(width, dtype=np.float64),
+                  single=width is None)
+            for part, width in _BRANCH_COLUMNS.items())
+
+    def key(self, item: PhaseInput, block: Block) -> dict[str, Any]:
+        return {"method": item.method.canonical(), "f_sha256": sha256_of(item.f),
+                "a_sha256": sha256_of(item.a)}
+
+    def compute(self, item: PhaseInput, progress: Callable[[int], None] | None = None
+                ) -> dict[str, NDArray[Any]]:
+        found = self.observable.compute(CurveWork(item.structure, item.f, item.a,
+                                                  item.method), progress=progress)
+        if found["branch_sweep"].size != self.pieces(item):
+            raise RuntimeError("branches: the sweeps solved again differ from the map's "
+                               "(another number of pieces)")
+        return found
+
+    def sizes(self, found: dict[tuple[int, ...], dict[str, NDArray[Any]]]
+              ) -> dict[str, int]:
+        values = list(found.values())
+        return {"branch": max(1, *(v["branch_sweep"].size for v in values)),
+                "step": max(1, *(int(v["branch_steps"].max(initial=0)) for v in values)),
+                "bifurcation": max(1, *(int(min(v["branch_bifurcations"].max(initial=0),
+                                                BRANCH_BIFURCATION_SLOTS))
+                                        for v in values))}
+
+    def filed(self, values: dict[str, NDArray[Any]], sizes: dict[str, int]
+              ) -> dict[str, NDArray[Any]]:
+        filed = {}
+        for name in self.variables:
+            declared = VARIABLES[name]
+            dims = GRIDS[declared.grid]
+            dtype = np.dtype(declared.dtype)
+            empty = _BRANCH_PADDING.get(name, np.nan if dtype.kind == "f" else 0)
+            array = np.full(tuple(sizes[d] for d in dims), empty, dtype=dtype)
+            given = values[name][tuple(slice(0, sizes[d]) for d in dims)]
+            array[tuple(slice(0, n) for n in given.shape)] = given
+            filed[name] = array
+        return filed
+
+
 #: The post-map phase of each observable that has one, by the observable's name.
 PHASES: dict[str, type[PostMapPhase]] = {
     FrontierPhase.name: FrontierPhase,
     FoldCurvesPhase.name: FoldCurvesPhase,
+    BranchesPhase.name: BranchesPhase,
 }
 
 
