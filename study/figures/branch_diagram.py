@@ -26,7 +26,14 @@ import numpy as np
 import xarray as xr
 from matplotlib.lines import Line2D
 
-from study.figures.common import require_axis, require_dims, save, structure_text
+from study.figures.common import (
+    coupling_label,
+    require_axis,
+    require_dims,
+    save,
+    selection_text,
+    structure_text,
+)
 from study.model.bifurcations import KINDS, kind_of_code
 
 if TYPE_CHECKING:
@@ -204,10 +211,12 @@ def compose_result(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
                              mec="black", label="jump located (jumps)"))
     fig.legend(handles=common, loc="outside lower center", ncol=min(len(common), 6),
                fontsize=8)
-    title = (f"Branches the slow sweeps ride along {along}, solid stable, dashed "
-             f"unstable{', with flight' if flight else ''}")
-    fig.suptitle(f"{title}\n{structure_text(dataset)}", fontsize=11)
-    return fig, title
+    head = f"Branches the slow sweeps ride along {along}, solid stable, dashed unstable"
+    selected = selection_text(dataset)
+    fig.suptitle(f"{head}\n{coupling_label(dataset)}\n{structure_text(dataset)}"
+                 + (f"\n{selected}" if selected else ""), fontsize=11)
+    return fig, (f"{head}, {coupling_label(dataset)} "
+                 f"({structure_text(dataset, tex=False)})")
 
 
 def result_branches(dataset: xr.Dataset, value: float) -> tuple[list[xr.Dataset],

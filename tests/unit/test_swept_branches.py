@@ -189,6 +189,7 @@ def test_the_branch_diagram_is_drawn_from_the_file(hysteresis, tmp_path, monkeyp
     (arrow,) = [t for t in top.texts if t.get_gid() == "sweep 0 jump"]
     assert arrow.xy[0] == pytest.approx(16.1)
     assert arrow.xyann[1] > 0 > arrow.xy[1]  # from the forward hop to the backward one
+    assert "two-way coupling" in fig.get_suptitle() and "M = 0.99" in fig.get_suptitle()
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
     assert {"stable orbit", "unstable orbit", "fold", "jump located (jumps)"} <= set(legend)
     plt.close(fig)
@@ -267,3 +268,36 @@ def test_ctrl_c_in_the_branches_phase_keeps_the_map_and_the_rerun_finishes(
     report = run_study(spec, output, cache=cache, progress=False, workers=1)
     assert (report.points_reused, report.points_computed) == (17, 0)
     assert open_result(output).branch_steps.values.min() > 0
+
+
+def test_the_branches_of_several_structures_are_each_ones_own_padded(tmp_path):
+    """Over M = 0.95 and 0.99 each structure's branches are those of a study of it
+    alone, padded to the most branches, steps and bifurcations of either (sweep none,
+    NaN, no_step, kind none past its own)."""
+    text = SPEC.format(observables='"velocity", "branches"', direction="both",
+                       coupling="two-way").replace(
+        "M = 0.99\n", "").replace("[sweep]\n", "[sweep]\nM = { values = [0.95, 0.99] }\n")
+    (tmp_path / "both.toml").write_text(text)
+    run_study(tmp_path / "both.toml", tmp_path / "both.nc", progress=False, workers=1)
+    both = open_result(tmp_path / "both.nc")
+    assert both.branch_f.dims == ("M", "branch", "step")
+    validate_file(tmp_path / "both.nc")
+    for k, m in enumerate((0.95, 0.99)):
+        (tmp_path / f"one-{k}.toml").write_text(
+            SPEC.format(observables='"velocity", "branches"', direction="both",
+                        coupling="two-way").replace("M = 0.99", f"M = {m}"))
+        run_study(tmp_path / f"one-{k}.toml", tmp_path / f"one-{k}.nc", progress=False,
+                  workers=1)
+        alone, here = open_result(tmp_path / f"one-{k}.nc"), both.isel(M=k)
+        for name in [v for v in alone.data_vars if str(v).startswith("branch_")]:
+            own = alone[name].values
+            np.testing.assert_array_equal(here[name].values[tuple(slice(0, n) for n in
+                                                                   own.shape)], own,
+                                          err_msg=name)
+        extra = slice(alone.sizes["branch"], None)
+        assert np.all(here.branch_sweep.values[extra] == -1)
+        assert np.all(here.branch_stable.values[extra] == -1)
+        assert np.all(np.isnan(here.branch_f.values[extra]))
+        assert np.all(here.branch_stable.values[:, alone.sizes["step"]:] == -1)
+        assert np.all(here.branch_bifurcation_kind.values[:, alone.sizes["bifurcation"]:]
+                      == 0)
