@@ -45,6 +45,8 @@ __all__ = ["BRANCH_VARIABLES", "compose", "compose_result", "draw", "kind_label"
 #: What a dataset must hold to be drawn as a branch (a :func:`study.branch` result).
 BRANCH_VARIABLES = ("f", "a", "velocity", "stable", "bifurcation_kind", "bifurcation_f",
                     "bifurcation_a", "bifurcation_velocity", "bifurcation_step")
+#: Columns of the diagram of a result at most (one per value of the axis not swept).
+MAX_COLUMNS = 6
 #: What each drive axis is, for labels.
 _AXES = {"f": "drive frequency f [Hz]", "a": "drive acceleration a [m s$^{-2}$]"}
 #: Short axis labels of the usual quantities (others: their ``long_name``).
@@ -179,6 +181,15 @@ def compose_result(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
     flight = "largest_hop" in dataset.variables
     panels = _panels("velocity", flight)
     columns = np.atleast_1d(dataset[other].values)
+    if columns.size > MAX_COLUMNS:
+        from study.figures import FigureError
+
+        middle = float(columns[columns.size // 2])
+        raise FigureError(
+            f"figure 'branch-diagram' draws a column per value of {other}, at most "
+            f"{MAX_COLUMNS}; this file (study {dataset.attrs.get('study_name')!r}) holds "
+            f"{columns.size}: select one or a few, e.g. --sel {other}={middle:g} or --sel "
+            f"{other}={float(columns[0]):g}:{float(columns[MAX_COLUMNS - 1]):g}")
     fig, axes = plt.subplots(len(panels), columns.size, squeeze=False, sharex=True,
                              figsize=(1.0 + 4.6 * columns.size,
                                       4.5 + 2.8 * (len(panels) - 1)),

@@ -207,6 +207,23 @@ def test_a_file_without_branches_draws_the_other_figures(tmp_path):
         draw_figure("branch-diagram", ds, tmp_path / "diagram")
 
 
+def test_a_diagram_of_more_columns_than_it_draws_says_what_to_select(hysteresis, tmp_path,
+                                                                     monkeypatch):
+    monkeypatch.setattr(diagram, "MAX_COLUMNS", 2)
+    with pytest.raises(FigureError, match=r"a column per value of a, at most 2; .* holds "
+                                          r"3: select one or a few, e.g. --sel a=10 or "
+                                          r"--sel a=9:10"):
+        draw_figure("branch-diagram", open_result(hysteresis), tmp_path / "diagram")
+    kept = []
+    monkeypatch.setattr(diagram, "save", lambda fig, *args: kept.append(fig) or [])
+    draw_figure("branch-diagram", open_result(hysteresis), tmp_path / "one",
+                sel=["a=10"])
+    (fig,) = kept
+    assert fig.axes[0].get_title() == "a = 10 m s$^{-2}$" and "selected: a=10" in (
+        fig.get_suptitle())
+    plt.close(fig)
+
+
 def test_a_rerun_reuses_the_branches_and_compute_map_gives_the_same(tmp_path, capsys):
     spec, cache = _spec(tmp_path), tmp_path / "cache"
     run_study(spec, tmp_path / "first.nc", cache=cache, progress=False, workers=1)
