@@ -216,8 +216,18 @@ def phase_blocks(phase: PostMapPhase, item: PhaseInput, code: str
                  ) -> list[tuple[Block, str, dict[str, Any]]]:
     """Each block of a structure's values of ``phase``, with its cache key and content
     (the code's hash ``code`` in it)."""
+    blocks = phase.blocks(item)
+    held = [v for block in blocks for v in block.variables]
+    if sorted(held) != sorted(phase.variables):
+        # A declaration error, not a user's: a variable added to the observable on a
+        # grid the phase's blocks do not cover (or one kept twice).
+        missing = sorted(set(phase.variables) - set(held))
+        raise RuntimeError(
+            f"the {phase.label} phase's cache blocks hold {', '.join(sorted(held))}, not "
+            f"its observable's variables (missing: {', '.join(missing) or 'none'}): "
+            f"extend {type(phase).__name__}.blocks in study/studies/phases.py")
     found = []
-    for block in phase.blocks(item):
+    for block in blocks:
         content: dict[str, Any] = {"observable": phase.name}
         if block.part is not None:
             content["part"] = block.part

@@ -318,3 +318,17 @@ def test_the_branches_of_several_structures_are_each_ones_own_padded(tmp_path):
         assert np.all(here.branch_stable.values[:, alone.sizes["step"]:] == -1)
         assert np.all(here.branch_bifurcation_kind.values[:, alone.sizes["bifurcation"]:]
                       == 0)
+
+
+def test_a_phase_whose_blocks_miss_a_variable_is_a_declaration_error():
+    from dataclasses import replace
+
+    from study.studies.observables import OBSERVABLES
+    from study.studies.phases import FoldCurvesPhase, PhaseInput, phase_blocks
+
+    declared = OBSERVABLES["fold_curves"]
+    observable = replace(declared, variables=(*declared.variables, "branch_f"))
+    item = PhaseInput((), M099, np.array([15.0, 16.0]), np.array([10.0]), None, None, {})
+    with pytest.raises(RuntimeError, match=r"missing: branch_f\): extend "
+                                           r"FoldCurvesPhase.blocks"):
+        phase_blocks(FoldCurvesPhase(observable), item, "code")
