@@ -160,6 +160,8 @@ FIGURES += hysteresis-flight hysteresis-paper
 FIGURES += basins-flight basins-paper
 # The folds of the forward and backward hops against M (workflow mass-ratio-folds).
 FIGURES += fold-curves
+# The branches the slow sweeps of hysteresis-flight ride (its branches observable).
+FIGURES += branch-diagram
 figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 
 figures/thresholds.png: results/thresholds.nc
@@ -184,6 +186,7 @@ figures/coupling-flight.png: results/coupling-flight.nc
 figures/bouncing.png: results/mass-ratio-limit-flight.nc
 figures/lyapunov.png: results/irregular-bouncing.nc
 figures/fold-curves.png: results/mass-ratio-folds.nc
+figures/branch-diagram.png: results/hysteresis-flight.nc
 figures/bifurcation-along-%.png: results/bifurcation-along-%.nc $(PACKAGE) FORCE | $(STAMP)
 	$(STUDY) figure bifurcation $< -o figures/bifurcation-along-$* --if-changed
 figures/hysteresis-%.png: results/hysteresis-%.nc $(PACKAGE) FORCE | $(STAMP)

@@ -112,6 +112,16 @@ FIGURES: dict[str, Figure] = {
         "Slow sweeps up and down: the velocity against the swept drive with the jumps "
         "marked, or over a map where the two sweeps end on different motions",
     ),
+    "branch-diagram": Figure(
+        "study.figures.branch_diagram", "hysteresis-flight",
+        ("velocity", "jumped", "branch_sweep", "branch_steps", "branch_start_f",
+         "branch_start_a", "branch_f", "branch_a", "branch_velocity", "branch_stable",
+         "branch_largest_hop", "branch_bifurcation_kind", "branch_bifurcation_f",
+         "branch_bifurcation_a", "branch_bifurcation_velocity", "branch_bifurcation_step"),
+        "Bifurcation diagram of slow sweeps: the branches they ride (stable solid, unstable "
+        "dashed, each bifurcation marked), the sweeps' velocities and located jumps over "
+        "them, per value of the other drive axis",
+    ),
     "fold-curves": Figure(
         "study.figures.fold_curves", "mass-ratio-folds",
         ("velocity", "jump_bifurcation", "jump_f", "jump_velocity"),

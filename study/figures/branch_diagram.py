@@ -1,9 +1,11 @@
 """A bifurcation diagram of branches: where a periodic motion exists, where it is stable
 and where it bifurcates, against the drive parameter it was continued in.
 
-Drawn from :func:`study.branch` (and :func:`study.doubled_branch`) results, not from a
-result file: no workflow writes branches yet, so this figure is not in
-:data:`study.figures.FIGURES` and is called from Python. Top: each branch's mean velocity
+Drawn from :func:`study.branch` (and :func:`study.doubled_branch`) results from Python,
+or from a study result that holds the ``branches`` observable (the branches its slow
+sweeps ride, :mod:`study.solvers.sweep_branches`): the registered figure
+``branch-diagram`` (``study figure branch-diagram FILE``, :func:`compose_result`), a
+column per value of the drive axis not swept. Top: each branch's mean velocity
 against the swept drive, solid where its orbit is stable and dashed where it is not
 (a line split where ``stable`` changes, each piece of one style), each located
 bifurcation marked with its kind's declared marker
@@ -17,24 +19,34 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib.lines import Line2D
 
-from study.figures.common import save, structure_text
+from study.figures.common import (
+    coupling_label,
+    require_axis,
+    require_dims,
+    save,
+    selection_text,
+    structure_text,
+)
 from study.model.bifurcations import KINDS, kind_of_code
 
 if TYPE_CHECKING:
     from study.solvers.protocol import SweptState
 
-__all__ = ["BRANCH_VARIABLES", "compose", "draw", "kind_label", "stability_pieces"]
+__all__ = ["BRANCH_VARIABLES", "compose", "compose_result", "draw", "kind_label",
+           "result_branches", "stability_pieces"]
 
 #: What a dataset must hold to be drawn as a branch (a :func:`study.branch` result).
 BRANCH_VARIABLES = ("f", "a", "velocity", "stable", "bifurcation_kind", "bifurcation_f",
                     "bifurcation_a", "bifurcation_velocity", "bifurcation_step")
+#: Columns of the diagram of a result at most (one per value of the axis not swept).
+MAX_COLUMNS = 6
 #: What each drive axis is, for labels.
 _AXES = {"f": "drive frequency f [Hz]", "a": "drive acceleration a [m s$^{-2}$]"}
 #: Short axis labels of the usual quantities (others: their ``long_name``).
@@ -56,11 +68,16 @@ def kind_label(code: int) -> str:
 def draw(branches: xr.Dataset | Sequence[xr.Dataset], output: str | Path, *,
          sweeps: Sequence[tuple[np.ndarray, SweptState]] | None = None,
          quantity: str = "velocity", labels: Sequence[str] | None = None) -> list[Path]:
-    """Draw the diagram of :func:`compose` into ``output.png`` and ``output.pdf``.
+    """Draw the diagram of :func:`compose` into ``output.png`` and ``output.pdf``, or
+    that of :func:`compose_result` where ``branches`` is a study result holding the
+    ``branches`` observable (``study figure branch-diagram FILE``).
 
     Parameters are those of :func:`compose`; ``output`` is the file stem (a ``.png`` or
     ``.pdf`` suffix is replaced). Returns the PNG and the PDF.
     """
+    if isinstance(branches, xr.Dataset) and "branch_velocity" in branches.variables:
+        fig, title = compose_result(branches)
+        return save(fig, output, branches, title)
     branches = _branches(branches)
     fig = compose(branches, sweeps=sweeps, quantity=quantity, labels=labels)
     record = xr.Dataset(attrs={
@@ -119,11 +136,221 @@ def compose(branches: xr.Dataset | Sequence[xr.Dataset], *,
     _check_quantity(branches, quantity)
     paths = _sweeps(sweeps, along)
     flight = any(int(b.attrs.get("flight", 0)) for b in branches)
-    panels = [quantity] + (["largest_hop"] if flight and quantity != "largest_hop" else [])
+    panels = _panels(quantity, flight)
     fig, axes = plt.subplots(len(panels), 1, figsize=(8.5, 4.5 + 2.8 * (len(panels) - 1)),
                              layout="constrained", sharex=True, squeeze=False,
                              height_ratios=(3.0, 2.0)[:len(panels)])
     axes = axes[:, 0]
+    kinds_seen = _fill(axes, branches, names, paths, panels, along)
+    axes[0].legend(handles=_legend(axes[0], kinds_seen, bool(paths)), fontsize=8,
+                   loc="best")
+    fixed = np.unique(np.concatenate([b[other].values for b in branches]))
+    where = ""
+    if fixed.size == 1:
+        where = (f" at a = {fixed[0]:g} m s$^{{-2}}$" if other == "a"
+                 else f" at f = {fixed[0]:g} Hz")
+    fig.suptitle(f"Branches along {along}{where}, solid stable, dashed unstable"
+                 f"{', with flight' if flight else ''}\n{_structure(branches[0])}",
+                 fontsize=11)
+    return fig
+
+
+def compose_result(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
+    """The bifurcation diagram of a study result with the ``branches`` observable
+    (a slow sweep, ``[sweep] protocol``), not saved, and its title.
+
+    One column per value of the drive axis not swept (``--sel`` one to draw it alone):
+    the branches the sweeps rode there (:func:`result_branches`, each as
+    :func:`compose` draws a branch: solid stable, dashed unstable, its bifurcations
+    marked), the sweeps' velocities over them (each jump an arrow) and, where the file
+    holds the ``jumps`` observable, each located jump ringed at its drive and velocity
+    (``gid`` ``"sweep N located jump"``). With flight the largest hop below.
+
+    Raises
+    ------
+    FigureError
+        A file of several structures (naming the ``--sel`` to give).
+    """
+    along = str(dataset.attrs.get("study_protocol_along", "f"))
+    other = "a" if along == "f" else "f"
+    dataset = require_dims(dataset, "branch-diagram",
+                           ("direction", "f", "a", "branch", "step", "bifurcation"),
+                           "the branches of one structure")
+    require_axis(dataset, "branch-diagram", along, f"the sweeps and branches against "
+                 f"{along}")
+    flight = "largest_hop" in dataset.variables
+    panels = _panels("velocity", flight)
+    columns = np.atleast_1d(dataset[other].values)
+    if columns.size > MAX_COLUMNS:
+        from study.figures import FigureError
+
+        middle = float(columns[columns.size // 2])
+        raise FigureError(
+            f"figure 'branch-diagram' draws a column per value of {other}, at most "
+            f"{MAX_COLUMNS}; this file (study {dataset.attrs.get('study_name')!r}) holds "
+            f"{columns.size}: select one or a few, e.g. --sel {other}={middle:g} or --sel "
+            f"{other}={float(columns[0]):g}:{float(columns[MAX_COLUMNS - 1]):g}")
+    fig, axes = plt.subplots(len(panels), columns.size, squeeze=False, sharex=True,
+                             figsize=(1.0 + 4.6 * columns.size,
+                                      4.5 + 2.8 * (len(panels) - 1)),
+                             layout="constrained", height_ratios=(3.0, 2.0)[:len(panels)])
+    kinds_seen: set[int] = set()
+    for j, value in enumerate(columns):
+        branches, names = result_branches(dataset, float(value))
+        paths = _result_sweeps(dataset, along, j)
+        column = axes[:, j]
+        if branches:
+            kinds_seen |= _fill(column, branches, names, paths, panels, along)
+        else:
+            column[0].text(0.5, 0.5, "no orbit to continue", ha="center",
+                           transform=column[0].transAxes)
+        _mark_located_jumps(column[0], dataset, along, j)
+        column[0].set_title(f"a = {value:g} m s$^{{-2}}$" if other == "a"
+                            else f"f = {value:g} Hz", fontsize=10)
+        mine = [h for h in column[0].get_legend_handles_labels()[0]
+                if str(h.get_gid()).startswith("branch ")]
+        if mine:
+            column[0].legend(handles=mine, fontsize=7, loc="best", title="branches",
+                             title_fontsize=7)
+    # The styles, the kinds marked, the sweeps and the jumps: one legend for all.
+    common = [h for h in _legend(axes[0, 0], kinds_seen, True)
+              if not str(h.get_gid()).startswith("branch ")]
+    if any(str(line.get_gid()).endswith("located jump") for ax in axes[0]
+           for line in ax.get_lines()) and not any(
+               h.get_label() == "jump located (jumps)" for h in common):
+        common.append(Line2D([], [], ls="none", marker="o", ms=9, mfc="none",
+                             mec="black", label="jump located (jumps)"))
+    fig.legend(handles=common, loc="outside lower center", ncol=min(len(common), 6),
+               fontsize=8)
+    head = f"Branches the slow sweeps ride along {along}, solid stable, dashed unstable"
+    selected = selection_text(dataset)
+    fig.suptitle(f"{head}\n{coupling_label(dataset)}\n{structure_text(dataset)}"
+                 + (f"\n{selected}" if selected else ""), fontsize=11)
+    return fig, (f"{head}, {coupling_label(dataset)} "
+                 f"({structure_text(dataset, tex=False)})")
+
+
+def result_branches(dataset: xr.Dataset, value: float) -> tuple[list[xr.Dataset],
+                                                                list[str]]:
+    """The branches of a study result (the ``branches`` observable) whose sweep ran at
+    ``value`` of the drive axis not swept, each as a :func:`study.branch`-like dataset
+    (its steps and bifurcations, the slots past them left out), and their legend
+    names (the sweep and where it settled on the motion)."""
+    along = str(dataset.attrs.get("study_protocol_along", "f"))
+    other = "a" if along == "f" else "f"
+    flight = "largest_hop" in dataset.variables
+    if "branch" not in dataset["branch_sweep"].dims:  # one selected (--sel branch=N)
+        dataset = dataset.assign({name: dataset[name].expand_dims("branch")
+                                  for name in dataset.data_vars
+                                  if str(name).startswith("branch_")})
+    sweeps = dict(zip(dataset["branch_sweep"].attrs["flag_values"].tolist(),
+                      dataset["branch_sweep"].attrs["flag_meanings"].split(), strict=True))
+    found, names = [], []
+    for b in range(dataset.sizes["branch"]):
+        steps = int(dataset["branch_steps"].values[b])
+        sweep = sweeps[int(dataset["branch_sweep"].values[b])]
+        if (sweep == "none" or steps < 1
+                or float(dataset[f"branch_start_{other}"].values[b]) != value):
+            continue
+        found.append(_file_branch(dataset, b, steps, along, flight))
+        start = float(dataset[f"branch_start_{along}"].values[b])
+        names.append(f"swept {sweep}, from {start:g} {'Hz' if along == 'f' else 'm/s²'}")
+    return found, names
+
+
+def _file_branch(dataset: xr.Dataset, b: int, steps: int, along: str, flight: bool
+                 ) -> xr.Dataset:
+    """Branch ``b`` of a result as a :func:`study.branch`-like dataset: its ``steps``
+    steps and its bifurcations."""
+    count = int(np.count_nonzero(dataset["branch_bifurcation_kind"].values[b]))
+
+    def along_step(name: str, units: str) -> tuple[str, np.ndarray, dict[str, str]]:
+        return ("step", dataset[name].values[b, :steps], {"units": units})
+
+    def at(name: str) -> tuple[str, np.ndarray]:
+        return ("bifurcation", dataset[name].values[b, :count])
+
+    return xr.Dataset(
+        {"f": along_step("branch_f", "Hz"), "a": along_step("branch_a", "m s-2"),
+         "velocity": along_step("branch_velocity", "m s-1"),
+         "stable": ("step", dataset["branch_stable"].values[b, :steps]),
+         "largest_hop": along_step("branch_largest_hop", "m"),
+         "bifurcation_kind": at("branch_bifurcation_kind"),
+         "bifurcation_f": at("branch_bifurcation_f"),
+         "bifurcation_a": at("branch_bifurcation_a"),
+         "bifurcation_velocity": at("branch_bifurcation_velocity"),
+         "bifurcation_step": at("branch_bifurcation_step")},
+        attrs={"along": along, "flight": int(flight)})
+
+
+def _directions(dataset: xr.Dataset) -> list[str]:
+    """The sweeps' directions of a result: its ``direction`` labels, else the one of its
+    protocol."""
+    if "direction" in dataset.coords:
+        return [str(d) for d in np.atleast_1d(dataset["direction"].values)]
+    return [str(dataset.attrs.get("study_protocol_direction", "up"))]
+
+
+def _line(dataset: xr.Dataset, name: str, along: str, k: int, column: int
+          ) -> np.ndarray:
+    """A per-point variable along the swept axis: direction ``k``, the column
+    ``column`` of the other axis (where it is a dimension: not once selected)."""
+    values = dataset[name]
+    if "direction" in values.dims:
+        values = values.isel(direction=k)
+    other = "a" if along == "f" else "f"
+    if other in values.dims:
+        values = values.isel({other: column})
+    return np.asarray(values.transpose(along).values).reshape(-1)
+
+
+def _result_sweeps(dataset: xr.Dataset, along: str, column: int
+                   ) -> list[tuple[np.ndarray, Any]]:
+    """The result's slow sweeps at one value of the other axis, as :func:`compose` takes
+    them: each its swept values and velocities in its visiting order."""
+    from types import SimpleNamespace
+
+    swept = np.asarray(dataset[along].values, dtype=float)
+    paths = []
+    for k, direction in enumerate(_directions(dataset)):
+        order = np.argsort(swept, kind="stable")
+        if direction == "down":
+            order = order[::-1]
+        state = SimpleNamespace(
+            velocity=_line(dataset, "velocity", along, k, column)[order],
+            largest_hop=(_line(dataset, "largest_hop", along, k, column)[order]
+                         if "largest_hop" in dataset.variables else None))
+        jumped = _line(dataset, "jumped", along, k, column)[order].astype(bool)
+        paths.append((swept[order], SimpleNamespace(state=state, jumped=jumped,
+                                                    along=along, direction=direction)))
+    return paths
+
+
+def _mark_located_jumps(ax: plt.Axes, dataset: xr.Dataset, along: str,
+                        column: int) -> None:
+    """Ring each jump the ``jumps`` observable located, at its drive and velocity."""
+    if "jump_f" not in dataset.variables:
+        return
+    for k, _ in enumerate(_directions(dataset)):
+        x = _line(dataset, f"jump_{along}", along, k, column)
+        y = _line(dataset, "jump_velocity", along, k, column)
+        held = np.isfinite(x) & np.isfinite(y)
+        if held.any():
+            ax.plot(x[held], 1e3 * y[held], ls="none", marker="o", ms=13, mfc="none",
+                    mec="black", mew=1.2, zorder=6, gid=f"sweep {k} located jump")
+
+
+def _panels(quantity: str, flight: bool) -> list[str]:
+    """The variables drawn, a panel each: ``quantity``, and with flight the largest
+    hop below it."""
+    return [quantity] + (["largest_hop"] if flight and quantity != "largest_hop" else [])
+
+
+def _fill(axes: Any, branches: list[xr.Dataset], names: list[str],
+          paths: list[tuple[np.ndarray, SweptState]], panels: list[str],
+          along: str) -> set[int]:
+    """Draw the branches and the sweeps into one column of panels (``axes``, one per
+    variable of ``panels``); the codes of the kinds marked."""
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     kinds_seen: set[int] = set()
     for ax, variable in zip(axes, panels, strict=True):
@@ -160,17 +387,7 @@ def compose(branches: xr.Dataset | Sequence[xr.Dataset], *,
             "long_name", variable)
         ax.set_ylabel(f"{long_name} [{units}]" if units else long_name)
     axes[-1].set_xlabel(_AXES[along])
-    axes[0].legend(handles=_legend(axes[0], kinds_seen, bool(paths)), fontsize=8,
-                   loc="best")
-    fixed = np.unique(np.concatenate([b[other].values for b in branches]))
-    where = ""
-    if fixed.size == 1:
-        where = (f" at a = {fixed[0]:g} m s$^{{-2}}$" if other == "a"
-                 else f" at f = {fixed[0]:g} Hz")
-    fig.suptitle(f"Branches along {along}{where}, solid stable, dashed unstable"
-                 f"{', with flight' if flight else ''}\n{_structure(branches[0])}",
-                 fontsize=11)
-    return fig
+    return kinds_seen
 
 
 def stability_pieces(x: np.ndarray, y: np.ndarray, stable: np.ndarray,
@@ -276,6 +493,10 @@ def _legend(ax: plt.Axes, kinds: set[int], swept: bool) -> list:
     if swept:
         handles.append(Line2D([], [], color="black", marker=r"$\downarrow$", ls="none",
                               ms=9, label="jump of a slow sweep"))
+    if any(line.get_gid() and str(line.get_gid()).endswith("located jump")
+           for line in ax.get_lines()):
+        handles.append(Line2D([], [], ls="none", marker="o", ms=9, mfc="none",
+                              mec="black", label="jump located (jumps)"))
     return handles
 
 

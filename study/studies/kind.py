@@ -13,7 +13,6 @@ commits the file; this module is what a run of a study does once it runs.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import threading
@@ -51,21 +50,26 @@ from study.engine.store import (
     new_temporary,
 )
 from study.model.structure import Structure
-from study.solvers.fold_curves import HOPS, SIDES, fold_curve_work
-from study.solvers.frontier import frontier_branches, frontier_work
 from study.studies.layout import (
     coordinates,
-    curve_observable,
     data_variables,
     direction_methods,
     method_attributes,
     method_of,
     observables_by_grid,
-    pad_branches,
     plan_study,
     study_summary,
 )
-from study.studies.observables import CurveWork, Observable
+from study.studies.observables import UNSWEPT_VARIABLES, Observable
+from study.studies.phases import (
+    Block,
+    PhaseInput,
+    PostMapPhase,
+    filed_arrays,
+    phase_blocks,
+    post_map_phases,
+    structure_content,
+)
 from study.studies.spec import StudySpec, load_spec, parse_spec
 from study.studies.spec_types import SPEC_SCHEMA
 from study.studies.sweep import (
@@ -132,10 +136,6 @@ def whole_runs(missing: np.ndarray, along: str) -> np.ndarray:
     if along == "a":
         return np.broadcast_to(missing.any(axis=1, keepdims=True), missing.shape).copy()
     return np.broadcast_to(missing.any(axis=0, keepdims=True), missing.shape).copy()
-
-
-def _structure_content(structure: Structure) -> dict[str, float]:
-    return {name: float(getattr(structure, name)) for name in Structure.__dataclass_fields__}
 
 
 def _creator() -> str:
@@ -248,9 +248,9 @@ class _Run:
         #: The method of each direction of a slow sweep both ways (a chunk's
         #: ``direction`` indexes it); else the study's method alone.
         self.methods = direction_methods(spec)
-        self.rows, self.points, self.frontier = observables_by_grid(spec)
-        #: The fold curves, continued after the map (and the frontier), if asked for.
-        self.curves = curve_observable(spec)
+        self.rows, self.points, _ = observables_by_grid(spec)
+        #: The phases after the map (the frontier, the fold curves), in order.
+        self.phases = post_map_phases(spec)
         self.f = spec.axis("f").values
         a_axis = spec.axis("a")
         self.a = a_axis.values if (a_axis is not None and spec.needs_solver) else np.empty(0)
@@ -285,7 +285,7 @@ class _Run:
             content = {
                 "observable": observable.name,
                 "variables": {v: VARIABLES[v].dtype for v in observable.variables},
-                "structure": _structure_content(self.structures[structure_index]),
+                "structure": structure_content(self.structures[structure_index]),
                 "method": method.canonical(),
                 "code_sha256": self.code,
             }
@@ -468,6 +468,13 @@ class _Run:
                 "the run goes on without keeping them" + (f": {what_to_do}" if what_to_do
                                                           else ""))
 
+    def _next(self, at: int) -> str:
+        """What the run does after a phase: the phase ``at`` after the map, or seal the
+        file ("done" is said only of the whole run)."""
+        if at < len(self.phases):
+            return f"{self.phases[at].label} next"
+        return "sealing the file"
+
     def _say_stopping(self) -> None:
         """Ctrl-C came: the run finishes the units running, to keep them."""
         self.progress.say("stopping: finishing the work running to keep it (about a "
@@ -523,10 +530,8 @@ class _Run:
         try:
             self.writer = self._open(temporary)
             # "done" is said only of the whole run: the map is one phase of it.
-            then = ("frontier next" if self.frontier is not None else
-                    "fold curves next" if self.curves is not None else "sealing the file")
             self.progress = Progress(self._total(), self.spec.name, progress,
-                                     finished=f"map done; {then}")
+                                     finished=f"map done; {self._next(0)}")
             pending: dict[int, _OpenChunk] = {}
             computed_chunks = 0
             with stop_requests(on_request=self._say_stopping) as stop:
@@ -558,10 +563,8 @@ class _Run:
                     self.progress.close()
                 if stop.is_set():
                     raise self.interrupted()
-                if self.frontier is not None:
-                    self._write_frontier(progress, stop)
-                if self.curves is not None:
-                    self._write_curves(progress, stop)
+                for at, phase in enumerate(self.phases):
+                    self._write_phase(phase, self._next(at + 1), progress, stop)
             gathering.join()
             self.writer.set_attributes(self._provenance_attrs())
             self.writer.close()
@@ -577,200 +580,98 @@ class _Run:
             self.points_computed, self.points_reused,
         )
 
-    def _write_frontier(self, progress: bool | None, stop: threading.Event) -> None:
-        """Frontier f*(a) of every structure from its whole velocity rows, with its own
-        progress (the points its bisections solve, counted beforehand). A structure's
-        frontier is kept once it is found; a stop request (Ctrl-C) ends the phase
-        after the bisection step running."""
+    def _write_phase(self, phase: PostMapPhase, then: str, progress: bool | None,
+                     stop: threading.Event) -> None:
+        """One phase after the map (:mod:`study.studies.phases`) for every structure,
+        with its own progress (the work its :meth:`~PostMapPhase.work` counts
+        beforehand). A structure's values are kept once found, under the keys of what
+        they follow from, and reused by a rerun onto any output or with force; a stop
+        request (Ctrl-C) ends the phase after the step running, the structures done
+        kept. Then its variables are written beside the map."""
         spec = self.spec
-        rows = {}
-        for index in self.structures:
-            where = (*index, slice(None), slice(None))
-            rows[index] = (self.writer.read("velocity", where),
-                           self.writer.read("status", where))
-        work = {index: frontier_work(self.f, velocity, status, spec.frontier_tolerance)
-                for index, (velocity, status) in rows.items()}
-        shown = Progress(sum(work.values()), f"{spec.name} frontier", progress, unit="solve",
-                         finished="frontier done; sealing the file")
+        items = {index: self._phase_input(phase, index, structure)
+                 for index, structure in self.structures.items()}
+        work = {index: phase.work(item) for index, item in items.items()}
+        shown = Progress(sum(work.values()), f"{spec.name} {phase.label}", progress,
+                         unit=phase.unit, finished=f"{phase.label} done; {then}")
 
-        def advance(solves: int) -> None:
-            shown.update(solves)
+        def advance(steps: int) -> None:
+            shown.update(steps)
             if stop.is_set():
-                raise KeyboardInterrupt  # what the frontier found so far is kept
+                raise KeyboardInterrupt  # what the phase found so far is kept
 
         found = {}
         reused = 0
         try:
             with shown.running(), compile_notices(shown):
-                for index, structure in self.structures.items():
+                for index, item in items.items():
                     if stop.is_set():
                         raise KeyboardInterrupt
-                    velocity, status = rows[index]
-                    key, content = self._frontier_key(index, velocity, status)
-                    slots = np.arange(frontier_branches(velocity, status), dtype=np.float64)
-                    kept = self._kept_frontier(key, slots)
+                    blocks = phase_blocks(phase, item, self.code)
+                    kept = self._kept_phase(blocks)
                     if kept is not None:
                         found[index] = kept
                         reused += 1
                         shown.update(work[index], 0)
                         continue
-                    found[index] = self.frontier.compute(
-                        structure, self.f, self.a, velocity, status, self.method,
-                        spec.frontier_tolerance, progress=advance)
-                    self._keep_frontier(key, content, slots, found[index])
+                    found[index] = phase.compute(item, progress=advance)
+                    self._keep_phase(blocks, found[index])
             if reused:
-                shown.say(f"frontier of {reused} of {len(self.structures)} structures "
-                          "reused from the cache (same map, solver and tolerance)")
+                shown.say(f"{phase.label} of {reused} of {len(self.structures)} structures "
+                          f"reused from the cache ({phase.reuse})")
         finally:
             shown.close()
-        branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
-        self.writer.dimension("branch", branches)
+        sizes, filed = filed_arrays(phase, found)
+        for name, size in sizes.items():
+            self.writer.dimension(name, size)
         ones = (1,) * len(spec.structure_axes)
-        variables = data_variables(spec, (self.frontier,))
+        variables = data_variables(spec, (phase.observable,))
+        first = next(iter(filed.values()))
         for variable in variables:
             self.writer.variable(variable.name, variable.dims, variable.dtype,
                                  {**variable.attrs, "coordinates": self.auxiliary},
-                                 (*ones, self.a.size, branches))
-        for index, item in found.items():
+                                 (*ones, *first[variable.name].shape))
+        for index, values in filed.items():
             for variable in variables:
-                self.writer.write(variable.name, (*index, slice(None), slice(None)),
-                                  pad_branches(item[variable.name], branches, variable.dtype))
+                self.writer.write(variable.name,
+                                  (*index, *(slice(None),) * values[variable.name].ndim),
+                                  values[variable.name])
 
-    def _frontier_key(self, index: tuple[int, ...], velocity: np.ndarray,
-                      status: np.ndarray) -> tuple[str, dict[str, Any]]:
-        """Cache key of a structure's frontier: it follows from its velocity map (the
-        brackets), the solver that refines them and the tolerance, so a frontier is
-        kept like points and found again by a rerun onto any output or with force."""
-        velocity = np.ascontiguousarray(velocity, dtype=np.float64)
-        status = np.ascontiguousarray(status)
-        content = {
-            "observable": self.frontier.name,
-            "variables": {v: VARIABLES[v].dtype for v in self.frontier.variables},
-            "structure": _structure_content(self.structures[index]),
-            "method": self.method.canonical(),
-            "code_sha256": self.code,
-            "tolerance": float(self.spec.frontier_tolerance),
-            "f_sha256": hashlib.sha256(np.ascontiguousarray(self.f).tobytes()).hexdigest(),
-            "map_sha256": hashlib.sha256(velocity.tobytes() + status.tobytes()
-                                         + str(status.dtype).encode()).hexdigest(),
-        }
-        return entry_key(content), content
+    def _phase_input(self, phase: PostMapPhase, index: tuple[int, ...],
+                     structure: Structure) -> PhaseInput:
+        """What ``phase`` computes a structure's values from: the study's axes and
+        method, and the map's values it reads, read back from the file."""
+        read = {name: self.writer.read(name, (*index, Ellipsis)) if not
+                self.spec.both_directions or name in UNSWEPT_VARIABLES
+                else self.writer.read(name, (slice(None), *index, Ellipsis))
+                for name in phase.reads}
+        return PhaseInput(index, structure, self.f, self.a, self.method, self.spec, read)
 
-    def _kept_frontier(self, key: str, slots: np.ndarray) -> dict[str, np.ndarray] | None:
-        """A structure's frontier kept by an earlier run (its branches stored as the
-        rows of a block over the accelerations), or None."""
-        if self.a.size == 0:
-            return None
-        dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in self.frontier.variables}
-        values, present = self.cache.lookup(key, slots, self.a, dtypes)
-        if not present.all():
-            return None
-        return {name: np.ascontiguousarray(array.T) for name, array in values.items()}
-
-    def _keep_frontier(self, key: str, content: dict[str, Any], slots: np.ndarray,
-                       found: dict[str, np.ndarray]) -> None:
-        if self.a.size == 0 or not self.keeping:
-            return
-        arrays = {name: np.ascontiguousarray(found[name].T) for name in self.frontier.variables}
-        self._keep(key, content, self.a, encode_block(key, slots, self.a, arrays))
-
-    def _write_curves(self, progress: bool | None, stop: threading.Event) -> None:
-        """The fold curves of every structure (:mod:`study.solvers.fold_curves`: slow
-        sweeps along the study's f, each hop's fold continued over its a), with their
-        own progress. A structure's curves are kept once found, under a key of what
-        they follow from (the structure, the solver, the f and a axes, not the map); a
-        stop request (Ctrl-C) ends the phase after the step running."""
-        spec = self.spec
-        work = fold_curve_work(self.a)
-        shown = Progress(work * len(self.structures), f"{spec.name} fold curves", progress,
-                         unit="step", finished="fold curves done; sealing the file")
-
-        def advance(steps: int) -> None:
-            shown.update(steps)
-            if stop.is_set():
-                raise KeyboardInterrupt  # the curves of the structures done are kept
-
-        found = {}
-        reused = 0
-        try:
-            with shown.running(), compile_notices(shown):
-                for index, structure in self.structures.items():
-                    if stop.is_set():
-                        raise KeyboardInterrupt
-                    keys = self._curve_keys(index)
-                    kept = self._kept_curves(keys)
-                    if kept is not None:
-                        found[index] = kept
-                        reused += 1
-                        shown.update(work, 0)
-                        continue
-                    found[index] = self.curves.compute(
-                        CurveWork(structure, self.f, self.a, self.method), progress=advance)
-                    self._keep_curves(keys, found[index])
-            if reused:
-                shown.say(f"fold curves of {reused} of {len(self.structures)} structures "
-                          "reused from the cache (same structure, solver and axes)")
-        finally:
-            shown.close()
-        ones = (1,) * len(spec.structure_axes)
-        for variable in data_variables(spec, (self.curves,)):
-            last = self.a.size if VARIABLES[variable.name].grid == "curve" else len(SIDES)
-            self.writer.variable(variable.name, variable.dims, variable.dtype,
-                                 {**variable.attrs, "coordinates": self.auxiliary},
-                                 (*ones, len(HOPS), last))
-        for index, item in found.items():
-            for variable in data_variables(spec, (self.curves,)):
-                self.writer.write(variable.name, (*index, slice(None), slice(None)),
-                                  item[variable.name])
-
-    def _curve_keys(self, index: tuple[int, ...]
-                    ) -> dict[str, tuple[str, dict[str, Any], np.ndarray]]:
-        """For each part of a structure's fold curves (over ``(hop, a)`` and over
-        ``(hop, curve_end)``): its cache key, content and the block's columns. The
-        curves follow from the structure, the solver (not the protocol: they sweep on
-        their own) and the f and a axes, not from the map."""
-        method = replace(self.method, protocol=None).canonical()
-        keys = {}
-        for part, columns in (("curve", self.a),
-                              ("curve_end", np.arange(len(SIDES), dtype=np.float64))):
-            names = [v for v in self.curves.variables if VARIABLES[v].grid == part]
-            content = {
-                "observable": self.curves.name,
-                "part": part,
-                "variables": {v: VARIABLES[v].dtype for v in names},
-                "structure": _structure_content(self.structures[index]),
-                "method": method,
-                "code_sha256": self.code,
-                "f_sha256": hashlib.sha256(np.ascontiguousarray(self.f).tobytes()).hexdigest(),
-                "a_sha256": hashlib.sha256(np.ascontiguousarray(self.a).tobytes()).hexdigest(),
-            }
-            keys[part] = (entry_key(content), content, columns)
-        return keys
-
-    def _kept_curves(self, keys: dict[str, tuple[str, dict[str, Any], np.ndarray]]
-                     ) -> dict[str, np.ndarray] | None:
-        """A structure's fold curves kept by an earlier run (the hops the rows of each
-        block), or None."""
-        slots = np.arange(len(HOPS), dtype=np.float64)
+    def _kept_phase(self, blocks: list[tuple[Block, str, dict[str, Any]]]
+                    ) -> dict[str, np.ndarray] | None:
+        """A structure's values of a phase kept by an earlier run (every block of
+        them), or None."""
         found: dict[str, np.ndarray] = {}
-        for part, (key, _, columns) in keys.items():
-            dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in self.curves.variables
-                      if VARIABLES[v].grid == part}
-            values, present = self.cache.lookup(key, slots, columns, dtypes)
+        for block, key, _ in blocks:
+            if not block.keepable:
+                return None
+            dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in block.variables}
+            values, present = self.cache.lookup(key, block.slots, block.columns, dtypes)
             if not present.all():
                 return None
-            found.update(values)
+            found.update({name: block.restored(array) for name, array in values.items()})
         return found
 
-    def _keep_curves(self, keys: dict[str, tuple[str, dict[str, Any], np.ndarray]],
-                     found: dict[str, np.ndarray]) -> None:
-        if not self.keeping:
+    def _keep_phase(self, blocks: list[tuple[Block, str, dict[str, Any]]],
+                    found: dict[str, np.ndarray]) -> None:
+        """Keep a structure's values of a phase, a block each (the whole of them or
+        nothing where a block has no columns)."""
+        if not self.keeping or not all(block.keepable for block, _, _ in blocks):
             return
-        slots = np.arange(len(HOPS), dtype=np.float64)
-        for part, (key, content, columns) in keys.items():
-            arrays = {v: np.ascontiguousarray(found[v]) for v in self.curves.variables
-                      if VARIABLES[v].grid == part}
-            self._keep(key, content, columns, encode_block(key, slots, columns, arrays))
+        for block, key, content in blocks:
+            arrays = {name: block.kept(found[name]) for name in block.variables}
+            self._keep(key, content, block.columns,
+                       encode_block(key, block.slots, block.columns, arrays))
 
     def _provenance_attrs(self) -> dict[str, Any]:
         spec = self.spec

@@ -35,21 +35,19 @@ from study.model.structure import Structure, check_structure
 from study.solvers.settings import SolverSettings, check_coupling, check_flight, check_start
 from study.studies.layout import (
     coordinates,
-    curve_observable,
     data_variables,
     direction_methods,
     method_attributes,
     method_of,
     observables_by_grid,
-    pad_branches,
     plan_study,
 )
 from study.studies.observables import (
     OBSERVABLES,
     UNSWEPT_VARIABLES,
     BasinSettings,
-    CurveWork,
 )
+from study.studies.phases import PhaseInput, computed_phase, post_map_phases
 from study.studies.spec import StudySpec, parse_spec
 from study.studies.spec_types import STRUCTURE_PARAMETERS
 from study.studies.sweep import Rectangle, Task, compute_task
@@ -321,7 +319,7 @@ def compute_map(
 
 def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
     """Every chunk of ``spec`` computed on threads and gathered into its layout."""
-    rows, points, frontier = observables_by_grid(spec)
+    rows, points, _ = observables_by_grid(spec)
     method = method_of(spec)
     methods = direction_methods(spec)
     f = spec.axis("f").values
@@ -360,11 +358,18 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
                     at = where if name in UNSWEPT_VARIABLES else (*lead, *where)
                     values[name][(*at, slice(None))] = block
     data = {v.name: (v.dims, values[v.name], v.attrs) for v in variables}
-    if frontier is not None:
-        data.update(_frontier(spec, frontier, f, a, values, method))
-    curves = curve_observable(spec)
-    if curves is not None:
-        data.update(_curves(spec, curves, f, a, method))
+    shape = tuple(len(axis) for axis in spec.structure_axes)
+    for phase in post_map_phases(spec):
+        # After the map, as the runner computes them (:mod:`study.studies.phases`).
+        items = {index: PhaseInput(index, structure, f, a, method, spec,
+                                   {name: values[name][index] if not spec.both_directions
+                                    or name in UNSWEPT_VARIABLES
+                                    else values[name][(slice(None), *index)]
+                                    for name in phase.reads})
+                 for index, structure in spec.structures()}
+        _, arrays = computed_phase(phase, items, shape)
+        data.update({variable.name: (variable.dims, arrays[variable.name], variable.attrs)
+                     for variable in data_variables(spec, (phase.observable,))})
     dataset = xr.Dataset(
         data, coords={c.name: (c.dims, c.values, c.attrs) for c in coordinates(spec)})
     dataset.attrs = {
@@ -374,40 +379,3 @@ def _computed(spec: StudySpec, workers: int | None) -> xr.Dataset:
         "study_spec": spec.text,
     }
     return dataset
-
-
-def _frontier(spec: StudySpec, frontier: Any, f: NDArray[np.float64],
-              a: NDArray[np.float64], values: dict[str, NDArray[Any]], method: Any
-              ) -> dict[str, tuple[tuple[str, ...], NDArray[Any], dict[str, Any]]]:
-    """The frontier of every structure from its velocity rows, padded to a common
-    number of branches (as the runner writes it)."""
-    found = {}
-    for index, structure in spec.structures():
-        found[index] = frontier.compute(structure, f, a, values["velocity"][index],
-                                        values["status"][index], method,
-                                        spec.frontier_tolerance)
-    branches = max(1, *(item["frontier_frequency"].shape[1] for item in found.values()))
-    shape = tuple(len(axis) for axis in spec.structure_axes)
-    out = {}
-    for variable in data_variables(spec, (frontier,)):
-        array = np.empty((*shape, a.size, branches), dtype=variable.dtype)
-        for index, item in found.items():
-            array[index] = pad_branches(item[variable.name], branches, variable.dtype)
-        out[variable.name] = (variable.dims, array, variable.attrs)
-    return out
-
-
-def _curves(spec: StudySpec, curves: Any, f: NDArray[np.float64], a: NDArray[np.float64],
-            method: Any) -> dict[str, tuple[tuple[str, ...], NDArray[Any], dict[str, Any]]]:
-    """The fold curves of every structure (as the runner writes them)."""
-    found = {index: curves.compute(CurveWork(structure, f, a, method))
-             for index, structure in spec.structures()}
-    shape = tuple(len(axis) for axis in spec.structure_axes)
-    out = {}
-    for variable in data_variables(spec, (curves,)):
-        first = next(iter(found.values()))[variable.name]
-        array = np.empty((*shape, *first.shape), dtype=variable.dtype)
-        for index, item in found.items():
-            array[index] = item[variable.name]
-        out[variable.name] = (variable.dims, array, variable.attrs)
-    return out

@@ -47,6 +47,7 @@ from study.solvers.protocol import SweptState, slow_sweep
 from study.solvers.section import SECTION_PERIODS, phase_section
 from study.solvers.settings import SolverSettings
 from study.solvers.steady import SteadyState
+from study.solvers.sweep_branches import swept_branches
 from study.studies.variables import DEFAULT_MAX_ATTRACTORS, GRIDS, VARIABLES, Variable
 
 __all__ = [
@@ -297,10 +298,13 @@ class Observable:
     name : str
     summary : str
         One line for docs and error messages.
-    grid : {"row", "point", "frontier", "curves"}
+    grid : {"row", "point", "frontier", "curves", "branches"}
         ``row``: closed form per frequency; ``point``: per drive point, by the
         solver; ``frontier``: found from whole velocity rows after the grid;
-        ``curves``: continued over the drive plane after the grid, per structure.
+        ``curves``: continued over the drive plane after the grid, per structure;
+        ``branches``: the branches a slow sweep rides, continued after the grid, per
+        structure (each after-the-grid observable's phase:
+        :mod:`study.studies.phases`).
     variables : tuple of str
         Names of its variables in :data:`study.studies.variables.VARIABLES`.
     requires : tuple of str
@@ -381,7 +385,7 @@ class Observable:
         """Its values, by :attr:`function`; a point observable first refuses a method
         it does not apply to (the spec refuses it before; a direct caller gets the
         same words)."""
-        if self.grid in ("point", "curves") and self.needs_anything:
+        if self.grid in ("point", "curves", "branches") and self.needs_anything:
             method = args[0].method
             unmet = unmet_needs((self.name,), method.name, method.coupling, method.flight,
                                 method.protocol is not None)
@@ -686,6 +690,35 @@ def _fold_curves(work: CurveWork, progress: Callable[[int], None] | None = None
             "fold_end_past": found.end_past}
 
 
+def _swept_branches(work: CurveWork, progress: Callable[[int], None] | None = None
+                    ) -> dict[str, NDArray[Any]]:
+    """The branches the study's slow sweeps ride (each direction's sweep solved again
+    over the whole grid, as the map's), one per piece of each run on one motion."""
+    method = work.method
+    along, direction = method.protocol  # type: ignore[misc]
+    sweeps = [slow_sweep(work.structure, work.f, work.a, along=along, direction=way,
+                         flight=method.flight, settings=method.solver)
+              for way in (("up", "down") if direction == "both" else (direction,))]
+    found = swept_branches(work.structure, work.f, work.a, sweeps, flight=method.flight,
+                           settings=method.solver, progress=progress)
+    ways = np.array([{"up": 0, "down": 1}[swept.direction] for swept in sweeps], np.int8)
+    return {
+        "branch_sweep": ways[found.sweep], "branch_start_f": found.start_f,
+        "branch_start_a": found.start_a, "branch_end": found.end,
+        "branch_steps": found.steps, "branch_orbit_period": found.periods,
+        "branch_bifurcations": found.count, "branch_f": found.f, "branch_a": found.a,
+        "branch_velocity": found.velocity, "branch_stable": found.stable,
+        "branch_largest_multiplier": found.largest_multiplier,
+        "branch_largest_hop": found.largest_hop, "branch_bifurcation_kind": found.kind,
+        "branch_bifurcation_f": found.bifurcation_f,
+        "branch_bifurcation_a": found.bifurcation_a,
+        "branch_bifurcation_velocity": found.bifurcation_velocity,
+        "branch_bifurcation_multiplier_modulus": found.multiplier_modulus,
+        "branch_bifurcation_multiplier_angle": np.degrees(found.multiplier_angle),
+        "branch_bifurcation_step": found.step,
+    }
+
+
 _DECLARED = (
     Observable("resonance", "gain and phase of the plate's first mode", "row",
                ("mode_gain", "mode_phase"), _resonance),
@@ -789,6 +822,25 @@ _DECLARED = (
                requires=("velocity",), methods=("exact",), couplings=("two-way",),
                why="the exact two-way solver's period map is what slow sweeps carry the "
                "state on and branches are continued on"),
+    Observable("branches", "the branches the slow sweeps ride, continued over the swept "
+               "range: each piece of a run on one motion (between jumps, and where its "
+               "orbit's period changes) is the branch of the orbit of its last point, "
+               "continued by pseudo-arclength continuation back to the piece's first "
+               "drive and on to the end of the swept axis, through its fold onto the "
+               "unstable part, each step's velocity and stability and each bifurcation "
+               "on it located exactly (after the map, per structure; one or two short "
+               "branches per piece)", "branches",
+               ("branch_sweep", "branch_start_f", "branch_start_a", "branch_end",
+                "branch_steps", "branch_orbit_period", "branch_bifurcations", "branch_f",
+                "branch_a", "branch_velocity", "branch_stable", "branch_largest_multiplier",
+                "branch_largest_hop", "branch_bifurcation_kind", "branch_bifurcation_f",
+                "branch_bifurcation_a", "branch_bifurcation_velocity",
+                "branch_bifurcation_multiplier_modulus",
+                "branch_bifurcation_multiplier_angle", "branch_bifurcation_step"),
+               _swept_branches, requires=("velocity", "diagnostics"), swept=True,
+               methods=("exact",), couplings=("two-way",),
+               why="it continues the motions a slow sweep rides, on the exact two-way "
+               "solver's period map"),
 )
 
 #: name -> Observable, in the order they appear in a dataset.
@@ -826,11 +878,14 @@ def markdown_table() -> str:
     the variables it writes (with flight also its flight variables)."""
     grids = {"row": "per `f` (closed form)", "point": "per `(f, a)` (solver)",
              "frontier": "per `a`, `branch` (bisection)",
-             "curves": "per `hop`, `a` and `hop`, `curve_end` (continuation)"}
+             "curves": "per `hop`, `a` and `hop`, `curve_end` (continuation)",
+             "branches": "per `branch`, `branch`, `step` and `branch`, `bifurcation` "
+             "(continuation)"}
     lines = ["| observable | what it computes | grid | needs | variables |",
              "|---|---|---|---|---|"]
     for name, o in OBSERVABLES.items():
-        needs = (f"`[sweep] protocol`: {o.why}" if o.unswept or o.swept
+        needs = (f"`[sweep] protocol`{f' and `{o.needs()}`' if o.needs() else ''}: "
+                 f"{o.why}" if o.unswept or o.swept
                  else f"`{o.needs()}`: {o.why}" if o.needs_anything
                  else "any method and coupling" if o.grid != "row" else "no solver")
         variables = ", ".join(f"`{v}`" for v in o.variables)

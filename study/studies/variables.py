@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from study.engine.kinds import ResultFormat
-from study.model.bifurcations import JUMP_FLAG_VALUES, JUMP_FLAGS
+from study.model.bifurcations import ENDS, JUMP_FLAG_VALUES, JUMP_FLAGS, KINDS
 from study.model.statistics import Z_95
 from study.model.status import NonConvergence, Status
 from study.model.units import (
@@ -76,6 +76,11 @@ STALE_RESULT_FORMATS: dict[int, dict[str, str]] = {1: {"mode_phase": "rad"}}
 GRIDS = {"row": ("f",), "point": ("f", "a"), "frontier": ("a", "branch"),
          "section": ("f", "a", "section_period"), "attractor": ("f", "a", "attractor"),
          "curve": ("hop", "a"), "curve_end": ("hop", "curve_end")}
+#: The branches slow sweeps ride (the branches observable): per branch (structure...,
+#: branch), per step of each (structure..., branch, step) and per located bifurcation
+#: on each (structure..., branch, bifurcation).
+GRIDS.update({"branch": ("branch",), "branch_step": ("branch", "step"),
+              "branch_bifurcation": ("branch", "bifurcation")})
 
 #: Attractor slots per point of the basins observable without ``[basins]
 #: max_attractors``.
@@ -245,6 +250,12 @@ _BASIN_STARTS = ("the seeded starts of [basins] (the solver's start, then the ba
 _NO_FOLD = "NaN (missing) exactly where fold_status is not found"
 _NO_END = ("NaN (missing) exactly where fold_end is reached (the curve ran to the end of "
            "the a axis) or not_found (nothing was followed)")
+
+#: What a swept branch's value says where there is none.
+_NO_BRANCH = "NaN (missing) exactly where branch_sweep is none"
+_NO_STEP = "NaN (missing) exactly where branch_stable is no_step (past the branch's steps)"
+_NO_BIFURCATION = ("NaN (missing) exactly where branch_bifurcation_kind is none (past the "
+                   "branch's bifurcations)")
 
 #: What each located jump's value says where there is none.
 _NO_JUMP = "NaN (missing) exactly where jump_bifurcation is no_jump or unlocated"
@@ -568,6 +579,77 @@ _DECLARED = (
              "sign of the velocity just above the frontier frequency (0: none)"),
     Variable("frontier_bracket", "frontier", "float64", HERTZ,
              "width of the final bisection bracket of the frontier frequency"),
+    Variable("branch_sweep", "branch", "int8", DIMENSIONLESS,
+             "the slow sweep whose motion the branch is: swept up or down",
+             flags=("none", "up", "down"), flag_values=(-1, 0, 1),
+             comment="none: a branch slot the structure does not fill"),
+    Variable("branch_start_f", "branch", "float64", HERTZ,
+             "drive frequency where the sweep settled on the branch's motion (the first "
+             "point of the piece of its run it rode)", comment=_NO_BRANCH),
+    Variable("branch_start_a", "branch", "float64", METRE_PER_SECOND_SQUARED,
+             "drive acceleration where the sweep settled on the branch's motion",
+             comment=_NO_BRANCH),
+    Variable("branch_end", "branch", "int8", DIMENSIONLESS,
+             "how the branch ends in the sweep's direction",
+             flags=("none", *(end.name for end in ENDS)),
+             flag_values=(0, *(end.code for end in ENDS)),
+             comment="reached: the sweep rode it to the end of the swept axis, or it runs "
+             "there; turned_back: it folds and runs back on its unstable part past the "
+             "last point the sweep rode; ended: its orbit ceases to exist (a non-smooth "
+             "end); not_followed: the motion ridden has no orbit to follow (an irregular "
+             "one); none: a slot the structure does not fill"),
+    Variable("branch_steps", "branch", "int32", DIMENSIONLESS,
+             "steps of the branch (the step slots it fills)"),
+    Variable("branch_orbit_period", "branch", "int32", DIMENSIONLESS,
+             "period of the branch's orbit in drive periods (0: no orbit)"),
+    Variable("branch_bifurcations", "branch", "int32", DIMENSIONLESS,
+             "bifurcations located on the branch (the bifurcation slots it fills, at most "
+             "their number)"),
+    Variable("branch_f", "branch_step", "float64", HERTZ,
+             "drive frequency of each step of the branch, in the sweep's direction",
+             comment=_NO_STEP),
+    Variable("branch_a", "branch_step", "float64", METRE_PER_SECOND_SQUARED,
+             "drive acceleration of each step of the branch", comment=_NO_STEP),
+    Variable("branch_velocity", "branch_step", "float64", METRE_PER_SECOND,
+             "mean velocity of the branch's orbit at each step, positive forward",
+             comment=_NO_STEP),
+    Variable("branch_stable", "branch_step", "int8", DIMENSIONLESS,
+             "whether the branch's orbit attracts its neighbours at each step (every "
+             "Floquet multiplier inside the unit circle)",
+             flags=("no_step", "unstable", "stable"), flag_values=(-1, 0, 1),
+             comment="no_step: a slot past the branch's steps"),
+    Variable("branch_largest_multiplier", "branch_step", "float64", DIMENSIONLESS,
+             "largest modulus of the Floquet multipliers of the branch's orbit at each "
+             "step", comment=_NO_STEP),
+    Variable("branch_largest_hop", "branch_step", "float64", METRE,
+             "largest gap between the base and the table over the branch's orbit at each "
+             "step (0 without flight)", comment=_NO_STEP),
+    Variable("branch_bifurcation_kind", "branch_bifurcation", "int8", DIMENSIONLESS,
+             "kind of each bifurcation located on the branch, in the branch's order",
+             flags=("none", *(kind.name for kind in KINDS)),
+             flag_values=(0, *(kind.code for kind in KINDS)),
+             comment="none: a slot past the branch's bifurcations; each located by a test "
+             "function that changes sign between two steps, to 1e-10 of the drive "
+             "(docs/theory/branches.md)"),
+    Variable("branch_bifurcation_f", "branch_bifurcation", "float64", HERTZ,
+             "drive frequency of the bifurcation", comment=_NO_BIFURCATION),
+    Variable("branch_bifurcation_a", "branch_bifurcation", "float64",
+             METRE_PER_SECOND_SQUARED, "drive acceleration of the bifurcation",
+             comment=_NO_BIFURCATION),
+    Variable("branch_bifurcation_velocity", "branch_bifurcation", "float64",
+             METRE_PER_SECOND, "mean velocity of the branch's orbit at the bifurcation",
+             comment=_NO_BIFURCATION),
+    Variable("branch_bifurcation_multiplier_modulus", "branch_bifurcation", "float64",
+             DIMENSIONLESS, "modulus of the Floquet multiplier that crosses there",
+             comment=_NO_BIFURCATION),
+    Variable("branch_bifurcation_multiplier_angle", "branch_bifurcation", "float64",
+             DEGREE, "argument of the Floquet multiplier that crosses there (0: real "
+             "positive, 180: real negative)", comment=_NO_BIFURCATION),
+    Variable("branch_bifurcation_step", "branch_bifurcation", "int32", DIMENSIONLESS,
+             "the step of the branch before the bifurcation (it lies between this step "
+             "and the next)",
+             comment="-1: before the branch's first step (where the part traced back "
+             "from the last point ridden ended), or a slot past its bifurcations"),
 )
 
 #: name -> Variable, in the order variables appear in a file.

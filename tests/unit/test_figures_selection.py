@@ -159,6 +159,22 @@ protocol = {{ along = "f", direction = "both" }}
 coupling = "two-way"
 flight = true
 """,
+    # The same sweeps with the branches they ride and their located jumps.
+    "branches": f"""\
+[study]
+name = "branches-small"
+observables = ["velocity", "jumps", "branches"]
+[structure]
+{PAPER}
+M = 0.99
+[sweep]
+f = {{ values = [14.8, 15.6, 16.4] }}
+a = {{ values = [9.0, 10.0] }}
+protocol = {{ along = "f", direction = "both" }}
+[solver]
+coupling = "two-way"
+flight = true
+""",
     # The two hops' folds from sweeps both ways with the jumps observable, over M.
     "folds": f"""\
 [study]
@@ -565,6 +581,7 @@ SOURCES = {
     "hysteresis": ("hysteresis", []),
     "basins": ("basins", []),
     "fold-curves": ("folds", []),
+    "branch-diagram": ("branches", []),
     "steering": ("trajectory", []),
     "steering-calibration": ("calibration", []),
     "steering-plan": ("plan", []),
@@ -578,6 +595,7 @@ def _cases():
             "coupling": ("M", "f", "a"), "flight": ("M", "f", "a", "branch"),
             "irregular": ("M", "f", "a"), "section": ("f", "a", "section_period"),
             "hysteresis": ("direction", "f", "a"),
+            "branches": ("direction", "f", "a", "branch"),
             "folds": ("direction", "M", "f", "a"),
             "basins": ("f", "a", "attractor"),
             "trajectory": ("t", "segment"),

@@ -118,9 +118,11 @@ def test_every_velocity_figure_is_covered():
     # bouncing, lyapunov and bifurcation: drawn from studies with flight
     # (tests/unit/test_figures_flight.py); hysteresis from slow sweeps
     # (tests/unit/test_figures_hysteresis.py, tests/unit/test_figures_selection.py),
-    # fold-curves from slow sweeps with jumps (tests/unit/test_hop_folds.py).
+    # fold-curves from slow sweeps with jumps (tests/unit/test_hop_folds.py),
+    # branch-diagram from slow sweeps with branches (tests/unit/test_swept_branches.py).
     assert velocity_figures <= set(SOURCES) | {"mass-ratio", "bouncing", "lyapunov",
-                                               "bifurcation", "hysteresis", "fold-curves"}
+                                               "bifurcation", "hysteresis", "fold-curves",
+                                               "branch-diagram"}
 
 
 @pytest.mark.parametrize("figure", headline(sorted(SOURCES)))

@@ -161,7 +161,8 @@ def test_unmet_needs_follow_the_registry_order_and_ignore_what_applies():
     assert unmet_needs(list(OBSERVABLES), "exact", "two-way", True, protocol=True) == []
     assert [line.split('"')[1] for line in
             unmet_needs(list(OBSERVABLES), "exact", "two-way", True)] == ["unswept",
-                                                                        "jumps"]
+                                                                        "jumps",
+                                                                        "branches"]
     names = [line.split('"')[1] for line in
              unmet_needs(list(reversed(OBSERVABLES)), "integrator", "one-way", False)]
     assert names == [n for n in OBSERVABLES if n in names]
