@@ -25,7 +25,7 @@ from study.model import codes
 from study.model.structure import Structure
 from study.solvers.curves import FollowedCurve, follow_curve, seed_of_trace
 from study.solvers.jumps import jump_branch
-from study.solvers.protocol import previous_points, slow_sweep
+from study.solvers.protocol import previous_points, reversal_jumps, slow_sweep
 from study.solvers.settings import SolverSettings
 
 __all__ = ["FOLD_END_FLAGS", "FOLD_END_VALUES", "FOLD_STATUS_FLAGS", "HOPS", "SIDES",
@@ -135,7 +135,7 @@ def fold_curves(structure: Structure, f: NDArray[np.float64], a: NDArray[np.floa
         swept = slow_sweep(structure, f, a, along="f", direction=direction, flight=flight,
                            settings=settings)
         report(1)
-        seeded = _seed(structure, f, a, swept, hop, flight, settings)
+        seeded = _seed(structure, f, a, swept, flight, settings)
         if seeded is None:
             report(a.size)
             continue
@@ -159,30 +159,20 @@ def fold_curves(structure: Structure, f: NDArray[np.float64], a: NDArray[np.floa
 
 
 def _seed(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
-          swept, hop: str, flight: bool, settings: SolverSettings
+          swept, flight: bool, settings: SolverSettings
           ) -> tuple[int, object, int] | None:
     """``(j, trace, index)``: the jump of ``swept`` at the acceleration ``a[j]`` where
     the hop's branch folds, the branch it rode and the fold's index on it; the columns
-    tried from the middle of the axis outwards, None where none has such a fold."""
+    tried from the middle of the axis outwards, in each the sweep's reversals
+    (:func:`study.solvers.protocol.reversal_jumps`: a sweep up's leave the forward hop,
+    a sweep down's the backward hop) in the order it meets them, None where none is
+    located at a fold."""
     velocity = swept.state.velocity
     previous = previous_points(f, swept.direction)
-    visit = np.argsort(np.argsort(f, kind="stable"), kind="stable")  # each f's rank
-    if swept.direction == "down":
-        visit = visit.size - 1 - visit
     middle = 0.5 * (a.size - 1)
     for j in sorted(range(a.size), key=lambda k: (abs(k - middle), k)):
-        rows = np.flatnonzero(swept.jumped[:, j])
-        rows = rows[np.argsort(visit[rows], kind="stable")]  # in the order the sweep meets them
-        for i in rows:
-            if previous[i] < 0:
-                continue
-            step = int(previous[i]) - int(i)
-            before = velocity[i + step, j]
-            after = velocity[i, j]
-            reverses = (before > 0.0 > after) if hop == "forward" else (before < 0.0 < after)
-            if not reverses:
-                continue
-            located = jump_branch(structure, f, a, swept, (int(i + step), j), (int(i), j),
+        for i in reversal_jumps(f, velocity[:, j], swept.jumped[:, j], swept.direction):
+            located = jump_branch(structure, f, a, swept, (int(previous[i]), j), (int(i), j),
                                   flight=flight, settings=settings)
             if located is None:
                 continue
