@@ -77,7 +77,7 @@ from study.studies.sweep import (
     missing_rectangles,
     unit_grain,
 )
-from study.studies.variables import RESULT_FORMAT, STUDY_FORMATS, VARIABLES
+from study.studies.variables import GRIDS, RESULT_FORMAT, STUDY_FORMATS, VARIABLES
 
 __all__ = ["STUDY_KIND", "default_cache", "stream_study"]
 
@@ -713,15 +713,17 @@ class _Run:
         finally:
             shown.close()
         ones = (1,) * len(spec.structure_axes)
+        sizes = {"hop": len(HOPS), "a": self.a.size, "curve_end": len(SIDES)}
         for variable in data_variables(spec, (self.curves,)):
-            last = self.a.size if VARIABLES[variable.name].grid == "curve" else len(SIDES)
+            grid = GRIDS[VARIABLES[variable.name].grid]
             self.writer.variable(variable.name, variable.dims, variable.dtype,
                                  {**variable.attrs, "coordinates": self.auxiliary},
-                                 (*ones, len(HOPS), last))
+                                 (*ones, *(sizes[d] for d in grid)))
         for index, item in found.items():
             for variable in data_variables(spec, (self.curves,)):
-                self.writer.write(variable.name, (*index, slice(None), slice(None)),
-                                  item[variable.name])
+                value = item[variable.name]
+                self.writer.write(variable.name, (*index, *(slice(None),) * value.ndim),
+                                  value)
 
     def _curve_keys(self, index: tuple[int, ...]
                     ) -> dict[str, tuple[str, dict[str, Any], np.ndarray]]:
@@ -731,8 +733,7 @@ class _Run:
         their own) and the f and a axes, not from the map."""
         method = replace(self.method, protocol=None).canonical()
         keys = {}
-        for part, columns in (("curve", self.a),
-                              ("curve_end", np.arange(len(SIDES), dtype=np.float64))):
+        for part, (_, columns) in self._curve_parts().items():
             names = [v for v in self.curves.variables if VARIABLES[v].grid == part]
             content = {
                 "observable": self.curves.name,
@@ -751,26 +752,42 @@ class _Run:
                      ) -> dict[str, np.ndarray] | None:
         """A structure's fold curves kept by an earlier run (the hops the rows of each
         block), or None."""
-        slots = np.arange(len(HOPS), dtype=np.float64)
+        parts = self._curve_parts()
         found: dict[str, np.ndarray] = {}
         for part, (key, _, columns) in keys.items():
+            slots = parts[part][0]
             dtypes = {v: np.dtype(VARIABLES[v].dtype) for v in self.curves.variables
                       if VARIABLES[v].grid == part}
             values, present = self.cache.lookup(key, slots, columns, dtypes)
             if not present.all():
                 return None
-            found.update(values)
+            # A block's rows are its slots: one row for a grid without hops.
+            found.update({v: value if part != "doubling" else value[0]
+                          for v, value in values.items()})
         return found
 
     def _keep_curves(self, keys: dict[str, tuple[str, dict[str, Any], np.ndarray]],
                      found: dict[str, np.ndarray]) -> None:
         if not self.keeping:
             return
-        slots = np.arange(len(HOPS), dtype=np.float64)
+        parts = self._curve_parts()
         for part, (key, content, columns) in keys.items():
-            arrays = {v: np.ascontiguousarray(found[v]) for v in self.curves.variables
-                      if VARIABLES[v].grid == part}
+            slots = parts[part][0]
+            arrays = {v: np.ascontiguousarray(found[v]).reshape(slots.size, columns.size)
+                      for v in self.curves.variables if VARIABLES[v].grid == part}
             self._keep(key, content, columns, encode_block(key, slots, columns, arrays))
+
+    def _curve_parts(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Each grid the curves observable writes (:data:`~study.studies.variables.
+        GRIDS`): the rows (slots) and columns of its kept block, the hops by the
+        accelerations (``curve``) or by the curve's ends (``curve_end``), or one row
+        by the accelerations (``doubling``)."""
+        hops = np.arange(len(HOPS), dtype=np.float64)
+        parts = {"curve": (hops, self.a),
+                 "curve_end": (hops, np.arange(len(SIDES), dtype=np.float64)),
+                 "doubling": (np.zeros(1), self.a)}
+        grids = {VARIABLES[v].grid for v in self.curves.variables}
+        return {part: value for part, value in parts.items() if part in grids}
 
     def _provenance_attrs(self) -> dict[str, Any]:
         spec = self.spec
