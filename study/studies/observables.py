@@ -832,7 +832,7 @@ def markdown_table() -> str:
     the variables it writes (with flight also its flight variables)."""
     grids = {"row": "per `f` (closed form)", "point": "per `(f, a)` (solver)",
              "frontier": "per `a`, `branch` (bisection)",
-             "curves": "per `hop`, `a`, `hop`, `curve_end` and `a` (continuation)"}
+             "curves": "per `(hop, a)`, `(hop, curve_end)` and `a` (continuation)"}
     lines = ["| observable | what it computes | grid | needs | variables |",
              "|---|---|---|---|---|"]
     for name, o in OBSERVABLES.items():
