@@ -676,7 +676,8 @@ class _Run:
 
     def _write_curves(self, progress: bool | None, stop: threading.Event) -> None:
         """The fold curves of every structure (:mod:`study.solvers.fold_curves`: slow
-        sweeps along the study's f, each hop's fold continued over its a), with their
+        sweeps along the study's f, each hop's fold continued over its a, and the
+        forward hop's period doubling), each variable over its declared grid, with their
         own progress. A structure's curves are kept once found, under a key of what
         they follow from (the structure, the solver, the f and a axes, not the map); a
         stop request (Ctrl-C) ends the phase after the step running."""
@@ -727,8 +728,9 @@ class _Run:
 
     def _curve_keys(self, index: tuple[int, ...]
                     ) -> dict[str, tuple[str, dict[str, Any], np.ndarray]]:
-        """For each part of a structure's fold curves (over ``(hop, a)`` and over
-        ``(hop, curve_end)``): its cache key, content and the block's columns. The
+        """For each part of a structure's fold curves (over ``(hop, a)``, over
+        ``(hop, curve_end)`` and over ``a``): its cache key, content and the block's
+        columns. The
         curves follow from the structure, the solver (not the protocol: they sweep on
         their own) and the f and a axes, not from the map."""
         method = replace(self.method, protocol=None).canonical()
