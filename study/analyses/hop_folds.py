@@ -15,8 +15,9 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from study.model.bifurcations import JUMP_UNLOCATED
+from study.model.bifurcations import JUMP_NONE, JUMP_UNLOCATED
 from study.model.units import DIMENSIONLESS, HERTZ, METRE_PER_SECOND
+from study.solvers.protocol import reversal_jumps
 
 __all__ = ["EDGES", "hop_folds"]
 
@@ -149,20 +150,20 @@ def hop_folds(dataset: xr.Dataset) -> xr.Dataset:
 
 def _reversal(f: np.ndarray, sweep: dict[str, np.ndarray], sign: int
               ) -> tuple[float, float, int]:
-    """``(f, velocity, index)`` of the first jump of a sweep (``sign`` +1: up, from a
-    forward to a backward motion; -1: down, from backward to forward): the located
+    """``(f, velocity, index)`` of the first jump of a sweep that reverses the motion
+    (``sign`` +1: up, from a forward to a backward motion; -1: down, from backward to
+    forward: :func:`study.solvers.protocol.reversal_jumps`): the located
     bifurcation's drive and velocity (NaN, NaN where the jump is not located), and the
     jumped point's index (-1, with NaNs, where there is none)."""
-    order = range(1, f.size) if sign > 0 else range(f.size - 2, -1, -1)
     velocity = sweep["velocity"]
-    for i in order:
-        before = i - sign
-        if (sweep["jump_bifurcation"][i] != 0 and sign * velocity[before] > 0.0
-                and sign * velocity[i] < 0.0):
-            if sweep["jump_bifurcation"][i] == JUMP_UNLOCATED:
-                return np.nan, np.nan, i
-            return float(sweep["jump_f"][i]), float(sweep["jump_velocity"][i]), i
-    return np.nan, np.nan, -1
+    jumped = sweep["jump_bifurcation"] != JUMP_NONE
+    reversals = reversal_jumps(f, velocity, jumped, "up" if sign > 0 else "down")
+    if reversals.size == 0:
+        return np.nan, np.nan, -1
+    i = int(reversals[0])
+    if sweep["jump_bifurcation"][i] == JUMP_UNLOCATED:
+        return np.nan, np.nan, i
+    return float(sweep["jump_f"][i]), float(sweep["jump_velocity"][i]), i
 
 
 def _edge(f: np.ndarray, end: int, fold: tuple[float, float, int], at_grid_end: bool,

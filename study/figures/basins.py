@@ -18,7 +18,9 @@ such column per value of it. Where the file holds the fold curves (the ``fold_cu
 observable), each hop's fold f_fold(a) is drawn over every panel as a black line at the
 accelerations where it was located (solid: the forward hop's, where a sweep up jumps;
 dashed: the backward hop's, where a sweep down jumps), and along f as a vertical line at
-its frequency: the edges of the region where both hops coexist.
+its frequency: the edges of the region where both hops coexist. The forward hop's
+period doubling (``doubling_f``, the same observable: below it in f the forward hop has
+twice the period) is drawn likewise, dotted.
 """
 
 from __future__ import annotations
@@ -46,8 +48,8 @@ from study.figures.common import (
     structure_text,
 )
 
-__all__ = ["FOLD_STYLES", "MAX_PANELS", "bar_width", "compose", "draw", "fold_lines",
-           "label_colour", "labelled"]
+__all__ = ["DOUBLING_STYLE", "FOLD_STYLES", "MAX_PANELS", "bar_width", "compose", "draw",
+           "fold_lines", "label_colour", "labelled"]
 
 #: Labels drawn over (f, a) at most, most points first.
 MAX_PANELS = 6
@@ -58,19 +60,23 @@ FOLD_STYLES = {"forward": {"color": "black", "linestyle": "-"},
                "backward": {"color": "black", "linestyle": "--"}}
 _FOLD_LABELS = {"forward": "forward hop's fold (a sweep up jumps there)",
                 "backward": "backward hop's fold (a sweep down jumps there)"}
+#: How the forward hop's period-doubling curve (``doubling_f``) is drawn.
+DOUBLING_STYLE = {"color": "black", "linestyle": ":",
+                  "label": "forward hop's period doubling (period 2 below it in f)"}
 
 
 def fold_lines(ax: plt.Axes, dataset: xr.Dataset, along: str = "a") -> list[plt.Line2D]:
     """Each hop's fold curve of the file (``fold_f``, the fold_curves observable) on
     ``ax``: over (f, a) as the line f_fold(a) through the accelerations where it was
     located (``along="a"``), or, at one acceleration, a vertical line at its frequency
-    (``along="f"``); the axes' limits kept. Returns the lines drawn (none where the file
-    holds no fold, or none was found)."""
-    if "fold_f" not in dataset or "hop" not in dataset["fold_f"].dims:
-        return []
+    (``along="f"``); then the forward hop's period doubling (``doubling_f``) the same
+    way, dotted; the axes' limits kept. Returns the lines drawn (none where the file
+    holds no such curve, or none was found)."""
     limits = ax.get_xlim(), ax.get_ylim()
     drawn = []
-    for hop in dataset["hop"].values:
+    hops = (dataset["hop"].values if "fold_f" in dataset and "hop" in dataset["fold_f"].dims
+            else ())
+    for hop in hops:
         name = str(hop)
         f = np.atleast_1d(dataset["fold_f"].sel(hop=hop).values)
         if not np.isfinite(f).any():
@@ -83,6 +89,17 @@ def fold_lines(ax: plt.Axes, dataset: xr.Dataset, along: str = "a") -> list[plt.
                                  **style)[0])
         else:
             drawn.append(ax.axvline(float(f[np.isfinite(f)][0]), linewidth=1.2, **style))
+    doubling = (np.atleast_1d(dataset["doubling_f"].values) if "doubling_f" in dataset
+                else np.empty(0))
+    if np.isfinite(doubling).any():  # the forward hop's other edge (newer files hold it)
+        style = {**DOUBLING_STYLE, "zorder": 5}
+        if along == "a":
+            a = np.atleast_1d(dataset["doubling_f"]["a"].values)
+            drawn.append(ax.plot(doubling, a, marker="s", markersize=2.5, linewidth=1.4,
+                                 **style)[0])
+        else:
+            drawn.append(ax.axvline(float(doubling[np.isfinite(doubling)][0]),
+                                    linewidth=1.2, **style))
     ax.set_xlim(*limits[0])
     ax.set_ylim(*limits[1])
     return drawn

@@ -11,6 +11,11 @@ hop's, of a sweep down from a backward motion to a forward one. One such fold of
 hop seeds its curve, which is continued over the study's whole ``a`` axis both ways
 (:func:`study.solvers.curves.follow_curve`) and located at each of its values exactly
 (to 1e-10 of the drive), its ends bracketed.
+
+The forward hop's other edge is no fold: followed down in ``f`` from where the sweep
+up left it, its branch period-doubles (the orbit of period 1 turns into one of period
+2, at M = 0.99 near 12.03 Hz at 10 m s-2). That period doubling is located on the same
+branch and continued over ``a`` the same way (``doubling_*`` of :class:`FoldCurves`).
 """
 
 from __future__ import annotations
@@ -23,13 +28,14 @@ from numpy.typing import NDArray
 
 from study.model import codes
 from study.model.structure import Structure
+from study.solvers.branch import Trace, trace_from_section
 from study.solvers.curves import FollowedCurve, follow_curve, seed_of_trace
 from study.solvers.jumps import jump_branch
-from study.solvers.protocol import previous_points, slow_sweep
+from study.solvers.protocol import previous_points, reversal_jumps, slow_sweep
 from study.solvers.settings import SolverSettings
 
-__all__ = ["FOLD_END_FLAGS", "FOLD_END_VALUES", "FOLD_STATUS_FLAGS", "HOPS", "SIDES",
-           "FoldCurves", "fold_curve_work", "fold_curves"]
+__all__ = ["DOUBLING_STATUS_FLAGS", "FOLD_END_FLAGS", "FOLD_END_VALUES", "FOLD_STATUS_FLAGS",
+           "HOPS", "SIDES", "FoldCurves", "fold_curve_work", "fold_curves"]
 
 #: The hops whose folds are followed, and the way a slow sweep along f rides each to
 #: its fold: the forward hop up, the backward hop down.
@@ -40,6 +46,10 @@ SIDES = ("below", "above")
 #: Why the fold of a hop has (or has not) a frequency at an acceleration.
 FOLD_STATUS_FLAGS = ("found", "no_fold", "beyond_end", "not_found")
 FOUND, NO_FOLD, BEYOND_END, NOT_FOUND = range(len(FOLD_STATUS_FLAGS))
+#: Why the forward hop's period doubling has (or has not) a frequency at an acceleration.
+DOUBLING_STATUS_FLAGS = ("found", "no_doubling", "beyond_end", "not_found")
+(DOUBLING_FOUND, DOUBLING_NONE, DOUBLING_BEYOND_END,
+ DOUBLING_NOT_FOUND) = range(len(DOUBLING_STATUS_FLAGS))
 #: How a curve ends on each side: the curve ends of
 #: :data:`study.model.bifurcations.CURVE_ENDS` (their codes), or ``not_found`` (0): no
 #: sweep located the hop's fold, nothing was followed.
@@ -74,6 +84,24 @@ class FoldCurves:
     seed : numpy.ndarray of int
         ``(2,)``: the index along ``a`` of the sweep's jump that seeded each curve
         (-1: none).
+    doubling_f : numpy.ndarray
+        ``(n_a,)``: the drive frequency of the forward hop's period doubling at each
+        acceleration [Hz], below its fold in ``f``: where the forward hop, followed down
+        in frequency, loses its stability to an orbit of twice its period (the other
+        edge of where it exists stably); NaN where ``doubling_status`` is not
+        ``found``.
+    doubling_velocity : numpy.ndarray
+        ``(n_a,)``: the mean velocity of the forward hop's orbit there [m s-1]; NaN
+        likewise.
+    doubling_status : numpy.ndarray of int8
+        ``(n_a,)``: :data:`DOUBLING_STATUS_FLAGS` (found; no_doubling: past where the
+        curve vanished, the hop's branch meeting no period doubling near the last one
+        (at M = 0.99 where it meets a grazing); beyond_end: past where it ended at
+        another bifurcation or was lost; not_found: the forward hop's fold was not
+        found, or its branch followed down from there meets no period doubling).
+    doubling_seed : int
+        The index along ``a`` where the doubling was first located (-1: none), the
+        forward fold's seed.
     """
 
     f: NDArray[np.float64]
@@ -83,12 +111,17 @@ class FoldCurves:
     end_last: NDArray[np.float64]
     end_past: NDArray[np.float64]
     seed: NDArray[np.int64]
+    doubling_f: NDArray[np.float64]
+    doubling_velocity: NDArray[np.float64]
+    doubling_status: NDArray[np.int8]
+    doubling_seed: int = -1
 
 
 def fold_curve_work(a: NDArray[np.float64]) -> int:
     """The steps :func:`fold_curves` reports to its ``progress`` for an ``a`` axis:
-    each sweep, and each acceleration of each curve."""
-    return len(HOPS) * (1 + np.size(a))
+    each sweep, and each acceleration of each curve; the forward hop's branch followed
+    down to its period doubling, and each acceleration of its curve."""
+    return (len(HOPS) + 1) * (1 + np.size(a))
 
 
 def fold_curves(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64], *,
@@ -128,18 +161,24 @@ def fold_curves(structure: Structure, f: NDArray[np.float64], a: NDArray[np.floa
                        end=np.zeros((len(HOPS), len(SIDES)), dtype=np.int8),
                        end_last=np.full((len(HOPS), len(SIDES)), np.nan),
                        end_past=np.full((len(HOPS), len(SIDES)), np.nan),
-                       seed=np.full(len(HOPS), -1, dtype=np.int64))
+                       seed=np.full(len(HOPS), -1, dtype=np.int64),
+                       doubling_f=np.full(a.size, np.nan),
+                       doubling_velocity=np.full(a.size, np.nan),
+                       doubling_status=np.full(a.size, DOUBLING_NOT_FOUND, dtype=np.int8))
     order = np.argsort(a, kind="stable")
+    ridden = None  # the forward hop's branch to its fold
     for h, hop in enumerate(HOPS):
         direction = _DIRECTIONS[hop]
         swept = slow_sweep(structure, f, a, along="f", direction=direction, flight=flight,
                            settings=settings)
         report(1)
-        seeded = _seed(structure, f, a, swept, hop, flight, settings)
+        seeded = _seed(structure, f, a, swept, flight, settings)
         if seeded is None:
             report(a.size)
             continue
         j, traced, cause = seeded
+        if hop == "forward":
+            ridden = (j, traced)
         seed = seed_of_trace(traced, cause, "f")
         found.seed[h] = j
         found.status[h, j] = FOUND
@@ -155,34 +194,75 @@ def fold_curves(structure: Structure, f: NDArray[np.float64], a: NDArray[np.floa
                                     settings=settings, progress=report)
             _fill(found, h, side, indices, followed)
             report(int(np.count_nonzero(found.status[h, indices] != FOUND)))
-    return found
+    if ridden is None:
+        report(1 + a.size)
+        return found
+    return _doubling(structure, f, a, found, *ridden, flight, settings, report)
+
+
+def _doubling(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+              found: FoldCurves, j: int, ridden: Trace, flight: bool,
+              settings: SolverSettings, report: Callable[[int], None]) -> FoldCurves:
+    """``found`` with the forward hop's period-doubling curve: the hop's orbit where
+    the sweep up left it (the start of ``ridden``, its branch to its fold at ``a[j]``)
+    followed down in ``f`` (to the axis's lowest value less its width, or half of it),
+    the first period doubling on that branch located and continued over ``a`` both ways
+    (:func:`study.solvers.curves.follow_curve`)."""
+    f_start, a_start = (float(x) for x in ridden.drive(ridden.column("t")[0]))
+    low = max(float(f.min()) - float(np.ptp(f)), 0.5 * float(f.min()))
+    try:
+        down = trace_from_section(structure, f_start, a_start, along="f", to=low,
+                                  state=ridden.states()[0],
+                                  section=float(ridden.column("section")[0]),
+                                  periods=ridden.periods, flight=flight, settings=settings)
+    except ValueError:
+        down = None
+    hits = (np.empty(0, dtype=np.int64) if down is None else np.flatnonzero(
+        down.bifurcation_column("kind").astype(int) == codes.BIFURCATION_PERIOD_DOUBLING))
+    report(1)
+    if hits.size == 0:
+        report(a.size)
+        return found
+    seed = seed_of_trace(down, int(hits[0]), "f")
+    status = found.doubling_status
+    status[j] = DOUBLING_FOUND
+    found.doubling_f[j], found.doubling_velocity[j] = seed.row[0], seed.row[2]
+    report(1)
+    order = np.argsort(a, kind="stable")
+    position = int(np.flatnonzero(order == j)[0])
+    for indices in (order[:position][::-1], order[position + 1:]):
+        if indices.size == 0:
+            continue
+        samples = a[indices]
+        followed = follow_curve(structure, seed, samples, float(samples[0] - a[j]),
+                                settings=settings, progress=report)
+        for row, sample in zip(followed.rows, followed.sample, strict=True):
+            if sample >= 0:
+                k = indices[sample]
+                status[k] = DOUBLING_FOUND
+                found.doubling_f[k], found.doubling_velocity[k] = row[0], row[2]
+        missing = status[indices] != DOUBLING_FOUND
+        status[indices[missing]] = (DOUBLING_NONE if followed.end == codes.CURVE_VANISHED
+                                    else DOUBLING_BEYOND_END)
+        report(int(np.count_nonzero(missing)))
+    return replace(found, doubling_seed=j)
 
 
 def _seed(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
-          swept, hop: str, flight: bool, settings: SolverSettings
+          swept, flight: bool, settings: SolverSettings
           ) -> tuple[int, object, int] | None:
     """``(j, trace, index)``: the jump of ``swept`` at the acceleration ``a[j]`` where
     the hop's branch folds, the branch it rode and the fold's index on it; the columns
-    tried from the middle of the axis outwards, None where none has such a fold."""
+    tried from the middle of the axis outwards, in each the sweep's reversals
+    (:func:`study.solvers.protocol.reversal_jumps`: a sweep up's leave the forward hop,
+    a sweep down's the backward hop) in the order it meets them, None where none is
+    located at a fold."""
     velocity = swept.state.velocity
     previous = previous_points(f, swept.direction)
-    visit = np.argsort(np.argsort(f, kind="stable"), kind="stable")  # each f's rank
-    if swept.direction == "down":
-        visit = visit.size - 1 - visit
     middle = 0.5 * (a.size - 1)
     for j in sorted(range(a.size), key=lambda k: (abs(k - middle), k)):
-        rows = np.flatnonzero(swept.jumped[:, j])
-        rows = rows[np.argsort(visit[rows], kind="stable")]  # in the order the sweep meets them
-        for i in rows:
-            if previous[i] < 0:
-                continue
-            step = int(previous[i]) - int(i)
-            before = velocity[i + step, j]
-            after = velocity[i, j]
-            reverses = (before > 0.0 > after) if hop == "forward" else (before < 0.0 < after)
-            if not reverses:
-                continue
-            located = jump_branch(structure, f, a, swept, (int(i + step), j), (int(i), j),
+        for i in reversal_jumps(f, velocity[:, j], swept.jumped[:, j], swept.direction):
+            located = jump_branch(structure, f, a, swept, (int(previous[i]), j), (int(i), j),
                                   flight=flight, settings=settings)
             if located is None:
                 continue

@@ -120,6 +120,37 @@ def previous_points(values: NDArray[np.float64], direction: str) -> NDArray[np.i
     return previous
 
 
+def reversal_jumps(values: NDArray[np.float64], velocity: NDArray[np.float64],
+                   jumped: NDArray[np.bool_], direction: str) -> NDArray[np.int64]:
+    """The jumps of one run of a slow sweep that reverse the motion, in the order the
+    sweep meets them: the indices along the swept axis ``values`` (in any order) of the
+    jumped points where a sweep ``"up"`` goes from a forward motion (velocity > 0) at
+    the point it visited before to a backward one (< 0), or a sweep ``"down"`` from a
+    backward motion to a forward one.
+
+    This is the rule of a reversal fold: the first such jump of a sweep up leaves the
+    forward hop at its fold, the first of a sweep down the backward hop at its
+    (:mod:`study.solvers.fold_curves`, :mod:`study.analyses.hop_folds`), where the jump
+    is located at a fold (:mod:`study.solvers.jumps`). ``velocity`` and ``jumped`` are
+    the run's, over ``values``; a NaN velocity reverses nothing."""
+    previous = previous_points(values, direction)
+    ranks = np.argsort(np.asarray(values), kind="stable")
+    if direction == "down":
+        ranks = ranks[::-1]
+    found = []
+    for i in ranks:  # in the order the sweep visits them
+        before = int(previous[i])
+        if before < 0 or not jumped[i]:
+            continue
+        if direction == "up":
+            reverses = velocity[before] > 0.0 > velocity[i]
+        else:
+            reverses = velocity[before] < 0.0 < velocity[i]
+        if reverses:
+            found.append(int(i))
+    return np.array(found, dtype=np.int64)
+
+
 def slow_sweep(
     structure: Structure,
     f: ArrayLike,

@@ -339,8 +339,9 @@ class Observable:
         ``frontier``: ``function(structure, f, a, velocity, status, method, tolerance,
         progress=None)``, each array ``(n_a, n_branch)`` (``progress(solves)`` after each
         bisection step); ``curves``: ``function(work: CurveWork, progress=None)``,
-        arrays over ``(hop, a)`` and ``(hop, curve_end)`` (``progress(steps)`` after each
-        sweep and each acceleration of a curve).
+        arrays over the grids of its variables, ``(hop, a)``, ``(hop, curve_end)``
+        and ``(a,)`` (``progress(steps)`` after each sweep, branch and acceleration of a
+        curve).
     methods : tuple of str or None
         The velocity solvers (:data:`METHODS`, ``[solver] method``) that compute it;
         None: any.
@@ -687,7 +688,9 @@ def _fold_curves(work: CurveWork, progress: Callable[[int], None] | None = None
                         settings=work.method.solver, progress=progress)
     return {"fold_f": found.f, "fold_velocity": found.velocity, "fold_status": found.status,
             "fold_end": found.end, "fold_end_last": found.end_last,
-            "fold_end_past": found.end_past}
+            "fold_end_past": found.end_past, "doubling_f": found.doubling_f,
+            "doubling_velocity": found.doubling_velocity,
+            "doubling_status": found.doubling_status}
 
 
 def _swept_branches(work: CurveWork, progress: Callable[[int], None] | None = None
@@ -816,9 +819,12 @@ _DECLARED = (
                "study's f at each a locate where each hop's branch folds (the forward "
                "hop's swept up, the backward hop's swept down), and one fold of each is "
                "continued over the study's a axis both ways, exact at each a, its ends "
-               "(a cusp, another bifurcation) bracketed (after the map, per structure)",
+               "(a cusp, another bifurcation) bracketed; and the forward hop's period "
+               "doubling below its fold in f, the hop's other edge, continued likewise "
+               "(after the map, per structure)",
                "curves", ("fold_f", "fold_velocity", "fold_status", "fold_end",
-                          "fold_end_last", "fold_end_past"), _fold_curves,
+                          "fold_end_last", "fold_end_past", "doubling_f",
+                          "doubling_velocity", "doubling_status"), _fold_curves,
                requires=("velocity",), methods=("exact",), couplings=("two-way",),
                why="the exact two-way solver's period map is what slow sweeps carry the "
                "state on and branches are continued on"),
@@ -878,7 +884,7 @@ def markdown_table() -> str:
     the variables it writes (with flight also its flight variables)."""
     grids = {"row": "per `f` (closed form)", "point": "per `(f, a)` (solver)",
              "frontier": "per `a`, `branch` (bisection)",
-             "curves": "per `hop`, `a` and `hop`, `curve_end` (continuation)",
+             "curves": "per `(hop, a)`, `(hop, curve_end)` and `a` (continuation)",
              "branches": "per `branch`, `branch`, `step` and `branch`, `bifurcation` "
              "(continuation)"}
     lines = ["| observable | what it computes | grid | needs | variables |",

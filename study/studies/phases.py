@@ -326,7 +326,8 @@ class FrontierPhase(PostMapPhase):
 class FoldCurvesPhase(PostMapPhase):
     """The fold curves of the forward and backward hops
     (:func:`study.solvers.fold_curves.fold_curves`: slow sweeps along the study's f,
-    each hop's fold continued over its a), over ``(hop, a)`` and ``(hop, curve_end)``.
+    each hop's fold continued over its a, and the forward hop's period doubling), over
+    ``(hop, a)``, ``(hop, curve_end)`` and ``(a,)``.
 
     They follow from the structure, the solver (not the protocol: they sweep on their
     own) and the f and a axes, not from the map: a rerun onto another output reuses
@@ -341,13 +342,18 @@ class FoldCurvesPhase(PostMapPhase):
         return fold_curve_work(item.a)
 
     def blocks(self, item: PhaseInput) -> tuple[Block, ...]:
-        # The hops the rows of each block: one block per grid of the variables.
+        # The hops the rows of each block: one block per grid of the variables; the
+        # doubling's, over a alone, kept as one column of the accelerations.
+        def held(part: str) -> tuple[str, ...]:
+            return tuple(v for v in self.variables if VARIABLES[v].grid == part)
+
         slots = np.arange(len(HOPS), dtype=np.float64)
         columns = {"curve": item.a, "curve_end": np.arange(len(SIDES), dtype=np.float64)}
-        return tuple(
-            Block(part, tuple(v for v in self.variables if VARIABLES[v].grid == part),
-                  slots, along)
-            for part, along in columns.items())
+        blocks = [Block(part, held(part), slots, along) for part, along in columns.items()]
+        if held("doubling"):
+            blocks.append(Block("doubling", held("doubling"), item.a, np.zeros(1),
+                                single=True))
+        return tuple(blocks)
 
     def key(self, item: PhaseInput, block: Block) -> dict[str, Any]:
         return {"method": replace(item.method, protocol=None).canonical(),

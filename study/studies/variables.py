@@ -26,7 +26,12 @@ from study.model.units import (
 )
 from study.solvers.attractors import ATTRACTOR_DROPS, ATTRACTOR_STARTS
 from study.solvers.basins import NO_ATTRACTOR
-from study.solvers.fold_curves import FOLD_END_FLAGS, FOLD_END_VALUES, FOLD_STATUS_FLAGS
+from study.solvers.fold_curves import (
+    DOUBLING_STATUS_FLAGS,
+    FOLD_END_FLAGS,
+    FOLD_END_VALUES,
+    FOLD_STATUS_FLAGS,
+)
 from study.solvers.section import SECTION_PERIODS
 from study.solvers.steady import FIELD_DTYPES, FIELD_UNITS
 
@@ -72,10 +77,11 @@ STALE_RESULT_FORMATS: dict[int, dict[str, str]] = {1: {"mode_phase": "rad"}}
 #: section_period): consecutive drive periods of the motion at each point, the
 #: basins' (structure..., f, a, attractor): the attractors at each point, a fold
 #: curve's (structure..., hop, a): each hop's fold at each acceleration, or its ends'
-#: (structure..., hop, curve_end): towards smaller and larger accelerations.
+#: (structure..., hop, curve_end): towards smaller and larger accelerations, and the
+#: forward hop's period-doubling curve (structure..., a).
 GRIDS = {"row": ("f",), "point": ("f", "a"), "frontier": ("a", "branch"),
          "section": ("f", "a", "section_period"), "attractor": ("f", "a", "attractor"),
-         "curve": ("hop", "a"), "curve_end": ("hop", "curve_end")}
+         "curve": ("hop", "a"), "curve_end": ("hop", "curve_end"), "doubling": ("a",)}
 #: The branches slow sweeps ride (the branches observable): per branch (structure...,
 #: branch), per step of each (structure..., branch, step) and per located bifurcation
 #: on each (structure..., branch, bifurcation).
@@ -256,6 +262,8 @@ _NO_BRANCH = "NaN (missing) exactly where branch_sweep is none"
 _NO_STEP = "NaN (missing) exactly where branch_stable is no_step (past the branch's steps)"
 _NO_BIFURCATION = ("NaN (missing) exactly where branch_bifurcation_kind is none (past the "
                    "branch's bifurcations)")
+#: What the period-doubling curve's value says where there is none.
+_NO_DOUBLING = "NaN (missing) exactly where doubling_status is not found"
 
 #: What each located jump's value says where there is none.
 _NO_JUMP = "NaN (missing) exactly where jump_bifurcation is no_jump or unlocated"
@@ -570,6 +578,27 @@ _DECLARED = (
     Variable("fold_end_past", "curve_end", "float64", METRE_PER_SECOND_SQUARED,
              "drive acceleration past the fold curve's end, where the fold is not met: "
              "the other side of the end's bracket", comment=_NO_END),
+    Variable("doubling_f", "doubling", "float64", HERTZ,
+             "drive frequency of the forward hop's period doubling at the drive "
+             "acceleration: below its fold in f, where the forward hop of period 1 turns "
+             "into one of twice its period (the other edge of where it exists stably)",
+             comment="each point located on the exact period map to 1e-10 of the drive "
+             "(the multiplier -1), on the forward hop's branch followed down in f from "
+             "where a slow sweep up left it at its fold, the curve continued over the a "
+             f"axis (not interpolated); {_NO_DOUBLING}", optional=True),
+    Variable("doubling_velocity", "doubling", "float64", METRE_PER_SECOND,
+             "mean velocity of the forward hop's orbit at its period doubling, positive "
+             "forward", comment=_NO_DOUBLING, optional=True),
+    Variable("doubling_status", "doubling", "int8", DIMENSIONLESS,
+             "whether the forward hop's period doubling was located at the drive "
+             "acceleration, and why not", flags=DOUBLING_STATUS_FLAGS,
+             comment="found: doubling_f holds it; no_doubling: past where the curve "
+             "vanished (the hop's branch meets no period doubling near the last one, as "
+             "where it meets a grazing); beyond_end: past where the curve ended at "
+             "another bifurcation or was lost, not followed there; not_found: the "
+             "forward hop's fold was not found (fold_status), or its branch followed "
+             "down in f from there meets no period doubling, so no curve was followed",
+             optional=True),
     Variable("frontier_frequency", "frontier", "float64", HERTZ,
              "drive frequency f*(a) where the mean velocity changes sign",
              comment="NaN-padded where an acceleration has fewer branches"),

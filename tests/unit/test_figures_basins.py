@@ -145,6 +145,39 @@ def test_the_fold_curves_are_drawn_over_every_panel(basins_map):
                 if "fold" in line.get_label()]
 
 
+DOUBLING_LABEL = "forward hop's period doubling (period 2 below it in f)"
+
+
+def test_the_period_doubling_is_drawn_beside_the_folds(basins_map):
+    a = basins_map["a"].values
+    doubling = 12.03 - 0.6 * (a - 10.0)
+    doubling[0] = np.nan  # not found there
+    folded = _with_folds(basins_map).assign(doubling_f=(("a",), doubling))
+    fig, _ = compose(folded)
+    panels = [ax for ax in fig.axes if ax.get_visible() and ax.get_title().startswith("label")]
+    limits = compose(basins_map)[0].axes[0].get_xlim()
+    for ax in panels:
+        lines = {line.get_label(): line for line in ax.get_lines()}
+        drawn = lines[DOUBLING_LABEL]
+        assert drawn.get_linestyle() == ":" and to_rgb(drawn.get_color()) == (0, 0, 0)
+        assert_allclose(drawn.get_xdata(), doubling, rtol=0, atol=0)
+        assert_allclose(drawn.get_ydata(), a, rtol=0, atol=0)
+        assert "forward hop's fold (a sweep up jumps there)" in lines
+        assert ax.get_xlim() == limits
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == [
+        "forward hop's fold (a sweep up jumps there)", DOUBLING_LABEL]
+    # Along f, at one acceleration: a vertical line at its frequency.
+    labelled, _ = follow_attractors(folded)
+    fig, _ = compose(labelled.sel(a=a[1]))
+    for ax in fig.axes:
+        lines = {line.get_label(): line for line in ax.get_lines()}
+        assert_allclose(lines[DOUBLING_LABEL].get_xdata(), [doubling[1]] * 2, rtol=0, atol=0)
+    # A file without it (written before the curve) draws the folds alone.
+    fig, _ = compose(_with_folds(basins_map))
+    assert not [line for ax in fig.axes for line in ax.get_lines()
+                if line.get_label() == DOUBLING_LABEL]
+
+
 def test_along_f_each_fold_is_a_vertical_line_at_its_frequency(basins_map):
     folded = _with_folds(basins_map)
     folded["fold_f"].values[1] = 13.3  # a backward fold too, at every a

@@ -22,15 +22,22 @@ import study
 from study.engine.interrupts import RunInterrupted
 from study.engine.runner import run_study
 from study.engine.spec_files import SpecError
+from study.engine.validation import seal
 from study.engine.validation.files import validate_file
 from study.model.bifurcations import kind_named
 from study.solvers import fold_curves as fold_module
+from study.solvers.exact import steady_state
+from study.solvers.integrator import Schedule, simulate
 from study.solvers.protocol import slow_sweep
+from study.solvers.settings import SolverSettings
 from study.studies.spec import parse_spec
+from tests.support.sealed_results import rewrite
 
 M099 = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
 M095 = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.95, cs=0.25)
 FOLD = kind_named("fold").code
+DOUBLING = kind_named("period_doubling").code
+DOUBLING_STATUS = dict(zip(fold_module.DOUBLING_STATUS_FLAGS, range(4), strict=True))
 F = np.linspace(12.0, 17.0, 11)
 STATUS = dict(zip(fold_module.FOLD_STATUS_FLAGS, range(4), strict=True))
 END = dict(zip(fold_module.FOLD_END_FLAGS, fold_module.FOLD_END_VALUES, strict=True))
@@ -78,6 +85,73 @@ def test_the_forward_fold_is_bifurcation_curves_and_ends_in_its_cusp(m099):
     assert (backward.fold_status.values == STATUS["not_found"]).all()
     assert (backward.fold_end.values == END["not_found"]).all()
     assert np.isnan(backward.fold_f.values).all()
+
+
+def test_the_forward_hops_period_doubling_is_bifurcation_curves(m099):
+    assert m099.doubling_f.dims == ("a",) and m099.doubling_f.attrs["units"] == "Hz"
+    assert m099.doubling_velocity.attrs["units"] == "m s-1"
+    # Seeded at the forward fold's a = 10, continued down to 7.5 (below the fold's
+    # cusp: the hop exists there, its fold does not) and up to 11, past where the
+    # curve vanishes (it meets a grazing of the hop's branch near 10.73 m s-2).
+    assert m099.doubling_status.values.tolist() == [DOUBLING_STATUS["found"]] * 3 + [
+        DOUBLING_STATUS["no_doubling"]]
+    assert np.isnan(m099.doubling_f.values[3]) and np.isnan(m099.doubling_velocity.values[3])
+    # study.bifurcation_curve of the same period doubling, from a branch of its own (the
+    # release's forward hop at 12.5 Hz, continued down in f).
+    hop = study.branch(M099, 12.5, 10.0, along="f", to=11.5, flight=True)
+    doubling = int(np.flatnonzero(hop.bifurcation_kind.values == DOUBLING)[0])
+    assert_allclose(hop.bifurcation_multiplier_modulus.values[doubling], 1.0, rtol=0,
+                    atol=1e-8)
+    assert_allclose(hop.bifurcation_multiplier_angle.values[doubling], np.pi, rtol=0,
+                    atol=1e-8)
+    curve = study.bifurcation_curve(M099, hop, doubling, to=7.5, num=6)
+    for a in (7.5, 8.0, 10.0):
+        k = int(np.flatnonzero(curve.a.values == a)[0])
+        assert_allclose(m099.doubling_f.sel(a=a).item(), curve.f.values[k], rtol=1e-9,
+                        atol=0)
+        assert_allclose(m099.doubling_velocity.sel(a=a).item(), curve.velocity.values[k],
+                        rtol=1e-7, atol=0)
+        # The multiplier there is -1.
+        assert_allclose(curve.multiplier_modulus.values[k], 1.0, rtol=0, atol=1e-8)
+        assert_allclose(curve.multiplier_angle.values[k], np.pi, rtol=0, atol=1e-8)
+    assert_allclose(m099.doubling_f.values[:3], [13.41124, 13.220089, 12.0305257], rtol=0,
+                    atol=1e-6)
+    # The forward hop moves forward at its doubling.
+    assert (m099.doubling_velocity.values[:3] > 0).all()
+
+
+def _period_velocities(f: float, state: np.ndarray, held: int = 400, last: int = 6
+                       ) -> np.ndarray:
+    """The integrator's mean velocity [m s-1] over each of the last ``last`` of ``held``
+    drive periods at ``(f, 10 m s-2)`` from a phase-0 state ``(delta, delta', v, h,
+    h')`` (x = 0)."""
+    times = np.arange(held - last, held + 1) / f
+    run = simulate(M099, Schedule(np.array([f]), np.array([10.0]), np.array([held / f])),
+                   coupling="two-way", flight=True, output_times=times,
+                   initial_state=np.array([state[0], state[1], 0.0, *state[2:]]))
+    assert run.outcome == "completed"
+    return np.diff(run.x) * f
+
+
+def test_across_the_doubling_the_integrator_leaves_the_forward_hop_for_period_2(m099):
+    doubling = m099.doubling_f.sel(a=10.0).item()
+    inside, outside = doubling + 0.02, doubling - 0.02
+    orbit = steady_state(M099, inside, 10.0, SolverSettings(), coupling="two-way",
+                         flight=True)
+    assert int(orbit.orbit_period) == 1
+    state = np.asarray(orbit.phase_state, dtype=float).reshape(5)
+    scale = 10.0 / (2 * np.pi * inside)
+    # Inside, disturbed, the integrator comes back to the forward hop of period 1.
+    disturbed = state.copy()
+    disturbed[0] *= 1.001
+    velocities = _period_velocities(inside, disturbed)
+    assert_allclose(velocities / scale, float(orbit.velocity) / scale, rtol=0, atol=1e-7)
+    # Past the doubling, carried there as a slow sweep down would, it leaves it for a
+    # forward motion of period 2: one period's velocity alternates with the next's.
+    velocities = _period_velocities(outside, state)
+    assert (velocities > 0).all()
+    assert_allclose(velocities[2:], velocities[:-2], rtol=1e-6, atol=0)
+    assert np.abs(np.diff(velocities)).min() > 1e-3 * scale
 
 
 def test_the_forward_fold_lies_in_a_fine_sweeps_bracket(m099):
@@ -144,12 +218,18 @@ def test_a_rerun_reuses_the_curves_and_another_f_axis_computes_them(tmp_path, mo
     with xr.open_dataset(tmp_path / "first.nc") as a, \
             xr.open_dataset(tmp_path / "second.nc") as b:
         for name in ("fold_f", "fold_velocity", "fold_status", "fold_end", "fold_end_last",
-                     "fold_end_past"):
+                     "fold_end_past", "doubling_f", "doubling_velocity", "doubling_status"):
             assert np.array_equal(a[name].values, b[name].values,
                                   equal_nan=a[name].dtype.kind == "f"), name
         assert list(a.hop.values) == ["forward", "backward"]
         assert_allclose(a.fold_f.sel(a=10.0).values, [15.0575, 12.1499], rtol=0, atol=1e-4)
+        assert a.doubling_f.dims == ("a",)
     validate_file(tmp_path / "first.nc")  # raises on a problem
+    # A file written before the doubling curve (without its variables) stays valid.
+    earlier = rewrite(tmp_path / "first.nc", tmp_path / "earlier.nc",
+                      drop=("doubling_f", "doubling_velocity", "doubling_status"))
+    seal(earlier)
+    assert validate_file(earlier) == "study result"
     study.run(_spec(tmp_path, num=25), tmp_path / "finer.nc", cache=cache, workers=1)
     assert len(calls) == 4
 

@@ -16,7 +16,7 @@ from numpy.testing import assert_allclose
 
 import study
 from study.solvers.integrator import Schedule, simulate, steady_mode_state
-from study.solvers.protocol import JUMP_FRACTION, slow_sweep, sweep_order
+from study.solvers.protocol import JUMP_FRACTION, reversal_jumps, slow_sweep, sweep_order
 
 #: The M -> 1 structure of the flight workflows.
 STRUCTURE = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
@@ -106,6 +106,24 @@ def test_the_order_visits_each_line_in_the_direction():
     np.testing.assert_array_equal(order[3:] % a.size, [1, 1, 1])
     order, _ = sweep_order(f, a, "a", "down")
     np.testing.assert_array_equal(a[order[:2] % a.size], [2.0, 1.0])
+
+
+def test_the_reversals_are_the_jumps_from_forward_to_backward_up_and_back_down():
+    # An axis given high to low: the sweep's order, not the index, says what is before.
+    f = np.array([15.0, 14.0, 13.0, 12.0, 11.0, 10.0])
+    velocity = np.array([-1.0, 2.0, -3.0, np.nan, 4.0, 5.0])
+    jumped = np.array([True, True, True, False, True, False])
+    # Up (10 -> 15 Hz): 14 -> 15 reverses; 13 Hz follows a NaN and 12 Hz did not jump.
+    np.testing.assert_array_equal(reversal_jumps(f, velocity, jumped, "up"), [0])
+    # Down (15 -> 10 Hz): 15 -> 14 reverses; 14 -> 13 goes forward to backward.
+    np.testing.assert_array_equal(reversal_jumps(f, velocity, jumped, "down"), [1])
+    jumped[1] = False
+    assert reversal_jumps(f, velocity, jumped, "down").size == 0
+    # Several, in the order the sweep meets them.
+    f = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
+    velocity = np.array([1.0, -1.0, 1.0, -1.0, -1.0])
+    np.testing.assert_array_equal(reversal_jumps(f, velocity, np.ones(5, bool), "up"), [1, 3])
+    np.testing.assert_array_equal(reversal_jumps(f, velocity, np.ones(5, bool), "down"), [2, 0])
 
 
 @pytest.mark.parametrize(("key", "kwargs", "text"), [
