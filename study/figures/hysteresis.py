@@ -128,7 +128,7 @@ def compose(dataset: xr.Dataset) -> tuple[plt.Figure, str]:
     from study.figures import FigureError
 
     dataset = require_dims(dataset, "hysteresis", ("direction", "f", "a"),
-                           "a slow sweep up and down of one structure")
+                           "a slow sweep up and down of one structure", "velocity")
     if "direction" not in dataset.dims or set(dataset["direction"].values) != {"up",
                                                                                "down"}:
         raise FigureError("figure 'hysteresis' compares the sweeps up and down, which "

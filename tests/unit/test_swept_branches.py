@@ -195,6 +195,15 @@ def test_the_branch_diagram_is_drawn_from_the_file(hysteresis, tmp_path, monkeyp
     plt.close(fig)
 
 
+def test_the_hysteresis_figure_draws_a_file_with_branches(hysteresis, tmp_path):
+    # The branches' own dimensions (branch, step, bifurcation) are not a sweep of the
+    # study to select: the figure reads the sweeps' velocity and draws as before.
+    ds = open_result(hysteresis)
+    assert {"branch", "step", "bifurcation"} <= set(ds.dims)
+    paths = draw_figure("hysteresis", ds, tmp_path / "hysteresis")
+    assert paths and all(p.exists() and p.stat().st_size > 0 for p in paths)
+
+
 def test_a_file_without_branches_draws_the_other_figures(tmp_path):
     spec = _spec(tmp_path, observables='"velocity", "jumps"', direction="both")
     run_study(spec, tmp_path / "old.nc", progress=False, workers=1)
