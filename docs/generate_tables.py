@@ -5,7 +5,7 @@ as tables, each generated from its one declaration in the package. They are writ
 into the page itself, between two markers::
 
     <!-- table: observables (written by docs/generate_tables.py from
-         study.studies.observables.markdown_table; do not edit) -->
+         study.studies.observable_table.markdown_table; do not edit) -->
     | observable | ... |
     <!-- end of table: observables -->
 
@@ -58,7 +58,7 @@ class Table:
 
 
 TABLES = (
-    Table("observables", "user-guide/specs.md", "study.studies.observables.markdown_table"),
+    Table("observables", "user-guide/specs.md", "study.studies.observable_table.markdown_table"),
     Table("contact laws", "user-guide/specs.md", "study.model.contact.markdown_table"),
     Table("parameters", "user-guide/specs.md", "study.model.parameters.markdown_table"),
     Table("starts", "user-guide/specs.md", "study.model.starts.markdown_table"),

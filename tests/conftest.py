@@ -7,6 +7,8 @@ collection, so that pytest-xdist starts them at once (:mod:`tests.support.schedu
 
 from __future__ import annotations
 
+import sys
+
 import pytest
 
 import study
@@ -26,3 +28,14 @@ from tests.support.warm_kernels import pytest_sessionstart  # noqa: F401 (a hook
 def paper_structure() -> study.Structure:
     """The structure of the paper's Fig. 1-2 (:data:`study.model.paper.PAPER_STRUCTURE`)."""
     return papers_structure()
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Every figure a test drew is closed after it (as matplotlib's own tests do): a
+    worker that runs many figure tests would otherwise pass pyplot's 20 open figures
+    and its warning, an error under ``filterwarnings = error``, fails the next test."""
+    yield
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if pyplot is not None:
+        pyplot.close("all")

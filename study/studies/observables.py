@@ -48,7 +48,7 @@ from study.solvers.section import SECTION_PERIODS, phase_section
 from study.solvers.settings import SolverSettings
 from study.solvers.steady import SteadyState
 from study.solvers.sweep_branches import swept_branches
-from study.studies.variables import DEFAULT_MAX_ATTRACTORS, GRIDS, VARIABLES, Variable
+from study.studies.variables import DEFAULT_MAX_ATTRACTORS, VARIABLES, Variable
 
 __all__ = [
     "BASIN_KEYS",
@@ -60,7 +60,6 @@ __all__ = [
     "Method",
     "Observable",
     "PointWork",
-    "markdown_table",
     "resolve",
     "solution_values",
     "unmet_needs",
@@ -876,43 +875,3 @@ def variables_of(requested: tuple[str, ...] | list[str], flight: bool = False,
     writes, in file order."""
     names = {v for o in resolve(requested, flight, protocol) for v in o.variables}
     return tuple(v for name, v in VARIABLES.items() if name in names)
-
-
-def markdown_table() -> str:
-    """The docs' table of observables (docs/user-guide/specs.md), from their
-    declarations: name, what it computes, its grid, what it needs of ``[solver]`` and
-    the variables it writes (with flight also its flight variables)."""
-    grids = {"row": "per `f` (closed form)", "point": "per `(f, a)` (solver)",
-             "frontier": "per `a`, `branch` (bisection)",
-             "curves": "per `(hop, a)`, `(hop, curve_end)` and `a` (continuation)",
-             "branches": "per `branch`, `branch`, `step` and `branch`, `bifurcation` "
-             "(continuation)"}
-    lines = ["| observable | what it computes | grid | needs | variables |",
-             "|---|---|---|---|---|"]
-    for name, o in OBSERVABLES.items():
-        needs = (f"`[sweep] protocol`{f' and `{o.needs()}`' if o.needs() else ''}: "
-                 f"{o.why}" if o.unswept or o.swept
-                 else f"`{o.needs()}`: {o.why}" if o.needs_anything
-                 else "any method and coupling" if o.grid != "row" else "no solver")
-        variables = ", ".join(f"`{v}`" for v in o.variables)
-        if o.flight_variables:
-            variables += "; with flight also " + ", ".join(f"`{v}`"
-                                                           for v in o.flight_variables)
-        if o.protocol_variables:
-            variables += "; with `[sweep] protocol` also " + ", ".join(
-                f"`{v}`" for v in o.protocol_variables)
-        if o.requires:
-            variables += " (with " + ", ".join(f"`{r}`" for r in o.requires) + ")"
-        # The dimensions some of its variables have beyond the drive point's (a phase
-        # section's periods, the basins' attractor slots).
-        beyond = sorted({d for v in (*o.variables, *o.flight_variables)
-                         for d in GRIDS[VARIABLES[v].grid][2:]})
-        grid = grids[o.grid] + "".join(f", and `{d}`" for d in beyond)
-        lines.append(f"| `{name}` | {_cell(o.summary)} | {grid} | {_cell(needs)} "
-                     f"| {variables} |")
-    return "\n".join(lines) + "\n"
-
-
-def _cell(text: str) -> str:
-    """``text`` safe in a markdown table cell."""
-    return text.replace("|", "\\|").replace("*", "\\*")

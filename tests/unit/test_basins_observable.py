@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 from study.engine.spec_files import SpecError
-from study.studies.observables import OBSERVABLES, BasinSettings, markdown_table
+from study.studies.observable_table import markdown_table
+from study.studies.observables import OBSERVABLES, BasinSettings
 from study.studies.spec import load_spec, parse_spec
 from study.studies.variables import VARIABLES
 

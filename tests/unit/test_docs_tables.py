@@ -37,8 +37,8 @@ def test_the_committed_table_is_the_generated_one(table) -> None:
 def test_the_tables_are_the_declarations_own() -> None:
     """What the script writes is the package's table function's text, whole."""
     from study.model.parameters import PARAMETERS
+    from study.studies.observable_table import markdown_table as observables
     from study.studies.observables import OBSERVABLES
-    from study.studies.observables import markdown_table as observables
 
     by_name = {table.name: table for table in tables.TABLES}
     assert by_name["observables"].generate() == observables().rstrip("\n") + "\n"

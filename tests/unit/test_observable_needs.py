@@ -12,8 +12,8 @@ import pytest
 
 from study.model.contact import COUPLINGS
 from study.model.contact import markdown_table as laws_table
+from study.studies.observable_table import markdown_table as observables_table
 from study.studies.observables import METHODS, OBSERVABLES, Method, Observable, unmet_needs
-from study.studies.observables import markdown_table as observables_table
 from study.studies.spec import SpecError, parse_spec
 
 PATH = "specs/needs-under-test.toml"
