@@ -7,7 +7,9 @@ collection, so that pytest-xdist starts them at once (:mod:`tests.support.schedu
 
 from __future__ import annotations
 
+import signal
 import sys
+import threading
 
 import pytest
 
@@ -39,3 +41,15 @@ def _close_figures():
     pyplot = sys.modules.get("matplotlib.pyplot")
     if pyplot is not None:
         pyplot.close("all")
+
+
+@pytest.fixture
+def python_sigint():
+    """SIGINT with Python's own handler (a test runner's worker may ignore it), in the
+    main thread (pytest-xdist runs tests there), where signal handlers run: for the
+    tests of what Ctrl-C keeps."""
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signal handlers run in the main thread only")
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)

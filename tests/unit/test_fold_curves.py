@@ -10,7 +10,6 @@ a rerun reuses it, another f axis computes it again.
 from __future__ import annotations
 
 import signal
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -242,17 +241,6 @@ def test_a_solver_that_cannot_compute_the_curves_is_refused_naming_the_key(tmp_p
     with pytest.raises(SpecError, match=r'\[sweep\] f has 1 value; the observable '
                        '"fold_curves"'):
         parse_spec(SPEC.format(num=1, coupling="two-way"), "one-f.toml")
-
-
-@pytest.fixture
-def python_sigint():
-    """SIGINT with Python's own handler, in the main thread (as tests/unit/
-    test_work_units.py's)."""
-    if threading.current_thread() is not threading.main_thread():
-        pytest.skip("signal handlers run in the main thread only")
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    yield
-    signal.signal(signal.SIGINT, previous)
 
 
 def test_ctrl_c_in_the_curves_phase_keeps_the_map_and_the_rerun_finishes(

@@ -16,7 +16,6 @@ matplotlib.use("Agg")
 
 import shutil
 import signal
-import threading
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -262,17 +261,6 @@ def test_a_spec_without_a_protocol_or_the_two_way_solver_is_refused(tmp_path):
                                         r'coupling = "two-way"'):
         parse_spec(text.replace('coupling = "two-way"', 'coupling = "one-way"')
                    .replace("flight = true", ""), "one-way.toml")
-
-
-@pytest.fixture
-def python_sigint():
-    """SIGINT with Python's own handler, in the main thread (as tests/unit/
-    test_work_units.py's)."""
-    if threading.current_thread() is not threading.main_thread():
-        pytest.skip("signal handlers run in the main thread only")
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    yield
-    signal.signal(signal.SIGINT, previous)
 
 
 def test_ctrl_c_in_the_branches_phase_keeps_the_map_and_the_rerun_finishes(

@@ -9,7 +9,6 @@ import io
 import itertools
 import re
 import signal
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -213,17 +212,6 @@ def test_progress_moves_within_a_one_chunk_study(tmp_path, capsys):
     shares = [int(re.match(r"one:\s+(\d+)%", line).group(1)) for line in lines]
     assert any(0 < share < 100 for share in shares), lines
     assert shares == sorted(shares) and shares[-1] == 100
-
-
-@pytest.fixture
-def python_sigint():
-    """SIGINT with Python's own handler (a test runner's worker may ignore it), in the
-    main thread (pytest-xdist runs tests there), where signal handlers run."""
-    if threading.current_thread() is not threading.main_thread():
-        pytest.skip("signal handlers run in the main thread only")
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    yield
-    signal.signal(signal.SIGINT, previous)
 
 
 def test_a_stop_request_keeps_every_unit_and_the_rerun_reuses_them(
