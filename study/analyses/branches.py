@@ -21,6 +21,8 @@ from study.model.bifurcations import (
     CURVE_ENDS,
     ENDS,
     KINDS,
+    LOCATED,
+    LOCATION_FLAGS,
     curve_end_named,
     end_named,
     kind_of_code,
@@ -103,6 +105,8 @@ def branch(structure: Structure, f: float, a: float, *, along: str, to: float,
         ``bifurcation_kind`` (a flag variable, :data:`study.model.bifurcations.KINDS`),
         ``bifurcation_f``, ``bifurcation_a``, ``bifurcation_velocity``,
         ``bifurcation_test`` (the test function's value there),
+        ``bifurcation_location`` (``located``, or ``not_converged``:
+        :data:`study.model.bifurcations.LOCATION_FLAGS`),
         ``bifurcation_multiplier_modulus`` and ``_angle``, ``bifurcation_step`` and the
         state and Jacobian there. Attributes: ``branch_end`` (why the trace stopped:
         :data:`study.model.bifurcations.ENDS`), ``along``, ``to``, ``start``,
@@ -237,6 +241,14 @@ def bifurcation_curve(structure: Structure, parent: xr.Dataset, bifurcation: int
                          f"branch's {count} bifurcations, got {bifurcation!r}")
     index = int(bifurcation)
     kind = int(parent["bifurcation_kind"].values[index])
+    if "bifurcation_location" in parent and int(
+            parent["bifurcation_location"].values[index]) != LOCATED:
+        raise ValueError(
+            f"bifurcation_curve: bifurcation {index} of the branch was not located "
+            f"(bifurcation_location is "
+            f"{LOCATION_FLAGS[int(parent['bifurcation_location'].values[index])]!r}, "
+            "it lies within a step): continue one whose bifurcation_location is "
+            "'located', or trace the branch again with a smaller max_step")
     x_found = float(parent[f"bifurcation_{along}"].values[index])
     v_start = float(parent[f"bifurcation_{other}"].values[index])
     check = as_acceleration if other == "a" else as_frequency
@@ -448,6 +460,13 @@ def branch_dataset(structure: Structure, traced: Trace, *, along: str, to: float
         "bifurcation_test": ("bifurcation", traced.bifurcation_column("test"),
                              {"units": "1", "long_name": "the test function's value "
                               "there (0 where located by bisection)"}),
+        "bifurcation_location": ("bifurcation", traced.bifurcation_locations(),
+                                 {"units": "1", "long_name": "how it was placed: "
+                                  "located to 1e-10 of the drive, or not_converged (it "
+                                  "lies within the step after bifurcation_step)",
+                                  "flag_values": np.arange(1, len(LOCATION_FLAGS),
+                                                           dtype=np.int8),
+                                  "flag_meanings": " ".join(LOCATION_FLAGS[1:])}),
         "bifurcation_multiplier_modulus": ("bifurcation", np.abs(b_mu),
                                            {"units": "1", "long_name": "modulus of the "
                                             "multiplier that crosses there"}),

@@ -9,7 +9,8 @@ column per value of the drive axis not swept. Top: each branch's mean velocity
 against the swept drive, solid where its orbit is stable and dashed where it is not
 (a line split where ``stable`` changes, each piece of one style), each located
 bifurcation marked with its kind's declared marker
-(:data:`study.model.bifurcations.KINDS`) and named in the legend by its kind's name. With
+(:data:`study.model.bifurcations.KINDS`; hollow where its location did not converge,
+``bifurcation_location``) and named in the legend by its kind's name. With
 flight, below: the largest hop of the base above the table the same way. Slow sweeps
 (:func:`study.solvers.protocol.slow_sweep`) may be drawn over it: the velocity each
 point settles on, each jump an arrow from the velocity before it to the one after.
@@ -34,7 +35,7 @@ from study.figures.common import (
     selection_text,
     structure_text,
 )
-from study.model.bifurcations import KINDS, kind_of_code
+from study.model.bifurcations import KINDS, LOCATED, kind_of_code
 
 if TYPE_CHECKING:
     from study.solvers.protocol import SweptState
@@ -279,7 +280,10 @@ def _file_branch(dataset: xr.Dataset, b: int, steps: int, along: str, flight: bo
          "bifurcation_f": at("branch_bifurcation_f"),
          "bifurcation_a": at("branch_bifurcation_a"),
          "bifurcation_velocity": at("branch_bifurcation_velocity"),
-         "bifurcation_step": at("branch_bifurcation_step")},
+         "bifurcation_step": at("branch_bifurcation_step"),
+         # A file written before the location flag: every bifurcation taken as located.
+         **({"bifurcation_location": at("branch_bifurcation_location")}
+            if "branch_bifurcation_location" in dataset else {})},
         attrs={"along": along, "flight": int(flight)})
 
 
@@ -362,15 +366,21 @@ def _fill(axes: Any, branches: list[xr.Dataset], names: list[str],
                          name if ax is axes[0] else None)
             codes = dataset["bifurcation_kind"].values.astype(int)
             x = dataset[f"bifurcation_{along}"].values
+            # Where the location did not converge the marker is hollow: the bifurcation
+            # lies within a step, not at the point drawn.
+            located = (dataset["bifurcation_location"].values == LOCATED
+                       if "bifurcation_location" in dataset else np.ones(codes.size, bool))
             if exact:
                 y = scale * dataset[f"bifurcation_{variable}"].values
                 for kind in KINDS:
-                    chosen = codes == kind.code
-                    if chosen.any():
-                        ax.plot(x[chosen], y[chosen], ls="none", marker=kind.marker,
-                                ms=8, mfc=colour, mec="black", mew=0.8, zorder=5,
-                                gid=f"branch {n} {kind.name}")
-                        kinds_seen.add(kind.code)
+                    for exactly, face, suffix in ((True, colour, ""),
+                                                  (False, "none", " not converged")):
+                        chosen = (codes == kind.code) & (located == exactly)
+                        if chosen.any():
+                            ax.plot(x[chosen], y[chosen], ls="none", marker=kind.marker,
+                                    ms=8, mfc=face, mec="black", mew=0.8, zorder=5,
+                                    gid=f"branch {n} {kind.name}{suffix}")
+                            kinds_seen.add(kind.code)
             else:
                 for value in x:
                     ax.axvline(value, color=colour, ls=":", lw=0.7,

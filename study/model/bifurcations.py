@@ -15,7 +15,8 @@ from dataclasses import dataclass
 from study.model import codes
 
 __all__ = ["CURVE_ENDS", "ENDS", "JUMP_FLAGS", "JUMP_FLAG_VALUES", "JUMP_NONE",
-           "JUMP_UNLOCATED", "KINDS", "BifurcationKind", "BranchEnd", "curve_end_named",
+           "JUMP_UNLOCATED", "KINDS", "LOCATED", "LOCATION_FLAGS", "LOCATION_NONE",
+           "NOT_CONVERGED", "BifurcationKind", "BranchEnd", "curve_end_named",
            "end_named", "kind_named", "kind_of_code", "markdown_table"]
 
 
@@ -100,6 +101,16 @@ JUMP_UNLOCATED = -1
 JUMP_FLAGS = ("unlocated", "no_jump", *(kind.name for kind in KINDS))
 #: Their codes, in the order of :data:`JUMP_FLAGS`.
 JUMP_FLAG_VALUES = (JUMP_UNLOCATED, JUMP_NONE, *(kind.code for kind in KINDS))
+
+#: How a bifurcation of a branch was placed, by code (0, 1, 2): ``none``, a slot past the
+#: branch's bifurcations; ``located``, its test function solved to the tracer's
+#: tolerance (or its event sequence bisected) to 1e-10 of the drive; ``not_converged``,
+#: the location stopped short of it (the corrector failed, or the test function did not
+#: come within 100 times its tolerance, as at the birth of a doubled orbit's branch,
+#: where its tangent is not defined): the bifurcation lies within the step before it,
+#: recorded at the best point found or at the step's end (its multiplier then NaN).
+LOCATION_FLAGS = ("none", "located", "not_converged")
+LOCATION_NONE, LOCATED, NOT_CONVERGED = range(len(LOCATION_FLAGS))
 
 @dataclass(frozen=True)
 class BranchEnd:

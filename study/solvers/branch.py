@@ -18,8 +18,12 @@ from numpy.typing import ArrayLike, NDArray
 from study.kernels.two_way import bifurcations as trace_kernel
 from study.kernels.two_way import branch as branch_kernel
 from study.model import as_acceleration, as_frequency
-from study.model.bifurcations import KINDS
-from study.model.codes import BIFURCATION_PERIOD_DOUBLING
+from study.model.bifurcations import KINDS, LOCATED, NOT_CONVERGED
+from study.model.codes import (
+    BIFURCATION_FOLD,
+    BIFURCATION_PERIOD_DOUBLING,
+    BIFURCATION_TORUS,
+)
 from study.model.starts import START_ALLOWED, START_TYPES, Drop, start_label
 from study.model.status import Status
 from study.model.structure import Structure, check_structure
@@ -43,6 +47,11 @@ DEFAULT_MAX_STEPS = 400
 DEFAULT_MAX_STEP = 0.02
 #: Bifurcations recorded on a branch at most.
 MAX_BIFURCATIONS = 256
+#: The largest test-function value of a located smooth bifurcation (fold, period
+#: doubling, torus): 100 times the tracer's own tolerance, whose regula falsi may also
+#: stop on a bracket already within 1e-10 of the drive.
+LOCATION_TEST_TOLERANCE = 100.0 * trace_kernel.TEST_TOLERANCE
+_SMOOTH = (BIFURCATION_FOLD, BIFURCATION_PERIOD_DOUBLING, BIFURCATION_TORUS)
 #: The statuses whose motion is a periodic orbit (or the static point) to continue.
 _ORBITS = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING, Status.BOUNCING)
 
@@ -98,6 +107,18 @@ class Trace:
     def bifurcation_column(self, name: str) -> NDArray[np.float64]:
         """The bifurcation column ``name``."""
         return self.bifurcations[:, _index(trace_kernel.BIFURCATION_COLUMNS, name)]
+
+    def bifurcation_locations(self) -> NDArray[np.int8]:
+        """How each bifurcation was placed
+        (:data:`study.model.bifurcations.LOCATION_FLAGS`): ``located`` where its
+        crossing multiplier is known and, for a smooth kind (fold, period doubling,
+        torus), its test function is within :data:`LOCATION_TEST_TOLERANCE`;
+        ``not_converged`` otherwise."""
+        kind = self.bifurcation_column("kind").astype(int)
+        smooth = np.isin(kind, _SMOOTH)
+        known = np.isfinite(self.bifurcation_column("multiplier_real"))
+        near = np.abs(self.bifurcation_column("test")) <= LOCATION_TEST_TOLERANCE
+        return np.where(known & (near | ~smooth), LOCATED, NOT_CONVERGED).astype(np.int8)
 
     def states(self) -> NDArray[np.float64]:
         """The orbit's state on the section at each step (steps x the state's

@@ -7,10 +7,12 @@ folds both motions are stable: the multistable region. :func:`fold_curves` finds
 fold where the sweeps of the study's ``f`` axis jump (:func:`study.solvers.protocol.
 slow_sweep`, :func:`study.solvers.jumps.jump_branch`): the forward hop's, a jump of a
 sweep up from a forward motion (velocity > 0) to a backward one (< 0), the backward
-hop's, of a sweep down from a backward motion to a forward one. One such fold of each
-hop seeds its curve, which is continued over the study's whole ``a`` axis both ways
-(:func:`study.solvers.curves.follow_curve`) and located at each of its values exactly
-(to 1e-10 of the drive), its ends bracketed.
+hop's, of a sweep down from a backward motion to a forward one. Where no sweep leaves
+a hop at a fold, its branch is followed on past the sweeps (carried along ``a`` to where
+the sweeps start on another motion, or past the ``f`` axis's end) to its fold. One such
+fold of each hop seeds its curve, which is continued over the study's whole ``a`` axis
+both ways (:func:`study.solvers.curves.follow_curve`) and located at each of its values
+exactly (to 1e-10 of the drive), its ends bracketed.
 
 The forward hop's other edge is no fold: followed down in ``f`` from where the sweep
 up left it, its branch period-doubles (the orbit of period 1 turns into one of period
@@ -27,10 +29,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from study.model import codes
+from study.model.bifurcations import LOCATED
+from study.model.status import Status
 from study.model.structure import Structure
-from study.solvers.branch import Trace, trace_from_section
+from study.solvers.branch import Trace, trace, trace_from_section
 from study.solvers.curves import FollowedCurve, follow_curve, seed_of_trace
-from study.solvers.jumps import jump_branch
+from study.solvers.jumps import ORBIT_STATUSES, jump_branch, stability_loss
 from study.solvers.protocol import previous_points, reversal_jumps, slow_sweep
 from study.solvers.settings import SolverSettings
 
@@ -73,7 +77,8 @@ class FoldCurves:
     status : numpy.ndarray of int8
         ``(2, n_a)``: :data:`FOLD_STATUS_FLAGS` (found; no_fold: past the curve's cusp,
         where the fold vanished; beyond_end: past where it ended at another bifurcation
-        or was lost; not_found: no sweep located the hop's fold).
+        or was lost; not_found: neither a sweep nor the hop's branch followed past the
+        sweeps located the hop's fold).
     end : numpy.ndarray of int8
         ``(2, 2)``: how each hop's curve ends on each side (:data:`SIDES`),
         :data:`FOLD_END_VALUES`.
@@ -82,8 +87,8 @@ class FoldCurves:
         last one where it is, and the first where it is not (the bracket of its end);
         NaN where it reached the axis's end or was not followed.
     seed : numpy.ndarray of int
-        ``(2,)``: the index along ``a`` of the sweep's jump that seeded each curve
-        (-1: none).
+        ``(2,)``: the index along ``a`` of the fold that seeded each curve, a sweep's
+        jump or off the sweeps (-1: none).
     doubling_f : numpy.ndarray
         ``(n_a,)``: the drive frequency of the forward hop's period doubling at each
         acceleration [Hz], below its fold in ``f``: where the forward hop, followed down
@@ -174,6 +179,8 @@ def fold_curves(structure: Structure, f: NDArray[np.float64], a: NDArray[np.floa
         report(1)
         seeded = _seed(structure, f, a, swept, flight, settings)
         if seeded is None:
+            seeded = _seed_off_sweeps(structure, f, a, swept, hop, flight, settings)
+        if seeded is None:
             report(a.size)
             continue
         j, traced, cause = seeded
@@ -218,7 +225,8 @@ def _doubling(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float6
     except ValueError:
         down = None
     hits = (np.empty(0, dtype=np.int64) if down is None else np.flatnonzero(
-        down.bifurcation_column("kind").astype(int) == codes.BIFURCATION_PERIOD_DOUBLING))
+        (down.bifurcation_column("kind").astype(int) == codes.BIFURCATION_PERIOD_DOUBLING)
+        & (down.bifurcation_locations() == LOCATED)))
     report(1)
     if hits.size == 0:
         report(a.size)
@@ -267,9 +275,94 @@ def _seed(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
             if located is None:
                 continue
             traced, cause = located
-            if int(traced.bifurcation_column("kind")[cause]) == codes.BIFURCATION_FOLD:
+            if _located_fold(traced, cause):
                 return j, traced, cause
     return None
+
+
+def _seed_off_sweeps(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
+                     swept, hop: str, flight: bool, settings: SolverSettings
+                     ) -> tuple[int, Trace, int] | None:
+    """``(j, trace, index)`` as :func:`_seed` gives it, where no sweep of ``swept``
+    leaves the hop at a fold: the hop's branch followed past the sweeps, in the sweep's
+    direction to ``f``'s far end and beyond it (by the axis's width, at most to half
+    its lowest value), its fold where it first stops being stable. Tried first at the
+    accelerations where the sweeps start on another motion, the hop carried there along
+    ``a`` at the sweeps' first frequency from the nearest acceleration where they start
+    on it (its fold may lie inside the grid there: at M = 0.99 the backward hop's, at
+    13.11 Hz at 9 m s-2, which sweeps down from 17 Hz on the forward hop never meet);
+    then, from the middle of the axis outwards, where the sweeps ride the hop to the
+    axis's far end without a jump. None where none is found."""
+    sign = 1.0 if hop == "forward" else -1.0
+    state = swept.state
+    upward = swept.direction == "up"
+    first, last = (int(np.argmin(f)), int(np.argmax(f))) if upward else (
+        int(np.argmax(f)), int(np.argmin(f)))
+    width = float(np.ptp(f))
+    beyond = (float(f.max()) + width if upward
+              else max(float(f.min()) - width, 0.5 * float(f.min())))
+    orbit = np.isin(state.status.astype(int), [int(s) for s in ORBIT_STATUSES if
+                                                s != Status.STATIC])
+    rides = orbit[first] & (sign * state.velocity[first] > 0)
+    ridden = np.flatnonzero(rides)
+    if ridden.size == 0:
+        return None
+    others = sorted(np.flatnonzero(~rides).tolist(),
+                    key=lambda j: (int(np.abs(ridden - j).min()), j))
+    for j in others:
+        k = int(ridden[np.argmin(np.abs(ridden - j))])
+        try:
+            carried, _ = trace(structure, float(f[first]), float(a[k]), along="a",
+                               to=float(a[j]), start=state.phase_state[first, k],
+                               flight=flight, settings=settings,
+                               periods=max(int(state.orbit_period[first, k]), 1))
+        except ValueError:
+            continue  # Newton's method does not close the sweep's orbit
+        if (carried.end != codes.BRANCH_REACHED or stability_loss(carried) is not None
+                or carried.column("radius")[-1] > 1.0):
+            continue  # the hop does not reach a[j] stable at this frequency
+        located = _fold_of_branch(structure, float(f[first]), float(a[j]), beyond,
+                                  carried.states()[-1], float(carried.column("section")[-1]),
+                                  carried.periods, flight, settings)
+        if located is not None:
+            return (j, *located)
+    jumped = swept.jumped.any(axis=0)
+    through = rides & ~jumped & orbit[last] & (sign * state.velocity[last] > 0)
+    middle = 0.5 * (a.size - 1)
+    for j in sorted(np.flatnonzero(through).tolist(), key=lambda k: (abs(k - middle), k)):
+        try:
+            branch, _ = trace(structure, float(f[last]), float(a[j]), along="f", to=beyond,
+                              start=state.phase_state[last, j], flight=flight,
+                              settings=settings,
+                              periods=max(int(state.orbit_period[last, j]), 1))
+        except ValueError:
+            continue
+        cause = stability_loss(branch)
+        if cause is not None and _located_fold(branch, cause):
+            return j, branch, cause
+    return None
+
+
+def _fold_of_branch(structure: Structure, f: float, a: float, to: float,
+                    state: NDArray[np.float64], section: float, periods: int, flight: bool,
+                    settings: SolverSettings) -> tuple[Trace, int] | None:
+    """The branch through the orbit near ``state`` (on its section) at ``(f, a)``
+    traced along ``f`` to ``to`` and the index of its fold, where it first stops being
+    stable there; None where it stops otherwise (another bifurcation) or not at all."""
+    branch = trace_from_section(structure, f, a, along="f", to=to, state=state,
+                                section=section, periods=periods, flight=flight,
+                                settings=settings)
+    cause = stability_loss(branch)
+    if cause is None or not _located_fold(branch, cause):
+        return None
+    return branch, cause
+
+
+def _located_fold(traced: Trace, index: int) -> bool:
+    """Whether the bifurcation ``index`` of ``traced`` is a fold located exactly (a
+    curve's seed must be)."""
+    return (int(traced.bifurcation_column("kind")[index]) == codes.BIFURCATION_FOLD
+            and int(traced.bifurcation_locations()[index]) == LOCATED)
 
 
 def _fill(found: FoldCurves, h: int, side: int, indices: NDArray[np.int64],

@@ -29,10 +29,11 @@ from study.solvers.branch import Trace, trace
 from study.solvers.protocol import SweptState, previous_points
 from study.solvers.settings import SolverSettings
 
-__all__ = ["SweepJumps", "jump_branch", "sweep_jumps"]
+__all__ = ["ORBIT_STATUSES", "SweepJumps", "jump_branch", "stability_loss", "sweep_jumps"]
 
 #: The statuses whose motion has an orbit (or the static point) to follow.
-_ORBITS = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING, Status.BOUNCING)
+ORBIT_STATUSES = (Status.STATIC, Status.STICK_SLIP, Status.CONTINUOUS_SLIDING,
+                  Status.BOUNCING)
 #: Kinds after which the orbit the sweep rode cannot go on as it was: the branch turns
 #: back or ends there.
 _ENDING = (codes.BIFURCATION_FOLD, codes.BIFURCATION_LIFT_OFF)
@@ -152,7 +153,7 @@ def jump_branch(structure: Structure, f: NDArray[np.float64], a: NDArray[np.floa
     goes on stable)."""
     state = swept.state
     status = Status(int(state.status[before]))
-    if status not in _ORBITS:
+    if status not in ORBIT_STATUSES:
         return None  # an irregular motion (or none) has no orbit to follow
     f0, a0 = float(f[before[0]]), float(a[before[1]])
     f1, a1 = float(f[here[0]]), float(a[here[1]])
@@ -168,13 +169,13 @@ def jump_branch(structure: Structure, f: NDArray[np.float64], a: NDArray[np.floa
                           start=start, flight=flight, settings=settings, periods=periods)
     except ValueError:
         return None  # Newton's method from the carried orbit does not close it
-    cause = _cause(traced)
+    cause = stability_loss(traced)
     if cause is None:
         return None
     return traced, cause
 
 
-def _cause(traced: Trace) -> int | None:
+def stability_loss(traced: Trace) -> int | None:
     """The index of the first located bifurcation of ``traced`` (in the order of the
     branch) after which the orbit does not go on stable: one that turns the branch back
     or ends it, one after which its largest multiplier is outside the unit circle, or

@@ -84,6 +84,9 @@ class SweptBranches:
     step : numpy.ndarray of int32
         The step before it along the branch (-1: before the first step, where the part
         traced back ended).
+    location : numpy.ndarray of int8
+        How it was placed (:data:`study.model.bifurcations.LOCATION_FLAGS`; 0 in a slot
+        past the branch's bifurcations).
     """
 
     sweep: NDArray[np.int8]
@@ -106,6 +109,7 @@ class SweptBranches:
     multiplier_modulus: NDArray[np.float64]
     multiplier_angle: NDArray[np.float64]
     step: NDArray[np.int32]
+    location: NDArray[np.int8]
 
 
 def swept_pieces(f: NDArray[np.float64], a: NDArray[np.float64], along: str,
@@ -161,7 +165,8 @@ class _Joined:
     end: int
     periods: int
     steps: NDArray[np.float64]   # (n, 6): f, a, velocity, radius, hop, stable
-    bifurcations: NDArray[np.float64]  # (m, 8): kind, f, a, velocity, modulus, angle, step
+    bifurcations: NDArray[np.float64]  # (m, 8): kind, f, a, velocity, modulus, angle, step,
+    # location
 
 
 def _piece(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
@@ -203,7 +208,7 @@ def _piece(structure: Structure, f: NDArray[np.float64], a: NDArray[np.float64],
 
 def _columns(traced: Trace) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """A trace's steps (f, a, velocity, radius, hop, stable) and bifurcations (kind, f,
-    a, velocity, modulus, angle, step)."""
+    a, velocity, modulus, angle, step, location)."""
     f, a = traced.drive(traced.column("t"))
     radius = traced.column("radius")
     steps = np.column_stack([f, a, traced.column("velocity"), radius, traced.column("hop"),
@@ -213,7 +218,8 @@ def _columns(traced: Trace) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
           + 1j * traced.bifurcation_column("multiplier_imag"))
     bifurcations = np.column_stack([
         traced.bifurcation_column("kind"), b_f, b_a, traced.bifurcation_column("velocity"),
-        np.abs(mu), np.angle(mu), traced.bifurcation_column("step")])
+        np.abs(mu), np.angle(mu), traced.bifurcation_column("step"),
+        traced.bifurcation_locations()])
     return steps, bifurcations
 
 
@@ -263,7 +269,7 @@ def _gathered(f: NDArray[np.float64], a: NDArray[np.float64],
         **{name: full((n, slots), np.nan, np.float64)
            for name in ("bifurcation_f", "bifurcation_a", "bifurcation_velocity",
                         "multiplier_modulus", "multiplier_angle")},
-        "step": full((n, slots), -1, np.int32),
+        "step": full((n, slots), -1, np.int32), "location": full((n, slots), 0, np.int8),
     }
     for b, (number, first, joined) in enumerate(rows):
         out["sweep"][b] = number
@@ -286,4 +292,5 @@ def _gathered(f: NDArray[np.float64], a: NDArray[np.float64],
                                        "multiplier_angle"), start=1):
             out[name][b, :m] = kept[:, column]
         out["step"][b, :m] = kept[:, 6].astype(np.int32)
+        out["location"][b, :m] = kept[:, 7].astype(np.int8)
     return SweptBranches(**out)

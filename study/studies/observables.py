@@ -718,6 +718,7 @@ def _swept_branches(work: CurveWork, progress: Callable[[int], None] | None = No
         "branch_bifurcation_multiplier_modulus": found.multiplier_modulus,
         "branch_bifurcation_multiplier_angle": np.degrees(found.multiplier_angle),
         "branch_bifurcation_step": found.step,
+        "branch_bifurcation_location": found.location,
     }
 
 
@@ -841,7 +842,8 @@ _DECLARED = (
                 "branch_largest_hop", "branch_bifurcation_kind", "branch_bifurcation_f",
                 "branch_bifurcation_a", "branch_bifurcation_velocity",
                 "branch_bifurcation_multiplier_modulus",
-                "branch_bifurcation_multiplier_angle", "branch_bifurcation_step"),
+                "branch_bifurcation_multiplier_angle", "branch_bifurcation_step",
+                "branch_bifurcation_location"),
                _swept_branches, requires=("velocity", "diagnostics"), swept=True,
                methods=("exact",), couplings=("two-way",),
                why="it continues the motions a slow sweep rides, on the exact two-way "

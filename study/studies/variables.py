@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from study.engine.kinds import ResultFormat
-from study.model.bifurcations import ENDS, JUMP_FLAG_VALUES, JUMP_FLAGS, KINDS
+from study.model.bifurcations import ENDS, JUMP_FLAG_VALUES, JUMP_FLAGS, KINDS, LOCATION_FLAGS
 from study.model.statistics import Z_95
 from study.model.status import NonConvergence, Status
 from study.model.units import (
@@ -262,6 +262,9 @@ _NO_BRANCH = "NaN (missing) exactly where branch_sweep is none"
 _NO_STEP = "NaN (missing) exactly where branch_stable is no_step (past the branch's steps)"
 _NO_BIFURCATION = ("NaN (missing) exactly where branch_bifurcation_kind is none (past the "
                    "branch's bifurcations)")
+_NO_MULTIPLIER = ("NaN (missing) where branch_bifurcation_kind is none (past the branch's "
+                  "bifurcations) and where branch_bifurcation_location is not_converged "
+                  "with no converged orbit at the recorded point")
 #: What the period-doubling curve's value says where there is none.
 _NO_DOUBLING = "NaN (missing) exactly where doubling_status is not found"
 
@@ -549,7 +552,9 @@ _DECLARED = (
              "backward hop: swept down)",
              comment="each point located on the exact period map to 1e-10 of the drive, "
              "the curve continued from a fold where a slow sweep of the study's f axis "
-             f"jumped from the hop to the other one (not interpolated); {_NO_FOLD}"),
+             "jumped from the hop to the other one, or where none does, from the fold of "
+             "the hop's branch followed on past the sweeps (not interpolated; it may lie "
+             f"outside the f axis); {_NO_FOLD}"),
     Variable("fold_velocity", "curve", "float64", METRE_PER_SECOND,
              "mean velocity of the hop's orbit at its fold, positive forward",
              comment=_NO_FOLD),
@@ -560,8 +565,9 @@ _DECLARED = (
              "vanished), where the hop's branch has no fold; beyond_end: past where the "
              "curve ended at another bifurcation or was lost (fold_end ended or lost), "
              "not followed there; not_found: no slow sweep along the study's f axis "
-             "jumped from this hop to the other at a fold at any acceleration, so no "
-             "curve was followed"),
+             "jumped from this hop to the other at a fold at any acceleration and the "
+             "hop's branch followed past the sweeps met no fold either, so no curve was "
+             "followed"),
     Variable("fold_end", "curve_end", "int8", DIMENSIONLESS,
              "how each hop's fold curve ends towards smaller (below) and larger (above) "
              "drive accelerations",
@@ -670,15 +676,24 @@ _DECLARED = (
              comment=_NO_BIFURCATION),
     Variable("branch_bifurcation_multiplier_modulus", "branch_bifurcation", "float64",
              DIMENSIONLESS, "modulus of the Floquet multiplier that crosses there",
-             comment=_NO_BIFURCATION),
+             comment=_NO_MULTIPLIER),
     Variable("branch_bifurcation_multiplier_angle", "branch_bifurcation", "float64",
              DEGREE, "argument of the Floquet multiplier that crosses there (0: real "
-             "positive, 180: real negative)", comment=_NO_BIFURCATION),
+             "positive, 180: real negative)", comment=_NO_MULTIPLIER),
     Variable("branch_bifurcation_step", "branch_bifurcation", "int32", DIMENSIONLESS,
              "the step of the branch before the bifurcation (it lies between this step "
              "and the next)",
              comment="-1: before the branch's first step (where the part traced back "
              "from the last point ridden ended), or a slot past its bifurcations"),
+    Variable("branch_bifurcation_location", "branch_bifurcation", "int8", DIMENSIONLESS,
+             "how the bifurcation was placed: located to 1e-10 of the drive, or not",
+             flags=LOCATION_FLAGS,
+             comment="none: a slot past the branch's bifurcations; located: its test "
+             "function solved (or its event sequence bisected) to 1e-10 of the drive; "
+             "not_converged: the location stopped short (the corrector failed, or the "
+             "test function did not come within 1e-9, as at the birth of a doubled "
+             "orbit's branch): it lies within the step after branch_bifurcation_step, "
+             "its drive and velocity those of the best point found"),
 )
 
 #: name -> Variable, in the order variables appear in a file.

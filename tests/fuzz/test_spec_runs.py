@@ -131,15 +131,15 @@ NAN_FLAGS: dict[str, dict[str, tuple[str, tuple[int, ...]]]] = {
         "doubling_velocity": ("doubling_status", (1, 2, 3)),
         # The branches a sweep rides: padding past a structure's branches (branch_sweep
         # none), past a branch's steps (branch_stable no_step) and past its bifurcations
-        # (kind none); a bifurcation whose corrector did not converge on its step is
-        # recorded at the step's end without its multiplier, whatever its kind.
+        # (kind none); a bifurcation whose location did not converge
+        # (branch_bifurcation_location not_converged, 2) may have no multiplier.
         **{f"branch_start_{name}": ("branch_sweep", (-1,)) for name in ("f", "a")},
         **{f"branch_{name}": ("branch_stable", (-1,))
            for name in ("f", "a", "velocity", "largest_multiplier", "largest_hop")},
         **{f"branch_bifurcation_{name}": ("branch_bifurcation_kind", (0,))
            for name in ("f", "a", "velocity")},
-        **{f"branch_bifurcation_multiplier_{name}": ("branch_bifurcation_kind",
-                                                     tuple(range(0, 8)))
+        **{f"branch_bifurcation_multiplier_{name}": ("branch_bifurcation_location",
+                                                     (0, 2))
            for name in ("modulus", "angle")},
         "fold_end_past": ("fold_end", (0, 1)),
         "frontier_frequency": ("frontier_kind", (0,)),

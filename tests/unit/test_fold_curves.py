@@ -79,7 +79,8 @@ def test_the_forward_fold_is_bifurcation_curves_and_ends_in_its_cusp(m099):
     last, past = forward.fold_end_last.values[0], forward.fold_end_past.values[0]
     assert 7.92 < past < last < 7.93 and last - past <= 1e-6 * last
     assert np.isnan(forward.fold_end_last.values[1]) and np.isnan(forward.fold_f.values[0])
-    # No sweep down along 12-17 Hz leaves the backward hop at a fold: not found.
+    # No sweep down along 12-17 Hz leaves the backward hop at a fold, and where the
+    # sweeps ride it to 12 Hz its branch followed on down to 7 Hz meets none: not found.
     backward = m099.sel(hop="backward")
     assert (backward.fold_status.values == STATUS["not_found"]).all()
     assert (backward.fold_end.values == END["not_found"]).all()
@@ -160,6 +161,73 @@ def test_the_forward_fold_lies_in_a_fine_sweeps_bracket(m099):
     i = int(np.flatnonzero(swept.jumped[:, 0] & (f >= 16.0))[0])
     fold = m099.fold_f.sel(hop="forward", a=10.0).item()
     assert f[i - 1] < fold < f[i] and f[i] - f[i - 1] == pytest.approx(0.0005, abs=1e-9)
+
+
+def _stepped_velocities(steps: list[tuple[float, float]], state: np.ndarray,
+                        held: int = 150, last: int = 4) -> np.ndarray:
+    """The integrator's mean velocity [m s-1] over the last ``last`` drive periods of
+    each step ``(f, a)`` [Hz, m s-2] of a stepped sweep, each held ``held`` periods, from
+    a phase-0 state ``(delta, delta', v, h, h')`` (x = 0)."""
+    f = np.array([step[0] for step in steps])
+    a = np.array([step[1] for step in steps])
+    ends = np.cumsum(held / f)
+    times = np.concatenate([end - np.arange(last, -1, -1) / fk
+                            for end, fk in zip(ends, f, strict=True)])
+    run = simulate(M099, Schedule(f, a, held / f), coupling="two-way", flight=True,
+                   output_times=times,
+                   initial_state=np.array([state[0], state[1], 0.0, *state[2:]]))
+    assert run.outcome == "completed"
+    x = np.asarray(run.x).reshape(len(steps), last + 1)
+    return (x[:, -1] - x[:, 0]) * f / last
+
+
+def test_a_fold_no_sweep_meets_is_found_off_the_sweeps_and_the_integrator_agrees():
+    # At 9 m s-2 a sweep down from 17 Hz starts on the forward hop and rides it to
+    # 12 Hz: it never meets the backward hop, whose stable branch ends inside the grid.
+    # The hop is carried there along a from 9.5 m s-2, where the sweep starts on it.
+    f, a = np.linspace(12.0, 17.0, 11), [9.0, 9.5]
+    found = study.compute_map(M099, f, a, observables=["velocity", "fold_curves"],
+                              coupling="two-way", flight=True)
+    backward = found.sel(hop="backward")
+    swept = slow_sweep(M099, f, a, along="f", direction="down", flight=True)
+    assert swept.state.velocity[-1, 0] > 0 > swept.state.velocity[-1, 1]
+    assert not swept.jumped.any()
+    assert (backward.fold_status.values == STATUS["found"]).all()
+    fold = backward.fold_f.sel(a=9.0).item()
+    assert_allclose(backward.fold_f.values, [13.1110140, 9.4640998], rtol=0, atol=1e-6)
+    assert (backward.fold_velocity.values < 0).all()
+    # The integrator's stepped sweep, from the backward hop at (17 Hz, 9.5 m s-2): down
+    # in a to 9, then down in f. It rides the backward hop to 0.02 Hz above the fold and
+    # leaves it for the forward hop 0.02 Hz below.
+    hop = steady_state(M099, 17.0, 9.5, SolverSettings(), coupling="two-way", flight=True)
+    assert float(hop.velocity) < 0
+    steps = [(17.0, 9.5), (17.0, 9.25), (17.0, 9.0), *((f, 9.0) for f in (
+        16.0, 15.0, 14.0, 13.5, fold + 0.1, fold + 0.02, fold - 0.02))]
+    velocities = _stepped_velocities(steps, np.asarray(hop.phase_state, dtype=float).ravel())
+    assert (velocities[:-1] < 0).all() and velocities[-1] > 0
+    # Ridden up to there, the hop's velocity meets the fold's.
+    assert_allclose(velocities[-2], backward.fold_velocity.sel(a=9.0).item(), rtol=0.05,
+                    atol=0)
+
+
+def test_a_fold_past_the_axis_is_the_curve_continued_from_inside_it():
+    # At 10 m s-2 the sweeps down ride the backward hop to the axis's end: on a 10-17 Hz
+    # axis its branch, followed past 10 Hz, folds at 6.08 Hz (the seed at this a). On a
+    # 12-17 Hz axis with 9 m s-2 the curve is seeded at 9 (inside the grid) and
+    # continued to 10: the same fold.
+    past = study.compute_map(M099, np.linspace(10.0, 17.0, 8), [10.0],
+                             observables=["velocity", "fold_curves"], coupling="two-way",
+                             flight=True).sel(hop="backward")
+    continued = study.compute_map(M099, np.linspace(12.0, 17.0, 11), [9.0, 10.0],
+                                  observables=["velocity", "fold_curves"],
+                                  coupling="two-way", flight=True).sel(hop="backward")
+    assert (past.fold_status.values == STATUS["found"]).all()
+    assert (continued.fold_status.values == STATUS["found"]).all()
+    assert_allclose(past.fold_f.item(), continued.fold_f.sel(a=10.0).item(), rtol=1e-9,
+                    atol=0)
+    assert_allclose(past.fold_velocity.item(), continued.fold_velocity.sel(a=10.0).item(),
+                    rtol=1e-7, atol=0)
+    assert 6.0 < past.fold_f.item() < 6.2 and past.fold_velocity.item() < 0
 
 
 def test_the_backward_hops_fold_at_m_095():

@@ -31,7 +31,7 @@ from study.engine.store import open_result
 from study.engine.validation.files import validate_file
 from study.figures import FigureError, draw_figure
 from study.figures import branch_diagram as diagram
-from study.model.bifurcations import ENDS, kind_named
+from study.model.bifurcations import ENDS, LOCATION_FLAGS, kind_named
 from study.solvers import sweep_branches as branches_module
 from study.solvers.protocol import slow_sweep
 from study.studies.spec import parse_spec
@@ -39,6 +39,7 @@ from study.studies.spec import parse_spec
 ROOT = Path(__file__).resolve().parents[2]
 M099 = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
 FOLD = kind_named("fold").code
+DOUBLING = kind_named("period_doubling").code
 END = {end.name: end.code for end in ENDS}
 
 SPEC = """
@@ -191,6 +192,59 @@ def test_the_branch_diagram_is_drawn_from_the_file(hysteresis, tmp_path, monkeyp
     assert "two-way coupling" in fig.get_suptitle() and "M = 0.99" in fig.get_suptitle()
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
     assert {"stable orbit", "unstable orbit", "fold", "jump located (jumps)"} <= set(legend)
+    plt.close(fig)
+
+
+def test_the_folds_at_a_doubled_orbits_birth_are_flagged_not_converged(
+        hysteresis, tmp_path, monkeypatch):
+    ds = open_result(hysteresis)
+    flags = dict(zip(ds.branch_bifurcation_location.attrs["flag_meanings"].split(),
+                     ds.branch_bifurcation_location.attrs["flag_values"].tolist(),
+                     strict=True))
+    assert list(flags) == list(LOCATION_FLAGS)
+    kind, location = ds.branch_bifurcation_kind.values, ds.branch_bifurcation_location.values
+    assert ((kind == 0) == (location == flags["none"])).all()
+    # Every located fold and period doubling has its multiplier at +1 and -1.
+    modulus = ds.branch_bifurcation_multiplier_modulus.values
+    angle = ds.branch_bifurcation_multiplier_angle.values
+    located = location == flags["located"]
+    for code, expected in ((FOLD, 0.0), (DOUBLING, 180.0)):
+        chosen = located & (kind == code)
+        assert chosen.any()
+        assert_allclose(modulus[chosen], 1.0, rtol=0, atol=1e-8)
+        assert_allclose(angle[chosen], expected, rtol=0, atol=1e-5)
+    # The sweep up at 9 m s-2 starts on the hop of period 2; its branch, continued up
+    # to where it is born at the period-1 hop's doubling (located on the branch of the
+    # sweep down), has no tangent there: the "folds" it reports are not converged.
+    b = _branch(ds, "up", 12.0, 9.0)
+    assert int(ds.branch_orbit_period.values[b]) == 2
+    count = int(ds.branch_bifurcations.values[b])
+    folds = kind[b, :count] == FOLD
+    assert folds.any() and (location[b, :count][folds] == flags["not_converged"]).all()
+    parent = _branch(ds, "down", 17.0, 9.0)
+    (doubling,) = np.flatnonzero(kind[parent] == DOUBLING)
+    assert location[parent, doubling] == flags["located"]
+    assert_allclose(ds.branch_bifurcation_f.values[b, :count][folds],
+                    ds.branch_bifurcation_f.values[parent, doubling], rtol=1e-6, atol=0)
+    # study.branch flags them the same, and a curve is not continued from one.
+    traced = study.branch(M099, 12.0, 9.0, along="f", to=12.7, flight=True)
+    unlocated = np.flatnonzero(traced.bifurcation_location.values == flags["not_converged"])
+    assert unlocated.size and (traced.bifurcation_kind.values[unlocated] == FOLD).all()
+    with pytest.raises(ValueError, match="bifurcation_location is 'not_converged'"):
+        study.bifurcation_curve(M099, traced, int(unlocated[0]), to=9.5, num=3)
+    # The diagram draws them hollow, the located ones filled.
+    kept = []
+    monkeypatch.setattr(diagram, "save", lambda fig, *args: kept.append(fig) or [])
+    draw_figure("branch-diagram", ds, tmp_path / "diagram")
+    (fig,) = kept
+    top = fig.axes[0]
+    names = [h.get_label() for h in top.get_legend().legend_handles]
+    n = names.index("swept up, from 12 Hz")
+    (hollow,) = [line for line in top.get_lines()
+                 if line.get_gid() == f"branch {n} fold not converged"]
+    assert hollow.get_markerfacecolor() == "none"
+    assert len(hollow.get_xdata()) == int(folds.sum())
+    assert not [line for line in top.get_lines() if line.get_gid() == f"branch {n} fold"]
     plt.close(fig)
 
 
