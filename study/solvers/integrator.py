@@ -490,7 +490,10 @@ def simulate(
     mode = _kernel.FLIGHT if airborne else int(np.sign(y[_kernel.V]))
     state = State(y, np.array([mode], dtype=np.int64),
                   np.array([0.0, settings.max_step * shortest]))
-    segments = Segments(schedule.starts, omega, schedule.acceleration,
+    # A writable copy: Schedule's arrays are read-only, and a read-only array is another
+    # signature to numba (the integrator compiled twice, once for the kernels' own
+    # calls).
+    segments = Segments(schedule.starts, omega, np.array(schedule.acceleration),
                         schedule.start_phases_rad, schedule.ends)
     control = StepControl(settings.tolerance, settings.tolerance, scale, fixed,
                           settings.max_step * shortest, settings.event_tolerance * shortest,

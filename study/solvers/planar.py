@@ -363,7 +363,8 @@ def simulate_planar(
     moving = bool(np.any(y[[_kernel.VX, _kernel.VY, _kernel.SPIN]] != 0.0))
     state = State(y, np.array([_kernel.SLIP if moving else _kernel.STICK], dtype=np.int64),
                   np.array([0.0, settings.max_step * shortest]))
-    segments = Segments(schedule.starts, omega, schedule.acceleration,
+    # Writable (Schedule's arrays are read-only: another numba signature).
+    segments = Segments(schedule.starts, omega, np.array(schedule.acceleration),
                         schedule.start_phases_rad, schedule.ends)
     control = StepControl(settings.tolerance, settings.tolerance, scale, 0.0,
                           settings.max_step * shortest, settings.event_tolerance * shortest,
