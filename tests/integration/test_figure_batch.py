@@ -1,26 +1,44 @@
-"""``make figures`` draws from one process (``python -m study.figures.batch``): each
-command does what its own ``study figure`` process does (same pictures, same
-``--if-changed`` check, same exit status), a failure stops the batch as it stops make,
-and every figure rule of the Makefile goes through it."""
+"""``make figures`` draws from one process (``python -m study.figures.batch``, which
+forks a child per figure): each command does what its own ``study figure`` process does
+(same pictures, same ``--if-changed`` check, same exit status), a failure stops the batch
+as it stops make, and every figure rule of the Makefile goes through it."""
 
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from study.cli import main
 from study.figures.batch import read_commands, run_commands
-from tests.unit.test_output_folders import spec_text
 
 ROOT = Path(__file__).resolve().parents[2]
+
+SPEC = """\
+[study]
+name = "own"
+observables = ["resonance", "thresholds"]
+
+[structure]
+f0 = 14.44
+Q = 17.5
+alpha = 64.0
+M = 0.08
+cs = 0.25
+
+[sweep]
+f = { start = 10.0, stop = 20.0, num = 9 }
+a = { start = 0.0, stop = 12.0, num = 4 }
+"""
 
 
 @pytest.fixture
 def result(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "own.toml").write_text(spec_text("own"))
+    (tmp_path / "own.toml").write_text(SPEC)
     assert main(["run", "own.toml", "-o", "results/own.nc"]) == 0
     return tmp_path / "results" / "own.nc"
 
@@ -62,6 +80,21 @@ def test_a_failed_command_stops_the_batch_with_its_status(
 
     assert run_commands([["figure", "no-such-figure", str(result)]]) == 2  # argparse's
     assert "invalid choice" in capfd.readouterr().err
+
+
+def test_the_module_reads_its_commands_from_a_file_or_standard_input(result: Path) -> None:
+    line = f"figure thresholds {result} -o figures/t --if-changed\n"
+    Path("commands").write_text(line)
+    done = subprocess.run([sys.executable, "-m", "study.figures.batch", "--jobs", "2",
+                           "commands"], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert "wrote figures/t.png" in done.stdout
+    done = subprocess.run([sys.executable, "-m", "study.figures.batch", "-"], input=line,
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 0 and "figures/t.png: up to date" in done.stdout, done.stderr
+    done = subprocess.run([sys.executable, "-m", "study.figures.batch", "none"],
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 1 and "none" in done.stderr
 
 
 def test_make_figures_runs_every_figure_rule_through_the_batch() -> None:
