@@ -4,6 +4,8 @@
 #                   (RESULT_JOBS=1: one after another); ends with the table of the
 #                   slowest runs (wall time, points computed and reused)
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
+#                   (only those whose data, options or code changed), two at a time
+#                   from one process (FIGURE_JOBS=1: one after another)
 #   make docs       the documentation site, build/html/index.html (Sphinx, warnings are
 #                   errors; runs the example gallery); needs the figures, so `make` first
 #   make test       set up .venv on a fresh machine, lint, run the default test tier (every
@@ -167,10 +169,12 @@ FIGURES += branch-diagram
 # FIGURE_LIST (and make the result files they need), then python -m study.figures.batch
 # runs each in a child forked from one process that paid the imports (numba, xarray,
 # matplotlib) and the figure code's fingerprints once. A `study figure` process of its
-# own spends about 2.5 s on those, most of the 3 s an up-to-date figure takes: on a
-# 2-core machine, 29 figures took 162 s drawn and 86 s up to date, one process each
-# after another; 61 s and 10 s this way. `make figures/NAME.png` draws one figure with
-# its own `study figure` process.
+# own spends about 2.5 s on those, most of the 3 s an up-to-date figure takes. The 29
+# figures of a fresh clone's results, on a 2-core machine shared with other work (load
+# 0.2-3; 3 December 2026): one `study figure` process each, one after another, 162 and
+# 145 s drawn, 86 s up to date (what `make docs` spent before its build); this way 61
+# and 70 s drawn, 10 s up to date; the same PNGs, byte for byte. `make figures/NAME.png`
+# draws one figure with its own `study figure` process.
 FIGURE_JOBS ?= 2
 FIGURE_COMMANDS := build/figure-commands
 FIGURE_FILES := $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
@@ -230,7 +234,9 @@ figures/%-flight.png: $(PACKAGE) FORCE | $(STAMP)
 
 FORCE:
 
-# The documentation site. Its pictures (docs/images/) are the figures of a full run,
+# The documentation site (`make docs`, after `make`: 152 s before the figure batch, 91 s
+# with it, load 2-2.7; of those, Sphinx: 4 s of start, the gallery 30-40 s, then reading
+# and writing 10 s each). Its pictures (docs/images/) are the figures of a full run,
 # copied in by `make docs`; `make docs-html` builds the pages from the pictures as they
 # are (no results needed). Warnings are errors; the example gallery (docs/examples/)
 # runs at every build. docs/images/ is tracked (the pages show their pictures on GitHub
@@ -246,6 +252,11 @@ docs: figures
 	$(PY) docs/copy_images.py $(addprefix figures/,$(addsuffix .png,$(DOC_FIGURES))) docs/images
 	$(MAKE) docs-html
 
+# Not with Sphinx's -j 2: without the gallery (-D plot_gallery=0) its reading and writing
+# took 27-32 s in one process and 23-39 s with -j 2 on this shared 2-core machine, no
+# clear gain, and the readers would be forked from the process the examples ran in
+# (a dask cluster, numba's threads). sphinx-gallery runs examples side by side only
+# with joblib, which the docs extra does not install.
 docs-html: | $(STAMP)
 	$(PY) -m sphinx -W --keep-going -b html docs build/html
 
