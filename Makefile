@@ -4,6 +4,8 @@
 #                   (RESULT_JOBS=1: one after another); ends with the table of the
 #                   slowest runs (wall time, points computed and reused)
 #   make figures    redraw every figure from its result file: figures/<name>.png, .pdf
+#                   (only those whose data, options or code changed), two at a time
+#                   from one process (FIGURE_JOBS=1: one after another)
 #   make docs       the documentation site, build/html/index.html (Sphinx, warnings are
 #                   errors; runs the example gallery); needs the figures, so `make` first
 #   make test       set up .venv on a fresh machine, lint, run the default test tier (every
@@ -67,7 +69,7 @@ RESULTS   := $(patsubst %,results/%.nc,$(foreach name,$(RESULTS_FIRST),$(filter 
                  $(filter-out $(RESULTS_FIRST),$(STEMS)))
 PACKAGE   := $(shell find study -name '*.py') $(wildcard study/schemas/*.json)
 
-.PHONY: all results result-files figures docs docs-html test test-unit test-integration \
+.PHONY: all results result-files figures figure-files docs docs-html test test-unit test-integration \
         test-slow test-all fuzz lint bench bench-quick compare cf-check list clean \
         schemas designs FORCE
 
@@ -162,7 +164,30 @@ FIGURES += basins-flight basins-paper
 FIGURES += fold-curves
 # The branches the slow sweeps of hysteresis-flight ride (its branches observable).
 FIGURES += branch-diagram
-figures: $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
+# `make figures` draws them from one process, FIGURE_JOBS at a time (default 2; 1: one
+# after another): the figure rules below only write their `study figure` commands to
+# FIGURE_LIST (and make the result files they need), then python -m study.figures.batch
+# runs each in a child forked from one process that paid the imports (numba, xarray,
+# matplotlib) and the figure code's fingerprints once. A `study figure` process of its
+# own spends about 2.5 s on those, most of the 3 s an up-to-date figure takes. The 29
+# figures of a fresh clone's results, on a 2-core machine shared with other work (load
+# 0.2-3; 3 December 2026): one `study figure` process each, one after another, 162 and
+# 145 s drawn, 86 s up to date (what `make docs` spent before its build); this way 61
+# and 70 s drawn, 10 s up to date; the same PNGs, byte for byte. `make figures/NAME.png`
+# draws one figure with its own `study figure` process.
+FIGURE_JOBS ?= 2
+FIGURE_COMMANDS := build/figure-commands
+FIGURE_FILES := $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
+figures: | $(STAMP)
+	@mkdir -p build && rm -f $(FIGURE_COMMANDS)
+	@$(MAKE) --no-print-directory figure-files FIGURE_LIST=$(FIGURE_COMMANDS)
+	$(PY) -m study.figures.batch --jobs $(FIGURE_JOBS) $(FIGURE_COMMANDS)
+
+figure-files: $(FIGURE_FILES)
+
+# How a figure rule draws: `study figure ...`; under `make figures`, the command
+# appended to FIGURE_LIST.
+STUDY_FIGURE = $(if $(FIGURE_LIST),@echo >>$(FIGURE_LIST),$(STUDY))
 
 figures/thresholds.png: results/thresholds.nc
 figures/velocity-curves.png: results/velocity-curves.nc
@@ -188,28 +213,30 @@ figures/lyapunov.png: results/irregular-bouncing.nc
 figures/fold-curves.png: results/mass-ratio-folds.nc
 figures/branch-diagram.png: results/hysteresis-flight.nc
 figures/bifurcation-along-%.png: results/bifurcation-along-%.nc $(PACKAGE) FORCE | $(STAMP)
-	$(STUDY) figure bifurcation $< -o figures/bifurcation-along-$* --if-changed
+	$(STUDY_FIGURE) figure bifurcation $< -o figures/bifurcation-along-$* --if-changed
 figures/hysteresis-%.png: results/hysteresis-%.nc $(PACKAGE) FORCE | $(STAMP)
-	$(STUDY) figure hysteresis $< -o figures/hysteresis-$* --if-changed
+	$(STUDY_FIGURE) figure hysteresis $< -o figures/hysteresis-$* --if-changed
 # Basins: figures/basins-X.png is figure basins of results/basins-X.nc (each motion
 # followed over the map, study.analyses.basins.follow_attractors).
 figures/basins-%.png: results/basins-%.nc $(PACKAGE) FORCE | $(STAMP)
-	$(STUDY) figure basins $< -o figures/basins-$* --if-changed
+	$(STUDY_FIGURE) figure basins $< -o figures/basins-$* --if-changed
 # A figure's date says nothing of what it was drawn from (a figure of another file drawn
 # to the same name is newer than its result): `study figure --if-changed` is asked every
 # time and redraws unless the PNG records this result's checksum, these options and
 # this figure code.
 figures/%.png: $(PACKAGE) FORCE | $(STAMP)
-	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$* --if-changed
+	$(STUDY_FIGURE) figure $* $(filter results/%.nc,$^) -o figures/$* --if-changed
 # The shorter stem wins: NAME-two-way.png is figure NAME.
 figures/%-two-way.png: $(PACKAGE) FORCE | $(STAMP)
-	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-two-way --if-changed
+	$(STUDY_FIGURE) figure $* $(filter results/%.nc,$^) -o figures/$*-two-way --if-changed
 figures/%-flight.png: $(PACKAGE) FORCE | $(STAMP)
-	$(STUDY) figure $* $(filter results/%.nc,$^) -o figures/$*-flight --if-changed
+	$(STUDY_FIGURE) figure $* $(filter results/%.nc,$^) -o figures/$*-flight --if-changed
 
 FORCE:
 
-# The documentation site. Its pictures (docs/images/) are the figures of a full run,
+# The documentation site (`make docs`, after `make`: 152 s before the figure batch, 91 s
+# with it, load 2-2.7; of those, Sphinx: 4 s of start, the gallery 30-40 s, then reading
+# and writing 10 s each). Its pictures (docs/images/) are the figures of a full run,
 # copied in by `make docs`; `make docs-html` builds the pages from the pictures as they
 # are (no results needed). Warnings are errors; the example gallery (docs/examples/)
 # runs at every build. docs/images/ is tracked (the pages show their pictures on GitHub
@@ -225,6 +252,11 @@ docs: figures
 	$(PY) docs/copy_images.py $(addprefix figures/,$(addsuffix .png,$(DOC_FIGURES))) docs/images
 	$(MAKE) docs-html
 
+# Not with Sphinx's -j 2: without the gallery (-D plot_gallery=0) its reading and writing
+# took 27-32 s in one process and 23-39 s with -j 2 on this shared 2-core machine, no
+# clear gain, and the readers would be forked from the process the examples ran in
+# (a dask cluster, numba's threads). sphinx-gallery runs examples side by side only
+# with joblib, which the docs extra does not install.
 docs-html: | $(STAMP)
 	$(PY) -m sphinx -W --keep-going -b html docs build/html
 
