@@ -166,7 +166,7 @@ FIGURES += fold-curves
 FIGURES += branch-diagram
 # `make figures` draws them from one process, FIGURE_JOBS at a time (default 2; 1: one
 # after another): the figure rules below only write their `study figure` commands to
-# FIGURE_LIST (and make the result files they need), then python -m study.figures.batch
+# FIGURE_LIST (and make the result files they need), then python -m study.figure_batch
 # runs each in a child forked from one process that paid the imports (numba, xarray,
 # matplotlib) and the figure code's fingerprints once. A `study figure` process of its
 # own spends about 2.5 s on those, most of the 3 s an up-to-date figure takes. The 29
@@ -181,7 +181,7 @@ FIGURE_FILES := $(addprefix figures/,$(addsuffix .png,$(FIGURES)))
 figures: | $(STAMP)
 	@mkdir -p build && rm -f $(FIGURE_COMMANDS)
 	@$(MAKE) --no-print-directory figure-files FIGURE_LIST=$(FIGURE_COMMANDS)
-	$(PY) -m study.figures.batch --jobs $(FIGURE_JOBS) $(FIGURE_COMMANDS)
+	$(PY) -m study.figure_batch --jobs $(FIGURE_JOBS) $(FIGURE_COMMANDS)
 
 figure-files: $(FIGURE_FILES)
 

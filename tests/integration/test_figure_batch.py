@@ -1,4 +1,4 @@
-"""``make figures`` draws from one process (``python -m study.figures.batch``, which
+"""``make figures`` draws from one process (``python -m study.figure_batch``, which
 forks a child per figure): each command does what its own ``study figure`` process does
 (same pictures, same ``--if-changed`` check, same exit status), a failure stops the batch
 as it stops make, and every figure rule of the Makefile goes through it."""
@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from study.cli import main
-from study.figures.batch import read_commands, run_commands
+from study.figure_batch import read_commands, run_commands
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -85,14 +85,14 @@ def test_a_failed_command_stops_the_batch_with_its_status(
 def test_the_module_reads_its_commands_from_a_file_or_standard_input(result: Path) -> None:
     line = f"figure thresholds {result} -o figures/t --if-changed\n"
     Path("commands").write_text(line)
-    done = subprocess.run([sys.executable, "-m", "study.figures.batch", "--jobs", "2",
+    done = subprocess.run([sys.executable, "-m", "study.figure_batch", "--jobs", "2",
                            "commands"], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert "wrote figures/t.png" in done.stdout
-    done = subprocess.run([sys.executable, "-m", "study.figures.batch", "-"], input=line,
+    done = subprocess.run([sys.executable, "-m", "study.figure_batch", "-"], input=line,
                           capture_output=True, text=True, check=False)
     assert done.returncode == 0 and "figures/t.png: up to date" in done.stdout, done.stderr
-    done = subprocess.run([sys.executable, "-m", "study.figures.batch", "none"],
+    done = subprocess.run([sys.executable, "-m", "study.figure_batch", "none"],
                           capture_output=True, text=True, check=False)
     assert done.returncode == 1 and "none" in done.stderr
 
@@ -101,7 +101,7 @@ def test_make_figures_runs_every_figure_rule_through_the_batch() -> None:
     makefile = (ROOT / "Makefile").read_text()
     target = re.search(r"^figures:.*\n((?:\t.*\n)+)", makefile, re.MULTILINE)
     assert target is not None
-    assert "-m study.figures.batch --jobs $(FIGURE_JOBS)" in target[1]
+    assert "-m study.figure_batch --jobs $(FIGURE_JOBS)" in target[1]
     assert re.search(r"^FIGURE_JOBS \?= 2$", makefile, re.MULTILINE)
     recipes = re.findall(r"^\t(.*) figure .*--if-changed$", makefile, re.MULTILINE)
     assert len(recipes) >= 6 and set(recipes) == {"$(STUDY_FIGURE)"}

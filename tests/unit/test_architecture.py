@@ -57,6 +57,7 @@ STAGES = ("model", "kernels", "solvers", "engine", "studies", "scenes",
 #: Modules outside the stage folders and the stage they belong to. ``study.version``
 #: is a leaf every stage may read (the package's version, for provenance).
 LOOSE_MODULES = {"study": "top", "study.api": "top", "study.cli": "top",
+                 "study.figure_batch": "top",  # runs study.cli's figure commands
                  "study.version": "model"}
 
 #: What the kernels may import outside ``study.kernels``: declarations without

@@ -11,7 +11,7 @@ is what a new ``study`` process would be after its imports, and it runs the same
 nothing one figure sets (matplotlib's state, a selection) is seen by another, since
 each child starts from this process's state and ends with its figure.
 
-``python -m study.figures.batch [--jobs N] FILE``: FILE (``-``: standard input) holds
+``python -m study.figure_batch [--jobs N] FILE``: FILE (``-``: standard input) holds
 one command per line, the arguments of ``study`` as a shell splits them (``figure
 regime-map results/regime-map.nc -o figures/regime-map --if-changed``); blank lines
 are skipped. Each command is printed as it starts. Exit status: 0 when every command
@@ -136,7 +136,7 @@ def run_commands(commands: Sequence[Sequence[str]], jobs: int = 1) -> int:
             argv = running.pop(pid)
             if code != 0 and not failed:
                 failed = code if code > 0 else 1  # killed by a signal: 1
-                print(f"study.figures.batch: 'study {shlex.join(argv)}' failed "
+                print(f"study.figure_batch: 'study {shlex.join(argv)}' failed "
                       f"(status {code}); no other command is started", file=sys.stderr,
                       flush=True)
     except KeyboardInterrupt:  # the children had the same Ctrl-C
@@ -150,9 +150,9 @@ def run_commands(commands: Sequence[Sequence[str]], jobs: int = 1) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m study.figures.batch [--jobs N] FILE``."""
+    """``python -m study.figure_batch [--jobs N] FILE``."""
     parser = argparse.ArgumentParser(
-        prog="python -m study.figures.batch",
+        prog="python -m study.figure_batch",
         description="run the study figure commands of FILE (one per line) in one "
                     "process, JOBS at a time")
     parser.add_argument("file", metavar="FILE",
@@ -166,7 +166,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         text = sys.stdin.read() if args.file == "-" else Path(args.file).read_text(
             encoding="utf-8")
     except OSError as err:
-        print(f"study.figures.batch: {args.file}: {err.strerror or err}", file=sys.stderr)
+        print(f"study.figure_batch: {args.file}: {err.strerror or err}", file=sys.stderr)
         return 1
     return run_commands(read_commands(text), jobs=args.jobs)
 
