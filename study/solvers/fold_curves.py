@@ -321,11 +321,14 @@ def _seed_off_sweeps(structure: Structure, f: NDArray[np.float64], a: NDArray[np
         if (carried.end != codes.BRANCH_REACHED or stability_loss(carried) is not None
                 or carried.column("radius")[-1] > 1.0):
             continue  # the hop does not reach a[j] stable at this frequency
-        located = _fold_of_branch(structure, float(f[first]), float(a[j]), beyond,
-                                  carried.states()[-1], float(carried.column("section")[-1]),
-                                  carried.periods, flight, settings)
-        if located is not None:
-            return (j, *located)
+        branch = trace_from_section(structure, float(f[first]), float(a[j]), along="f",
+                                    to=beyond, state=carried.states()[-1],
+                                    section=float(carried.column("section")[-1]),
+                                    periods=carried.periods, flight=flight,
+                                    settings=settings)
+        cause = _first_fold(branch)
+        if cause is not None:
+            return j, branch, cause
     jumped = swept.jumped.any(axis=0)
     through = rides & ~jumped & orbit[last] & (sign * state.velocity[last] > 0)
     middle = 0.5 * (a.size - 1)
@@ -337,25 +340,18 @@ def _seed_off_sweeps(structure: Structure, f: NDArray[np.float64], a: NDArray[np
                               periods=max(int(state.orbit_period[last, j]), 1))
         except ValueError:
             continue
-        cause = stability_loss(branch)
-        if cause is not None and _located_fold(branch, cause):
+        cause = _first_fold(branch)
+        if cause is not None:
             return j, branch, cause
     return None
 
 
-def _fold_of_branch(structure: Structure, f: float, a: float, to: float,
-                    state: NDArray[np.float64], section: float, periods: int, flight: bool,
-                    settings: SolverSettings) -> tuple[Trace, int] | None:
-    """The branch through the orbit near ``state`` (on its section) at ``(f, a)``
-    traced along ``f`` to ``to`` and the index of its fold, where it first stops being
-    stable there; None where it stops otherwise (another bifurcation) or not at all."""
-    branch = trace_from_section(structure, f, a, along="f", to=to, state=state,
-                                section=section, periods=periods, flight=flight,
-                                settings=settings)
+def _first_fold(branch: Trace) -> int | None:
+    """The index of the bifurcation where ``branch`` first stops being stable
+    (:func:`study.solvers.jumps.stability_loss`) if it is a located fold; None where it
+    stops otherwise (another bifurcation) or not at all."""
     cause = stability_loss(branch)
-    if cause is None or not _located_fold(branch, cause):
-        return None
-    return branch, cause
+    return cause if cause is not None and _located_fold(branch, cause) else None
 
 
 def _located_fold(traced: Trace, index: int) -> bool:
