@@ -693,7 +693,9 @@ _DECLARED = (
              "not_converged: the location stopped short (the corrector failed, or the "
              "test function did not come within 1e-9, as at the birth of a doubled "
              "orbit's branch): it lies within the step after branch_bifurcation_step, "
-             "its drive and velocity those of the best point found"),
+             "its drive and velocity those of the best point found",
+             # Files of the branches observable written before the flag lack it.
+             optional=True),
 )
 
 #: name -> Variable, in the order variables appear in a file.

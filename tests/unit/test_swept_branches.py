@@ -28,6 +28,7 @@ from study.engine.interrupts import RunInterrupted
 from study.engine.runner import run_study
 from study.engine.spec_files import SpecError
 from study.engine.store import open_result
+from study.engine.validation import seal
 from study.engine.validation.files import validate_file
 from study.figures import FigureError, draw_figure
 from study.figures import branch_diagram as diagram
@@ -35,6 +36,7 @@ from study.model.bifurcations import ENDS, LOCATION_FLAGS, kind_named
 from study.solvers import sweep_branches as branches_module
 from study.solvers.protocol import slow_sweep
 from study.studies.spec import parse_spec
+from tests.support.sealed_results import rewrite
 
 ROOT = Path(__file__).resolve().parents[2]
 M099 = study.Structure(f0=14.44, Q=17.5, alpha=64.0, M=0.99, cs=0.25)
@@ -245,6 +247,17 @@ def test_the_folds_at_a_doubled_orbits_birth_are_flagged_not_converged(
     assert hollow.get_markerfacecolor() == "none"
     assert len(hollow.get_xdata()) == int(folds.sum())
     assert not [line for line in top.get_lines() if line.get_gid() == f"branch {n} fold"]
+    plt.close(fig)
+    # A file of the branches observable written before the flag stays valid and draws,
+    # every bifurcation then filled.
+    earlier = rewrite(hysteresis, tmp_path / "earlier.nc",
+                      drop=("branch_bifurcation_location",))
+    seal(earlier)
+    assert validate_file(earlier) == "study result"
+    draw_figure("branch-diagram", open_result(earlier), tmp_path / "earlier")
+    fig = kept[-1]
+    assert [line for line in fig.axes[0].get_lines()
+            if line.get_gid() == f"branch {n} fold"]
     plt.close(fig)
 
 
